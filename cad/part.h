@@ -1,0 +1,50 @@
+// Parts (distinct shapes, each one object class of the dataset) and their instances.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "cad/mesh.h"
+
+namespace cadsynth {
+
+// Mass properties of a solid with unit density, in the frame its geometry is given in.
+struct MassProperties {
+  double volume_mm3 = 0.0;
+  Eigen::Vector3d center_of_mass = Eigen::Vector3d::Zero();  // mm
+  // Inertia tensor about the centre of mass, axes of the same frame, for density 1 (mm^5).
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+};
+
+// One distinct shape. Its model frame is its CAD frame moved to the centre of the axis-aligned
+// bounding box of the mesh (BOP practice); `cad_from_model` keeps that offset, so a point moves
+// as x_in_cad = cad_from_model * x_in_model. Mesh and mass properties are in the model frame.
+struct Part {
+  std::string name;
+  Mesh mesh;
+  Eigen::Isometry3d cad_from_model = Eigen::Isometry3d::Identity();
+  MassProperties mass;
+  bool mass_from_brep = false;  // true when `mass` came from the exact B-rep
+};
+
+// One placed copy of a part. A point of the part moves to the world (or to the frame of the
+// assembly it belongs to) as x_in_world = world_from_model * x_in_model.
+struct Instance {
+  int part = 0;        // index into the owning list of parts
+  std::string name;    // instance name from the CAD file, or generated
+  Eigen::Isometry3d world_from_model = Eigen::Isometry3d::Identity();
+};
+
+// An assembly as read from a file: distinct parts, and every instance placed in the frame of the
+// file's root (a part used N times is one Part with N Instances).
+struct Assembly {
+  std::string name;
+  std::string length_unit;  // the length unit the file declares (geometry is in mm regardless)
+  std::vector<Part> parts;
+  std::vector<Instance> instances;
+};
+
+}  // namespace cadsynth

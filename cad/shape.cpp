@@ -1,0 +1,218 @@
+#include "cad/shape.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepBndLib.hxx>
+#include <BRepBuilderAPI_Transform.hxx>
+#include <BRepGProp.hxx>
+#include <BRepLProp_SLProps.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
+#include <BRep_Tool.hxx>
+#include <Bnd_Box.hxx>
+#include <GProp_GProps.hxx>
+#include <Poly_Triangulation.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Face.hxx>
+#include <gp_Trsf.hxx>
+
+#include "cad/error.h"
+#include "cad/occt_shape.h"
+
+namespace cadsynth {
+
+bool TessellationOptions::Check(std::string* why) const {
+  if (!(linear_deflection_mm > 0.0) || !std::isfinite(linear_deflection_mm)) {
+    *why = "linear_deflection must be a positive length";
+    return false;
+  }
+  if (!(angular_deflection_rad > 0.0) || angular_deflection_rad >= M_PI) {
+    *why = "angular_deflection must be between 0 and 180 degrees (exclusive)";
+    return false;
+  }
+  return true;
+}
+
+Shape::Shape() : impl_(std::make_shared<const Impl>()) {}
+Shape::Shape(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
+
+bool Shape::IsNull() const { return impl_->shape.IsNull(); }
+
+Eigen::AlignedBox3d Shape::Bounds() const {
+  Eigen::AlignedBox3d box;
+  if (IsNull()) return box;
+  Bnd_Box bnd;
+  BRepBndLib::Add(impl_->shape, bnd);
+  if (bnd.IsVoid()) return box;
+  double x0, y0, z0, x1, y1, z1;
+  bnd.Get(x0, y0, z0, x1, y1, z1);
+  box.extend(Eigen::Vector3d(x0, y0, z0));
+  box.extend(Eigen::Vector3d(x1, y1, z1));
+  return box;
+}
+
+namespace {
+
+template <typename Builder>
+Shape Build(Builder&& builder, const char* what) {
+  try {
+    builder.Build();
+    if (!builder.IsDone()) throw Error(std::string("OpenCASCADE could not build ") + what);
+    return WrapShape(builder.Shape());
+  } catch (const Standard_Failure& failure) {
+    throw Error(std::string("OpenCASCADE could not build ") + what + ": " +
+                failure.GetMessageString());
+  }
+}
+
+void RequirePositive(double value, const char* what) {
+  if (!(value > 0.0) || !std::isfinite(value)) {
+    std::ostringstream out;
+    out << what << " must be positive (got " << value << ")";
+    throw Error(out.str());
+  }
+}
+
+gp_Trsf ToTrsf(const Eigen::Isometry3d& t) {
+  gp_Trsf trsf;
+  const Eigen::Matrix3d& r = t.linear();
+  const Eigen::Vector3d& p = t.translation();
+  trsf.SetValues(r(0, 0), r(0, 1), r(0, 2), p.x(), r(1, 0), r(1, 1), r(1, 2), p.y(), r(2, 0),
+                 r(2, 1), r(2, 2), p.z());
+  return trsf;
+}
+
+}  // namespace
+
+Shape MakeBox(double dx, double dy, double dz) {
+  RequirePositive(dx, "box size x");
+  RequirePositive(dy, "box size y");
+  RequirePositive(dz, "box size z");
+  return Build(BRepPrimAPI_MakeBox(dx, dy, dz), "a box");
+}
+
+Shape MakeCylinder(double radius, double height) {
+  RequirePositive(radius, "cylinder radius");
+  RequirePositive(height, "cylinder height");
+  return Build(BRepPrimAPI_MakeCylinder(radius, height), "a cylinder");
+}
+
+Shape MakeSphere(double radius) {
+  RequirePositive(radius, "sphere radius");
+  return Build(BRepPrimAPI_MakeSphere(radius), "a sphere");
+}
+
+Shape Transformed(const Shape& shape, const Eigen::Isometry3d& transform) {
+  return Build(BRepBuilderAPI_Transform(OcctShape(shape), ToTrsf(transform), /*copy=*/true),
+               "a moved shape");
+}
+
+Mesh Tessellate(const Shape& shape, const TessellationOptions& options) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("tessellation: " + why);
+  const TopoDS_Shape& s = OcctShape(shape);
+  if (s.IsNull()) throw Error("tessellation: empty shape");
+
+  try {
+    BRepMesh_IncrementalMesh mesher(s, options.linear_deflection_mm, /*isRelative=*/false,
+                                    options.angular_deflection_rad, /*isInParallel=*/false);
+  } catch (const Standard_Failure& failure) {
+    throw Error(std::string("tessellation failed: ") + failure.GetMessageString());
+  }
+
+  Mesh mesh;
+  uint32_t face_index = 0;
+  for (TopExp_Explorer it(s, TopAbs_FACE); it.More(); it.Next(), ++face_index) {
+    const TopoDS_Face& face = TopoDS::Face(it.Current());
+    TopLoc_Location location;
+    const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, location);
+    if (tri.IsNull() || tri->NbTriangles() == 0) continue;
+
+    const gp_Trsf trsf = location.Transformation();
+    const bool reversed = face.Orientation() == TopAbs_REVERSED;
+    const auto base = static_cast<uint32_t>(mesh.positions.size());
+    const int num_nodes = tri->NbNodes();
+
+    std::vector<Eigen::Vector3f> facet_normals(num_nodes, Eigen::Vector3f::Zero());
+    for (int i = 1; i <= num_nodes; ++i) {
+      const gp_Pnt p = tri->Node(i).Transformed(trsf);
+      mesh.positions.emplace_back(float(p.X()), float(p.Y()), float(p.Z()));
+    }
+    for (int t = 1; t <= tri->NbTriangles(); ++t) {
+      int a, b, c;
+      tri->Triangle(t).Get(a, b, c);
+      if (reversed) std::swap(b, c);
+      Eigen::Matrix<uint32_t, 3, 1> idx(base + a - 1, base + b - 1, base + c - 1);
+      const Eigen::Vector3f& pa = mesh.positions[idx[0]];
+      const Eigen::Vector3f n = (mesh.positions[idx[1]] - pa).cross(mesh.positions[idx[2]] - pa);
+      facet_normals[a - 1] += n;
+      facet_normals[b - 1] += n;
+      facet_normals[c - 1] += n;
+      mesh.triangles.push_back(idx);
+      mesh.face_ids.push_back(face_index);
+    }
+
+    // Normals from the exact surface where it has one at the node; the area-weighted facet
+    // normal otherwise (and to orient the surface normal consistently with the winding).
+    BRepAdaptor_Surface surface(face, /*useTrsf=*/true);
+    BRepLProp_SLProps props(surface, 1, 1e-9);
+    for (int i = 1; i <= num_nodes; ++i) {
+      Eigen::Vector3f facet = facet_normals[i - 1];
+      const float facet_norm = facet.norm();
+      if (facet_norm > 0.0f) facet /= facet_norm;
+      Eigen::Vector3f normal = facet;
+      if (tri->HasUVNodes()) {
+        const gp_Pnt2d uv = tri->UVNode(i);
+        props.SetParameters(uv.X(), uv.Y());
+        if (props.IsNormalDefined()) {
+          const gp_Dir d = props.Normal();
+          Eigen::Vector3f exact(float(d.X()), float(d.Y()), float(d.Z()));
+          if (reversed) exact = -exact;
+          // A surface normal pointing against the facets means a degenerate parametrisation
+          // (poles, seams): trust the facets there.
+          if (facet_norm == 0.0f || exact.dot(facet) > 0.0f) normal = exact;
+        }
+      }
+      mesh.normals.push_back(normal);
+    }
+  }
+  if (mesh.empty()) throw Error("tessellation produced no triangles (the shape has no faces)");
+  return mesh;
+}
+
+MassProperties ComputeMassProperties(const Shape& shape) {
+  MassProperties result;
+  GProp_GProps props;
+  BRepGProp::VolumeProperties(OcctShape(shape), props);
+  result.volume_mm3 = props.Mass();
+  if (result.volume_mm3 > 0.0) {
+    const gp_Pnt c = props.CentreOfMass();
+    result.center_of_mass = Eigen::Vector3d(c.X(), c.Y(), c.Z());
+    const gp_Mat m = props.MatrixOfInertia();
+    for (int r = 0; r < 3; ++r) {
+      for (int col = 0; col < 3; ++col) result.inertia(r, col) = m.Value(r + 1, col + 1);
+    }
+  }
+  return result;
+}
+
+Part MakePart(const std::string& name, const Shape& shape, const TessellationOptions& options) {
+  Part part;
+  part.name = name;
+  part.mesh = Tessellate(shape, options);
+  const Eigen::Vector3d centre = part.mesh.Bounds().center();
+  part.cad_from_model = Eigen::Translation3d(centre);
+  part.mesh.Transform(part.cad_from_model.inverse());
+  part.mass = ComputeMassProperties(shape);
+  part.mass.center_of_mass -= centre;
+  part.mass_from_brep = part.mass.volume_mm3 > 0.0;
+  return part;
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,63 @@
+// Exact B-rep solids, kept opaque: OpenCASCADE types never leave cad/ and variants/.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "cad/mesh.h"
+#include "cad/part.h"
+
+namespace cadsynth {
+
+// Controls how B-rep surfaces become triangles.
+struct TessellationOptions {
+  // Largest distance (mm) allowed between a triangle and the exact surface.
+  double linear_deflection_mm = 0.1;
+  // Largest angle (radians) between the normals of neighbouring triangles on a curved face.
+  double angular_deflection_rad = 0.35;  // 20 degrees
+
+  // False, with a reason, when a value is out of range.
+  bool Check(std::string* why) const;
+};
+
+// A B-rep shape (solid, compound of solids, shell...). Cheap to copy: copies share the geometry.
+class Shape {
+ public:
+  struct Impl;  // defined in cad/occt_shape.h, for cad/ and variants/ sources only
+
+  Shape();
+  explicit Shape(std::shared_ptr<const Impl> impl);
+
+  bool IsNull() const;
+  // Axis-aligned bounds in mm (from the exact geometry, with OpenCASCADE's small tolerance gap).
+  Eigen::AlignedBox3d Bounds() const;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::shared_ptr<const Impl> impl_;
+};
+
+// Primitives, all in mm.
+// A box with one corner at the origin and the opposite corner at (dx, dy, dz).
+Shape MakeBox(double dx, double dy, double dz);
+// A cylinder around +z with its base centred at the origin.
+Shape MakeCylinder(double radius, double height);
+// A sphere centred at the origin.
+Shape MakeSphere(double radius);
+// `shape` moved by `transform`.
+Shape Transformed(const Shape& shape, const Eigen::Isometry3d& transform);
+
+// Triangles for every face, with per-vertex normals from the exact surface. Throws Error when the
+// options are invalid or the shape yields no triangles.
+Mesh Tessellate(const Shape& shape, const TessellationOptions& options);
+
+// Exact volume, centre of mass and inertia of the solids in `shape`.
+MassProperties ComputeMassProperties(const Shape& shape);
+
+// Tessellates `shape` and moves it into its model frame (see Part).
+Part MakePart(const std::string& name, const Shape& shape, const TessellationOptions& options);
+
+}  // namespace cadsynth

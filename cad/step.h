@@ -1,0 +1,32 @@
+// STEP files through OpenCASCADE's XDE: assembly tree, instance placements and names.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "cad/part.h"
+#include "cad/shape.h"
+
+namespace cadsynth {
+
+// Reads a STEP file (AP203/AP214/AP242) into distinct parts and their instances. Lengths come
+// out in millimetres whatever unit the file declares. Parts are tessellated in parallel.
+// Throws Error naming the file for a missing, unreadable, corrupted or empty file.
+Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& options);
+
+// One part written to STEP, placed once per entry of `placements`.
+struct StepComponent {
+  std::string name;
+  Shape shape;
+  std::vector<Eigen::Isometry3d> placements = {Eigen::Isometry3d::Identity()};
+};
+
+// Writes the components as one assembly named `assembly_name`, in millimetres (AP214).
+// The file appears complete or not at all (written under a temporary name, then renamed).
+void WriteStep(const std::filesystem::path& path, const std::string& assembly_name,
+               const std::vector<StepComponent>& components);
+
+}  // namespace cadsynth

@@ -1,0 +1,263 @@
+#include "dataset/bop.h"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <system_error>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for.h>
+
+#include "cad/error.h"
+#include "dataset/file_io.h"
+#include "dataset/models.h"
+
+namespace cadsynth {
+
+using Json = nlohmann::ordered_json;
+
+bool BopOptions::Check(std::string* why) const {
+  if (!(depth_scale > 0.0) || !std::isfinite(depth_scale)) {
+    *why = "depth_scale must be positive";
+    return false;
+  }
+  if (split.empty() || split.find('/') != std::string::npos || split == "." || split == "..") {
+    *why = "split must be a plain folder name";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+std::string Id6(int id) {
+  char buffer[16];
+  std::snprintf(buffer, sizeof(buffer), "%06d", id);
+  return buffer;
+}
+
+void CreateFolder(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error(dir.string() + ": cannot create folder: " + ec.message());
+}
+
+Json RowMajor(const Eigen::Matrix3d& r) {
+  Json out = Json::array();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out.push_back(r(i, j));
+  }
+  return out;
+}
+
+Json Vec(const Eigen::Vector3d& t) { return Json::array({t.x(), t.y(), t.z()}); }
+
+void WriteJson(const std::filesystem::path& path, const Json& json) {
+  WriteFileAtomic(path, json.dump(2) + "\n");
+}
+
+std::string EncodePng(const cv::Mat& image, const std::filesystem::path& where) {
+  std::vector<uchar> bytes;
+  if (!cv::imencode(".png", image, bytes)) throw Error(where.string() + ": PNG encoding failed");
+  return std::string(bytes.begin(), bytes.end());
+}
+
+// Bounding box (x, y, w, h) of the pixels where `inside(pixel)` holds; all -1 when none.
+template <typename Predicate>
+void BoundingBox(int width, int height, Predicate inside, int box[4]) {
+  int u0 = width, v0 = height, u1 = -1, v1 = -1;
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      if (!inside(static_cast<size_t>(v) * width + u)) continue;
+      u0 = std::min(u0, u);
+      u1 = std::max(u1, u);
+      v0 = std::min(v0, v);
+      v1 = std::max(v1, v);
+    }
+  }
+  if (u1 < 0) {
+    box[0] = box[1] = box[2] = box[3] = -1;
+  } else {
+    box[0] = u0;
+    box[1] = v0;
+    box[2] = u1 - u0 + 1;
+    box[3] = v1 - v0 + 1;
+  }
+}
+
+}  // namespace
+
+uint16_t EncodeDepth(float depth_mm, double depth_scale) {
+  if (!(depth_mm > 0.0f)) return 0;
+  const double units = std::round(depth_mm / depth_scale);
+  if (units > std::numeric_limits<uint16_t>::max()) return 0;
+  return static_cast<uint16_t>(units);
+}
+
+GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale) {
+  GtInfo info;
+  const int w = frame.width(), h = frame.height();
+  const uint16_t visible_id = static_cast<uint16_t>(instance + 1);
+  const std::vector<uint8_t>& amodal = frame.instances[instance].amodal_mask;
+  const auto in_full = [&](size_t p) { return !amodal.empty() && amodal[p] != 0; };
+  const auto in_visible = [&](size_t p) { return frame.instance[p] == visible_id; };
+  BoundingBox(w, h, in_full, info.bbox_obj);
+  BoundingBox(w, h, in_visible, info.bbox_visib);
+  for (size_t p = 0; p < frame.instance.size(); ++p) {
+    if (in_full(p)) {
+      ++info.px_count_all;
+      if (EncodeDepth(frame.depth[p], depth_scale) != 0) ++info.px_count_valid;
+    }
+    if (in_visible(p)) ++info.px_count_visib;
+  }
+  info.visib_fract =
+      info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
+  return info;
+}
+
+void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts) {
+  const std::filesystem::path dir = root / "models";
+  CreateFolder(dir);
+  std::vector<double> diameters(parts.size());
+  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
+    diameters[i] = MeshDiameter(parts[i].mesh);
+    WriteFileAtomic(dir / ("obj_" + Id6(static_cast<int>(i) + 1) + ".ply"),
+                    EncodePly(parts[i].mesh));
+  });
+  Json info = Json::object();
+  Json cad = Json::object();
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const Eigen::AlignedBox3d box = parts[i].mesh.Bounds();
+    const std::string key = std::to_string(i + 1);
+    info[key] = {{"diameter", diameters[i]},
+                 {"min_x", box.min().x()}, {"min_y", box.min().y()}, {"min_z", box.min().z()},
+                 {"size_x", box.sizes().x()}, {"size_y", box.sizes().y()},
+                 {"size_z", box.sizes().z()}};
+    Json cad_from_model = Json::array();
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) cad_from_model.push_back(parts[i].cad_from_model.matrix()(r, c));
+    }
+    cad[key] = {{"name", parts[i].name},
+                {"cad_from_model", cad_from_model},
+                {"volume_mm3", parts[i].mass.volume_mm3},
+                {"center_of_mass", Vec(parts[i].mass.center_of_mass)},
+                {"mass_from_brep", parts[i].mass_from_brep},
+                {"triangles", parts[i].mesh.num_triangles()}};
+  }
+  WriteJson(dir / "models_info.json", info);
+  WriteJson(dir / "models_cad.json", cad);
+}
+
+void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,
+                    const BopOptions& options) {
+  CreateFolder(root);
+  WriteJson(root / "camera.json", Json{{"cx", k.cx}, {"cy", k.cy},
+                                       {"depth_scale", options.depth_scale}, {"fx", k.fx},
+                                       {"fy", k.fy}, {"height", k.height}, {"width", k.width}});
+}
+
+struct BopSceneWriter::Entry {
+  Json camera;
+  Json gt;
+  Json gt_info;
+};
+
+BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
+                               const BopOptions& options, std::vector<int> obj_id_of_instance)
+    : scene_dir_(root / options.split / Id6(scene_id)),
+      options_(options),
+      obj_ids_(std::move(obj_id_of_instance)) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("bop: " + why);
+  for (const char* sub : {"rgb", "depth", "mask", "mask_visib"}) CreateFolder(scene_dir_ / sub);
+}
+
+void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
+  if (frame.instances.size() != obj_ids_.size()) {
+    throw Error("bop: frame has " + std::to_string(frame.instances.size()) +
+                " instances, the scene " + std::to_string(obj_ids_.size()));
+  }
+  const int w = frame.width(), h = frame.height();
+  const std::string im = Id6(image_id);
+
+  cv::Mat rgb(h, w, CV_8UC3, const_cast<uint8_t*>(frame.rgb.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  const std::filesystem::path rgb_path = scene_dir_ / "rgb" / (im + ".png");
+  WriteFileAtomic(rgb_path, EncodePng(bgr, rgb_path));
+
+  cv::Mat depth(h, w, CV_16UC1);
+  for (int v = 0; v < h; ++v) {
+    auto* row = depth.ptr<uint16_t>(v);
+    for (int u = 0; u < w; ++u) {
+      row[u] = EncodeDepth(frame.depth[static_cast<size_t>(v) * w + u], options_.depth_scale);
+    }
+  }
+  const std::filesystem::path depth_path = scene_dir_ / "depth" / (im + ".png");
+  WriteFileAtomic(depth_path, EncodePng(depth, depth_path));
+
+  auto entry = std::make_shared<Entry>();
+  const Eigen::Isometry3d cam_from_world = frame.camera.world_from_cam.inverse();
+  Json k = Json::array();
+  const Eigen::Matrix3d kmat = frame.camera.intrinsics.K();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) k.push_back(kmat(r, c));
+  }
+  entry->camera = {{"cam_K", k},
+                   {"depth_scale", options_.depth_scale},
+                   {"cam_R_w2c", RowMajor(cam_from_world.linear())},
+                   {"cam_t_w2c", Vec(cam_from_world.translation())}};
+  entry->gt = Json::array();
+  entry->gt_info = Json::array();
+
+  cv::Mat mask(h, w, CV_8UC1);
+  for (size_t i = 0; i < frame.instances.size(); ++i) {
+    const Frame::InstanceTruth& truth = frame.instances[i];
+    entry->gt.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
+                         {"cam_t_m2c", Vec(truth.cam_from_model.translation())},
+                         {"obj_id", obj_ids_[i]}});
+    const GtInfo info = ComputeGtInfo(frame, static_cast<int>(i), options_.depth_scale);
+    entry->gt_info.push_back(
+        {{"bbox_obj", {info.bbox_obj[0], info.bbox_obj[1], info.bbox_obj[2], info.bbox_obj[3]}},
+         {"bbox_visib",
+          {info.bbox_visib[0], info.bbox_visib[1], info.bbox_visib[2], info.bbox_visib[3]}},
+         {"px_count_all", info.px_count_all},
+         {"px_count_valid", info.px_count_valid},
+         {"px_count_visib", info.px_count_visib},
+         {"visib_fract", info.visib_fract}});
+
+    const std::string name = im + "_" + Id6(static_cast<int>(i)) + ".png";
+    const uint16_t visible_id = static_cast<uint16_t>(i + 1);
+    auto* out = mask.ptr<uint8_t>(0);
+    for (size_t p = 0; p < frame.instance.size(); ++p) {
+      out[p] = !truth.amodal_mask.empty() && truth.amodal_mask[p] != 0 ? 255 : 0;
+    }
+    WriteFileAtomic(scene_dir_ / "mask" / name, EncodePng(mask, scene_dir_ / "mask" / name));
+    for (size_t p = 0; p < frame.instance.size(); ++p) {
+      out[p] = frame.instance[p] == visible_id ? 255 : 0;
+    }
+    WriteFileAtomic(scene_dir_ / "mask_visib" / name,
+                    EncodePng(mask, scene_dir_ / "mask_visib" / name));
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  entries_[image_id] = std::move(entry);
+}
+
+void BopSceneWriter::Finish() {
+  Json camera = Json::object(), gt = Json::object(), gt_info = Json::object();
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const auto& [image_id, entry] : entries_) {
+    const std::string key = std::to_string(image_id);
+    camera[key] = entry->camera;
+    gt[key] = entry->gt;
+    gt_info[key] = entry->gt_info;
+  }
+  WriteJson(scene_dir_ / "scene_camera.json", camera);
+  WriteJson(scene_dir_ / "scene_gt.json", gt);
+  WriteJson(scene_dir_ / "scene_gt_info.json", gt_info);
+}
+
+}  // namespace cadsynth

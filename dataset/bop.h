@@ -1,0 +1,86 @@
+// BOP datasets (bop_toolkit's docs/bop_datasets_format.md is the contract).
+//
+//   ROOT/camera.json                         intrinsics and depth_scale
+//   ROOT/models/obj_OBJID.ply                one mesh per object, mm, model frame
+//   ROOT/models/models_info.json             diameter and 3D bounding box per object
+//   ROOT/models/models_cad.json              (cadsynth) name, cad_from_model, volume per object
+//   ROOT/SPLIT/SCENEID/rgb/IMID.png          colour
+//   ROOT/SPLIT/SCENEID/depth/IMID.png        uint16, depth_mm = value * depth_scale, 0 = none
+//   ROOT/SPLIT/SCENEID/mask/IMID_GTID.png    full silhouette of ground-truth entry GTID (0/255)
+//   ROOT/SPLIT/SCENEID/mask_visib/IMID_GTID.png  its visible part (0/255)
+//   ROOT/SPLIT/SCENEID/scene_camera.json     cam_K, depth_scale, cam_R_w2c, cam_t_w2c per image
+//   ROOT/SPLIT/SCENEID/scene_gt.json         cam_R_m2c, cam_t_m2c, obj_id per instance
+//   ROOT/SPLIT/SCENEID/scene_gt_info.json    bboxes, pixel counts, visib_fract per instance
+//
+// All ids are written with 6 digits. Rotations are row-major; translations in mm.
+// cam_R_m2c / cam_t_m2c is cam_from_model; cam_R_w2c / cam_t_w2c is cam_from_world (the
+// inverse of the camera pose world_from_cam), so world_from_model = inverse(w2c) * m2c.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "cad/part.h"
+#include "render/camera.h"
+#include "render/frame.h"
+
+namespace cadsynth {
+
+struct BopOptions {
+  double depth_scale = 0.1;     // mm per depth unit: 0.1 mm steps, up to 6.5535 m
+  std::string split = "train";  // folder holding the scenes
+
+  bool Check(std::string* why) const;
+};
+
+// Writes ROOT/models/ for `parts`; part i becomes obj_id i + 1.
+void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts);
+
+// Writes ROOT/camera.json.
+void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& intrinsics,
+                    const BopOptions& options);
+
+// Ground-truth statistics of one instance in one frame, as scene_gt_info.json holds them.
+struct GtInfo {
+  int bbox_obj[4] = {-1, -1, -1, -1};    // x, y, width, height of the full silhouette
+  int bbox_visib[4] = {-1, -1, -1, -1};  // of the visible part
+  int px_count_all = 0;
+  int px_count_valid = 0;  // silhouette pixels with a depth value in the written depth image
+  int px_count_visib = 0;
+  double visib_fract = 0.0;
+};
+// `instance` is the index in frame.instances; `depth_scale` decides which depths are writable.
+GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale);
+
+// Depth in mm to BOP's uint16 units; 0 where there is no return or the value does not fit.
+uint16_t EncodeDepth(float depth_mm, double depth_scale);
+
+// Writes the images of one scene as frames arrive (from any thread) and its JSON files at the end.
+class BopSceneWriter {
+ public:
+  // obj_id_of_instance[i] is the BOP obj_id of Scene::instances[i].
+  BopSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
+                 std::vector<int> obj_id_of_instance);
+
+  // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`.
+  void WriteFrame(int image_id, const Frame& frame);
+
+  // Writes scene_camera.json, scene_gt.json and scene_gt_info.json, ordered by image id.
+  void Finish();
+
+  const std::filesystem::path& scene_dir() const { return scene_dir_; }
+
+ private:
+  struct Entry;
+  std::filesystem::path scene_dir_;
+  BopOptions options_;
+  std::vector<int> obj_ids_;
+  std::mutex mutex_;
+  std::map<int, std::shared_ptr<Entry>> entries_;
+};
+
+}  // namespace cadsynth

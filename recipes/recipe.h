@@ -1,0 +1,52 @@
+// Recipes: one YAML file describes a whole run. Only this module knows YAML; it fills the
+// Options structs of the other modules and checks them, pointing at file:line:column.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "cad/shape.h"
+#include "dataset/bop.h"
+#include "render/camera.h"
+#include "render/renderer.h"
+#include "render/scene.h"
+#include "variants/arrangement.h"
+
+namespace cadsynth {
+
+// Where a part list entry comes from.
+struct PartSource {
+  enum class Kind { kBuiltinDefault, kStep };
+  Kind kind = Kind::kBuiltinDefault;
+  std::filesystem::path path;  // kStep: absolute, or relative to the working folder
+  std::string where;           // "recipe.yaml:3:5" (empty for the built-in default)
+};
+
+// Everything one run needs, each module's options filled in.
+struct RunSpec {
+  std::filesystem::path recipe;  // empty for the built-in default job
+  std::vector<PartSource> sources;
+  TessellationOptions tessellation;
+  ArrangementOptions arrangement;
+  Intrinsics intrinsics;
+  SweepOptions sweep;
+  Scene look;  // floor, colours and lights (its instances are filled in by the run)
+  RenderOptions render;
+  BopOptions bop;
+  std::filesystem::path output;  // empty: the command line decides
+};
+
+// The built-in default job: the built-in parts in a row, a 144-view sweep (yaw every 30 degrees,
+// pitch 15-75 by 20, radius 0.65, 1.05, 1.45 m), Kinect v1 camera.
+RunSpec DefaultRunSpec();
+
+// Reads a recipe. Throws Error "FILE:LINE:COL: what" for unknown keys (with the nearest known
+// key), values of the wrong kind or unit, impossible values and missing files.
+RunSpec LoadRecipe(const std::filesystem::path& path);
+
+// Same, from text; `name` is used in messages and `base_dir` resolves relative paths.
+RunSpec ParseRecipe(const std::string& text, const std::string& name,
+                    const std::filesystem::path& base_dir);
+
+}  // namespace cadsynth

@@ -1,0 +1,36 @@
+// The rendered images and per-instance ground truth of one camera view.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "render/camera.h"
+
+namespace cadsynth {
+
+// Images are row-major, width x height, pixel (u, v) at index v * width + u.
+struct Frame {
+  Camera camera;
+
+  std::vector<uint8_t> rgb;       // 3 bytes per pixel: R, G, B
+  std::vector<float> depth;       // z in the camera frame, mm; 0 = no return
+  std::vector<uint16_t> instance; // visible instance: index in Scene::instances + 1; 0 = none
+
+  struct InstanceTruth {
+    Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();
+    // Full silhouette, also where other instances hide it: 1 = covered. Same size as the image.
+    std::vector<uint8_t> amodal_mask;
+    int px_count_all = 0;    // pixels of the amodal mask inside the image
+    int px_count_visib = 0;  // pixels where this instance is the front-most surface
+  };
+  std::vector<InstanceTruth> instances;  // one per Scene::instances entry, same order
+
+  int width() const { return camera.intrinsics.width; }
+  int height() const { return camera.intrinsics.height; }
+};
+
+}  // namespace cadsynth

@@ -1,0 +1,31 @@
+// What the renderer draws: placed instances of parts, a floor, lights and a background.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cad/part.h"
+
+namespace cadsynth {
+
+// Colours are linear RGB in [0, 1].
+struct Scene {
+  std::vector<Instance> instances;     // world_from_model of each placed part
+  std::vector<Eigen::Vector3f> part_colors;  // one per part; parts without one are grey
+
+  bool floor = true;                   // the plane z = 0, a square centred on the origin
+  double floor_half_size_mm = 10000.0;
+  Eigen::Vector3f floor_color{0.55f, 0.55f, 0.55f};
+  Eigen::Vector3f background_color{0.12f, 0.14f, 0.18f};
+
+  // One directional light (direction the light travels, world frame) plus ambient light.
+  Eigen::Vector3d light_direction{-0.3, -0.4, -1.0};
+  float light_intensity = 0.75f;
+  float ambient = 0.3f;
+};
+
+// A palette of well-separated colours for parts without a colour of their own.
+Eigen::Vector3f PaletteColor(int index);
+
+}  // namespace cadsynth

@@ -1,0 +1,33 @@
+// The `generate` job: RunSpec in, BOP dataset out. Used by the command line and the tests.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "recipes/recipe.h"
+
+namespace cadsynth {
+
+struct GenerateOptions {
+  std::filesystem::path output;  // dataset folder to create
+  bool overwrite = false;        // replace an existing folder (only once the new one is complete)
+  // Called after each written frame with (frames done, frames total); may be empty.
+  std::function<void(size_t, size_t)> progress;
+  // Receives one line per notable fact (what was read, placement); may be empty.
+  std::function<void(const std::string&)> info;
+};
+
+struct GenerateSummary {
+  size_t frames = 0;
+  size_t objects = 0;
+  size_t instances = 0;
+  double seconds = 0.0;
+};
+
+// Builds or reads the parts, arranges them, renders every view of the sweep and writes the BOP
+// dataset. Everything is written into a hidden staging folder next to `output` and renamed into
+// place at the end, so a failed run leaves no half-written dataset. Throws Error.
+GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options);
+
+}  // namespace cadsynth

@@ -1,0 +1,133 @@
+// The cadsynth command line. Owns threads (one tbb::global_control), logging and exit codes.
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include "cad/error.h"
+#include "recipes/recipe.h"
+#include "tools/generate.h"
+
+namespace {
+
+constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data out.
+
+usage:
+  cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--quiet]
+  cadsynth --help | --version
+
+generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
+           Without a recipe it runs the built-in default job (no input files needed).
+  -o DIR       output folder (default: the recipe's output.dir, else ./cadsynth_dataset)
+  --overwrite  replace DIR if it exists (the old one stays until the new one is complete)
+  --threads N  worker threads (default: all cores); results do not depend on it
+  --quiet      no progress or info lines, only warnings and errors
+)";
+
+struct UsageError {
+  std::string what;
+};
+
+int ParseThreads(const std::string& text) {
+  char* end = nullptr;
+  const long value = std::strtol(text.c_str(), &end, 10);
+  if (end == text.c_str() || *end != '\0' || value < 1 || value > 1024) {
+    throw UsageError{"--threads takes a whole number from 1 to 1024, got '" + text + "'"};
+  }
+  return static_cast<int>(value);
+}
+
+int RunGenerate(const std::vector<std::string>& args) {
+  std::optional<std::string> recipe, output;
+  bool overwrite = false, quiet = false;
+  int threads = 0;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= args.size()) throw UsageError{a + " needs a value"};
+      return args[++i];
+    };
+    if (a == "-o" || a == "--output") {
+      output = value();
+    } else if (a == "--overwrite") {
+      overwrite = true;
+    } else if (a == "--quiet" || a == "-q") {
+      quiet = true;
+    } else if (a == "--threads" || a == "-j") {
+      threads = ParseThreads(value());
+    } else if (!a.empty() && a[0] == '-') {
+      throw UsageError{"unknown option '" + a + "'"};
+    } else if (recipe) {
+      throw UsageError{"one recipe at a time (got '" + *recipe + "' and '" + a + "')"};
+    } else {
+      recipe = a;
+    }
+  }
+
+  std::unique_ptr<tbb::global_control> thread_limit;
+  if (threads > 0) {
+    thread_limit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  }
+
+  const cadsynth::RunSpec spec = recipe ? cadsynth::LoadRecipe(*recipe) : cadsynth::DefaultRunSpec();
+  cadsynth::GenerateOptions options;
+  options.output = output ? std::filesystem::path(*output)
+                          : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
+  options.overwrite = overwrite;
+  if (!quiet) {
+    options.info = [](const std::string& line) { std::cout << line << "\n" << std::flush; };
+    const bool tty = ::isatty(STDERR_FILENO) != 0;
+    auto mutex = std::make_shared<std::mutex>();
+    options.progress = [tty, mutex](size_t done, size_t total) {
+      std::lock_guard<std::mutex> lock(*mutex);
+      if (tty) {
+        std::fprintf(stderr, "\rrendered %zu/%zu frames", done, total);
+        if (done == total) std::fprintf(stderr, "\n");
+      } else if (done == total || done % std::max<size_t>(1, total / 10) == 0) {
+        std::fprintf(stderr, "rendered %zu/%zu frames\n", done, total);
+      }
+    };
+  }
+  const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);
+  std::printf("wrote %zu frames of %zu objects (%zu instances) to %s in %.1f s (%.1f frames/s)\n",
+              summary.frames, summary.objects, summary.instances,
+              std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,
+              summary.seconds > 0 ? summary.frames / summary.seconds : 0.0);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  try {
+    if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+      std::cout << kUsage;
+      return args.empty() ? 2 : 0;
+    }
+    if (args[0] == "--version") {
+      std::cout << "cadsynth " << CADSYNTH_VERSION << "\n";
+      return 0;
+    }
+    if (args[0] == "generate") return RunGenerate({args.begin() + 1, args.end()});
+    throw UsageError{"unknown command '" + args[0] + "'"};
+  } catch (const UsageError& e) {
+    std::cerr << "error: " << e.what << "\n(run 'cadsynth --help' for usage)\n";
+    return 2;
+  } catch (const cadsynth::Error& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "error: internal: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -6,6 +6,8 @@
 #include <system_error>
 
 #include <IFSelect_ReturnStatus.hxx>
+#include <Interface_Check.hxx>
+#include <Interface_CheckIterator.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -25,6 +27,7 @@
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <XSControl_WorkSession.hxx>
 #include <gp_Trsf.hxx>
 #include <tbb/parallel_for.h>
 
@@ -73,6 +76,23 @@ Eigen::Isometry3d ToIsometry(const gp_Trsf& trsf, const std::string& where) {
     result.translation()(r) = t.Value(r + 1, 4);
   }
   return result;
+}
+
+// OpenCASCADE reads past syntax errors and quietly drops the entities it could not parse, which
+// turns a corrupted file into plausible but wrong geometry. Syntax failures sit in the model's
+// global check (entity number 0); per-entity semantic failures (unusual PMI or font entities in
+// real files) do not make a file unusable and are tolerated.
+void ThrowOnSyntaxErrors(STEPControl_Reader& reader, const std::string& file) {
+  const Interface_CheckIterator checks = reader.WS()->ModelCheckList();
+  for (checks.Start(); checks.More(); checks.Next()) {
+    const Handle(Interface_Check)& check = checks.Value();
+    if (checks.Number() != 0 || check->NbFails() == 0) continue;
+    std::string first = check->CFail(1);
+    const std::string prefix = "Undefined Parsing: ";
+    if (first.rfind(prefix, 0) == 0) first = first.substr(prefix.size());
+    throw Error(file + ": corrupted STEP file: " + first + " (" + std::to_string(check->NbFails()) +
+                " syntax error" + (check->NbFails() > 1 ? "s" : "") + ")");
+  }
 }
 
 struct PendingInstance {
@@ -127,6 +147,7 @@ Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& 
         XCAFApp_Application::GetApplication()->Close(doc);
         throw Error(file + ": not a readable STEP file (OpenCASCADE could not parse it)");
       }
+      ThrowOnSyntaxErrors(reader.ChangeReader(), file);
       {
         TColStd_SequenceOfAsciiString lengths, angles, solid_angles;
         reader.ChangeReader().FileUnits(lengths, angles, solid_angles);

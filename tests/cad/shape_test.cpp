@@ -1,0 +1,72 @@
+#include "cad/shape.h"
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+
+namespace cadsynth {
+namespace {
+
+TEST(Shape, BoxTessellatesToTwelveOutwardTriangles) {
+  const Mesh mesh = Tessellate(MakeBox(40, 30, 20), TessellationOptions{});
+  EXPECT_EQ(mesh.num_triangles(), 12u);
+  EXPECT_NEAR(mesh.SurfaceArea(), 2 * (40 * 30 + 30 * 20 + 40 * 20), 1e-6);
+  const Eigen::Vector3f centre(20, 15, 10);
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
+    const Eigen::Vector3f n = (b - a).cross(c - a);
+    EXPECT_GT(n.dot((a + b + c) / 3 - centre), 0.0f) << "triangle winds inward";
+    for (int i = 0; i < 3; ++i) EXPECT_GT(mesh.normals[t[i]].dot(n), 0.0f);
+  }
+  ASSERT_EQ(mesh.face_ids.size(), 12u);
+  EXPECT_EQ(*std::max_element(mesh.face_ids.begin(), mesh.face_ids.end()), 5u);
+}
+
+TEST(Shape, SphereVerticesLieOnTheSphere) {
+  const double r = 25.0;
+  const Mesh mesh = Tessellate(MakeSphere(r), TessellationOptions{0.05, 0.3});
+  ASSERT_GT(mesh.num_vertices(), 100u);
+  for (size_t i = 0; i < mesh.num_vertices(); ++i) {
+    const Eigen::Vector3f& p = mesh.positions[i];
+    EXPECT_NEAR(p.norm(), r, 1e-4);
+    EXPECT_GT(mesh.normals[i].dot(p.normalized()), 0.999f);  // exact surface normal, outward
+  }
+  // Chords lie inside the sphere by at most the deflection: area slightly below 4 pi r^2.
+  EXPECT_LT(mesh.SurfaceArea(), 4 * M_PI * r * r);
+  EXPECT_GT(mesh.SurfaceArea(), 4 * M_PI * (r - 0.05) * (r - 0.05));
+}
+
+TEST(Shape, MassPropertiesAreExact) {
+  const MassProperties box = ComputeMassProperties(MakeBox(40, 30, 20));
+  EXPECT_NEAR(box.volume_mm3, 24000.0, 1e-6);
+  EXPECT_TRUE(box.center_of_mass.isApprox(Eigen::Vector3d(20, 15, 10), 1e-9));
+  // Ixx of a box about its centre: m (b^2 + c^2) / 12 with m = volume.
+  EXPECT_NEAR(box.inertia(0, 0), 24000.0 * (30 * 30 + 20 * 20) / 12.0, 1e-3);
+  const MassProperties cyl = ComputeMassProperties(MakeCylinder(10, 50));
+  EXPECT_NEAR(cyl.volume_mm3, M_PI * 100 * 50, 1e-6);
+  EXPECT_NEAR(cyl.center_of_mass.z(), 25.0, 1e-9);
+}
+
+TEST(Shape, MakePartMovesToTheBoundingBoxCentre) {
+  const Eigen::Isometry3d moved = Eigen::Translation3d(100, -50, 7) * Eigen::Isometry3d::Identity();
+  const Part part = MakePart("brick", Transformed(MakeBox(40, 30, 20), moved), TessellationOptions{});
+  EXPECT_EQ(part.name, "brick");
+  EXPECT_TRUE(part.cad_from_model.translation().isApprox(Eigen::Vector3d(120, -35, 17), 1e-9));
+  EXPECT_TRUE(part.mesh.Bounds().center().isZero(1e-6));
+  EXPECT_TRUE(part.mass.center_of_mass.isZero(1e-9));  // a box's centroid is its box centre
+  EXPECT_TRUE(part.mass_from_brep);
+}
+
+TEST(Shape, RejectsImpossibleInput) {
+  EXPECT_THROW(MakeBox(0, 1, 1), Error);
+  EXPECT_THROW(MakeCylinder(-1, 1), Error);
+  EXPECT_THROW(Tessellate(MakeBox(1, 1, 1), TessellationOptions{0.0, 0.3}), Error);
+  EXPECT_THROW(Tessellate(MakeBox(1, 1, 1), TessellationOptions{0.1, 4.0}), Error);
+  EXPECT_THROW(Tessellate(Shape(), TessellationOptions{}), Error);
+  std::string why;
+  EXPECT_FALSE((TessellationOptions{-1.0, 0.3}).Check(&why));
+  EXPECT_NE(why.find("linear_deflection"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -1,0 +1,171 @@
+#include "dataset/bop.h"
+
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <gtest/gtest.h>
+
+#include "cad/shape.h"
+#include "render/renderer.h"
+#include "tests/test_support.h"
+
+namespace cadsynth {
+namespace {
+
+using nlohmann::json;
+
+json ReadJson(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in) << path;
+  return json::parse(in);
+}
+
+TEST(EncodeDepth, RoundsToTheScaleAndDropsWhatDoesNotFit) {
+  EXPECT_EQ(EncodeDepth(0.0f, 0.1), 0);
+  EXPECT_EQ(EncodeDepth(523.46f, 0.1), 5235);
+  EXPECT_EQ(EncodeDepth(6553.5f, 0.1), 65535);
+  EXPECT_EQ(EncodeDepth(6553.6f, 0.1), 0);  // beyond the uint16 range: no value, not a clamp
+  EXPECT_EQ(EncodeDepth(6553.6f, 1.0), 6554);
+}
+
+// A 4x3 frame worked by hand: instance 0 is fully visible in two pixels; instance 1 has a full
+// silhouette of four pixels, of which one is hidden by instance 0 and one has no valid depth.
+Frame HandFrame() {
+  Frame f;
+  f.camera.intrinsics = Intrinsics{4, 3, 10, 10, 2, 1.5};
+  f.rgb.assign(4 * 3 * 3, 0);
+  f.depth.assign(12, 0.0f);
+  f.instance.assign(12, 0);
+  f.instances.resize(2);
+  for (auto& t : f.instances) t.amodal_mask.assign(12, 0);
+  // Instance 0 at (1,0) and (2,0).
+  for (int p : {1, 2}) {
+    f.instance[p] = 1;
+    f.instances[0].amodal_mask[p] = 1;
+    f.depth[p] = 100.0f;
+  }
+  // Instance 1 silhouette at (2,0), (2,1), (3,1), (3,2); (2,0) hidden by instance 0.
+  for (int p : {2, 6, 7, 11}) f.instances[1].amodal_mask[p] = 1;
+  for (int p : {6, 7}) {
+    f.instance[p] = 2;
+    f.depth[p] = 200.0f;
+  }
+  f.instance[11] = 2;
+  f.depth[11] = 9000.0f;  // visible but too far for uint16 at 0.1 mm
+  return f;
+}
+
+TEST(GtInfo, HandWorkedFrame) {
+  const Frame f = HandFrame();
+  const GtInfo a = ComputeGtInfo(f, 0, 0.1);
+  EXPECT_EQ(a.px_count_all, 2);
+  EXPECT_EQ(a.px_count_visib, 2);
+  EXPECT_EQ(a.px_count_valid, 2);
+  EXPECT_DOUBLE_EQ(a.visib_fract, 1.0);
+  EXPECT_EQ(std::vector<int>(a.bbox_obj, a.bbox_obj + 4), (std::vector<int>{1, 0, 2, 1}));
+  const GtInfo b = ComputeGtInfo(f, 1, 0.1);
+  EXPECT_EQ(b.px_count_all, 4);
+  EXPECT_EQ(b.px_count_visib, 3);
+  EXPECT_EQ(b.px_count_valid, 3);  // (2,0) via instance 0's depth, (2,1), (3,1); not (3,2)
+  EXPECT_DOUBLE_EQ(b.visib_fract, 0.75);
+  EXPECT_EQ(std::vector<int>(b.bbox_obj, b.bbox_obj + 4), (std::vector<int>{2, 0, 2, 3}));
+  EXPECT_EQ(std::vector<int>(b.bbox_visib, b.bbox_visib + 4), (std::vector<int>{2, 1, 2, 2}));
+  Frame hidden = HandFrame();
+  std::fill(hidden.instances[0].amodal_mask.begin(), hidden.instances[0].amodal_mask.end(), 0);
+  std::replace(hidden.instance.begin(), hidden.instance.end(), uint16_t{1}, uint16_t{0});
+  const GtInfo none = ComputeGtInfo(hidden, 0, 0.1);
+  EXPECT_EQ(std::vector<int>(none.bbox_obj, none.bbox_obj + 4), (std::vector<int>{-1, -1, -1, -1}));
+  EXPECT_EQ(none.visib_fract, 0.0);
+}
+
+TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
+  testing::ScratchDir dir;
+  const std::vector<Part> parts = {MakePart("box", MakeBox(60, 40, 20), TessellationOptions{}),
+                                   MakePart("pin", MakeCylinder(8, 50), TessellationOptions{})};
+  Scene scene;
+  scene.instances = {Instance{0, "a", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
+                     Instance{1, "b", Eigen::Translation3d(50, 0, 25) * Eigen::Isometry3d::Identity()}};
+  const Renderer renderer(parts, scene);
+  BopOptions options;
+  WriteBopModels(dir.path(), parts);
+  WriteBopCamera(dir.path(), Intrinsics::KinectV1(), options);
+  BopSceneWriter writer(dir.path(), 3, options, {1, 2});
+  std::vector<Frame> frames;
+  for (int i = 0; i < 2; ++i) {
+    Camera camera;
+    camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, i * 1.0, 0.7, 600.0);
+    frames.push_back(renderer.Render(camera));
+  }
+  writer.WriteFrame(1, frames[1]);  // out of order on purpose
+  writer.WriteFrame(0, frames[0]);
+  writer.Finish();
+
+  const json camera = ReadJson(dir / "camera.json");
+  for (const char* key : {"cx", "cy", "depth_scale", "fx", "fy", "height", "width"}) {
+    EXPECT_TRUE(camera.contains(key)) << key;
+  }
+  EXPECT_EQ(camera["width"], 640);
+  const json info = ReadJson(dir / "models" / "models_info.json");
+  ASSERT_EQ(info.size(), 2u);
+  EXPECT_NEAR(info["1"]["diameter"].get<double>(), std::sqrt(60.0 * 60 + 40 * 40 + 20 * 20), 1e-4);
+  EXPECT_NEAR(info["1"]["min_x"].get<double>(), -30.0, 1e-5);
+  EXPECT_NEAR(info["1"]["size_y"].get<double>(), 40.0, 1e-5);
+  EXPECT_TRUE(std::filesystem::exists(dir / "models" / "obj_000001.ply"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "models" / "obj_000002.ply"));
+  EXPECT_EQ(ReadJson(dir / "models" / "models_cad.json")["2"]["name"], "pin");
+
+  const auto scene_dir = dir / "train" / "000003";
+  const json cams = ReadJson(scene_dir / "scene_camera.json");
+  const json gt = ReadJson(scene_dir / "scene_gt.json");
+  const json gt_info = ReadJson(scene_dir / "scene_gt_info.json");
+  ASSERT_EQ(cams.size(), 2u);
+  EXPECT_EQ(cams.begin().key(), "0");  // ordered by image id
+  for (int im = 0; im < 2; ++im) {
+    const std::string key = std::to_string(im);
+    EXPECT_EQ(cams[key]["cam_K"].size(), 9u);
+    EXPECT_EQ(cams[key]["cam_R_w2c"].size(), 9u);
+    EXPECT_EQ(cams[key]["cam_t_w2c"].size(), 3u);
+    EXPECT_EQ(cams[key]["depth_scale"], 0.1);
+    ASSERT_EQ(gt[key].size(), 2u);
+    ASSERT_EQ(gt_info[key].size(), 2u);
+    // cam_t_w2c is the translation of cam_from_world: the world origin seen from the camera.
+    const Eigen::Isometry3d cam_from_world = frames[im].camera.world_from_cam.inverse();
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(cams[key]["cam_t_w2c"][c].get<double>(), cam_from_world.translation()[c], 1e-9);
+    }
+    for (int i = 0; i < 2; ++i) {
+      const json& g = gt[key][i];
+      EXPECT_EQ(g["obj_id"], i + 1);
+      EXPECT_EQ(g["cam_R_m2c"].size(), 9u);
+      const Eigen::Isometry3d& m2c = frames[im].instances[i].cam_from_model;
+      EXPECT_NEAR(g["cam_R_m2c"][1].get<double>(), m2c.linear()(0, 1), 1e-12);  // row-major
+      EXPECT_NEAR(g["cam_t_m2c"][2].get<double>(), m2c.translation().z(), 1e-9);
+      const json& gi = gt_info[key][i];
+      for (const char* k : {"bbox_obj", "bbox_visib", "px_count_all", "px_count_valid",
+                            "px_count_visib", "visib_fract"}) {
+        EXPECT_TRUE(gi.contains(k)) << k;
+      }
+      EXPECT_EQ(gi["px_count_visib"], frames[im].instances[i].px_count_visib);
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06d_%06d.png", im, i);
+      const cv::Mat mask = cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+      ASSERT_FALSE(mask.empty()) << name;
+      EXPECT_EQ(cv::countNonZero(mask), frames[im].instances[i].px_count_visib);
+      const cv::Mat full = cv::imread((scene_dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
+      EXPECT_EQ(cv::countNonZero(full), frames[im].instances[i].px_count_all);
+    }
+    char image[16];
+    std::snprintf(image, sizeof(image), "%06d.png", im);
+    const cv::Mat depth = cv::imread((scene_dir / "depth" / image).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(depth.type(), CV_16UC1);
+    EXPECT_EQ(depth.at<uint16_t>(240, 320), EncodeDepth(frames[im].depth[240 * 640 + 320], 0.1));
+    const cv::Mat rgb = cv::imread((scene_dir / "rgb" / image).string(), cv::IMREAD_COLOR);
+    ASSERT_EQ(rgb.type(), CV_8UC3);
+    EXPECT_EQ(rgb.at<cv::Vec3b>(240, 320)[0], frames[im].rgb[3 * (240 * 640 + 320) + 2]);  // BGR
+  }
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -1,0 +1,127 @@
+#include "recipes/recipe.h"
+
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "tests/test_support.h"
+
+namespace cadsynth {
+namespace {
+
+std::string ErrorOf(const std::string& text, const std::filesystem::path& base = ".") {
+  try {
+    ParseRecipe(text, "r.yaml", base);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(Recipe, PaperSweepExpandsExactly) {
+  const RunSpec spec = ParseRecipe(R"(
+sweep:
+  yaw: {from: 0, to: 360, step: 10}
+  pitch: {from: 0, to: 90, step: 10}
+  radius: {from: 0.65 m, to: 1.45 m, step: 0.1 m}
+)", "r.yaml", ".");
+  EXPECT_EQ(spec.sweep.yaw_rad.size(), 37u);
+  EXPECT_EQ(spec.sweep.pitch_rad.size(), 10u);
+  ASSERT_EQ(spec.sweep.radius_mm.size(), 9u);
+  EXPECT_NEAR(spec.sweep.radius_mm.back(), 1450.0, 1e-9);
+  EXPECT_NEAR(spec.sweep.yaw_rad.back(), 2 * M_PI, 1e-12);
+  EXPECT_EQ(spec.sweep.NumViews(), 3330u);
+  EXPECT_EQ(spec.sources.size(), 1u);  // no parts: the built-in set
+  EXPECT_EQ(spec.sources[0].kind, PartSource::Kind::kBuiltinDefault);
+  EXPECT_EQ(spec.arrangement.layout, Layout::kRow);
+}
+
+TEST(Recipe, CameraListsAndOptions) {
+  const RunSpec spec = ParseRecipe(R"(
+camera: {preset: kinect_v1, width: 320, height: 240, fx: 262.5, fy: 262.5, cx: 159.5, cy: 119.5}
+sweep: {yaw: [0, 90 deg, 3.14159 rad], pitch: 45, radius: 1 m, target: [0, 0, 2 cm]}
+tessellation: {linear_deflection: 20 um, angular_deflection: 10}
+scene: {layout: row, gap: 1 in}
+render: {floor: false, background: [1, 1, 1], amodal_masks: no}
+output: {dir: out/x, depth_scale: 1.0, split: val}
+)", "r.yaml", "/base");
+  EXPECT_EQ(spec.intrinsics.width, 320);
+  EXPECT_DOUBLE_EQ(spec.intrinsics.fx, 262.5);
+  EXPECT_EQ(spec.sweep.yaw_rad.size(), 3u);
+  EXPECT_DOUBLE_EQ(spec.sweep.yaw_rad[1], M_PI / 2);
+  EXPECT_DOUBLE_EQ(spec.sweep.radius_mm[0], 1000.0);
+  EXPECT_DOUBLE_EQ(spec.sweep.target.z(), 20.0);
+  EXPECT_DOUBLE_EQ(spec.tessellation.linear_deflection_mm, 0.02);
+  EXPECT_DOUBLE_EQ(spec.arrangement.gap_mm, 25.4);
+  EXPECT_FALSE(spec.look.floor);
+  EXPECT_FALSE(spec.render.amodal_masks);
+  EXPECT_EQ(spec.output, std::filesystem::path("/base/out/x"));
+  EXPECT_EQ(spec.bop.split, "val");
+}
+
+TEST(Recipe, ErrorsPointAtLineAndColumn) {
+  EXPECT_EQ(ErrorOf("camera:\n  preset: kinect_v1\n  fxx: 500\n"),
+            "r.yaml:3:3: unknown key 'camera.fxx' (did you mean 'fx'?)");
+  EXPECT_EQ(ErrorOf("sweeep: {}\n"), "r.yaml:1:1: unknown key 'sweeep' (did you mean 'sweep'?)");
+  EXPECT_EQ(ErrorOf("exposure: 3\n"), "r.yaml:1:1: unknown key 'exposure'");
+  EXPECT_EQ(ErrorOf("sweep:\n  radius: 1 parsec\n"),
+            "r.yaml:2:11: sweep.radius: unknown length unit 'parsec' (use um, mm, cm, m, in or ft)");
+  EXPECT_EQ(ErrorOf("camera: {fx: fast}\n"), "r.yaml:1:14: camera.fx: expected a number, got 'fast'");
+  EXPECT_EQ(ErrorOf("camera: {width: 0}\n"),
+            "r.yaml:1:9: camera: image size 0x480 must be between 1 and 16384 pixels");
+  EXPECT_EQ(ErrorOf("sweep: {pitch: {from: 0, to: 90}}\n"),
+            "r.yaml:1:16: sweep.pitch: a range needs 'from', 'to' and 'step' (no 'step')");
+  EXPECT_EQ(ErrorOf("sweep: {pitch: 120}\n"), "r.yaml:1:8: sweep: pitch must lie between -90 and 90 degrees");
+  EXPECT_EQ(ErrorOf("camera: [1, 2\n").rfind("r.yaml:", 0), 0u);  // YAML syntax errors too
+  EXPECT_EQ(ErrorOf("- just\n- a list\n"), "r.yaml: a recipe is a mapping of sections (parts, sweep, ...)");
+}
+
+TEST(Recipe, PartsResolveRelativeToTheRecipe) {
+  testing::ScratchDir dir;
+  std::ofstream(dir / "part.stp") << "ISO-10303-21;\n";
+  const RunSpec spec = ParseRecipe("parts:\n  - step: part.stp\n  - builtin: default\n", "r.yaml", dir.path());
+  ASSERT_EQ(spec.sources.size(), 2u);
+  EXPECT_EQ(spec.sources[0].kind, PartSource::Kind::kStep);
+  EXPECT_EQ(spec.sources[0].path, dir / "part.stp");
+  EXPECT_EQ(spec.sources[0].where, "r.yaml:2:11");
+  EXPECT_EQ(spec.arrangement.layout, Layout::kAssembled);
+  EXPECT_EQ(ErrorOf("parts:\n  - step: nope.stp\n", dir.path()),
+            "r.yaml:2:11: parts[0].step: " + (dir / "nope.stp").string() + ": no such file");
+  EXPECT_EQ(ErrorOf("parts:\n  - stp: part.stp\n", dir.path()),
+            "r.yaml:2:5: unknown key 'parts[0].stp' (did you mean 'step'?)");
+}
+
+TEST(Recipe, LoadRecipeNamesTheFile) {
+  testing::ScratchDir dir;
+  try {
+    LoadRecipe(dir / "nope.yaml");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), (dir / "nope.yaml").string() + ": no such recipe file");
+  }
+  std::ofstream(dir / "bad.yaml") << "output:\n  dirr: x\n";
+  try {
+    LoadRecipe(dir / "bad.yaml");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "bad.yaml").string() + ":2:3: unknown key 'output.dirr' (did you mean 'dir'?)");
+  }
+}
+
+TEST(Recipe, ShippedRecipesParse) {
+  for (const char* name : {"as1_assembly.yaml", "paper_sweep.yaml"}) {
+    const std::filesystem::path path = std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / name;
+    if (std::string(name) == "as1_assembly.yaml" && testing::DataFile("step/assemblies/as1-oc-214.stp").empty()) {
+      continue;  // refers to the shared data
+    }
+    EXPECT_NO_THROW(LoadRecipe(path)) << name;
+  }
+  EXPECT_EQ(LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "paper_sweep.yaml")
+                .sweep.NumViews(),
+            3330u);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -1,0 +1,188 @@
+#include "render/renderer.h"
+
+#include <tbb/global_control.h>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "cad/shape.h"
+
+namespace cadsynth {
+namespace {
+
+// A camera at `eye` looking straight down (-z), image x along world +x, image y along world -y.
+Eigen::Isometry3d LookingDown(const Eigen::Vector3d& eye) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  T.translation() = eye;
+  return T;
+}
+
+// An instance whose model frame (its bounding-box centre) sits at `where`.
+Instance Place(int part, const Part&, const Eigen::Vector3d& where) {
+  return Instance{part, "i", Eigen::Isometry3d(Eigen::Translation3d(where))};
+}
+
+int Count(const std::vector<uint8_t>& mask) {
+  return static_cast<int>(std::count(mask.begin(), mask.end(), 1));
+}
+
+TEST(Renderer, DepthOfATiltedFloorIsTheCameraZ) {
+  Scene scene;  // floor only
+  const Renderer renderer({}, scene);
+  Camera camera;
+  camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.4, 35.0 * M_PI / 180.0, 1200.0);
+  const Frame frame = renderer.Render(camera);
+  const Eigen::Isometry3d& T = camera.world_from_cam;
+  const Intrinsics& k = camera.intrinsics;
+  int checked = 0;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const Eigen::Vector3d d = T.linear() * Eigen::Vector3d((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy, 1.0);
+      const float depth = frame.depth[v * k.width + u];
+      if (d.z() >= 0) {
+        EXPECT_EQ(depth, 0.0f);  // above the horizon: no return
+        continue;
+      }
+      const double z = -T.translation().z() / d.z();  // ray parameter with d_cam.z = 1: the depth
+      const Eigen::Vector3d hit = T.translation() + z * d;
+      if (hit.head<2>().cwiseAbs().maxCoeff() > scene.floor_half_size_mm - 1) continue;
+      ASSERT_NEAR(depth, z, 0.01) << "pixel " << u << "," << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 100000);
+}
+
+TEST(Renderer, DepthOfASphereMatchesTheAnalyticIntersection) {
+  const double r = 50.0;
+  const std::vector<Part> parts = {MakePart("ball", MakeSphere(r), TessellationOptions{0.002, 0.1})};
+  Scene scene;
+  scene.floor = false;
+  const Eigen::Vector3d centre(12.0, -7.0, 50.0);
+  scene.instances = {Place(0, parts[0], centre)};
+  const Renderer renderer(parts, scene);
+  Camera camera;
+  camera.world_from_cam = WorldFromCamOnSphere(centre, 0.7, 50.0 * M_PI / 180.0, 400.0);
+  camera.world_from_cam.translation() += Eigen::Vector3d(5, 3, 0);  // off-axis on purpose
+  const Frame frame = renderer.Render(camera);
+  const Intrinsics& k = camera.intrinsics;
+  const Eigen::Vector3d c = camera.world_from_cam.inverse() * centre;  // centre in camera frame
+  int checked = 0;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const Eigen::Vector3d d((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy, 1.0);
+      // |t d - c|^2 = r^2  ->  t = (d.c - sqrt((d.c)^2 - |d|^2 (|c|^2 - r^2))) / |d|^2
+      const double a = d.squaredNorm(), b = d.dot(c), disc = b * b - a * (c.squaredNorm() - r * r);
+      const float depth = frame.depth[v * k.width + u];
+      if (disc <= 0) {
+        if (disc < -1e-2 * a * r) EXPECT_EQ(depth, 0.0f);  // clearly outside the silhouette
+        continue;
+      }
+      const double t = (b - std::sqrt(disc)) / a;
+      const Eigen::Vector3d normal = (t * d - c) / r;
+      if (-normal.dot(d.normalized()) < 0.5) continue;  // grazing: chord error grows as 1/cos
+      ASSERT_NEAR(depth, t, 0.01) << "pixel " << u << "," << v;
+      EXPECT_EQ(frame.instance[v * k.width + u], 1);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10000);
+}
+
+TEST(Renderer, BoxFaceSeenHeadOnCoversExactlyItsPixels) {
+  // A 100 x 100 mm top face 525 mm in front of a camera with f = 525 px spans exactly 100 px; with
+  // cx = cy = 320 its edges fall on pixel borders, so pixel centres (u + 0.5) decide cleanly.
+  const std::vector<Part> parts = {MakePart("box", MakeBox(100, 100, 40), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.instances = {Place(0, parts[0], {0, 0, 20})};  // top face at z = 40, centred on the axis
+  const Renderer renderer(parts, scene);
+  Camera camera;
+  camera.intrinsics = Intrinsics{640, 640, 525.0, 525.0, 320.0, 320.0};
+  camera.world_from_cam = LookingDown({0, 0, 40 + 525});
+  const Frame frame = renderer.Render(camera);
+  EXPECT_EQ(frame.instances[0].px_count_visib, 100 * 100);
+  EXPECT_EQ(frame.instances[0].px_count_all, 100 * 100);
+  EXPECT_EQ(Count(frame.instances[0].amodal_mask), 100 * 100);
+  // Corners: pixel (270, 270) is inside, (269, 270) and (370, 270) are not.
+  EXPECT_EQ(frame.instance[270 * 640 + 270], 1);
+  EXPECT_EQ(frame.instance[270 * 640 + 269], 0);
+  EXPECT_EQ(frame.instance[270 * 640 + 370], 0);
+  EXPECT_EQ(frame.instance[369 * 640 + 369], 1);
+  EXPECT_FLOAT_EQ(frame.depth[300 * 640 + 300], 525.0f);
+}
+
+TEST(Renderer, FrontObjectOwnsThePixelAndTheHiddenOneKeepsItsFullMask) {
+  const std::vector<Part> parts = {MakePart("big", MakeBox(100, 100, 20), TessellationOptions{}),
+                                   MakePart("small", MakeBox(40, 40, 20), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.instances = {Place(0, parts[0], {0, 0, 10}), Place(1, parts[1], {0, 0, 100})};
+  const Renderer renderer(parts, scene);
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 600});
+  const Frame frame = renderer.Render(camera);
+  const int centre = 240 * 640 + 320;
+  EXPECT_EQ(frame.instance[centre], 2);  // the small box is nearer the camera
+  EXPECT_NEAR(frame.depth[centre], 600.0 - 110.0, 1e-3);
+
+  // Rendering the big box alone gives exactly its amodal mask from the occluded scene.
+  Scene alone = scene;
+  alone.instances = {scene.instances[0]};
+  const Frame solo = Renderer(parts, alone).Render(camera);
+  std::vector<uint8_t> visible_alone(solo.instance.size());
+  for (size_t p = 0; p < solo.instance.size(); ++p) visible_alone[p] = solo.instance[p] == 1;
+  EXPECT_EQ(frame.instances[0].amodal_mask, visible_alone);
+  EXPECT_EQ(frame.instances[0].px_count_all, solo.instances[0].px_count_visib);
+  EXPECT_EQ(frame.instances[0].px_count_visib + frame.instances[1].px_count_visib,
+            solo.instances[0].px_count_visib);  // the small box hides part of the big one
+  EXPECT_GT(frame.instances[1].px_count_visib, 0);
+}
+
+TEST(Renderer, PosesComposeFromCameraAndInstance) {
+  const std::vector<Part> parts = {MakePart("box", MakeBox(30, 20, 10), TessellationOptions{})};
+  Scene scene;
+  scene.instances = {Instance{0, "b", Eigen::Translation3d(40, 10, 5) *
+                                          Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ())}};
+  const Renderer renderer(parts, scene);
+  Camera camera;
+  camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 1.1, 0.8, 900.0);
+  const Frame frame = renderer.Render(camera);
+  const Eigen::Isometry3d expected = camera.world_from_cam.inverse() * scene.instances[0].world_from_model;
+  EXPECT_TRUE(frame.instances[0].cam_from_model.isApprox(expected, 1e-12));
+  // And the model origin projects into the silhouette.
+  const Eigen::Vector3d o = frame.instances[0].cam_from_model.translation();
+  const int u = static_cast<int>(std::floor(525.0 * o.x() / o.z() + 319.5));
+  const int v = static_cast<int>(std::floor(525.0 * o.y() / o.z() + 239.5));
+  EXPECT_EQ(frame.instances[0].amodal_mask[v * 640 + u], 1);
+}
+
+TEST(Renderer, OutputDoesNotDependOnTheThreadCount) {
+  const std::vector<Part> parts = {MakePart("cyl", MakeCylinder(20, 60), TessellationOptions{}),
+                                   MakePart("box", MakeBox(50, 40, 30), TessellationOptions{})};
+  Scene scene;
+  scene.instances = {Place(0, parts[0], {-30, 0, 30}), Place(1, parts[1], {30, 10, 15})};
+  scene.part_colors = {PaletteColor(0), PaletteColor(1)};
+  const Renderer renderer(parts, scene);
+  Camera camera;
+  camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.3, 0.5, 700.0);
+  const auto render_with = [&](size_t threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    return renderer.Render(camera);
+  };
+  const Frame one = render_with(1), two = render_with(2);
+  EXPECT_EQ(one.rgb, two.rgb);
+  EXPECT_EQ(one.depth, two.depth);
+  EXPECT_EQ(one.instance, two.instance);
+  for (int i = 0; i < 2; ++i) EXPECT_EQ(one.instances[i].amodal_mask, two.instances[i].amodal_mask);
+}
+
+TEST(Renderer, RejectsInstancesOfMissingParts) {
+  Scene scene;
+  scene.instances = {Instance{3, "ghost", Eigen::Isometry3d::Identity()}};
+  EXPECT_THROW(Renderer({}, scene), Error);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -1,0 +1,52 @@
+// Helpers shared by the tests: the shared data folder and scratch folders.
+#pragma once
+
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace cadsynth::testing {
+
+// ../shared/data by default; CADSYNTH_TEST_DATA in the environment overrides it.
+inline std::filesystem::path DataDir() {
+  const char* env = std::getenv("CADSYNTH_TEST_DATA");
+  return std::filesystem::absolute(env != nullptr ? env : CADSYNTH_TEST_DATA).lexically_normal();
+}
+
+// The path of a shared data file, or empty when it is not there.
+inline std::filesystem::path DataFile(const std::string& relative) {
+  const std::filesystem::path path = DataDir() / relative;
+  return std::filesystem::exists(path) ? path : std::filesystem::path();
+}
+
+#define CADSYNTH_REQUIRE_DATA(var, relative)                                                  \
+  const std::filesystem::path var = ::cadsynth::testing::DataFile(relative);                 \
+  if (var.empty()) {                                                                          \
+    GTEST_SKIP() << "shared test data not found: " << (::cadsynth::testing::DataDir() / relative) \
+                 << " (set CADSYNTH_TEST_DATA to the shared/data folder)";                   \
+  }
+
+// A fresh folder removed at the end of the test.
+class ScratchDir {
+ public:
+  ScratchDir() {
+    std::random_device rd;
+    path_ = std::filesystem::temp_directory_path() /
+            ("cadsynth_test_" + std::to_string(rd()) + "_" + std::to_string(rd()));
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace cadsynth::testing

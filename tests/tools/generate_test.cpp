@@ -1,0 +1,150 @@
+#include "tools/generate.h"
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "tests/test_support.h"
+
+namespace cadsynth {
+namespace {
+
+using nlohmann::json;
+using testing::ScratchDir;
+
+// The default job at a small size: 2 views of 160x120.
+RunSpec SmallDefault() {
+  RunSpec spec = DefaultRunSpec();
+  spec.intrinsics = Intrinsics{160, 120, 131.25, 131.25, 79.5, 59.5};
+  spec.sweep.yaw_rad = {0.0, 2.0};
+  spec.sweep.pitch_rad = {0.6};
+  spec.sweep.radius_mm = {700.0};
+  return spec;
+}
+
+std::map<std::string, std::string> ReadTree(const std::filesystem::path& root) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::stringstream bytes;
+    bytes << in.rdbuf();
+    files[std::filesystem::relative(entry.path(), root).string()] = bytes.str();
+  }
+  return files;
+}
+
+size_t EntriesIn(const std::filesystem::path& dir) {
+  return static_cast<size_t>(std::distance(std::filesystem::directory_iterator(dir), {}));
+}
+
+TEST(Generate, DefaultJobWritesACompleteBopDataset) {
+  ScratchDir dir;
+  GenerateOptions options;
+  options.output = dir / "data";
+  size_t last_progress = 0;
+  options.progress = [&](size_t done, size_t total) {
+    EXPECT_EQ(total, 2u);
+    last_progress = std::max(last_progress, done);
+  };
+  const GenerateSummary summary = Generate(SmallDefault(), options);
+  EXPECT_EQ(summary.frames, 2u);
+  EXPECT_EQ(summary.objects, 3u);
+  EXPECT_EQ(last_progress, 2u);
+
+  const auto files = ReadTree(dir / "data");
+  for (const char* f : {"camera.json", "models/models_info.json", "models/obj_000001.ply",
+                        "models/obj_000003.ply", "train/000000/rgb/000001.png",
+                        "train/000000/depth/000001.png", "train/000000/mask/000001_000002.png",
+                        "train/000000/mask_visib/000000_000000.png", "train/000000/scene_camera.json",
+                        "train/000000/scene_gt.json", "train/000000/scene_gt_info.json"}) {
+    EXPECT_TRUE(files.count(f)) << f;
+  }
+  // camera.json; models_info, models_cad and 3 PLY; per scene 3 JSON, 2 rgb, 2 depth, and
+  // 2 images x 3 instances of mask and mask_visib.
+  EXPECT_EQ(files.size(), 1u + 5u + 3u + 2u + 2u + 2u * 3u * 2u);
+  // Every part rests on the floor in view: the sweep sees each of them.
+  const json info = json::parse(files.at("train/000000/scene_gt_info.json"));
+  for (int i = 0; i < 3; ++i) EXPECT_GT(info["0"][i]["px_count_visib"].get<int>(), 0) << i;
+  EXPECT_EQ(EntriesIn(dir.path()), 1u);  // no staging folder left behind
+}
+
+TEST(Generate, SameSpecGivesTheSameBytesWhateverTheThreadCount) {
+  ScratchDir dir;
+  const auto run = [&](const std::string& name, size_t threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    GenerateOptions options;
+    options.output = dir / name;
+    Generate(SmallDefault(), options);
+    return ReadTree(dir / name);
+  };
+  const auto one = run("one", 1), two = run("two", 2);
+  ASSERT_EQ(one.size(), two.size());
+  for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
+}
+
+TEST(Generate, BadInputLeavesNoDatasetBehind) {
+  ScratchDir dir;
+  std::ofstream(dir / "broken.stp") << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(";
+  RunSpec spec = SmallDefault();
+  spec.sources = {PartSource{PartSource::Kind::kStep, dir / "broken.stp", "r.yaml:2:11"}};
+  GenerateOptions options;
+  options.output = dir / "out";
+  try {
+    Generate(spec, options);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("r.yaml:2:11: " + (dir / "broken.stp").string() + ": ", 0), 0u)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  EXPECT_EQ(EntriesIn(dir.path()), 1u);  // only broken.stp: no staging folder either
+}
+
+TEST(Generate, ExistingOutputNeedsOverwrite) {
+  ScratchDir dir;
+  std::filesystem::create_directories(dir / "out");
+  std::ofstream(dir / "out" / "keep.txt") << "mine";
+  GenerateOptions options;
+  options.output = dir / "out";
+  EXPECT_THROW(Generate(SmallDefault(), options), Error);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "keep.txt"));
+  options.overwrite = true;
+  Generate(SmallDefault(), options);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "keep.txt"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "camera.json"));
+  EXPECT_EQ(EntriesIn(dir.path()), 1u);
+}
+
+TEST(Generate, As1RecipeShowsEveryPart) {
+  CADSYNTH_REQUIRE_DATA(file, "step/assemblies/as1-oc-214.stp");
+  ScratchDir dir;
+  RunSpec spec = LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "as1_assembly.yaml");
+  spec.intrinsics = Intrinsics{320, 240, 262.5, 262.5, 159.5, 119.5};  // half size, same view
+  GenerateOptions options;
+  options.output = dir / "as1";
+  const GenerateSummary summary = Generate(spec, options);
+  EXPECT_EQ(summary.objects, 5u);
+  EXPECT_EQ(summary.instances, 18u);
+  std::ifstream gt_in(dir / "as1" / "train" / "000000" / "scene_gt.json");
+  std::ifstream info_in(dir / "as1" / "train" / "000000" / "scene_gt_info.json");
+  const json gt = json::parse(gt_in), info = json::parse(info_in);
+  std::map<int, int> best;  // obj_id -> most visible pixels in any view
+  for (const auto& [image, entries] : gt.items()) {
+    for (size_t i = 0; i < entries.size(); ++i) {
+      const int obj = entries[i]["obj_id"];
+      best[obj] = std::max(best[obj], info[image][i]["px_count_visib"].get<int>());
+    }
+  }
+  ASSERT_EQ(best.size(), 5u);
+  for (const auto& [obj, px] : best) EXPECT_GT(px, 20) << "obj_id " << obj;
+}
+
+}  // namespace
+}  // namespace cadsynth

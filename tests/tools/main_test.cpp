@@ -1,0 +1,103 @@
+// The command line as a user meets it: exit codes, one clear error line, nothing half-written.
+#include <sys/wait.h>
+
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "tests/test_support.h"
+
+namespace {
+
+using cadsynth::testing::ScratchDir;
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+CliRun Cadsynth(const std::string& args, const ScratchDir& dir) {
+  const std::string command = "cd '" + dir.path().string() + "' && '" CADSYNTH_EXE "' " + args +
+                              " > stdout.txt 2> stderr.txt";
+  const int status = std::system(command.c_str());
+  CliRun run;
+  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  for (auto [name, text] : {std::pair{"stdout.txt", &run.out}, std::pair{"stderr.txt", &run.err}}) {
+    std::ifstream in(dir / name);
+    std::stringstream s;
+    s << in.rdbuf();
+    *text = s.str();
+    std::filesystem::remove(dir / name);
+  }
+  return run;
+}
+
+size_t Lines(const std::string& text) { return std::count(text.begin(), text.end(), '\n'); }
+
+TEST(Cli, HelpVersionAndUsageErrors) {
+  ScratchDir dir;
+  EXPECT_EQ(Cadsynth("--help", dir).code, 0);
+  EXPECT_NE(Cadsynth("--help", dir).out.find("cadsynth generate"), std::string::npos);
+  EXPECT_EQ(Cadsynth("--version", dir).code, 0);
+  const CliRun bad = Cadsynth("frobnicate", dir);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_EQ(bad.err.rfind("error: unknown command 'frobnicate'", 0), 0u);
+  EXPECT_EQ(Cadsynth("generate --threads zero", dir).code, 2);
+}
+
+TEST(Cli, MissingRecipeIsOneLineAndNoOutput) {
+  ScratchDir dir;
+  const CliRun run = Cadsynth("generate missing.yaml -o out", dir);
+  EXPECT_EQ(run.code, 1);
+  EXPECT_EQ(run.err, "error: missing.yaml: no such recipe file\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
+
+TEST(Cli, UnknownKeyNamesFileLineAndColumn) {
+  ScratchDir dir;
+  std::ofstream(dir / "r.yaml") << "sweep:\n  yaw: [0, 90]\n  pich: 30\n";
+  const CliRun run = Cadsynth("generate r.yaml -o out", dir);
+  EXPECT_EQ(run.code, 1);
+  EXPECT_EQ(run.err, "error: r.yaml:3:3: unknown key 'sweep.pich' (did you mean 'pitch'?)\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
+
+TEST(Cli, FileThatIsNotStepFailsCleanly) {
+  ScratchDir dir;
+  std::ofstream(dir / "notes.stp") << "shopping list: bolts, nuts\n";
+  std::ofstream(dir / "r.yaml") << "parts:\n  - step: notes.stp\nsweep: {yaw: 0, pitch: 45, radius: 1 m}\n";
+  const CliRun run = Cadsynth("generate r.yaml -o out", dir);
+  EXPECT_EQ(run.code, 1);
+  EXPECT_EQ(Lines(run.err), 1u) << run.err;
+  EXPECT_NE(run.err.find("r.yaml:2:11: "), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("notes.stp: not a readable STEP file"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 2);
+}
+
+TEST(Cli, CorruptedSharedStepFailsCleanly) {
+  CADSYNTH_REQUIRE_DATA(file, "step/awkward/bug32314_corrupted.stp");
+  ScratchDir dir;
+  std::ofstream(dir / "r.yaml") << "parts:\n  - step: " << file.string()
+                                << "\nsweep: {yaw: 0, pitch: 45, radius: 1 m}\n";
+  const CliRun run = Cadsynth("generate r.yaml -o out", dir);
+  EXPECT_EQ(run.code, 1);
+  EXPECT_EQ(Lines(run.err), 1u) << run.err;
+  EXPECT_NE(run.err.find(file.string()), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
+
+TEST(Cli, GenerateWithoutArgumentsWritesTheDefaultDataset) {
+  ScratchDir dir;
+  const CliRun run = Cadsynth("generate --quiet", dir);
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find("wrote 144 frames of 3 objects"), std::string::npos) << run.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000000" / "scene_gt.json"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000000" / "rgb" / "000143.png"));
+  const CliRun again = Cadsynth("generate --quiet", dir);
+  EXPECT_EQ(again.code, 1);
+  EXPECT_NE(again.err.find("already exists (pass --overwrite"), std::string::npos);
+}
+
+}  // namespace

@@ -272,7 +272,7 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "render", {"background", "floor", "floor_color", "ambient", "light_direction",
-                               "light_intensity", "amodal_masks"});
+                               "light_intensity"});
   Scene& look = spec->look;
   if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
   if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
@@ -293,7 +293,6 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (look.ambient < 0.0f || look.light_intensity < 0.0f) {
     r.Fail(node, "render", "ambient and light_intensity must not be negative");
   }
-  if (node["amodal_masks"]) spec->render.amodal_masks = r.Bool(node["amodal_masks"], "render.amodal_masks");
 }
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {

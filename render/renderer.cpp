@@ -163,15 +163,13 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
   }
   rtcCommitScene(im.world);
 
-  if (options.amodal_masks) {
-    for (size_t i = 0; i < scene.instances.size(); ++i) {
-      RTCScene alone = rtcNewScene(im.device);
-      RTCGeometry geometry = im.NewInstance(static_cast<int>(i));
-      rtcAttachGeometryByID(alone, geometry, 0);
-      rtcReleaseGeometry(geometry);
-      rtcCommitScene(alone);
-      im.solo.push_back(alone);
-    }
+  for (size_t i = 0; i < scene.instances.size(); ++i) {
+    RTCScene alone = rtcNewScene(im.device);
+    RTCGeometry geometry = im.NewInstance(static_cast<int>(i));
+    rtcAttachGeometryByID(alone, geometry, 0);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(alone);
+    im.solo.push_back(alone);
   }
   im.ThrowIfFailed("building the scene");
 }
@@ -309,7 +307,7 @@ Frame Renderer::Render(const Camera& camera) const {
   for (size_t p = 0; p < num_pixels; ++p) {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }
-  if (im.options.amodal_masks) {
+  {
     tbb::parallel_for(size_t{0}, im.scene.instances.size(), [&](size_t i) {
       Frame::InstanceTruth& truth = frame.instances[i];
       truth.amodal_mask.assign(num_pixels, 0);

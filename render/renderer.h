@@ -13,7 +13,6 @@
 namespace cadsynth {
 
 struct RenderOptions {
-  bool amodal_masks = true;  // trace every instance alone for its full silhouette
   // Pixel rows handed to one task; results never depend on it or on the thread count.
   int rows_per_task = 8;
 
@@ -21,7 +20,8 @@ struct RenderOptions {
 };
 
 // Builds the acceleration structures once; Render() may then be called from many threads.
-// One ray per pixel through its centre; depth is the camera-frame z of the first hit.
+// One ray per pixel through its centre; depth is the camera-frame z of the first hit. The full
+// (amodal) silhouette of each instance comes from tracing that instance alone.
 class Renderer {
  public:
   // `parts` are copied into the renderer's own buffers; `scene.instances` refer to them by index.

@@ -43,7 +43,7 @@ camera: {preset: kinect_v1, width: 320, height: 240, fx: 262.5, fy: 262.5, cx: 1
 sweep: {yaw: [0, 90 deg, 3.14159 rad], pitch: 45, radius: 1 m, target: [0, 0, 2 cm]}
 tessellation: {linear_deflection: 20 um, angular_deflection: 10}
 scene: {layout: row, gap: 1 in}
-render: {floor: false, background: [1, 1, 1], amodal_masks: no}
+render: {floor: false, background: [1, 1, 1]}
 output: {dir: out/x, depth_scale: 1.0, split: val}
 )", "r.yaml", "/base");
   EXPECT_EQ(spec.intrinsics.width, 320);
@@ -55,7 +55,6 @@ output: {dir: out/x, depth_scale: 1.0, split: val}
   EXPECT_DOUBLE_EQ(spec.tessellation.linear_deflection_mm, 0.02);
   EXPECT_DOUBLE_EQ(spec.arrangement.gap_mm, 25.4);
   EXPECT_FALSE(spec.look.floor);
-  EXPECT_FALSE(spec.render.amodal_masks);
   EXPECT_EQ(spec.output, std::filesystem::path("/base/out/x"));
   EXPECT_EQ(spec.bop.split, "val");
 }

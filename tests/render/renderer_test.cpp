@@ -76,7 +76,9 @@ TEST(Renderer, DepthOfASphereMatchesTheAnalyticIntersection) {
       const double a = d.squaredNorm(), b = d.dot(c), disc = b * b - a * (c.squaredNorm() - r * r);
       const float depth = frame.depth[v * k.width + u];
       if (disc <= 0) {
-        if (disc < -1e-2 * a * r) EXPECT_EQ(depth, 0.0f);  // clearly outside the silhouette
+        if (disc < -1e-2 * a * r) {
+          EXPECT_EQ(depth, 0.0f);  // clearly outside the silhouette
+        }
         continue;
       }
       const double t = (b - std::sqrt(disc)) / a;

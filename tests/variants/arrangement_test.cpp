@@ -18,7 +18,7 @@ Fixture TwoBoxesAndACylinder() {
   f.parts.push_back(MakePart("box", MakeBox(40, 30, 20), TessellationOptions{}));
   f.parts.push_back(MakePart("cyl", MakeCylinder(10, 50), TessellationOptions{}));
   const auto place = [&](int part, const Eigen::Isometry3d& cad) {
-    f.instances.push_back({part, "i" + std::to_string(f.instances.size()), cad * f.parts[part].cad_from_model});
+    f.instances.push_back({part, std::string("i").append(std::to_string(f.instances.size())), cad * f.parts[part].cad_from_model});
   };
   place(0, Eigen::Translation3d(500, 200, 100) * Eigen::Isometry3d::Identity());
   place(0, Eigen::Translation3d(500, 260, 130) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));

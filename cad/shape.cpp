@@ -79,15 +79,6 @@ void RequirePositive(double value, const char* what) {
   }
 }
 
-gp_Trsf ToTrsf(const Eigen::Isometry3d& t) {
-  gp_Trsf trsf;
-  const Eigen::Matrix3d& r = t.linear();
-  const Eigen::Vector3d& p = t.translation();
-  trsf.SetValues(r(0, 0), r(0, 1), r(0, 2), p.x(), r(1, 0), r(1, 1), r(1, 2), p.y(), r(2, 0),
-                 r(2, 1), r(2, 2), p.z());
-  return trsf;
-}
-
 }  // namespace
 
 Shape MakeBox(double dx, double dy, double dz) {

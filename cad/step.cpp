@@ -242,12 +242,7 @@ void WriteStep(const std::filesystem::path& path, const std::string& assembly_na
       const TDF_Label part = tool->AddShape(OcctShape(component.shape), /*makeAssembly=*/false);
       TDataStd_Name::Set(part, TCollection_ExtendedString(component.name.c_str(), true));
       for (const Eigen::Isometry3d& placement : component.placements) {
-        gp_Trsf trsf;
-        const Eigen::Matrix3d& r = placement.linear();
-        const Eigen::Vector3d& t = placement.translation();
-        trsf.SetValues(r(0, 0), r(0, 1), r(0, 2), t.x(), r(1, 0), r(1, 1), r(1, 2), t.y(),
-                       r(2, 0), r(2, 1), r(2, 2), t.z());
-        tool->AddComponent(root, part, TopLoc_Location(trsf));
+        tool->AddComponent(root, part, TopLoc_Location(ToTrsf(placement)));
       }
     }
     tool->UpdateAssemblies();

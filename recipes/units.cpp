@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "cad/units.h"
+
 namespace cadsynth {
 namespace {
 
@@ -22,16 +24,6 @@ bool SplitNumber(const std::string& text, double* value, std::string* unit) {
 }
 
 }  // namespace
-
-std::optional<double> LengthUnitMm(const std::string& unit) {
-  if (unit == "mm" || unit == "millimetre" || unit == "millimeter") return 1.0;
-  if (unit == "um" || unit == "micron") return 1e-3;
-  if (unit == "cm") return 10.0;
-  if (unit == "m" || unit == "metre" || unit == "meter") return 1000.0;
-  if (unit == "in" || unit == "inch") return 25.4;
-  if (unit == "ft" || unit == "foot") return 304.8;
-  return std::nullopt;
-}
 
 std::optional<double> ParseLengthMm(const std::string& text, std::string* why) {
   double value = 0.0;

@@ -13,7 +13,4 @@ std::optional<double> ParseLengthMm(const std::string& text, std::string* why);
 // An angle in radians. Units: deg (or °), rad; a bare number is degrees.
 std::optional<double> ParseAngleRad(const std::string& text, std::string* why);
 
-// Millimetres per unit for a length unit name ("mm", "m", "inch", ...), or nullopt if unknown.
-std::optional<double> LengthUnitMm(const std::string& unit);
-
 }  // namespace cadsynth

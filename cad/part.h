@@ -1,6 +1,7 @@
 // Parts (distinct shapes, each one object class of the dataset) and their instances.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@ struct Part {
   Eigen::Isometry3d cad_from_model = Eigen::Isometry3d::Identity();
   MassProperties mass;
   bool mass_from_brep = false;  // true when `mass` came from the exact B-rep
+  bool watertight = false;      // the mesh is closed and consistently wound
+  std::optional<Eigen::Vector3f> color;  // sRGB in [0, 1], when the CAD file gives one
 };
 
 // One placed copy of a part. A point of the part moves to the world (or to the frame of the
@@ -36,12 +39,14 @@ struct Instance {
   int part = 0;        // index into the owning list of parts
   std::string name;    // instance name from the CAD file, or generated
   Eigen::Isometry3d world_from_model = Eigen::Isometry3d::Identity();
+  std::optional<Eigen::Vector3f> color;  // overrides the part's colour for this instance
 };
 
 // An assembly as read from a file: distinct parts, and every instance placed in the frame of the
 // file's root (a part used N times is one Part with N Instances).
 struct Assembly {
   std::string name;
+  std::string format;       // "STEP", "IGES", "BREP", "mesh (stl)", "built-in", ...
   std::string length_unit;  // the length unit the file declares (geometry is in mm regardless)
   std::vector<Part> parts;
   std::vector<Instance> instances;

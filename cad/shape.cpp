@@ -23,6 +23,7 @@
 #include <gp_Trsf.hxx>
 
 #include "cad/error.h"
+#include "cad/mesh_analysis.h"
 #include "cad/occt_shape.h"
 
 namespace cadsynth {
@@ -203,6 +204,7 @@ Part MakePart(const std::string& name, const Shape& shape, const TessellationOpt
   part.mass = ComputeMassProperties(shape);
   part.mass.center_of_mass -= centre;
   part.mass_from_brep = part.mass.volume_mm3 > 0.0;
+  part.watertight = AnalyzeTopology(part.mesh).watertight();
   return part;
 }
 

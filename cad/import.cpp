@@ -1,0 +1,210 @@
+#include "cad/import.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <IFSelect_ReturnStatus.hxx>
+#include <IGESCAFControl_Reader.hxx>
+#include <IGESData_IGESModel.hxx>
+#include <Standard_Failure.hxx>
+#include <TCollection_HAsciiString.hxx>
+#include <TDocStd_Document.hxx>
+#include <TopoDS_Shape.hxx>
+#include <XCAFApp_Application.hxx>
+
+#include "cad/error.h"
+#include "cad/occt_shape.h"
+#include "cad/step.h"
+#include "cad/units.h"
+#include "cad/xde.h"
+
+namespace cadsynth {
+
+bool ImportOptions::Check(std::string* why) const {
+  if (!tessellation.Check(why)) return false;
+  if (!unit.empty() && !LengthUnitMm(unit)) {
+    *why = "unknown length unit '" + unit + "' (use um, mm, cm, m, in or ft)";
+    return false;
+  }
+  if (!(crease_angle_rad >= 0.0) || crease_angle_rad > M_PI) {
+    *why = "crease_angle must be between 0 and 180 degrees";
+    return false;
+  }
+  return true;
+}
+
+CadFormat DetectFormat(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".step" || ext == ".stp" || ext == ".p21") return CadFormat::kStep;
+  if (ext == ".iges" || ext == ".igs") return CadFormat::kIges;
+  if (ext == ".brep" || ext == ".rle") return CadFormat::kBrep;
+  for (const char* mesh : {".stl", ".obj", ".ply", ".dae", ".gltf", ".glb", ".3mf", ".off"}) {
+    if (ext == mesh) return CadFormat::kMesh;
+  }
+  internal::RequireReadableFile(path.string());
+  std::ifstream in(path, std::ios::binary);
+  std::string head(256, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  if (head.find("ISO-10303-21") != std::string::npos) return CadFormat::kStep;
+  if (head.find("CASCADE Topology") != std::string::npos ||
+      head.find("DBRep_DrawableShape") != std::string::npos) {
+    return CadFormat::kBrep;
+  }
+  throw Error(path.string() +
+              ": unknown kind of file (expected STEP .step/.stp, IGES .iges/.igs, OpenCASCADE "
+              ".brep, or a mesh .stl/.obj/.ply/.dae/.gltf/.glb/.3mf/.off)");
+}
+
+void ScaleAssembly(Assembly* assembly, double factor) {
+  if (factor == 1.0) return;
+  const float f = static_cast<float>(factor);
+  for (Part& part : assembly->parts) {
+    for (Eigen::Vector3f& p : part.mesh.positions) p *= f;
+    part.cad_from_model.translation() *= factor;
+    part.mass.volume_mm3 *= factor * factor * factor;
+    part.mass.center_of_mass *= factor;
+    part.mass.inertia *= std::pow(factor, 5);
+  }
+  for (Instance& instance : assembly->instances) instance.world_from_model.translation() *= factor;
+}
+
+Assembly ReadIges(const std::filesystem::path& path, const TessellationOptions& options) {
+  const std::string file = path.string();
+  internal::RequireReadableFile(file);
+  internal::InitOcct();
+  internal::CadContents contents;
+  std::string length_unit;
+  {
+    std::lock_guard<std::mutex> lock(internal::XdeMutex());
+    Handle(TDocStd_Document) doc;
+    XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+    try {
+      IGESCAFControl_Reader reader;
+      reader.SetNameMode(true);
+      reader.SetColorMode(true);
+      if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) {
+        throw Error(file + ": not a readable IGES file (OpenCASCADE could not parse it)");
+      }
+      const Handle(IGESData_IGESModel) model = Handle(IGESData_IGESModel)::DownCast(reader.Model());
+      if (!model.IsNull() && !model->GlobalSection().UnitName().IsNull()) {
+        length_unit = model->GlobalSection().UnitName()->ToCString();
+      }
+      if (!reader.Transfer(doc)) throw Error(file + ": OpenCASCADE could not translate the IGES entities");
+      contents = internal::CollectDocument(doc, file);
+      XCAFApp_Application::GetApplication()->Close(doc);
+    } catch (const Standard_Failure& failure) {
+      XCAFApp_Application::GetApplication()->Close(doc);
+      throw Error(file + ": OpenCASCADE failed while reading: " + failure.GetMessageString());
+    } catch (...) {
+      XCAFApp_Application::GetApplication()->Close(doc);
+      throw;
+    }
+  }
+  Assembly assembly = internal::BuildAssembly(file, std::move(contents), options);
+  assembly.format = "IGES";
+  assembly.length_unit = length_unit;
+  return assembly;
+}
+
+Assembly ReadBrep(const std::filesystem::path& path, const TessellationOptions& options) {
+  const std::string file = path.string();
+  internal::RequireReadableFile(file);
+  internal::InitOcct();
+  TopoDS_Shape shape;
+  try {
+    BRep_Builder builder;
+    if (!BRepTools::Read(shape, file.c_str(), builder) || shape.IsNull()) {
+      throw Error(file + ": not a readable OpenCASCADE BREP file");
+    }
+  } catch (const Standard_Failure& failure) {
+    throw Error(file + ": not a readable OpenCASCADE BREP file: " + failure.GetMessageString());
+  }
+  internal::CadContents contents;
+  contents.name = path.stem().string();
+  contents.part_names = {contents.name};
+  contents.part_shapes = {WrapShape(shape)};
+  contents.part_colors = {std::nullopt};
+  contents.instances = {Instance{0, contents.name, Eigen::Isometry3d::Identity()}};
+  Assembly assembly = internal::BuildAssembly(file, std::move(contents), options);
+  assembly.format = "BREP";
+  return assembly;
+}
+
+namespace {
+
+// The unit among common ones that would make the largest extent closest to 100 mm.
+std::string LikelyUnit(double extent_in_file_units) {
+  std::string best = "mm";
+  double best_score = 1e300;
+  for (const char* unit : {"um", "mm", "cm", "m", "in"}) {
+    const double score = std::abs(std::log10(extent_in_file_units * *LengthUnitMm(unit) / 100.0));
+    if (score < best_score) {
+      best_score = score;
+      best = unit;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& options) {
+  const std::string file = path.string();
+  std::string why;
+  if (!options.Check(&why)) throw Error(file + ": " + why);
+  const CadFormat format = DetectFormat(path);
+  Assembly assembly;
+  switch (format) {
+    case CadFormat::kStep: assembly = ReadStep(path, options.tessellation); break;
+    case CadFormat::kIges: assembly = ReadIges(path, options.tessellation); break;
+    case CadFormat::kBrep: assembly = ReadBrep(path, options.tessellation); break;
+    case CadFormat::kMesh: assembly = ReadMesh(path, options.crease_angle_rad); break;
+  }
+
+  // What one unit of the file's numbers is in mm, and what the translator already assumed.
+  double assumed_mm = 1.0;
+  const bool declares_unit = format == CadFormat::kStep || format == CadFormat::kIges;
+  if (declares_unit && !assembly.length_unit.empty()) {
+    const std::optional<double> declared = LengthUnitMm(assembly.length_unit);
+    if (declared) assumed_mm = *declared;
+  }
+  if (!options.unit.empty()) {
+    if (declares_unit && !assembly.length_unit.empty() && !LengthUnitMm(assembly.length_unit)) {
+      throw Error(file + ": cannot override the unit: the file's unit '" + assembly.length_unit +
+                  "' is not one cadsynth knows");
+    }
+    const double stated_mm = *LengthUnitMm(options.unit);
+    ScaleAssembly(&assembly, stated_mm / assumed_mm);
+    assembly.length_unit = options.unit + " (stated by the recipe" +
+                           (assembly.length_unit.empty() ? std::string(")")
+                                                         : ", file declares " + assembly.length_unit + ")");
+    assumed_mm = stated_mm;
+  } else if (!declares_unit) {
+    assembly.length_unit = "none (taken as mm)";
+  }
+
+  // A part over 5 m or under 1 mm is most likely in another unit than assumed.
+  double largest = 0.0;
+  for (const Part& part : assembly.parts) largest = std::max(largest, part.mesh.Bounds().sizes().maxCoeff());
+  if (largest > 5000.0 || largest < 1.0) {
+    std::ostringstream message;
+    message.precision(4);
+    const double in_file_units = largest / assumed_mm;
+    const std::string likely = LikelyUnit(in_file_units);
+    message << file << ": largest part is " << largest << " mm, implausible for a part; if the file's "
+            << "numbers are in " << likely << ", state `unit: " << likely << "` (it would then be "
+            << in_file_units * *LengthUnitMm(likely) << " mm)";
+    Warn(message.str());
+  }
+  return assembly;
+}
+
+}  // namespace cadsynth

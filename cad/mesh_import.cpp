@@ -1,0 +1,87 @@
+// Triangle meshes through assimp: one file, one part.
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <cmath>
+
+#include "cad/error.h"
+#include "cad/import.h"
+#include "cad/mesh_analysis.h"
+#include "cad/xde.h"
+
+namespace cadsynth {
+
+Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
+  const std::string file = path.string();
+  internal::RequireReadableFile(file);
+  Assimp::Importer importer;
+  // Recompute normals so the crease angle decides which edges stay sharp.
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS);
+  importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE,
+                            static_cast<float>(crease_angle_rad * 180.0 / M_PI));
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // Keep the file's own axes (COLLADA files here are Z_UP, like our world).
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
+  const unsigned flags = aiProcess_Triangulate | aiProcess_RemoveComponent | aiProcess_GenSmoothNormals |
+                         aiProcess_PreTransformVertices | aiProcess_SortByPType;
+  const aiScene* scene = importer.ReadFile(file, flags);
+  if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
+    std::string why = importer.GetErrorString();
+    if (why.empty()) why = "the file holds no complete scene";
+    throw Error(file + ": not a readable mesh: " + why);
+  }
+
+  Mesh mesh;
+  std::optional<Eigen::Vector3f> color;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* in = scene->mMeshes[m];
+    if ((in->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
+    const auto base = static_cast<uint32_t>(mesh.positions.size());
+    for (unsigned v = 0; v < in->mNumVertices; ++v) {
+      const aiVector3D& p = in->mVertices[v];
+      mesh.positions.emplace_back(p.x, p.y, p.z);
+      const aiVector3D n = in->HasNormals() ? in->mNormals[v] : aiVector3D(0, 0, 1);
+      Eigen::Vector3f normal(n.x, n.y, n.z);
+      mesh.normals.push_back(std::isfinite(normal.squaredNorm()) && normal.squaredNorm() > 0
+                                 ? normal.normalized()
+                                 : Eigen::Vector3f::UnitZ());
+    }
+    for (unsigned f = 0; f < in->mNumFaces; ++f) {
+      const aiFace& face = in->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      mesh.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]);
+    }
+    aiColor4D diffuse;
+    if (!color && in->mMaterialIndex < scene->mNumMaterials &&
+        scene->mMaterials[in->mMaterialIndex]->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) {
+      color = Eigen::Vector3f(diffuse.r, diffuse.g, diffuse.b);
+    }
+  }
+  if (mesh.empty()) throw Error(file + ": the mesh file holds no triangles");
+
+  Part part;
+  part.name = path.stem().string();
+  const Eigen::Vector3d centre = mesh.Bounds().center();
+  part.cad_from_model = Eigen::Translation3d(centre);
+  mesh.Transform(part.cad_from_model.inverse());
+  part.mesh = std::move(mesh);
+  part.color = color;
+  part.watertight = AnalyzeTopology(part.mesh).watertight();
+  if (part.watertight) {
+    part.mass = ComputeMeshMassProperties(part.mesh);
+  } else {
+    Warn(file + ": the mesh is not closed; its volume and centre of mass are unknown");
+  }
+
+  Assembly assembly;
+  assembly.name = part.name;
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  assembly.format = "mesh (" + ext.substr(ext.empty() ? 0 : 1) + ")";
+  assembly.instances = {Instance{0, part.name, part.cad_from_model}};
+  assembly.parts.push_back(std::move(part));
+  return assembly;
+}
+
+}  // namespace cadsynth

@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cad/error.h"
+#include "cad/units.h"
 #include "recipes/units.h"
 
 namespace cadsynth {
@@ -181,22 +182,39 @@ class Reader {
   std::filesystem::path base_dir_;
 };
 
+void DetectFormatOrFail(const Reader& r, const YAML::Node& node, const std::string& key,
+                       const std::filesystem::path& path) {
+  try {
+    DetectFormat(path);
+  } catch (const Error& e) {
+    r.Fail(node, key, e.what());
+  }
+}
+
 void ReadParts(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (!node.IsSequence() || node.size() == 0) {
-    r.Fail(node, "parts", "expected a list such as [{step: part.stp}, {builtin: default}]");
+    r.Fail(node, "parts", "expected a list such as [{file: part.stp}, {builtin: default}]");
   }
   spec->sources.clear();
   for (size_t i = 0; i < node.size(); ++i) {
     const YAML::Node item = node[i];
     const std::string key = "parts[" + std::to_string(i) + "]";
-    r.ExpectMap(item, key, {"step", "builtin"});
-    if (item.size() != 1) r.Fail(item, key, "give exactly one of 'step' or 'builtin'");
+    r.ExpectMap(item, key, {"file", "unit", "builtin"});
+    if (!item["file"] == !item["builtin"]) r.Fail(item, key, "give exactly one of 'file' or 'builtin'");
     PartSource source;
-    if (item["step"]) {
-      source.kind = PartSource::Kind::kStep;
-      source.path = r.ResolvePath(item["step"], key + ".step");
-      source.where = r.Where(item["step"]);
+    if (item["file"]) {
+      source.kind = PartSource::Kind::kFile;
+      source.path = r.ResolvePath(item["file"], key + ".file");
+      source.where = r.Where(item["file"]);
+      if (item["unit"]) {
+        source.unit = r.Scalar(item["unit"], key + ".unit");
+        if (!LengthUnitMm(source.unit)) {
+          r.Fail(item["unit"], key + ".unit", "unknown length unit '" + source.unit + "' (use um, mm, cm, m, in or ft)");
+        }
+      }
+      DetectFormatOrFail(r, item["file"], key + ".file", source.path);
     } else {
+      if (item["unit"]) r.Fail(item["unit"], key + ".unit", "the built-in parts are in mm");
       const std::string which = r.Scalar(item["builtin"], key + ".builtin");
       if (which != "default") r.Fail(item["builtin"], key + ".builtin", "the built-in set is 'default'");
       source.kind = PartSource::Kind::kBuiltinDefault;
@@ -223,7 +241,13 @@ void ReadScene(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "tessellation", {"linear_deflection", "angular_deflection"});
+  r.ExpectMap(node, "tessellation", {"linear_deflection", "angular_deflection", "crease_angle"});
+  if (node["crease_angle"]) {
+    spec->crease_angle_rad = r.Angle(node["crease_angle"], "tessellation.crease_angle");
+    if (spec->crease_angle_rad < 0.0 || spec->crease_angle_rad > M_PI) {
+      r.Fail(node["crease_angle"], "tessellation.crease_angle", "must lie between 0 and 180 degrees");
+    }
+  }
   if (node["linear_deflection"]) {
     spec->tessellation.linear_deflection_mm =
         r.Length(node["linear_deflection"], "tessellation.linear_deflection");
@@ -272,7 +296,14 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "render", {"background", "floor", "floor_color", "ambient", "light_direction",
-                               "light_intensity"});
+                               "light_intensity", "colors"});
+  if (node["colors"]) {
+    const std::string colors = r.Scalar(node["colors"], "render.colors");
+    if (colors != "cad" && colors != "palette") {
+      r.Fail(node["colors"], "render.colors", "expected 'cad' or 'palette', got '" + colors + "'");
+    }
+    spec->cad_colors = colors == "cad";
+  }
   Scene& look = spec->look;
   if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
   if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");

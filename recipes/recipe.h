@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "cad/import.h"
 #include "cad/shape.h"
 #include "dataset/bop.h"
 #include "render/camera.h"
@@ -17,9 +18,10 @@ namespace cadsynth {
 
 // Where a part list entry comes from.
 struct PartSource {
-  enum class Kind { kBuiltinDefault, kStep };
+  enum class Kind { kBuiltinDefault, kFile };
   Kind kind = Kind::kBuiltinDefault;
-  std::filesystem::path path;  // kStep: absolute, or relative to the working folder
+  std::filesystem::path path;  // kFile: STEP, IGES, BREP or mesh
+  std::string unit;            // kFile: the unit its numbers are in, overriding the file (see ImportOptions)
   std::string where;           // "recipe.yaml:3:5" (empty for the built-in default)
 };
 
@@ -28,10 +30,12 @@ struct RunSpec {
   std::filesystem::path recipe;  // empty for the built-in default job
   std::vector<PartSource> sources;
   TessellationOptions tessellation;
+  double crease_angle_rad = ImportOptions{}.crease_angle_rad;  // meshes
   ArrangementOptions arrangement;
   Intrinsics intrinsics;
   SweepOptions sweep;
   Scene look;  // floor, colours and lights (its instances are filled in by the run)
+  bool cad_colors = true;  // colours from the CAD files where they have them, else the palette
   RenderOptions render;
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides

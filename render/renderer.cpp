@@ -59,6 +59,7 @@ struct Renderer::Impl {
   std::vector<PartBuffers> parts;
   std::vector<Eigen::AlignedBox3d> model_bounds;  // per part, model frame
   std::vector<Eigen::Matrix3f> instance_rotation;  // world_from_model rotation per instance
+  std::vector<Eigen::Vector3f> albedo;             // colour per instance
   unsigned floor_id = kInvalid;
 
   ~Impl() {
@@ -144,6 +145,11 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     rtcAttachGeometryByID(im.world, geometry, static_cast<unsigned>(i));
     rtcReleaseGeometry(geometry);
     im.instance_rotation.push_back(scene.instances[i].world_from_model.linear().cast<float>());
+    const Instance& instance = scene.instances[i];
+    const size_t part = static_cast<size_t>(instance.part);
+    im.albedo.push_back(instance.color             ? *instance.color
+                        : part < scene.part_colors.size() ? scene.part_colors[part]
+                                                          : Eigen::Vector3f(0.7f, 0.7f, 0.7f));
   }
   if (scene.floor) {
     const float h = static_cast<float>(scene.floor_half_size_mm);
@@ -280,9 +286,7 @@ Frame Renderer::Render(const Camera& camera) const {
                 normal = im.instance_rotation[inst] *
                          (b0 * buffers.normals[tri[0]] + b1 * buffers.normals[tri[1]] +
                           b2 * buffers.normals[tri[2]]);
-                albedo = static_cast<size_t>(part) < im.scene.part_colors.size()
-                             ? im.scene.part_colors[part]
-                             : Eigen::Vector3f(0.7f, 0.7f, 0.7f);
+                albedo = im.albedo[inst];
                 frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
               } else {
                 normal = Eigen::Vector3f::UnitZ();

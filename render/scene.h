@@ -11,8 +11,9 @@ namespace cadsynth {
 
 // Colours are linear RGB in [0, 1].
 struct Scene {
-  std::vector<Instance> instances;     // world_from_model of each placed part
-  std::vector<Eigen::Vector3f> part_colors;  // one per part; parts without one are grey
+  // world_from_model of each placed part; an instance's own colour, if any, wins over its part's.
+  std::vector<Instance> instances;
+  std::vector<Eigen::Vector3f> part_colors;  // one per part; parts without one are light grey
 
   bool floor = true;                   // the plane z = 0, a square centred on the origin
   double floor_half_size_mm = 10000.0;

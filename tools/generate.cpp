@@ -11,7 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include "cad/error.h"
-#include "cad/step.h"
+#include "cad/import.h"
 #include "dataset/bop.h"
 #include "render/renderer.h"
 #include "variants/arrangement.h"
@@ -20,18 +20,17 @@
 namespace cadsynth {
 namespace {
 
-Assembly LoadSource(const PartSource& source, const TessellationOptions& tessellation) {
-  switch (source.kind) {
-    case PartSource::Kind::kBuiltinDefault:
-      return MakeDefaultParts(tessellation);
-    case PartSource::Kind::kStep:
-      try {
-        return ReadStep(source.path, tessellation);
-      } catch (const Error& e) {
-        throw Error(source.where.empty() ? e.what() : source.where + ": " + e.what());
-      }
+Assembly LoadSource(const PartSource& source, const RunSpec& spec) {
+  if (source.kind == PartSource::Kind::kBuiltinDefault) return MakeDefaultParts(spec.tessellation);
+  ImportOptions options;
+  options.tessellation = spec.tessellation;
+  options.crease_angle_rad = spec.crease_angle_rad;
+  options.unit = source.unit;
+  try {
+    return ImportCad(source.path, options);
+  } catch (const Error& e) {
+    throw Error(source.where.empty() ? e.what() : source.where + ": " + e.what());
   }
-  throw Error("unknown part source");
 }
 
 // Removes a folder tree on scope exit unless released.
@@ -98,10 +97,11 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   std::vector<Part> parts;
   std::vector<Instance> instances;
   for (const PartSource& source : spec.sources) {
-    Assembly assembly = LoadSource(source, spec.tessellation);
+    Assembly assembly = LoadSource(source, spec);
     std::ostringstream line;
-    line << "read " << (source.kind == PartSource::Kind::kStep ? source.path.string() : "built-in parts")
-         << ": '" << assembly.name << "', unit " << (assembly.length_unit.empty() ? "?" : assembly.length_unit)
+    line << "read " << (source.kind == PartSource::Kind::kFile ? source.path.string() : "built-in parts")
+         << " (" << assembly.format << "): '" << assembly.name << "', unit "
+         << (assembly.length_unit.empty() ? "?" : assembly.length_unit)
          << ", " << assembly.parts.size() << " parts, " << assembly.instances.size() << " instances";
     info(line.str());
     const int offset = static_cast<int>(parts.size());
@@ -123,7 +123,13 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   Scene scene = spec.look;
   scene.instances = Arrange(parts, instances, spec.arrangement);
   scene.part_colors.clear();
-  for (size_t i = 0; i < parts.size(); ++i) scene.part_colors.push_back(PaletteColor(static_cast<int>(i)));
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const Eigen::Vector3f palette = PaletteColor(static_cast<int>(i));
+    scene.part_colors.push_back(spec.cad_colors ? parts[i].color.value_or(palette) : palette);
+  }
+  if (!spec.cad_colors) {
+    for (Instance& instance : scene.instances) instance.color.reset();
+  }
   const Renderer renderer(parts, scene, spec.render);
 
   std::vector<int> obj_ids;

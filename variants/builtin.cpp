@@ -74,6 +74,7 @@ Shape MakeGearBlank(const GearBlankOptions& options) {
 Assembly MakeDefaultParts(const TessellationOptions& tessellation) {
   Assembly assembly;
   assembly.name = "default_parts";
+  assembly.format = "built-in";
   assembly.length_unit = "mm";
   const auto add = [&](const std::string& name, const Shape& shape) {
     assembly.parts.push_back(MakePart(name, shape, tessellation));

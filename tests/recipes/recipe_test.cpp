@@ -79,16 +79,25 @@ TEST(Recipe, ErrorsPointAtLineAndColumn) {
 TEST(Recipe, PartsResolveRelativeToTheRecipe) {
   testing::ScratchDir dir;
   std::ofstream(dir / "part.stp") << "ISO-10303-21;\n";
-  const RunSpec spec = ParseRecipe("parts:\n  - step: part.stp\n  - builtin: default\n", "r.yaml", dir.path());
+  const RunSpec spec =
+      ParseRecipe("parts:\n  - file: part.stp\n    unit: inch\n  - builtin: default\n", "r.yaml", dir.path());
   ASSERT_EQ(spec.sources.size(), 2u);
-  EXPECT_EQ(spec.sources[0].kind, PartSource::Kind::kStep);
+  EXPECT_EQ(spec.sources[0].kind, PartSource::Kind::kFile);
+  EXPECT_EQ(spec.sources[0].unit, "inch");
   EXPECT_EQ(spec.sources[0].path, dir / "part.stp");
   EXPECT_EQ(spec.sources[0].where, "r.yaml:2:11");
   EXPECT_EQ(spec.arrangement.layout, Layout::kAssembled);
-  EXPECT_EQ(ErrorOf("parts:\n  - step: nope.stp\n", dir.path()),
-            "r.yaml:2:11: parts[0].step: " + (dir / "nope.stp").string() + ": no such file");
-  EXPECT_EQ(ErrorOf("parts:\n  - stp: part.stp\n", dir.path()),
-            "r.yaml:2:5: unknown key 'parts[0].stp' (did you mean 'step'?)");
+  EXPECT_EQ(ErrorOf("parts:\n  - file: nope.stp\n", dir.path()),
+            "r.yaml:2:11: parts[0].file: " + (dir / "nope.stp").string() + ": no such file");
+  EXPECT_EQ(ErrorOf("parts:\n  - file: part.stp\n    unit: cubits\n", dir.path()),
+            "r.yaml:3:11: parts[0].unit: unknown length unit 'cubits' (use um, mm, cm, m, in or ft)");
+  std::ofstream(dir / "notes.txt") << "bolts, nuts\n";
+  EXPECT_NE(ErrorOf("parts:\n  - file: notes.txt\n", dir.path()).find("r.yaml:2:11: parts[0].file: "),
+            std::string::npos);
+  EXPECT_EQ(ErrorOf("parts:\n  - {builtin: default, file: part.stp}\n", dir.path()),
+            "r.yaml:2:5: parts[0]: give exactly one of 'file' or 'builtin'");
+  EXPECT_EQ(ErrorOf("parts:\n  - fiel: part.stp\n", dir.path()),
+            "r.yaml:2:5: unknown key 'parts[0].fiel' (did you mean 'file'?)");
 }
 
 TEST(Recipe, LoadRecipeNamesTheFile) {

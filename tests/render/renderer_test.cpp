@@ -180,6 +180,27 @@ TEST(Renderer, OutputDoesNotDependOnTheThreadCount) {
   for (int i = 0; i < 2; ++i) EXPECT_EQ(one.instances[i].amodal_mask, two.instances[i].amodal_mask);
 }
 
+TEST(Renderer, InstanceColourWinsOverPartColour) {
+  const std::vector<Part> parts = {MakePart("box", MakeBox(100, 100, 20), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.ambient = 1.0f;  // flat: the pixel is the albedo
+  scene.light_intensity = 0.0f;
+  scene.part_colors = {Eigen::Vector3f(0, 0, 1)};
+  scene.instances = {Place(0, parts[0], {-60, 0, 10}), Place(0, parts[0], {60, 0, 10})};
+  scene.instances[1].color = Eigen::Vector3f(1, 0, 0);
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 800});
+  const Frame frame = Renderer(parts, scene).Render(camera);
+  const auto rgb = [&](int u, int v) {
+    const uint8_t* p = &frame.rgb[3 * (v * 640 + u)];
+    return std::array<int, 3>{p[0], p[1], p[2]};
+  };
+  // World -x is image left (image x = world x when looking down).
+  EXPECT_EQ(rgb(320 - 40, 240), (std::array<int, 3>{0, 0, 255}));
+  EXPECT_EQ(rgb(320 + 40, 240), (std::array<int, 3>{255, 0, 0}));
+}
+
 TEST(Renderer, RejectsInstancesOfMissingParts) {
   Scene scene;
   scene.instances = {Instance{3, "ghost", Eigen::Isometry3d::Identity()}};

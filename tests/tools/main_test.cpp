@@ -66,7 +66,7 @@ TEST(Cli, UnknownKeyNamesFileLineAndColumn) {
 TEST(Cli, FileThatIsNotStepFailsCleanly) {
   ScratchDir dir;
   std::ofstream(dir / "notes.stp") << "shopping list: bolts, nuts\n";
-  std::ofstream(dir / "r.yaml") << "parts:\n  - step: notes.stp\nsweep: {yaw: 0, pitch: 45, radius: 1 m}\n";
+  std::ofstream(dir / "r.yaml") << "parts:\n  - file: notes.stp\nsweep: {yaw: 0, pitch: 45, radius: 1 m}\n";
   const CliRun run = Cadsynth("generate r.yaml -o out", dir);
   EXPECT_EQ(run.code, 1);
   EXPECT_EQ(Lines(run.err), 1u) << run.err;
@@ -79,7 +79,7 @@ TEST(Cli, FileThatIsNotStepFailsCleanly) {
 TEST(Cli, CorruptedSharedStepFailsCleanly) {
   CADSYNTH_REQUIRE_DATA(file, "step/awkward/bug32314_corrupted.stp");
   ScratchDir dir;
-  std::ofstream(dir / "r.yaml") << "parts:\n  - step: " << file.string()
+  std::ofstream(dir / "r.yaml") << "parts:\n  - file: " << file.string()
                                 << "\nsweep: {yaw: 0, pitch: 45, radius: 1 m}\n";
   const CliRun run = Cadsynth("generate r.yaml -o out", dir);
   EXPECT_EQ(run.code, 1);

@@ -33,6 +33,10 @@ bool TessellationOptions::Check(std::string* why) const {
     *why = "linear_deflection must be a positive length";
     return false;
   }
+  if (!(min_relative_deflection >= 0.0) || min_relative_deflection > 0.1) {
+    *why = "min_relative_deflection must be between 0 and 0.1";
+    return false;
+  }
   if (!(angular_deflection_rad > 0.0) || angular_deflection_rad >= M_PI) {
     *why = "angular_deflection must be between 0 and 180 degrees (exclusive)";
     return false;
@@ -197,7 +201,21 @@ MassProperties ComputeMassProperties(const Shape& shape) {
 Part MakePart(const std::string& name, const Shape& shape, const TessellationOptions& options) {
   Part part;
   part.name = name;
-  part.mesh = Tessellate(shape, options);
+  TessellationOptions effective = options;
+  const Eigen::AlignedBox3d bounds = shape.Bounds();
+  if (!bounds.isEmpty()) {
+    const double diagonal = bounds.diagonal().norm();
+    const double floor = options.min_relative_deflection * diagonal;
+    if (floor > options.linear_deflection_mm) {
+      effective.linear_deflection_mm = floor;
+      std::ostringstream message;
+      message.precision(3);
+      message << "part '" << name << "' is " << diagonal / 1000.0 << " m across; tessellated with "
+              << floor << " mm deflection instead of " << options.linear_deflection_mm << " mm";
+      Warn(message.str());
+    }
+  }
+  part.mesh = Tessellate(shape, effective);
   const Eigen::Vector3d centre = part.mesh.Bounds().center();
   part.cad_from_model = Eigen::Translation3d(centre);
   part.mesh.Transform(part.cad_from_model.inverse());

@@ -18,6 +18,10 @@ struct TessellationOptions {
   double linear_deflection_mm = 0.1;
   // Largest angle (radians) between the normals of neighbouring triangles on a curved face.
   double angular_deflection_rad = 0.35;  // 20 degrees
+  // MakePart never uses a linear deflection finer than this fraction of the part's bounding-box
+  // diagonal: a 100 m part (real files have them, by unit mistakes) at 0.1 mm would need billions
+  // of triangles. At 1e-5 it changes nothing for parts under 10 m.
+  double min_relative_deflection = 1e-5;
 
   // False, with a reason, when a value is out of range.
   bool Check(std::string* why) const;
@@ -57,7 +61,8 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options);
 // Exact volume, centre of mass and inertia of the solids in `shape`.
 MassProperties ComputeMassProperties(const Shape& shape);
 
-// Tessellates `shape` and moves it into its model frame (see Part).
+// Tessellates `shape` (see min_relative_deflection, with a warning when it applies) and moves it
+// into its model frame (see Part).
 Part MakePart(const std::string& name, const Shape& shape, const TessellationOptions& options);
 
 }  // namespace cadsynth

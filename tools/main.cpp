@@ -15,6 +15,7 @@
 #include "cad/error.h"
 #include "recipes/recipe.h"
 #include "tools/generate.h"
+#include "tools/inspect.h"
 
 namespace {
 
@@ -22,6 +23,7 @@ constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data
 
 usage:
   cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--quiet]
+  cadsynth inspect FILE [--json] [--unit UNIT] [--deflection MM]
   cadsynth --help | --version
 
 generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
@@ -30,6 +32,13 @@ generate   Renders every view of the recipe's camera sweep and writes a BOP data
   --overwrite  replace DIR if it exists (the old one stays until the new one is complete)
   --threads N  worker threads (default: all cores); results do not depend on it
   --quiet      no progress or info lines, only warnings and errors
+
+inspect    Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb .3mf .off) and
+           prints what cadsynth sees: format, declared unit, parts with instance counts, size in
+           mm, triangles, colour, volume and whether the mesh is closed, and every instance.
+  --json           machine-readable output
+  --unit UNIT      the unit the file's numbers are really in (overrides the file; meshes: mm)
+  --deflection MM  tessellation tolerance (default 0.1 mm)
 )";
 
 struct UsageError {
@@ -105,6 +114,38 @@ int RunGenerate(const std::vector<std::string>& args) {
   return 0;
 }
 
+int RunInspect(const std::vector<std::string>& args) {
+  std::optional<std::string> file;
+  bool json = false;
+  cadsynth::ImportOptions options;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= args.size()) throw UsageError{a + " needs a value"};
+      return args[++i];
+    };
+    if (a == "--json") {
+      json = true;
+    } else if (a == "--unit") {
+      options.unit = value();
+    } else if (a == "--deflection") {
+      const std::string text = value();
+      char* end = nullptr;
+      options.tessellation.linear_deflection_mm = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || *end != '\0') throw UsageError{"--deflection takes a number of mm, got '" + text + "'"};
+    } else if (!a.empty() && a[0] == '-') {
+      throw UsageError{"unknown option '" + a + "'"};
+    } else if (file) {
+      throw UsageError{"one file at a time"};
+    } else {
+      file = a;
+    }
+  }
+  if (!file) throw UsageError{"inspect needs a FILE"};
+  std::cout << (json ? cadsynth::InspectJson(*file, options) : cadsynth::InspectText(*file, options));
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -119,6 +160,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args[0] == "generate") return RunGenerate({args.begin() + 1, args.end()});
+    if (args[0] == "inspect") return RunInspect({args.begin() + 1, args.end()});
     throw UsageError{"unknown command '" + args[0] + "'"};
   } catch (const UsageError& e) {
     std::cerr << "error: " << e.what << "\n(run 'cadsynth --help' for usage)\n";

@@ -1,0 +1,97 @@
+#include "tools/inspect.h"
+
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace cadsynth {
+namespace {
+
+std::string Hex(const std::optional<Eigen::Vector3f>& color) {
+  if (!color) return "-";
+  char buffer[16];
+  const auto byte = [](float v) { return static_cast<int>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255)); };
+  std::snprintf(buffer, sizeof(buffer), "#%02x%02x%02x", byte(color->x()), byte(color->y()), byte(color->z()));
+  return buffer;
+}
+
+std::vector<int> InstanceCounts(const Assembly& a) {
+  std::vector<int> counts(a.parts.size(), 0);
+  for (const Instance& i : a.instances) ++counts[i.part];
+  return counts;
+}
+
+}  // namespace
+
+std::string InspectText(const std::filesystem::path& path, const ImportOptions& options) {
+  const Assembly a = ImportCad(path, options);
+  const std::vector<int> counts = InstanceCounts(a);
+  std::ostringstream out;
+  out << path.string() << "\n  format " << a.format << ", unit " << (a.length_unit.empty() ? "?" : a.length_unit)
+      << ", '" << a.name << "': " << a.parts.size() << " parts, " << a.instances.size()
+      << " instances (sizes in mm)\n\n";
+  char line[512];
+  std::snprintf(line, sizeof(line), "  %3s  %-28s %5s  %-28s %9s  %-7s  %13s  %s\n", "id", "part", "inst",
+                "size x y z", "triangles", "colour", "volume mm3", "closed");
+  out << line;
+  for (size_t i = 0; i < a.parts.size(); ++i) {
+    const Part& p = a.parts[i];
+    const Eigen::Vector3d s = p.mesh.Bounds().sizes();
+    char size[64];
+    std::snprintf(size, sizeof(size), "%.4g x %.4g x %.4g", s.x(), s.y(), s.z());
+    char volume[32] = "-";
+    if (p.mass.volume_mm3 > 0) std::snprintf(volume, sizeof(volume), "%.6g", p.mass.volume_mm3);
+    std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %5d  %-28s %9zu  %-7s  %13s  %s\n", i + 1,
+                  p.name.c_str(), counts[i], size, p.mesh.num_triangles(), Hex(p.color).c_str(), volume,
+                  p.watertight ? "yes" : "NO");
+    out << line;
+  }
+  out << "\n  instances (position of the model frame in the file's root frame, mm):\n";
+  for (const Instance& i : a.instances) {
+    const Eigen::Vector3d t = i.world_from_model.translation();
+    std::snprintf(line, sizeof(line), "    %-32.32s part %-3d at (%.4g, %.4g, %.4g)%s%s\n", i.name.c_str(),
+                  i.part + 1, t.x(), t.y(), t.z(), i.color ? " colour " : "", i.color ? Hex(i.color).c_str() : "");
+    out << line;
+  }
+  return out.str();
+}
+
+std::string InspectJson(const std::filesystem::path& path, const ImportOptions& options) {
+  using Json = nlohmann::ordered_json;
+  const Assembly a = ImportCad(path, options);
+  const std::vector<int> counts = InstanceCounts(a);
+  const auto vec = [](const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); };
+  Json parts = Json::array();
+  for (size_t i = 0; i < a.parts.size(); ++i) {
+    const Part& p = a.parts[i];
+    const Eigen::AlignedBox3d box = p.mesh.Bounds();
+    Json part = {{"id", i + 1},
+                 {"name", p.name},
+                 {"instances", counts[i]},
+                 {"bbox_min_mm", vec(box.min())},
+                 {"bbox_max_mm", vec(box.max())},
+                 {"size_mm", vec(box.sizes())},
+                 {"triangles", p.mesh.num_triangles()},
+                 {"color", p.color ? Json(Hex(p.color)) : Json()},
+                 {"volume_mm3", p.mass.volume_mm3 > 0 ? Json(p.mass.volume_mm3) : Json()},
+                 {"volume_from", p.mass_from_brep ? "brep" : (p.mass.volume_mm3 > 0 ? "mesh" : "none")},
+                 {"watertight", p.watertight}};
+    parts.push_back(part);
+  }
+  Json instances = Json::array();
+  for (const Instance& i : a.instances) {
+    Json pose = Json::array();
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) pose.push_back(i.world_from_model.matrix()(r, c));
+    }
+    instances.push_back({{"name", i.name}, {"part", i.part + 1}, {"root_from_model", pose},
+                         {"color", i.color ? Json(Hex(i.color)) : Json()}});
+  }
+  const Json out = {{"file", path.string()}, {"format", a.format}, {"length_unit", a.length_unit},
+                    {"name", a.name},        {"parts", parts},      {"instances", instances}};
+  return out.dump(2) + "\n";
+}
+
+}  // namespace cadsynth

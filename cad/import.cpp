@@ -90,7 +90,8 @@ Assembly ReadIges(const std::filesystem::path& path, const TessellationOptions& 
       IGESCAFControl_Reader reader;
       reader.SetNameMode(true);
       reader.SetColorMode(true);
-      if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) {
+      const std::string absolute = std::filesystem::absolute(path).lexically_normal().string();
+      if (reader.ReadFile(absolute.c_str()) != IFSelect_RetDone) {
         throw Error(file + ": not a readable IGES file (OpenCASCADE could not parse it)");
       }
       const Handle(IGESData_IGESModel) model = Handle(IGESData_IGESModel)::DownCast(reader.Model());

@@ -67,7 +67,11 @@ Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& 
       reader.SetColorMode(true);
       reader.SetLayerMode(false);
       reader.SetPropsMode(false);
-      if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) {
+      // OpenCASCADE resolves external references (DOCUMENT_FILE) against the path as given:
+      // make it absolute, or assemblies split over files lose their parts unless read from
+      // their own folder.
+      const std::string absolute = std::filesystem::absolute(path).lexically_normal().string();
+      if (reader.ReadFile(absolute.c_str()) != IFSelect_RetDone) {
         throw Error(file + ": not a readable STEP file (OpenCASCADE could not parse it)");
       }
       ThrowOnSyntaxErrors(reader.ChangeReader(), file);

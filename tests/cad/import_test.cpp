@@ -1,0 +1,246 @@
+// The importer against real third-party files (skipped without ../shared/data) and bad input.
+#include "cad/import.h"
+
+#include <cctype>
+#include <fstream>
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "tests/test_support.h"
+
+namespace cadsynth {
+namespace {
+
+using testing::ScratchDir;
+
+ImportOptions Coarse(const std::string& unit = "") {
+  ImportOptions o;
+  o.tessellation.linear_deflection_mm = 0.5;
+  o.unit = unit;
+  return o;
+}
+
+std::string ErrorOf(const std::filesystem::path& path, const ImportOptions& o = Coarse()) {
+  try {
+    ImportCad(path, o);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// Silences warnings for the duration of a test and counts them.
+class QuietWarnings {
+ public:
+  QuietWarnings() : previous_(SetWarningSink([](const std::string&) { ++count_; })) { count_ = 0; }
+  ~QuietWarnings() { SetWarningSink(previous_); }
+  static int count() { return count_; }
+
+ private:
+  static inline int count_ = 0;
+  WarningSink previous_;
+};
+
+TEST(ImportSharedData, EveryFileImportsOrFailsWithAMessageNamingIt) {
+  const std::filesystem::path root = testing::DataDir();
+  if (!std::filesystem::exists(root / "step")) GTEST_SKIP() << "shared test data not found: " << root;
+  QuietWarnings quiet;
+  int imported = 0;
+  std::vector<std::string> failed;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+    if (!entry.is_regular_file()) continue;
+    const std::string ext = entry.path().extension().string();
+    if (ext == ".md" || entry.path().filename() == "SHA256SUMS") continue;
+    try {
+      const Assembly a = ImportCad(entry.path(), Coarse());
+      ASSERT_FALSE(a.parts.empty()) << entry.path();
+      ASSERT_FALSE(a.instances.empty()) << entry.path();
+      for (const Part& p : a.parts) {
+        ASSERT_FALSE(p.mesh.empty()) << entry.path();
+        ASSERT_TRUE(p.mesh.Bounds().sizes().allFinite()) << entry.path();
+      }
+      ++imported;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(entry.path().string() + ": ", 0), 0u) << e.what();
+      failed.push_back(entry.path().filename().string());
+    }
+  }
+  // The deliberately corrupted file, and NIST's tessellated-only file (OpenCASCADE 7.6 reads no
+  // STEP tessellated geometry), are the only files that do not import.
+  std::sort(failed.begin(), failed.end());
+  EXPECT_EQ(failed, (std::vector<std::string>{"bug32314_corrupted.stp", "nist_ftc_08_asme1_ap242-e1-tg.stp"}));
+  EXPECT_GE(imported, 60);
+}
+
+// Instance boxes in the assembly frame, all instances together.
+Eigen::AlignedBox3d AssemblyBounds(const Assembly& a) {
+  Eigen::AlignedBox3d box;
+  for (const Instance& i : a.instances) box.extend(a.parts[i.part].mesh.Bounds(i.world_from_model));
+  return box;
+}
+
+std::string Canonical(std::string name) {
+  std::string out;
+  for (char c : name) {
+    if (std::isalnum(static_cast<unsigned char>(c))) out += static_cast<char>(std::tolower(c));
+  }
+  return out;
+}
+
+TEST(ImportSharedData, As1FromTwoWritersGivesTheSameParts) {
+  CADSYNTH_REQUIRE_DATA(oc, "step/assemblies/as1-oc-214.stp");
+  CADSYNTH_REQUIRE_DATA(md, "step/assemblies/as1-md-214.stp");
+  const Assembly a = ImportCad(oc, Coarse()), b = ImportCad(md, Coarse());
+  std::map<std::string, const Part*> pa, pb;
+  std::map<std::string, int> ca, cb;
+  for (const Part& p : a.parts) pa[Canonical(p.name)] = &p;
+  for (const Part& p : b.parts) pb[Canonical(p.name)] = &p;
+  for (const Instance& i : a.instances) ++ca[Canonical(a.parts[i.part].name)];
+  for (const Instance& i : b.instances) ++cb[Canonical(b.parts[i.part].name)];
+  ASSERT_EQ(pa.size(), 5u);
+  ASSERT_EQ(pb.size(), 5u);
+  EXPECT_EQ(ca, cb);  // plate 1, l-bracket 2, rod 1, bolt 6, nut 8
+  for (const auto& [name, part] : pa) {
+    ASSERT_TRUE(pb.count(name)) << name;
+    if (name == "bolt") continue;  // the MicroStation file's bolt is 40 mm long, OCCT's 37 mm
+    EXPECT_NEAR(part->mass.volume_mm3, pb[name]->mass.volume_mm3, 1e-3 * part->mass.volume_mm3) << name;
+    std::vector<double> sa(3), sb(3);
+    for (int k = 0; k < 3; ++k) {
+      sa[k] = std::round(part->mesh.Bounds().sizes()[k] * 10) / 10;
+      sb[k] = std::round(pb[name]->mesh.Bounds().sizes()[k] * 10) / 10;
+    }
+    std::sort(sa.begin(), sa.end());  // the writers orient some part frames differently
+    std::sort(sb.begin(), sb.end());
+    EXPECT_EQ(sa, sb) << name;
+  }
+  EXPECT_NEAR(pa["bolt"]->mesh.Bounds().sizes().maxCoeff(), 37.0, 0.01);
+  EXPECT_NEAR(pb["bolt"]->mesh.Bounds().sizes().maxCoeff(), 40.0, 0.01);
+  // Same footprint; the longer bolts reach 3 mm further below the plate.
+  const Eigen::Vector3d size_a = AssemblyBounds(a).sizes(), size_b = AssemblyBounds(b).sizes();
+  EXPECT_NEAR(size_a.x(), 200.0, 0.01);
+  EXPECT_NEAR(size_b.x(), 200.0, 0.01);
+  EXPECT_NEAR(size_a.y(), 150.0, 0.01);
+  EXPECT_NEAR(size_b.y(), 150.0, 0.01);
+  EXPECT_NEAR(size_b.z() - size_a.z(), 3.0, 0.01);
+}
+
+TEST(ImportSharedData, InchFileComesOutInMillimetres) {
+  CADSYNTH_REQUIRE_DATA(file, "step/assemblies/dm1-id-214.stp");
+  const Assembly inch = ImportCad(file, Coarse());
+  const Assembly raw = ImportCad(file, Coarse("mm"));  // the file's numbers taken as mm
+  EXPECT_EQ(inch.length_unit, "INCH");
+  ASSERT_EQ(inch.parts.size(), raw.parts.size());
+  for (size_t i = 0; i < inch.parts.size(); ++i) {
+    const Eigen::Vector3d a = inch.parts[i].mesh.Bounds().sizes(), b = raw.parts[i].mesh.Bounds().sizes();
+    EXPECT_TRUE(a.isApprox(25.4 * b, 1e-4)) << inch.parts[i].name << ": " << a.transpose() << " vs " << b.transpose();
+  }
+}
+
+TEST(ImportSharedData, UnitOverrideRepairsTheFileThatDeclaresInchButHoldsMillimetres) {
+  CADSYNTH_REQUIRE_DATA(pe, "step/assemblies/as1_pe_203.stp");
+  CADSYNTH_REQUIRE_DATA(oc, "step/assemblies/as1-oc-214.stp");
+  QuietWarnings quiet;
+  // The Pro/E file names every part 'SOLID': the plate is the part of largest volume.
+  const auto plate = [](const Assembly& a) {
+    const Part* best = &a.parts[0];
+    for (const Part& p : a.parts) {
+      if (p.mass.volume_mm3 > best->mass.volume_mm3) best = &p;
+    }
+    Eigen::Vector3d size = best->mesh.Bounds().sizes();
+    std::sort(size.data(), size.data() + 3);
+    return size;
+  };
+  const Eigen::Vector3d reference = plate(ImportCad(oc, Coarse()));
+  ASSERT_TRUE(reference.isApprox(Eigen::Vector3d(20, 150, 180), 1e-3)) << reference.transpose();
+  const Assembly as_declared = ImportCad(pe, Coarse());
+  EXPECT_TRUE(plate(as_declared).isApprox(25.4 * reference, 1e-3)) << plate(as_declared).transpose();
+  const Assembly repaired = ImportCad(pe, Coarse("mm"));
+  EXPECT_TRUE(plate(repaired).isApprox(reference, 1e-3)) << plate(repaired).transpose();
+  EXPECT_EQ(repaired.length_unit, "mm (stated by the recipe, file declares INCH)");
+}
+
+TEST(ImportSharedData, ExternalReferencesResolveFromAnyFolder) {
+  CADSYNTH_REQUIRE_DATA(file, "step/awkward/external_refs_s1-c5-214/s1-c5-214.stp");
+  const Assembly a = ImportCad(std::filesystem::relative(file), Coarse());
+  EXPECT_EQ(a.parts.size(), 8u);
+  EXPECT_EQ(a.instances.size(), 11u);
+}
+
+TEST(ImportSharedData, BinaryStlWithSolidHeaderAndColladaAgree) {
+  CADSYNTH_REQUIRE_DATA(stl, "mesh/seed_speed_reducer/left_gear.STL");
+  CADSYNTH_REQUIRE_DATA(dae, "mesh/seed_speed_reducer/left_gear.dae");
+  QuietWarnings quiet;
+  const Assembly a = ImportCad(stl, Coarse("m"));
+  EXPECT_EQ(quiet.count(), 0);  // 25 mm in metres: plausible, no warning
+  ASSERT_EQ(a.parts.size(), 1u);
+  EXPECT_EQ(a.parts[0].mesh.num_triangles(), 18164u);
+  EXPECT_EQ(a.format, "mesh (stl)");
+  const Eigen::Vector3d size = a.parts[0].mesh.Bounds().sizes();
+  EXPECT_NEAR(size.maxCoeff(), 25.09, 0.01);
+  const Assembly b = ImportCad(dae, Coarse("m"));
+  EXPECT_TRUE(b.parts[0].mesh.Bounds().sizes().isApprox(size, 1e-3));
+  // Without a unit the metre file is 0.025 mm: a warning says which unit would make sense.
+  ImportCad(stl, Coarse());
+  EXPECT_EQ(quiet.count(), 1);
+}
+
+TEST(Import, BadFilesGiveClearErrors) {
+  ScratchDir dir;
+  EXPECT_EQ(ErrorOf(dir / "missing.step"), (dir / "missing.step").string() + ": no such file");
+  EXPECT_EQ(ErrorOf(dir.path()), dir.path().string() + ": is a folder, not a file");
+  std::ofstream(dir / "empty.stl").close();
+  EXPECT_EQ(ErrorOf(dir / "empty.stl"), (dir / "empty.stl").string() + ": file is empty");
+  {
+    std::ofstream garbage(dir / "garbage.stl", std::ios::binary);
+    for (int i = 0; i < 1000; ++i) garbage.put(static_cast<char>((i * 7919) % 251));
+  }
+  EXPECT_EQ(ErrorOf(dir / "garbage.stl").rfind((dir / "garbage.stl").string() + ": not a readable mesh", 0), 0u)
+      << ErrorOf(dir / "garbage.stl");
+  std::ofstream(dir / "notes.xyz") << "hello\n";
+  EXPECT_NE(ErrorOf(dir / "notes.xyz").find("unknown kind of file"), std::string::npos);
+  std::ofstream(dir / "noext") << "ISO-10303-21;\nHEADER;\n";
+  EXPECT_EQ(DetectFormat(dir / "noext"), CadFormat::kStep);
+  ImportOptions bad_unit = Coarse("furlong");
+  EXPECT_NE(ErrorOf(dir / "noext", bad_unit).find("unknown length unit 'furlong'"), std::string::npos);
+}
+
+TEST(Import, TruncatedRealFileIsAnError) {
+  CADSYNTH_REQUIRE_DATA(file, "step/parts/xr1-tc-blt.stp");
+  ScratchDir dir;
+  std::ifstream in(file, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream(dir / "half.stp", std::ios::binary) << text.substr(0, text.size() / 2);
+  const std::string message = ErrorOf(dir / "half.stp");
+  EXPECT_EQ(message.rfind((dir / "half.stp").string() + ": ", 0), 0u) << message;
+}
+
+TEST(Import, ObjMeshWithUnitAndMassProperties) {
+  ScratchDir dir;
+  // A closed unit cube in metres, as an OBJ with outward quads.
+  std::ofstream(dir / "cube.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                     "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  QuietWarnings quiet;
+  const Assembly a = ImportCad(dir / "cube.obj", Coarse("cm"));
+  ASSERT_EQ(a.parts.size(), 1u);
+  const Part& p = a.parts[0];
+  EXPECT_EQ(p.mesh.num_triangles(), 12u);
+  EXPECT_TRUE(p.watertight);
+  EXPECT_NEAR(p.mass.volume_mm3, 1000.0, 1e-3);  // 1 cm^3
+  EXPECT_TRUE(p.mesh.Bounds().sizes().isApprox(Eigen::Vector3d(10, 10, 10), 1e-6));
+  EXPECT_TRUE(a.instances[0].world_from_model.translation().isApprox(Eigen::Vector3d(5, 5, 5), 1e-6));
+  EXPECT_EQ(quiet.count(), 0);
+}
+
+TEST(Import, BrepFileIsOnePart) {
+  CADSYNTH_REQUIRE_DATA(file, "brep/occt_engine/CrankArm.brep");
+  const Assembly a = ImportCad(file, Coarse());
+  ASSERT_EQ(a.parts.size(), 1u);
+  EXPECT_EQ(a.format, "BREP");
+  EXPECT_EQ(a.parts[0].name, "CrankArm");
+  EXPECT_GT(a.parts[0].mass.volume_mm3, 0.0);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -117,7 +117,7 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options) {
 
   try {
     BRepMesh_IncrementalMesh mesher(s, options.linear_deflection_mm, /*isRelative=*/false,
-                                    options.angular_deflection_rad, /*isInParallel=*/false);
+                                    options.angular_deflection_rad, /*isInParallel=*/true);
   } catch (const Standard_Failure& failure) {
     throw Error(std::string("tessellation failed: ") + failure.GetMessageString());
   }

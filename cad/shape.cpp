@@ -6,6 +6,7 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
+#include <BRepCheck_Analyzer.hxx>
 #include <BRepGProp.hxx>
 #include <BRepLProp_SLProps.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
@@ -16,6 +17,7 @@
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
 #include <Poly_Triangulation.hxx>
+#include <ShapeFix_Shape.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
@@ -180,6 +182,20 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options) {
   }
   if (mesh.empty()) throw Error("tessellation produced no triangles (the shape has no faces)");
   return mesh;
+}
+
+Shape Heal(const Shape& shape, bool* healed) {
+  *healed = false;
+  if (shape.IsNull()) return shape;
+  try {
+    if (BRepCheck_Analyzer(OcctShape(shape)).IsValid()) return shape;
+    Handle(ShapeFix_Shape) fix = new ShapeFix_Shape(OcctShape(shape));
+    fix->Perform();
+    *healed = true;
+    return WrapShape(fix->Shape());
+  } catch (const Standard_Failure& failure) {
+    throw Error(std::string("shape healing failed: ") + failure.GetMessageString());
+  }
 }
 
 MassProperties ComputeMassProperties(const Shape& shape) {

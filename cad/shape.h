@@ -58,6 +58,11 @@ Shape Transformed(const Shape& shape, const Eigen::Isometry3d& transform);
 // options are invalid or the shape yields no triangles.
 Mesh Tessellate(const Shape& shape, const TessellationOptions& options);
 
+// Checks the B-rep (BRepCheck) and, when it is invalid, repairs it with OpenCASCADE's shape
+// healing (ShapeFix: orientation, gaps, missing seams, small edges). Returns the shape unchanged
+// when it is valid; sets *healed when it repaired something.
+Shape Heal(const Shape& shape, bool* healed);
+
 // Exact volume, centre of mass and inertia of the solids in `shape`.
 MassProperties ComputeMassProperties(const Shape& shape);
 

@@ -149,7 +149,10 @@ Assembly BuildAssembly(const std::string& file, CadContents contents,
   std::vector<std::string> errors(n);
   tbb::parallel_for(size_t{0}, n, [&](size_t i) {
     try {
-      parts[i] = MakePart(contents.part_names[i], contents.part_shapes[i], options);
+      bool healed = false;
+      const Shape shape = Heal(contents.part_shapes[i], &healed);
+      if (healed) Warn(file + ": part '" + contents.part_names[i] + "' had invalid geometry; repaired by shape healing");
+      parts[i] = MakePart(contents.part_names[i], shape, options);
       parts[i].color = contents.part_colors[i];
     } catch (const Error& e) {
       errors[i] = e.what();

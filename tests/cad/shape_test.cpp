@@ -2,7 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <BRep_Builder.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Shell.hxx>
+#include <TopoDS_Solid.hxx>
+
 #include "cad/error.h"
+#include "cad/mesh_analysis.h"
+#include "cad/occt_shape.h"
 
 namespace cadsynth {
 namespace {
@@ -71,6 +79,31 @@ TEST(Shape, HugePartsGetACoarserDeflectionAndAWarning) {
   // Rim chords 2 sqrt(2 r s) ~ 166 mm: about 2 pi r / 166 ~ 380 segments, not 1,000s.
   EXPECT_LT(huge.mesh.num_triangles(), 4 * 600u);
   EXPECT_GT(huge.mesh.num_triangles(), 4 * 300u);
+}
+
+TEST(Shape, HealRepairsAFlippedFaceAndLeavesValidShapesAlone) {
+  bool healed = true;
+  const Shape box = MakeBox(40, 30, 20);
+  EXPECT_EQ(&Heal(box, &healed).impl(), &box.impl());
+  EXPECT_FALSE(healed);
+
+  // The box's six faces sewn into a shell with one face turned inside out.
+  TopoDS_Shell shell;
+  BRep_Builder builder;
+  builder.MakeShell(shell);
+  int index = 0;
+  for (TopExp_Explorer it(OcctShape(box), TopAbs_FACE); it.More(); it.Next(), ++index) {
+    builder.Add(shell, index == 2 ? it.Current().Reversed() : it.Current());
+  }
+  TopoDS_Solid solid;
+  builder.MakeSolid(solid);
+  builder.Add(solid, shell);
+  const Shape broken = WrapShape(solid);
+  EXPECT_FALSE(AnalyzeTopology(Tessellate(broken, TessellationOptions{})).watertight());
+  const Shape repaired = Heal(broken, &healed);
+  EXPECT_TRUE(healed);
+  EXPECT_TRUE(AnalyzeTopology(Tessellate(repaired, TessellationOptions{})).watertight());
+  EXPECT_NEAR(ComputeMassProperties(repaired).volume_mm3, 24000.0, 1e-6);
 }
 
 TEST(Shape, RejectsImpossibleInput) {

@@ -31,6 +31,10 @@ bool ImportOptions::Check(std::string* why) const {
     *why = "unknown length unit '" + unit + "' (use um, mm, cm, m, in or ft)";
     return false;
   }
+  if (!encoding.empty() && StepCodePage(encoding).empty()) {
+    *why = "unknown encoding '" + encoding + "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312, iso8859-5)";
+    return false;
+  }
   if (!(crease_angle_rad >= 0.0) || crease_angle_rad > M_PI) {
     *why = "crease_angle must be between 0 and 180 degrees";
     return false;
@@ -164,7 +168,7 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
   const CadFormat format = DetectFormat(path);
   Assembly assembly;
   switch (format) {
-    case CadFormat::kStep: assembly = ReadStep(path, options.tessellation); break;
+    case CadFormat::kStep: assembly = ReadStep(path, options.tessellation, options.encoding); break;
     case CadFormat::kIges: assembly = ReadIges(path, options.tessellation); break;
     case CadFormat::kBrep: assembly = ReadBrep(path, options.tessellation); break;
     case CadFormat::kMesh: assembly = ReadMesh(path, options.crease_angle_rad); break;

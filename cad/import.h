@@ -16,6 +16,8 @@ struct ImportOptions {
   // for BREP and meshes, which carry no unit, it states it. Empty: trust the file; BREP and
   // meshes are then taken as millimetres.
   std::string unit;
+  // STEP only: the code page of names written as raw bytes (cp1251, sjis, ...); see StepEncodings.
+  std::string encoding;
   // Meshes: normals of neighbouring triangles meeting at more than this angle stay apart (a
   // sharp edge); below it they are averaged (smooth shading). 0 gives faceted normals.
   double crease_angle_rad = 30.0 * 3.14159265358979323846 / 180.0;

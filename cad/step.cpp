@@ -1,6 +1,11 @@
 #include "cad/step.h"
 
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+
 #include <IFSelect_ReturnStatus.hxx>
+#include <Interface_Static.hxx>
 #include <Interface_Check.hxx>
 #include <Interface_CheckIterator.hxx>
 #include <STEPCAFControl_Reader.hxx>
@@ -40,6 +45,35 @@ void ThrowOnSyntaxErrors(STEPControl_Reader& reader, const std::string& file) {
   }
 }
 
+bool IsValidUtf8(const std::string& bytes) {
+  size_t i = 0;
+  while (i < bytes.size()) {
+    const auto c = static_cast<unsigned char>(bytes[i]);
+    const int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : -1;
+    if (extra < 0 || i + extra >= bytes.size() + (extra == 0 ? 1 : 0)) return false;
+    for (int k = 1; k <= extra; ++k) {
+      if ((static_cast<unsigned char>(bytes[i + k]) >> 6) != 0x2) return false;
+    }
+    i += extra + 1;
+  }
+  return true;
+}
+
+// STEP strings are ASCII with escapes; some writers put raw bytes of their code page instead.
+// Warn when those bytes are not UTF-8, so the user can state the code page.
+void WarnOnRawNonUtf8(const std::filesystem::path& path, const std::string& file) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  while (std::getline(in, line)) {
+    const bool raw = std::any_of(line.begin(), line.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x80; });
+    if (raw && !IsValidUtf8(line)) {
+      Warn(file + ": names hold bytes that are not UTF-8 (a local code page); state it, e.g. "
+                  "`encoding: cp1251` for Cyrillic, `cp1252` for Western European, `sjis` for Japanese");
+      return;
+    }
+  }
+}
+
 // Closes an XDE document when it goes out of scope.
 struct DocumentGuard {
   Handle(TDocStd_Document) doc;
@@ -49,11 +83,37 @@ struct DocumentGuard {
 
 }  // namespace
 
-Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& options) {
+std::string StepCodePage(const std::string& encoding) {
+  static const char* const kNames[] = {
+      "UTF8",   "SJIS",   "EUC",    "GB",        "CP850",     "CP1250",    "CP1251",    "CP1252",
+      "CP1253", "CP1254", "CP1255", "CP1256",    "CP1257",    "CP1258",    "iso8859-1", "iso8859-2",
+      "iso8859-3", "iso8859-4", "iso8859-5", "iso8859-6", "iso8859-7", "iso8859-8", "iso8859-9"};
+  static const std::pair<const char*, const char*> kAliases[] = {
+      {"utf-8", "UTF8"}, {"shift_jis", "SJIS"}, {"shift-jis", "SJIS"}, {"gb2312", "GB"},
+      {"gbk", "GB"},     {"latin1", "iso8859-1"}, {"latin-1", "iso8859-1"}};
+  const auto lower = [](std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const std::string key = lower(encoding);
+  for (const auto& [alias, name] : kAliases) {
+    if (key == alias) return name;
+  }
+  for (const char* name : kNames) {
+    if (key == lower(name)) return name;
+  }
+  return {};
+}
+
+Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& options,
+                  const std::string& encoding) {
   const std::string file = path.string();
   internal::RequireReadableFile(file);
   std::string why;
   if (!options.Check(&why)) throw Error(file + ": tessellation: " + why);
+  const std::string code_page = encoding.empty() ? "UTF8" : StepCodePage(encoding);
+  if (code_page.empty()) throw Error(file + ": unknown encoding '" + encoding + "'");
+  if (encoding.empty()) WarnOnRawNonUtf8(path, file);
   internal::InitOcct();
 
   internal::CadContents contents;
@@ -62,6 +122,7 @@ Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& 
     std::lock_guard<std::mutex> lock(internal::XdeMutex());
     try {
       DocumentGuard document;
+      Interface_Static::SetCVal("read.step.codepage", code_page.c_str());  // under XdeMutex
       STEPCAFControl_Reader reader;
       reader.SetNameMode(true);
       reader.SetColorMode(true);

@@ -14,8 +14,16 @@ namespace cadsynth {
 
 // Reads a STEP file (AP203/AP214/AP242) into distinct parts and their instances. Lengths come
 // out in millimetres whatever unit the file declares. Parts are tessellated in parallel.
+// `encoding` is the code page of names written as raw bytes instead of STEP's escapes (see
+// StepCodePage(); empty: UTF-8, with a warning when the file's bytes are not UTF-8).
 // Throws Error naming the file for a missing, unreadable, corrupted or empty file.
-Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& options);
+Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& options,
+                  const std::string& encoding = "");
+
+// OpenCASCADE's name for a code page ReadStep accepts, in any case: UTF8 (utf-8), SJIS
+// (shift_jis), EUC, GB (gb2312), CP850, CP1250-CP1258, iso8859-1 (latin1) to iso8859-9.
+// Empty when unknown.
+std::string StepCodePage(const std::string& encoding);
 
 // One part written to STEP, placed once per entry of `placements`.
 struct StepComponent {

@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cad/error.h"
+#include "cad/step.h"
 #include "cad/units.h"
 #include "recipes/units.h"
 
@@ -199,7 +200,7 @@ void ReadParts(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   for (size_t i = 0; i < node.size(); ++i) {
     const YAML::Node item = node[i];
     const std::string key = "parts[" + std::to_string(i) + "]";
-    r.ExpectMap(item, key, {"file", "unit", "builtin"});
+    r.ExpectMap(item, key, {"file", "unit", "encoding", "builtin"});
     if (!item["file"] == !item["builtin"]) r.Fail(item, key, "give exactly one of 'file' or 'builtin'");
     PartSource source;
     if (item["file"]) {
@@ -212,9 +213,16 @@ void ReadParts(const Reader& r, const YAML::Node& node, RunSpec* spec) {
           r.Fail(item["unit"], key + ".unit", "unknown length unit '" + source.unit + "' (use um, mm, cm, m, in or ft)");
         }
       }
+      if (item["encoding"]) {
+        source.encoding = r.Scalar(item["encoding"], key + ".encoding");
+        if (StepCodePage(source.encoding).empty()) {
+          r.Fail(item["encoding"], key + ".encoding",
+                 "unknown encoding '" + source.encoding + "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312)");
+        }
+      }
       DetectFormatOrFail(r, item["file"], key + ".file", source.path);
     } else {
-      if (item["unit"]) r.Fail(item["unit"], key + ".unit", "the built-in parts are in mm");
+      if (item["unit"] || item["encoding"]) r.Fail(item, key, "'unit' and 'encoding' go with 'file'");
       const std::string which = r.Scalar(item["builtin"], key + ".builtin");
       if (which != "default") r.Fail(item["builtin"], key + ".builtin", "the built-in set is 'default'");
       source.kind = PartSource::Kind::kBuiltinDefault;

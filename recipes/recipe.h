@@ -22,6 +22,7 @@ struct PartSource {
   Kind kind = Kind::kBuiltinDefault;
   std::filesystem::path path;  // kFile: STEP, IGES, BREP or mesh
   std::string unit;            // kFile: the unit its numbers are in, overriding the file (see ImportOptions)
+  std::string encoding;        // kFile, STEP: code page of raw-byte names (see ImportOptions)
   std::string where;           // "recipe.yaml:3:5" (empty for the built-in default)
 };
 

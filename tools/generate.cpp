@@ -26,6 +26,7 @@ Assembly LoadSource(const PartSource& source, const RunSpec& spec) {
   options.tessellation = spec.tessellation;
   options.crease_angle_rad = spec.crease_angle_rad;
   options.unit = source.unit;
+  options.encoding = source.encoding;
   try {
     return ImportCad(source.path, options);
   } catch (const Error& e) {

@@ -23,7 +23,7 @@ constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data
 
 usage:
   cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--quiet]
-  cadsynth inspect FILE [--json] [--unit UNIT] [--deflection MM]
+  cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
   cadsynth --help | --version
 
 generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
@@ -38,6 +38,7 @@ inspect    Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb
            mm, triangles, colour, volume and whether the mesh is closed, and every instance.
   --json           machine-readable output
   --unit UNIT      the unit the file's numbers are really in (overrides the file; meshes: mm)
+  --encoding CP    STEP names written as raw bytes of a code page: cp1251, cp1252, sjis, ...
   --deflection MM  tessellation tolerance (default 0.1 mm)
 )";
 
@@ -128,6 +129,8 @@ int RunInspect(const std::vector<std::string>& args) {
       json = true;
     } else if (a == "--unit") {
       options.unit = value();
+    } else if (a == "--encoding") {
+      options.encoding = value();
     } else if (a == "--deflection") {
       const std::string text = value();
       char* end = nullptr;

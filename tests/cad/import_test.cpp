@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "cad/error.h"
+#include "cad/step.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {
@@ -184,6 +185,27 @@ TEST(ImportSharedData, BinaryStlWithSolidHeaderAndColladaAgree) {
   // Without a unit the metre file is 0.025 mm: a warning says which unit would make sense.
   ImportCad(stl, Coarse());
   EXPECT_EQ(quiet.count(), 1);
+}
+
+TEST(ImportSharedData, NamesInALocalCodePageAreReadableWhenStated) {
+  CADSYNTH_REQUIRE_DATA(file, "step/awkward/bug31670_russian.stp");
+  QuietWarnings quiet;
+  const Assembly guessed = ImportCad(file, Coarse());
+  EXPECT_EQ(quiet.count(), 1);  // the raw CP1251 bytes are not UTF-8: say so
+  EXPECT_EQ(guessed.name, "\u00d1\u00e1\u00ee\u00f0\u00ea\u00e01");  // Latin-1 reading of the bytes
+  ImportOptions cyrillic = Coarse();
+  cyrillic.encoding = "cp1251";
+  const Assembly read = ImportCad(file, cyrillic);
+  EXPECT_EQ(read.name, "\u0421\u0431\u043e\u0440\u043a\u04301");  // "Сборка1": assembly 1
+  EXPECT_EQ(quiet.count(), 1);
+  EXPECT_EQ(StepCodePage("Shift_JIS"), "SJIS");
+  EXPECT_EQ(StepCodePage("klingon"), "");
+}
+
+TEST(ImportSharedData, EscapedUnicodeNamesDecode) {
+  CADSYNTH_REQUIRE_DATA(file, "step/parts/spur_gear_10t_fusion360.step");
+  const Assembly a = ImportCad(file, Coarse());
+  EXPECT_EQ(a.name, "(\u672a\u4fdd\u5b58)");  // "(未保存)", written as \X2\ escapes
 }
 
 TEST(Import, BadFilesGiveClearErrors) {

@@ -93,7 +93,7 @@ TEST(Generate, BadInputLeavesNoDatasetBehind) {
   ScratchDir dir;
   std::ofstream(dir / "broken.stp") << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(";
   RunSpec spec = SmallDefault();
-  spec.sources = {PartSource{PartSource::Kind::kFile, dir / "broken.stp", "", "r.yaml:2:11"}};
+  spec.sources = {PartSource{.kind = PartSource::Kind::kFile, .path = dir / "broken.stp", .where = "r.yaml:2:11"}};
   GenerateOptions options;
   options.output = dir / "out";
   try {

@@ -17,6 +17,7 @@
 #include <TopoDS_Shape.hxx>
 #include <XCAFApp_Application.hxx>
 
+#include "cad/assembly.h"
 #include "cad/error.h"
 #include "cad/occt_shape.h"
 #include "cad/step.h"
@@ -173,6 +174,9 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
     case CadFormat::kBrep: assembly = ReadBrep(path, options.tessellation); break;
     case CadFormat::kMesh: assembly = ReadMesh(path, options.crease_angle_rad); break;
   }
+
+  // Files that store N copies of one shape; meshes of one surface lie within twice the deflection.
+  MergeIdenticalParts(&assembly, 2.0 * options.tessellation.linear_deflection_mm + 1e-3);
 
   // What one unit of the file's numbers is in mm, and what the translator already assumed.
   double assumed_mm = 1.0;

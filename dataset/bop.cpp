@@ -1,5 +1,7 @@
 #include "dataset/bop.h"
 
+#include <fnmatch.h>
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -118,7 +120,37 @@ GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale) {
   return info;
 }
 
-void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts) {
+std::vector<ObjectClass> AssignClasses(
+    const std::vector<std::string>& part_names,
+    const std::vector<std::pair<std::string, std::vector<std::string>>>& groups,
+    std::vector<std::string>* empty_groups) {
+  std::vector<ObjectClass> classes(part_names.size());
+  std::vector<bool> used(groups.size(), false);
+  int next_id = static_cast<int>(groups.size()) + 1;
+  for (size_t i = 0; i < part_names.size(); ++i) {
+    for (size_t g = 0; g < groups.size() && classes[i].id == 0; ++g) {
+      for (const std::string& pattern : groups[g].second) {
+        if (fnmatch(pattern.c_str(), part_names[i].c_str(), FNM_CASEFOLD) == 0) {
+          classes[i] = {static_cast<int>(g) + 1, groups[g].first};
+          used[g] = true;
+          break;
+        }
+      }
+    }
+    if (classes[i].id == 0) classes[i] = {next_id++, part_names[i]};
+  }
+  empty_groups->clear();
+  for (size_t g = 0; g < groups.size(); ++g) {
+    if (!used[g]) empty_groups->push_back(groups[g].first);
+  }
+  return classes;
+}
+
+void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts,
+                    const std::vector<ObjectClass>& classes) {
+  if (!classes.empty() && classes.size() != parts.size()) {
+    throw Error("bop: " + std::to_string(classes.size()) + " classes for " + std::to_string(parts.size()) + " parts");
+  }
   const std::filesystem::path dir = root / "models";
   CreateFolder(dir);
   std::vector<double> diameters(parts.size());
@@ -140,7 +172,11 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
     for (int r = 0; r < 4; ++r) {
       for (int c = 0; c < 4; ++c) cad_from_model.push_back(parts[i].cad_from_model.matrix()(r, c));
     }
+    const ObjectClass object_class =
+        classes.empty() ? ObjectClass{static_cast<int>(i) + 1, parts[i].name} : classes[i];
     cad[key] = {{"name", parts[i].name},
+                {"class_id", object_class.id},
+                {"class_name", object_class.name},
                 {"cad_from_model", cad_from_model},
                 {"volume_mm3", parts[i].mass.volume_mm3},
                 {"center_of_mass", Vec(parts[i].mass.center_of_mass)},

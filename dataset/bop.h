@@ -37,8 +37,26 @@ struct BopOptions {
   bool Check(std::string* why) const;
 };
 
-// Writes ROOT/models/ for `parts`; part i becomes obj_id i + 1.
-void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts);
+// The semantic class of an object: several objects (distinct shapes) may share one, e.g. every
+// bolt size is a 'bolt'. Ids start at 1.
+struct ObjectClass {
+  int id = 0;
+  std::string name;
+};
+
+// Classes for parts named `part_names`: group g (in order) is class g + 1 and takes every part
+// whose name matches one of its shell globs (case-insensitive; the first matching group wins);
+// the other parts get classes of their own after the groups, named after the part. Sets
+// *empty_groups to the names of groups that matched no part.
+std::vector<ObjectClass> AssignClasses(
+    const std::vector<std::string>& part_names,
+    const std::vector<std::pair<std::string, std::vector<std::string>>>& groups,
+    std::vector<std::string>* empty_groups);
+
+// Writes ROOT/models/ for `parts`; part i becomes obj_id i + 1. `classes[i]` is the class of part
+// i (written to models_cad.json); empty: each object is its own class, named after the part.
+void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts,
+                    const std::vector<ObjectClass>& classes = {});
 
 // Writes ROOT/camera.json.
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& intrinsics,

@@ -248,6 +248,36 @@ void ReadScene(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.Check(spec->arrangement, node, "scene");
 }
 
+void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
+  r.ExpectMap(node, "classes", {"by", "groups"});
+  if (node["by"]) {
+    const std::string by = r.Scalar(node["by"], "classes.by");
+    if (by == "part") {
+      spec->class_by = RunSpec::ClassBy::kPart;
+    } else if (by == "assembly") {
+      spec->class_by = RunSpec::ClassBy::kAssembly;
+    } else {
+      r.Fail(node["by"], "classes.by", "expected 'part' or 'assembly', got '" + by + "'");
+    }
+  }
+  if (node["groups"]) {
+    const YAML::Node groups = node["groups"];
+    if (!groups.IsMap()) r.Fail(groups, "classes.groups", "expected {class name: [name patterns]}");
+    for (auto it = groups.begin(); it != groups.end(); ++it) {
+      const std::string name = it->first.as<std::string>();
+      const std::string key = "classes.groups." + name;
+      std::vector<std::string> patterns;
+      if (it->second.IsSequence()) {
+        for (const YAML::Node& p : it->second) patterns.push_back(r.Scalar(p, key));
+      } else {
+        patterns.push_back(r.Scalar(it->second, key));
+      }
+      if (patterns.empty()) r.Fail(it->second, key, "give at least one name pattern");
+      spec->class_groups.emplace_back(name, patterns);
+    }
+  }
+}
+
 void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "tessellation", {"linear_deflection", "angular_deflection", "crease_angle"});
   if (node["crease_angle"]) {
@@ -373,8 +403,10 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   // A recipe's assemblies stay as designed; the built-in set (no 'parts') lies side by side.
   spec.arrangement.layout = root["parts"] ? Layout::kAssembled : Layout::kRow;
   try {
-    r.ExpectMap(root, "", {"parts", "scene", "tessellation", "camera", "sweep", "render", "output"});
+    r.ExpectMap(root, "", {"parts", "classes", "scene", "tessellation", "camera", "sweep", "render",
+                           "output"});
     if (root["parts"]) ReadParts(r, root["parts"], &spec);
+    if (root["classes"]) ReadClasses(r, root["classes"], &spec);
     if (root["scene"]) ReadScene(r, root["scene"], &spec);
     if (root["tessellation"]) ReadTessellation(r, root["tessellation"], &spec);
     if (root["camera"]) ReadCamera(r, root["camera"], &spec);

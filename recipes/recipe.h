@@ -33,6 +33,13 @@ struct RunSpec {
   TessellationOptions tessellation;
   double crease_angle_rad = ImportOptions{}.crease_angle_rad;  // meshes
   ArrangementOptions arrangement;
+  // What one object class is: each distinct part shape (kPart) or each file's whole assembly
+  // (kAssembly, fused into one rigid object).
+  enum class ClassBy { kPart, kAssembly };
+  ClassBy class_by = ClassBy::kPart;
+  // Named classes grouping parts by name (shell globs, case-insensitive), in recipe order;
+  // parts matching none keep a class of their own.
+  std::vector<std::pair<std::string, std::vector<std::string>>> class_groups;
   Intrinsics intrinsics;
   SweepOptions sweep;
   Scene look;  // floor, colours and lights (its instances are filled in by the run)

@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include "cad/error.h"
+#include "cad/assembly.h"
 #include "cad/import.h"
 #include "dataset/bop.h"
 #include "render/renderer.h"
@@ -94,11 +95,13 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   if (!spec.bop.Check(&why)) throw Error("output: " + why);
   if (spec.sources.empty()) throw Error("no parts to render");
 
-  // Parts and instances of every source, in one list.
-  std::vector<Part> parts;
-  std::vector<Instance> instances;
+  // Parts and instances of every source, in one assembly.
+  Assembly all;
+  std::vector<Part>& parts = all.parts;
+  std::vector<Instance>& instances = all.instances;
   for (const PartSource& source : spec.sources) {
     Assembly assembly = LoadSource(source, spec);
+    if (spec.class_by == RunSpec::ClassBy::kAssembly) assembly = FuseAssembly(assembly);
     std::ostringstream line;
     line << "read " << (source.kind == PartSource::Kind::kFile ? source.path.string() : "built-in parts")
          << " (" << assembly.format << "): '" << assembly.name << "', unit "
@@ -106,19 +109,28 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
          << ", " << assembly.parts.size() << " parts, " << assembly.instances.size() << " instances";
     info(line.str());
     const int offset = static_cast<int>(parts.size());
-    for (Part& part : assembly.parts) {
-      const Eigen::Vector3d size = part.mesh.Bounds().sizes();
-      std::ostringstream p;
-      p.precision(4);
-      p << "  obj_id " << parts.size() + 1 << ": '" << part.name << "' " << size.x() << " x "
-        << size.y() << " x " << size.z() << " mm, " << part.mesh.num_triangles() << " triangles";
-      info(p.str());
-      parts.push_back(std::move(part));
-    }
+    for (Part& part : assembly.parts) parts.push_back(std::move(part));
     for (Instance instance : assembly.instances) {
       instance.part += offset;
       instances.push_back(std::move(instance));
     }
+  }
+  // The same shape from several files (or built in and imported) is one object.
+  const size_t merged = MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3);
+  if (merged > 0) info("merged " + std::to_string(merged) + " parts that repeat a shape of another file");
+
+  std::vector<std::string> names, empty_groups;
+  for (const Part& part : parts) names.push_back(part.name);
+  const std::vector<ObjectClass> classes = AssignClasses(names, spec.class_groups, &empty_groups);
+  for (const std::string& group : empty_groups) Warn("class '" + group + "' matches no part");
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const Eigen::Vector3d size = parts[i].mesh.Bounds().sizes();
+    std::ostringstream p;
+    p.precision(4);
+    p << "  obj_id " << i + 1 << ": '" << parts[i].name << "' " << size.x() << " x " << size.y()
+      << " x " << size.z() << " mm, " << parts[i].mesh.num_triangles() << " triangles, class "
+      << classes[i].id << " '" << classes[i].name << "'";
+    info(p.str());
   }
 
   Scene scene = spec.look;
@@ -145,7 +157,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   std::filesystem::remove_all(staging.path(), ec);
 
   WriteBopCamera(staging.path(), spec.intrinsics, spec.bop);
-  WriteBopModels(staging.path(), parts);
+  WriteBopModels(staging.path(), parts, classes);
   BopSceneWriter writer(staging.path(), /*scene_id=*/0, spec.bop, obj_ids);
 
   // cast -> encode + write, a bounded number of frames in flight.

@@ -162,10 +162,25 @@ TEST(ImportSharedData, UnitOverrideRepairsTheFileThatDeclaresInchButHoldsMillime
   EXPECT_EQ(repaired.length_unit, "mm (stated by the recipe, file declares INCH)");
 }
 
+TEST(ImportSharedData, EightStoredCopiesAreOnePartWithEightInstances) {
+  CADSYNTH_REQUIRE_DATA(file, "step/assemblies/eight_cyl.stp");
+  const Assembly a = ImportCad(file, Coarse());
+  ASSERT_EQ(a.parts.size(), 1u);
+  ASSERT_EQ(a.instances.size(), 8u);
+  // The copies sit at (+-207.6, +-55.8, +-185): their centres survive the merge.
+  for (const Instance& i : a.instances) {
+    const Eigen::Vector3d c = a.parts[0].mesh.Bounds(i.world_from_model).center();
+    EXPECT_NEAR(std::abs(c.x()), 207.6, 0.1);
+    EXPECT_NEAR(std::abs(c.y()), 55.83, 0.1);
+    EXPECT_NEAR(std::abs(c.z()), 185.0, 0.1);
+  }
+}
+
 TEST(ImportSharedData, ExternalReferencesResolveFromAnyFolder) {
   CADSYNTH_REQUIRE_DATA(file, "step/awkward/external_refs_s1-c5-214/s1-c5-214.stp");
   const Assembly a = ImportCad(std::filesystem::relative(file), Coarse());
-  EXPECT_EQ(a.parts.size(), 8u);
+  // 8 leaf files; FOOT_FRONT_000 and FOOT_BACK_000 hold the same shape, so 7 parts.
+  EXPECT_EQ(a.parts.size(), 7u);
   EXPECT_EQ(a.instances.size(), 11u);
 }
 

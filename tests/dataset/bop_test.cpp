@@ -80,6 +80,24 @@ TEST(GtInfo, HandWorkedFrame) {
   EXPECT_EQ(none.visib_fract, 0.0);
 }
 
+TEST(AssignClasses, GroupsByNamePatternThenOneClassPerRemainingPart) {
+  std::vector<std::string> empty;
+  const std::vector<ObjectClass> classes = AssignClasses(
+      {"M6 bolt", "plate", "NUT_M6", "M8 Bolt", "washer"},
+      {{"bolt", {"*bolt*"}}, {"nut", {"nut*", "*-nut"}}, {"screw", {"*screw*"}}}, &empty);
+  ASSERT_EQ(classes.size(), 5u);
+  EXPECT_EQ(classes[0].id, 1);
+  EXPECT_EQ(classes[0].name, "bolt");
+  EXPECT_EQ(classes[3].id, 1);  // case-insensitive
+  EXPECT_EQ(classes[2].id, 2);
+  EXPECT_EQ(classes[2].name, "nut");
+  EXPECT_EQ(classes[1].id, 4);  // after the three groups, in part order
+  EXPECT_EQ(classes[1].name, "plate");
+  EXPECT_EQ(classes[4].id, 5);
+  EXPECT_EQ(empty, std::vector<std::string>{"screw"});
+  EXPECT_EQ(AssignClasses({"a", "b"}, {}, &empty)[1].id, 2);
+}
+
 TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
   testing::ScratchDir dir;
   const std::vector<Part> parts = {MakePart("box", MakeBox(60, 40, 20), TessellationOptions{}),

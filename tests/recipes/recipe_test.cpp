@@ -59,6 +59,23 @@ output: {dir: out/x, depth_scale: 1.0, split: val}
   EXPECT_EQ(spec.bop.split, "val");
 }
 
+TEST(Recipe, Classes) {
+  const RunSpec spec = ParseRecipe(R"(
+classes:
+  by: assembly
+  groups:
+    fastener: ["*bolt*", "*nut*"]
+    plate: plate
+)", "r.yaml", ".");
+  EXPECT_EQ(spec.class_by, RunSpec::ClassBy::kAssembly);
+  ASSERT_EQ(spec.class_groups.size(), 2u);
+  EXPECT_EQ(spec.class_groups[0].first, "fastener");
+  EXPECT_EQ(spec.class_groups[0].second, (std::vector<std::string>{"*bolt*", "*nut*"}));
+  EXPECT_EQ(spec.class_groups[1].second, std::vector<std::string>{"plate"});
+  EXPECT_EQ(ErrorOf("classes: {by: shape}\n"), "r.yaml:1:15: classes.by: expected 'part' or 'assembly', got 'shape'");
+  EXPECT_EQ(ErrorOf("classes: {group: {}}\n"), "r.yaml:1:11: unknown key 'classes.group' (did you mean 'groups'?)");
+}
+
 TEST(Recipe, ErrorsPointAtLineAndColumn) {
   EXPECT_EQ(ErrorOf("camera:\n  preset: kinect_v1\n  fxx: 500\n"),
             "r.yaml:3:3: unknown key 'camera.fxx' (did you mean 'fx'?)");

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "cad/error.h"
+#include "cad/step.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {
@@ -120,6 +121,56 @@ TEST(Generate, ExistingOutputNeedsOverwrite) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "keep.txt"));
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "camera.json"));
   EXPECT_EQ(EntriesIn(dir.path()), 1u);
+}
+
+json ModelsCad(const std::filesystem::path& root) {
+  std::ifstream in(root / "models" / "models_cad.json");
+  return json::parse(in);
+}
+
+TEST(Generate, SameShapeFromTwoSourcesIsOneObject) {
+  ScratchDir dir;
+  // The built-in box, written to STEP turned on its side, is the built-in box.
+  WriteStep(dir / "box.step", "boxes",
+            {StepComponent{"turned box", MakeBox(80, 60, 40),
+                           {Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()))}}});
+  RunSpec spec = SmallDefault();
+  spec.sources = {PartSource{}, PartSource{.kind = PartSource::Kind::kFile, .path = dir / "box.step"}};
+  GenerateOptions options;
+  options.output = dir / "out";
+  const GenerateSummary summary = Generate(spec, options);
+  EXPECT_EQ(summary.objects, 3u);  // box, peg, gear: the STEP box is a second box instance
+  EXPECT_EQ(summary.instances, 4u);
+}
+
+TEST(Generate, ClassesByAssemblyAndByNameGroups) {
+  ScratchDir dir;
+  WriteStep(dir / "kit.step", "kit",
+            {StepComponent{"M6 bolt", MakeCylinder(3, 30), {Eigen::Isometry3d::Identity()}},
+             StepComponent{"M8 bolt", MakeCylinder(4, 40), {Eigen::Isometry3d(Eigen::Translation3d(50, 0, 0))}},
+             StepComponent{"base plate", MakeBox(100, 80, 5), {Eigen::Isometry3d(Eigen::Translation3d(0, 0, -5))}}});
+  RunSpec spec = SmallDefault();
+  spec.sources = {PartSource{.kind = PartSource::Kind::kFile, .path = dir / "kit.step"}};
+  spec.class_groups = {{"bolt", {"*bolt"}}};
+  GenerateOptions options;
+  options.output = dir / "grouped";
+  EXPECT_EQ(Generate(spec, options).objects, 3u);
+  const json grouped = ModelsCad(dir / "grouped");
+  EXPECT_EQ(grouped["1"]["class_id"], 1);
+  EXPECT_EQ(grouped["1"]["class_name"], "bolt");
+  EXPECT_EQ(grouped["2"]["class_id"], 1);
+  EXPECT_EQ(grouped["3"]["class_id"], 2);
+  EXPECT_EQ(grouped["3"]["class_name"], "base plate");
+
+  spec.class_by = RunSpec::ClassBy::kAssembly;
+  spec.class_groups.clear();
+  options.output = dir / "fused";
+  const GenerateSummary fused = Generate(spec, options);
+  EXPECT_EQ(fused.objects, 1u);
+  EXPECT_EQ(fused.instances, 1u);
+  const json one = ModelsCad(dir / "fused");
+  EXPECT_EQ(one["1"]["name"], "kit");
+  EXPECT_NEAR(one["1"]["volume_mm3"].get<double>(), M_PI * (9 * 30 + 16 * 40) + 100 * 80 * 5, 1e-3);
 }
 
 TEST(Generate, As1RecipeShowsEveryPart) {

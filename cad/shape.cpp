@@ -51,6 +51,10 @@ Shape::Shape(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
 
 bool Shape::IsNull() const { return impl_->shape.IsNull(); }
 
+bool Shape::HasFaces() const {
+  return !IsNull() && TopExp_Explorer(impl_->shape, TopAbs_FACE).More();
+}
+
 Eigen::AlignedBox3d Shape::Bounds() const {
   Eigen::AlignedBox3d box;
   if (IsNull()) return box;

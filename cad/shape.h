@@ -36,6 +36,8 @@ class Shape {
   explicit Shape(std::shared_ptr<const Impl> impl);
 
   bool IsNull() const;
+  // True when the shape has at least one face (wires and points have none).
+  bool HasFaces() const;
   // Axis-aligned bounds in mm (from the exact geometry, with OpenCASCADE's small tolerance gap).
   Eigen::AlignedBox3d Bounds() const;
   const Impl& impl() const { return *impl_; }

@@ -23,6 +23,8 @@
 
 #include "cad/error.h"
 #include "cad/occt_shape.h"
+#include "cad/step_tessellated.h"
+#include "cad/units.h"
 #include "cad/xde.h"
 
 namespace cadsynth {
@@ -145,6 +147,20 @@ Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& 
       contents = internal::CollectDocument(document.doc, file);
     } catch (const Standard_Failure& failure) {
       throw Error(file + ": OpenCASCADE failed while reading: " + failure.GetMessageString());
+    }
+  }
+  // Files that carry only triangles (AP242 tessellated geometry) have no B-rep faces for
+  // OpenCASCADE 7.6: pass their triangles through.
+  const bool has_faces = std::any_of(contents.part_shapes.begin(), contents.part_shapes.end(),
+                                     [](const Shape& s) { return s.HasFaces(); });
+  if (!has_faces) {
+    const std::optional<double> unit_mm = LengthUnitMm(length_unit);
+    Assembly tessellated = internal::ReadStepTessellated(path, unit_mm.value_or(1.0));
+    if (!tessellated.parts.empty()) {
+      tessellated.name = contents.name.empty() ? path.stem().string() : contents.name;
+      tessellated.format = "STEP (tessellated)";
+      tessellated.length_unit = length_unit;
+      return tessellated;
     }
   }
   Assembly assembly = internal::BuildAssembly(file, std::move(contents), options);

@@ -30,6 +30,9 @@ struct Part {
   MassProperties mass;
   bool mass_from_brep = false;  // true when `mass` came from the exact B-rep
   bool watertight = false;      // the mesh is closed and consistently wound
+  // Largest measured distance between the mesh and the exact B-rep surface (mm); negative when
+  // not measured or there is no B-rep.
+  double max_deviation_mm = -1.0;
   std::optional<Eigen::Vector3f> color;  // sRGB in [0, 1], when the CAD file gives one
 };
 

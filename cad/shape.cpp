@@ -16,6 +16,8 @@
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
+#include <GeomAPI_ProjectPointOnSurf.hxx>
+#include <Geom_Surface.hxx>
 #include <Poly_Triangulation.hxx>
 #include <ShapeFix_Shape.hxx>
 #include <Standard_Failure.hxx>
@@ -115,7 +117,37 @@ Shape Transformed(const Shape& shape, const Eigen::Isometry3d& transform) {
                "a moved shape");
 }
 
-Mesh Tessellate(const Shape& shape, const TessellationOptions& options) {
+namespace {
+
+// Distance from `p` to the face's surface: Gauss-Newton on |S(u, v) - p|^2 from (u, v), which
+// converges in a few steps for a point near its own triangle; where it does not (degenerate
+// parametrisations such as sphere poles), OpenCASCADE's global projection decides.
+double DistanceToSurface(const BRepAdaptor_Surface& surface, const Handle(Geom_Surface)& geometry,
+                         const gp_Pnt& p, double u, double v) {
+  gp_Pnt s;
+  gp_Vec du, dv;
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    surface.D1(u, v, s, du, dv);
+    const gp_Vec r(p, s);
+    const double a = du.Dot(du), b = du.Dot(dv), c = dv.Dot(dv);
+    const double det = a * c - b * b;
+    if (!(det > 1e-12 * a * c) || !(a * c > 0)) break;
+    const double gu = du.Dot(r), gv = dv.Dot(r);
+    const double step_u = (c * gu - b * gv) / det, step_v = (a * gv - b * gu) / det;
+    u -= step_u;
+    v -= step_v;
+    if ((step_u * du + step_v * dv).Magnitude() < 1e-9) {
+      surface.D0(u, v, s);
+      return s.Distance(p);
+    }
+  }
+  GeomAPI_ProjectPointOnSurf projection(p, geometry);
+  return projection.NbPoints() > 0 ? projection.LowerDistance() : -1.0;
+}
+
+}  // namespace
+
+Mesh Tessellate(const Shape& shape, const TessellationOptions& options, double* max_deviation_mm) {
   std::string why;
   if (!options.Check(&why)) throw Error("tessellation: " + why);
   const TopoDS_Shape& s = OcctShape(shape);
@@ -129,6 +161,7 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options) {
   }
 
   Mesh mesh;
+  if (max_deviation_mm != nullptr) *max_deviation_mm = 0.0;
   uint32_t face_index = 0;
   for (TopExp_Explorer it(s, TopAbs_FACE); it.More(); it.Next(), ++face_index) {
     const TopoDS_Face& face = TopoDS::Face(it.Current());
@@ -183,6 +216,33 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options) {
       }
       mesh.normals.push_back(normal);
     }
+
+    if (max_deviation_mm != nullptr && tri->HasUVNodes()) {
+      const Handle(Geom_Surface) geometry = BRep_Tool::Surface(face);  // with the face's location
+      const size_t first = mesh.triangles.size() - static_cast<size_t>(tri->NbTriangles());
+      for (size_t t = first; t < mesh.triangles.size(); ++t) {
+        const auto& idx = mesh.triangles[t];
+        gp_Pnt2d uv[3];
+        for (int k = 0; k < 3; ++k) uv[k] = tri->UVNode(static_cast<int>(idx[k] - base) + 1);
+        const auto point = [&](int k) {
+          const Eigen::Vector3f& q = mesh.positions[idx[k]];
+          return gp_Pnt(q.x(), q.y(), q.z());
+        };
+        // Centroid and edge midpoints: where a chord strays furthest from the surface.
+        const auto sample = [&](const gp_Pnt& p, double u, double v) {
+          const double d = DistanceToSurface(surface, geometry, p, u, v);
+          if (d >= 0.0) *max_deviation_mm = std::max(*max_deviation_mm, d);
+        };
+        const gp_Pnt a = point(0), b = point(1), c = point(2);
+        sample(gp_Pnt((a.XYZ() + b.XYZ() + c.XYZ()) / 3.0), (uv[0].X() + uv[1].X() + uv[2].X()) / 3.0,
+               (uv[0].Y() + uv[1].Y() + uv[2].Y()) / 3.0);
+        for (int k = 0; k < 3; ++k) {
+          const int l = (k + 1) % 3;
+          sample(gp_Pnt((point(k).XYZ() + point(l).XYZ()) / 2.0), (uv[k].X() + uv[l].X()) / 2.0,
+                 (uv[k].Y() + uv[l].Y()) / 2.0);
+        }
+      }
+    }
   }
   if (mesh.empty()) throw Error("tessellation produced no triangles (the shape has no faces)");
   return mesh;
@@ -235,7 +295,7 @@ Part MakePart(const std::string& name, const Shape& shape, const TessellationOpt
       Warn(message.str());
     }
   }
-  part.mesh = Tessellate(shape, effective);
+  part.mesh = Tessellate(shape, effective, options.measure_deviation ? &part.max_deviation_mm : nullptr);
   const Eigen::Vector3d centre = part.mesh.Bounds().center();
   part.cad_from_model = Eigen::Translation3d(centre);
   part.mesh.Transform(part.cad_from_model.inverse());

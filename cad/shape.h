@@ -22,6 +22,8 @@ struct TessellationOptions {
   // diagonal: a 100 m part (real files have them, by unit mistakes) at 0.1 mm would need billions
   // of triangles. At 1e-5 it changes nothing for parts under 10 m.
   double min_relative_deflection = 1e-5;
+  // MakePart measures Part::max_deviation_mm (see Tessellate); costs about as much as meshing.
+  bool measure_deviation = false;
 
   // False, with a reason, when a value is out of range.
   bool Check(std::string* why) const;
@@ -57,8 +59,11 @@ Shape MakeSphere(double radius);
 Shape Transformed(const Shape& shape, const Eigen::Isometry3d& transform);
 
 // Triangles for every face, with per-vertex normals from the exact surface. Throws Error when the
-// options are invalid or the shape yields no triangles.
-Mesh Tessellate(const Shape& shape, const TessellationOptions& options);
+// options are invalid or the shape yields no triangles. With `max_deviation_mm`, also measures
+// the largest distance between the triangles and the exact surface: each triangle's centroid and
+// edge midpoints are projected onto its face's surface (Gauss-Newton from the mid-UV).
+Mesh Tessellate(const Shape& shape, const TessellationOptions& options,
+                double* max_deviation_mm = nullptr);
 
 // Checks the B-rep (BRepCheck) and, when it is invalid, repairs it with OpenCASCADE's shape
 // healing (ShapeFix: orientation, gaps, missing seams, small edges). Returns the shape unchanged

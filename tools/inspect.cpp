@@ -17,6 +17,13 @@ std::string Hex(const std::optional<Eigen::Vector3f>& color) {
   return buffer;
 }
 
+// Names may hold line breaks and tabs (STEP allows them): keep the table on one line per row.
+std::string Printable(const std::string& name) {
+  std::string out;
+  for (char c : name) out += (static_cast<unsigned char>(c) < 0x20) ? ' ' : c;
+  return out;
+}
+
 std::vector<int> InstanceCounts(const Assembly& a) {
   std::vector<int> counts(a.parts.size(), 0);
   for (const Instance& i : a.instances) ++counts[i.part];
@@ -25,16 +32,25 @@ std::vector<int> InstanceCounts(const Assembly& a) {
 
 }  // namespace
 
+namespace {
+
+Assembly Read(const std::filesystem::path& path, ImportOptions options) {
+  options.tessellation.measure_deviation = true;
+  return ImportCad(path, options);
+}
+
+}  // namespace
+
 std::string InspectText(const std::filesystem::path& path, const ImportOptions& options) {
-  const Assembly a = ImportCad(path, options);
+  const Assembly a = Read(path, options);
   const std::vector<int> counts = InstanceCounts(a);
   std::ostringstream out;
   out << path.string() << "\n  format " << a.format << ", unit " << (a.length_unit.empty() ? "?" : a.length_unit)
       << ", '" << a.name << "': " << a.parts.size() << " parts, " << a.instances.size()
       << " instances (sizes in mm)\n\n";
   char line[512];
-  std::snprintf(line, sizeof(line), "  %3s  %-28s %5s  %-28s %9s  %-7s  %13s  %s\n", "id", "part", "inst",
-                "size x y z", "triangles", "colour", "volume mm3", "closed");
+  std::snprintf(line, sizeof(line), "  %3s  %-28s %5s  %-28s %9s  %-7s  %13s  %-6s  %s\n", "id", "part", "inst",
+                "size x y z", "triangles", "colour", "volume mm3", "closed", "deviation mm");
   out << line;
   for (size_t i = 0; i < a.parts.size(); ++i) {
     const Part& p = a.parts[i];
@@ -43,15 +59,17 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
     std::snprintf(size, sizeof(size), "%.4g x %.4g x %.4g", s.x(), s.y(), s.z());
     char volume[32] = "-";
     if (p.mass.volume_mm3 > 0) std::snprintf(volume, sizeof(volume), "%.6g", p.mass.volume_mm3);
-    std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %5d  %-28s %9zu  %-7s  %13s  %s\n", i + 1,
-                  p.name.c_str(), counts[i], size, p.mesh.num_triangles(), Hex(p.color).c_str(), volume,
-                  p.watertight ? "yes" : "NO");
+    char deviation[32] = "-";
+    if (p.max_deviation_mm >= 0) std::snprintf(deviation, sizeof(deviation), "%.3g", p.max_deviation_mm);
+    std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %5d  %-28s %9zu  %-7s  %13s  %-6s  %s\n", i + 1,
+                  Printable(p.name).c_str(), counts[i], size, p.mesh.num_triangles(), Hex(p.color).c_str(), volume,
+                  p.watertight ? "yes" : "NO", deviation);
     out << line;
   }
   out << "\n  instances (position of the model frame in the file's root frame, mm):\n";
   for (const Instance& i : a.instances) {
     const Eigen::Vector3d t = i.world_from_model.translation();
-    std::snprintf(line, sizeof(line), "    %-32.32s part %-3d at (%.4g, %.4g, %.4g)%s%s\n", i.name.c_str(),
+    std::snprintf(line, sizeof(line), "    %-32.32s part %-3d at (%.4g, %.4g, %.4g)%s%s\n", Printable(i.name).c_str(),
                   i.part + 1, t.x(), t.y(), t.z(), i.color ? " colour " : "", i.color ? Hex(i.color).c_str() : "");
     out << line;
   }
@@ -60,7 +78,7 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
 
 std::string InspectJson(const std::filesystem::path& path, const ImportOptions& options) {
   using Json = nlohmann::ordered_json;
-  const Assembly a = ImportCad(path, options);
+  const Assembly a = Read(path, options);
   const std::vector<int> counts = InstanceCounts(a);
   const auto vec = [](const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); };
   Json parts = Json::array();
@@ -77,7 +95,8 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
                  {"color", p.color ? Json(Hex(p.color)) : Json()},
                  {"volume_mm3", p.mass.volume_mm3 > 0 ? Json(p.mass.volume_mm3) : Json()},
                  {"volume_from", p.mass_from_brep ? "brep" : (p.mass.volume_mm3 > 0 ? "mesh" : "none")},
-                 {"watertight", p.watertight}};
+                 {"watertight", p.watertight},
+                 {"max_deviation_mm", p.max_deviation_mm >= 0 ? Json(p.max_deviation_mm) : Json()}};
     parts.push_back(part);
   }
   Json instances = Json::array();

@@ -44,6 +44,24 @@ TEST(Shape, SphereVerticesLieOnTheSphere) {
   EXPECT_GT(mesh.SurfaceArea(), 4 * M_PI * (r - 0.05) * (r - 0.05));
 }
 
+TEST(Shape, MeasuredDeviationStaysWithinTheDeflection) {
+  // A sphere's chords stray from the surface by the sagitta; the measured maximum must be below
+  // the requested deflection but of its order, and zero for a box.
+  for (double deflection : {0.5, 0.05}) {
+    double deviation = -1;
+    Tessellate(MakeSphere(30), TessellationOptions{deflection, 0.5}, &deviation);
+    EXPECT_LE(deviation, deflection * 1.05) << deflection;
+    EXPECT_GE(deviation, deflection * 0.2) << deflection;
+  }
+  double deviation = -1;
+  Tessellate(MakeBox(10, 20, 30), TessellationOptions{}, &deviation);
+  EXPECT_NEAR(deviation, 0.0, 1e-9);
+  TessellationOptions measured;
+  measured.measure_deviation = true;
+  EXPECT_GE(MakePart("c", MakeCylinder(10, 10), measured).max_deviation_mm, 0.0);
+  EXPECT_LT(MakePart("c", MakeCylinder(10, 10), TessellationOptions{}).max_deviation_mm, 0.0);
+}
+
 TEST(Shape, MassPropertiesAreExact) {
   const MassProperties box = ComputeMassProperties(MakeBox(40, 30, 20));
   EXPECT_NEAR(box.volume_mm3, 24000.0, 1e-6);

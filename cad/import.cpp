@@ -175,6 +175,9 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
     case CadFormat::kMesh: assembly = ReadMesh(path, options.crease_angle_rad); break;
   }
 
+  if (options.crease_angle_rad == 0.0) {
+    for (Part& part : assembly.parts) part.mesh.MakeFaceted();
+  }
   // Files that store N copies of one shape; meshes of one surface lie within twice the deflection.
   MergeIdenticalParts(&assembly, 2.0 * options.tessellation.linear_deflection_mm + 1e-3);
 

@@ -19,7 +19,8 @@ struct ImportOptions {
   // STEP only: the code page of names written as raw bytes (cp1251, sjis, ...); see StepEncodings.
   std::string encoding;
   // Meshes: normals of neighbouring triangles meeting at more than this angle stay apart (a
-  // sharp edge); below it they are averaged (smooth shading). 0 gives faceted normals.
+  // sharp edge); below it they are averaged (smooth shading). B-rep parts keep the exact normals
+  // of their surfaces, sharp between faces. 0 gives faceted normals for every format.
   double crease_angle_rad = 30.0 * 3.14159265358979323846 / 180.0;
 
   bool Check(std::string* why) const;

@@ -30,6 +30,23 @@ void Mesh::Append(const Mesh& other) {
   }
 }
 
+void Mesh::MakeFaceted() {
+  std::vector<Eigen::Vector3f> positions, normals;
+  positions.reserve(3 * triangles.size());
+  normals.reserve(3 * triangles.size());
+  for (auto& t : triangles) {
+    const Eigen::Vector3f a = this->positions[t[0]], b = this->positions[t[1]], c = this->positions[t[2]];
+    Eigen::Vector3f n = (b - a).cross(c - a);
+    n = n.norm() > 0 ? n.normalized() : Eigen::Vector3f::UnitZ();
+    const auto base = static_cast<uint32_t>(positions.size());
+    positions.insert(positions.end(), {a, b, c});
+    normals.insert(normals.end(), {n, n, n});
+    t = Eigen::Matrix<uint32_t, 3, 1>(base, base + 1, base + 2);
+  }
+  this->positions = std::move(positions);
+  this->normals = std::move(normals);
+}
+
 double Mesh::SurfaceArea() const {
   double area = 0.0;
   for (const auto& t : triangles) {

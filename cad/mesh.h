@@ -36,6 +36,9 @@ struct Mesh {
 
   // Sum of triangle areas in mm^2.
   double SurfaceArea() const;
+
+  // Flat shading: three vertices of its own for every triangle, each with the triangle's normal.
+  void MakeFaceted();
 };
 
 }  // namespace cadsynth

@@ -7,7 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <IGESControl_Writer.hxx>
+
 #include "cad/error.h"
+#include "cad/occt_shape.h"
 #include "cad/step.h"
 #include "cad/step_tessellated.h"
 #include "tests/test_support.h"
@@ -315,6 +318,24 @@ TEST(Import, ObjMeshWithUnitAndMassProperties) {
   EXPECT_TRUE(p.mesh.Bounds().sizes().isApprox(Eigen::Vector3d(10, 10, 10), 1e-6));
   EXPECT_TRUE(a.instances[0].world_from_model.translation().isApprox(Eigen::Vector3d(5, 5, 5), 1e-6));
   EXPECT_EQ(quiet.count(), 0);
+}
+
+TEST(Import, IgesWrittenByOpenCascadeReadsBackInMillimetres) {
+  ScratchDir dir;
+  const Shape box = MakeBox(25.4, 50.8, 76.2);  // 1 x 2 x 3 inches
+  for (const char* unit : {"MM", "IN"}) {
+    const std::filesystem::path file = dir / (std::string("box_") + unit + ".igs");
+    IGESControl_Writer writer(unit, 0);
+    ASSERT_TRUE(writer.AddShape(OcctShape(box)));
+    writer.ComputeModel();
+    ASSERT_TRUE(writer.Write(file.string().c_str()));
+    const Assembly a = ImportCad(file, Coarse());
+    EXPECT_EQ(a.format, "IGES");
+    ASSERT_EQ(a.parts.size(), 1u) << unit;
+    EXPECT_TRUE(a.parts[0].mesh.Bounds().sizes().isApprox(Eigen::Vector3d(25.4, 50.8, 76.2), 1e-4))
+        << unit << ": " << a.parts[0].mesh.Bounds().sizes().transpose();
+    EXPECT_NEAR(a.parts[0].mass.volume_mm3, 25.4 * 50.8 * 76.2, 1e-2);
+  }
 }
 
 TEST(Import, BrepFileIsOnePart) {

@@ -35,6 +35,17 @@ TEST(Mesh, TransformMovesPointsAndRotatesNormals) {
   EXPECT_NEAR(b.max().z(), 1.0, 1e-12);
 }
 
+TEST(Mesh, FacetedGivesEachTriangleItsOwnVerticesAndNormal) {
+  Mesh m = UnitSquare();
+  m.normals.assign(4, Eigen::Vector3f(0, 0.6f, 0.8f));  // smooth normals, tilted
+  m.MakeFaceted();
+  ASSERT_EQ(m.num_vertices(), 6u);
+  for (const auto& n : m.normals) EXPECT_EQ(n, Eigen::Vector3f::UnitZ());
+  EXPECT_EQ(m.positions[3], Eigen::Vector3f(0, 0, 0));  // second triangle starts at vertex 0
+  EXPECT_EQ(m.triangles[1], (Eigen::Matrix<uint32_t, 3, 1>(3, 4, 5)));
+  EXPECT_DOUBLE_EQ(m.SurfaceArea(), 1.0);
+}
+
 TEST(Mesh, AppendOffsetsIndices) {
   Mesh m = UnitSquare();
   m.Append(UnitSquare());

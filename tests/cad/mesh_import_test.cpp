@@ -1,0 +1,69 @@
+// Mesh formats through assimp: files written by assimp's own exporters read back the same.
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "cad/import.h"
+#include "tests/test_support.h"
+
+namespace cadsynth {
+namespace {
+
+// A closed cube, 20 mm, one corner at the origin, written as OBJ with outward quads.
+std::filesystem::path WriteCube(const testing::ScratchDir& dir) {
+  std::ofstream(dir / "cube.obj") << "v 0 0 0\nv 20 0 0\nv 20 20 0\nv 0 20 0\nv 0 0 20\nv 20 0 20\nv 20 20 20\n"
+                                     "v 0 20 20\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  return dir / "cube.obj";
+}
+
+TEST(ReadMesh, EveryFormatAssimpWritesReadsBackAsTheSameCube) {
+  testing::ScratchDir dir;
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(WriteCube(dir).string(), aiProcess_Triangulate);
+  ASSERT_NE(scene, nullptr) << importer.GetErrorString();
+  Assimp::Exporter exporter;
+  const std::pair<const char*, const char*> formats[] = {
+      {"stlb", "cube.stl"}, {"ply", "cube.ply"}, {"gltf2", "cube.gltf"}, {"glb2", "cube.glb"},
+      {"3mf", "cube.3mf"},  {"collada", "cube.dae"}, {"obj", "cube_out.obj"}};
+  for (const auto& [id, name] : formats) {
+    ASSERT_EQ(exporter.Export(scene, id, (dir / name).string()), AI_SUCCESS) << id << ": " << exporter.GetErrorString();
+    const Assembly a = ImportCad(dir / name, ImportOptions{});
+    ASSERT_EQ(a.parts.size(), 1u) << name;
+    const Part& p = a.parts[0];
+    EXPECT_EQ(p.mesh.num_triangles(), 12u) << name;
+    EXPECT_TRUE(p.watertight) << name;
+    EXPECT_NEAR(p.mass.volume_mm3, 8000.0, 1e-2) << name;
+    EXPECT_TRUE(p.mesh.Bounds().sizes().isApprox(Eigen::Vector3d(20, 20, 20), 1e-5)) << name;
+  }
+}
+
+TEST(ReadMesh, CreaseAngleDecidesSmoothOrSharp) {
+  testing::ScratchDir dir;
+  const std::filesystem::path cube = WriteCube(dir);
+  // A cube's faces meet at 90 degrees: below a 100-degree crease angle its corners are smoothed,
+  // at 30 degrees (the default) every normal is a face normal.
+  const Assembly sharp = ImportCad(cube, ImportOptions{});
+  for (const Eigen::Vector3f& n : sharp.parts[0].mesh.normals) {
+    EXPECT_NEAR(n.cwiseAbs().maxCoeff(), 1.0f, 1e-5f);
+  }
+  ImportOptions smooth;
+  smooth.crease_angle_rad = 100.0 * M_PI / 180.0;
+  int diagonal = 0;
+  const Assembly smoothed = ImportCad(cube, smooth);
+  for (const Eigen::Vector3f& n : smoothed.parts[0].mesh.normals) {
+    diagonal += n.cwiseAbs().maxCoeff() < 0.9f;
+  }
+  EXPECT_GT(diagonal, 0);
+  ImportOptions faceted;
+  faceted.crease_angle_rad = 0.0;
+  EXPECT_EQ(ImportCad(cube, faceted).parts[0].mesh.num_vertices(), 36u);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -52,10 +52,17 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
       if (face.mNumIndices != 3) continue;
       mesh.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]);
     }
+    // A colour only from a material the file defines: assimp gives colourless formats (STL) a
+    // default material of its own.
     aiColor4D diffuse;
-    if (!color && in->mMaterialIndex < scene->mNumMaterials &&
-        scene->mMaterials[in->mMaterialIndex]->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) {
-      color = Eigen::Vector3f(diffuse.r, diffuse.g, diffuse.b);
+    if (!color && in->mMaterialIndex < scene->mNumMaterials) {
+      const aiMaterial* material = scene->mMaterials[in->mMaterialIndex];
+      aiString name;
+      const bool own = material->Get(AI_MATKEY_NAME, name) != AI_SUCCESS ||
+                       std::string(name.C_Str()) != AI_DEFAULT_MATERIAL_NAME;
+      if (own && material->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) {
+        color = Eigen::Vector3f(diffuse.r, diffuse.g, diffuse.b);
+      }
     }
   }
   if (mesh.empty()) throw Error(file + ": the mesh file holds no triangles");

@@ -243,9 +243,11 @@ TEST(ImportSharedData, BinaryStlWithSolidHeaderAndColladaAgree) {
   ASSERT_EQ(a.parts.size(), 1u);
   EXPECT_EQ(a.parts[0].mesh.num_triangles(), 18164u);
   EXPECT_EQ(a.format, "mesh (stl)");
+  EXPECT_FALSE(a.parts[0].color.has_value());  // STL has no colours (not assimp's default grey)
   const Eigen::Vector3d size = a.parts[0].mesh.Bounds().sizes();
   EXPECT_NEAR(size.maxCoeff(), 25.09, 0.01);
   const Assembly b = ImportCad(dae, Coarse("m"));
+  EXPECT_TRUE(b.parts[0].color.has_value());  // the Blender export's material
   EXPECT_TRUE(b.parts[0].mesh.Bounds().sizes().isApprox(size, 1e-3));
   // Without a unit the metre file is 0.025 mm: a warning says which unit would make sense.
   ImportCad(stl, Coarse());

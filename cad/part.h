@@ -43,6 +43,8 @@ struct Instance {
   std::string name;    // instance name from the CAD file, or generated
   Eigen::Isometry3d world_from_model = Eigen::Isometry3d::Identity();
   std::optional<Eigen::Vector3f> color;  // overrides the part's colour for this instance
+  // Where it sits in the file's assembly tree: names from the root down, joined by '/'.
+  std::string path;
 };
 
 // An assembly as read from a file: distinct parts, and every instance placed in the frame of the

@@ -17,6 +17,8 @@
 #include <TDocStd_Document.hxx>
 #include <TopLoc_Location.hxx>
 #include <XCAFApp_Application.hxx>
+#include <Quantity_Color.hxx>
+#include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XSControl_WorkSession.hxx>
@@ -189,6 +191,11 @@ void WriteStep(const std::filesystem::path& path, const std::string& assembly_na
       if (component.shape.IsNull()) fail("component '" + component.name + "' is empty");
       const TDF_Label part = tool->AddShape(OcctShape(component.shape), /*makeAssembly=*/false);
       TDataStd_Name::Set(part, TCollection_ExtendedString(component.name.c_str(), true));
+      if (component.color) {
+        const Eigen::Vector3f& c = *component.color;
+        XCAFDoc_DocumentTool::ColorTool(document.doc->Main())
+            ->SetColor(part, Quantity_Color(c.x(), c.y(), c.z(), Quantity_TOC_sRGB), XCAFDoc_ColorSurf);
+      }
       for (const Eigen::Isometry3d& placement : component.placements) {
         tool->AddComponent(root, part, TopLoc_Location(ToTrsf(placement)));
       }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,7 @@ struct StepComponent {
   std::string name;
   Shape shape;
   std::vector<Eigen::Isometry3d> placements = {Eigen::Isometry3d::Identity()};
+  std::optional<Eigen::Vector3f> color;  // sRGB in [0, 1], written as the part's surface colour
 };
 
 // Writes the components as one assembly named `assembly_name`, in millimetres (AP214).

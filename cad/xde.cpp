@@ -1,6 +1,8 @@
 #include "cad/xde.h"
 
 #include <filesystem>
+#include <algorithm>
+#include <array>
 #include <map>
 #include <system_error>
 
@@ -8,7 +10,10 @@
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
+#include <BRepGProp.hxx>
+#include <GProp_GProps.hxx>
 #include <Quantity_Color.hxx>
+#include <TopExp_Explorer.hxx>
 #include <Standard_Failure.hxx>
 #include <TCollection_AsciiString.hxx>
 #include <TDF_Label.hxx>
@@ -36,14 +41,48 @@ std::string LabelName(const TDF_Label& label) {
   return TCollection_AsciiString(name->Get()).ToCString();
 }
 
+Eigen::Vector3f ToVector(const Quantity_Color& c) {
+  double r, g, b;
+  c.Values(r, g, b, Quantity_TOC_sRGB);
+  return Eigen::Vector3f(float(r), float(g), float(b));
+}
+
 std::optional<Eigen::Vector3f> LabelColor(const Handle(XCAFDoc_ColorTool)& colors, const TDF_Label& label) {
   Quantity_Color c;
   if (colors->GetColor(label, XCAFDoc_ColorSurf, c) || colors->GetColor(label, XCAFDoc_ColorGen, c)) {
-    double r, g, b;
-    c.Values(r, g, b, Quantity_TOC_sRGB);
-    return Eigen::Vector3f(float(r), float(g), float(b));
+    return ToVector(c);
   }
   return std::nullopt;
+}
+
+std::optional<Eigen::Vector3f> ShapeColor(const Handle(XCAFDoc_ColorTool)& colors, const TopoDS_Shape& shape) {
+  Quantity_Color c;
+  if (colors->GetColor(shape, XCAFDoc_ColorSurf, c) || colors->GetColor(shape, XCAFDoc_ColorGen, c)) {
+    return ToVector(c);
+  }
+  return std::nullopt;
+}
+
+// A part's colour: its label's, else its first coloured solid's, else the colour covering the
+// largest area of its faces (files that colour faces only).
+std::optional<Eigen::Vector3f> PartColor(const Handle(XCAFDoc_ColorTool)& colors, const TDF_Label& label,
+                                         const TopoDS_Shape& shape) {
+  if (auto c = LabelColor(colors, label)) return c;
+  for (TopExp_Explorer it(shape, TopAbs_SOLID); it.More(); it.Next()) {
+    if (auto c = ShapeColor(colors, it.Current())) return c;
+  }
+  std::map<std::array<float, 3>, double> area;
+  for (TopExp_Explorer it(shape, TopAbs_FACE); it.More(); it.Next()) {
+    if (auto c = ShapeColor(colors, it.Current())) {
+      GProp_GProps props;
+      BRepGProp::SurfaceProperties(it.Current(), props);
+      area[{c->x(), c->y(), c->z()}] += props.Mass();
+    }
+  }
+  if (area.empty()) return std::nullopt;
+  const auto best = std::max_element(area.begin(), area.end(),
+                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  return Eigen::Vector3f(best->first[0], best->first[1], best->first[2]);
 }
 
 Eigen::Isometry3d ToIsometry(const gp_Trsf& trsf, const std::string& where) {
@@ -68,7 +107,7 @@ struct Walker {
   std::map<std::string, int> part_by_entry;
 
   void Visit(const TDF_Label& label, const TopLoc_Location& location, const std::string& name,
-             std::optional<Eigen::Vector3f> color) {
+             const std::string& path, std::optional<Eigen::Vector3f> color) {
     if (XCAFDoc_ShapeTool::IsAssembly(label)) {
       if (!color) color = LabelColor(colors, label);
       TDF_LabelSequence components;
@@ -77,8 +116,9 @@ struct Walker {
         TDF_Label referred;
         if (!XCAFDoc_ShapeTool::GetReferredShape(it.Value(), referred)) continue;
         std::optional<Eigen::Vector3f> own = LabelColor(colors, it.Value());
-        Visit(referred, location * XCAFDoc_ShapeTool::GetLocation(it.Value()), LabelName(it.Value()),
-              own ? own : color);
+        const std::string child = LabelName(it.Value());
+        Visit(referred, location * XCAFDoc_ShapeTool::GetLocation(it.Value()), child,
+              path + "/" + (child.empty() ? LabelName(referred) : child), own ? own : color);
       }
       return;
     }
@@ -89,12 +129,14 @@ struct Walker {
       std::string part_name = LabelName(label);
       if (part_name.empty()) part_name = "part_" + std::to_string(out->part_names.size());
       out->part_names.push_back(part_name);
-      out->part_shapes.push_back(WrapShape(XCAFDoc_ShapeTool::GetShape(label)));
-      out->part_colors.push_back(LabelColor(colors, label));
+      const TopoDS_Shape shape = XCAFDoc_ShapeTool::GetShape(label);
+      out->part_shapes.push_back(WrapShape(shape));
+      out->part_colors.push_back(PartColor(colors, label, shape));
     }
     Instance instance;
     instance.part = slot->second;
     instance.name = name.empty() ? out->part_names[slot->second] : name;
+    instance.path = path;
     instance.world_from_model = ToIsometry(location.Transformation(), file + ": instance '" + instance.name + "'");
     instance.color = color;
     out->instances.push_back(std::move(instance));
@@ -137,7 +179,8 @@ CadContents CollectDocument(const Handle(TDocStd_Document)& doc, const std::stri
   shapes->GetFreeShapes(roots);
   for (TDF_LabelSequence::Iterator it(roots); it.More(); it.Next()) {
     if (contents.name.empty()) contents.name = LabelName(it.Value());
-    walker.Visit(it.Value(), TopLoc_Location(), LabelName(it.Value()), std::nullopt);
+    const std::string root = LabelName(it.Value());
+    walker.Visit(it.Value(), TopLoc_Location(), root, root.empty() ? "root" : root, std::nullopt);
   }
   return contents;
 }

@@ -66,12 +66,29 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
                   p.watertight ? "yes" : "NO", deviation);
     out << line;
   }
-  out << "\n  instances (position of the model frame in the file's root frame, mm):\n";
+  out << "\n  assembly tree (instance: part id, position of its model frame in the root frame, mm):\n";
+  // Print each instance under its path, opening the sub-assemblies it is in as they appear.
+  std::vector<std::string> open;
   for (const Instance& i : a.instances) {
+    std::vector<std::string> levels;
+    std::string path = i.path.empty() ? i.name : i.path;
+    for (size_t start = 0, slash; start <= path.size(); start = slash + 1) {
+      slash = path.find('/', start);
+      if (slash == std::string::npos) slash = path.size();
+      levels.push_back(path.substr(start, slash - start));
+    }
+    size_t common = 0;
+    while (common < open.size() && common + 1 < levels.size() && open[common] == levels[common]) ++common;
+    open.resize(common);
+    for (size_t d = common; d + 1 < levels.size(); ++d) {
+      out << "    " << std::string(2 * d, ' ') << Printable(levels[d]) << "\n";
+      open.push_back(levels[d]);
+    }
     const Eigen::Vector3d t = i.world_from_model.translation();
-    std::snprintf(line, sizeof(line), "    %-32.32s part %-3d at (%.4g, %.4g, %.4g)%s%s\n", Printable(i.name).c_str(),
-                  i.part + 1, t.x(), t.y(), t.z(), i.color ? " colour " : "", i.color ? Hex(i.color).c_str() : "");
-    out << line;
+    std::snprintf(line, sizeof(line), "%s: part %d at (%.4g, %.4g, %.4g)%s%s\n",
+                  Printable(levels.back()).c_str(), i.part + 1, t.x(), t.y(), t.z(), i.color ? ", colour " : "",
+                  i.color ? Hex(i.color).c_str() : "");
+    out << "    " << std::string(2 * (levels.size() - 1), ' ') << line;
   }
   return out.str();
 }
@@ -105,7 +122,7 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
     for (int r = 0; r < 4; ++r) {
       for (int c = 0; c < 4; ++c) pose.push_back(i.world_from_model.matrix()(r, c));
     }
-    instances.push_back({{"name", i.name}, {"part", i.part + 1}, {"root_from_model", pose},
+    instances.push_back({{"name", i.name}, {"path", i.path}, {"part", i.part + 1}, {"root_from_model", pose},
                          {"color", i.color ? Json(Hex(i.color)) : Json()}});
   }
   const Json out = {{"file", path.string()}, {"format", a.format}, {"length_unit", a.length_unit},

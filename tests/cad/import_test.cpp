@@ -340,6 +340,14 @@ TEST(Import, IgesWrittenByOpenCascadeReadsBackInMillimetres) {
   }
 }
 
+TEST(ImportSharedData, FaceColoursGiveThePartTheColourOfMostOfItsArea) {
+  CADSYNTH_REQUIRE_DATA(file, "step/parts/io1-cm-214.stp");  // colours on faces only
+  const Assembly a = ImportCad(file, Coarse());
+  ASSERT_EQ(a.parts.size(), 1u);
+  ASSERT_TRUE(a.parts[0].color.has_value());
+  EXPECT_TRUE(a.parts[0].color->isApprox(Eigen::Vector3f(1, 1, 0), 1e-3f)) << a.parts[0].color->transpose();
+}
+
 TEST(Import, BrepFileIsOnePart) {
   CADSYNTH_REQUIRE_DATA(file, "brep/occt_engine/CrankArm.brep");
   const Assembly a = ImportCad(file, Coarse());

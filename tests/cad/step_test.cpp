@@ -28,7 +28,7 @@ TEST(Step, WrittenAssemblyReadsBackWithInstancesNamesAndPlacements) {
   const Eigen::Isometry3d right = Eigen::Translation3d(100, 0, 0) *
                                   Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ());
   WriteStep(file, "fixture",
-            {StepComponent{"brick", MakeBox(40, 30, 20), {left, right}},
+            {StepComponent{"brick", MakeBox(40, 30, 20), {left, right}, Eigen::Vector3f(0.8f, 0.2f, 0.1f)},
              StepComponent{"pin", MakeCylinder(5, 60)}});
   ASSERT_TRUE(std::filesystem::exists(file));
   EXPECT_FALSE(std::filesystem::exists(file.string() + ".partial"));
@@ -42,6 +42,12 @@ TEST(Step, WrittenAssemblyReadsBackWithInstancesNamesAndPlacements) {
   EXPECT_EQ(a.parts[brick].name, "brick");
   EXPECT_EQ(a.parts[1 - brick].name, "pin");
   EXPECT_NEAR(a.parts[brick].mass.volume_mm3, 24000.0, 1e-3);
+  ASSERT_TRUE(a.parts[brick].color.has_value());
+  EXPECT_TRUE(a.parts[brick].color->isApprox(Eigen::Vector3f(0.8f, 0.2f, 0.1f), 1e-3f));
+  EXPECT_FALSE(a.parts[1 - brick].color.has_value());
+  for (const Instance& i : a.instances) {
+    EXPECT_EQ(i.path, "fixture/" + i.name);  // one level below the root
+  }
   EXPECT_NEAR(a.parts[1 - brick].mass.volume_mm3, M_PI * 25 * 60, 1e-3);
 
   // The world bounds of each brick instance follow its placement.

@@ -89,9 +89,8 @@ Assembly ReadIges(const std::filesystem::path& path, const TessellationOptions& 
   std::string length_unit;
   {
     std::lock_guard<std::mutex> lock(internal::XdeMutex());
-    Handle(TDocStd_Document) doc;
-    XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
     try {
+      internal::DocumentGuard document;
       IGESCAFControl_Reader reader;
       reader.SetNameMode(true);
       reader.SetColorMode(true);
@@ -103,15 +102,12 @@ Assembly ReadIges(const std::filesystem::path& path, const TessellationOptions& 
       if (!model.IsNull() && !model->GlobalSection().UnitName().IsNull()) {
         length_unit = model->GlobalSection().UnitName()->ToCString();
       }
-      if (!reader.Transfer(doc)) throw Error(file + ": OpenCASCADE could not translate the IGES entities");
-      contents = internal::CollectDocument(doc, file);
-      XCAFApp_Application::GetApplication()->Close(doc);
+      if (!reader.Transfer(document.doc)) {
+        throw Error(file + ": OpenCASCADE could not translate the IGES entities");
+      }
+      contents = internal::CollectDocument(document.doc, file);
     } catch (const Standard_Failure& failure) {
-      XCAFApp_Application::GetApplication()->Close(doc);
       throw Error(file + ": OpenCASCADE failed while reading: " + failure.GetMessageString());
-    } catch (...) {
-      XCAFApp_Application::GetApplication()->Close(doc);
-      throw;
     }
   }
   Assembly assembly = internal::BuildAssembly(file, std::move(contents), options);

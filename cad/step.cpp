@@ -78,13 +78,6 @@ void WarnOnRawNonUtf8(const std::filesystem::path& path, const std::string& file
   }
 }
 
-// Closes an XDE document when it goes out of scope.
-struct DocumentGuard {
-  Handle(TDocStd_Document) doc;
-  DocumentGuard() { XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc); }
-  ~DocumentGuard() { XCAFApp_Application::GetApplication()->Close(doc); }
-};
-
 }  // namespace
 
 std::string StepCodePage(const std::string& encoding) {
@@ -125,7 +118,7 @@ Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& 
   {
     std::lock_guard<std::mutex> lock(internal::XdeMutex());
     try {
-      DocumentGuard document;
+      internal::DocumentGuard document;
       Interface_Static::SetCVal("read.step.codepage", code_page.c_str());  // under XdeMutex
       STEPCAFControl_Reader reader;
       reader.SetNameMode(true);
@@ -183,7 +176,7 @@ void WriteStep(const std::filesystem::path& path, const std::string& assembly_na
   };
   std::lock_guard<std::mutex> lock(internal::XdeMutex());
   try {
-    DocumentGuard document;
+    internal::DocumentGuard document;
     const Handle(XCAFDoc_ShapeTool) tool = XCAFDoc_DocumentTool::ShapeTool(document.doc->Main());
     const TDF_Label root = tool->NewShape();
     TDataStd_Name::Set(root, TCollection_ExtendedString(assembly_name.c_str(), true));

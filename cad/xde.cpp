@@ -21,6 +21,7 @@
 #include <TDF_Tool.hxx>
 #include <TDataStd_Name.hxx>
 #include <TopLoc_Location.hxx>
+#include <XCAFApp_Application.hxx>
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
@@ -156,6 +157,9 @@ void InitOcct() {
     Interface_Static::SetCVal("write.step.unit", "MM");
   });
 }
+
+DocumentGuard::DocumentGuard() { XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc); }
+DocumentGuard::~DocumentGuard() { XCAFApp_Application::GetApplication()->Close(doc); }
 
 std::mutex& XdeMutex() {
   static std::mutex mutex;

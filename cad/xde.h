@@ -20,6 +20,15 @@ void InitOcct();
 // XDE documents come from a process-wide application object: create and read them one at a time.
 std::mutex& XdeMutex();
 
+// A new XDE document, closed when the guard goes out of scope. Create under XdeMutex().
+struct DocumentGuard {
+  Handle(TDocStd_Document) doc;
+  DocumentGuard();
+  ~DocumentGuard();
+  DocumentGuard(const DocumentGuard&) = delete;
+  DocumentGuard& operator=(const DocumentGuard&) = delete;
+};
+
 // What an XDE document holds, before tessellation.
 struct CadContents {
   std::string name;

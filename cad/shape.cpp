@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include <BRepAdaptor_Surface.hxx>
+#include <BRepAlgoAPI_Common.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepCheck_Analyzer.hxx>
@@ -259,6 +260,19 @@ Shape Heal(const Shape& shape, bool* healed) {
     return WrapShape(fix->Shape());
   } catch (const Standard_Failure& failure) {
     throw Error(std::string("shape healing failed: ") + failure.GetMessageString());
+  }
+}
+
+double CommonVolume(const Shape& a, const Eigen::Isometry3d& a_pose, const Shape& b,
+                    const Eigen::Isometry3d& b_pose) {
+  try {
+    BRepAlgoAPI_Common common(OcctShape(Transformed(a, a_pose)), OcctShape(Transformed(b, b_pose)));
+    if (!common.IsDone()) throw Error("OpenCASCADE could not intersect the shapes");
+    GProp_GProps props;
+    BRepGProp::VolumeProperties(common.Shape(), props);
+    return std::max(0.0, props.Mass());
+  } catch (const Standard_Failure& failure) {
+    throw Error(std::string("intersecting shapes failed: ") + failure.GetMessageString());
   }
 }
 

@@ -70,6 +70,11 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options,
 // when it is valid; sets *healed when it repaired something.
 Shape Heal(const Shape& shape, bool* healed);
 
+// Volume (mm^3) of the intersection of two shapes placed by `a_pose` and `b_pose`: zero for parts
+// that touch but do not overlap.
+double CommonVolume(const Shape& a, const Eigen::Isometry3d& a_pose, const Shape& b,
+                    const Eigen::Isometry3d& b_pose);
+
 // Exact volume, centre of mass and inertia of the solids in `shape`.
 MassProperties ComputeMassProperties(const Shape& shape);
 

@@ -99,6 +99,10 @@ bool Near(double x, double y, double relative) { return std::abs(x - y) <= relat
 
 }  // namespace
 
+double MaxSurfaceDistance(const Mesh& surface, const Mesh& points, const Eigen::Isometry3d& transform) {
+  return SurfaceDistance(surface).MaxDistance(Vertices(points, points.num_vertices()), transform, 1e300);
+}
+
 std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, double tolerance_mm) {
   if (a.empty() || b.empty()) return std::nullopt;
   const SurfaceMoments ma = Moments(a), mb = Moments(b);

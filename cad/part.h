@@ -20,6 +20,25 @@ struct MassProperties {
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
 };
 
+// The rigid motions that map a shape onto itself (BOP's symmetries_discrete and
+// symmetries_continuous), in the frame the shape is given in: x' = transform * x.
+struct Symmetries {
+  std::vector<Eigen::Isometry3d> discrete;  // without the identity
+  struct Axis {
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // unit
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();      // a point on the axis
+  };
+  std::vector<Axis> continuous;  // any rotation about these axes
+  bool empty() const { return discrete.empty() && continuous.empty(); }
+  // The same symmetries seen in another frame: for x_old = old_from_new * x_new.
+  Symmetries InFrame(const Eigen::Isometry3d& old_from_new) const;
+  // Common cases, about the z axis through the origin: an n-fold rotation, optionally with the
+  // n half-turns about horizontal axes that flip the shape over (for shapes symmetric top to
+  // bottom about `mid_z`); continuous rotation about z, optionally with a flip about x.
+  static Symmetries Cyclic(int n, bool flips, double mid_z = 0.0);
+  static Symmetries Revolution(bool flip, double mid_z = 0.0);
+};
+
 // One distinct shape. Its model frame is its CAD frame moved to the centre of the axis-aligned
 // bounding box of the mesh (BOP practice); `cad_from_model` keeps that offset, so a point moves
 // as x_in_cad = cad_from_model * x_in_model. Mesh and mass properties are in the model frame.
@@ -34,6 +53,7 @@ struct Part {
   // not measured or there is no B-rep.
   double max_deviation_mm = -1.0;
   std::optional<Eigen::Vector3f> color;  // sRGB in [0, 1], when the CAD file gives one
+  Symmetries symmetries;                 // in the model frame; empty when unknown
 };
 
 // One placed copy of a part. A point of the part moves to the world (or to the frame of the

@@ -392,6 +392,11 @@ double InvoluteFitError(const GearOptions& options) {
   return worst;
 }
 
+Symmetries GearSymmetries(const GearOptions& o) {
+  const bool flat = o.helix_angle_rad == 0.0 && o.hub_length_mm == 0.0;
+  return Symmetries::Cyclic(o.teeth, flat, 0.5 * o.face_width_mm);
+}
+
 Shape MakeGear(const GearOptions& o) {
   std::string why;
   if (!o.Check(&why)) throw Error("gear: " + why);

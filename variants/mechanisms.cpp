@@ -93,6 +93,7 @@ Assembly TessellateAssembly(const ShapeAssembly& shapes, const TessellationOptio
   assembly.parts.resize(shapes.components.size());
   tbb::parallel_for(size_t{0}, shapes.components.size(), [&](size_t i) {
     assembly.parts[i] = MakePart(shapes.components[i].name, shapes.components[i].shape, options);
+    assembly.parts[i].symmetries = shapes.components[i].symmetries.InFrame(assembly.parts[i].cad_from_model);
   });
   for (const ShapeAssembly::Placement& p : shapes.placements) {
     assembly.instances.push_back(
@@ -142,8 +143,8 @@ ShapeAssembly MakeGearPair(const GearPairOptions& o) {
   return Guarded("gear pair", [&] {
     ShapeAssembly a;
     a.name = "gear_pair";
-    a.components = {{"gear_z" + std::to_string(o.first.teeth), MakeGear(o.first)},
-                    {"gear_z" + std::to_string(o.second.teeth), MakeGear(o.second)}};
+    a.components = {{"gear_z" + std::to_string(o.first.teeth), MakeGear(o.first), GearSymmetries(o.first)},
+                    {"gear_z" + std::to_string(o.second.teeth), MakeGear(o.second), GearSymmetries(o.second)}};
     a.placements = {{0, "gear_1", Pose(0, 0, 0, 0)},
                     {1, "gear_2", Pose(o.CentreDistance(), 0, 0, MeshTurn(0.0, o.first.teeth, 0.0, o.second.teeth))}};
     return a;
@@ -220,10 +221,10 @@ ShapeAssembly MakePlanetary(const PlanetaryOptions& o) {
 
     ShapeAssembly s;
     s.name = "planetary_gearbox";
-    s.components = {{"sun_z" + std::to_string(o.sun_teeth), MakeGear(sun)},
-                    {"planet_z" + std::to_string(o.planet_teeth), MakeGear(planet)},
-                    {"ring_z" + std::to_string(o.RingTeeth()), MakeGear(ring)},
-                    {"carrier", WrapShape(carrier)}};
+    s.components = {{"sun_z" + std::to_string(o.sun_teeth), MakeGear(sun), GearSymmetries(sun)},
+                    {"planet_z" + std::to_string(o.planet_teeth), MakeGear(planet), GearSymmetries(planet)},
+                    {"ring_z" + std::to_string(o.RingTeeth()), MakeGear(ring), GearSymmetries(ring)},
+                    {"carrier", WrapShape(carrier), Symmetries::Cyclic(o.planets, false)}};
     s.placements.push_back({0, "sun", Pose(0, 0, 0, 0)});
     for (int i = 0; i < o.planets; ++i) {
       const double phi = 2 * M_PI * i / o.planets;
@@ -283,10 +284,20 @@ ShapeAssembly MakeSliderCrank(const SliderCrankOptions& o) {
     const double rod_turn = std::atan2(-pin.y(), xs - pin.x());
     ShapeAssembly s;
     s.name = "slider_crank";
-    s.components = {{"base", WrapShape(base)},
-                    {"crank", WrapShape(Link(o.crank_mm, w, t, o.pin_diameter_mm))},
-                    {"connecting_rod", WrapShape(Link(o.rod_mm, w, t, o.pin_diameter_mm))},
-                    {"slider", WrapShape(slider)}};
+    // A link is symmetric under the half-turn about its mid-line and under the half-turn about
+    // z through its middle (and the two combined).
+    const auto link_symmetries = [&](double length) {
+      Symmetries sym;
+      const Eigen::Isometry3d to_mid{Eigen::Translation3d(0.5 * length, 0, 0.5 * t)};
+      for (const Eigen::Vector3d axis : {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()}) {
+        sym.discrete.push_back(to_mid * Eigen::AngleAxisd(M_PI, axis) * to_mid.inverse());
+      }
+      return sym;
+    };
+    s.components = {{"base", WrapShape(base), {}},
+                    {"crank", WrapShape(Link(o.crank_mm, w, t, o.pin_diameter_mm)), link_symmetries(o.crank_mm)},
+                    {"connecting_rod", WrapShape(Link(o.rod_mm, w, t, o.pin_diameter_mm)), link_symmetries(o.rod_mm)},
+                    {"slider", WrapShape(slider), {}}};
     s.placements = {{0, "base", Pose(0, 0, 0, 0)},
                     {1, "crank", Pose(0, 0, 0.0, theta)},
                     {2, "connecting_rod", Pose(pin.x(), pin.y(), t, rod_turn)},

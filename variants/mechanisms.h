@@ -18,6 +18,7 @@ struct ShapeAssembly {
   struct Component {
     std::string name;
     Shape shape;
+    Symmetries symmetries;  // in the shape's own (CAD) frame
   };
   struct Placement {
     int component = 0;

@@ -23,7 +23,8 @@ double MaxSurfaceDistance(const Mesh& surface, const Mesh& points, const Eigen::
 // of the coordinate axes are tried.
 std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, double tolerance_mm);
 
-// Parts that are the same shape (FindCongruence) become one part, and their instances refer to
+// Parts that are the same shape (FindCongruence, and equal exact volumes when both have a B-rep)
+// become one part, and their instances refer to
 // it with poses corrected by the congruence: a part used N times is one model with N instances,
 // even when the file stores N copies, rotated or not. The first part's name is kept. Returns the
 // number of parts merged away.

@@ -72,11 +72,14 @@ void ScaleAssembly(Assembly* assembly, double factor) {
   if (factor == 1.0) return;
   const float f = static_cast<float>(factor);
   for (Part& part : assembly->parts) {
+    if (!part.brep.IsNull()) part.brep = Scaled(part.brep, Eigen::Vector3d::Constant(factor));
     for (Eigen::Vector3f& p : part.mesh.positions) p *= f;
     part.cad_from_model.translation() *= factor;
     part.mass.volume_mm3 *= factor * factor * factor;
     part.mass.center_of_mass *= factor;
     part.mass.inertia *= std::pow(factor, 5);
+    for (Eigen::Isometry3d& s : part.symmetries.discrete) s.translation() *= factor;
+    for (Symmetries::Axis& a : part.symmetries.continuous) a.offset *= factor;
   }
   for (Instance& instance : assembly->instances) instance.world_from_model.translation() *= factor;
 }

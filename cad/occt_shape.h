@@ -8,7 +8,7 @@
 #include <TopoDS_Shape.hxx>
 #include <gp_Trsf.hxx>
 
-#include "cad/shape.h"
+#include "cad/brep.h"
 
 namespace cadsynth {
 

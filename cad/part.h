@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "cad/mesh.h"
+#include "cad/brep.h"
 
 namespace cadsynth {
 
@@ -54,6 +55,7 @@ struct Part {
   double max_deviation_mm = -1.0;
   std::optional<Eigen::Vector3f> color;  // sRGB in [0, 1], when the CAD file gives one
   Symmetries symmetries;                 // in the model frame; empty when unknown
+  Shape brep;  // the exact solid in the CAD frame (null for meshes), for scaling and export
 };
 
 // One placed copy of a part. A point of the part moves to the world (or to the frame of the

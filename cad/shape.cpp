@@ -6,7 +6,9 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepAlgoAPI_Common.hxx>
 #include <BRepBndLib.hxx>
+#include <BRepBuilderAPI_GTransform.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
+#include <gp_GTrsf.hxx>
 #include <BRepCheck_Analyzer.hxx>
 #include <BRepGProp.hxx>
 #include <BRepLProp_SLProps.hxx>
@@ -147,6 +149,20 @@ double DistanceToSurface(const BRepAdaptor_Surface& surface, const Handle(Geom_S
 }
 
 }  // namespace
+
+Shape Scaled(const Shape& shape, const Eigen::Vector3d& f) {
+  if (!(f.minCoeff() > 0) || !f.allFinite()) throw Error("scale factors must be positive");
+  if (f.x() == f.y() && f.y() == f.z()) {
+    gp_Trsf scale;
+    scale.SetScale(gp_Pnt(0, 0, 0), f.x());
+    return Build(BRepBuilderAPI_Transform(OcctShape(shape), scale, /*copy=*/true), "a scaled shape");
+  }
+  gp_GTrsf scale;
+  scale.SetValue(1, 1, f.x());
+  scale.SetValue(2, 2, f.y());
+  scale.SetValue(3, 3, f.z());
+  return Build(BRepBuilderAPI_GTransform(OcctShape(shape), scale, /*copy=*/true), "a scaled shape");
+}
 
 Mesh Tessellate(const Shape& shape, const TessellationOptions& options, double* max_deviation_mm) {
   std::string why;
@@ -317,6 +333,7 @@ Part MakePart(const std::string& name, const Shape& shape, const TessellationOpt
   part.mass.center_of_mass -= centre;
   part.mass_from_brep = part.mass.volume_mm3 > 0.0;
   part.watertight = AnalyzeTopology(part.mesh).watertight();
+  part.brep = shape;
   return part;
 }
 

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "cad/brep.h"
 #include "cad/mesh.h"
 #include "cad/part.h"
 
@@ -29,25 +30,6 @@ struct TessellationOptions {
   bool Check(std::string* why) const;
 };
 
-// A B-rep shape (solid, compound of solids, shell...). Cheap to copy: copies share the geometry.
-class Shape {
- public:
-  struct Impl;  // defined in cad/occt_shape.h, for cad/ and variants/ sources only
-
-  Shape();
-  explicit Shape(std::shared_ptr<const Impl> impl);
-
-  bool IsNull() const;
-  // True when the shape has at least one face (wires and points have none).
-  bool HasFaces() const;
-  // Axis-aligned bounds in mm (from the exact geometry, with OpenCASCADE's small tolerance gap).
-  Eigen::AlignedBox3d Bounds() const;
-  const Impl& impl() const { return *impl_; }
-
- private:
-  std::shared_ptr<const Impl> impl_;
-};
-
 // Primitives, all in mm.
 // A box with one corner at the origin and the opposite corner at (dx, dy, dz).
 Shape MakeBox(double dx, double dy, double dz);
@@ -57,6 +39,8 @@ Shape MakeCylinder(double radius, double height);
 Shape MakeSphere(double radius);
 // `shape` moved by `transform`.
 Shape Transformed(const Shape& shape, const Eigen::Isometry3d& transform);
+// `shape` scaled about the origin by (sx, sy, sz) (exact; a general affine map when unequal).
+Shape Scaled(const Shape& shape, const Eigen::Vector3d& factors);
 
 // Triangles for every face, with per-vertex normals from the exact surface. Throws Error when the
 // options are invalid or the shape yields no triangles. With `max_deviation_mm`, also measures

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <system_error>
 
 #include <nlohmann/json.hpp>
@@ -121,13 +122,20 @@ GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale) {
 }
 
 std::vector<ObjectClass> AssignClasses(
-    const std::vector<std::string>& part_names,
+    const std::vector<std::string>& part_names, const std::vector<std::string>& labels,
     const std::vector<std::pair<std::string, std::vector<std::string>>>& groups,
     std::vector<std::string>* empty_groups) {
   std::vector<ObjectClass> classes(part_names.size());
   std::vector<bool> used(groups.size(), false);
   int next_id = static_cast<int>(groups.size()) + 1;
+  std::map<std::string, int> label_ids;
   for (size_t i = 0; i < part_names.size(); ++i) {
+    if (i < labels.size() && !labels[i].empty()) {
+      auto [it, inserted] = label_ids.emplace(labels[i], next_id);
+      if (inserted) ++next_id;
+      classes[i] = {it->second, labels[i]};
+      continue;
+    }
     for (size_t g = 0; g < groups.size() && classes[i].id == 0; ++g) {
       for (const std::string& pattern : groups[g].second) {
         if (fnmatch(pattern.c_str(), part_names[i].c_str(), FNM_CASEFOLD) == 0) {
@@ -168,6 +176,26 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
                  {"min_x", box.min().x()}, {"min_y", box.min().y()}, {"min_z", box.min().z()},
                  {"size_x", box.sizes().x()}, {"size_y", box.sizes().y()},
                  {"size_z", box.sizes().z()}};
+    // Symmetries as bop_toolkit reads them: 4x4 row-major transforms, and axes with offsets.
+    const Symmetries& sym = parts[i].symmetries;
+    if (!sym.discrete.empty()) {
+      Json discrete = Json::array();
+      for (const Eigen::Isometry3d& t : sym.discrete) {
+        Json m = Json::array();
+        for (int r = 0; r < 4; ++r) {
+          for (int c = 0; c < 4; ++c) m.push_back(std::abs(t.matrix()(r, c)) < 1e-12 ? 0.0 : t.matrix()(r, c));
+        }
+        discrete.push_back(m);
+      }
+      info[key]["symmetries_discrete"] = discrete;
+    }
+    if (!sym.continuous.empty()) {
+      Json continuous = Json::array();
+      for (const Symmetries::Axis& a : sym.continuous) {
+        continuous.push_back({{"axis", Vec(a.direction)}, {"offset", Vec(a.offset)}});
+      }
+      info[key]["symmetries_continuous"] = continuous;
+    }
     Json cad_from_model = Json::array();
     for (int r = 0; r < 4; ++r) {
       for (int c = 0; c < 4; ++c) cad_from_model.push_back(parts[i].cad_from_model.matrix()(r, c));

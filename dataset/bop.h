@@ -45,11 +45,13 @@ struct ObjectClass {
 };
 
 // Classes for parts named `part_names`: group g (in order) is class g + 1 and takes every part
-// whose name matches one of its shell globs (case-insensitive; the first matching group wins);
-// the other parts get classes of their own after the groups, named after the part. Sets
-// *empty_groups to the names of groups that matched no part.
+// whose name matches one of its shell globs (case-insensitive; the first matching group wins).
+// Parts with a non-empty `labels[i]` (e.g. a family that is one class) share one class per label
+// instead, numbered after the groups in order of first appearance; the remaining parts get
+// classes of their own, named after the part. Sets *empty_groups to the names of groups that
+// matched no part. `labels` may be empty.
 std::vector<ObjectClass> AssignClasses(
-    const std::vector<std::string>& part_names,
+    const std::vector<std::string>& part_names, const std::vector<std::string>& labels,
     const std::vector<std::pair<std::string, std::vector<std::string>>>& groups,
     std::vector<std::string>* empty_groups);
 

@@ -10,6 +10,7 @@
 
 #include "cad/error.h"
 #include "cad/step.h"
+#include "variants/families.h"
 #include "cad/units.h"
 #include "recipes/units.h"
 
@@ -192,18 +193,166 @@ void DetectFormatOrFail(const Reader& r, const YAML::Node& node, const std::stri
   }
 }
 
-void ReadParts(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  if (!node.IsSequence() || node.size() == 0) {
-    r.Fail(node, "parts", "expected a list such as [{file: part.stp}, {builtin: default}]");
+// One value of a family parameter, by its kind.
+ParamValue ReadParam(const Reader& r, const YAML::Node& node, const std::string& key, const FamilyParam& p) {
+  switch (p.kind) {
+    case FamilyParam::Kind::kLength: return r.Length(node, key);
+    case FamilyParam::Kind::kAngle: return r.Angle(node, key);
+    case FamilyParam::Kind::kCount: return double(r.Integer(node, key));
+    case FamilyParam::Kind::kNumber: return r.Number(node, key);
+    case FamilyParam::Kind::kText:
+      if (p.name == "file") return r.ResolvePath(node, key).string();
+      return r.Scalar(node, key);
   }
-  spec->sources.clear();
+  return 0.0;
+}
+
+const FamilyParam& Param(const Reader& r, const FamilyInfo& family, const YAML::Node& key_node, const std::string& where) {
+  const std::string name = key_node.as<std::string>();
+  if (const FamilyParam* p = family.Find(name)) return *p;
+  try {
+    CompleteParams(family, {{name, 0.0}});
+  } catch (const Error& e) {
+    r.Fail(key_node, where, e.what());
+  }
+  r.Fail(key_node, where, "unknown parameter '" + name + "'");
+}
+
+// Values of one parameter for a grid: a value, a list, or an inclusive range.
+std::vector<ParamValue> ReadSeries(const Reader& r, const YAML::Node& node, const std::string& key, const FamilyParam& p) {
+  std::vector<ParamValue> values;
+  if (p.kind == FamilyParam::Kind::kText) {
+    if (node.IsSequence()) {
+      for (const YAML::Node& item : node) values.push_back(ReadParam(r, item, key, p));
+    } else {
+      values.push_back(ReadParam(r, node, key, p));
+    }
+    if (values.empty()) r.Fail(node, key, "the list is empty");
+    return values;
+  }
+  const auto one = [&](const YAML::Node& n, const std::string& k) { return std::get<double>(ReadParam(r, n, k, p)); };
+  for (double v : r.Series(node, key, one)) values.push_back(p.kind == FamilyParam::Kind::kCount ? std::round(v) : v);
+  return values;
+}
+
+void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key, PartSource* source) {
+  source->kind = PartSource::Kind::kFamily;
+  source->family = r.Scalar(item["family"], key + ".family");
+  source->where = r.Where(item["family"]);
+  const FamilyInfo* family = FindFamily(source->family);
+  if (family == nullptr) {
+    std::string known;
+    for (const FamilyInfo& f : Families()) known += (known.empty() ? "" : ", ") + f.name;
+    r.Fail(item["family"], key + ".family", "unknown family '" + source->family + "' (known: " + known + ")");
+  }
+  ParamValues fixed;
+  if (item["params"]) {
+    const YAML::Node params = item["params"];
+    if (!params.IsMap()) r.Fail(params, key + ".params", "expected {parameter: value}");
+    for (auto it = params.begin(); it != params.end(); ++it) {
+      const FamilyParam& p = Param(r, *family, it->first, key + ".params");
+      fixed[p.name] = ReadParam(r, it->second, key + ".params." + p.name, p);
+    }
+  }
+  if (item["grid"] && item["random"]) r.Fail(item, key, "give 'grid' or 'random', not both");
+  std::vector<ParamValues> variants = {fixed};
+  if (item["grid"]) {
+    const YAML::Node grid = item["grid"];
+    if (!grid.IsMap()) r.Fail(grid, key + ".grid", "expected {parameter: values}");
+    // Nested loops over the family's parameters in their own order, the last varying fastest.
+    std::map<std::string, std::vector<ParamValue>> axes;
+    for (auto it = grid.begin(); it != grid.end(); ++it) {
+      const FamilyParam& p = Param(r, *family, it->first, key + ".grid");
+      axes[p.name] = ReadSeries(r, it->second, key + ".grid." + p.name, p);
+    }
+    for (const FamilyParam& p : family->params) {
+      const auto axis = axes.find(p.name);
+      if (axis == axes.end()) continue;
+      std::vector<ParamValues> next;
+      for (const ParamValues& v : variants) {
+        for (const ParamValue& value : axis->second) {
+          ParamValues w = v;
+          w[p.name] = value;
+          next.push_back(std::move(w));
+        }
+      }
+      variants = std::move(next);
+      if (variants.size() > 100000) r.Fail(grid, key + ".grid", "more than 100000 variants");
+    }
+  } else if (item["random"]) {
+    const YAML::Node random = item["random"];
+    r.ExpectMap(random, key + ".random", {"count", "seed", "params"});
+    if (!random["count"] || !random["params"]) r.Fail(random, key + ".random", "give 'count' and 'params'");
+    const int count = r.Integer(random["count"], key + ".random.count");
+    if (count < 1 || count > 100000) r.Fail(random["count"], key + ".random.count", "count must be 1 to 100000");
+    const uint64_t seed = random["seed"] ? static_cast<uint64_t>(r.Integer(random["seed"], key + ".random.seed")) : 0;
+    const YAML::Node params = random["params"];
+    if (!params.IsMap()) r.Fail(params, key + ".random.params", "expected {parameter: {from, to} or [choices]}");
+    // Each parameter draws from its own stream (its index in the family), variant by variant.
+    struct Draw {
+      const FamilyParam* param;
+      size_t stream;
+      std::vector<ParamValue> choices;  // a list: pick one
+      double from = 0, to = 0;          // a range
+    };
+    std::vector<Draw> draws;
+    for (auto it = params.begin(); it != params.end(); ++it) {
+      const FamilyParam& p = Param(r, *family, it->first, key + ".random.params");
+      const std::string k = key + ".random.params." + p.name;
+      Draw d{&p, static_cast<size_t>(&p - family->params.data()), {}, 0, 0};
+      if (it->second.IsMap()) {
+        r.ExpectMap(it->second, k, {"from", "to"});
+        if (!it->second["from"] || !it->second["to"] || p.kind == FamilyParam::Kind::kText) {
+          r.Fail(it->second, k, "a random range needs 'from' and 'to' (text parameters take a list)");
+        }
+        d.from = std::get<double>(ReadParam(r, it->second["from"], k + ".from", p));
+        d.to = std::get<double>(ReadParam(r, it->second["to"], k + ".to", p));
+        if (d.to < d.from) r.Fail(it->second["to"], k + ".to", "'to' must not be less than 'from'");
+      } else {
+        d.choices = ReadSeries(r, it->second, k, p);
+      }
+      draws.push_back(std::move(d));
+    }
+    variants.clear();
+    for (int v = 0; v < count; ++v) {
+      ParamValues w = fixed;
+      for (const Draw& d : draws) {
+        const double u = UniformDraw(seed, d.stream, static_cast<uint64_t>(v));
+        if (!d.choices.empty()) {
+          w[d.param->name] = d.choices[std::min(d.choices.size() - 1, static_cast<size_t>(u * d.choices.size()))];
+        } else if (d.param->kind == FamilyParam::Kind::kCount) {
+          w[d.param->name] = std::floor(d.from + u * (d.to - d.from + 1));
+        } else {
+          w[d.param->name] = d.from + u * (d.to - d.from);
+        }
+      }
+      variants.push_back(std::move(w));
+    }
+  }
+  for (ParamValues& v : variants) v = CompleteParams(*family, v);
+  source->variants = std::move(variants);
+  if (item["class"]) {
+    const std::string c = r.Scalar(item["class"], key + ".class");
+    if (c != "variant" && c != "family") r.Fail(item["class"], key + ".class", "expected 'variant' or 'family', got '" + c + "'");
+    source->one_class = c == "family";
+  }
+}
+
+std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node, const std::string& where) {
+  if (!node.IsSequence() || node.size() == 0) {
+    r.Fail(node, where, "expected a list such as [{file: part.stp}, {family: spur_gear}]");
+  }
+  std::vector<PartSource> sources;
   for (size_t i = 0; i < node.size(); ++i) {
     const YAML::Node item = node[i];
-    const std::string key = "parts[" + std::to_string(i) + "]";
-    r.ExpectMap(item, key, {"file", "unit", "encoding", "builtin"});
-    if (!item["file"] == !item["builtin"]) r.Fail(item, key, "give exactly one of 'file' or 'builtin'");
+    const std::string key = where + "[" + std::to_string(i) + "]";
+    r.ExpectMap(item, key, {"file", "unit", "encoding", "family", "params", "grid", "random", "class"});
+    if (!item["file"] == !item["family"]) r.Fail(item, key, "give exactly one of 'file' or 'family'");
     PartSource source;
     if (item["file"]) {
+      for (const char* k : {"params", "grid", "random", "class"}) {
+        if (item[k]) r.Fail(item[k], key + "." + k, "goes with 'family', not 'file'");
+      }
       source.kind = PartSource::Kind::kFile;
       source.path = r.ResolvePath(item["file"], key + ".file");
       source.where = r.Where(item["file"]);
@@ -222,30 +371,39 @@ void ReadParts(const Reader& r, const YAML::Node& node, RunSpec* spec) {
       }
       DetectFormatOrFail(r, item["file"], key + ".file", source.path);
     } else {
-      if (item["unit"] || item["encoding"]) r.Fail(item, key, "'unit' and 'encoding' go with 'file'");
-      const std::string which = r.Scalar(item["builtin"], key + ".builtin");
-      if (which != "default") r.Fail(item["builtin"], key + ".builtin", "the built-in set is 'default'");
-      source.kind = PartSource::Kind::kBuiltinDefault;
-      source.where = r.Where(item["builtin"]);
+      if (item["unit"] || item["encoding"]) r.Fail(item, key, "'unit' and 'encoding' go with 'file' (the scaled family has its own)");
+      ReadFamily(r, item, key, &source);
     }
-    spec->sources.push_back(source);
+    sources.push_back(std::move(source));
   }
+  return sources;
 }
 
-void ReadScene(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "scene", {"layout", "gap"});
+void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, ArrangementOptions* arrangement) {
   if (node["layout"]) {
-    const std::string layout = r.Scalar(node["layout"], "scene.layout");
+    const std::string layout = r.Scalar(node["layout"], key + ".layout");
     if (layout == "assembled") {
-      spec->arrangement.layout = Layout::kAssembled;
+      arrangement->layout = Layout::kAssembled;
     } else if (layout == "row") {
-      spec->arrangement.layout = Layout::kRow;
+      arrangement->layout = Layout::kRow;
+    } else if (layout == "grid") {
+      arrangement->layout = Layout::kGrid;
     } else {
-      r.Fail(node["layout"], "scene.layout", "expected 'assembled' or 'row', got '" + layout + "'");
+      r.Fail(node["layout"], key + ".layout", "expected 'assembled', 'row' or 'grid', got '" + layout + "'");
     }
   }
-  if (node["gap"]) spec->arrangement.gap_mm = r.Length(node["gap"], "scene.gap");
-  r.Check(spec->arrangement, node, "scene");
+  if (node["gap"]) arrangement->gap_mm = r.Length(node["gap"], key + ".gap");
+  r.Check(*arrangement, node, key);
+}
+
+SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::string& key) {
+  r.ExpectMap(node, key, {"name", "parts", "layout", "gap"});
+  if (!node["parts"]) r.Fail(node, key, "a scene needs 'parts'");
+  SceneSpec scene;
+  scene.name = node["name"] ? r.Scalar(node["name"], key + ".name") : key;
+  scene.sources = ReadParts(r, node["parts"], key + ".parts");
+  ReadLayout(r, node, key, &scene.arrangement);
+  return scene;
 }
 
 void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
@@ -377,10 +535,26 @@ void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 }  // namespace
 
+std::vector<SceneSpec> DemoScenes() {
+  const auto family = [](const std::string& name, ParamValues values = {}) {
+    PartSource source;
+    source.kind = PartSource::Kind::kFamily;
+    source.family = name;
+    source.variants = {CompleteParams(*FindFamily(name), values)};
+    return source;
+  };
+  SceneSpec planetary{"planetary_gearbox", {family("planetary")}, {Layout::kAssembled, 40.0}};
+  SceneSpec crank{"slider_crank", {family("slider_crank")}, {Layout::kAssembled, 40.0}};
+  SceneSpec benchmark{"assembly_benchmark",
+                      {family("round_peg"), family("square_peg"), family("faceplate"), family("stepped_shaft"),
+                       family("hex_bolt", {{"size", std::string("M10")}, {"length", 40.0}})},
+                      {Layout::kGrid, 30.0}};
+  return {planetary, crank, benchmark};
+}
+
 RunSpec DefaultRunSpec() {
   RunSpec spec;
-  spec.sources = {PartSource{}};
-  spec.arrangement.layout = Layout::kRow;
+  spec.scenes = DemoScenes();
   for (int yaw = 0; yaw < 360; yaw += 30) spec.sweep.yaw_rad.push_back(yaw * kDeg);
   for (int pitch = 15; pitch <= 75; pitch += 20) spec.sweep.pitch_rad.push_back(pitch * kDeg);
   spec.sweep.radius_mm = {650.0, 1050.0, 1450.0};
@@ -400,14 +574,37 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
 
   const Reader r(name, base_dir);
   RunSpec spec = DefaultRunSpec();
-  // A recipe's assemblies stay as designed; the built-in set (no 'parts') lies side by side.
-  spec.arrangement.layout = root["parts"] ? Layout::kAssembled : Layout::kRow;
   try {
-    r.ExpectMap(root, "", {"parts", "classes", "scene", "tessellation", "camera", "sweep", "render",
+    r.ExpectMap(root, "", {"parts", "scene", "scenes", "classes", "tessellation", "camera", "sweep", "render",
                            "output"});
-    if (root["parts"]) ReadParts(r, root["parts"], &spec);
+    if (root["scenes"] && (root["parts"] || root["scene"])) {
+      r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
+    }
+    if (root["parts"]) {
+      SceneSpec scene;
+      scene.name = "scene";
+      scene.sources = ReadParts(r, root["parts"], "parts");
+      if (root["scene"]) {
+        r.ExpectMap(root["scene"], "scene", {"layout", "gap"});
+        ReadLayout(r, root["scene"], "scene", &scene.arrangement);
+      }
+      spec.scenes = {scene};
+    } else if (root["scene"]) {
+      r.Fail(root["scene"], "scene", "'scene' goes with 'parts' (without parts the default scenes are used)");
+    }
+    if (root["scenes"]) {
+      const YAML::Node scenes = root["scenes"];
+      if (scenes.IsScalar() && scenes.Scalar() == "default") {
+        spec.scenes = DemoScenes();
+      } else {
+        if (!scenes.IsSequence() || scenes.size() == 0) r.Fail(scenes, "scenes", "expected a list of scenes, or 'default'");
+        spec.scenes.clear();
+        for (size_t i = 0; i < scenes.size(); ++i) {
+          spec.scenes.push_back(ReadSceneEntry(r, scenes[i], "scenes[" + std::to_string(i) + "]"));
+        }
+      }
+    }
     if (root["classes"]) ReadClasses(r, root["classes"], &spec);
-    if (root["scene"]) ReadScene(r, root["scene"], &spec);
     if (root["tessellation"]) ReadTessellation(r, root["tessellation"], &spec);
     if (root["camera"]) ReadCamera(r, root["camera"], &spec);
     if (root["sweep"]) ReadSweep(r, root["sweep"], &spec);

@@ -13,26 +13,38 @@
 #include "render/renderer.h"
 #include "render/scene.h"
 #include "variants/arrangement.h"
+#include "variants/families.h"
 
 namespace cadsynth {
 
-// Where a part list entry comes from.
+// Where a part list entry comes from: a file, or a parametric family with its variants.
 struct PartSource {
-  enum class Kind { kBuiltinDefault, kFile };
-  Kind kind = Kind::kBuiltinDefault;
+  enum class Kind { kFile, kFamily };
+  Kind kind = Kind::kFile;
   std::filesystem::path path;  // kFile: STEP, IGES, BREP or mesh
   std::string unit;            // kFile: the unit its numbers are in, overriding the file (see ImportOptions)
   std::string encoding;        // kFile, STEP: code page of raw-byte names (see ImportOptions)
-  std::string where;           // "recipe.yaml:3:5" (empty for the built-in default)
+  std::string family;          // kFamily: the family's name (see Families())
+  // kFamily: every variant's complete parameters, in a stable order (grid: nested loops over the
+  // family's parameters in their order, the last varying fastest; random: draw order).
+  std::vector<ParamValues> variants;
+  bool one_class = false;      // kFamily: all variants are one object class (class: family)
+  std::string where;           // "recipe.yaml:3:5" (empty when built in)
+};
+
+// One BOP scene: what lies on the floor together, and how.
+struct SceneSpec {
+  std::string name;
+  std::vector<PartSource> sources;
+  ArrangementOptions arrangement;
 };
 
 // Everything one run needs, each module's options filled in.
 struct RunSpec {
   std::filesystem::path recipe;  // empty for the built-in default job
-  std::vector<PartSource> sources;
+  std::vector<SceneSpec> scenes;
   TessellationOptions tessellation;
   double crease_angle_rad = ImportOptions{}.crease_angle_rad;  // meshes
-  ArrangementOptions arrangement;
   // What one object class is: each distinct part shape (kPart) or each file's whole assembly
   // (kAssembly, fused into one rigid object).
   enum class ClassBy { kPart, kAssembly };
@@ -49,9 +61,14 @@ struct RunSpec {
   std::filesystem::path output;  // empty: the command line decides
 };
 
-// The built-in default job: the built-in parts in a row, a 144-view sweep (yaw every 30 degrees,
-// pitch 15-75 by 20, radius 0.65, 1.05, 1.45 m), Kinect v1 camera.
+// The built-in default job: the reference paper's three demo sets rebuilt parametrically, one BOP
+// scene each (a planetary gearbox, a slider-crank mechanism, an assembly-benchmark set of pegs,
+// faceplate, shaft and bolt), on a 144-view sweep (yaw every 30 degrees, pitch 15-75 by 20,
+// radius 0.65, 1.05, 1.45 m), Kinect v1 camera.
 RunSpec DefaultRunSpec();
+
+// The three demo scenes of the default job (also what `scenes: default` means in a recipe).
+std::vector<SceneSpec> DemoScenes();
 
 // Reads a recipe. Throws Error "FILE:LINE:COL: what" for unknown keys (with the nearest known
 // key), values of the wrong kind or unit, impossible values and missing files.

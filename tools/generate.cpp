@@ -1,37 +1,84 @@
 #include "tools/generate.h"
 
-#include <atomic>
-#include <chrono>
-#include <memory>
-#include <sstream>
-#include <system_error>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <system_error>
+
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
-#include "cad/error.h"
 #include "cad/assembly.h"
+#include "cad/error.h"
 #include "cad/import.h"
 #include "dataset/bop.h"
+#include "dataset/file_io.h"
 #include "render/renderer.h"
 #include "variants/arrangement.h"
-#include "variants/builtin.h"
+#include "variants/families.h"
 
 namespace cadsynth {
 namespace {
 
-Assembly LoadSource(const PartSource& source, const RunSpec& spec) {
-  if (source.kind == PartSource::Kind::kBuiltinDefault) return MakeDefaultParts(spec.tessellation);
+using Json = nlohmann::ordered_json;
+
+// One thing to build: a file, or one variant of a family; a rigid group in its scene.
+struct Job {
+  int scene = 0;
+  const PartSource* source = nullptr;
+  size_t variant = 0;
+  std::string id;  // stable: scene/entry/family-or-file/variant
+  Assembly assembly;
+  std::string error;
+};
+
+std::string Describe(const ParamValues& values) {
+  std::ostringstream out;
+  out.precision(6);
+  bool first = true;
+  for (const auto& [name, value] : values) {
+    out << (first ? "" : ", ") << name << "=";
+    if (const double* x = std::get_if<double>(&value)) out << *x; else out << std::get<std::string>(value);
+    first = false;
+  }
+  return out.str();
+}
+
+Json ParamsJson(const ParamValues& values) {
+  Json out = Json::object();
+  for (const auto& [name, value] : values) {
+    if (const double* x = std::get_if<double>(&value)) out[name] = *x; else out[name] = std::get<std::string>(value);
+  }
+  return out;
+}
+
+void Build(const RunSpec& spec, Job* job) {
   ImportOptions options;
   options.tessellation = spec.tessellation;
   options.crease_angle_rad = spec.crease_angle_rad;
-  options.unit = source.unit;
-  options.encoding = source.encoding;
+  const PartSource& source = *job->source;
   try {
-    return ImportCad(source.path, options);
+    if (source.kind == PartSource::Kind::kFile) {
+      options.unit = source.unit;
+      options.encoding = source.encoding;
+      job->assembly = ImportCad(source.path, options);
+    } else {
+      job->assembly = BuildVariant(*FindFamily(source.family), source.variants[job->variant], options);
+    }
+    if (spec.class_by == RunSpec::ClassBy::kAssembly) job->assembly = FuseAssembly(job->assembly);
   } catch (const Error& e) {
-    throw Error(source.where.empty() ? e.what() : source.where + ": " + e.what());
+    std::string where = source.where.empty() ? "" : source.where + ": ";
+    if (source.kind == PartSource::Kind::kFamily) {
+      where += "variant " + std::to_string(job->variant) + " (" + Describe(source.variants[job->variant]) + "): ";
+    }
+    job->error = where + e.what();
   }
 }
 
@@ -52,13 +99,10 @@ class StagingFolder {
   std::filesystem::path path_;
 };
 
-void MoveIntoPlace(const std::filesystem::path& staging, const std::filesystem::path& output,
-                   bool overwrite) {
+void MoveIntoPlace(const std::filesystem::path& staging, const std::filesystem::path& output, bool overwrite) {
   std::error_code ec;
   if (std::filesystem::exists(output, ec)) {
-    if (!overwrite) {
-      throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
-    }
+    if (!overwrite) throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
     std::filesystem::path old = output;
     old += ".old-" + std::to_string(::getpid());
     std::filesystem::rename(output, old, ec);
@@ -93,110 +137,194 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
   if (!spec.bop.Check(&why)) throw Error("output: " + why);
-  if (spec.sources.empty()) throw Error("no parts to render");
+  if (spec.scenes.empty()) throw Error("no scenes to render");
 
-  // Parts and instances of every source, in one assembly.
-  Assembly all;
-  std::vector<Part>& parts = all.parts;
-  std::vector<Instance>& instances = all.instances;
-  for (const PartSource& source : spec.sources) {
-    Assembly assembly = LoadSource(source, spec);
-    if (spec.class_by == RunSpec::ClassBy::kAssembly) assembly = FuseAssembly(assembly);
-    std::ostringstream line;
-    line << "read " << (source.kind == PartSource::Kind::kFile ? source.path.string() : "built-in parts")
-         << " (" << assembly.format << "): '" << assembly.name << "', unit "
-         << (assembly.length_unit.empty() ? "?" : assembly.length_unit)
-         << ", " << assembly.parts.size() << " parts, " << assembly.instances.size() << " instances";
-    info(line.str());
-    const int offset = static_cast<int>(parts.size());
-    for (Part& part : assembly.parts) parts.push_back(std::move(part));
-    for (Instance instance : assembly.instances) {
-      instance.part += offset;
-      instances.push_back(std::move(instance));
+  // Every file and every variant, built in parallel; errors reported in recipe order.
+  std::vector<Job> jobs;
+  for (size_t s = 0; s < spec.scenes.size(); ++s) {
+    const SceneSpec& scene = spec.scenes[s];
+    if (scene.sources.empty()) throw Error("scene '" + scene.name + "' has no parts");
+    for (size_t e = 0; e < scene.sources.size(); ++e) {
+      const PartSource& source = scene.sources[e];
+      const std::string base = scene.name + "/" + std::to_string(e) + "/";
+      if (source.kind == PartSource::Kind::kFile) {
+        jobs.push_back({static_cast<int>(s), &source, 0, base + source.path.filename().string(), {}, {}});
+      } else {
+        for (size_t v = 0; v < source.variants.size(); ++v) {
+          jobs.push_back({static_cast<int>(s), &source, v, base + source.family + "/" + std::to_string(v), {}, {}});
+        }
+      }
     }
   }
-  // The same shape from several files (or built in and imported) is one object.
-  const size_t merged = MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3);
-  if (merged > 0) info("merged " + std::to_string(merged) + " parts that repeat a shape of another file");
+  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) { Build(spec, &jobs[j]); });
+  for (const Job& job : jobs) {
+    if (!job.error.empty()) throw Error(job.error);
+  }
 
+  // One list of parts; instances remember their job (a rigid group) and scene.
+  Assembly all;
+  std::vector<int> job_of_instance;
+  std::vector<std::string> label_of_part;
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    Assembly& a = jobs[j].assembly;
+    const PartSource& source = *jobs[j].source;
+    if (source.kind == PartSource::Kind::kFile) {
+      std::ostringstream line;
+      line << "read " << source.path.string() << " (" << a.format << "): '" << a.name << "', unit "
+           << (a.length_unit.empty() ? "?" : a.length_unit) << ", " << a.parts.size() << " parts, "
+           << a.instances.size() << " instances";
+      info(line.str());
+    }
+    const int offset = static_cast<int>(all.parts.size());
+    for (Part& part : a.parts) {
+      label_of_part.push_back(source.one_class ? source.family : std::string());
+      all.parts.push_back(std::move(part));
+    }
+    for (Instance instance : a.instances) {
+      instance.part += offset;
+      all.instances.push_back(std::move(instance));
+      job_of_instance.push_back(static_cast<int>(j));
+    }
+  }
+  for (const SceneSpec& scene : spec.scenes) {
+    for (const PartSource& source : scene.sources) {
+      if (source.kind == PartSource::Kind::kFamily) {
+        info("built " + std::to_string(source.variants.size()) + " variant(s) of " + source.family + " for scene '" +
+             scene.name + "'");
+      }
+    }
+  }
+  // The same shape from several files, variants or scenes is one object.
+  {
+    std::vector<int> first_instance_part(all.instances.size());
+    for (size_t i = 0; i < all.instances.size(); ++i) first_instance_part[i] = all.instances[i].part;
+    const size_t merged = MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3);
+    if (merged > 0) info("merged " + std::to_string(merged) + " parts that repeat the shape of another");
+    std::vector<std::string> labels(all.parts.size());
+    for (size_t i = 0; i < all.instances.size(); ++i) {
+      std::string& label = labels[all.instances[i].part];
+      if (label.empty()) label = label_of_part[first_instance_part[i]];
+    }
+    label_of_part = std::move(labels);
+  }
+  std::vector<Part>& parts = all.parts;
   std::vector<std::string> names, empty_groups;
   for (const Part& part : parts) names.push_back(part.name);
-  const std::vector<ObjectClass> classes = AssignClasses(names, spec.class_groups, &empty_groups);
+  const std::vector<ObjectClass> classes = AssignClasses(names, label_of_part, spec.class_groups, &empty_groups);
   for (const std::string& group : empty_groups) Warn("class '" + group + "' matches no part");
   for (size_t i = 0; i < parts.size(); ++i) {
     const Eigen::Vector3d size = parts[i].mesh.Bounds().sizes();
     std::ostringstream p;
     p.precision(4);
-    p << "  obj_id " << i + 1 << ": '" << parts[i].name << "' " << size.x() << " x " << size.y()
-      << " x " << size.z() << " mm, " << parts[i].mesh.num_triangles() << " triangles, class "
-      << classes[i].id << " '" << classes[i].name << "'";
+    p << "  obj_id " << i + 1 << ": '" << parts[i].name << "' " << size.x() << " x " << size.y() << " x "
+      << size.z() << " mm, " << parts[i].mesh.num_triangles() << " triangles, class " << classes[i].id << " '"
+      << classes[i].name << "'";
     info(p.str());
   }
 
-  Scene scene = spec.look;
-  scene.instances = Arrange(parts, instances, spec.arrangement);
-  scene.part_colors.clear();
-  for (size_t i = 0; i < parts.size(); ++i) {
-    const Eigen::Vector3f palette = PaletteColor(static_cast<int>(i));
-    scene.part_colors.push_back(spec.cad_colors ? parts[i].color.value_or(palette) : palette);
+  // Scenes: arrange each scene's groups on the floor.
+  struct SceneRun {
+    Scene scene;
+    std::vector<int> obj_ids;
+  };
+  std::vector<SceneRun> runs(spec.scenes.size());
+  for (size_t s = 0; s < spec.scenes.size(); ++s) {
+    std::vector<Instance> instances;
+    std::vector<int> groups;
+    for (size_t i = 0; i < all.instances.size(); ++i) {
+      if (jobs[job_of_instance[i]].scene != static_cast<int>(s)) continue;
+      instances.push_back(all.instances[i]);
+      groups.push_back(job_of_instance[i]);
+    }
+    SceneRun& run = runs[s];
+    run.scene = spec.look;
+    run.scene.instances = Arrange(parts, instances, spec.scenes[s].arrangement, groups);
+    run.scene.part_colors.clear();
+    for (size_t i = 0; i < parts.size(); ++i) {
+      const Eigen::Vector3f palette = PaletteColor(static_cast<int>(i));
+      run.scene.part_colors.push_back(spec.cad_colors ? parts[i].color.value_or(palette) : palette);
+    }
+    if (!spec.cad_colors) {
+      for (Instance& instance : run.scene.instances) instance.color.reset();
+    }
+    for (const Instance& instance : run.scene.instances) run.obj_ids.push_back(instance.part + 1);
   }
-  if (!spec.cad_colors) {
-    for (Instance& instance : scene.instances) instance.color.reset();
-  }
-  const Renderer renderer(parts, scene, spec.render);
-
-  std::vector<int> obj_ids;
-  for (const Instance& instance : scene.instances) obj_ids.push_back(instance.part + 1);
   const std::vector<SweepView> views = ExpandSweep(spec.sweep);
+  const size_t total_frames = views.size() * runs.size();
 
   // Everything goes to a hidden staging folder beside the output, renamed into place at the end.
   std::filesystem::create_directories(output.parent_path(), ec);
   if (ec) throw Error(output.parent_path().string() + ": cannot create folder: " + ec.message());
-  StagingFolder staging(output.parent_path() /
-                        ("." + output.filename().string() + ".partial-" + std::to_string(::getpid())));
+  StagingFolder staging(output.parent_path() / ("." + output.filename().string() + ".partial-" + std::to_string(::getpid())));
   std::filesystem::remove_all(staging.path(), ec);
 
   WriteBopCamera(staging.path(), spec.intrinsics, spec.bop);
   WriteBopModels(staging.path(), parts, classes);
-  BopSceneWriter writer(staging.path(), /*scene_id=*/0, spec.bop, obj_ids);
 
-  // cast -> encode + write, a bounded number of frames in flight.
+  // variants.json: what each file or variant is, and which objects it became.
+  Json variants = Json::array();
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    std::set<int> obj_ids, class_ids;
+    for (size_t i = 0; i < all.instances.size(); ++i) {
+      if (job_of_instance[i] != static_cast<int>(j)) continue;
+      obj_ids.insert(all.instances[i].part + 1);
+      class_ids.insert(classes[all.instances[i].part].id);
+    }
+    const PartSource& source = *jobs[j].source;
+    Json entry = {{"id", jobs[j].id}, {"scene_id", jobs[j].scene}, {"scene", spec.scenes[jobs[j].scene].name}};
+    if (source.kind == PartSource::Kind::kFile) {
+      entry["file"] = source.path.string();
+    } else {
+      entry["family"] = source.family;
+      entry["params"] = ParamsJson(source.variants[jobs[j].variant]);
+    }
+    entry["obj_ids"] = obj_ids;
+    entry["class_ids"] = class_ids;
+    variants.push_back(entry);
+  }
+  WriteFileAtomic(staging.path() / "variants.json", Json{{"variants", variants}}.dump(2) + "\n");
+
+  // Render scene by scene: cast -> encode + write, a bounded number of frames in flight.
   std::atomic<size_t> done{0};
-  size_t next = 0;
-  const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
-  using FramePtr = std::shared_ptr<const Frame>;
-  tbb::parallel_pipeline(
-      tokens,
-      tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                     [&](tbb::flow_control& control) -> size_t {
-                                       if (next >= views.size()) {
-                                         control.stop();
-                                         return 0;
-                                       }
-                                       return next++;
-                                     }) &
-          tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
-              tbb::filter_mode::parallel,
-              [&](size_t i) {
-                const Camera camera{spec.intrinsics, views[i].world_from_cam};
-                return std::make_pair(i, std::make_shared<const Frame>(renderer.Render(camera)));
-              }) &
-          tbb::make_filter<std::pair<size_t, FramePtr>, void>(
-              tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                writer.WriteFrame(static_cast<int>(item.first), *item.second);
-                const size_t n = ++done;
-                if (options.progress) options.progress(n, views.size());
-              }));
-  writer.Finish();
+  for (size_t s = 0; s < runs.size(); ++s) {
+    const Renderer renderer(parts, runs[s].scene, spec.render);
+    BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, runs[s].obj_ids);
+    size_t next = 0;
+    const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
+    using FramePtr = std::shared_ptr<const Frame>;
+    tbb::parallel_pipeline(
+        tokens,
+        tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                       [&](tbb::flow_control& control) -> size_t {
+                                         if (next >= views.size()) {
+                                           control.stop();
+                                           return 0;
+                                         }
+                                         return next++;
+                                       }) &
+            tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
+                tbb::filter_mode::parallel,
+                [&](size_t i) {
+                  const Camera camera{spec.intrinsics, views[i].world_from_cam};
+                  return std::make_pair(i, std::make_shared<const Frame>(renderer.Render(camera)));
+                }) &
+            tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
+                  writer.WriteFrame(static_cast<int>(item.first), *item.second);
+                  const size_t n = ++done;
+                  if (options.progress) options.progress(n, total_frames);
+                }));
+    writer.Finish();
+  }
   MoveIntoPlace(staging.path(), output, options.overwrite);
   staging.Release();
 
   GenerateSummary summary;
-  summary.frames = views.size();
+  summary.frames = total_frames;
+  summary.scenes = runs.size();
   summary.objects = parts.size();
-  summary.instances = scene.instances.size();
-  summary.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.instances = all.instances.size();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
 

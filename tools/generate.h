@@ -20,13 +20,15 @@ struct GenerateOptions {
 
 struct GenerateSummary {
   size_t frames = 0;
+  size_t scenes = 0;
   size_t objects = 0;
   size_t instances = 0;
   double seconds = 0.0;
 };
 
-// Builds or reads the parts, arranges them, renders every view of the sweep and writes the BOP
-// dataset. Everything is written into a hidden staging folder next to `output` and renamed into
+// Reads the files and builds the family variants of every scene, merges repeated shapes into one
+// object each, arranges each scene on the floor, renders every view of the sweep per scene and
+// writes the BOP dataset (scene i in SPLIT/00000i) plus variants.json. Everything is written into a hidden staging folder next to `output` and renamed into
 // place at the end, so a failed run leaves no half-written dataset. Throws Error.
 GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options);
 

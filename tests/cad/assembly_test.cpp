@@ -4,7 +4,7 @@
 
 #include "cad/error.h"
 #include "cad/shape.h"
-#include "variants/builtin.h"
+#include "variants/gear.h"
 
 namespace cadsynth {
 namespace {
@@ -49,7 +49,11 @@ TEST(FindCongruence, CylinderTurnedAboutItsAxisMovesItsSeam) {
 }
 
 TEST(FindCongruence, GearRecoversTheTurnModuloOneTooth) {
-  const Shape gear = MakeGearBlank(GearBlankOptions{});  // 20 teeth: 18 degrees apart
+  GearOptions options;
+  options.teeth = 20;  // 18 degrees apart
+  options.module_mm = 3.0;
+  options.bore_diameter_mm = 12.0;
+  const Shape gear = MakeGear(options);
   const Mesh a = Remeshed(gear, Eigen::Isometry3d::Identity());
   const double turn = 7.0 * M_PI / 180.0;
   const Mesh b = Remeshed(gear, Eigen::Isometry3d(Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ())));
@@ -106,6 +110,17 @@ TEST(MergeIdenticalParts, CopiesBecomeInstancesAndStayWhereTheyWere) {
     EXPECT_TRUE(after.min().isApprox(before[k].min(), 1e-3) || (after.min() - before[k].min()).norm() < 0.1) << k;
     EXPECT_LT((after.max() - before[k].max()).norm(), 0.1) << k;
   }
+}
+
+TEST(MergeIdenticalParts, ExactVolumesKeepNearTwinsApart) {
+  // Two discs whose holes differ by 0.1 mm in radius: within the mesh tolerance, but not the same.
+  Assembly assembly;
+  assembly.parts = {MakePart("sun", MakeCylinder(20, 10), kFine), MakePart("planet", MakeCylinder(20, 10), kFine)};
+  assembly.parts[1].mass.volume_mm3 *= 1.001;  // as if its bore were wider
+  assembly.instances = {{0, "a", assembly.parts[0].cad_from_model}, {1, "b", assembly.parts[1].cad_from_model}};
+  EXPECT_EQ(MergeIdenticalParts(&assembly, 0.21), 0u);
+  assembly.parts[1].mass_from_brep = false;  // a mesh: only the geometry can tell
+  EXPECT_EQ(MergeIdenticalParts(&assembly, 0.21), 1u);
 }
 
 TEST(FuseAssembly, OneRigidPartWithCombinedMass) {

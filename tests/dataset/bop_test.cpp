@@ -83,7 +83,7 @@ TEST(GtInfo, HandWorkedFrame) {
 TEST(AssignClasses, GroupsByNamePatternThenOneClassPerRemainingPart) {
   std::vector<std::string> empty;
   const std::vector<ObjectClass> classes = AssignClasses(
-      {"M6 bolt", "plate", "NUT_M6", "M8 Bolt", "washer"},
+      {"M6 bolt", "plate", "NUT_M6", "M8 Bolt", "washer"}, {},
       {{"bolt", {"*bolt*"}}, {"nut", {"nut*", "*-nut"}}, {"screw", {"*screw*"}}}, &empty);
   ASSERT_EQ(classes.size(), 5u);
   EXPECT_EQ(classes[0].id, 1);
@@ -95,7 +95,15 @@ TEST(AssignClasses, GroupsByNamePatternThenOneClassPerRemainingPart) {
   EXPECT_EQ(classes[1].name, "plate");
   EXPECT_EQ(classes[4].id, 5);
   EXPECT_EQ(empty, std::vector<std::string>{"screw"});
-  EXPECT_EQ(AssignClasses({"a", "b"}, {}, &empty)[1].id, 2);
+  EXPECT_EQ(AssignClasses({"a", "b"}, {}, {}, &empty)[1].id, 2);
+  // Labels (a family that is one class) come before name groups take a part, after the groups.
+  const auto labelled = AssignClasses({"gear_z12", "M6 bolt", "gear_z13", "plate"}, {"spur_gear", "", "spur_gear", ""},
+                                      {{"bolt", {"*bolt*"}}}, &empty);
+  EXPECT_EQ(labelled[0].id, 2);
+  EXPECT_EQ(labelled[0].name, "spur_gear");
+  EXPECT_EQ(labelled[2].id, 2);
+  EXPECT_EQ(labelled[1].id, 1);
+  EXPECT_EQ(labelled[3].id, 3);
 }
 
 TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {

@@ -32,9 +32,9 @@ sweep:
   EXPECT_NEAR(spec.sweep.radius_mm.back(), 1450.0, 1e-9);
   EXPECT_NEAR(spec.sweep.yaw_rad.back(), 2 * M_PI, 1e-12);
   EXPECT_EQ(spec.sweep.NumViews(), 3330u);
-  EXPECT_EQ(spec.sources.size(), 1u);  // no parts: the built-in set
-  EXPECT_EQ(spec.sources[0].kind, PartSource::Kind::kBuiltinDefault);
-  EXPECT_EQ(spec.arrangement.layout, Layout::kRow);
+  ASSERT_EQ(spec.scenes.size(), 3u);  // no parts: the three demo sets
+  EXPECT_EQ(spec.scenes[0].name, "planetary_gearbox");
+  EXPECT_EQ(spec.scenes[2].arrangement.layout, Layout::kGrid);
 }
 
 TEST(Recipe, CameraListsAndOptions) {
@@ -42,6 +42,7 @@ TEST(Recipe, CameraListsAndOptions) {
 camera: {preset: kinect_v1, width: 320, height: 240, fx: 262.5, fy: 262.5, cx: 159.5, cy: 119.5}
 sweep: {yaw: [0, 90 deg, 3.14159 rad], pitch: 45, radius: 1 m, target: [0, 0, 2 cm]}
 tessellation: {linear_deflection: 20 um, angular_deflection: 10}
+parts: [{family: round_peg}]
 scene: {layout: row, gap: 1 in}
 render: {floor: false, background: [1, 1, 1]}
 output: {dir: out/x, depth_scale: 1.0, split: val}
@@ -53,7 +54,7 @@ output: {dir: out/x, depth_scale: 1.0, split: val}
   EXPECT_DOUBLE_EQ(spec.sweep.radius_mm[0], 1000.0);
   EXPECT_DOUBLE_EQ(spec.sweep.target.z(), 20.0);
   EXPECT_DOUBLE_EQ(spec.tessellation.linear_deflection_mm, 0.02);
-  EXPECT_DOUBLE_EQ(spec.arrangement.gap_mm, 25.4);
+  EXPECT_DOUBLE_EQ(spec.scenes.at(0).arrangement.gap_mm, 25.4);
   EXPECT_FALSE(spec.look.floor);
   EXPECT_EQ(spec.output, std::filesystem::path("/base/out/x"));
   EXPECT_EQ(spec.bop.split, "val");
@@ -97,13 +98,16 @@ TEST(Recipe, PartsResolveRelativeToTheRecipe) {
   testing::ScratchDir dir;
   std::ofstream(dir / "part.stp") << "ISO-10303-21;\n";
   const RunSpec spec =
-      ParseRecipe("parts:\n  - file: part.stp\n    unit: inch\n  - builtin: default\n", "r.yaml", dir.path());
-  ASSERT_EQ(spec.sources.size(), 2u);
-  EXPECT_EQ(spec.sources[0].kind, PartSource::Kind::kFile);
-  EXPECT_EQ(spec.sources[0].unit, "inch");
-  EXPECT_EQ(spec.sources[0].path, dir / "part.stp");
-  EXPECT_EQ(spec.sources[0].where, "r.yaml:2:11");
-  EXPECT_EQ(spec.arrangement.layout, Layout::kAssembled);
+      ParseRecipe("parts:\n  - file: part.stp\n    unit: inch\n  - family: washer\n", "r.yaml", dir.path());
+  ASSERT_EQ(spec.scenes.size(), 1u);
+  const std::vector<PartSource>& sources = spec.scenes[0].sources;
+  ASSERT_EQ(sources.size(), 2u);
+  EXPECT_EQ(sources[0].kind, PartSource::Kind::kFile);
+  EXPECT_EQ(sources[0].unit, "inch");
+  EXPECT_EQ(sources[0].path, dir / "part.stp");
+  EXPECT_EQ(sources[0].where, "r.yaml:2:11");
+  EXPECT_EQ(sources[1].kind, PartSource::Kind::kFamily);
+  EXPECT_EQ(spec.scenes[0].arrangement.layout, Layout::kAssembled);
   EXPECT_EQ(ErrorOf("parts:\n  - file: nope.stp\n", dir.path()),
             "r.yaml:2:11: parts[0].file: " + (dir / "nope.stp").string() + ": no such file");
   EXPECT_EQ(ErrorOf("parts:\n  - file: part.stp\n    unit: cubits\n", dir.path()),
@@ -111,8 +115,8 @@ TEST(Recipe, PartsResolveRelativeToTheRecipe) {
   std::ofstream(dir / "notes.txt") << "bolts, nuts\n";
   EXPECT_NE(ErrorOf("parts:\n  - file: notes.txt\n", dir.path()).find("r.yaml:2:11: parts[0].file: "),
             std::string::npos);
-  EXPECT_EQ(ErrorOf("parts:\n  - {builtin: default, file: part.stp}\n", dir.path()),
-            "r.yaml:2:5: parts[0]: give exactly one of 'file' or 'builtin'");
+  EXPECT_EQ(ErrorOf("parts:\n  - {family: washer, file: part.stp}\n", dir.path()),
+            "r.yaml:2:5: parts[0]: give exactly one of 'file' or 'family'");
   EXPECT_EQ(ErrorOf("parts:\n  - fiel: part.stp\n", dir.path()),
             "r.yaml:2:5: unknown key 'parts[0].fiel' (did you mean 'file'?)");
 }

@@ -29,6 +29,27 @@ RunSpec SmallDefault() {
   return spec;
 }
 
+// A family entry with the given variants (parameters completed with the family's defaults).
+PartSource Family(const std::string& name, const std::vector<ParamValues>& variants, bool one_class = false) {
+  PartSource source;
+  source.kind = PartSource::Kind::kFamily;
+  source.family = name;
+  for (const ParamValues& v : variants) source.variants.push_back(CompleteParams(*FindFamily(name), v));
+  source.one_class = one_class;
+  return source;
+}
+
+RunSpec OneScene(std::vector<PartSource> sources, Layout layout = Layout::kAssembled) {
+  RunSpec spec = SmallDefault();
+  spec.scenes = {SceneSpec{"scene", std::move(sources), {layout, 20.0}}};
+  return spec;
+}
+
+json ReadJson(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return json::parse(in);
+}
+
 std::map<std::string, std::string> ReadTree(const std::filesystem::path& root) {
   std::map<std::string, std::string> files;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
@@ -45,35 +66,76 @@ size_t EntriesIn(const std::filesystem::path& dir) {
   return static_cast<size_t>(std::distance(std::filesystem::directory_iterator(dir), {}));
 }
 
-TEST(Generate, DefaultJobWritesACompleteBopDataset) {
+TEST(Generate, DefaultJobIsThePapersThreeDemoSets) {
   ScratchDir dir;
   GenerateOptions options;
   options.output = dir / "data";
   size_t last_progress = 0;
   options.progress = [&](size_t done, size_t total) {
-    EXPECT_EQ(total, 2u);
+    EXPECT_EQ(total, 6u);  // 3 scenes x 2 views
     last_progress = std::max(last_progress, done);
   };
   const GenerateSummary summary = Generate(SmallDefault(), options);
-  EXPECT_EQ(summary.frames, 2u);
-  EXPECT_EQ(summary.objects, 3u);
-  EXPECT_EQ(last_progress, 2u);
+  EXPECT_EQ(summary.scenes, 3u);
+  EXPECT_EQ(summary.frames, 6u);
+  EXPECT_EQ(last_progress, 6u);
+  // Planetary: sun, planet, ring, carrier; slider-crank: base, crank, rod, slider; benchmark:
+  // round peg, square peg, faceplate, shaft, bolt.
+  EXPECT_EQ(summary.objects, 13u);
+  EXPECT_EQ(summary.instances, 6u + 4u + 5u);
 
   const auto files = ReadTree(dir / "data");
-  for (const char* f : {"camera.json", "models/models_info.json", "models/obj_000001.ply",
-                        "models/obj_000003.ply", "train/000000/rgb/000001.png",
-                        "train/000000/depth/000001.png", "train/000000/mask/000001_000002.png",
-                        "train/000000/mask_visib/000000_000000.png", "train/000000/scene_camera.json",
-                        "train/000000/scene_gt.json", "train/000000/scene_gt_info.json"}) {
+  for (const char* f : {"camera.json", "models/models_info.json", "models/obj_000013.ply", "variants.json",
+                        "train/000000/rgb/000001.png", "train/000001/scene_gt.json",
+                        "train/000002/mask_visib/000001_000004.png", "train/000002/scene_gt_info.json"}) {
     EXPECT_TRUE(files.count(f)) << f;
   }
-  // camera.json; models_info, models_cad and 3 PLY; per scene 3 JSON, 2 rgb, 2 depth, and
-  // 2 images x 3 instances of mask and mask_visib.
-  EXPECT_EQ(files.size(), 1u + 5u + 3u + 2u + 2u + 2u * 3u * 2u);
-  // Every part rests on the floor in view: the sweep sees each of them.
-  const json info = json::parse(files.at("train/000000/scene_gt_info.json"));
-  for (int i = 0; i < 3; ++i) EXPECT_GT(info["0"][i]["px_count_visib"].get<int>(), 0) << i;
+  // Gears carry their z-fold symmetry, pegs a continuous one.
+  const json info = json::parse(files.at("models/models_info.json"));
+  const json cad = json::parse(files.at("models/models_cad.json"));
+  for (const auto& [key, model] : cad.items()) {
+    const std::string name = model["name"];
+    if (name == "sun_z18") {
+      EXPECT_EQ(info[key]["symmetries_discrete"].size(), 17u + 18u);  // 17 turns, 18 flips
+    }
+    if (name == "round_peg") {
+      EXPECT_EQ(info[key]["symmetries_continuous"].size(), 1u);
+    }
+  }
+  const json variants = json::parse(files.at("variants.json"))["variants"];
+  ASSERT_EQ(variants.size(), 7u);  // planetary, slider-crank, five benchmark parts
+  EXPECT_EQ(variants[0]["id"], "planetary_gearbox/0/planetary/0");
+  EXPECT_EQ(variants[0]["params"]["sun_teeth"], 18.0);
+  EXPECT_EQ(variants[0]["obj_ids"].size(), 4u);
+  EXPECT_EQ(variants[6]["params"]["size"], "M10");
   EXPECT_EQ(EntriesIn(dir.path()), 1u);  // no staging folder left behind
+}
+
+TEST(Generate, GridAndRandomFamiliesGenerateTwiceIdentically) {
+  ScratchDir dir;
+  std::vector<ParamValues> grid;
+  for (int z = 12; z <= 40; ++z) grid.push_back({{"teeth", double(z)}, {"module", 1.5}, {"bore", 6.0}});
+  RunSpec spec = OneScene({Family("spur_gear", grid, /*one_class=*/true)}, Layout::kGrid);
+  spec.sweep.yaw_rad = {0.5};
+  spec.sweep.radius_mm = {1400.0};
+  const auto run = [&](const RunSpec& s, const std::string& name) {
+    GenerateOptions options;
+    options.output = dir / name;
+    Generate(s, options);
+    return ReadTree(dir / name);
+  };
+  const auto first = run(spec, "grid_a"), second = run(spec, "grid_b");
+  ASSERT_EQ(first.size(), second.size());
+  for (const auto& [name, bytes] : first) EXPECT_TRUE(second.at(name) == bytes) << name;
+  const json variants = json::parse(first.at("variants.json"))["variants"];
+  ASSERT_EQ(variants.size(), 29u);
+  EXPECT_EQ(variants[28]["params"]["teeth"], 40.0);
+  const json cad = json::parse(first.at("models/models_cad.json"));
+  EXPECT_EQ(cad.size(), 29u);                      // 29 objects ...
+  EXPECT_EQ(cad["29"]["class_name"], "spur_gear");  // ... of one class
+  EXPECT_EQ(cad["1"]["class_id"], cad["29"]["class_id"]);
+  const json info = json::parse(first.at("models/models_info.json"));
+  EXPECT_EQ(info["29"]["symmetries_discrete"].size(), 39u + 40u);
 }
 
 TEST(Generate, SameSpecGivesTheSameBytesWhateverTheThreadCount) {
@@ -93,8 +155,7 @@ TEST(Generate, SameSpecGivesTheSameBytesWhateverTheThreadCount) {
 TEST(Generate, BadInputLeavesNoDatasetBehind) {
   ScratchDir dir;
   std::ofstream(dir / "broken.stp") << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(";
-  RunSpec spec = SmallDefault();
-  spec.sources = {PartSource{.kind = PartSource::Kind::kFile, .path = dir / "broken.stp", .where = "r.yaml:2:11"}};
+  RunSpec spec = OneScene({PartSource{.kind = PartSource::Kind::kFile, .path = dir / "broken.stp", .where = "r.yaml:2:11"}});
   GenerateOptions options;
   options.output = dir / "out";
   try {
@@ -123,24 +184,22 @@ TEST(Generate, ExistingOutputNeedsOverwrite) {
   EXPECT_EQ(EntriesIn(dir.path()), 1u);
 }
 
-json ModelsCad(const std::filesystem::path& root) {
-  std::ifstream in(root / "models" / "models_cad.json");
-  return json::parse(in);
-}
+json ModelsCad(const std::filesystem::path& root) { return ReadJson(root / "models" / "models_cad.json"); }
 
 TEST(Generate, SameShapeFromTwoSourcesIsOneObject) {
   ScratchDir dir;
-  // The built-in box, written to STEP turned on its side, is the built-in box.
-  WriteStep(dir / "box.step", "boxes",
-            {StepComponent{"turned box", MakeBox(80, 60, 40),
+  // A square peg written to STEP lying on its side is the square-peg family's peg.
+  WriteStep(dir / "peg.step", "pegs",
+            {StepComponent{"turned peg", MakeBox(20, 20, 50),
                            {Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()))}}});
-  RunSpec spec = SmallDefault();
-  spec.sources = {PartSource{}, PartSource{.kind = PartSource::Kind::kFile, .path = dir / "box.step"}};
+  RunSpec spec = OneScene({Family("square_peg", {{}}), Family("round_peg", {{}}),
+                           PartSource{.kind = PartSource::Kind::kFile, .path = dir / "peg.step"}},
+                          Layout::kRow);
   GenerateOptions options;
   options.output = dir / "out";
   const GenerateSummary summary = Generate(spec, options);
-  EXPECT_EQ(summary.objects, 3u);  // box, peg, gear: the STEP box is a second box instance
-  EXPECT_EQ(summary.instances, 4u);
+  EXPECT_EQ(summary.objects, 2u);  // square and round peg: the STEP peg is a second square peg
+  EXPECT_EQ(summary.instances, 3u);
 }
 
 TEST(Generate, ClassesByAssemblyAndByNameGroups) {
@@ -149,8 +208,7 @@ TEST(Generate, ClassesByAssemblyAndByNameGroups) {
             {StepComponent{"M6 bolt", MakeCylinder(3, 30), {Eigen::Isometry3d::Identity()}},
              StepComponent{"M8 bolt", MakeCylinder(4, 40), {Eigen::Isometry3d(Eigen::Translation3d(50, 0, 0))}},
              StepComponent{"base plate", MakeBox(100, 80, 5), {Eigen::Isometry3d(Eigen::Translation3d(0, 0, -5))}}});
-  RunSpec spec = SmallDefault();
-  spec.sources = {PartSource{.kind = PartSource::Kind::kFile, .path = dir / "kit.step"}};
+  RunSpec spec = OneScene({PartSource{.kind = PartSource::Kind::kFile, .path = dir / "kit.step"}});
   spec.class_groups = {{"bolt", {"*bolt"}}};
   GenerateOptions options;
   options.output = dir / "grouped";
@@ -183,6 +241,7 @@ TEST(Generate, As1RecipeShowsEveryPart) {
   const GenerateSummary summary = Generate(spec, options);
   EXPECT_EQ(summary.objects, 5u);
   EXPECT_EQ(summary.instances, 18u);
+  EXPECT_EQ(summary.scenes, 1u);
   std::ifstream gt_in(dir / "as1" / "train" / "000000" / "scene_gt.json");
   std::ifstream info_in(dir / "as1" / "train" / "000000" / "scene_gt_info.json");
   const json gt = json::parse(gt_in), info = json::parse(info_in);

@@ -92,8 +92,8 @@ TEST(Cli, GenerateWithoutArgumentsWritesTheDefaultDataset) {
   ScratchDir dir;
   const CliRun run = Cadsynth("generate --quiet", dir);
   ASSERT_EQ(run.code, 0) << run.err;
-  EXPECT_NE(run.out.find("wrote 144 frames of 3 objects"), std::string::npos) << run.out;
-  EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000000" / "scene_gt.json"));
+  EXPECT_NE(run.out.find("wrote 432 frames (3 scenes) of 13 objects"), std::string::npos) << run.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000002" / "scene_gt.json"));
   EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000000" / "rgb" / "000143.png"));
   const CliRun again = Cadsynth("generate --quiet", dir);
   EXPECT_EQ(again.code, 1);

@@ -1,0 +1,345 @@
+#include "variants/families.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "cad/error.h"
+#include "cad/mesh_analysis.h"
+#include "variants/gear.h"
+#include "variants/standard_parts.h"
+
+namespace cadsynth {
+namespace {
+
+using Kind = FamilyParam::Kind;
+constexpr double kDeg = M_PI / 180.0;
+
+FamilyParam Length(const char* name, double mm, const char* help) { return {name, Kind::kLength, mm, "", help}; }
+FamilyParam Angle(const char* name, double deg, const char* help) { return {name, Kind::kAngle, deg * kDeg, "", help}; }
+FamilyParam Count(const char* name, int n, const char* help) { return {name, Kind::kCount, double(n), "", help}; }
+FamilyParam Number(const char* name, double x, const char* help) { return {name, Kind::kNumber, x, "", help}; }
+FamilyParam Text(const char* name, const char* text, const char* help) { return {name, Kind::kText, 0.0, text, help}; }
+
+std::vector<FamilyParam> GearParams(int teeth) {
+  return {Count("teeth", teeth, "number of teeth"),
+          Length("module", 2.0, "normal module"),
+          Length("face_width", 10.0, "tooth width along the axis"),
+          Angle("pressure_angle", 20.0, "normal pressure angle"),
+          Number("profile_shift", 0.0, "profile shift in modules"),
+          Length("backlash", 0.0, "tooth thinning at the pitch circle"),
+          Number("root_fillet", 0.38, "root fillet radius in modules"),
+          Angle("helix_angle", 0.0, "0 for spur; positive right hand")};
+}
+
+size_t Edit(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+double Num(const ParamValues& v, const char* name) { return std::get<double>(v.at(name)); }
+int Int(const ParamValues& v, const char* name) { return static_cast<int>(std::lround(Num(v, name))); }
+const std::string& Str(const ParamValues& v, const char* name) { return std::get<std::string>(v.at(name)); }
+
+GearOptions GearFrom(const ParamValues& v, const std::string& suffix = "") {
+  GearOptions g;
+  g.teeth = Int(v, ("teeth" + suffix).c_str());
+  g.module_mm = Num(v, "module");
+  g.face_width_mm = Num(v, "face_width");
+  g.pressure_angle_rad = Num(v, "pressure_angle");
+  g.profile_shift = Num(v, ("profile_shift" + suffix).c_str());
+  g.backlash_mm = Num(v, "backlash");
+  g.helix_angle_rad = Num(v, "helix_angle");
+  return g;
+}
+
+ShapeAssembly Single(const std::string& name, ShapeAssembly::Component component) {
+  ShapeAssembly a;
+  a.name = name;
+  a.placements = {{0, component.name, Eigen::Isometry3d::Identity()}};
+  a.components = {std::move(component)};
+  return a;
+}
+
+std::vector<std::pair<double, double>> ParseSections(const std::string& text) {
+  // "20x10, 30x40, 20x10": diameter x length in mm.
+  std::vector<std::pair<double, double>> sections;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    double d = 0, l = 0;
+    char x = 0;
+    std::stringstream one(item);
+    if (!(one >> d >> x >> l) || (x != 'x' && x != 'X')) {
+      throw Error("sections: expected diameter x length pairs such as '20x10, 30x40', got '" + item + "'");
+    }
+    sections.emplace_back(d, l);
+  }
+  return sections;
+}
+
+}  // namespace
+
+const FamilyParam* FamilyInfo::Find(const std::string& param) const {
+  for (const FamilyParam& p : params) {
+    if (p.name == param) return &p;
+  }
+  return nullptr;
+}
+
+const std::vector<FamilyInfo>& Families() {
+  static const std::vector<FamilyInfo> families = [] {
+    std::vector<FamilyInfo> f;
+    std::vector<FamilyParam> spur = GearParams(20);
+    spur.push_back(Length("bore", 0.0, "centre hole diameter (0: none)"));
+    spur.push_back(Length("hub_diameter", 0.0, "hub below the gear (0: none)"));
+    spur.push_back(Length("hub_length", 0.0, "hub length"));
+    f.push_back({"spur_gear", "an involute spur or helical gear", spur});
+    std::vector<FamilyParam> ring = GearParams(60);
+    ring.push_back(Length("rim_width", 0.0, "ring wall beyond the root circle (0: 2.5 modules)"));
+    f.push_back({"ring_gear", "an internal (ring) gear", ring});
+    f.push_back({"gear_pair", "two external gears in mesh at the working centre distance",
+                 {Count("teeth_1", 14, "teeth of the first gear"), Count("teeth_2", 28, "teeth of the second gear"),
+                  Length("module", 2.0, "normal module"), Length("face_width", 10.0, "tooth width"),
+                  Angle("pressure_angle", 20.0, "normal pressure angle"),
+                  Number("profile_shift_1", 0.0, "profile shift of the first gear"),
+                  Number("profile_shift_2", 0.0, "profile shift of the second gear"),
+                  Length("backlash", 0.05, "tooth thinning per gear"), Angle("helix_angle", 0.0, "first gear's helix (the second is opposite)"),
+                  Length("bore", 6.0, "bore of both gears")}});
+    f.push_back({"planetary", "sun, planets, ring (z_ring = z_sun + 2 z_planet) and carrier",
+                 {Count("sun_teeth", 18, "sun teeth"), Count("planet_teeth", 18, "planet teeth"),
+                  Count("planets", 3, "number of planets"), Length("module", 1.5, "module"),
+                  Length("face_width", 10.0, "tooth width"), Length("backlash", 0.05, "tooth thinning per gear"),
+                  Length("pin_diameter", 6.0, "carrier pins"), Length("carrier_thickness", 4.0, "carrier plate"),
+                  Length("sun_bore", 6.0, "sun bore")}});
+    f.push_back({"slider_crank", "base, crank, connecting rod and slider at a crank angle",
+                 {Length("crank", 40.0, "crank radius"), Length("rod", 120.0, "connecting rod length"),
+                  Angle("crank_angle", 35.0, "crank angle"), Length("link_width", 16.0, "link width"),
+                  Length("link_thickness", 6.0, "link thickness"), Length("pin_diameter", 6.0, "pin holes"),
+                  Length("slider", 30.0, "slider block length")}});
+    f.push_back({"round_peg", "a cylinder", {Length("diameter", 20.0, "diameter"), Length("length", 50.0, "length")}});
+    f.push_back({"square_peg", "a square prism", {Length("side", 20.0, "side"), Length("length", 50.0, "length")}});
+    f.push_back({"faceplate", "a plate with a grid of holes",
+                 {Length("width", 120.0, "x size"), Length("height", 80.0, "y size"), Length("thickness", 8.0, "z size"),
+                  Count("rows", 2, "hole rows"), Count("columns", 3, "hole columns"),
+                  Length("hole_diameter", 10.0, "hole diameter"), Length("margin", 15.0, "edge to outer hole centres")}});
+    f.push_back({"stepped_shaft", "cylinders one after another",
+                 {Text("sections", "16x20, 24x50, 16x20", "diameter x length pairs, mm")}});
+    f.push_back({"shoulder_bolt", "ISO 7379 shoulder bolt",
+                 {Length("shoulder_diameter", 10.0, "6, 8, 10, 12, 16 or 20 mm"), Length("shoulder_length", 30.0, "shoulder length")}});
+    f.push_back({"hex_bolt", "ISO 4017 hex bolt (thread as a plain shank)",
+                 {Text("size", "M8", "M3 to M24"), Length("length", 30.0, "length under the head")}});
+    f.push_back({"hex_nut", "ISO 4032 hex nut", {Text("size", "M8", "M3 to M24")}});
+    f.push_back({"washer", "ISO 7089 plain washer", {Text("size", "M8", "M3 to M24")}});
+    f.push_back({"ball_bearing", "deep-groove ball bearing",
+                 {Length("bore", 20.0, "bore"), Length("outer_diameter", 47.0, "outer diameter"), Length("width", 14.0, "width")}});
+    f.push_back({"scaled", "any CAD or mesh file, scaled",
+                 {Text("file", "", "the file (relative to the recipe)"), Number("scale", 1.0, "uniform scale"),
+                  Number("scale_x", 1.0, "extra scale along x"), Number("scale_y", 1.0, "extra scale along y"),
+                  Number("scale_z", 1.0, "extra scale along z"), Text("unit", "", "the file's unit (see parts.unit)")}});
+    return f;
+  }();
+  return families;
+}
+
+const FamilyInfo* FindFamily(const std::string& name) {
+  for (const FamilyInfo& f : Families()) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+ParamValues CompleteParams(const FamilyInfo& family, const ParamValues& values) {
+  ParamValues out;
+  for (const FamilyParam& p : family.params) {
+    out[p.name] = p.kind == Kind::kText ? ParamValue(p.default_text) : ParamValue(p.default_number);
+  }
+  for (const auto& [name, value] : values) {
+    const FamilyParam* p = family.Find(name);
+    if (p == nullptr) {
+      std::string best;
+      size_t best_distance = 3;
+      for (const FamilyParam& q : family.params) {
+        if (Edit(name, q.name) < best_distance) best_distance = Edit(name, q.name), best = q.name;
+      }
+      throw Error("family '" + family.name + "' has no parameter '" + name + "'" +
+                  (best.empty() ? "" : " (did you mean '" + best + "'?)"));
+    }
+    const bool text = std::holds_alternative<std::string>(value);
+    if (text != (p->kind == Kind::kText)) {
+      throw Error(family.name + "." + name + ": expected " + (text ? "a number" : "a text"));
+    }
+    if (p->kind == Kind::kCount && std::get<double>(value) != std::floor(std::get<double>(value))) {
+      throw Error(family.name + "." + name + ": expected a whole number");
+    }
+    out[name] = value;
+  }
+  return out;
+}
+
+ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& v) {
+  const std::string& f = family.name;
+  try {
+    if (f == "spur_gear" || f == "ring_gear") {
+      GearOptions g = GearFrom(v);
+      g.internal = f == "ring_gear";
+      if (g.internal) {
+        g.rim_width_mm = Num(v, "rim_width");
+      } else {
+        g.bore_diameter_mm = Num(v, "bore");
+        g.hub_diameter_mm = Num(v, "hub_diameter");
+        g.hub_length_mm = Num(v, "hub_length");
+      }
+      return Single(f, {f + "_z" + std::to_string(g.teeth), MakeGear(g), GearSymmetries(g)});
+    }
+    if (f == "gear_pair") {
+      GearPairOptions o;
+      o.first = GearFrom(v, "_1");
+      o.second = GearFrom(v, "_2");
+      o.second.helix_angle_rad = -o.first.helix_angle_rad;
+      o.first.bore_diameter_mm = o.second.bore_diameter_mm = Num(v, "bore");
+      return MakeGearPair(o);
+    }
+    if (f == "planetary") {
+      PlanetaryOptions o;
+      o.sun_teeth = Int(v, "sun_teeth");
+      o.planet_teeth = Int(v, "planet_teeth");
+      o.planets = Int(v, "planets");
+      o.module_mm = Num(v, "module");
+      o.face_width_mm = Num(v, "face_width");
+      o.backlash_mm = Num(v, "backlash");
+      o.pin_diameter_mm = Num(v, "pin_diameter");
+      o.carrier_thickness_mm = Num(v, "carrier_thickness");
+      o.sun_bore_mm = Num(v, "sun_bore");
+      return MakePlanetary(o);
+    }
+    if (f == "slider_crank") {
+      SliderCrankOptions o;
+      o.crank_mm = Num(v, "crank");
+      o.rod_mm = Num(v, "rod");
+      o.crank_angle_rad = Num(v, "crank_angle");
+      o.link_width_mm = Num(v, "link_width");
+      o.link_thickness_mm = Num(v, "link_thickness");
+      o.pin_diameter_mm = Num(v, "pin_diameter");
+      o.slider_mm = Num(v, "slider");
+      return MakeSliderCrank(o);
+    }
+    if (f == "round_peg") return Single(f, MakeRoundPeg(Num(v, "diameter"), Num(v, "length")));
+    if (f == "square_peg") return Single(f, MakeSquarePeg(Num(v, "side"), Num(v, "length")));
+    if (f == "faceplate") {
+      return Single(f, MakeFaceplate(Num(v, "width"), Num(v, "height"), Num(v, "thickness"), Int(v, "rows"),
+                                     Int(v, "columns"), Num(v, "hole_diameter"), Num(v, "margin")));
+    }
+    if (f == "stepped_shaft") return Single(f, MakeSteppedShaft(ParseSections(Str(v, "sections"))));
+    if (f == "shoulder_bolt") return Single(f, MakeShoulderBolt(Num(v, "shoulder_diameter"), Num(v, "shoulder_length")));
+    if (f == "hex_bolt") return Single(f, MakeHexBolt(Str(v, "size"), Num(v, "length")));
+    if (f == "hex_nut") return Single(f, MakeHexNut(Str(v, "size")));
+    if (f == "washer") return Single(f, MakeWasher(Str(v, "size")));
+    if (f == "ball_bearing") return Single(f, MakeBallBearing(Num(v, "bore"), Num(v, "outer_diameter"), Num(v, "width")));
+  } catch (const Error& e) {
+    throw Error(f + ": " + e.what());
+  }
+  throw Error("family '" + f + "' is not parametric (it scales a file)");
+}
+
+Assembly BuildVariant(const FamilyInfo& family, const ParamValues& v, const ImportOptions& options) {
+  if (family.name != "scaled") {
+    Assembly a = TessellateAssembly(BuildVariantShapes(family, v), options.tessellation);
+    return a;
+  }
+  if (Str(v, "file").empty()) throw Error("scaled: give the file to scale");
+  ImportOptions import = options;
+  import.unit = Str(v, "unit");
+  const Assembly source = ImportCad(Str(v, "file"), import);
+  const double s = Num(v, "scale");
+  const Eigen::Vector3d factors(s * Num(v, "scale_x"), s * Num(v, "scale_y"), s * Num(v, "scale_z"));
+  if (!(factors.minCoeff() > 0)) throw Error("scaled: scale factors must be positive");
+  return ScaleVariant(source, factors, options.tessellation);
+}
+
+double UniformDraw(uint64_t seed, uint64_t stream, uint64_t index) {
+  // SplitMix64 over a mix of the three inputs.
+  uint64_t x = seed * 0x9E3779B97F4A7C15ull ^ (stream + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
+               (index + 0x85EBCA77C2B2AE63ull) * 0x94D049BB133111EBull;
+  for (int round = 0; round < 2; ++round) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    x ^= x >> 31;
+  }
+  return static_cast<double>(x >> 11) * 0x1.0p-53;
+}
+
+Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& f, const TessellationOptions& options) {
+  const bool uniform = f.x() == f.y() && f.y() == f.z();
+  Assembly out;
+  out.name = assembly.name;
+  out.format = assembly.format;
+  out.length_unit = assembly.length_unit;
+  const auto scaled_part = [&](const Part& part, const Eigen::Isometry3d& root_from_cad, const std::string& name) {
+    // The part's geometry in the root frame, scaled there.
+    if (!part.brep.IsNull()) {
+      Part p = MakePart(name, Scaled(Transformed(part.brep, root_from_cad), f), options);
+      p.color = part.color;
+      return p;
+    }
+    Part p;
+    p.name = name;
+    p.color = part.color;
+    p.mesh = part.mesh;
+    p.mesh.Transform(root_from_cad * part.cad_from_model);
+    const Eigen::Vector3f ff = f.cast<float>();
+    for (Eigen::Vector3f& v : p.mesh.positions) v = v.cwiseProduct(ff);
+    for (Eigen::Vector3f& n : p.mesh.normals) n = n.cwiseQuotient(ff).normalized();  // inverse transpose
+    const Eigen::Vector3d centre = p.mesh.Bounds().center();
+    p.cad_from_model = Eigen::Translation3d(centre);
+    p.mesh.Transform(p.cad_from_model.inverse());
+    p.watertight = AnalyzeTopology(p.mesh).watertight();
+    if (p.watertight) p.mass = ComputeMeshMassProperties(p.mesh);
+    return p;
+  };
+  if (uniform) {
+    for (const Part& part : assembly.parts) {
+      Part p = scaled_part(part, Eigen::Isometry3d::Identity(), part.name);
+      const double s = f.x();
+      // Symmetries survive a uniform scale (about the scaled model origin).
+      p.symmetries = part.symmetries;
+      for (Eigen::Isometry3d& t : p.symmetries.discrete) t.translation() *= s;
+      for (Symmetries::Axis& a : p.symmetries.continuous) a.offset *= s;
+      out.parts.push_back(std::move(p));
+    }
+    for (const Instance& i : assembly.instances) {
+      Instance j = i;
+      // world_from_model = [R, t]: R stays, t scales; the new model frame is the scaled CAD frame
+      // moved to its own box centre.
+      const Part& old_part = assembly.parts[i.part];
+      const Eigen::Isometry3d root_from_cad = i.world_from_model * old_part.cad_from_model.inverse();
+      Eigen::Isometry3d scaled_root_from_cad = root_from_cad;
+      scaled_root_from_cad.translation() *= f.x();
+      j.world_from_model = scaled_root_from_cad * out.parts[i.part].cad_from_model;
+      out.instances.push_back(std::move(j));
+    }
+    return out;
+  }
+  for (const Instance& i : assembly.instances) {
+    const Part& part = assembly.parts[i.part];
+    const Eigen::Isometry3d root_from_cad = i.world_from_model * part.cad_from_model.inverse();
+    out.parts.push_back(scaled_part(part, root_from_cad, part.name));
+    Instance j = i;
+    j.part = static_cast<int>(out.parts.size()) - 1;
+    j.world_from_model = out.parts.back().cad_from_model;  // the geometry is in the root frame
+    out.instances.push_back(std::move(j));
+  }
+  return out;
+}
+
+}  // namespace cadsynth

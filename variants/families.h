@@ -1,0 +1,62 @@
+// Parametric part families: every size of a bolt, every tooth count of a gear, any file scaled.
+// A family has named, typed parameters with defaults; a variant is one choice of values.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "cad/import.h"
+#include "cad/part.h"
+#include "variants/mechanisms.h"
+
+namespace cadsynth {
+
+struct FamilyParam {
+  enum class Kind { kLength, kAngle, kCount, kNumber, kText };
+  std::string name;
+  Kind kind = Kind::kNumber;
+  double default_number = 0.0;  // lengths in mm, angles in radians
+  std::string default_text;
+  std::string help;
+};
+
+struct FamilyInfo {
+  std::string name;
+  std::string help;
+  std::vector<FamilyParam> params;
+  const FamilyParam* Find(const std::string& param) const;
+};
+
+// Every family cadsynth knows, in a fixed order.
+const std::vector<FamilyInfo>& Families();
+const FamilyInfo* FindFamily(const std::string& name);
+
+// One value: a number (mm, radians, count) or a text (an ISO size, a file path, shaft sections).
+using ParamValue = std::variant<double, std::string>;
+using ParamValues = std::map<std::string, ParamValue>;  // sorted by name: stable output
+
+// The family's defaults overlaid with `values`. Throws Error for an unknown parameter (with the
+// nearest known one) or a value of the wrong kind.
+ParamValues CompleteParams(const FamilyInfo& family, const ParamValues& values);
+
+// Builds one variant as parts with instances, tessellated. `values` must be complete
+// (CompleteParams). Throws Error with the reason for impossible values.
+Assembly BuildVariant(const FamilyInfo& family, const ParamValues& values, const ImportOptions& options);
+
+// The B-rep parts and placements of a parametric variant (not 'scaled'), e.g. for STEP export.
+ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& values);
+
+// A portable, seeded source of uniform numbers in [0, 1): the same on every machine and
+// compiler (std:: distributions are not), from (seed, stream, index).
+double UniformDraw(uint64_t seed, uint64_t stream, uint64_t index);
+
+// Every length of `assembly` scaled by (sx, sy, sz) in its root frame. Uniform scales keep
+// instances; otherwise each instance becomes a part of its own (a turned part scales
+// differently). B-rep parts are scaled exactly and tessellated anew; mesh parts are scaled as
+// meshes.
+Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& scale, const TessellationOptions& options);
+
+}  // namespace cadsynth

@@ -189,8 +189,10 @@ void WriteStep(const std::filesystem::path& path, const std::string& assembly_na
         XCAFDoc_DocumentTool::ColorTool(document.doc->Main())
             ->SetColor(part, Quantity_Color(c.x(), c.y(), c.z(), Quantity_TOC_sRGB), XCAFDoc_ColorSurf);
       }
-      for (const Eigen::Isometry3d& placement : component.placements) {
-        tool->AddComponent(root, part, TopLoc_Location(ToTrsf(placement)));
+      for (size_t k = 0; k < component.placements.size(); ++k) {
+        const TDF_Label placed = tool->AddComponent(root, part, TopLoc_Location(ToTrsf(component.placements[k])));
+        const std::string name = component.name + "_" + std::to_string(k + 1);
+        TDataStd_Name::Set(placed, TCollection_ExtendedString(name.c_str(), true));
       }
     }
     tool->UpdateAssemblies();

@@ -14,6 +14,7 @@
 
 #include "cad/error.h"
 #include "recipes/recipe.h"
+#include "tools/export.h"
 #include "tools/generate.h"
 #include "tools/inspect.h"
 
@@ -24,6 +25,7 @@ constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data
 usage:
   cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--quiet]
   cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
+  cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
   cadsynth --help | --version
 
 generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
@@ -40,6 +42,9 @@ inspect    Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb
   --unit UNIT      the unit the file's numbers are really in (overrides the file; meshes: mm)
   --encoding CP    STEP names written as raw bytes of a code page: cp1251, cp1252, sjis, ...
   --deflection MM  tessellation tolerance (default 0.1 mm)
+
+variants   Lists every variant of the recipe's part families (id and parameters, as in
+           variants.json); with --export-step writes each as DIR/<id>.step (exact B-rep, mm).
 )";
 
 struct UsageError {
@@ -149,6 +154,35 @@ int RunInspect(const std::vector<std::string>& args) {
   return 0;
 }
 
+int RunVariants(const std::vector<std::string>& args) {
+  std::optional<std::string> recipe, dir;
+  bool overwrite = false;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--export-step") {
+      if (i + 1 >= args.size()) throw UsageError{"--export-step needs a folder"};
+      dir = args[++i];
+    } else if (a == "--overwrite") {
+      overwrite = true;
+    } else if (!a.empty() && a[0] == '-') {
+      throw UsageError{"unknown option '" + a + "'"};
+    } else if (recipe) {
+      throw UsageError{"one recipe at a time"};
+    } else {
+      recipe = a;
+    }
+  }
+  const cadsynth::RunSpec spec = recipe ? cadsynth::LoadRecipe(*recipe) : cadsynth::DefaultRunSpec();
+  if (!dir) {
+    for (const cadsynth::VariantListing& v : cadsynth::ListVariants(spec)) std::cout << v.id << "  " << v.params << "\n";
+    return 0;
+  }
+  const auto written = cadsynth::ExportVariants(spec, *dir, overwrite);
+  for (const cadsynth::VariantListing& v : written) std::cout << v.step.string() << "  " << v.params << "\n";
+  std::cout << "wrote " << written.size() << " STEP files\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -164,6 +198,7 @@ int main(int argc, char** argv) {
     }
     if (args[0] == "generate") return RunGenerate({args.begin() + 1, args.end()});
     if (args[0] == "inspect") return RunInspect({args.begin() + 1, args.end()});
+    if (args[0] == "variants") return RunVariants({args.begin() + 1, args.end()});
     throw UsageError{"unknown command '" + args[0] + "'"};
   } catch (const UsageError& e) {
     std::cerr << "error: " << e.what << "\n(run 'cadsynth --help' for usage)\n";

@@ -77,6 +77,70 @@ classes:
   EXPECT_EQ(ErrorOf("classes: {group: {}}\n"), "r.yaml:1:11: unknown key 'classes.group' (did you mean 'groups'?)");
 }
 
+double Num(const ParamValues& v, const char* name) { return std::get<double>(v.at(name)); }
+
+TEST(Recipe, FamilyGridExpandsInTheFamilysParameterOrder) {
+  const RunSpec spec = ParseRecipe(R"(
+parts:
+  - family: spur_gear
+    params: {face_width: 1 cm, bore: 5}
+    grid: {module: [1, 2], teeth: {from: 12, to: 13, step: 1}}
+    class: family
+)", "r.yaml", ".");
+  const PartSource& s = spec.scenes.at(0).sources.at(0);
+  EXPECT_EQ(s.family, "spur_gear");
+  EXPECT_TRUE(s.one_class);
+  ASSERT_EQ(s.variants.size(), 4u);  // teeth comes before module in the family: teeth varies slowest
+  EXPECT_EQ(Num(s.variants[0], "teeth"), 12);
+  EXPECT_EQ(Num(s.variants[0], "module"), 1);
+  EXPECT_EQ(Num(s.variants[1], "module"), 2);
+  EXPECT_EQ(Num(s.variants[2], "teeth"), 13);
+  EXPECT_EQ(Num(s.variants[3], "face_width"), 10);
+  EXPECT_EQ(Num(s.variants[3], "bore"), 5);
+  EXPECT_EQ(Num(s.variants[3], "pressure_angle"), 20 * M_PI / 180);  // default filled in
+  const RunSpec full = ParseRecipe("parts: [{family: spur_gear, grid: {teeth: {from: 12, to: 40, step: 1}}}]\n", "r", ".");
+  EXPECT_EQ(full.scenes[0].sources[0].variants.size(), 29u);
+}
+
+TEST(Recipe, SeededRandomFamilyIsTheSameEveryTime) {
+  const auto parse = [](int seed) {
+    return ParseRecipe("parts:\n  - family: spur_gear\n    random: {count: 6, seed: " + std::to_string(seed) +
+                           ", params: {teeth: {from: 12, to: 40}, module: [1.5, 2], helix_angle: {from: 0, to: 30}}}\n",
+                       "r.yaml", ".")
+        .scenes[0]
+        .sources[0]
+        .variants;
+  };
+  const auto a = parse(3), b = parse(3), c = parse(4);
+  ASSERT_EQ(a.size(), 6u);
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+  for (const ParamValues& v : a) {
+    const double teeth = Num(v, "teeth");
+    EXPECT_EQ(teeth, std::floor(teeth));
+    EXPECT_GE(teeth, 12);
+    EXPECT_LE(teeth, 40);
+    EXPECT_TRUE(Num(v, "module") == 1.5 || Num(v, "module") == 2.0);
+    EXPECT_LE(Num(v, "helix_angle"), 30 * M_PI / 180);
+  }
+}
+
+TEST(Recipe, FamilyErrorsPointAtTheKey) {
+  EXPECT_EQ(ErrorOf("parts: [{family: spur_gear, params: {teth: 12}}]\n"),
+            "r.yaml:1:38: parts[0].params: family 'spur_gear' has no parameter 'teth' (did you mean 'teeth'?)");
+  EXPECT_EQ(ErrorOf("parts: [{family: spur_gear, grid: {module: 2 parsec}}]\n"),
+            "r.yaml:1:44: parts[0].grid.module: unknown length unit 'parsec' (use um, mm, cm, m, in or ft)");
+  EXPECT_EQ(ErrorOf("parts: [{family: spur_gear, params: {teeth: 12.5}}]\n"),
+            "r.yaml:1:45: parts[0].params.teeth: expected a whole number, got '12.5'");
+  EXPECT_NE(ErrorOf("parts: [{family: sprocket}]\n").find("r.yaml:1:18: parts[0].family: unknown family 'sprocket' (known: spur_gear,"),
+            std::string::npos);
+  EXPECT_EQ(ErrorOf("parts: [{family: washer, grid: {size: [M6]}, random: {count: 2, params: {size: [M8]}}}]\n"),
+            "r.yaml:1:9: parts[0]: give 'grid' or 'random', not both");
+  EXPECT_EQ(ErrorOf("parts: [{family: washer, class: each}]\n"),
+            "r.yaml:1:33: parts[0].class: expected 'variant' or 'family', got 'each'");
+  EXPECT_EQ(ErrorOf("scenes: [{name: a}]\n"), "r.yaml:1:10: scenes[0]: a scene needs 'parts'");
+}
+
 TEST(Recipe, ErrorsPointAtLineAndColumn) {
   EXPECT_EQ(ErrorOf("camera:\n  preset: kinect_v1\n  fxx: 500\n"),
             "r.yaml:3:3: unknown key 'camera.fxx' (did you mean 'fx'?)");

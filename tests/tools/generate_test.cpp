@@ -116,6 +116,18 @@ TEST(Generate, GridAndRandomFamiliesGenerateTwiceIdentically) {
   std::vector<ParamValues> grid;
   for (int z = 12; z <= 40; ++z) grid.push_back({{"teeth", double(z)}, {"module", 1.5}, {"bore", 6.0}});
   RunSpec spec = OneScene({Family("spur_gear", grid, /*one_class=*/true)}, Layout::kGrid);
+  // And a second scene of seeded random helical gears and bolts, from recipe text.
+  const RunSpec random = ParseRecipe(R"(
+scenes:
+  - name: random
+    layout: grid
+    parts:
+      - family: spur_gear
+        random: {count: 5, seed: 11, params: {teeth: {from: 15, to: 30}, helix_angle: {from: 10, to: 20}}}
+      - family: hex_bolt
+        random: {count: 3, seed: 11, params: {size: [M6, M8, M12], length: {from: 20 mm, to: 50 mm}}}
+)", "r.yaml", ".");
+  spec.scenes.push_back(random.scenes.at(0));
   spec.sweep.yaw_rad = {0.5};
   spec.sweep.radius_mm = {1400.0};
   const auto run = [&](const RunSpec& s, const std::string& name) {
@@ -127,11 +139,13 @@ TEST(Generate, GridAndRandomFamiliesGenerateTwiceIdentically) {
   const auto first = run(spec, "grid_a"), second = run(spec, "grid_b");
   ASSERT_EQ(first.size(), second.size());
   for (const auto& [name, bytes] : first) EXPECT_TRUE(second.at(name) == bytes) << name;
+  EXPECT_TRUE(first.count("train/000001/rgb/000000.png"));
   const json variants = json::parse(first.at("variants.json"))["variants"];
-  ASSERT_EQ(variants.size(), 29u);
+  ASSERT_EQ(variants.size(), 29u + 5u + 3u);
   EXPECT_EQ(variants[28]["params"]["teeth"], 40.0);
+  EXPECT_EQ(variants[29]["id"], "random/0/spur_gear/0");
   const json cad = json::parse(first.at("models/models_cad.json"));
-  EXPECT_EQ(cad.size(), 29u);                      // 29 objects ...
+  EXPECT_GE(cad.size(), 29u + 5u + 1u);            // 29 objects (and the random ones) ...
   EXPECT_EQ(cad["29"]["class_name"], "spur_gear");  // ... of one class
   EXPECT_EQ(cad["1"]["class_id"], cad["29"]["class_id"]);
   const json info = json::parse(first.at("models/models_info.json"));

@@ -1,0 +1,99 @@
+#include "variants/stable_pose.h"
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "cad/shape.h"
+
+namespace cadsynth {
+namespace {
+
+std::vector<Eigen::Vector3d> Points(const Mesh& mesh) {
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& p : mesh.positions) points.push_back(p.cast<double>());
+  return points;
+}
+
+double Sum(const std::vector<StablePose>& poses) {
+  double total = 0;
+  for (const StablePose& p : poses) total += p.probability;
+  return total;
+}
+
+TEST(StablePoses, CubeRestsOnAnyFaceWithEqualOdds) {
+  const Mesh cube = Tessellate(MakeBox(30, 30, 30), TessellationOptions{});
+  const auto poses = StablePoses(Points(cube), Eigen::Vector3d(15, 15, 15));
+  ASSERT_EQ(poses.size(), 6u);
+  for (const StablePose& p : poses) {
+    EXPECT_NEAR(p.probability, 1.0 / 6.0, 1e-9);
+    EXPECT_NEAR(p.height, 15.0, 1e-9);
+  }
+}
+
+TEST(StablePoses, CylinderCapsAndSideAsWorkedByHand) {
+  // r = 10, h = 20: each cap subtends 2 pi (1 - 10 / sqrt(10^2 + 10^2)) = 2 pi (1 - 0.7071) sr at
+  // the centre: probability 0.1464 each; the side takes the remaining 0.7071.
+  const Mesh cylinder = Tessellate(MakeCylinder(10, 20), TessellationOptions{0.005, 0.05});
+  const auto poses = StablePoses(Points(cylinder), Eigen::Vector3d(0, 0, 10));
+  EXPECT_NEAR(Sum(poses), 1.0, 1e-9);
+  double caps = 0, side = 0;
+  for (const StablePose& p : poses) {
+    if (std::abs(p.normal.z()) > 0.999) {
+      caps += p.probability;
+      EXPECT_NEAR(p.probability, 0.5 * (1 - 1 / std::sqrt(2.0)), 1e-3);
+      EXPECT_NEAR(p.height, 10.0, 1e-6);
+    } else {
+      side += p.probability;
+      EXPECT_NEAR(p.height, 10.0, 0.01);  // the hull's flats lie inside the circle by the sagitta
+    }
+  }
+  EXPECT_NEAR(caps, 1 - 1 / std::sqrt(2.0), 2e-3);
+  EXPECT_NEAR(side, 1 / std::sqrt(2.0), 2e-3);
+}
+
+TEST(StablePoses, FlatPlateLiesFlatMostOften) {
+  // 100 x 60 x 10 plate: a big face is a 100 x 60 rectangle 5 mm from the centre, subtending
+  // 4 asin(a b / sqrt((a^2 + 4 d^2)(b^2 + 4 d^2))) sr.
+  const double a = 100, b = 60, d = 5;
+  const double omega = 4 * std::asin(a * b / std::sqrt((a * a + 4 * d * d) * (b * b + 4 * d * d)));
+  const Mesh plate = Tessellate(MakeBox(a, b, 10), TessellationOptions{});
+  const auto poses = StablePoses(Points(plate), Eigen::Vector3d(50, 30, 5));
+  ASSERT_EQ(poses.size(), 6u);
+  EXPECT_NEAR(poses[0].probability, omega / (4 * M_PI), 1e-9);
+  EXPECT_NEAR(poses[1].probability, omega / (4 * M_PI), 1e-9);
+  EXPECT_NEAR(std::abs(poses[0].normal.z()), 1.0, 1e-12);  // most stable: lying flat
+  EXPECT_GT(poses[0].probability, 0.35);
+  EXPECT_NEAR(Sum(poses), 1.0, 1e-9);
+  // Resting on its most stable face: the face is on the floor and the centre of mass 5 mm up.
+  const Eigen::Vector3d com = poses[0].floor_from_body * Eigen::Vector3d(50, 30, 5);
+  EXPECT_NEAR(com.z(), 5.0, 1e-9);
+}
+
+TEST(StablePoses, UnstableFacesTipOntoTheirNeighbours) {
+  // An L of two boxes: the 40 x 10 bar with a 10 x 30 post at one end. Standing on the post's top
+  // face the centre of mass overhangs it, so that face is not a pose and passes its odds on.
+  Mesh l = Tessellate(MakeBox(40, 10, 10), TessellationOptions{});
+  Mesh post = Tessellate(MakeBox(10, 10, 30), TessellationOptions{});
+  l.Append(post);
+  // Centre of mass: bar (4000 mm3 at (20, 5, 5)) and post (3000 mm3 at (5, 5, 15)) minus the
+  // shared cube (1000 mm3 at (5, 5, 5)): (80000 + 15000 - 5000, 30000, 20000 + 45000 - 5000) / 6000.
+  const Eigen::Vector3d com(15.0, 5.0, 10.0);
+  const auto poses = StablePoses(Points(l), com);
+  EXPECT_NEAR(Sum(poses), 1.0, 1e-9);
+  bool on_bar_bottom = false, on_post_side = false;
+  for (const StablePose& p : poses) {
+    EXPECT_FALSE(p.normal.isApprox(Eigen::Vector3d(0, 0, 1), 1e-9)) << "the post top cannot hold it";
+    on_bar_bottom = on_bar_bottom || p.normal.isApprox(Eigen::Vector3d(0, 0, -1), 1e-9);
+    // The post's outer side (x = 0) is 10 x 30 mm; the centre of mass (z = 10) projects inside.
+    on_post_side = on_post_side || p.normal.isApprox(Eigen::Vector3d(-1, 0, 0), 1e-9);
+  }
+  EXPECT_TRUE(on_bar_bottom);
+  EXPECT_TRUE(on_post_side);
+}
+
+TEST(StablePoses, RejectsFlatInput) {
+  EXPECT_THROW(StablePoses({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, Eigen::Vector3d::Zero()), Error);
+}
+
+}  // namespace
+}  // namespace cadsynth

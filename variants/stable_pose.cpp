@@ -1,0 +1,158 @@
+#include "variants/stable_pose.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_3.h>
+
+#include "cad/error.h"
+
+namespace cadsynth {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using HullMesh = CGAL::Surface_mesh<Point>;
+
+Eigen::Vector3d ToEigen(const Point& p) { return {p.x(), p.y(), p.z()}; }
+
+// Solid angle of triangle (a, b, c) seen from the origin (Van Oosterom and Strackee).
+double SolidAngle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const double la = a.norm(), lb = b.norm(), lc = c.norm();
+  const double numerator = a.dot(b.cross(c));
+  const double denominator = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+  return std::abs(2.0 * std::atan2(numerator, denominator));
+}
+
+struct Face {
+  Eigen::Vector3d normal;
+  double offset = 0;  // normal . x = offset on the face plane
+  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
+  std::map<std::pair<int, int>, int> edges;  // boundary edge (vertex ids) -> neighbouring face
+  double solid_angle = 0;
+};
+
+}  // namespace
+
+std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& com) {
+  if (points.size() < 4) throw Error("stable poses: need at least 4 points");
+  std::vector<Point> input;
+  input.reserve(points.size());
+  for (const auto& p : points) input.emplace_back(p.x(), p.y(), p.z());
+  HullMesh hull;
+  CGAL::convex_hull_3(input.begin(), input.end(), hull);
+  if (hull.number_of_faces() < 4) throw Error("stable poses: the points are flat (no volume to rest)");
+
+  // Size of the body, for tolerances.
+  Eigen::AlignedBox3d box;
+  for (const auto& p : points) box.extend(p);
+  const double size = box.diagonal().norm();
+
+  // Group hull triangles into planar faces.
+  std::vector<int> face_of(hull.number_of_faces(), -1);
+  std::vector<Face> faces;
+  std::vector<HullMesh::Face_index> handles(hull.faces().begin(), hull.faces().end());
+  const auto triangle = [&](HullMesh::Face_index f) {
+    std::array<Eigen::Vector3d, 3> t;
+    int k = 0;
+    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull)) t[k++] = ToEigen(hull.point(v));
+    return t;
+  };
+  for (auto f : handles) {
+    const auto t = triangle(f);
+    const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
+    int found = -1;
+    for (size_t i = 0; i < faces.size() && found < 0; ++i) {
+      if (faces[i].normal.dot(n) > 1 - 1e-9 && std::abs(n.dot(t[0]) - faces[i].offset) < 1e-7 * size) found = int(i);
+    }
+    if (found < 0) {
+      found = static_cast<int>(faces.size());
+      faces.push_back(Face{n, n.dot(t[0]), {}, {}, 0});
+    }
+    faces[found].triangles.push_back(t);
+    face_of[f.idx()] = found;
+  }
+  // Boundary edges between different faces, and solid angles seen from the centre of mass.
+  for (auto f : handles) {
+    const int me = face_of[f.idx()];
+    for (auto h : CGAL::halfedges_around_face(hull.halfedge(f), hull)) {
+      const int other = face_of[hull.face(hull.opposite(h)).idx()];
+      if (other == me) continue;
+      faces[me].edges[{int(hull.source(h).idx()), int(hull.target(h).idx())}] = other;
+    }
+    const auto t = triangle(f);
+    faces[me].solid_angle += SolidAngle(t[0] - com, t[1] - com, t[2] - com);
+  }
+
+  // Where the centre of mass projects onto each face's plane, and how far outside the face it lies
+  // (negative inside), with the edge it is furthest beyond.
+  const auto outside = [&](int fi, int* next) {
+    const Face& face = faces[fi];
+    const Eigen::Vector3d p = com - (face.normal.dot(com) - face.offset) * face.normal;
+    double worst = -1e300;
+    *next = -1;
+    for (const auto& [edge, neighbour] : face.edges) {
+      const Eigen::Vector3d a = ToEigen(hull.point(HullMesh::Vertex_index(edge.first)));
+      const Eigen::Vector3d b = ToEigen(hull.point(HullMesh::Vertex_index(edge.second)));
+      // The face lies to the left of a -> b (counter-clockwise about the outward normal).
+      const Eigen::Vector3d out = (b - a).cross(face.normal).normalized();
+      const double d = out.dot(p - a);
+      if (d > worst) worst = d, *next = neighbour;
+    }
+    return worst;
+  };
+  const double tolerance = 1e-9 * size;
+  std::vector<double> probability(faces.size(), 0.0);
+  for (size_t f = 0; f < faces.size(); ++f) {
+    int current = static_cast<int>(f), next = -1;
+    for (size_t step = 0; step <= faces.size(); ++step) {
+      if (outside(current, &next) <= tolerance) break;
+      current = next;
+    }
+    probability[current] += faces[f].solid_angle / (4 * M_PI);
+  }
+
+  std::vector<StablePose> poses;
+  for (size_t f = 0; f < faces.size(); ++f) {
+    if (probability[f] <= 0) continue;
+    int unused;
+    if (outside(static_cast<int>(f), &unused) > tolerance) continue;
+    StablePose pose;
+    pose.normal = faces[f].normal;
+    pose.probability = probability[f];
+    pose.height = faces[f].offset - faces[f].normal.dot(com);
+    const Eigen::Matrix3d r = Eigen::Quaterniond::FromTwoVectors(faces[f].normal, -Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    pose.floor_from_body.linear() = r;
+    pose.floor_from_body.translation() = Eigen::Vector3d(0, 0, faces[f].offset);  // face plane -> z = 0
+    poses.push_back(pose);
+  }
+  std::stable_sort(poses.begin(), poses.end(), [](const StablePose& a, const StablePose& b) {
+    return a.probability > b.probability + 1e-12;
+  });
+  return poses;
+}
+
+std::vector<StablePose> StablePoses(const std::vector<Part>& parts, const std::vector<Instance>& instances) {
+  std::vector<Eigen::Vector3d> points;
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  double weight = 0;
+  for (const Instance& i : instances) {
+    const Part& part = parts.at(i.part);
+    for (const Eigen::Vector3f& p : part.mesh.positions) points.push_back(i.world_from_model * p.cast<double>());
+    if (part.mass.volume_mm3 > 0) {
+      moment += part.mass.volume_mm3 * (i.world_from_model * part.mass.center_of_mass);
+      weight += part.mass.volume_mm3;
+    } else {  // open mesh: its box centre, weighted by area as a thin shell
+      const double area = part.mesh.SurfaceArea();
+      moment += area * (i.world_from_model * part.mesh.Bounds().center());
+      weight += area;
+    }
+  }
+  if (weight <= 0) throw Error("stable poses: the body has no volume or area");
+  return StablePoses(points, moment / weight);
+}
+
+}  // namespace cadsynth

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <system_error>
 
@@ -381,23 +382,33 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node, const
 
 void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, ArrangementOptions* arrangement) {
   if (node["layout"]) {
+    static const std::map<std::string, Layout> layouts = {{"assembled", Layout::kAssembled}, {"single", Layout::kSingle},
+                                                         {"row", Layout::kRow}, {"grid", Layout::kGrid},
+                                                         {"clutter", Layout::kClutter}};
     const std::string layout = r.Scalar(node["layout"], key + ".layout");
-    if (layout == "assembled") {
-      arrangement->layout = Layout::kAssembled;
-    } else if (layout == "row") {
-      arrangement->layout = Layout::kRow;
-    } else if (layout == "grid") {
-      arrangement->layout = Layout::kGrid;
-    } else {
-      r.Fail(node["layout"], key + ".layout", "expected 'assembled', 'row' or 'grid', got '" + layout + "'");
+    const auto it = layouts.find(layout);
+    if (it == layouts.end()) {
+      r.Fail(node["layout"], key + ".layout", "expected assembled, single, row, grid or clutter, got '" + layout + "'");
     }
+    arrangement->layout = it->second;
+  }
+  if (node["pose"]) {
+    static const std::map<std::string, PoseMode> poses = {{"stable", PoseMode::kStable}, {"random", PoseMode::kRandom},
+                                                         {"all", PoseMode::kAll}, {"as_designed", PoseMode::kAsDesigned}};
+    const std::string pose = r.Scalar(node["pose"], key + ".pose");
+    const auto it = poses.find(pose);
+    if (it == poses.end()) r.Fail(node["pose"], key + ".pose", "expected stable, random, all or as_designed, got '" + pose + "'");
+    arrangement->pose = it->second;
   }
   if (node["gap"]) arrangement->gap_mm = r.Length(node["gap"], key + ".gap");
+  if (node["copies"]) arrangement->copies = r.Integer(node["copies"], key + ".copies");
+  if (node["radius"]) arrangement->clutter_radius_mm = r.Length(node["radius"], key + ".radius");
+  if (node["seed"]) arrangement->seed = static_cast<uint64_t>(r.Integer(node["seed"], key + ".seed"));
   r.Check(*arrangement, node, key);
 }
 
 SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::string& key) {
-  r.ExpectMap(node, key, {"name", "parts", "layout", "gap"});
+  r.ExpectMap(node, key, {"name", "parts", "layout", "pose", "gap", "copies", "radius", "seed"});
   if (!node["parts"]) r.Fail(node, key, "a scene needs 'parts'");
   SceneSpec scene;
   scene.name = node["name"] ? r.Scalar(node["name"], key + ".name") : key;
@@ -543,12 +554,12 @@ std::vector<SceneSpec> DemoScenes() {
     source.variants = {CompleteParams(*FindFamily(name), values)};
     return source;
   };
-  SceneSpec planetary{"planetary_gearbox", {family("planetary")}, {Layout::kAssembled, 40.0}};
-  SceneSpec crank{"slider_crank", {family("slider_crank")}, {Layout::kAssembled, 40.0}};
+  SceneSpec planetary{"planetary_gearbox", {family("planetary")}, {.layout = Layout::kAssembled}};
+  SceneSpec crank{"slider_crank", {family("slider_crank")}, {.layout = Layout::kAssembled}};
   SceneSpec benchmark{"assembly_benchmark",
                       {family("round_peg"), family("square_peg"), family("faceplate"), family("stepped_shaft"),
                        family("hex_bolt", {{"size", std::string("M10")}, {"length", 40.0}})},
-                      {Layout::kGrid, 30.0}};
+                      {.layout = Layout::kGrid, .gap_mm = 30.0}};
   return {planetary, crank, benchmark};
 }
 
@@ -585,7 +596,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
       scene.name = "scene";
       scene.sources = ReadParts(r, root["parts"], "parts");
       if (root["scene"]) {
-        r.ExpectMap(root["scene"], "scene", {"layout", "gap"});
+        r.ExpectMap(root["scene"], "scene", {"layout", "pose", "gap", "copies", "radius", "seed"});
         ReadLayout(r, root["scene"], "scene", &scene.arrangement);
       }
       spec.scenes = {scene};

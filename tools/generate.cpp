@@ -238,7 +238,11 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     }
     SceneRun& run = runs[s];
     run.scene = spec.look;
-    run.scene.instances = Arrange(parts, instances, spec.scenes[s].arrangement, groups);
+    try {
+      run.scene.instances = Arrange(parts, instances, spec.scenes[s].arrangement, groups).instances;
+    } catch (const Error& e) {
+      throw Error("scene '" + spec.scenes[s].name + "': " + e.what());
+    }
     run.scene.part_colors.clear();
     for (size_t i = 0; i < parts.size(); ++i) {
       const Eigen::Vector3f palette = PaletteColor(static_cast<int>(i));
@@ -323,7 +327,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   summary.frames = total_frames;
   summary.scenes = runs.size();
   summary.objects = parts.size();
-  summary.instances = all.instances.size();
+  summary.instances = 0;
+  for (const SceneRun& run : runs) summary.instances += run.scene.instances.size();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

@@ -3,82 +3,262 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <sstream>
 
 #include "cad/error.h"
+#include "variants/families.h"
+#include "variants/stable_pose.h"
 
 namespace cadsynth {
 
 bool ArrangementOptions::Check(std::string* why) const {
   if (!(gap_mm >= 0.0)) {
     *why = "gap must not be negative";
-    return false;
+  } else if (copies < 1 || copies > 10000) {
+    *why = "copies must be 1 to 10000";
+  } else if (!(clutter_radius_mm > 0.0)) {
+    *why = "clutter radius must be positive";
+  } else if (layout == Layout::kAssembled && (copies != 1 || pose == PoseMode::kAll)) {
+    *why = "an assembled layout is one body: no copies, and one pose";
+  } else {
+    return true;
   }
-  return true;
+  return false;
 }
 
 namespace {
 
-Eigen::AlignedBox3d InstanceBounds(const std::vector<Part>& parts, const Instance& instance) {
-  return parts.at(instance.part).mesh.Bounds(instance.world_from_model);
+using Polygon = std::vector<Eigen::Vector2d>;
+
+// Convex hull of 2D points, counter-clockwise (monotone chain).
+Polygon ConvexHull2D(std::vector<Eigen::Vector2d> p) {
+  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) { return a.x() != b.x() ? a.x() < b.x() : a.y() < b.y(); });
+  if (p.size() < 3) return p;
+  Polygon hull(2 * p.size());
+  size_t k = 0;
+  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+  };
+  for (size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross(hull[k - 2], hull[k - 1], p[i - 1]) <= 0) --k;
+    hull[k++] = p[i - 1];
+  }
+  hull.resize(k - 1);
+  return hull;
 }
 
-void Shift(const Eigen::Vector3d& shift, Instance* instance) {
-  instance->world_from_model = Eigen::Translation3d(shift) * instance->world_from_model;
+// Separation of two convex polygons along the best axis (negative: they overlap).
+double Separation(const Polygon& a, const Polygon& b) {
+  double best = -1e300;
+  for (const Polygon* poly : {&a, &b}) {
+    for (size_t i = 0; i < poly->size(); ++i) {
+      const Eigen::Vector2d e = (*poly)[(i + 1) % poly->size()] - (*poly)[i];
+      const Eigen::Vector2d n = Eigen::Vector2d(e.y(), -e.x()).normalized();
+      double a_min = 1e300, a_max = -1e300, b_min = 1e300, b_max = -1e300;
+      for (const auto& p : a) a_min = std::min(a_min, n.dot(p)), a_max = std::max(a_max, n.dot(p));
+      for (const auto& p : b) b_min = std::min(b_min, n.dot(p)), b_max = std::max(b_max, n.dot(p));
+      best = std::max(best, std::max(b_min - a_max, a_min - b_max));
+    }
+  }
+  return best;
+}
+
+double Area(const Polygon& p) {
+  double area = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const auto& a = p[i];
+    const auto& b = p[(i + 1) % p.size()];
+    area += a.x() * b.y() - b.x() * a.y();
+  }
+  return 0.5 * area;
+}
+
+struct Body {
+  int group = 0;
+  std::vector<Instance> instances;
+};
+
+Eigen::AlignedBox3d Bounds(const std::vector<Part>& parts, const Body& body) {
+  Eigen::AlignedBox3d box;
+  for (const Instance& i : body.instances) box.extend(parts[i.part].mesh.Bounds(i.world_from_model));
+  return box;
+}
+
+void Apply(const Eigen::Isometry3d& motion, Body* body) {
+  for (Instance& i : body->instances) i.world_from_model = motion * i.world_from_model;
+}
+
+// Rests a body: on its most stable face, a drawn one, or `pose_index`; then yaw about z and lower
+// onto the floor. Returns false when `pose_index` is beyond its stable poses.
+void Rest(const std::vector<Part>& parts, const ArrangementOptions& o, const std::vector<StablePose>& poses,
+          size_t pose_index, double yaw, Body* body) {
+  if (o.pose != PoseMode::kAsDesigned) Apply(poses[pose_index].floor_from_body, body);
+  Apply(Eigen::Isometry3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())), body);
+  const Eigen::AlignedBox3d box = Bounds(parts, *body);
+  Apply(Eigen::Isometry3d(Eigen::Translation3d(-box.center().x(), -box.center().y(), -box.min().z())), body);
 }
 
 }  // namespace
 
-std::vector<Instance> Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                              const ArrangementOptions& options, const std::vector<int>& group) {
+Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                    const ArrangementOptions& o, const std::vector<int>& group) {
   std::string why;
-  if (!options.Check(&why)) throw Error("arrangement: " + why);
+  if (!o.Check(&why)) throw Error("arrangement: " + why);
   if (!group.empty() && group.size() != instances.size()) throw Error("arrangement: one group per instance");
   for (const Instance& instance : instances) {
     if (instance.part < 0 || static_cast<size_t>(instance.part) >= parts.size()) {
       throw Error("arrangement: instance '" + instance.name + "' refers to a missing part");
     }
   }
-  std::vector<Instance> placed = instances;
-  if (placed.empty()) return placed;
+  Arrangement out;
+  if (instances.empty()) return out;
 
-  // Groups in order of first appearance, with their bounds.
+  // Rigid bodies: the groups, or everything for an assembled layout.
+  std::vector<Body> groups;
   std::map<int, size_t> index_of;
-  std::vector<std::vector<size_t>> members;
-  for (size_t i = 0; i < placed.size(); ++i) {
+  for (size_t i = 0; i < instances.size(); ++i) {
     const int g = group.empty() ? static_cast<int>(i) : group[i];
-    auto [it, inserted] = index_of.emplace(g, members.size());
-    if (inserted) members.emplace_back();
-    members[it->second].push_back(i);
+    auto [it, inserted] = index_of.emplace(g, groups.size());
+    if (inserted) groups.push_back(Body{g, {}});
+    groups[it->second].instances.push_back(instances[i]);
   }
-  std::vector<Eigen::AlignedBox3d> bounds(members.size());
-  for (size_t g = 0; g < members.size(); ++g) {
-    for (size_t i : members[g]) bounds[g].extend(InstanceBounds(parts, placed[i]));
+  if (o.layout == Layout::kSingle && groups.size() != 1) {
+    throw Error("arrangement: the single layout takes one part or assembly (got " + std::to_string(groups.size()) + ")");
+  }
+  std::vector<Body> bodies;
+  if (o.layout == Layout::kAssembled) {
+    Body all{groups[0].group, {}};
+    for (const Body& b : groups) all.instances.insert(all.instances.end(), b.instances.begin(), b.instances.end());
+    const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned ? std::vector<StablePose>{} : StablePoses(parts, all.instances);
+    size_t pick = 0;
+    if (o.pose == PoseMode::kRandom) {
+      double u = UniformDraw(o.seed, 7, 0), acc = 0;
+      while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
+    }
+    Rest(parts, o, poses, pick, 0.0, &all);
+    // Keep each instance's group for the caller.
+    std::vector<int> owner;
+    for (const Body& b : groups) owner.insert(owner.end(), b.instances.size(), b.group);
+    out.instances = all.instances;
+    out.group = owner;
+    return out;
   }
 
-  if (options.layout != Layout::kAssembled) {
-    // Cells: a row, or rows of about sqrt(N); each group centred in its cell, resting on z = 0.
-    const size_t n = members.size();
-    const size_t columns = options.layout == Layout::kRow ? n : static_cast<size_t>(std::ceil(std::sqrt(double(n))));
-    std::vector<double> column_width(columns, 0.0), row_depth((n + columns - 1) / columns, 0.0);
-    for (size_t g = 0; g < n; ++g) {
-      column_width[g % columns] = std::max(column_width[g % columns], bounds[g].sizes().x());
-      row_depth[g / columns] = std::max(row_depth[g / columns], bounds[g].sizes().y());
-    }
-    for (size_t g = 0; g < n; ++g) {
-      double x = 0, y = 0;
-      for (size_t c = 0; c < g % columns; ++c) x += column_width[c] + options.gap_mm;
-      for (size_t r = 0; r < g / columns; ++r) y -= row_depth[r] + options.gap_mm;
-      const Eigen::Vector3d centre(x + 0.5 * column_width[g % columns], y - 0.5 * row_depth[g / columns], 0.0);
-      const Eigen::Vector3d shift(centre.x() - bounds[g].center().x(), centre.y() - bounds[g].center().y(),
-                                  -bounds[g].min().z());
-      for (size_t i : members[g]) Shift(shift, &placed[i]);
+  // Copies of each group, each resting on its own: on the chosen face, at yaw 0 (or random).
+  const bool clutter = o.layout == Layout::kClutter;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const std::vector<StablePose> poses =
+        o.pose == PoseMode::kAsDesigned ? std::vector<StablePose>{} : StablePoses(parts, groups[g].instances);
+    const size_t faces = o.pose == PoseMode::kAll ? poses.size() : 1;
+    for (int c = 0; c < o.copies; ++c) {
+      for (size_t f = 0; f < faces; ++f) {
+        const uint64_t index = (static_cast<uint64_t>(g) << 32) + static_cast<uint64_t>(c) * faces + f;
+        size_t pick = o.pose == PoseMode::kAll ? f : 0;
+        if (o.pose == PoseMode::kRandom) {
+          const double u = UniformDraw(o.seed, 1, index);
+          double acc = 0;
+          while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
+        }
+        const double yaw = (clutter || o.pose == PoseMode::kRandom) ? 2 * M_PI * UniformDraw(o.seed, 2, index) : 0.0;
+        Body body = groups[g];
+        Rest(parts, o, poses, pick, yaw, &body);
+        bodies.push_back(std::move(body));
+      }
     }
   }
-  Eigen::AlignedBox3d all;
-  for (const Instance& instance : placed) all.extend(InstanceBounds(parts, instance));
-  const Eigen::Vector3d shift(-all.center().x(), -all.center().y(), -all.min().z());
-  for (Instance& instance : placed) Shift(shift, &instance);
-  return placed;
+
+  if (!clutter) {
+    // Cells: a row, or rows of about sqrt(N); each body centred in its cell.
+    const size_t n = bodies.size();
+    const size_t columns = (o.layout == Layout::kRow || o.layout == Layout::kSingle)
+                               ? n
+                               : static_cast<size_t>(std::ceil(std::sqrt(double(n))));
+    std::vector<double> column_width(columns, 0.0), row_depth((n + columns - 1) / columns, 0.0);
+    std::vector<Eigen::AlignedBox3d> bounds;
+    for (size_t b = 0; b < n; ++b) {
+      bounds.push_back(Bounds(parts, bodies[b]));
+      column_width[b % columns] = std::max(column_width[b % columns], bounds[b].sizes().x());
+      row_depth[b / columns] = std::max(row_depth[b / columns], bounds[b].sizes().y());
+    }
+    for (size_t b = 0; b < n; ++b) {
+      double x = 0, y = 0;
+      for (size_t c = 0; c < b % columns; ++c) x += column_width[c] + o.gap_mm;
+      for (size_t r = 0; r < b / columns; ++r) y -= row_depth[r] + o.gap_mm;
+      const Eigen::Vector3d shift(x + 0.5 * column_width[b % columns] - bounds[b].center().x(),
+                                  y - 0.5 * row_depth[b / columns] - bounds[b].center().y(), 0.0);
+      Apply(Eigen::Isometry3d(Eigen::Translation3d(shift)), &bodies[b]);
+    }
+  } else {
+    // Clutter: largest footprints first, each at up to 500 random spots in the disc, kept `gap`
+    // from every body already down (footprints are the convex hulls of the bodies' floor shadows,
+    // so disjoint footprints mean disjoint bodies).
+    std::vector<Polygon> footprint(bodies.size());
+    for (size_t b = 0; b < bodies.size(); ++b) {
+      std::vector<Eigen::Vector2d> shadow;
+      for (const Instance& i : bodies[b].instances) {
+        for (const Eigen::Vector3f& p : parts[i.part].mesh.positions) shadow.push_back((i.world_from_model * p.cast<double>()).head<2>());
+      }
+      footprint[b] = ConvexHull2D(shadow);
+    }
+    std::vector<size_t> order(bodies.size());
+    for (size_t b = 0; b < order.size(); ++b) order[b] = b;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return Area(footprint[a]) > Area(footprint[b]); });
+    std::vector<Polygon> placed;
+    std::vector<Body> kept;
+    for (size_t b : order) {
+      bool done = false;
+      for (int attempt = 0; attempt < 500 && !done; ++attempt) {
+        const uint64_t index = (static_cast<uint64_t>(b) << 20) + static_cast<uint64_t>(attempt);
+        const double r = o.clutter_radius_mm * std::sqrt(UniformDraw(o.seed, 3, index));
+        const double phi = 2 * M_PI * UniformDraw(o.seed, 4, index);
+        const Eigen::Vector2d at(r * std::cos(phi), r * std::sin(phi));
+        Polygon moved = footprint[b];
+        bool inside = true;
+        for (auto& p : moved) {
+          p += at;
+          inside = inside && p.norm() <= o.clutter_radius_mm;
+        }
+        if (!inside) continue;
+        bool free = true;
+        for (const Polygon& other : placed) free = free && Separation(moved, other) >= o.gap_mm;
+        if (!free) continue;
+        placed.push_back(moved);
+        Body body = bodies[b];
+        Apply(Eigen::Isometry3d(Eigen::Translation3d(at.x(), at.y(), 0.0)), &body);
+        kept.push_back(std::move(body));
+        done = true;
+      }
+    }
+    if (kept.size() < bodies.size()) {
+      std::ostringstream message;
+      message << "clutter: only " << kept.size() << " of " << bodies.size() << " parts fit in a disc of radius "
+              << o.clutter_radius_mm << " mm with " << o.gap_mm << " mm between them; give a larger radius or fewer copies";
+      throw Error(message.str());
+    }
+    // Back in input order, for stable output.
+    std::sort(kept.begin(), kept.end(), [&](const Body& a, const Body& b) { return a.group < b.group; });
+    bodies = std::move(kept);
+  }
+
+  for (const Body& body : bodies) {
+    for (const Instance& i : body.instances) {
+      out.instances.push_back(i);
+      out.group.push_back(body.group);
+    }
+  }
+  // Centre everything on the z axis (clutter is centred on the disc already).
+  if (!clutter) {
+    Eigen::AlignedBox3d all;
+    for (const Instance& i : out.instances) all.extend(parts[i.part].mesh.Bounds(i.world_from_model));
+    for (Instance& i : out.instances) {
+      i.world_from_model = Eigen::Translation3d(-all.center().x(), -all.center().y(), 0.0) * i.world_from_model;
+    }
+  }
+  return out;
 }
 
 }  // namespace cadsynth

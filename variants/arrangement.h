@@ -1,6 +1,7 @@
 // Placing parts as they would rest in a work cell: on the floor z = 0, centred on the origin.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -11,22 +12,40 @@ namespace cadsynth {
 // Instances come in rigid groups (a file's assembly, one variant of a family): a layout moves
 // whole groups and never takes one apart.
 enum class Layout {
-  kAssembled,  // the groups as designed, in their own frames, moved together onto the floor
-  kRow,        // each group on the floor on its own, side by side along +x
-  kGrid,       // each group on the floor on its own, in rows of about sqrt(N)
+  kAssembled,  // all groups as designed, in their own frames, resting together as one rigid body
+  kSingle,     // one group at the origin
+  kRow,        // each group resting on its own, side by side along +x
+  kGrid,       // each group resting on its own, in rows of about sqrt(N)
+  kClutter,    // each group dropped at a random yaw and position in a disc, none overlapping
+};
+
+// Which way up a group rests (see StablePoses).
+enum class PoseMode {
+  kStable,      // on its most probable face
+  kRandom,      // on a face drawn by probability, at a random yaw
+  kAll,         // one copy on every stable face
+  kAsDesigned,  // as the CAD has it, lowered onto the floor
 };
 
 struct ArrangementOptions {
   Layout layout = Layout::kAssembled;
-  double gap_mm = 40.0;  // kRow, kGrid: free space between neighbouring groups
+  PoseMode pose = PoseMode::kStable;
+  double gap_mm = 40.0;              // row, grid, clutter: least free space between groups
+  int copies = 1;                    // each group placed this many times (not with kAssembled)
+  double clutter_radius_mm = 150.0;  // clutter: the disc the groups land in
+  uint64_t seed = 0;                 // random poses, yaws and clutter positions
 
   bool Check(std::string* why) const;
 };
 
-// Returns `instances` with world poses such that the lowest point of each group (kRow, kGrid) or
-// of everything (kAssembled) is on the floor z = 0 and the arrangement's bounding box is centred
-// on the world z axis. `group[i]` is the group of instance i (empty: one group per instance).
-std::vector<Instance> Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                              const ArrangementOptions& options, const std::vector<int>& group = {});
+struct Arrangement {
+  std::vector<Instance> instances;  // world poses: resting on z = 0, centred on the z axis
+  std::vector<int> group;           // the input group of each instance (copies share it)
+};
+
+// Arranges `instances` (`group[i]` is the group of instance i; empty: one group per instance).
+// Throws Error when a clutter does not fit, saying how many groups did.
+Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                    const ArrangementOptions& options, const std::vector<int>& group = {});
 
 }  // namespace cadsynth

@@ -41,7 +41,7 @@ PartSource Family(const std::string& name, const std::vector<ParamValues>& varia
 
 RunSpec OneScene(std::vector<PartSource> sources, Layout layout = Layout::kAssembled) {
   RunSpec spec = SmallDefault();
-  spec.scenes = {SceneSpec{"scene", std::move(sources), {layout, 20.0}}};
+  spec.scenes = {SceneSpec{"scene", std::move(sources), {.layout = layout, .gap_mm = 20.0}}};
   return spec;
 }
 

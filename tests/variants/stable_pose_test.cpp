@@ -49,6 +49,11 @@ TEST(StablePoses, CylinderCapsAndSideAsWorkedByHand) {
   }
   EXPECT_NEAR(caps, 1 - 1 / std::sqrt(2.0), 2e-3);
   EXPECT_NEAR(side, 1 / std::sqrt(2.0), 2e-3);
+  // The side's many flats are one pose (the most probable), the caps another.
+  EXPECT_NEAR(poses.front().pose_probability, 1 / std::sqrt(2.0), 2e-3);
+  EXPECT_LT(std::abs(poses.front().normal.z()), 0.01);
+  EXPECT_EQ(poses.back().pose, 1);
+  EXPECT_NEAR(poses.back().pose_probability, 1 - 1 / std::sqrt(2.0), 2e-3);
 }
 
 TEST(StablePoses, FlatPlateLiesFlatMostOften) {

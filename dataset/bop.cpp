@@ -310,6 +310,18 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
   entries_[image_id] = std::move(entry);
 }
 
+void BopSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
+  if (instances.size() != obj_ids_.size()) throw Error("bop: world poses for a different number of instances");
+  Json list = Json::array();
+  for (size_t i = 0; i < instances.size(); ++i) {
+    list.push_back({{"obj_id", obj_ids_[i]},
+                    {"world_R_m2w", RowMajor(instances[i].world_from_model.linear())},
+                    {"world_t_m2w", Vec(instances[i].world_from_model.translation())},
+                    {"name", instances[i].name}});
+  }
+  WriteJson(scene_dir_ / "scene_gt_world.json", list);
+}
+
 void BopSceneWriter::Finish() {
   Json camera = Json::object(), gt = Json::object(), gt_info = Json::object();
   std::lock_guard<std::mutex> lock(mutex_);

@@ -92,6 +92,11 @@ class BopSceneWriter {
   // Writes scene_camera.json, scene_gt.json and scene_gt_info.json, ordered by image id.
   void Finish();
 
+  // Writes scene_gt_world.json (cadsynth): the world pose of every instance of this static scene,
+  // in scene_gt order: obj_id, world_R_m2w (row-major) and world_t_m2w (mm), so that
+  // world_from_model = [world_R_m2w, world_t_m2w]; and the instance's name.
+  void WriteWorldPoses(const std::vector<Instance>& instances);
+
   const std::filesystem::path& scene_dir() const { return scene_dir_; }
 
  private:

@@ -82,6 +82,56 @@ void Build(const RunSpec& spec, Job* job) {
   }
 }
 
+}  // namespace
+
+std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                                           const Intrinsics& k, const SweepOptions& sweep) {
+  std::vector<std::string> warnings;
+  if (instances.empty() || sweep.radius_mm.empty()) return warnings;
+  const double nearest = *std::min_element(sweep.radius_mm.begin(), sweep.radius_mm.end());
+  const double farthest = *std::max_element(sweep.radius_mm.begin(), sweep.radius_mm.end());
+  // The camera always looks at the target: the scene must fit in the cone of the narrower half
+  // field of view at the nearest radius.
+  const double half_fov = std::min(std::atan2(std::min(k.cx, k.width - k.cx), k.fx),
+                                   std::atan2(std::min(k.cy, k.height - k.cy), k.fy));
+  double reach = 0;
+  for (const Instance& i : instances) {
+    for (const Eigen::Vector3f& p : parts[i.part].mesh.positions) {
+      reach = std::max(reach, (i.world_from_model * p.cast<double>() - sweep.target).norm());
+    }
+  }
+  std::ostringstream out;
+  out.precision(4);
+  if (reach >= nearest) {
+    out << "the scene reaches " << std::lround(reach) << " mm from the target, beyond the nearest camera radius "
+        << std::lround(nearest) << " mm: the camera will be inside or touching it";
+    warnings.push_back(out.str());
+  } else if (std::asin(reach / nearest) > half_fov) {
+    out << "the scene reaches " << std::lround(reach) << " mm from the target; at the nearest radius "
+        << std::lround(nearest) << " mm the camera sees only " << std::lround(nearest * std::sin(half_fov))
+        << " mm around it: objects will be cut off";
+    warnings.push_back(out.str());
+  }
+  // The smallest object at the farthest radius.
+  double smallest = 1e300;
+  std::string name;
+  for (const Instance& i : instances) {
+    const double d = parts[i.part].mesh.Bounds().sizes().maxCoeff();
+    if (d < smallest) smallest = d, name = parts[i.part].name;
+  }
+  const double pixels = k.fx * smallest / farthest;
+  if (pixels < 10.0) {
+    std::ostringstream small;
+    small.precision(3);
+    small << "'" << name << "' (" << smallest << " mm) spans only " << pixels << " px at the farthest radius "
+          << std::lround(farthest) << " mm";
+    warnings.push_back(small.str());
+  }
+  return warnings;
+}
+
+namespace {
+
 // Removes a folder tree on scope exit unless released.
 class StagingFolder {
  public:
@@ -255,6 +305,11 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   }
   const std::vector<SweepView> views = ExpandSweep(spec.sweep);
   const size_t total_frames = views.size() * runs.size();
+  for (size_t s = 0; s < runs.size(); ++s) {
+    for (const std::string& warning : PlacementWarnings(parts, runs[s].scene.instances, spec.intrinsics, spec.sweep)) {
+      Warn("scene '" + spec.scenes[s].name + "': " + warning);
+    }
+  }
 
   // Everything goes to a hidden staging folder beside the output, renamed into place at the end.
   std::filesystem::create_directories(output.parent_path(), ec);
@@ -293,6 +348,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   for (size_t s = 0; s < runs.size(); ++s) {
     const Renderer renderer(parts, runs[s].scene, spec.render);
     BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, runs[s].obj_ids);
+    writer.WriteWorldPoses(runs[s].scene.instances);
     size_t next = 0;
     const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
     using FramePtr = std::shared_ptr<const Frame>;

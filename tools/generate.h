@@ -26,6 +26,11 @@ struct GenerateSummary {
   double seconds = 0.0;
 };
 
+// What a user should hear about a scene before rendering it: whether its objects fit the view at
+// the nearest camera radius, and whether the smallest is still a few pixels at the farthest.
+std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                                           const Intrinsics& intrinsics, const SweepOptions& sweep);
+
 // Reads the files and builds the family variants of every scene, merges repeated shapes into one
 // object each, arranges each scene on the floor, renders every view of the sweep per scene and
 // writes the BOP dataset (scene i in SPLIT/00000i) plus variants.json. Everything is written into a hidden staging folder next to `output` and renamed into

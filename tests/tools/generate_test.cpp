@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "cad/error.h"
+#include "cad/shape.h"
 #include "cad/step.h"
 #include "tests/test_support.h"
 
@@ -109,6 +110,56 @@ TEST(Generate, DefaultJobIsThePapersThreeDemoSets) {
   EXPECT_EQ(variants[0]["obj_ids"].size(), 4u);
   EXPECT_EQ(variants[6]["params"]["size"], "M10");
   EXPECT_EQ(EntriesIn(dir.path()), 1u);  // no staging folder left behind
+}
+
+TEST(Generate, WorldPosesAgreeWithCameraAndModelPoses) {
+  ScratchDir dir;
+  GenerateOptions options;
+  options.output = dir / "data";
+  Generate(SmallDefault(), options);
+  const json world = ReadJson(dir / "data" / "train" / "000000" / "scene_gt_world.json");
+  const json gt = ReadJson(dir / "data" / "train" / "000000" / "scene_gt.json");
+  const json cams = ReadJson(dir / "data" / "train" / "000000" / "scene_camera.json");
+  ASSERT_EQ(world.size(), gt["1"].size());
+  const auto pose = [](const json& r, const json& t) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) T.linear()(i, j) = r[3 * i + j];
+      T.translation()[i] = t[i];
+    }
+    return T;
+  };
+  for (size_t i = 0; i < world.size(); ++i) {
+    EXPECT_EQ(world[i]["obj_id"], gt["1"][i]["obj_id"]);
+    // world_from_model = inverse(cam_from_world) * cam_from_model
+    const Eigen::Isometry3d expected = pose(cams["1"]["cam_R_w2c"], cams["1"]["cam_t_w2c"]).inverse() *
+                                       pose(gt["1"][i]["cam_R_m2c"], gt["1"][i]["cam_t_m2c"]);
+    EXPECT_TRUE(pose(world[i]["world_R_m2w"], world[i]["world_t_m2w"]).isApprox(expected, 1e-9)) << i;
+  }
+}
+
+TEST(PlacementWarnings, SayWhenObjectsDoNotFitOrVanish) {
+  const std::vector<Part> parts = {MakePart("slab", MakeBox(520, 20, 10), TessellationOptions{}),
+                                   MakePart("speck", MakeCylinder(1.5, 1), TessellationOptions{})};
+  SweepOptions sweep;
+  sweep.yaw_rad = {0};
+  sweep.pitch_rad = {0.5};
+  sweep.radius_mm = {650, 1450};
+  const Intrinsics kinect = Intrinsics::KinectV1();
+  // A 520 mm slab reaches ~260 mm from the target; the Kinect's narrower half field of view is
+  // atan(239.5 / 525) = 24.5 deg, so at 650 mm the camera sees 650 sin(24.5 deg) = 270 mm: fits.
+  std::vector<Instance> fits = {{0, "slab", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 5))}};
+  EXPECT_TRUE(PlacementWarnings(parts, fits, kinect, sweep).empty());
+  // Moved 100 mm off the target it reaches ~360 mm: cut off.
+  std::vector<Instance> off = {{0, "slab", Eigen::Isometry3d(Eigen::Translation3d(100, 0, 5))}};
+  const auto cut = PlacementWarnings(parts, off, kinect, sweep);
+  ASSERT_EQ(cut.size(), 1u);
+  EXPECT_NE(cut[0].find("objects will be cut off"), std::string::npos) << cut[0];
+  // A 3 mm part at 1450 mm: 525 * 3 / 1450 = 1.09 px.
+  std::vector<Instance> tiny = {{1, "speck", Eigen::Isometry3d::Identity()}};
+  const auto small = PlacementWarnings(parts, tiny, kinect, sweep);
+  ASSERT_EQ(small.size(), 1u);
+  EXPECT_NE(small[0].find("'speck' (3 mm) spans only 1.09 px at the farthest radius 1450 mm"), std::string::npos) << small[0];
 }
 
 TEST(Generate, GridAndRandomFamiliesGenerateTwiceIdentically) {

@@ -113,8 +113,8 @@ int RunGenerate(const std::vector<std::string>& args) {
     };
   }
   const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);
-  std::printf("wrote %zu frames (%zu scenes) of %zu objects (%zu instances) to %s in %.1f s (%.1f frames/s)\n",
-              summary.frames, summary.scenes, summary.objects, summary.instances,
+  std::printf("wrote %zu frames (%zu scene%s) of %zu objects (%zu instances) to %s in %.1f s (%.1f frames/s)\n",
+              summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.objects, summary.instances,
               std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,
               summary.seconds > 0 ? summary.frames / summary.seconds : 0.0);
   return 0;

@@ -501,9 +501,45 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.Check(s, node, "sweep");
 }
 
+Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::string& key, bool length) {
+  if (!node.IsSequence() || node.size() != 3) r.Fail(node, key, "expected [x, y, z]");
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) v[i] = length ? r.Length(node[i], key) : r.Number(node[i], key);
+  return v;
+}
+
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "render", {"background", "floor", "floor_color", "ambient", "light_direction",
-                               "light_intensity", "colors"});
+  r.ExpectMap(node, "render", {"background", "floor", "floor_color", "ambient", "lights", "shadows", "colors",
+                               "near", "far", "supersampling", "normals"});
+  Scene& look = spec->look;
+  if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
+  if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
+  if (node["floor_color"]) look.floor_color = r.Color(node["floor_color"], "render.floor_color");
+  if (node["ambient"]) look.ambient = static_cast<float>(r.Number(node["ambient"], "render.ambient"));
+  if (look.ambient < 0.0f) r.Fail(node["ambient"], "render.ambient", "must not be negative");
+  if (node["shadows"]) look.shadows = r.Bool(node["shadows"], "render.shadows");
+  if (node["lights"]) {
+    const YAML::Node lights = node["lights"];
+    if (!lights.IsSequence()) r.Fail(lights, "render.lights", "expected a list of {direction: [x, y, z]} or {position: [x, y, z]}");
+    look.lights.clear();
+    for (size_t i = 0; i < lights.size(); ++i) {
+      const std::string key = "render.lights[" + std::to_string(i) + "]";
+      r.ExpectMap(lights[i], key, {"direction", "position", "intensity"});
+      if (!lights[i]["direction"] == !lights[i]["position"]) r.Fail(lights[i], key, "give a direction or a position");
+      Scene::Light light;
+      if (lights[i]["direction"]) {
+        light.kind = Scene::Light::Kind::kDirectional;
+        light.direction = Triple(r, lights[i]["direction"], key + ".direction", false);
+        if (light.direction.norm() == 0) r.Fail(lights[i]["direction"], key + ".direction", "the direction must not be zero");
+      } else {
+        light.kind = Scene::Light::Kind::kPoint;
+        light.position = Triple(r, lights[i]["position"], key + ".position", true);
+      }
+      if (lights[i]["intensity"]) light.intensity = static_cast<float>(r.Number(lights[i]["intensity"], key + ".intensity"));
+      if (light.intensity < 0) r.Fail(lights[i]["intensity"], key + ".intensity", "must not be negative");
+      look.lights.push_back(light);
+    }
+  }
   if (node["colors"]) {
     const std::string colors = r.Scalar(node["colors"], "render.colors");
     if (colors != "cad" && colors != "palette") {
@@ -511,26 +547,11 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     }
     spec->cad_colors = colors == "cad";
   }
-  Scene& look = spec->look;
-  if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
-  if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
-  if (node["floor_color"]) look.floor_color = r.Color(node["floor_color"], "render.floor_color");
-  if (node["ambient"]) look.ambient = static_cast<float>(r.Number(node["ambient"], "render.ambient"));
-  if (node["light_intensity"]) {
-    look.light_intensity =
-        static_cast<float>(r.Number(node["light_intensity"], "render.light_intensity"));
-  }
-  if (node["light_direction"]) {
-    const YAML::Node d = node["light_direction"];
-    if (!d.IsSequence() || d.size() != 3) r.Fail(d, "render.light_direction", "expected [x, y, z]");
-    for (int i = 0; i < 3; ++i) look.light_direction[i] = r.Number(d[i], "render.light_direction");
-    if (look.light_direction.norm() == 0.0) {
-      r.Fail(d, "render.light_direction", "the direction must not be zero");
-    }
-  }
-  if (look.ambient < 0.0f || look.light_intensity < 0.0f) {
-    r.Fail(node, "render", "ambient and light_intensity must not be negative");
-  }
+  if (node["near"]) spec->render.near_mm = r.Length(node["near"], "render.near");
+  if (node["far"]) spec->render.far_mm = r.Length(node["far"], "render.far");
+  if (node["supersampling"]) spec->render.supersampling = r.Integer(node["supersampling"], "render.supersampling");
+  if (node["normals"]) spec->render.normals = r.Bool(node["normals"], "render.normals");
+  r.Check(spec->render, node, "render");
 }
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {

@@ -19,6 +19,7 @@ struct Frame {
   std::vector<uint8_t> rgb;       // 3 bytes per pixel: R, G, B
   std::vector<float> depth;       // z in the camera frame, mm; 0 = no return
   std::vector<uint16_t> instance; // visible instance: index in Scene::instances + 1; 0 = none
+  std::vector<Eigen::Vector3f> normals;  // RenderOptions::normals: unit, camera frame; 0 = none
 
   struct InstanceTruth {
     Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();

@@ -14,11 +14,14 @@
 namespace cadsynth {
 
 bool RenderOptions::Check(std::string* why) const {
-  if (rows_per_task < 1) {
-    *why = "rows_per_task must be at least 1";
-    return false;
+  if (!(near_mm >= 0) || !(far_mm > near_mm)) {
+    *why = "the clip range needs 0 <= near < far";
+  } else if (supersampling < 1 || supersampling > 8) {
+    *why = "supersampling must be 1 to 8 samples per axis";
+  } else {
+    return true;
   }
-  return true;
+  return false;
 }
 
 namespace {
@@ -59,7 +62,12 @@ struct Renderer::Impl {
   std::vector<PartBuffers> parts;
   std::vector<Eigen::AlignedBox3d> model_bounds;  // per part, model frame
   std::vector<Eigen::Matrix3f> instance_rotation;  // world_from_model rotation per instance
-  std::vector<Eigen::Vector3f> albedo;             // colour per instance
+  std::vector<Eigen::Vector3f> albedo_of;          // colour per instance
+  std::vector<Eigen::Vector3f> light_dirs;         // directional lights: unit travel direction
+
+  struct Shaded;
+  // Colours and normals of a traced packet's lanes: ambient plus every light it sees.
+  void ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const;
   unsigned floor_id = kInvalid;
 
   ~Impl() {
@@ -147,7 +155,7 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     im.instance_rotation.push_back(scene.instances[i].world_from_model.linear().cast<float>());
     const Instance& instance = scene.instances[i];
     const size_t part = static_cast<size_t>(instance.part);
-    im.albedo.push_back(instance.color             ? *instance.color
+    im.albedo_of.push_back(instance.color             ? *instance.color
                         : part < scene.part_colors.size() ? scene.part_colors[part]
                                                           : Eigen::Vector3f(0.7f, 0.7f, 0.7f));
   }
@@ -168,6 +176,12 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     rtcReleaseGeometry(floor);
   }
   rtcCommitScene(im.world);
+  for (const Scene::Light& light : scene.lights) {
+    if (light.kind == Scene::Light::Kind::kDirectional && light.direction.norm() == 0) {
+      throw Error("renderer: a directional light needs a direction");
+    }
+    im.light_dirs.push_back(light.direction.normalized().cast<float>());
+  }
 
   for (size_t i = 0; i < scene.instances.size(); ++i) {
     RTCScene alone = rtcNewScene(im.device);
@@ -184,23 +198,7 @@ Renderer::~Renderer() = default;
 
 namespace {
 
-inline void InitRay(RTCRayHit* rh, const Eigen::Vector3f& origin, const Eigen::Vector3f& dir) {
-  rh->ray.org_x = origin.x();
-  rh->ray.org_y = origin.y();
-  rh->ray.org_z = origin.z();
-  rh->ray.dir_x = dir.x();
-  rh->ray.dir_y = dir.y();
-  rh->ray.dir_z = dir.z();
-  rh->ray.tnear = 0.0f;
-  rh->ray.tfar = std::numeric_limits<float>::infinity();
-  rh->ray.time = 0.0f;
-  rh->ray.mask = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: set every bit
-  rh->ray.id = 0;
-  rh->ray.flags = 0;
-  rh->hit.geomID = kInvalid;
-  rh->hit.primID = kInvalid;
-  rh->hit.instID[0] = kInvalid;
-}
+constexpr int kTile = 4;  // 4 x 4 pixels: one 16-ray packet
 
 inline uint8_t ToByte(float value) {
   return static_cast<uint8_t>(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
@@ -236,7 +234,133 @@ PixelRect ProjectedRect(const Eigen::AlignedBox3d& model_box, const Eigen::Isome
   return r;
 }
 
+// The camera's rays: origin, and direction with camera-frame z = 1 so that t is the depth.
+struct RayGen {
+  Eigen::Matrix3f rotation;
+  Eigen::Vector3f origin;
+  const Intrinsics* k;
+  Eigen::Vector3f Dir(double u, double v) const {  // (u, v): a point on the image, e.g. a pixel centre
+    const Eigen::Vector3f d_cam(static_cast<float>((u - k->cx) / k->fx), static_cast<float>((v - k->cy) / k->fy), 1.0f);
+    return rotation * d_cam;
+  }
+};
+
+// Fills a 16-ray packet for the 4 x 4 tile at (u0, v0), sample offset (du, dv) within each pixel.
+void InitPacket(const RayGen& gen, int u0, int v0, int w, int h, double du, double dv, float tnear, float tfar,
+                RTCRayHit16* rh, int valid[16]) {
+  for (int j = 0; j < 16; ++j) {
+    const int u = u0 + j % kTile, v = v0 + j / kTile;
+    valid[j] = (u < w && v < h) ? -1 : 0;
+    const Eigen::Vector3f d = gen.Dir(u + du, v + dv);
+    rh->ray.org_x[j] = gen.origin.x();
+    rh->ray.org_y[j] = gen.origin.y();
+    rh->ray.org_z[j] = gen.origin.z();
+    rh->ray.dir_x[j] = d.x();
+    rh->ray.dir_y[j] = d.y();
+    rh->ray.dir_z[j] = d.z();
+    rh->ray.tnear[j] = tnear;
+    rh->ray.tfar[j] = tfar;
+    rh->ray.time[j] = 0.0f;
+    rh->ray.mask[j] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: set every bit
+    rh->ray.id[j] = static_cast<unsigned>(j);
+    rh->ray.flags[j] = 0;
+    rh->hit.geomID[j] = kInvalid;
+    rh->hit.primID[j] = kInvalid;
+    rh->hit.instID[0][j] = kInvalid;
+  }
+}
+
 }  // namespace
+
+// One shaded sample of a packet lane.
+struct Renderer::Impl::Shaded {
+  Eigen::Vector3f color;
+  Eigen::Vector3f normal;  // world, facing the camera (zero when nothing was hit)
+};
+
+void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const {
+  const Eigen::Vector3f background = scene.background_color;
+  Eigen::Vector3f albedo[16];
+  Eigen::Vector3f point[16];
+  bool hit[16];
+  for (int j = 0; j < 16; ++j) {
+    hit[j] = valid[j] != 0 && rh.hit.geomID[j] != kInvalid;
+    out[j].color = background;
+    out[j].normal.setZero();
+    if (!hit[j]) continue;
+    const Eigen::Vector3f dir(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
+    const unsigned inst = rh.hit.instID[0][j];
+    Eigen::Vector3f normal;
+    if (inst != kInvalid) {
+      const PartBuffers& buffers = parts[scene.instances[inst].part];
+      const uint32_t* tri = &buffers.indices[3 * rh.hit.primID[j]];
+      const float b1 = rh.hit.u[j], b2 = rh.hit.v[j], b0 = 1.0f - b1 - b2;
+      normal = instance_rotation[inst] *
+               (b0 * buffers.normals[tri[0]] + b1 * buffers.normals[tri[1]] + b2 * buffers.normals[tri[2]]);
+      albedo[j] = albedo_of[inst];
+    } else {
+      normal = Eigen::Vector3f::UnitZ();
+      albedo[j] = scene.floor_color;
+    }
+    normal.normalize();
+    if (normal.dot(dir) > 0.0f) normal = -normal;  // shade the side the camera sees
+    out[j].normal = normal;
+    point[j] = Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) + rh.ray.tfar[j] * dir;
+    out[j].color = albedo[j] * scene.ambient;
+  }
+  for (size_t l = 0; l < scene.lights.size(); ++l) {
+    const Scene::Light& light = scene.lights[l];
+    Eigen::Vector3f to_light[16];
+    float distance[16];
+    alignas(64) int lit[16];
+    float cosine[16];
+    bool any = false;
+    for (int j = 0; j < 16; ++j) {
+      lit[j] = 0;
+      if (!hit[j]) continue;
+      if (light.kind == Scene::Light::Kind::kDirectional) {
+        to_light[j] = -light_dirs[l];
+        distance[j] = std::numeric_limits<float>::infinity();
+      } else {
+        const Eigen::Vector3f d = light.position.cast<float>() - point[j];
+        distance[j] = d.norm();
+        to_light[j] = d / std::max(distance[j], 1e-6f);
+      }
+      cosine[j] = out[j].normal.dot(to_light[j]);
+      if (cosine[j] > 0.0f) lit[j] = -1, any = true;
+    }
+    if (!any) continue;
+    if (scene.shadows) {
+      RTCRay16 shadow;
+      for (int j = 0; j < 16; ++j) {
+        const Eigen::Vector3f& p = lit[j] ? point[j] : Eigen::Vector3f::Zero().eval();
+        const Eigen::Vector3f& d = lit[j] ? to_light[j] : Eigen::Vector3f::UnitZ().eval();
+        shadow.org_x[j] = p.x();
+        shadow.org_y[j] = p.y();
+        shadow.org_z[j] = p.z();
+        shadow.dir_x[j] = d.x();
+        shadow.dir_y[j] = d.y();
+        shadow.dir_z[j] = d.z();
+        // Start a little off the surface (float error at a metre is ~1e-4 mm).
+        shadow.tnear[j] = 0.05f;
+        shadow.tfar[j] = lit[j] ? distance[j] : 0.0f;
+        shadow.time[j] = 0.0f;
+        shadow.mask[j] = 0xFFFFFFFFu;
+        shadow.id[j] = static_cast<unsigned>(j);
+        shadow.flags[j] = 0;
+      }
+      RTCIntersectContext context;
+      rtcInitIntersectContext(&context);
+      rtcOccluded16(lit, world, &context, &shadow);
+      for (int j = 0; j < 16; ++j) {
+        if (lit[j] && shadow.tfar[j] < 0.0f) lit[j] = 0;  // occluded: tfar = -inf
+      }
+    }
+    for (int j = 0; j < 16; ++j) {
+      if (lit[j]) out[j].color += albedo[j] * (light.intensity * cosine[j]);
+    }
+  }
+}
 
 Frame Renderer::Render(const Camera& camera) const {
   const Impl& im = *impl_;
@@ -245,62 +369,62 @@ Frame Renderer::Render(const Camera& camera) const {
   if (!k.Check(&why)) throw Error("camera: " + why);
   const int w = k.width, h = k.height;
   const size_t num_pixels = static_cast<size_t>(w) * h;
+  const RenderOptions& o = im.options;
 
   Frame frame;
   frame.camera = camera;
   frame.rgb.assign(3 * num_pixels, 0);
   frame.depth.assign(num_pixels, 0.0f);
   frame.instance.assign(num_pixels, 0);
+  if (o.normals) frame.normals.assign(num_pixels, Eigen::Vector3f::Zero());
 
-  const Eigen::Matrix3f rotation = camera.world_from_cam.linear().cast<float>();
-  const Eigen::Vector3f origin = camera.world_from_cam.translation().cast<float>();
-  const auto ray_dir = [&](int u, int v) {
-    const Eigen::Vector3f d_cam(static_cast<float>((u + 0.5 - k.cx) / k.fx),
-                                static_cast<float>((v + 0.5 - k.cy) / k.fy), 1.0f);
-    return Eigen::Vector3f(rotation * d_cam);  // z of d_cam is 1, so t is the depth
-  };
-  const Eigen::Vector3f to_light = -im.scene.light_direction.normalized().cast<float>();
-  const Eigen::Vector3f background = im.scene.background_color;
+  const RayGen gen{camera.world_from_cam.linear().cast<float>(), camera.world_from_cam.translation().cast<float>(), &k};
+  const Eigen::Matrix3f cam_from_world_rotation = gen.rotation.transpose();
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  const float tnear = static_cast<float>(o.near_mm), tfar = static_cast<float>(o.far_mm);
+  const int ss = o.supersampling;
 
-  tbb::parallel_for(
-      tbb::blocked_range<int>(0, h, im.options.rows_per_task), [&](const tbb::blocked_range<int>& rows) {
-        RTCIntersectContext context;
-        for (int v = rows.begin(); v < rows.end(); ++v) {
-          for (int u = 0; u < w; ++u) {
-            const size_t pixel = static_cast<size_t>(v) * w + u;
-            const Eigen::Vector3f dir = ray_dir(u, v);
-            RTCRayHit rh;
-            InitRay(&rh, origin, dir);
-            rtcInitIntersectContext(&context);
-            rtcIntersect1(im.world, &context, &rh);
-            Eigen::Vector3f color = background;
-            if (rh.hit.geomID != kInvalid) {
-              frame.depth[pixel] = rh.ray.tfar;
-              Eigen::Vector3f normal, albedo;
-              const unsigned inst = rh.hit.instID[0];
-              if (inst != kInvalid) {
-                const int part = im.scene.instances[inst].part;
-                const PartBuffers& buffers = im.parts[part];
-                const uint32_t* tri = &buffers.indices[3 * rh.hit.primID];
-                const float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.0f - b1 - b2;
-                normal = im.instance_rotation[inst] *
-                         (b0 * buffers.normals[tri[0]] + b1 * buffers.normals[tri[1]] +
-                          b2 * buffers.normals[tri[2]]);
-                albedo = im.albedo[inst];
-                frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
-              } else {
-                normal = Eigen::Vector3f::UnitZ();
-                albedo = im.scene.floor_color;
-              }
-              normal.normalize();
-              if (normal.dot(dir) > 0.0f) normal = -normal;  // shade the side the camera sees
-              const float diffuse = std::max(0.0f, normal.dot(to_light));
-              color = albedo * (im.scene.ambient + im.scene.light_intensity * diffuse);
-            }
-            for (int c = 0; c < 3; ++c) frame.rgb[3 * pixel + c] = ToByte(color[c]);
-          }
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
+    RTCIntersectContext context;
+    RTCRayHit16 rh;
+    alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
+    Impl::Shaded shaded[16];
+    for (int tile = range.begin(); tile < range.end(); ++tile) {
+      const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
+      // The pixel centres: depth, instance, normal, and (without supersampling) colour.
+      InitPacket(gen, u0, v0, w, h, 0.5, 0.5, tnear, tfar, &rh, valid);
+      rtcInitIntersectContext(&context);
+      rtcIntersect16(valid, im.world, &context, &rh);
+      Eigen::Vector3f color[16];
+      if (ss == 1 || o.normals) im.ShadePacket(rh, valid, shaded);
+      for (int j = 0; j < 16; ++j) {
+        if (!valid[j]) continue;
+        const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+        if (rh.hit.geomID[j] != kInvalid) {
+          frame.depth[pixel] = rh.ray.tfar[j];
+          const unsigned inst = rh.hit.instID[0][j];
+          if (inst != kInvalid) frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
+          if (o.normals) frame.normals[pixel] = cam_from_world_rotation * shaded[j].normal;
         }
-      });
+        color[j] = ss == 1 ? shaded[j].color : Eigen::Vector3f::Zero();
+      }
+      // Supersampled colour: a regular grid of samples in each pixel.
+      for (int sy = 0; ss > 1 && sy < ss; ++sy) {
+        for (int sx = 0; sx < ss; ++sx) {
+          InitPacket(gen, u0, v0, w, h, (sx + 0.5) / ss, (sy + 0.5) / ss, tnear, tfar, &rh, valid);
+          rtcInitIntersectContext(&context);
+          rtcIntersect16(valid, im.world, &context, &rh);
+          im.ShadePacket(rh, valid, shaded);
+          for (int j = 0; j < 16; ++j) color[j] += shaded[j].color / float(ss * ss);
+        }
+      }
+      for (int j = 0; j < 16; ++j) {
+        if (!valid[j]) continue;
+        const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+        for (int c = 0; c < 3; ++c) frame.rgb[3 * pixel + c] = ToByte(color[j][c]);
+      }
+    }
+  });
 
   // Per-instance truth: pose, amodal silhouette (the instance traced alone), pixel counts.
   const Eigen::Isometry3d cam_from_world = camera.world_from_cam.inverse();
@@ -311,29 +435,29 @@ Frame Renderer::Render(const Camera& camera) const {
   for (size_t p = 0; p < num_pixels; ++p) {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }
-  {
-    tbb::parallel_for(size_t{0}, im.scene.instances.size(), [&](size_t i) {
-      Frame::InstanceTruth& truth = frame.instances[i];
-      truth.amodal_mask.assign(num_pixels, 0);
-      const int part = im.scene.instances[i].part;
-      const PixelRect r = ProjectedRect(im.model_bounds[part], truth.cam_from_model, k);
-      int count = 0;
-      RTCIntersectContext context;
-      for (int v = r.v0; v < r.v1; ++v) {
-        for (int u = r.u0; u < r.u1; ++u) {
-          RTCRayHit rh;
-          InitRay(&rh, origin, ray_dir(u, v));
-          rtcInitIntersectContext(&context);
-          rtcIntersect1(im.solo[i], &context, &rh);
-          if (rh.hit.geomID != kInvalid) {
-            truth.amodal_mask[static_cast<size_t>(v) * w + u] = 1;
+  tbb::parallel_for(size_t{0}, im.scene.instances.size(), [&](size_t i) {
+    Frame::InstanceTruth& truth = frame.instances[i];
+    truth.amodal_mask.assign(num_pixels, 0);
+    const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, k);
+    int count = 0;
+    RTCIntersectContext context;
+    RTCRayHit16 rh;
+    alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
+    for (int v0 = r.v0 - r.v0 % kTile; v0 < r.v1; v0 += kTile) {
+      for (int u0 = r.u0 - r.u0 % kTile; u0 < r.u1; u0 += kTile) {
+        InitPacket(gen, u0, v0, w, h, 0.5, 0.5, tnear, tfar, &rh, valid);
+        rtcInitIntersectContext(&context);
+        rtcIntersect16(valid, im.solo[i], &context, &rh);
+        for (int j = 0; j < 16; ++j) {
+          if (valid[j] && rh.hit.geomID[j] != kInvalid) {
+            truth.amodal_mask[static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile)] = 1;
             ++count;
           }
         }
       }
-      truth.px_count_all = count;
-    });
-  }
+    }
+    truth.px_count_all = count;
+  });
   return frame;
 }
 

@@ -13,15 +13,22 @@
 namespace cadsynth {
 
 struct RenderOptions {
-  // Pixel rows handed to one task; results never depend on it or on the thread count.
-  int rows_per_task = 8;
+  // Depth clip (mm along the optical axis): nothing nearer than `near_mm` or farther than `far_mm`
+  // is seen (depth 0, no instance).
+  double near_mm = 1.0;
+  double far_mm = 1e7;
+  // Supersampled anti-aliasing of RGB only: samples x samples rays per pixel (1: off). Depth,
+  // instance ids and masks always come from the pixel centre.
+  int supersampling = 1;
+  bool normals = false;  // fill Frame::normals (camera frame)
 
   bool Check(std::string* why) const;
 };
 
 // Builds the acceleration structures once; Render() may then be called from many threads.
-// One ray per pixel through its centre; depth is the camera-frame z of the first hit. The full
-// (amodal) silhouette of each instance comes from tracing that instance alone.
+// One ray per pixel through its centre, traced as 16-ray packets over 4 x 4 pixel tiles (tiles in
+// parallel; the output does not depend on the thread count); depth is the camera-frame z of the
+// first hit. The full (amodal) silhouette of each instance comes from tracing that instance alone.
 class Renderer {
  public:
   // `parts` are copied into the renderer's own buffers; `scene.instances` refer to them by index.

@@ -20,10 +20,17 @@ struct Scene {
   Eigen::Vector3f floor_color{0.55f, 0.55f, 0.55f};
   Eigen::Vector3f background_color{0.12f, 0.14f, 0.18f};
 
-  // One directional light (direction the light travels, world frame) plus ambient light.
-  Eigen::Vector3d light_direction{-0.3, -0.4, -1.0};
-  float light_intensity = 0.75f;
+  // Lambert shading: albedo * (ambient + sum of light intensity * max(0, n . l) * unshadowed).
+  struct Light {
+    enum class Kind { kDirectional, kPoint };
+    Kind kind = Kind::kDirectional;
+    Eigen::Vector3d direction{-0.3, -0.4, -1.0};  // directional: the way the light travels (world)
+    Eigen::Vector3d position{0.0, 0.0, 2000.0};   // point: where it is (world, mm); no fall-off
+    float intensity = 0.75f;
+  };
+  std::vector<Light> lights = {Light{}};
   float ambient = 0.3f;
+  bool shadows = true;  // hard shadows: an occlusion ray from every lit point to every light
 };
 
 // A palette of well-separated colours for parts without a colour of their own.

@@ -187,7 +187,7 @@ TEST(Renderer, InstanceColourWinsOverPartColour) {
   Scene scene;
   scene.floor = false;
   scene.ambient = 1.0f;  // flat: the pixel is the albedo
-  scene.light_intensity = 0.0f;
+  scene.lights.clear();
   scene.part_colors = {Eigen::Vector3f(0, 0, 1)};
   scene.instances = {Place(0, parts[0], {-60, 0, 10}), Place(0, parts[0], {60, 0, 10})};
   scene.instances[1].color = Eigen::Vector3f(1, 0, 0);
@@ -201,6 +201,102 @@ TEST(Renderer, InstanceColourWinsOverPartColour) {
   // World -x is image left (image x = world x when looking down).
   EXPECT_EQ(rgb(320 - 40, 240), (std::array<int, 3>{0, 0, 255}));
   EXPECT_EQ(rgb(320 + 40, 240), (std::array<int, 3>{255, 0, 0}));
+}
+
+// Floor pixel (u, v) of a camera LookingDown from `height` (f = 525, c = (319.5, 239.5)).
+int FloorPixel(double x, double y, double height, int* u) {
+  *u = static_cast<int>(std::floor(319.5 + 525.0 * x / height));
+  return static_cast<int>(std::floor(239.5 - 525.0 * y / height));
+}
+
+TEST(Renderer, ShadowFallsWhereGeometrySays) {
+  // A 40 x 40 x 20 mm box floating at z = 100..120 over the origin, lit along (1, 0, -1): its
+  // shadow on the floor covers x in [-20 + 100, 20 + 120] = [80, 140], y in [-20, 20].
+  const std::vector<Part> parts = {MakePart("box", MakeBox(40, 40, 20), TessellationOptions{})};
+  Scene scene;
+  scene.floor_color = Eigen::Vector3f(0.5f, 0.5f, 0.5f);
+  scene.ambient = 0.2f;
+  scene.lights = {Scene::Light{Scene::Light::Kind::kDirectional, Eigen::Vector3d(1, 0, -1)}};
+  scene.lights[0].intensity = 0.8f;
+  scene.instances = {Place(0, parts[0], {0, 0, 110})};
+  const Renderer renderer(parts, scene);
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 1000});
+  const Frame frame = renderer.Render(camera);
+  const auto grey = [&](double x, double y) {
+    int u;
+    const int v = FloorPixel(x, y, 1000, &u);
+    return int(frame.rgb[3 * (v * 640 + u)]);
+  };
+  const int shadowed = std::lround(255 * 0.5 * 0.2);                          // ambient only
+  const int lit = std::lround(255 * 0.5 * (0.2 + 0.8 * std::cos(M_PI / 4)));  // 45 degree light
+  EXPECT_EQ(grey(110, 0), shadowed);
+  EXPECT_EQ(grey(85, 15), shadowed);
+  EXPECT_EQ(grey(135, -15), shadowed);
+  EXPECT_EQ(grey(110, 30), lit);   // beside the shadow
+  EXPECT_EQ(grey(150, 0), lit);    // beyond it
+  EXPECT_EQ(grey(60, 0), lit);     // between the box and its shadow
+  scene.shadows = false;
+  const Frame unshadowed = Renderer(parts, scene).Render(camera);
+  int u;
+  const int v = FloorPixel(110, 0, 1000, &u);
+  EXPECT_EQ(int(unshadowed.rgb[3 * (v * 640 + u)]), lit);
+}
+
+TEST(Renderer, PointLightFollowsTheCosine) {
+  Scene scene;  // floor only
+  scene.floor_color = Eigen::Vector3f(1, 1, 1);
+  scene.ambient = 0.0f;
+  scene.lights = {Scene::Light{Scene::Light::Kind::kPoint, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 300), 1.0f}};
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 1000});
+  const Frame frame = Renderer({}, scene).Render(camera);
+  const auto grey = [&](double x) {
+    int u;
+    const int v = FloorPixel(x, 0, 1000, &u);
+    return int(frame.rgb[3 * (v * 640 + u)]);
+  };
+  // Under the light cos = 1; 300 mm aside cos = 300 / sqrt(300^2 + 300^2) = 0.707.
+  EXPECT_NEAR(grey(0.5), 255, 1);
+  EXPECT_NEAR(grey(300), 255 * std::sqrt(0.5), 2);
+  EXPECT_NEAR(grey(-150), 255 * 300 / std::hypot(300.0, 150.0), 2);
+}
+
+TEST(Renderer, ClipNormalsAndSupersampling) {
+  const std::vector<Part> parts = {MakePart("box", MakeBox(100, 100, 40), TessellationOptions{})};
+  Scene scene;
+  scene.instances = {Place(0, parts[0], {0.3, 0.2, 20})};  // edges off the pixel grid
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 600});
+  RenderOptions options;
+  options.normals = true;
+  const Frame plain = Renderer(parts, scene, options).Render(camera);
+  // The box top faces the camera: normal (0, 0, -1) in the camera frame; the floor too.
+  EXPECT_TRUE(plain.normals[240 * 640 + 320].isApprox(Eigen::Vector3f(0, 0, -1), 1e-5f));
+  EXPECT_TRUE(plain.normals[5 * 640 + 5].isApprox(Eigen::Vector3f(0, 0, -1), 1e-5f));
+  // Clipping at 570 mm: the box top (560 mm away) is gone; the ray starts inside the solid box and
+  // next meets its bottom face, at the floor's 600 mm.
+  EXPECT_EQ(plain.depth[240 * 640 + 320], 560.0f);
+  options.near_mm = 570;
+  options.far_mm = 700;
+  const Frame clipped = Renderer(parts, scene, options).Render(camera);
+  EXPECT_EQ(clipped.depth[240 * 640 + 320], 600.0f);
+  options.far_mm = 590;
+  EXPECT_EQ(Renderer(parts, scene, options).Render(camera).depth[5 * 640 + 5], 0.0f);  // no floor
+  // Supersampling softens RGB at the box edge and leaves depth and ids alone.
+  RenderOptions ss;
+  ss.supersampling = 4;
+  const Frame smooth = Renderer(parts, scene, ss).Render(camera);
+  EXPECT_EQ(smooth.depth, plain.depth);
+  EXPECT_EQ(smooth.instance, plain.instance);
+  int differing = 0;
+  for (size_t p = 0; p < plain.rgb.size(); ++p) differing += plain.rgb[p] != smooth.rgb[p];
+  EXPECT_GT(differing, 100);                          // edge pixels blend box and floor
+  EXPECT_LT(differing, int(plain.rgb.size()) / 20);  // interiors stay as they were
+  RenderOptions bad;
+  bad.near_mm = 10;
+  bad.far_mm = 5;
+  EXPECT_THROW(Renderer(parts, scene, bad), Error);
 }
 
 TEST(Renderer, RejectsInstancesOfMissingParts) {

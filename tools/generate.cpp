@@ -172,23 +172,11 @@ void MoveIntoPlace(const std::filesystem::path& staging, const std::filesystem::
 
 }  // namespace
 
-GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info_sink) {
   const auto info = [&](const std::string& line) {
-    if (options.info) options.info(line);
+    if (info_sink) info_sink(line);
   };
-  if (options.output.empty()) throw Error("no output folder given");
-  const std::filesystem::path output = std::filesystem::absolute(options.output).lexically_normal();
-  std::error_code ec;
-  if (std::filesystem::exists(output, ec) && !options.overwrite) {
-    throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
-  }
-  std::string why;
-  if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
-  if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
-  if (!spec.bop.Check(&why)) throw Error("output: " + why);
   if (spec.scenes.empty()) throw Error("no scenes to render");
-
   // Every file and every variant, built in parallel; errors reported in recipe order.
   std::vector<Job> jobs;
   for (size_t s = 0; s < spec.scenes.size(); ++s) {
@@ -273,6 +261,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   }
 
   // Scenes: arrange each scene's groups on the floor.
+  PreparedRun prepared;
   struct SceneRun {
     Scene scene;
     std::vector<int> obj_ids;
@@ -303,23 +292,6 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     }
     for (const Instance& instance : run.scene.instances) run.obj_ids.push_back(instance.part + 1);
   }
-  const std::vector<SweepView> views = ExpandSweep(spec.sweep);
-  const size_t total_frames = views.size() * runs.size();
-  for (size_t s = 0; s < runs.size(); ++s) {
-    for (const std::string& warning : PlacementWarnings(parts, runs[s].scene.instances, spec.intrinsics, spec.sweep)) {
-      Warn("scene '" + spec.scenes[s].name + "': " + warning);
-    }
-  }
-
-  // Everything goes to a hidden staging folder beside the output, renamed into place at the end.
-  std::filesystem::create_directories(output.parent_path(), ec);
-  if (ec) throw Error(output.parent_path().string() + ": cannot create folder: " + ec.message());
-  StagingFolder staging(output.parent_path() / ("." + output.filename().string() + ".partial-" + std::to_string(::getpid())));
-  std::filesystem::remove_all(staging.path(), ec);
-
-  WriteBopCamera(staging.path(), spec.intrinsics, spec.bop);
-  WriteBopModels(staging.path(), parts, classes);
-
   // variants.json: what each file or variant is, and which objects it became.
   Json variants = Json::array();
   for (size_t j = 0; j < jobs.size(); ++j) {
@@ -341,14 +313,58 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     entry["class_ids"] = class_ids;
     variants.push_back(entry);
   }
-  WriteFileAtomic(staging.path() / "variants.json", Json{{"variants", variants}}.dump(2) + "\n");
+  prepared.variants_json = Json{{"variants", variants}}.dump(2) + "\n";
+
+  for (SceneRun& run : runs) {
+    prepared.scenes.push_back(std::move(run.scene));
+    prepared.obj_ids.push_back(std::move(run.obj_ids));
+  }
+  prepared.parts = std::move(all.parts);
+  prepared.classes = classes;
+  return prepared;
+}
+
+GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (options.output.empty()) throw Error("no output folder given");
+  const std::filesystem::path output = std::filesystem::absolute(options.output).lexically_normal();
+  std::error_code ec;
+  if (std::filesystem::exists(output, ec) && !options.overwrite) {
+    throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
+  }
+  std::string why;
+  if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
+  if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
+  if (!spec.bop.Check(&why)) throw Error("output: " + why);
+
+  PreparedRun prepared = Prepare(spec, options.info);
+  const std::vector<Part>& parts = prepared.parts;
+  const std::vector<SweepView> views = ExpandSweep(spec.sweep);
+  const size_t total_frames = views.size() * prepared.scenes.size();
+  for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+    for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
+      Warn("scene '" + spec.scenes[s].name + "': " + warning);
+    }
+  }
+
+  // Everything goes to a hidden staging folder beside the output, renamed into place at the end.
+  std::filesystem::create_directories(output.parent_path(), ec);
+  if (ec) throw Error(output.parent_path().string() + ": cannot create folder: " + ec.message());
+  std::string hidden = ".";
+  hidden.append(output.filename().string()).append(".partial-").append(std::to_string(::getpid()));
+  StagingFolder staging(output.parent_path() / hidden);
+  std::filesystem::remove_all(staging.path(), ec);
+
+  WriteBopCamera(staging.path(), spec.intrinsics, spec.bop);
+  WriteBopModels(staging.path(), parts, prepared.classes);
+  WriteFileAtomic(staging.path() / "variants.json", prepared.variants_json);
 
   // Render scene by scene: cast -> encode + write, a bounded number of frames in flight.
   std::atomic<size_t> done{0};
-  for (size_t s = 0; s < runs.size(); ++s) {
-    const Renderer renderer(parts, runs[s].scene, spec.render);
-    BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, runs[s].obj_ids);
-    writer.WriteWorldPoses(runs[s].scene.instances);
+  for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+    const Renderer renderer(parts, prepared.scenes[s], spec.render);
+    BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
+    writer.WriteWorldPoses(prepared.scenes[s].instances);
     size_t next = 0;
     const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
     using FramePtr = std::shared_ptr<const Frame>;
@@ -381,10 +397,10 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
 
   GenerateSummary summary;
   summary.frames = total_frames;
-  summary.scenes = runs.size();
+  summary.scenes = prepared.scenes.size();
   summary.objects = parts.size();
   summary.instances = 0;
-  for (const SceneRun& run : runs) summary.instances += run.scene.instances.size();
+  for (const Scene& scene : prepared.scenes) summary.instances += scene.instances.size();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

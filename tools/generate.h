@@ -5,7 +5,9 @@
 #include <functional>
 #include <string>
 
+#include "dataset/bop.h"
 #include "recipes/recipe.h"
+#include "render/scene.h"
 
 namespace cadsynth {
 
@@ -25,6 +27,20 @@ struct GenerateSummary {
   size_t instances = 0;
   double seconds = 0.0;
 };
+
+// Everything a run renders, before rendering: the objects (all scenes share them), their classes,
+// each scene arranged on the floor with the obj_id of each instance, and variants.json's text.
+struct PreparedRun {
+  std::vector<Part> parts;
+  std::vector<ObjectClass> classes;
+  std::vector<Scene> scenes;
+  std::vector<std::vector<int>> obj_ids;
+  std::string variants_json;
+};
+
+// Reads the files and builds the family variants of every scene (in parallel), merges repeated
+// shapes, assigns classes and arranges each scene. Throws Error naming the recipe entry.
+PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info = {});
 
 // What a user should hear about a scene before rendering it: whether its objects fit the view at
 // the nearest camera radius, and whether the smallest is still a few pixels at the farthest.

@@ -68,57 +68,71 @@ std::string EncodePng(const cv::Mat& image, const std::filesystem::path& where) 
   return std::string(bytes.begin(), bytes.end());
 }
 
-// Bounding box (x, y, w, h) of the pixels where `inside(pixel)` holds; all -1 when none.
-template <typename Predicate>
-void BoundingBox(int width, int height, Predicate inside, int box[4]) {
-  int u0 = width, v0 = height, u1 = -1, v1 = -1;
-  for (int v = 0; v < height; ++v) {
-    for (int u = 0; u < width; ++u) {
-      if (!inside(static_cast<size_t>(v) * width + u)) continue;
-      u0 = std::min(u0, u);
-      u1 = std::max(u1, u);
-      v0 = std::min(v0, v);
-      v1 = std::max(v1, v);
-    }
-  }
-  if (u1 < 0) {
-    box[0] = box[1] = box[2] = box[3] = -1;
-  } else {
-    box[0] = u0;
-    box[1] = v0;
-    box[2] = u1 - u0 + 1;
-    box[3] = v1 - v0 + 1;
-  }
-}
-
 }  // namespace
 
 uint16_t EncodeDepth(float depth_mm, double depth_scale) {
   if (!(depth_mm > 0.0f)) return 0;
-  const double units = std::round(depth_mm / depth_scale);
-  if (units > std::numeric_limits<uint16_t>::max()) return 0;
+  const double units = depth_mm / depth_scale + 0.5;  // round half up (depths are positive)
+  if (units >= std::numeric_limits<uint16_t>::max() + 1.0) return 0;
   return static_cast<uint16_t>(units);
 }
 
-GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale) {
-  GtInfo info;
+std::vector<GtInfo> ComputeGtInfos(const Frame& frame, double depth_scale) {
   const int w = frame.width(), h = frame.height();
-  const uint16_t visible_id = static_cast<uint16_t>(instance + 1);
-  const std::vector<uint8_t>& amodal = frame.instances[instance].amodal_mask;
-  const auto in_full = [&](size_t p) { return !amodal.empty() && amodal[p] != 0; };
-  const auto in_visible = [&](size_t p) { return frame.instance[p] == visible_id; };
-  BoundingBox(w, h, in_full, info.bbox_obj);
-  BoundingBox(w, h, in_visible, info.bbox_visib);
-  for (size_t p = 0; p < frame.instance.size(); ++p) {
-    if (in_full(p)) {
-      ++info.px_count_all;
-      if (EncodeDepth(frame.depth[p], depth_scale) != 0) ++info.px_count_valid;
+  const size_t n = frame.instances.size();
+  std::vector<GtInfo> infos(n);
+  // Visible: one pass over the instance ids.
+  std::vector<int> u0(n, w), v0(n, h), u1(n, -1), v1(n, -1);
+  for (int v = 0; v < h; ++v) {
+    const uint16_t* row = &frame.instance[static_cast<size_t>(v) * w];
+    for (int u = 0; u < w; ++u) {
+      if (row[u] == 0) continue;
+      const size_t i = row[u] - 1;
+      ++infos[i].px_count_visib;
+      u0[i] = std::min(u0[i], u);
+      u1[i] = std::max(u1[i], u);
+      v0[i] = std::min(v0[i], v);
+      v1[i] = std::max(v1[i], v);
     }
-    if (in_visible(p)) ++info.px_count_visib;
   }
-  info.visib_fract =
-      info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
-  return info;
+  const auto box = [](int a0, int b0, int a1, int b1, int out[4]) {
+    if (a1 < 0) {
+      out[0] = out[1] = out[2] = out[3] = -1;
+    } else {
+      out[0] = a0;
+      out[1] = b0;
+      out[2] = a1 - a0 + 1;
+      out[3] = b1 - b0 + 1;
+    }
+  };
+  for (size_t i = 0; i < n; ++i) {
+    GtInfo& info = infos[i];
+    box(u0[i], v0[i], u1[i], v1[i], info.bbox_visib);
+    // Full silhouette: only inside the rectangle the renderer traced.
+    const Frame::InstanceTruth& truth = frame.instances[i];
+    int a0 = w, b0 = h, a1 = -1, b1 = -1;
+    if (!truth.amodal_mask.empty()) {
+      for (int v = std::max(0, truth.roi[1]); v < std::min(h, truth.roi[3]); ++v) {
+        for (int u = std::max(0, truth.roi[0]); u < std::min(w, truth.roi[2]); ++u) {
+          const size_t p = static_cast<size_t>(v) * w + u;
+          if (truth.amodal_mask[p] == 0) continue;
+          ++info.px_count_all;
+          if (EncodeDepth(frame.depth[p], depth_scale) != 0) ++info.px_count_valid;
+          a0 = std::min(a0, u);
+          a1 = std::max(a1, u);
+          b0 = std::min(b0, v);
+          b1 = std::max(b1, v);
+        }
+      }
+    }
+    box(a0, b0, a1, b1, info.bbox_obj);
+    info.visib_fract = info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
+  }
+  return infos;
+}
+
+GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale) {
+  return ComputeGtInfos(frame, depth_scale).at(static_cast<size_t>(instance));
 }
 
 std::vector<ObjectClass> AssignClasses(
@@ -277,13 +291,14 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
   entry->gt = Json::array();
   entry->gt_info = Json::array();
 
+  const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_.depth_scale);
   cv::Mat mask(h, w, CV_8UC1);
   for (size_t i = 0; i < frame.instances.size(); ++i) {
     const Frame::InstanceTruth& truth = frame.instances[i];
     entry->gt.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
                          {"cam_t_m2c", Vec(truth.cam_from_model.translation())},
                          {"obj_id", obj_ids_[i]}});
-    const GtInfo info = ComputeGtInfo(frame, static_cast<int>(i), options_.depth_scale);
+    const GtInfo& info = infos[i];
     entry->gt_info.push_back(
         {{"bbox_obj", {info.bbox_obj[0], info.bbox_obj[1], info.bbox_obj[2], info.bbox_obj[3]}},
          {"bbox_visib",
@@ -295,13 +310,25 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
 
     const std::string name = im + "_" + Id6(static_cast<int>(i)) + ".png";
     const uint16_t visible_id = static_cast<uint16_t>(i + 1);
-    auto* out = mask.ptr<uint8_t>(0);
-    for (size_t p = 0; p < frame.instance.size(); ++p) {
-      out[p] = !truth.amodal_mask.empty() && truth.amodal_mask[p] != 0 ? 255 : 0;
+    // Masks are zero outside their boxes: fill only inside.
+    mask.setTo(0);
+    if (info.bbox_obj[0] >= 0) {
+      for (int v = info.bbox_obj[1]; v < info.bbox_obj[1] + info.bbox_obj[3]; ++v) {
+        auto* out = mask.ptr<uint8_t>(v);
+        const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v) * w];
+        for (int u = info.bbox_obj[0]; u < info.bbox_obj[0] + info.bbox_obj[2]; ++u) out[u] = in[u] != 0 ? 255 : 0;
+      }
     }
     WriteFileAtomic(scene_dir_ / "mask" / name, EncodePng(mask, scene_dir_ / "mask" / name));
-    for (size_t p = 0; p < frame.instance.size(); ++p) {
-      out[p] = frame.instance[p] == visible_id ? 255 : 0;
+    mask.setTo(0);
+    if (info.bbox_visib[0] >= 0) {
+      for (int v = info.bbox_visib[1]; v < info.bbox_visib[1] + info.bbox_visib[3]; ++v) {
+        auto* out = mask.ptr<uint8_t>(v);
+        const uint16_t* in = &frame.instance[static_cast<size_t>(v) * w];
+        for (int u = info.bbox_visib[0]; u < info.bbox_visib[0] + info.bbox_visib[2]; ++u) {
+          out[u] = in[u] == visible_id ? 255 : 0;
+        }
+      }
     }
     WriteFileAtomic(scene_dir_ / "mask_visib" / name,
                     EncodePng(mask, scene_dir_ / "mask_visib" / name));

@@ -75,6 +75,8 @@ struct GtInfo {
 };
 // `instance` is the index in frame.instances; `depth_scale` decides which depths are writable.
 GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale);
+// All instances at once: one pass over the visible ids, and one over each amodal mask's rectangle.
+std::vector<GtInfo> ComputeGtInfos(const Frame& frame, double depth_scale);
 
 // Depth in mm to BOP's uint16 units; 0 where there is no return or the value does not fit.
 uint16_t EncodeDepth(float depth_mm, double depth_scale);

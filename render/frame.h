@@ -25,6 +25,9 @@ struct Frame {
     Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();
     // Full silhouette, also where other instances hide it: 1 = covered. Same size as the image.
     std::vector<uint8_t> amodal_mask;
+    // The mask is zero outside the pixel rectangle [roi[0], roi[2]) x [roi[1], roi[3]) (clamped
+    // to the image; the default is the whole image).
+    int roi[4] = {0, 0, 1 << 30, 1 << 30};
     int px_count_all = 0;    // pixels of the amodal mask inside the image
     int px_count_visib = 0;  // pixels where this instance is the front-most surface
   };

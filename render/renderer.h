@@ -21,6 +21,9 @@ struct RenderOptions {
   // instance ids and masks always come from the pixel centre.
   int supersampling = 1;
   bool normals = false;  // fill Frame::normals (camera frame)
+  // For profiling only (a dataset needs both): skip shading (RGB stays black) or the amodal masks.
+  bool shade = true;
+  bool amodal_masks = true;
 
   bool Check(std::string* why) const;
 };

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <algorithm>
 #include <limits>
 #include <map>
 #include <system_error>
@@ -237,12 +239,6 @@ void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,
                                        {"fy", k.fy}, {"height", k.height}, {"width", k.width}});
 }
 
-struct BopSceneWriter::Entry {
-  Json camera;
-  Json gt;
-  Json gt_info;
-};
-
 BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
                                const BopOptions& options, std::vector<int> obj_id_of_instance)
     : scene_dir_(root / options.split / Id6(scene_id)),
@@ -250,7 +246,7 @@ BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
       obj_ids_(std::move(obj_id_of_instance)) {
   std::string why;
   if (!options.Check(&why)) throw Error("bop: " + why);
-  for (const char* sub : {"rgb", "depth", "mask", "mask_visib"}) CreateFolder(scene_dir_ / sub);
+  for (const char* sub : {"rgb", "depth", "mask", "mask_visib", ".fragments"}) CreateFolder(scene_dir_ / sub);
 }
 
 void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
@@ -277,29 +273,27 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
   const std::filesystem::path depth_path = scene_dir_ / "depth" / (im + ".png");
   WriteFileAtomic(depth_path, EncodePng(depth, depth_path));
 
-  auto entry = std::make_shared<Entry>();
+  Json camera_entry, gt_entry = Json::array(), gt_info_entry = Json::array();
   const Eigen::Isometry3d cam_from_world = frame.camera.world_from_cam.inverse();
   Json k = Json::array();
   const Eigen::Matrix3d kmat = frame.camera.intrinsics.K();
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) k.push_back(kmat(r, c));
   }
-  entry->camera = {{"cam_K", k},
+  camera_entry = {{"cam_K", k},
                    {"depth_scale", options_.depth_scale},
                    {"cam_R_w2c", RowMajor(cam_from_world.linear())},
                    {"cam_t_w2c", Vec(cam_from_world.translation())}};
-  entry->gt = Json::array();
-  entry->gt_info = Json::array();
 
   const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_.depth_scale);
   cv::Mat mask(h, w, CV_8UC1);
   for (size_t i = 0; i < frame.instances.size(); ++i) {
     const Frame::InstanceTruth& truth = frame.instances[i];
-    entry->gt.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
+    gt_entry.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
                          {"cam_t_m2c", Vec(truth.cam_from_model.translation())},
                          {"obj_id", obj_ids_[i]}});
     const GtInfo& info = infos[i];
-    entry->gt_info.push_back(
+    gt_info_entry.push_back(
         {{"bbox_obj", {info.bbox_obj[0], info.bbox_obj[1], info.bbox_obj[2], info.bbox_obj[3]}},
          {"bbox_visib",
           {info.bbox_visib[0], info.bbox_visib[1], info.bbox_visib[2], info.bbox_visib[3]}},
@@ -333,8 +327,11 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
     WriteFileAtomic(scene_dir_ / "mask_visib" / name,
                     EncodePng(mask, scene_dir_ / "mask_visib" / name));
   }
+  // One fragment per frame: three lines of compact JSON, read back in order by Finish().
+  WriteFileAtomic(scene_dir_ / ".fragments" / (im + ".json"),
+                  camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n");
   std::lock_guard<std::mutex> lock(mutex_);
-  entries_[image_id] = std::move(entry);
+  image_ids_.push_back(image_id);
 }
 
 void BopSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
@@ -350,17 +347,44 @@ void BopSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
 }
 
 void BopSceneWriter::Finish() {
-  Json camera = Json::object(), gt = Json::object(), gt_info = Json::object();
   std::lock_guard<std::mutex> lock(mutex_);
-  for (const auto& [image_id, entry] : entries_) {
-    const std::string key = std::to_string(image_id);
-    camera[key] = entry->camera;
-    gt[key] = entry->gt;
-    gt_info[key] = entry->gt_info;
+  std::sort(image_ids_.begin(), image_ids_.end());
+  image_ids_.erase(std::unique(image_ids_.begin(), image_ids_.end()), image_ids_.end());
+  // Stream the three files: {"id": entry, ...}, each entry indented as json.dump(2) would.
+  const char* names[3] = {"scene_camera.json", "scene_gt.json", "scene_gt_info.json"};
+  std::ofstream out[3];
+  for (int f = 0; f < 3; ++f) {
+    out[f].open(scene_dir_ / (std::string(names[f]) + ".tmp"), std::ios::binary);
+    if (!out[f]) throw Error((scene_dir_ / names[f]).string() + ": cannot create file");
+    out[f] << "{";
   }
-  WriteJson(scene_dir_ / "scene_camera.json", camera);
-  WriteJson(scene_dir_ / "scene_gt.json", gt);
-  WriteJson(scene_dir_ / "scene_gt_info.json", gt_info);
+  const auto indent = [](const std::string& text) {
+    std::string result;
+    for (char c : text) {
+      result += c;
+      if (c == '\n') result += "  ";
+    }
+    return result;
+  };
+  for (size_t n = 0; n < image_ids_.size(); ++n) {
+    const std::filesystem::path fragment = scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json");
+    std::ifstream in(fragment, std::ios::binary);
+    std::string line;
+    for (int f = 0; f < 3; ++f) {
+      if (!std::getline(in, line)) throw Error(fragment.string() + ": incomplete fragment");
+      out[f] << (n == 0 ? "\n  \"" : ",\n  \"") << image_ids_[n] << "\": " << indent(Json::parse(line).dump(2));
+    }
+  }
+  for (int f = 0; f < 3; ++f) {
+    out[f] << (image_ids_.empty() ? "}\n" : "\n}\n");
+    out[f].close();
+    if (!out[f]) throw Error((scene_dir_ / names[f]).string() + ": cannot write file (disk full?)");
+    std::error_code ec;
+    std::filesystem::rename(scene_dir_ / (std::string(names[f]) + ".tmp"), scene_dir_ / names[f], ec);
+    if (ec) throw Error((scene_dir_ / names[f]).string() + ": cannot move file into place: " + ec.message());
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(scene_dir_ / ".fragments", ec);
 }
 
 }  // namespace cadsynth

@@ -88,10 +88,12 @@ class BopSceneWriter {
   BopSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
                  std::vector<int> obj_id_of_instance);
 
-  // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`.
+  // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`, and the
+  // frame's JSON entries to a fragment file (so memory does not grow with the number of frames).
   void WriteFrame(int image_id, const Frame& frame);
 
-  // Writes scene_camera.json, scene_gt.json and scene_gt_info.json, ordered by image id.
+  // Writes scene_camera.json, scene_gt.json and scene_gt_info.json from the fragments, ordered by
+  // image id, streaming one frame at a time, and removes the fragments.
   void Finish();
 
   // Writes scene_gt_world.json (cadsynth): the world pose of every instance of this static scene,
@@ -102,12 +104,11 @@ class BopSceneWriter {
   const std::filesystem::path& scene_dir() const { return scene_dir_; }
 
  private:
-  struct Entry;
   std::filesystem::path scene_dir_;
   BopOptions options_;
   std::vector<int> obj_ids_;
   std::mutex mutex_;
-  std::map<int, std::shared_ptr<Entry>> entries_;
+  std::vector<int> image_ids_;  // written so far
 };
 
 }  // namespace cadsynth

@@ -467,17 +467,29 @@ void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "camera", {"preset", "width", "height", "fx", "fy", "cx", "cy"});
+  r.ExpectMap(node, "camera", {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov"});
   Intrinsics& k = spec->intrinsics;
   if (node["preset"]) {
     const std::string preset = r.Scalar(node["preset"], "camera.preset");
-    if (preset != "kinect_v1") {
-      r.Fail(node["preset"], "camera.preset", "unknown preset '" + preset + "' (known: kinect_v1)");
+    if (preset == "kinect_v1") {
+      k = Intrinsics::KinectV1();
+    } else if (preset == "realsense_d435") {
+      k = Intrinsics::RealSenseD435(1280);
+    } else if (preset == "realsense_d435_640") {
+      k = Intrinsics::RealSenseD435(640);
+    } else {
+      r.Fail(node["preset"], "camera.preset",
+             "unknown preset '" + preset + "' (known: kinect_v1, realsense_d435, realsense_d435_640)");
     }
-    k = Intrinsics::KinectV1();
   }
   if (node["width"]) k.width = r.Integer(node["width"], "camera.width");
   if (node["height"]) k.height = r.Integer(node["height"], "camera.height");
+  if (node["hfov"]) {
+    const double hfov = r.Angle(node["hfov"], "camera.hfov");
+    if (!(hfov > 0 && hfov < M_PI)) r.Fail(node["hfov"], "camera.hfov", "must lie between 0 and 180 degrees");
+    if (node["fx"] || node["fy"] || node["cx"] || node["cy"]) r.Fail(node["hfov"], "camera.hfov", "give hfov or fx/fy/cx/cy, not both");
+    k = Intrinsics::FromFov(k.width, k.height, hfov);
+  }
   if (node["fx"]) k.fx = r.Number(node["fx"], "camera.fx");
   if (node["fy"]) k.fy = r.Number(node["fy"], "camera.fy");
   if (node["cx"]) k.cx = r.Number(node["cx"], "camera.cx");
@@ -486,7 +498,8 @@ void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "sweep", {"yaw", "pitch", "radius", "target"});
+  r.ExpectMap(node, "sweep", {"yaw", "pitch", "radius", "target", "sampler", "count", "seed", "roll_jitter",
+                              "target_jitter", "min_visible_pixels"});
   const auto angle = [&](const YAML::Node& n, const std::string& k) { return r.Angle(n, k); };
   const auto length = [&](const YAML::Node& n, const std::string& k) { return r.Length(n, k); };
   SweepOptions& s = spec->sweep;
@@ -499,6 +512,34 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     for (int i = 0; i < 3; ++i) s.target[i] = r.Length(t[i], "sweep.target");
   }
   r.Check(s, node, "sweep");
+  ViewSampler& v = spec->sampler;
+  if (node["sampler"]) {
+    const std::string kind = r.Scalar(node["sampler"], "sweep.sampler");
+    if (kind == "grid") {
+      v.kind = ViewSampler::Kind::kGrid;
+    } else if (kind == "fibonacci") {
+      v.kind = ViewSampler::Kind::kFibonacci;
+    } else if (kind == "random") {
+      v.kind = ViewSampler::Kind::kRandom;
+    } else {
+      r.Fail(node["sampler"], "sweep.sampler", "expected grid, fibonacci or random, got '" + kind + "'");
+    }
+  }
+  // Fibonacci and random views fill the band between the lowest and highest pitch; random radii the
+  // range between the smallest and largest radius.
+  v.min_pitch_rad = *std::min_element(s.pitch_rad.begin(), s.pitch_rad.end());
+  v.max_pitch_rad = *std::max_element(s.pitch_rad.begin(), s.pitch_rad.end());
+  v.min_radius_mm = *std::min_element(s.radius_mm.begin(), s.radius_mm.end());
+  v.max_radius_mm = *std::max_element(s.radius_mm.begin(), s.radius_mm.end());
+  if (node["count"]) v.count = r.Integer(node["count"], "sweep.count");
+  if (node["seed"]) v.seed = static_cast<uint64_t>(r.Integer(node["seed"], "sweep.seed"));
+  if (node["roll_jitter"]) v.roll_jitter_rad = r.Angle(node["roll_jitter"], "sweep.roll_jitter");
+  if (node["target_jitter"]) v.target_jitter_mm = r.Length(node["target_jitter"], "sweep.target_jitter");
+  if (node["min_visible_pixels"]) {
+    spec->min_visible_pixels = r.Integer(node["min_visible_pixels"], "sweep.min_visible_pixels");
+    if (spec->min_visible_pixels < 0) r.Fail(node["min_visible_pixels"], "sweep.min_visible_pixels", "must not be negative");
+  }
+  r.Check(v, node, "sweep");
 }
 
 Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::string& key, bool length) {

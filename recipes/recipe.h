@@ -54,6 +54,8 @@ struct RunSpec {
   std::vector<std::pair<std::string, std::vector<std::string>>> class_groups;
   Intrinsics intrinsics;
   SweepOptions sweep;
+  ViewSampler sampler;          // kGrid: the sweep as listed
+  int min_visible_pixels = 0;   // skip views where fewer object pixels are visible (0: keep all)
   Scene look;  // floor, colours and lights (its instances are filled in by the run)
   bool cad_colors = true;  // colours from the CAD files where they have them, else the palette
   RenderOptions render;

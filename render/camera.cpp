@@ -1,9 +1,20 @@
 #include "render/camera.h"
 
 #include <cmath>
+#include <algorithm>
 #include <sstream>
 
 namespace cadsynth {
+
+Intrinsics Intrinsics::RealSenseD435(int width) {
+  if (width == 1280) return Intrinsics{1280, 720, 923.0, 923.0, 639.5, 359.5};
+  return Intrinsics{640, 480, 615.0, 615.0, 319.5, 239.5};
+}
+
+Intrinsics Intrinsics::FromFov(int width, int height, double hfov_rad) {
+  const double f = 0.5 * width / std::tan(0.5 * hfov_rad);
+  return Intrinsics{width, height, f, f, 0.5 * width - 0.5, 0.5 * height - 0.5};
+}
 
 Eigen::Matrix3d Intrinsics::K() const {
   Eigen::Matrix3d k;
@@ -71,6 +82,100 @@ std::vector<SweepView> ExpandSweep(const SweepOptions& options) {
         views.push_back(
             {yaw, pitch, radius, WorldFromCamOnSphere(options.target, yaw, pitch, radius)});
       }
+    }
+  }
+  return views;
+}
+
+bool ViewSampler::Check(std::string* why) const {
+  std::ostringstream out;
+  if (kind != Kind::kGrid && (count < 1 || count > 10000000)) {
+    out << "count must be 1 to 10,000,000";
+  } else if (!(min_pitch_rad <= max_pitch_rad) || min_pitch_rad < -0.5 * M_PI - 1e-12 || max_pitch_rad > 0.5 * M_PI + 1e-12) {
+    out << "the pitch band must lie within -90 to 90 degrees, lowest first";
+  } else if (kind == Kind::kRandom && !(min_radius_mm > 0 && min_radius_mm <= max_radius_mm)) {
+    out << "the radius range must be positive, smallest first";
+  } else if (!(roll_jitter_rad >= 0) || !(target_jitter_mm >= 0)) {
+    out << "jitter must not be negative";
+  } else {
+    return true;
+  }
+  *why = out.str();
+  return false;
+}
+
+namespace {
+
+// SplitMix64 of (seed, stream, index) to [0, 1): the same on every machine.
+double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
+  uint64_t x = seed * 0x9E3779B97F4A7C15ull ^ (stream + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
+               (index + 0x85EBCA77C2B2AE63ull) * 0x94D049BB133111EBull;
+  for (int round = 0; round < 2; ++round) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    x ^= x >> 31;
+  }
+  return static_cast<double>(x >> 11) * 0x1.0p-53;
+}
+
+// Pitch from a uniform number, uniform in area over the band (sin(pitch) uniform).
+double PitchForArea(double u, double lo, double hi) {
+  const double s = std::sin(lo) + u * (std::sin(hi) - std::sin(lo));
+  return std::asin(std::clamp(s, -1.0, 1.0));
+}
+
+}  // namespace
+
+std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOptions& sweep) {
+  std::vector<SweepView> views;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  switch (sampler.kind) {
+    case ViewSampler::Kind::kGrid:
+      views = ExpandSweep(sweep);
+      break;
+    case ViewSampler::Kind::kFibonacci:
+      for (double radius : sweep.radius_mm) {
+        for (int i = 0; i < sampler.count; ++i) {
+          const double pitch = PitchForArea((i + 0.5) / sampler.count, sampler.min_pitch_rad, sampler.max_pitch_rad);
+          const double yaw = std::fmod(i * golden, 2 * M_PI);
+          views.push_back({yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
+        }
+      }
+      break;
+    case ViewSampler::Kind::kRandom:
+      for (int i = 0; i < sampler.count; ++i) {
+        const double yaw = 2 * M_PI * Draw(sampler.seed, 10, i);
+        const double pitch = PitchForArea(Draw(sampler.seed, 11, i), sampler.min_pitch_rad, sampler.max_pitch_rad);
+        const double radius =
+            sampler.min_radius_mm + Draw(sampler.seed, 12, i) * (sampler.max_radius_mm - sampler.min_radius_mm);
+        views.push_back({yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
+      }
+      break;
+  }
+  if (sampler.roll_jitter_rad > 0 || sampler.target_jitter_mm > 0) {
+    for (size_t i = 0; i < views.size(); ++i) {
+      SweepView& v = views[i];
+      // Aim at a point in a ball around the target (uniform in volume), then roll.
+      Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+      if (sampler.target_jitter_mm > 0) {
+        const double z = 2 * Draw(sampler.seed, 20, i) - 1, a = 2 * M_PI * Draw(sampler.seed, 21, i);
+        const double r = sampler.target_jitter_mm * std::cbrt(Draw(sampler.seed, 22, i));
+        offset = r * Eigen::Vector3d(std::sqrt(1 - z * z) * std::cos(a), std::sqrt(1 - z * z) * std::sin(a), z);
+      }
+      const Eigen::Vector3d eye = v.world_from_cam.translation();
+      const Eigen::Vector3d aim = sweep.target + offset;
+      Eigen::Isometry3d pose = v.world_from_cam;
+      const Eigen::Vector3d z = (aim - eye).normalized();
+      Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ());
+      if (x.norm() < 1e-9) x = v.world_from_cam.linear().col(0);  // straight down: keep the yaw
+      x.normalize();
+      pose.linear().col(0) = x;
+      pose.linear().col(1) = z.cross(x);
+      pose.linear().col(2) = z;
+      const double roll = sampler.roll_jitter_rad * (2 * Draw(sampler.seed, 23, i) - 1);
+      pose.linear() = pose.linear() * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      v.world_from_cam = pose;
     }
   }
   return views;

@@ -6,6 +6,7 @@
 //   ((u + 0.5 - cx) / fx, (v + 0.5 - cy) / fy, 1) in the camera frame.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,12 @@ struct Intrinsics {
 
   // The Kinect v1 of the reference paper: 640x480, fx = fy = 525, cx = 319.5, cy = 239.5.
   static Intrinsics KinectV1() { return Intrinsics{}; }
+  // Intel RealSense D435 colour camera, nominal (datasheet field of view 69 x 42 degrees): 1280x720
+  // with fx = fy = 923, or 640x480 with fx = fy = 615; principal point at the centre. Real units
+  // differ by a few percent: give the calibrated K for training on a real camera.
+  static Intrinsics RealSenseD435(int width);
+  // Square pixels, principal point at the centre, horizontal field of view `hfov_rad`.
+  static Intrinsics FromFov(int width, int height, double hfov_rad);
 
   Eigen::Matrix3d K() const;
   bool Check(std::string* why) const;
@@ -62,5 +69,30 @@ Eigen::Isometry3d WorldFromCamOnSphere(const Eigen::Vector3d& target, double yaw
                                        double pitch_rad, double radius_mm);
 
 std::vector<SweepView> ExpandSweep(const SweepOptions& options);
+
+// Other ways to place cameras around the target, all looking at it.
+struct ViewSampler {
+  enum class Kind {
+    kGrid,       // SweepOptions' yaw x pitch x radius grid (the reference paper)
+    kFibonacci,  // `count` directions spread evenly over the band of pitches (a Fibonacci
+                 // lattice, equal area per view), at each radius of the sweep
+    kRandom,     // `count` views uniform on the band of pitches, radius uniform in its range
+  };
+  Kind kind = Kind::kGrid;
+  int count = 100;
+  double min_pitch_rad = 0.0, max_pitch_rad = 1.5707963267948966;  // the band (fibonacci, random)
+  double min_radius_mm = 650.0, max_radius_mm = 1450.0;            // random
+  // Jitter, for every sampler: the camera rolls about its optical axis by up to +-roll_jitter and
+  // aims at a point up to target_jitter_mm from the target (uniform in a ball).
+  double roll_jitter_rad = 0.0;
+  double target_jitter_mm = 0.0;
+  uint64_t seed = 0;
+
+  bool Check(std::string* why) const;
+};
+
+// The views of `sampler` (grid and fibonacci radii come from `sweep`). Seeded draws are the same on
+// every machine. View i's jitter depends only on (seed, i).
+std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOptions& sweep);
 
 }  // namespace cadsynth

@@ -339,7 +339,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
 
   PreparedRun prepared = Prepare(spec, options.info);
   const std::vector<Part>& parts = prepared.parts;
-  const std::vector<SweepView> views = ExpandSweep(spec.sweep);
+  std::string why_sampler;
+  if (!spec.sampler.Check(&why_sampler)) throw Error("sweep: " + why_sampler);
+  const std::vector<SweepView> views = SampleViews(spec.sampler, spec.sweep);
   const size_t total_frames = views.size() * prepared.scenes.size();
   for (size_t s = 0; s < prepared.scenes.size(); ++s) {
     for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
@@ -359,8 +361,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   WriteBopModels(staging.path(), parts, prepared.classes);
   WriteFileAtomic(staging.path() / "variants.json", prepared.variants_json);
 
-  // Render scene by scene: cast -> encode + write, a bounded number of frames in flight.
-  std::atomic<size_t> done{0};
+  // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
+  // showing too little of the scene are skipped (image ids keep their view index).
+  std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
   for (size_t s = 0; s < prepared.scenes.size(); ++s) {
     const Renderer renderer(parts, prepared.scenes[s], spec.render);
     BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
@@ -386,7 +389,13 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                 }) &
             tbb::make_filter<std::pair<size_t, FramePtr>, void>(
                 tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                  writer.WriteFrame(static_cast<int>(item.first), *item.second);
+                  int visible = 0;
+                  for (const Frame::InstanceTruth& t : item.second->instances) visible += t.px_count_visib;
+                  if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
+                    ++(visible == 0 ? empty_views : sparse_views);
+                  } else {
+                    writer.WriteFrame(static_cast<int>(item.first), *item.second);
+                  }
                   const size_t n = ++done;
                   if (options.progress) options.progress(n, total_frames);
                 }));
@@ -396,7 +405,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   staging.Release();
 
   GenerateSummary summary;
-  summary.frames = total_frames;
+  summary.skipped_empty = empty_views;
+  summary.skipped_sparse = sparse_views;
+  summary.frames = total_frames - summary.skipped_empty - summary.skipped_sparse;
   summary.scenes = prepared.scenes.size();
   summary.objects = parts.size();
   summary.instances = 0;

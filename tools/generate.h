@@ -21,7 +21,9 @@ struct GenerateOptions {
 };
 
 struct GenerateSummary {
-  size_t frames = 0;
+  size_t frames = 0;          // written
+  size_t skipped_empty = 0;   // views with no object pixel visible (sweep.min_visible_pixels > 0)
+  size_t skipped_sparse = 0;  // views with fewer than sweep.min_visible_pixels object pixels
   size_t scenes = 0;
   size_t objects = 0;
   size_t instances = 0;

@@ -113,6 +113,11 @@ int RunGenerate(const std::vector<std::string>& args) {
     };
   }
   const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);
+  if (summary.skipped_empty + summary.skipped_sparse > 0) {
+    std::printf("skipped %zu views: %zu showed no object, %zu fewer than %d object pixels\n",
+                summary.skipped_empty + summary.skipped_sparse, summary.skipped_empty, summary.skipped_sparse,
+                spec.min_visible_pixels);
+  }
   std::printf("wrote %zu frames (%zu scene%s) of %zu objects (%zu instances) to %s in %.1f s (%.1f frames/s)\n",
               summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.objects, summary.instances,
               std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,

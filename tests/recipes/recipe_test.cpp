@@ -60,6 +60,35 @@ output: {dir: out/x, depth_scale: 1.0, split: val}
   EXPECT_EQ(spec.bop.split, "val");
 }
 
+TEST(Recipe, CamerasSamplersAndFilter) {
+  const RunSpec spec = ParseRecipe(R"(
+camera: {preset: realsense_d435}
+sweep:
+  sampler: random
+  count: 500
+  seed: 9
+  pitch: {from: 20, to: 80, step: 60}
+  radius: [0.5 m, 1 m]
+  roll_jitter: 5
+  target_jitter: 2 cm
+  min_visible_pixels: 200
+)", "r.yaml", ".");
+  EXPECT_EQ(spec.intrinsics.width, 1280);
+  EXPECT_EQ(spec.sampler.kind, ViewSampler::Kind::kRandom);
+  EXPECT_EQ(spec.sampler.count, 500);
+  EXPECT_EQ(spec.sampler.seed, 9u);
+  EXPECT_NEAR(spec.sampler.min_pitch_rad, 20 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(spec.sampler.max_pitch_rad, 80 * M_PI / 180, 1e-12);
+  EXPECT_EQ(spec.sampler.max_radius_mm, 1000);
+  EXPECT_EQ(spec.sampler.target_jitter_mm, 20);
+  EXPECT_EQ(spec.min_visible_pixels, 200);
+  EXPECT_NEAR(ParseRecipe("camera: {width: 800, height: 600, hfov: 90}\n", "r", ".").intrinsics.fx, 400.0, 1e-9);
+  EXPECT_EQ(ErrorOf("sweep: {sampler: spiral}\n"), "r.yaml:1:18: sweep.sampler: expected grid, fibonacci or random, got 'spiral'");
+  EXPECT_EQ(ErrorOf("camera: {preset: kinect_v2}\n"),
+            "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, realsense_d435, realsense_d435_640)");
+  EXPECT_EQ(ErrorOf("camera: {hfov: 200}\n"), "r.yaml:1:16: camera.hfov: must lie between 0 and 180 degrees");
+}
+
 TEST(Recipe, Classes) {
   const RunSpec spec = ParseRecipe(R"(
 classes:

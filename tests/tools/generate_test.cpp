@@ -138,6 +138,29 @@ TEST(Generate, WorldPosesAgreeWithCameraAndModelPoses) {
   }
 }
 
+TEST(Generate, ViewsShowingTooLittleAreSkippedAndCounted) {
+  ScratchDir dir;
+  // A 20 x 50 mm peg at 700 mm with f = 131 px covers a few dozen pixels of 160 x 120.
+  RunSpec spec = OneScene({Family("round_peg", {{}})});
+  spec.sweep.yaw_rad = {0.0, 1.0, 2.0};
+  GenerateOptions options;
+  options.output = dir / "few";
+  spec.min_visible_pixels = 100000;
+  const GenerateSummary skipped = Generate(spec, options);
+  EXPECT_EQ(skipped.frames, 0u);
+  EXPECT_EQ(skipped.skipped_sparse, 3u);
+  EXPECT_TRUE(ReadJson(dir / "few" / "train" / "000000" / "scene_gt.json").empty());
+  spec.min_visible_pixels = 5;
+  options.output = dir / "all";
+  const GenerateSummary kept = Generate(spec, options);
+  EXPECT_EQ(kept.frames, 3u);
+  EXPECT_EQ(kept.skipped_sparse + kept.skipped_empty, 0u);
+  // Aimed 5 m away, nothing is in view: counted apart.
+  spec.sweep.target = Eigen::Vector3d(5000, 0, 0);
+  options.output = dir / "none";
+  EXPECT_EQ(Generate(spec, options).skipped_empty, 3u);
+}
+
 TEST(PlacementWarnings, SayWhenObjectsDoNotFitOrVanish) {
   const std::vector<Part> parts = {MakePart("slab", MakeBox(520, 20, 10), TessellationOptions{}),
                                    MakePart("speck", MakeCylinder(1.5, 1), TessellationOptions{})};

@@ -273,6 +273,23 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
   const std::filesystem::path depth_path = scene_dir_ / "depth" / (im + ".png");
   WriteFileAtomic(depth_path, EncodePng(depth, depth_path));
 
+  if (!frame.normals.empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
+    CreateFolder(scene_dir_ / "normal");
+    cv::Mat normals(h, w, CV_8UC3, cv::Scalar(0, 0, 0));
+    for (int v = 0; v < h; ++v) {
+      auto* row = normals.ptr<cv::Vec3b>(v);
+      for (int u = 0; u < w; ++u) {
+        const Eigen::Vector3f& n = frame.normals[static_cast<size_t>(v) * w + u];
+        if (n.isZero()) continue;
+        for (int c = 0; c < 3; ++c) {
+          row[u][2 - c] = static_cast<uint8_t>(std::clamp((n[c] + 1.0f) * 127.5f + 0.5f, 0.0f, 255.0f));  // BGR
+        }
+      }
+    }
+    const std::filesystem::path normal_path = scene_dir_ / "normal" / (im + ".png");
+    WriteFileAtomic(normal_path, EncodePng(normals, normal_path));
+  }
+
   Json camera_entry, gt_entry = Json::array(), gt_info_entry = Json::array();
   const Eigen::Isometry3d cam_from_world = frame.camera.world_from_cam.inverse();
   Json k = Json::array();

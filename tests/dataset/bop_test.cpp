@@ -106,6 +106,25 @@ TEST(AssignClasses, GroupsByNamePatternThenOneClassPerRemainingPart) {
   EXPECT_EQ(labelled[3].id, 3);
 }
 
+TEST(Bop, NormalsAreWrittenWhenRendered) {
+  testing::ScratchDir dir;
+  Scene scene;  // the floor, seen straight down: normal (0, 0, -1) in the camera frame
+  RenderOptions options;
+  options.normals = true;
+  Camera camera;
+  camera.world_from_cam.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  camera.world_from_cam.translation() = Eigen::Vector3d(0, 0, 500);
+  const Frame frame = Renderer({}, scene, options).Render(camera);
+  BopSceneWriter writer(dir.path(), 0, BopOptions{}, {});
+  writer.WriteFrame(0, frame);
+  const cv::Mat normals = cv::imread((dir / "train" / "000000" / "normal" / "000000.png").string(), cv::IMREAD_COLOR);
+  ASSERT_EQ(normals.type(), CV_8UC3);
+  const cv::Vec3b n = normals.at<cv::Vec3b>(240, 320);  // BGR of (0, 0, -1) -> (128, 128, 0)
+  EXPECT_EQ(n[2], 128);
+  EXPECT_EQ(n[1], 128);
+  EXPECT_EQ(n[0], 0);
+}
+
 TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
   testing::ScratchDir dir;
   const std::vector<Part> parts = {MakePart("box", MakeBox(60, 40, 20), TessellationOptions{}),

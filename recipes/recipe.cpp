@@ -13,6 +13,7 @@
 #include "cad/step.h"
 #include "variants/families.h"
 #include "cad/units.h"
+#include "cad/util.h"
 #include "recipes/units.h"
 
 namespace cadsynth {
@@ -20,21 +21,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 constexpr size_t kMaxSeries = 1000000;
-
-size_t EditDistance(const std::string& a, const std::string& b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
-      diagonal = up;
-    }
-  }
-  return row[b.size()];
-}
 
 // Reads one recipe; every failure names name:line:column of the offending node.
 class Reader {
@@ -62,15 +48,7 @@ class Reader {
           allowed.end()) {
         continue;
       }
-      std::string best;
-      size_t best_distance = 3;  // suggest only close matches
-      for (const char* a : allowed) {
-        const size_t d = EditDistance(k, a);
-        if (d < best_distance) {
-          best_distance = d;
-          best = a;
-        }
-      }
+      const std::string best = NearestName(k, std::vector<std::string>(allowed.begin(), allowed.end()));
       std::string what = "unknown key '" + (key.empty() ? k : key + "." + k) + "'";
       if (!best.empty()) what += " (did you mean '" + best + "'?)";
       throw Error(Where(it->first) + ": " + what);

@@ -1,5 +1,7 @@
 #include "render/camera.h"
 
+#include "cad/util.h"
+
 #include <cmath>
 #include <algorithm>
 #include <sstream>
@@ -106,19 +108,6 @@ bool ViewSampler::Check(std::string* why) const {
 
 namespace {
 
-// SplitMix64 of (seed, stream, index) to [0, 1): the same on every machine.
-double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
-  uint64_t x = seed * 0x9E3779B97F4A7C15ull ^ (stream + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
-               (index + 0x85EBCA77C2B2AE63ull) * 0x94D049BB133111EBull;
-  for (int round = 0; round < 2; ++round) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    x ^= x >> 31;
-  }
-  return static_cast<double>(x >> 11) * 0x1.0p-53;
-}
-
 // Pitch from a uniform number, uniform in area over the band (sin(pitch) uniform).
 double PitchForArea(double u, double lo, double hi) {
   const double s = std::sin(lo) + u * (std::sin(hi) - std::sin(lo));
@@ -145,10 +134,10 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       break;
     case ViewSampler::Kind::kRandom:
       for (int i = 0; i < sampler.count; ++i) {
-        const double yaw = 2 * M_PI * Draw(sampler.seed, 10, i);
-        const double pitch = PitchForArea(Draw(sampler.seed, 11, i), sampler.min_pitch_rad, sampler.max_pitch_rad);
+        const double yaw = 2 * M_PI * UniformDraw(sampler.seed, 10, i);
+        const double pitch = PitchForArea(UniformDraw(sampler.seed, 11, i), sampler.min_pitch_rad, sampler.max_pitch_rad);
         const double radius =
-            sampler.min_radius_mm + Draw(sampler.seed, 12, i) * (sampler.max_radius_mm - sampler.min_radius_mm);
+            sampler.min_radius_mm + UniformDraw(sampler.seed, 12, i) * (sampler.max_radius_mm - sampler.min_radius_mm);
         views.push_back({yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
       }
       break;
@@ -159,8 +148,8 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       // Aim at a point in a ball around the target (uniform in volume), then roll.
       Eigen::Vector3d offset = Eigen::Vector3d::Zero();
       if (sampler.target_jitter_mm > 0) {
-        const double z = 2 * Draw(sampler.seed, 20, i) - 1, a = 2 * M_PI * Draw(sampler.seed, 21, i);
-        const double r = sampler.target_jitter_mm * std::cbrt(Draw(sampler.seed, 22, i));
+        const double z = 2 * UniformDraw(sampler.seed, 20, i) - 1, a = 2 * M_PI * UniformDraw(sampler.seed, 21, i);
+        const double r = sampler.target_jitter_mm * std::cbrt(UniformDraw(sampler.seed, 22, i));
         offset = r * Eigen::Vector3d(std::sqrt(1 - z * z) * std::cos(a), std::sqrt(1 - z * z) * std::sin(a), z);
       }
       const Eigen::Vector3d eye = v.world_from_cam.translation();
@@ -173,7 +162,7 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       pose.linear().col(0) = x;
       pose.linear().col(1) = z.cross(x);
       pose.linear().col(2) = z;
-      const double roll = sampler.roll_jitter_rad * (2 * Draw(sampler.seed, 23, i) - 1);
+      const double roll = sampler.roll_jitter_rad * (2 * UniformDraw(sampler.seed, 23, i) - 1);
       pose.linear() = pose.linear() * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       v.world_from_cam = pose;
     }

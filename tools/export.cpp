@@ -12,21 +12,6 @@
 #include "variants/families.h"
 
 namespace cadsynth {
-namespace {
-
-std::string Describe(const ParamValues& values) {
-  std::ostringstream out;
-  out.precision(6);
-  bool first = true;
-  for (const auto& [name, value] : values) {
-    out << (first ? "" : ", ") << name << "=";
-    if (const double* x = std::get_if<double>(&value)) out << *x; else out << std::get<std::string>(value);
-    first = false;
-  }
-  return out.str();
-}
-
-}  // namespace
 
 std::vector<VariantListing> ListVariants(const RunSpec& spec) {
   std::vector<VariantListing> list;
@@ -39,7 +24,7 @@ std::vector<VariantListing> ListVariants(const RunSpec& spec) {
         continue;
       }
       for (size_t v = 0; v < source.variants.size(); ++v) {
-        list.push_back({base + source.family + "/" + std::to_string(v), source.family, Describe(source.variants[v]), {}});
+        list.push_back({base + source.family + "/" + std::to_string(v), source.family, DescribeParams(source.variants[v]), {}});
       }
     }
   }

@@ -39,17 +39,6 @@ struct Job {
   std::string error;
 };
 
-std::string Describe(const ParamValues& values) {
-  std::ostringstream out;
-  out.precision(6);
-  bool first = true;
-  for (const auto& [name, value] : values) {
-    out << (first ? "" : ", ") << name << "=";
-    if (const double* x = std::get_if<double>(&value)) out << *x; else out << std::get<std::string>(value);
-    first = false;
-  }
-  return out.str();
-}
 
 Json ParamsJson(const ParamValues& values) {
   Json out = Json::object();
@@ -76,7 +65,7 @@ void Build(const RunSpec& spec, Job* job) {
   } catch (const Error& e) {
     std::string where = source.where.empty() ? "" : source.where + ": ";
     if (source.kind == PartSource::Kind::kFamily) {
-      where += "variant " + std::to_string(job->variant) + " (" + Describe(source.variants[job->variant]) + "): ";
+      where += "variant " + std::to_string(job->variant) + " (" + DescribeParams(source.variants[job->variant]) + "): ";
     }
     job->error = where + e.what();
   }

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "cad/error.h"
+#include "cad/util.h"
 #include "cad/mesh_analysis.h"
 #include "variants/gear.h"
 #include "variants/standard_parts.h"
@@ -29,21 +30,6 @@ std::vector<FamilyParam> GearParams(int teeth) {
           Length("backlash", 0.0, "tooth thinning at the pitch circle"),
           Number("root_fillet", 0.38, "root fillet radius in modules"),
           Angle("helix_angle", 0.0, "0 for spur; positive right hand")};
-}
-
-size_t Edit(const std::string& a, const std::string& b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
-      diagonal = up;
-    }
-  }
-  return row[b.size()];
 }
 
 double Num(const ParamValues& v, const char* name) { return std::get<double>(v.at(name)); }
@@ -166,11 +152,9 @@ ParamValues CompleteParams(const FamilyInfo& family, const ParamValues& values) 
   for (const auto& [name, value] : values) {
     const FamilyParam* p = family.Find(name);
     if (p == nullptr) {
-      std::string best;
-      size_t best_distance = 3;
-      for (const FamilyParam& q : family.params) {
-        if (Edit(name, q.name) < best_distance) best_distance = Edit(name, q.name), best = q.name;
-      }
+      std::vector<std::string> names;
+      for (const FamilyParam& q : family.params) names.push_back(q.name);
+      const std::string best = NearestName(name, names);
       throw Error("family '" + family.name + "' has no parameter '" + name + "'" +
                   (best.empty() ? "" : " (did you mean '" + best + "'?)"));
     }
@@ -266,17 +250,16 @@ Assembly BuildVariant(const FamilyInfo& family, const ParamValues& v, const Impo
   return ScaleVariant(source, factors, options.tessellation);
 }
 
-double UniformDraw(uint64_t seed, uint64_t stream, uint64_t index) {
-  // SplitMix64 over a mix of the three inputs.
-  uint64_t x = seed * 0x9E3779B97F4A7C15ull ^ (stream + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
-               (index + 0x85EBCA77C2B2AE63ull) * 0x94D049BB133111EBull;
-  for (int round = 0; round < 2; ++round) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    x ^= x >> 31;
+std::string DescribeParams(const ParamValues& values) {
+  std::ostringstream out;
+  out.precision(6);
+  bool first = true;
+  for (const auto& [name, value] : values) {
+    out << (first ? "" : ", ") << name << "=";
+    if (const double* x = std::get_if<double>(&value)) out << *x; else out << std::get<std::string>(value);
+    first = false;
   }
-  return static_cast<double>(x >> 11) * 0x1.0p-53;
+  return out.str();
 }
 
 Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& f, const TessellationOptions& options) {

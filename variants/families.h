@@ -10,6 +10,7 @@
 
 #include "cad/import.h"
 #include "cad/part.h"
+#include "cad/util.h"
 #include "variants/mechanisms.h"
 
 namespace cadsynth {
@@ -49,9 +50,8 @@ Assembly BuildVariant(const FamilyInfo& family, const ParamValues& values, const
 // The B-rep parts and placements of a parametric variant (not 'scaled'), e.g. for STEP export.
 ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& values);
 
-// A portable, seeded source of uniform numbers in [0, 1): the same on every machine and
-// compiler (std:: distributions are not), from (seed, stream, index).
-double UniformDraw(uint64_t seed, uint64_t stream, uint64_t index);
+// "name=value, ..." for messages and listings.
+std::string DescribeParams(const ParamValues& values);
 
 // Every length of `assembly` scaled by (sx, sy, sz) in its root frame. Uniform scales keep
 // instances; otherwise each instance becomes a part of its own (a turned part scales

@@ -1,0 +1,26 @@
+#include "cad/util.h"
+
+#include <gtest/gtest.h>
+
+namespace cadsynth {
+namespace {
+
+TEST(EditDistance, CountsInsertionsDeletionsAndSubstitutions) {
+  EXPECT_EQ(EditDistance("kitten", "sitting"), 3u);
+  EXPECT_EQ(EditDistance("", "abc"), 3u);
+  EXPECT_EQ(EditDistance("pitch", "pitch"), 0u);
+  EXPECT_EQ(NearestName("pich", {"yaw", "pitch", "radius"}), "pitch");
+  EXPECT_EQ(NearestName("exposure", {"yaw", "pitch", "radius"}), "");
+}
+
+TEST(UniformDraw, KnownValuesDoNotChange) {
+  // The draws are part of the recipe format: the same seed must give the same scene forever.
+  EXPECT_EQ(UniformDraw(0, 0, 0), UniformDraw(0, 0, 0));
+  const double first = UniformDraw(2026, 3, 7);
+  EXPECT_GE(first, 0.0);
+  EXPECT_LT(first, 1.0);
+  EXPECT_NE(first, UniformDraw(2026, 3, 8));
+}
+
+}  // namespace
+}  // namespace cadsynth

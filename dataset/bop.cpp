@@ -19,6 +19,7 @@
 #include "cad/error.h"
 #include "dataset/file_io.h"
 #include "dataset/models.h"
+#include "cad/util.h"
 
 namespace cadsynth {
 
@@ -29,11 +30,23 @@ bool BopOptions::Check(std::string* why) const {
     *why = "depth_scale must be positive";
     return false;
   }
+  if (test_every < 0 || !(test_fraction >= 0 && test_fraction <= 1) ||
+      !(target_min_visib_fract >= 0 && target_min_visib_fract <= 1)) {
+    *why = "test_every must not be negative; test_fraction and target_min_visib_fract lie in 0..1";
+    return false;
+  }
   if (split.empty() || split.find('/') != std::string::npos || split == "." || split == "..") {
     *why = "split must be a plain folder name";
     return false;
   }
   return true;
+}
+
+bool BopOptions::IsTest(int index, int count) const {
+  if (test_every > 0) return index % test_every == test_every - 1;
+  // Each image is a test image with probability test_fraction, drawn from (seed, its index).
+  (void)count;
+  return UniformDraw(split_seed, 40, static_cast<uint64_t>(index)) < test_fraction;
 }
 
 namespace {
@@ -363,8 +376,9 @@ void BopSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
   WriteJson(scene_dir_ / "scene_gt_world.json", list);
 }
 
-void BopSceneWriter::Finish() {
+SceneSplit BopSceneWriter::Finish() {
   std::lock_guard<std::mutex> lock(mutex_);
+  SceneSplit split;
   std::sort(image_ids_.begin(), image_ids_.end());
   image_ids_.erase(std::unique(image_ids_.begin(), image_ids_.end()), image_ids_.end());
   // Stream the three files: {"id": entry, ...}, each entry indented as json.dump(2) would.
@@ -387,9 +401,19 @@ void BopSceneWriter::Finish() {
     const std::filesystem::path fragment = scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json");
     std::ifstream in(fragment, std::ios::binary);
     std::string line;
+    const bool test = options_.IsTest(static_cast<int>(n), static_cast<int>(image_ids_.size()));
+    (test ? split.test : split.train).push_back(image_ids_[n]);
     for (int f = 0; f < 3; ++f) {
       if (!std::getline(in, line)) throw Error(fragment.string() + ": incomplete fragment");
-      out[f] << (n == 0 ? "\n  \"" : ",\n  \"") << image_ids_[n] << "\": " << indent(Json::parse(line).dump(2));
+      const Json entry = Json::parse(line);
+      out[f] << (n == 0 ? "\n  \"" : ",\n  \"") << image_ids_[n] << "\": " << indent(entry.dump(2));
+      if (test && f == 2) {  // gt_info: count the instances visible enough, per object
+        std::map<int, int> counts;
+        for (size_t i = 0; i < entry.size() && i < obj_ids_.size(); ++i) {
+          if (entry[i]["visib_fract"].get<double>() >= options_.target_min_visib_fract) ++counts[obj_ids_[i]];
+        }
+        for (const auto& [obj, count] : counts) split.targets.push_back({image_ids_[n], obj, count});
+      }
     }
   }
   for (int f = 0; f < 3; ++f) {
@@ -402,6 +426,23 @@ void BopSceneWriter::Finish() {
   }
   std::error_code ec;
   std::filesystem::remove_all(scene_dir_ / ".fragments", ec);
+  return split;
+}
+
+void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit>& scenes) {
+  CreateFolder(root / "splits");
+  std::string train, test;
+  Json targets = Json::array();
+  for (size_t s = 0; s < scenes.size(); ++s) {
+    for (int im : scenes[s].train) train += Id6(static_cast<int>(s)) + " " + Id6(im) + "\n";
+    for (int im : scenes[s].test) test += Id6(static_cast<int>(s)) + " " + Id6(im) + "\n";
+    for (const SceneSplit::Target& t : scenes[s].targets) {
+      targets.push_back({{"im_id", t.im_id}, {"inst_count", t.inst_count}, {"obj_id", t.obj_id}, {"scene_id", s}});
+    }
+  }
+  WriteFileAtomic(root / "splits" / "train.txt", train);
+  WriteFileAtomic(root / "splits" / "test.txt", test);
+  WriteFileAtomic(root / "test_targets_bop19.json", targets.dump(2) + "\n");
 }
 
 }  // namespace cadsynth

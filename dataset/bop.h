@@ -33,9 +33,32 @@ namespace cadsynth {
 struct BopOptions {
   double depth_scale = 0.1;     // mm per depth unit: 0.1 mm steps, up to 6.5535 m
   std::string split = "train";  // folder holding the scenes
+  // Train/test split of each scene's images, in image order: every `test_every`-th image is a test
+  // image (the reference paper: every 4th, 75/25), or, when test_every is 0, each image is a test
+  // image with probability `test_fraction` (seeded). Test images also go to test_targets_bop19.json.
+  int test_every = 4;
+  double test_fraction = 0.25;
+  uint64_t split_seed = 0;
+  // Test targets count instances at least this visible (bop_toolkit: 0.1).
+  double target_min_visib_fract = 0.1;
 
   bool Check(std::string* why) const;
+  bool IsTest(int index, int count) const;  // index-th of `count` images of a scene
 };
+
+// One scene's split, as BopSceneWriter::Finish sees it.
+struct SceneSplit {
+  std::vector<int> train, test;  // image ids
+  // BOP test targets: (image id, obj_id, number of instances at least target_min_visib_fract visible).
+  struct Target {
+    int im_id, obj_id, inst_count;
+  };
+  std::vector<Target> targets;
+};
+
+// Writes ROOT/splits/{train,test}.txt ("scene_id image_id" per line) and
+// ROOT/test_targets_bop19.json for the given scenes' splits.
+void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit>& scenes);
 
 // The semantic class of an object: several objects (distinct shapes) may share one, e.g. every
 // bolt size is a 'bolt'. Ids start at 1.
@@ -93,8 +116,8 @@ class BopSceneWriter {
   void WriteFrame(int image_id, const Frame& frame);
 
   // Writes scene_camera.json, scene_gt.json and scene_gt_info.json from the fragments, ordered by
-  // image id, streaming one frame at a time, and removes the fragments.
-  void Finish();
+  // image id, streaming one frame at a time, removes the fragments, and returns the scene's split.
+  SceneSplit Finish();
 
   // Writes scene_gt_world.json (cadsynth): the world pose of every instance of this static scene,
   // in scene_gt order: obj_id, world_R_m2w (row-major) and world_t_m2w (mm), so that

@@ -574,7 +574,16 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "output", {"dir", "depth_scale", "split"});
+  r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed"});
+  if (node["test_every"] && node["test_fraction"]) {
+    r.Fail(node["test_fraction"], "output.test_fraction", "give test_every or test_fraction, not both");
+  }
+  if (node["test_every"]) spec->bop.test_every = r.Integer(node["test_every"], "output.test_every");
+  if (node["test_fraction"]) {
+    spec->bop.test_every = 0;
+    spec->bop.test_fraction = r.Number(node["test_fraction"], "output.test_fraction");
+  }
+  if (node["split_seed"]) spec->bop.split_seed = static_cast<uint64_t>(r.Integer(node["split_seed"], "output.split_seed"));
   if (node["dir"]) {
     std::filesystem::path dir = r.Scalar(node["dir"], "output.dir");
     spec->output = (dir.is_relative() ? r.base_dir() / dir : dir).lexically_normal();

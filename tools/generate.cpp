@@ -353,6 +353,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
   // showing too little of the scene are skipped (image ids keep their view index).
   std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
+  std::vector<SceneSplit> splits;
   for (size_t s = 0; s < prepared.scenes.size(); ++s) {
     const Renderer renderer(parts, prepared.scenes[s], spec.render);
     BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
@@ -388,8 +389,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                   const size_t n = ++done;
                   if (options.progress) options.progress(n, total_frames);
                 }));
-    writer.Finish();
+    splits.push_back(writer.Finish());
   }
+  WriteSplits(staging.path(), splits);
   MoveIntoPlace(staging.path(), output, options.overwrite);
   staging.Release();
 

@@ -1,6 +1,7 @@
 #include "dataset/bop.h"
 
 #include <fstream>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -104,6 +105,46 @@ TEST(AssignClasses, GroupsByNamePatternThenOneClassPerRemainingPart) {
   EXPECT_EQ(labelled[2].id, 2);
   EXPECT_EQ(labelled[1].id, 1);
   EXPECT_EQ(labelled[3].id, 3);
+}
+
+TEST(Bop, EveryFourthImageIsATestImageWithItsTargets) {
+  testing::ScratchDir dir;
+  const std::vector<Part> parts = {MakePart("box", MakeBox(60, 40, 20), TessellationOptions{})};
+  Scene scene;
+  scene.instances = {Instance{0, "a", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
+                     Instance{0, "b", Eigen::Isometry3d(Eigen::Translation3d(0, 0, -500))}};  // under the floor
+  const Renderer renderer(parts, scene);
+  BopOptions options;  // every 4th
+  BopSceneWriter writer(dir.path(), 0, options, {1, 1});
+  for (int i = 0; i < 8; ++i) {
+    Camera camera;
+    camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, i * 0.5, 0.8, 600.0);
+    writer.WriteFrame(i, renderer.Render(camera));
+  }
+  const SceneSplit split = writer.Finish();
+  EXPECT_EQ(split.train, (std::vector<int>{0, 1, 2, 4, 5, 6}));
+  EXPECT_EQ(split.test, (std::vector<int>{3, 7}));
+  ASSERT_EQ(split.targets.size(), 2u);  // one visible box per test image; the buried one is not a target
+  EXPECT_EQ(split.targets[0].im_id, 3);
+  EXPECT_EQ(split.targets[0].obj_id, 1);
+  EXPECT_EQ(split.targets[0].inst_count, 1);
+  WriteSplits(dir.path(), {split});
+  std::ifstream test(dir / "splits" / "test.txt");
+  std::stringstream text;
+  text << test.rdbuf();
+  EXPECT_EQ(text.str(), "000000 000003\n000000 000007\n");
+  const json targets = ReadJson(dir / "test_targets_bop19.json");
+  ASSERT_EQ(targets.size(), 2u);
+  EXPECT_EQ(targets[1]["im_id"], 7);
+  EXPECT_EQ(targets[1]["scene_id"], 0);
+  // A seeded fraction: reproducible, about the fraction asked.
+  BopOptions fraction;
+  fraction.test_every = 0;
+  fraction.test_fraction = 0.3;
+  int tests = 0;
+  for (int i = 0; i < 1000; ++i) tests += fraction.IsTest(i, 1000);
+  EXPECT_NEAR(tests, 300, 45);
+  EXPECT_EQ(fraction.IsTest(17, 1000), fraction.IsTest(17, 1000));
 }
 
 TEST(Bop, NormalsAreWrittenWhenRendered) {

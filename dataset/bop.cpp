@@ -19,6 +19,7 @@
 #include "cad/error.h"
 #include "dataset/file_io.h"
 #include "dataset/models.h"
+#include "dataset/point_cloud.h"
 #include "cad/util.h"
 
 namespace cadsynth {
@@ -28,6 +29,10 @@ using Json = nlohmann::ordered_json;
 bool BopOptions::Check(std::string* why) const {
   if (!(depth_scale > 0.0) || !std::isfinite(depth_scale)) {
     *why = "depth_scale must be positive";
+    return false;
+  }
+  if (model_points < 0 || model_points > 10000000) {
+    *why = "model_points must be 0 to 10,000,000";
     return false;
   }
   if (test_every < 0 || !(test_fraction >= 0 && test_fraction <= 1) ||
@@ -242,6 +247,33 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
   }
   WriteJson(dir / "models_info.json", info);
   WriteJson(dir / "models_cad.json", cad);
+}
+
+void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts, const BopOptions& options) {
+  if (options.model_points <= 0) return;
+  CreateFolder(root / "models" / "points");
+  std::vector<Keypoints> keypoints(parts.size());
+  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
+    const std::vector<Eigen::Vector3f> points =
+        options.even_points ? SampleEvenly(parts[i].mesh, options.model_points, options.point_seed + i)
+                            : SampleSurface(parts[i].mesh, options.model_points, options.point_seed + i);
+    WriteFileAtomic(root / "models" / "points" / ("obj_" + Id6(static_cast<int>(i) + 1) + ".ply"), EncodePointPly(points));
+    keypoints[i] = ComputeKeypoints(parts[i].mesh, points);
+  });
+  const auto list = [](const auto& points) {
+    Json out = Json::array();
+    for (const Eigen::Vector3f& p : points) out.push_back({p.x(), p.y(), p.z()});
+    return out;
+  };
+  Json all = Json::object();
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const Keypoints& k = keypoints[i];
+    all[std::to_string(i + 1)] = {{"fps8", list(k.fps8)},
+                                  {"fps16", list(k.fps16)},
+                                  {"center", {k.center.x(), k.center.y(), k.center.z()}},
+                                  {"corners", list(k.corners)}};
+  }
+  WriteJson(root / "models" / "keypoints.json", all);
 }
 
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,

@@ -41,6 +41,11 @@ struct BopOptions {
   uint64_t split_seed = 0;
   // Test targets count instances at least this visible (bop_toolkit: 0.1).
   double target_min_visib_fract = 0.1;
+  // Model point clouds (models/points/obj_*.ply): points per part (the paper: 3,000; 0: none),
+  // spread uniformly by area or evenly spaced, seeded.
+  int model_points = 3000;
+  bool even_points = false;
+  uint64_t point_seed = 0;
 
   bool Check(std::string* why) const;
   bool IsTest(int index, int count) const;  // index-th of `count` images of a scene
@@ -82,6 +87,11 @@ std::vector<ObjectClass> AssignClasses(
 // i (written to models_cad.json); empty: each object is its own class, named after the part.
 void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts,
                     const std::vector<ObjectClass>& classes = {});
+
+// Writes ROOT/models/points/obj_OBJID.ply (options.model_points surface points per part) and
+// ROOT/models/keypoints.json: per obj_id, 8 and 16 farthest-point keypoints on the surface, the
+// centre and the 8 bounding-box corners (model frame, mm), as PVN3D uses.
+void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts, const BopOptions& options);
 
 // Writes ROOT/camera.json.
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& intrinsics,

@@ -574,7 +574,17 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed"});
+  r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed",
+                               "model_points", "point_sampling", "point_seed"});
+  if (node["model_points"]) spec->bop.model_points = r.Integer(node["model_points"], "output.model_points");
+  if (node["point_seed"]) spec->bop.point_seed = static_cast<uint64_t>(r.Integer(node["point_seed"], "output.point_seed"));
+  if (node["point_sampling"]) {
+    const std::string mode = r.Scalar(node["point_sampling"], "output.point_sampling");
+    if (mode != "area" && mode != "even") {
+      r.Fail(node["point_sampling"], "output.point_sampling", "expected 'area' or 'even', got '" + mode + "'");
+    }
+    spec->bop.even_points = mode == "even";
+  }
   if (node["test_every"] && node["test_fraction"]) {
     r.Fail(node["test_fraction"], "output.test_fraction", "give test_every or test_fraction, not both");
   }

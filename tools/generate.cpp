@@ -348,6 +348,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
 
   WriteBopCamera(staging.path(), spec.intrinsics, spec.bop);
   WriteBopModels(staging.path(), parts, prepared.classes);
+  WriteModelPoints(staging.path(), parts, spec.bop);
   WriteFileAtomic(staging.path() / "variants.json", prepared.variants_json);
 
   // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views

@@ -87,6 +87,7 @@ TEST(Generate, DefaultJobIsThePapersThreeDemoSets) {
 
   const auto files = ReadTree(dir / "data");
   for (const char* f : {"camera.json", "models/models_info.json", "models/obj_000013.ply", "variants.json",
+                        "models/points/obj_000013.ply", "models/keypoints.json",
                         "splits/train.txt", "splits/test.txt", "test_targets_bop19.json",
                         "train/000000/rgb/000001.png", "train/000001/scene_gt.json",
                         "train/000002/mask_visib/000001_000004.png", "train/000002/scene_gt_info.json"}) {
@@ -104,6 +105,13 @@ TEST(Generate, DefaultJobIsThePapersThreeDemoSets) {
       EXPECT_EQ(info[key]["symmetries_continuous"].size(), 1u);
     }
   }
+  // Model clouds: 3000 points per object by default, keypoints for all 13 objects.
+  const std::string cloud = files.at("models/points/obj_000001.ply");
+  EXPECT_NE(cloud.find("element vertex 3000\n"), std::string::npos);
+  const json keypoints = json::parse(files.at("models/keypoints.json"));
+  EXPECT_EQ(keypoints.size(), 13u);
+  EXPECT_EQ(keypoints["13"]["fps8"].size(), 8u);
+  EXPECT_EQ(keypoints["13"]["corners"].size(), 8u);
   const json variants = json::parse(files.at("variants.json"))["variants"];
   ASSERT_EQ(variants.size(), 7u);  // planetary, slider-crank, five benchmark parts
   EXPECT_EQ(variants[0]["id"], "planetary_gearbox/0/planetary/0");

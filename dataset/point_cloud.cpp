@@ -1,6 +1,7 @@
 #include "dataset/point_cloud.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 
@@ -82,6 +83,38 @@ std::string EncodePointPly(const std::vector<Eigen::Vector3f>& points) {
   out.precision(7);
   for (const auto& p : points) out << p.x() << " " << p.y() << " " << p.z() << "\n";
   return out.str();
+}
+
+std::vector<Eigen::Vector3f> DecodePointPly(const std::string& text, const std::string& origin) {
+  std::istringstream in(text);
+  std::string line;
+  long count = -1;
+  bool ascii = false, header_done = false;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.rfind("format ", 0) == 0) ascii = line.rfind("format ascii", 0) == 0;
+    if (line.rfind("element vertex ", 0) == 0) count = std::atol(line.c_str() + 15);
+    if (line == "end_header" || line == "end_header\r") {
+      header_done = true;
+      break;
+    }
+  }
+  if (!header_done || !ascii || count < 0) {
+    throw Error(origin + ": not an ASCII point PLY (needs 'format ascii', 'element vertex N' and 'end_header')");
+  }
+  std::vector<Eigen::Vector3f> points;
+  points.reserve(static_cast<size_t>(count));
+  for (long i = 0; i < count; ++i) {
+    ++line_no;
+    Eigen::Vector3f p;
+    if (!std::getline(in, line) || !(std::istringstream(line) >> p.x() >> p.y() >> p.z())) {
+      throw Error(origin + ":" + std::to_string(line_no) + ": expected vertex " + std::to_string(i + 1) + " of " +
+                  std::to_string(count) + " as 'x y z'");
+    }
+    points.push_back(p);
+  }
+  return points;
 }
 
 }  // namespace cadsynth

@@ -33,5 +33,8 @@ Keypoints ComputeKeypoints(const Mesh& mesh, const std::vector<Eigen::Vector3f>&
 
 // ASCII PLY with x, y, z (mm).
 std::string EncodePointPly(const std::vector<Eigen::Vector3f>& points);
+// Reads what EncodePointPly writes (ASCII PLY whose first three vertex properties are x, y, z).
+// `origin` names the file in the Error thrown on anything else.
+std::vector<Eigen::Vector3f> DecodePointPly(const std::string& text, const std::string& origin);
 
 }  // namespace cadsynth

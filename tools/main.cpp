@@ -14,6 +14,7 @@
 
 #include "cad/error.h"
 #include "recipes/recipe.h"
+#include "tools/eval.h"
 #include "tools/export.h"
 #include "tools/generate.h"
 #include "tools/inspect.h"
@@ -26,6 +27,7 @@ usage:
   cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--quiet]
   cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
   cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
+  cadsynth eval DATASET RESULTS.csv [--json FILE]
   cadsynth --help | --version
 
 generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
@@ -45,6 +47,11 @@ inspect    Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb
 
 variants   Lists every variant of the recipe's part families (id and parameters, as in
            variants.json); with --export-step writes each as DIR/<id>.step (exact B-rep, mm).
+
+eval       Scores pose estimates in the BOP results format (scene_id,im_id,obj_id,score,R,t,time)
+           against DATASET's test split: ADD, ADD-S (for symmetric parts), the share within 10%
+           of the diameter and the AUC of accuracy up to 0.1 m, per object and overall.
+  --json FILE  also write the scores as JSON
 )";
 
 struct UsageError {
@@ -188,6 +195,27 @@ int RunVariants(const std::vector<std::string>& args) {
   return 0;
 }
 
+int RunEval(const std::vector<std::string>& args) {
+  std::vector<std::string> positional;
+  std::optional<std::string> json;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--json") {
+      if (i + 1 >= args.size()) throw UsageError{"--json needs a file"};
+      json = args[++i];
+    } else if (!a.empty() && a[0] == '-') {
+      throw UsageError{"unknown option '" + a + "'"};
+    } else {
+      positional.push_back(a);
+    }
+  }
+  if (positional.size() != 2) throw UsageError{"eval needs DATASET and RESULTS.csv"};
+  const cadsynth::EvalReport report = cadsynth::Evaluate(positional[0], positional[1]);
+  std::cout << cadsynth::EvalTable(report);
+  if (json) cadsynth::WriteEvalJson(*json, report);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -204,6 +232,7 @@ int main(int argc, char** argv) {
     if (args[0] == "generate") return RunGenerate({args.begin() + 1, args.end()});
     if (args[0] == "inspect") return RunInspect({args.begin() + 1, args.end()});
     if (args[0] == "variants") return RunVariants({args.begin() + 1, args.end()});
+    if (args[0] == "eval") return RunEval({args.begin() + 1, args.end()});
     throw UsageError{"unknown command '" + args[0] + "'"};
   } catch (const UsageError& e) {
     std::cerr << "error: " << e.what << "\n(run 'cadsynth --help' for usage)\n";

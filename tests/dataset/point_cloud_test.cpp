@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "cad/assembly.h"
+#include "cad/error.h"
 #include "cad/shape.h"
 
 namespace cadsynth {
@@ -68,6 +69,18 @@ TEST(Keypoints, FarthestPointsStartAtOppositeCornersAndSpread) {
   }
   EXPECT_GT(min_gap, 20.0f);  // 8 random surface points would typically be far closer
   EXPECT_EQ(std::vector<Eigen::Vector3f>(k.fps16.begin(), k.fps16.begin() + 8), k.fps8);  // FPS is greedy
+}
+
+TEST(PointPly, DecodeReadsWhatEncodeWrites) {
+  const std::vector<Eigen::Vector3f> points = {{1.5f, -2.25f, 3.0f}, {0.0f, 1e-3f, 1234.5f}};
+  EXPECT_EQ(DecodePointPly(EncodePointPly(points), "x.ply"), points);
+  try {
+    DecodePointPly("ply\nformat ascii 1.0\nelement vertex 3\nend_header\n1 2 3\n4 5\n", "bad.ply");
+    FAIL() << "a short vertex line must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.ply:6"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(DecodePointPly("ply\nformat binary_little_endian 1.0\nend_header\n", "b.ply"), Error);
 }
 
 }  // namespace

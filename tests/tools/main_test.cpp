@@ -100,4 +100,14 @@ TEST(Cli, GenerateWithoutArgumentsWritesTheDefaultDataset) {
   EXPECT_NE(again.err.find("already exists (pass --overwrite"), std::string::npos);
 }
 
+TEST(Cli, EvalErrorsAreOneLine) {
+  ScratchDir dir;
+  EXPECT_EQ(Cadsynth("eval only_one_arg", dir).code, 2);
+  std::ofstream(dir / "r.csv") << "0,0,1,0.9,1 0 0 0 1 0 0 0 1,0 0 500,-1\n";
+  const CliRun run = Cadsynth("eval nowhere r.csv --json scores.json", dir);
+  EXPECT_EQ(run.code, 1);
+  EXPECT_EQ(run.err, "error: nowhere: no such dataset folder\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "scores.json"));
+}
+
 }  // namespace

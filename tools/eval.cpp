@@ -1,0 +1,336 @@
+#include "tools/eval.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+
+#include "cad/error.h"
+#include "dataset/file_io.h"
+#include "dataset/point_cloud.h"
+#include "dataset/pose_metrics.h"
+
+namespace cadsynth {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+constexpr double kAucMaxMm = 100.0;  // 0.1 m, as PoseCNN and PVN3D
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open");
+  std::stringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+Json ReadJsonFile(const fs::path& path) {
+  try {
+    return Json::parse(ReadText(path));
+  } catch (const Json::exception& e) {
+    throw Error(path.string() + ": not valid JSON: " + e.what());
+  }
+}
+
+struct Model {
+  std::string name;
+  bool symmetric = false;
+  double diameter = 0;
+  std::vector<Eigen::Vector3f> points;
+};
+
+Eigen::Isometry3d Pose(const Json& r, const Json& t, const std::string& where) {
+  if (!r.is_array() || r.size() != 9 || !t.is_array() || t.size() != 3) {
+    throw Error(where + ": a pose needs 9 rotation and 3 translation numbers");
+  }
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 9; ++i) pose.linear()(i / 3, i % 3) = r[i].get<double>();
+  for (int i = 0; i < 3; ++i) pose.translation()(i) = t[i].get<double>();
+  return pose;
+}
+
+struct Estimate {
+  double score;
+  Eigen::Isometry3d pose;
+};
+
+using ImageKey = std::pair<int, int>;  // scene, image
+
+// BOP results: scene_id,im_id,obj_id,score,R,t,time with R and t space-separated.
+std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::path& path) {
+  std::istringstream in(ReadText(path));
+  std::map<std::pair<ImageKey, int>, std::vector<Estimate>> out;
+  std::string line;
+  for (int line_no = 1; std::getline(in, line); ++line_no) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || (line_no == 1 && line.rfind("scene_id", 0) == 0)) continue;
+    const std::string where = path.string() + ":" + std::to_string(line_no);
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
+    if (fields.size() < 6) {
+      throw Error(where + ": expected scene_id,im_id,obj_id,score,R,t[,time], got " + std::to_string(fields.size()) +
+                  " fields");
+    }
+    const auto numbers = [&](const std::string& text, size_t n, const char* what) {
+      std::istringstream s(text);
+      std::vector<double> v;
+      for (double x; s >> x;) v.push_back(x);
+      if (v.size() != n || !s.eof()) {
+        throw Error(where + ": " + what + " needs " + std::to_string(n) + " space-separated numbers, got '" + text + "'");
+      }
+      return v;
+    };
+    const auto ids = numbers(fields[0] + " " + fields[1] + " " + fields[2] + " " + fields[3], 4,
+                             "scene_id, im_id, obj_id and score");
+    const auto r = numbers(fields[4], 9, "R");
+    const auto t = numbers(fields[5], 3, "t");
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    for (int i = 0; i < 9; ++i) pose.linear()(i / 3, i % 3) = r[i];
+    for (int i = 0; i < 3; ++i) pose.translation()(i) = t[i];
+    const double det = pose.linear().determinant();
+    if (std::abs(det - 1.0) > 1e-3) {
+      throw Error(where + ": R is not a rotation (determinant " + std::to_string(det) + ")");
+    }
+    out[{{static_cast<int>(ids[0]), static_cast<int>(ids[1])}, static_cast<int>(ids[2])}].push_back({ids[3], pose});
+  }
+  return out;
+}
+
+// The folder holding the scene folders: the one (e.g. train/) whose subfolders have scene_gt.json.
+fs::path SceneRoot(const fs::path& dataset) {
+  std::vector<fs::path> roots;
+  for (const auto& entry : fs::directory_iterator(dataset)) {
+    if (!entry.is_directory()) continue;
+    for (const auto& scene : fs::directory_iterator(entry.path())) {
+      if (fs::exists(scene.path() / "scene_gt.json")) {
+        roots.push_back(entry.path());
+        break;
+      }
+    }
+  }
+  if (roots.size() != 1) {
+    throw Error(dataset.string() + ": expected one folder of scenes with scene_gt.json, found " +
+                std::to_string(roots.size()));
+  }
+  return roots[0];
+}
+
+void Score(ObjectScores* s, const std::vector<double>& add_s, const std::vector<double>& add_or_s,
+           const std::vector<double>& diameters) {
+  s->instances = static_cast<int>(add_s.size());
+  double sum = 0;
+  int hits = 0;
+  for (size_t i = 0; i < add_or_s.size(); ++i) {
+    if (!std::isfinite(add_or_s[i])) continue;
+    ++s->estimated;
+    sum += add_or_s[i];
+    if (add_or_s[i] < 0.1 * diameters[i]) ++hits;
+  }
+  s->mean_error_mm = s->estimated ? sum / s->estimated : std::numeric_limits<double>::quiet_NaN();
+  s->within_10pct = s->instances ? static_cast<double>(hits) / s->instances : 0.0;
+  s->auc_adds = AccuracyAuc(add_s, kAucMaxMm);
+  s->auc_add_or_s = AccuracyAuc(add_or_s, kAucMaxMm);
+}
+
+}  // namespace
+
+EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
+  if (!fs::is_directory(dataset)) throw Error(dataset.string() + ": no such dataset folder");
+  // Models.
+  const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
+  const fs::path cad_file = dataset / "models" / "models_cad.json";
+  const Json cad = fs::exists(cad_file) ? ReadJsonFile(cad_file) : Json::object();
+  std::map<int, Model> models;
+  for (const auto& [key, entry] : info.items()) {
+    Model m;
+    m.diameter = entry.at("diameter").get<double>();
+    m.symmetric = (entry.contains("symmetries_discrete") && !entry["symmetries_discrete"].empty()) ||
+                  (entry.contains("symmetries_continuous") && !entry["symmetries_continuous"].empty());
+    m.name = cad.contains(key) && cad[key].contains("name") ? cad[key]["name"].get<std::string>() : "obj_" + key;
+    std::ostringstream file;
+    file << "obj_" << std::setw(6) << std::setfill('0') << key << ".ply";
+    const fs::path cloud = dataset / "models" / "points" / file.str();
+    if (!fs::exists(cloud)) {
+      throw Error(cloud.string() + ": missing; eval needs the model clouds (generate with output.model_points > 0)");
+    }
+    m.points = DecodePointPly(ReadText(cloud), cloud.string());
+    models[std::stoi(key)] = std::move(m);
+  }
+
+  const auto estimates = ReadResults(results);
+
+  // Which images: splits/test.txt if present, else all.
+  EvalReport report;
+  std::set<ImageKey> test_images;
+  const fs::path test_list = dataset / "splits" / "test.txt";
+  const bool use_split = fs::exists(test_list);
+  if (use_split) {
+    std::istringstream in(ReadText(test_list));
+    int scene, image;
+    while (in >> scene >> image) test_images.insert({scene, image});
+    if (!in.eof()) throw Error(test_list.string() + ": expected 'scene_id image_id' per line");
+    if (test_images.empty()) throw Error(test_list.string() + ": the test split is empty (see output.test_every)");
+    report.images = "test split (" + test_list.string() + ")";
+  } else {
+    report.images = "all images (no splits/test.txt)";
+  }
+
+  // Ground truth of the evaluated images, grouped like the estimates.
+  struct Instance {
+    ImageKey image;
+    int obj_id;
+    Eigen::Isometry3d pose;
+  };
+  std::vector<Instance> truth;
+  std::set<ImageKey> images;
+  const fs::path root = SceneRoot(dataset);
+  for (const auto& scene_dir : fs::directory_iterator(root)) {
+    const fs::path gt_file = scene_dir.path() / "scene_gt.json";
+    if (!fs::exists(gt_file)) continue;
+    const int scene = std::stoi(scene_dir.path().filename().string());
+    const Json scene_gt = ReadJsonFile(gt_file);
+    for (const auto& [im, list] : scene_gt.items()) {
+      const ImageKey key{scene, std::stoi(im)};
+      if (use_split && !test_images.count(key)) continue;
+      images.insert(key);
+      for (const Json& gt : list) {
+        const int obj = gt.at("obj_id").get<int>();
+        if (!models.count(obj)) throw Error(gt_file.string() + ": obj_id " + std::to_string(obj) + " has no model");
+        truth.push_back({key, obj, Pose(gt.at("cam_R_m2c"), gt.at("cam_t_m2c"), gt_file.string())});
+      }
+    }
+  }
+  report.image_count = static_cast<int>(images.size());
+  if (truth.empty()) throw Error(dataset.string() + ": no ground-truth instances to evaluate");
+
+  // Match estimates to instances: per (image, object), best score first, each to the unmatched
+  // instance it is closest to (by ADD(-S)).
+  std::map<std::pair<ImageKey, int>, std::vector<size_t>> groups;
+  for (size_t i = 0; i < truth.size(); ++i) groups[{truth[i].image, truth[i].obj_id}].push_back(i);
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> add_s(truth.size(), inf), add_or_s(truth.size(), inf);
+  std::vector<std::pair<std::pair<ImageKey, int>, std::vector<size_t>>> work(groups.begin(), groups.end());
+  std::vector<int> surplus(work.size(), 0);
+  tbb::parallel_for(size_t{0}, work.size(), [&](size_t g) {
+    const auto& [key, members] = work[g];
+    auto found = estimates.find(key);
+    if (found == estimates.end()) return;
+    std::vector<Estimate> list = found->second;
+    std::stable_sort(list.begin(), list.end(), [](const Estimate& a, const Estimate& b) { return a.score > b.score; });
+    const Model& model = models.at(key.second);
+    std::vector<bool> taken(members.size(), false);
+    for (const Estimate& e : list) {
+      int best = -1;
+      double best_error = inf, best_add_s = inf;
+      for (size_t m = 0; m < members.size(); ++m) {
+        if (taken[m]) continue;
+        const Eigen::Isometry3d& gt = truth[members[m]].pose;
+        const double s = AddSError(model.points, e.pose, gt);
+        const double err = model.symmetric ? s : AddError(model.points, e.pose, gt);
+        if (err < best_error) best = static_cast<int>(m), best_error = err, best_add_s = s;
+      }
+      if (best < 0) {
+        ++surplus[g];
+        continue;
+      }
+      taken[best] = true;
+      add_or_s[members[best]] = best_error;
+      add_s[members[best]] = best_add_s;
+    }
+  });
+  for (const auto& [key, list] : estimates) {
+    if (images.count(key.first) && !groups.count(key)) report.unmatched_estimates += static_cast<int>(list.size());
+    if (!images.count(key.first)) report.ignored_estimates += static_cast<int>(list.size());
+  }
+  for (int s : surplus) report.unmatched_estimates += s;
+
+  // Scores per object and overall.
+  std::vector<double> all_diam;
+  for (const Instance& t : truth) all_diam.push_back(models.at(t.obj_id).diameter);
+  for (const auto& [obj, model] : models) {
+    std::vector<double> a, b, d;
+    for (size_t i = 0; i < truth.size(); ++i) {
+      if (truth[i].obj_id != obj) continue;
+      a.push_back(add_s[i]), b.push_back(add_or_s[i]), d.push_back(model.diameter);
+    }
+    if (a.empty()) continue;
+    ObjectScores s;
+    s.obj_id = obj;
+    s.name = model.name;
+    s.symmetric = model.symmetric;
+    s.diameter_mm = model.diameter;
+    Score(&s, a, b, d);
+    report.objects.push_back(s);
+  }
+  report.overall.name = "all";
+  Score(&report.overall, add_s, add_or_s, all_diam);
+  return report;
+}
+
+std::string EvalTable(const EvalReport& report) {
+  std::ostringstream out;
+  out << "evaluated: " << report.images << ", " << report.image_count << " images\n";
+  out << std::left << std::setw(8) << "obj_id" << std::setw(22) << "name" << std::right << std::setw(5) << "sym"
+      << std::setw(11) << "diam mm" << std::setw(11) << "found" << std::setw(13) << "ADD(-S) mm" << std::setw(10)
+      << "<10% d" << std::setw(11) << "AUC ADD-S" << std::setw(13) << "AUC ADD(-S)" << "\n";
+  const auto row = [&](const ObjectScores& s) {
+    out << std::left << std::setw(8) << (s.obj_id ? std::to_string(s.obj_id) : "") << std::setw(22) << s.name
+        << std::right << std::setw(5) << (s.obj_id ? (s.symmetric ? "yes" : "no") : "") << std::setw(11)
+        << std::fixed << std::setprecision(1);
+    if (s.obj_id) {
+      out << s.diameter_mm;
+    } else {
+      out << "";
+    }
+    out << std::setw(11) << (std::to_string(s.estimated) + "/" + std::to_string(s.instances)) << std::setw(13)
+        << std::setprecision(2) << s.mean_error_mm << std::setw(9) << std::setprecision(1) << 100 * s.within_10pct
+        << "%" << std::setw(10) << 100 * s.auc_adds << "%" << std::setw(12) << 100 * s.auc_add_or_s << "%\n";
+  };
+  for (const ObjectScores& s : report.objects) row(s);
+  row(report.overall);
+  if (report.unmatched_estimates) out << report.unmatched_estimates << " estimates matched no ground-truth instance\n";
+  if (report.ignored_estimates) out << report.ignored_estimates << " estimates for images outside the evaluated set ignored\n";
+  return out.str();
+}
+
+std::string EvalJson(const EvalReport& report) {
+  const auto scores = [](const ObjectScores& s) {
+    Json j = {{"instances", s.instances},
+              {"estimated", s.estimated},
+              {"mean_error_mm", std::isfinite(s.mean_error_mm) ? Json(s.mean_error_mm) : Json()},
+              {"within_10pct_diameter", s.within_10pct},
+              {"auc_adds", s.auc_adds},
+              {"auc_add_or_s", s.auc_add_or_s}};
+    if (s.obj_id) {
+      j["obj_id"] = s.obj_id;
+      j["name"] = s.name;
+      j["symmetric"] = s.symmetric;
+      j["diameter_mm"] = s.diameter_mm;
+    }
+    return j;
+  };
+  Json objects = Json::array();
+  for (const ObjectScores& s : report.objects) objects.push_back(scores(s));
+  return Json{{"images", report.images},
+              {"image_count", report.image_count},
+              {"unmatched_estimates", report.unmatched_estimates},
+              {"ignored_estimates", report.ignored_estimates},
+              {"auc_max_threshold_mm", kAucMaxMm},
+              {"objects", objects},
+              {"overall", scores(report.overall)}}
+             .dump(2) + "\n";
+}
+
+void WriteEvalJson(const fs::path& path, const EvalReport& report) { WriteFileAtomic(path, EvalJson(report)); }
+
+}  // namespace cadsynth

@@ -146,6 +146,16 @@ std::vector<GtInfo> ComputeGtInfos(const Frame& frame, double depth_scale) {
       }
     }
     box(a0, b0, a1, b1, info.bbox_obj);
+    // As bop_toolkit: count and box on the 3x canvas, so truncated parts count (bbox_obj may
+    // reach outside the image). Hand-made frames without the canvas keep the in-image values.
+    if (truth.px_count_canvas > 0) {
+      info.px_count_all = truth.px_count_canvas;
+      const int* c = truth.bbox_canvas;  // may lie wholly left of or above the image
+      info.bbox_obj[0] = c[0];
+      info.bbox_obj[1] = c[1];
+      info.bbox_obj[2] = c[2] - c[0] + 1;
+      info.bbox_obj[3] = c[3] - c[1] + 1;
+    }
     info.visib_fract = info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
   }
   return infos;
@@ -368,11 +378,12 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
     const uint16_t visible_id = static_cast<uint16_t>(i + 1);
     // Masks are zero outside their boxes: fill only inside.
     mask.setTo(0);
-    if (info.bbox_obj[0] >= 0) {
-      for (int v = info.bbox_obj[1]; v < info.bbox_obj[1] + info.bbox_obj[3]; ++v) {
+    if (info.bbox_obj[0] >= 0) {  // the box may reach outside the image: clip it
+      const int u_end = std::min(w, info.bbox_obj[0] + info.bbox_obj[2]);
+      for (int v = std::max(0, info.bbox_obj[1]); v < std::min(h, info.bbox_obj[1] + info.bbox_obj[3]); ++v) {
         auto* out = mask.ptr<uint8_t>(v);
         const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v) * w];
-        for (int u = info.bbox_obj[0]; u < info.bbox_obj[0] + info.bbox_obj[2]; ++u) out[u] = in[u] != 0 ? 255 : 0;
+        for (int u = std::max(0, info.bbox_obj[0]); u < u_end; ++u) out[u] = in[u] != 0 ? 255 : 0;
       }
     }
     WriteFileAtomic(scene_dir_ / "mask" / name, EncodePng(mask, scene_dir_ / "mask" / name));

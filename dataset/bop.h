@@ -99,9 +99,10 @@ void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& intrins
 
 // Ground-truth statistics of one instance in one frame, as scene_gt_info.json holds them.
 struct GtInfo {
-  int bbox_obj[4] = {-1, -1, -1, -1};    // x, y, width, height of the full silhouette
+  // x, y, width, height of the full silhouette on the 3x canvas: not clipped to the image.
+  int bbox_obj[4] = {-1, -1, -1, -1};
   int bbox_visib[4] = {-1, -1, -1, -1};  // of the visible part
-  int px_count_all = 0;
+  int px_count_all = 0;    // full silhouette on the 3x canvas (truncated parts count)
   int px_count_valid = 0;  // silhouette pixels with a depth value in the written depth image
   int px_count_visib = 0;
   double visib_fract = 0.0;

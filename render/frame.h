@@ -29,6 +29,11 @@ struct Frame {
     // to the image; the default is the whole image).
     int roi[4] = {0, 0, 1 << 30, 1 << 30};
     int px_count_all = 0;    // pixels of the amodal mask inside the image
+    // The silhouette on the canvas of three times the image size, [-w, 2w) x [-h, 2h) (as
+    // bop_toolkit renders it), so that truncated parts count: its pixel count and its bounding
+    // box (u_min, v_min, u_max, v_max, inclusive, image coordinates; all -1 when empty).
+    int px_count_canvas = 0;
+    int bbox_canvas[4] = {-1, -1, -1, -1};
     int px_count_visib = 0;  // pixels where this instance is the front-most surface
   };
   std::vector<InstanceTruth> instances;  // one per Scene::instances entry, same order

@@ -214,9 +214,11 @@ struct PixelRect {
   int u0, v0, u1, v1;
 };
 
+// The pixels that can see `model_box`, clamped to `bounds` (all of it when a corner lies behind
+// the camera).
 PixelRect ProjectedRect(const Eigen::AlignedBox3d& model_box, const Eigen::Isometry3d& cam_from_model,
-                        const Intrinsics& k) {
-  const PixelRect whole{0, 0, k.width, k.height};
+                        const Intrinsics& k, const PixelRect& bounds) {
+  const PixelRect whole = bounds;
   double umin = std::numeric_limits<double>::infinity(), vmin = umin;
   double umax = -umin, vmax = -umin;
   for (int c = 0; c < 8; ++c) {
@@ -231,10 +233,13 @@ PixelRect ProjectedRect(const Eigen::AlignedBox3d& model_box, const Eigen::Isome
   }
   // Pixel centres at +0.5: pixel u is inside when umin <= u + 0.5 <= umax. One pixel of margin.
   PixelRect r;
-  r.u0 = std::clamp(static_cast<int>(std::floor(umin - 0.5)) - 1, 0, k.width);
-  r.u1 = std::clamp(static_cast<int>(std::ceil(umax - 0.5)) + 2, 0, k.width);
-  r.v0 = std::clamp(static_cast<int>(std::floor(vmin - 0.5)) - 1, 0, k.height);
-  r.v1 = std::clamp(static_cast<int>(std::ceil(vmax - 0.5)) + 2, 0, k.height);
+  const auto clamp = [](double x, int lo, int hi) {
+    return static_cast<int>(std::clamp(x, static_cast<double>(lo), static_cast<double>(hi)));
+  };
+  r.u0 = clamp(std::floor(umin - 0.5) - 1, bounds.u0, bounds.u1);
+  r.u1 = clamp(std::ceil(umax - 0.5) + 2, bounds.u0, bounds.u1);
+  r.v0 = clamp(std::floor(vmin - 0.5) - 1, bounds.v0, bounds.v1);
+  r.v1 = clamp(std::ceil(vmax - 0.5) + 2, bounds.v0, bounds.v1);
   return r;
 }
 
@@ -274,6 +279,34 @@ void InitPacket(const RayGen& gen, int u0, int v0, int w, int h, const std::vect
     rh->ray.tfar[j] = tfar;
     rh->ray.time[j] = 0.0f;
     rh->ray.mask[j] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: set every bit
+    rh->ray.id[j] = static_cast<unsigned>(j);
+    rh->ray.flags[j] = 0;
+    rh->hit.geomID[j] = kInvalid;
+    rh->hit.primID[j] = kInvalid;
+    rh->hit.instID[0][j] = kInvalid;
+  }
+}
+
+// A 4 x 4 packet at any pixel (u0, v0) of the 3x canvas, where the tabulated directions do not
+// reach; lanes outside `rect` are off. Same directions as InitPacket inside the image.
+void InitCanvasPacket(const RayGen& gen, int u0, int v0, const PixelRect& rect, float tnear, float tfar,
+                      RTCRayHit16* rh, int valid[16]) {
+  const Intrinsics& k = *gen.k;
+  for (int j = 0; j < 16; ++j) {
+    const int u = u0 + j % kTile, v = v0 + j / kTile;
+    valid[j] = (u < rect.u1 && v < rect.v1) ? -1 : 0;
+    const float x = static_cast<float>((u + 0.5 - k.cx) / k.fx), y = static_cast<float>((v + 0.5 - k.cy) / k.fy);
+    const Eigen::Vector3f d = gen.col0 * x + gen.col1 * y + gen.col2;
+    rh->ray.org_x[j] = gen.origin.x();
+    rh->ray.org_y[j] = gen.origin.y();
+    rh->ray.org_z[j] = gen.origin.z();
+    rh->ray.dir_x[j] = d.x();
+    rh->ray.dir_y[j] = d.y();
+    rh->ray.dir_z[j] = d.z();
+    rh->ray.tnear[j] = tnear;
+    rh->ray.tfar[j] = tfar;
+    rh->ray.time[j] = 0.0f;
+    rh->ray.mask[j] = 0xFFFFFFFFu;
     rh->ray.id[j] = static_cast<unsigned>(j);
     rh->ray.flags[j] = 0;
     rh->hit.geomID[j] = kInvalid;
@@ -461,32 +494,43 @@ Frame Renderer::Render(const Camera& camera) const {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }
   if (!o.amodal_masks) return frame;
+  // The silhouette is traced on bop_toolkit's canvas of three times the image size, [-w, 2w) x
+  // [-h, 2h), so that counts and boxes of truncated instances include their parts outside the image.
+  const PixelRect canvas{-w, -h, 2 * w, 2 * h};
   tbb::parallel_for(size_t{0}, im.scene.instances.size(), [&](size_t i) {
     Frame::InstanceTruth& truth = frame.instances[i];
     truth.amodal_mask.assign(num_pixels, 0);
-    const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, k);
-    truth.roi[0] = r.u0;
-    truth.roi[1] = r.v0;
-    truth.roi[2] = r.u1;
-    truth.roi[3] = r.v1;
-    int count = 0;
+    const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, k, canvas);
+    truth.roi[0] = std::clamp(r.u0, 0, w);
+    truth.roi[1] = std::clamp(r.v0, 0, h);
+    truth.roi[2] = std::clamp(r.u1, 0, w);
+    truth.roi[3] = std::clamp(r.v1, 0, h);
+    int count = 0, canvas_count = 0;
+    int box[4] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::min(),
+                  std::numeric_limits<int>::min()};
     RTCIntersectContext context;
     RTCRayHit16 rh;
     alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
-    for (int v0 = r.v0 - r.v0 % kTile; v0 < r.v1; v0 += kTile) {
-      for (int u0 = r.u0 - r.u0 % kTile; u0 < r.u1; u0 += kTile) {
-        InitPacket(gen, u0, v0, w, h, xs, ys, tnear, tfar, &rh, valid);
+    for (int v0 = r.v0; v0 < r.v1; v0 += kTile) {
+      for (int u0 = r.u0; u0 < r.u1; u0 += kTile) {
+        InitCanvasPacket(gen, u0, v0, r, tnear, tfar, &rh, valid);
         rtcInitIntersectContext(&context);
         rtcIntersect16(valid, im.solo[i], &context, &rh);
         for (int j = 0; j < 16; ++j) {
-          if (valid[j] && rh.hit.geomID[j] != kInvalid) {
-            truth.amodal_mask[static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile)] = 1;
-            ++count;
-          }
+          if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
+          const int u = u0 + j % kTile, v = v0 + j / kTile;
+          ++canvas_count;
+          box[0] = std::min(box[0], u), box[1] = std::min(box[1], v);
+          box[2] = std::max(box[2], u), box[3] = std::max(box[3], v);
+          if (u < 0 || v < 0 || u >= w || v >= h) continue;
+          truth.amodal_mask[static_cast<size_t>(v) * w + u] = 1;
+          ++count;
         }
       }
     }
     truth.px_count_all = count;
+    truth.px_count_canvas = canvas_count;
+    if (canvas_count > 0) std::copy(box, box + 4, truth.bbox_canvas);
   });
   return frame;
 }

@@ -81,6 +81,62 @@ TEST(GtInfo, HandWorkedFrame) {
   EXPECT_EQ(none.visib_fract, 0.0);
 }
 
+// bop_toolkit's definition, recomputed independently: render each instance alone with a camera
+// whose image is three times as large (principal point moved by the image size) and count.
+TEST(GtInfo, TruncatedAndOccludedMatchTheThreeTimesCanvas) {
+  const std::vector<Part> parts = {MakePart("big", MakeBox(100, 100, 40), TessellationOptions{}),
+                                   MakePart("small", MakeBox(40, 40, 20), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  // The big box's 100 mm top face, 525 mm from an f = 525 camera, spans u in [-50, 50): half of
+  // it lies left of the image. The small box above it (u in [-26, 20)) hides part of the rest and
+  // is cut by the image border too.
+  scene.instances = {Instance{0, "big", Eigen::Isometry3d(Eigen::Translation3d(-320, 0, 20))},
+                     Instance{1, "small", Eigen::Isometry3d(Eigen::Translation3d(-280, 0, 100))}};
+  Camera camera;
+  camera.intrinsics = Intrinsics{640, 480, 525.0, 525.0, 320.0, 240.0};
+  camera.world_from_cam = Eigen::Isometry3d::Identity();
+  camera.world_from_cam.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // looking down
+  camera.world_from_cam.translation() = Eigen::Vector3d(0, 0, 40 + 525);
+  const Frame frame = Renderer(parts, scene).Render(camera);
+  const std::vector<GtInfo> infos = ComputeGtInfos(frame, 0.1);
+
+  // Hand-worked for the big box: the top face covers u in [-50, 50), v in [190, 290); the side
+  // wall facing the optical axis (x = -270, 525...565 mm deep) adds u up to 320 - 525 * 270 / 565
+  // = 69.1, so 119 columns. The box is not clipped at u = 0.
+  EXPECT_GT(infos[0].px_count_all, 100 * 100);
+  EXPECT_EQ(std::vector<int>(infos[0].bbox_obj, infos[0].bbox_obj + 4), (std::vector<int>{-50, 190, 119, 100}));
+  EXPECT_LT(infos[0].px_count_visib, frame.instances[0].px_count_all);  // occluded inside the image
+
+  Camera canvas = camera;
+  canvas.intrinsics = Intrinsics{3 * 640, 3 * 480, 525.0, 525.0, 320.0 + 640, 240.0 + 480};
+  for (size_t i = 0; i < 2; ++i) {
+    SCOPED_TRACE(i);
+    Scene alone = scene;
+    alone.instances = {scene.instances[i]};
+    const Frame solo = Renderer(parts, alone).Render(canvas);
+    int count = 0, u0 = 1 << 30, v0 = 1 << 30, u1 = -(1 << 30), v1 = -(1 << 30);
+    for (int v = 0; v < canvas.intrinsics.height; ++v) {
+      for (int u = 0; u < canvas.intrinsics.width; ++u) {
+        if (solo.instance[static_cast<size_t>(v) * canvas.intrinsics.width + u] == 0) continue;
+        ++count;
+        u0 = std::min(u0, u - 640), u1 = std::max(u1, u - 640);
+        v0 = std::min(v0, v - 480), v1 = std::max(v1, v - 480);
+      }
+    }
+    EXPECT_EQ(infos[i].px_count_all, count);
+    EXPECT_EQ(std::vector<int>(infos[i].bbox_obj, infos[i].bbox_obj + 4),
+              (std::vector<int>{u0, v0, u1 - u0 + 1, v1 - v0 + 1}));
+    // Visible pixels straight from the id image, and the fraction of the whole.
+    int visible = 0;
+    for (uint16_t id : frame.instance) visible += id == i + 1;
+    EXPECT_EQ(infos[i].px_count_visib, visible);
+    EXPECT_DOUBLE_EQ(infos[i].visib_fract, static_cast<double>(visible) / count);
+    EXPECT_LT(infos[i].visib_fract, 0.6);  // both are truncated
+  }
+  EXPECT_LT(infos[1].bbox_obj[0], 0);  // the small box's box starts left of the image too
+}
+
 TEST(AssignClasses, GroupsByNamePatternThenOneClassPerRemainingPart) {
   std::vector<std::string> empty;
   const std::vector<ObjectClass> classes = AssignClasses(

@@ -17,6 +17,7 @@
 #include <tbb/parallel_for.h>
 
 #include "cad/error.h"
+#include "dataset/coco.h"
 #include "dataset/file_io.h"
 #include "dataset/models.h"
 #include "dataset/point_cloud.h"
@@ -400,9 +401,27 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
     WriteFileAtomic(scene_dir_ / "mask_visib" / name,
                     EncodePng(mask, scene_dir_ / "mask_visib" / name));
   }
-  // One fragment per frame: three lines of compact JSON, read back in order by Finish().
+  // COCO: the visible mask of every instance that shows, as compressed RLE.
+  Json coco_entry = Json::array();
+  if (options_.coco) {
+    for (size_t i = 0; i < infos.size(); ++i) {
+      const GtInfo& info = infos[i];
+      if (info.px_count_visib == 0) continue;
+      const int* b = info.bbox_visib;
+      const uint16_t id = static_cast<uint16_t>(i + 1);
+      const RleMask rle = EncodeRle(w, h, b[0], b[1], b[0] + b[2], b[1] + b[3],
+                                    [&](size_t p) { return frame.instance[p] == id; });
+      coco_entry.push_back({{"inst_id", i},
+                            {"obj_id", obj_ids_[i]},
+                            {"area", info.px_count_visib},
+                            {"bbox", {b[0], b[1], b[2], b[3]}},
+                            {"counts", CompressRleCounts(rle.counts)}});
+    }
+  }
+  // One fragment per frame: four lines of compact JSON, read back in order by Finish().
   WriteFileAtomic(scene_dir_ / ".fragments" / (im + ".json"),
-                  camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n");
+                  camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n" +
+                      Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() + "\n");
   std::lock_guard<std::mutex> lock(mutex_);
   image_ids_.push_back(image_id);
 }
@@ -440,6 +459,16 @@ SceneSplit BopSceneWriter::Finish() {
     }
     return result;
   };
+  // scene_gt_coco.json: annotations streamed, the (small) image list kept for the end.
+  const std::filesystem::path coco_path = scene_dir_ / "scene_gt_coco.json";
+  std::ofstream coco;
+  Json coco_images = Json::array();
+  int annotation_id = 0;
+  if (options_.coco) {
+    coco.open(coco_path.string() + ".tmp", std::ios::binary);
+    if (!coco) throw Error(coco_path.string() + ": cannot create file");
+    coco << "{\n  \"annotations\": [";
+  }
   for (size_t n = 0; n < image_ids_.size(); ++n) {
     const std::filesystem::path fragment = scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json");
     std::ifstream in(fragment, std::ios::binary);
@@ -458,6 +487,47 @@ SceneSplit BopSceneWriter::Finish() {
         for (const auto& [obj, count] : counts) split.targets.push_back({image_ids_[n], obj, count});
       }
     }
+    if (!options_.coco) continue;
+    if (!std::getline(in, line)) throw Error(fragment.string() + ": incomplete fragment");
+    const Json entry = Json::parse(line);
+    const int w = entry["width"], h = entry["height"];
+    coco_images.push_back(
+        {{"id", image_ids_[n]}, {"file_name", "rgb/" + Id6(image_ids_[n]) + ".png"}, {"width", w}, {"height", h}});
+    for (const Json& a : entry["annotations"]) {
+      const Json annotation = {{"id", ++annotation_id},
+                               {"image_id", image_ids_[n]},
+                               {"category_id", a["obj_id"]},
+                               {"iscrowd", 0},
+                               {"area", a["area"]},
+                               {"bbox", a["bbox"]},
+                               {"segmentation", {{"size", {h, w}}, {"counts", a["counts"]}}},
+                               {"width", w},
+                               {"height", h},
+                               {"inst_id", a["inst_id"]}};
+      coco << (annotation_id == 1 ? "\n    " : ",\n    ") << annotation.dump();
+    }
+  }
+  if (options_.coco) {
+    Json categories = Json::array();
+    std::vector<int> ids = obj_ids_;
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    for (int id : ids) {
+      Json c = {{"id", id}, {"name", std::to_string(id)}, {"supercategory", "cadsynth"}};
+      for (const CocoCategory& known : categories_) {
+        if (known.id == id) c = {{"id", id}, {"name", known.name}, {"supercategory", known.supercategory}};
+      }
+      categories.push_back(c);
+    }
+    coco << (annotation_id ? "\n  ],\n" : "],\n") << "  \"categories\": " << categories.dump()
+         << ",\n  \"images\": " << coco_images.dump() << ",\n  \"info\": "
+         << Json{{"description", "cadsynth scene " + scene_dir_.filename().string()}}.dump()
+         << ",\n  \"licenses\": []\n}\n";
+    coco.close();
+    if (!coco) throw Error(coco_path.string() + ": cannot write file (disk full?)");
+    std::error_code ec;
+    std::filesystem::rename(coco_path.string() + ".tmp", coco_path, ec);
+    if (ec) throw Error(coco_path.string() + ": cannot move file into place: " + ec.message());
   }
   for (int f = 0; f < 3; ++f) {
     out[f] << (image_ids_.empty() ? "}\n" : "\n}\n");
@@ -486,6 +556,61 @@ void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit
   WriteFileAtomic(root / "splits" / "train.txt", train);
   WriteFileAtomic(root / "splits" / "test.txt", test);
   WriteFileAtomic(root / "test_targets_bop19.json", targets.dump(2) + "\n");
+}
+
+void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& options,
+                     const std::vector<SceneSplit>& scenes, const std::vector<ObjectClass>& classes) {
+  if (!options.coco) return;
+  CreateFolder(root / "coco");
+  Json categories = Json::array();
+  std::map<int, std::string> class_names;
+  for (const ObjectClass& c : classes) class_names[c.id] = c.name;
+  for (const auto& [id, name] : class_names) categories.push_back({{"id", id}, {"name", name}, {"supercategory", "cadsynth"}});
+  for (const bool test : {false, true}) {
+    Json images = Json::array(), annotations = Json::array();
+    for (size_t s = 0; s < scenes.size(); ++s) {
+      const std::vector<int>& wanted = test ? scenes[s].test : scenes[s].train;
+      if (wanted.empty()) continue;
+      const std::string scene_folder = options.split + "/" + Id6(static_cast<int>(s));
+      const std::filesystem::path file = root / scene_folder / "scene_gt_coco.json";
+      std::ifstream in(file, std::ios::binary);
+      if (!in) throw Error(file.string() + ": cannot open");
+      const Json scene = Json::parse(in);
+      std::map<int, int> image_number;  // im_id -> merged image id
+      for (const Json& image : scene["images"]) {
+        const int im = image["id"];
+        if (!std::binary_search(wanted.begin(), wanted.end(), im)) continue;
+        image_number[im] = static_cast<int>(images.size()) + 1;
+        images.push_back({{"id", image_number[im]},
+                          {"file_name", scene_folder + "/" + image["file_name"].get<std::string>()},
+                          {"width", image["width"]},
+                          {"height", image["height"]},
+                          {"scene_id", s},
+                          {"im_id", im}});
+      }
+      for (const Json& a : scene["annotations"]) {
+        const auto found = image_number.find(a["image_id"].get<int>());
+        if (found == image_number.end()) continue;
+        const int obj = a["category_id"];
+        Json merged = a;
+        merged["id"] = static_cast<int>(annotations.size()) + 1;
+        merged["image_id"] = found->second;
+        merged["category_id"] = obj >= 1 && obj <= static_cast<int>(classes.size()) ? classes[obj - 1].id : obj;
+        merged["obj_id"] = obj;
+        merged["scene_id"] = s;
+        merged["im_id"] = found->first;
+        annotations.push_back(std::move(merged));
+      }
+    }
+    WriteFileAtomic(root / "coco" / (test ? "test.json" : "train.json"),
+                    Json{{"annotations", annotations},
+                         {"categories", categories},
+                         {"images", images},
+                         {"info", {{"description", test ? "cadsynth test split" : "cadsynth train split"}}},
+                         {"licenses", Json::array()}}
+                            .dump() +
+                        "\n");
+  }
 }
 
 }  // namespace cadsynth

@@ -44,6 +44,9 @@ struct BopOptions {
   // Model point clouds (models/points/obj_*.ply): points per part (the paper: 3,000; 0: none),
   // spread uniformly by area or evenly spaced, seeded.
   int model_points = 3000;
+  // COCO instance annotations of the visible masks (compressed RLE): SCENE/scene_gt_coco.json as
+  // BOP writes it, and coco/{train,test}.json merged over the scenes by split.
+  bool coco = true;
   bool even_points = false;
   uint64_t point_seed = 0;
 
@@ -135,6 +138,14 @@ class BopSceneWriter {
   // world_from_model = [world_R_m2w, world_t_m2w]; and the instance's name.
   void WriteWorldPoses(const std::vector<Instance>& instances);
 
+  // Names of the COCO categories of scene_gt_coco.json (category id = obj_id, as BOP); by default
+  // each is named after its obj_id.
+  struct CocoCategory {
+    int id = 0;
+    std::string name, supercategory;
+  };
+  void SetCocoCategories(std::vector<CocoCategory> categories) { categories_ = std::move(categories); }
+
   const std::filesystem::path& scene_dir() const { return scene_dir_; }
 
  private:
@@ -143,6 +154,13 @@ class BopSceneWriter {
   std::vector<int> obj_ids_;
   std::mutex mutex_;
   std::vector<int> image_ids_;  // written so far
+  std::vector<CocoCategory> categories_;
 };
+
+// Writes ROOT/coco/train.json and ROOT/coco/test.json: the scenes' scene_gt_coco.json merged by
+// the split, images numbered from 1 with file names relative to ROOT, and categories the object
+// classes: `classes[obj_id - 1]` (each annotation also keeps obj_id, scene_id, im_id, inst_id).
+void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& options,
+                     const std::vector<SceneSplit>& scenes, const std::vector<ObjectClass>& classes);
 
 }  // namespace cadsynth

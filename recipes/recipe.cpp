@@ -575,7 +575,8 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed",
-                               "model_points", "point_sampling", "point_seed"});
+                               "model_points", "point_sampling", "point_seed", "coco"});
+  if (node["coco"]) spec->bop.coco = r.Bool(node["coco"], "output.coco");
   if (node["model_points"]) spec->bop.model_points = r.Integer(node["model_points"], "output.model_points");
   if (node["point_seed"]) spec->bop.point_seed = static_cast<uint64_t>(r.Integer(node["point_seed"], "output.point_seed"));
   if (node["point_sampling"]) {

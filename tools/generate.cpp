@@ -359,6 +359,11 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     const Renderer renderer(parts, prepared.scenes[s], spec.render);
     BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
     writer.WriteWorldPoses(prepared.scenes[s].instances);
+    std::vector<BopSceneWriter::CocoCategory> categories;
+    for (size_t p = 0; p < parts.size(); ++p) {
+      categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
+    }
+    writer.SetCocoCategories(std::move(categories));
     size_t next = 0;
     const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
     using FramePtr = std::shared_ptr<const Frame>;
@@ -393,6 +398,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     splits.push_back(writer.Finish());
   }
   WriteSplits(staging.path(), splits);
+  WriteMergedCoco(staging.path(), spec.bop, splits, prepared.classes);
   MoveIntoPlace(staging.path(), output, options.overwrite);
   staging.Release();
 

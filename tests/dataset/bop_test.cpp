@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "cad/shape.h"
+#include "dataset/coco.h"
 #include "render/renderer.h"
 #include "tests/test_support.h"
 
@@ -242,7 +243,7 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
   }
   writer.WriteFrame(1, frames[1]);  // out of order on purpose
   writer.WriteFrame(0, frames[0]);
-  writer.Finish();
+  const SceneSplit split = writer.Finish();
 
   const json camera = ReadJson(dir / "camera.json");
   for (const char* key : {"cx", "cy", "depth_scale", "fx", "fy", "height", "width"}) {
@@ -307,6 +308,51 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
     ASSERT_EQ(rgb.type(), CV_8UC3);
     EXPECT_EQ(rgb.at<cv::Vec3b>(240, 320)[0], frames[im].rgb[3 * (240 * 640 + 320) + 2]);  // BGR
   }
+
+  // COCO: every visible mask, decoded from its compressed RLE, is the mask_visib PNG.
+  const json coco = ReadJson(scene_dir / "scene_gt_coco.json");
+  for (const char* k : {"annotations", "categories", "images", "info", "licenses"}) EXPECT_TRUE(coco.contains(k)) << k;
+  ASSERT_EQ(coco["images"].size(), 2u);
+  EXPECT_EQ(coco["images"][0]["file_name"], "rgb/000000.png");
+  EXPECT_EQ(coco["categories"].size(), 2u);
+  int annotations = 0;
+  for (const json& a : coco["annotations"]) {
+    const int im = a["image_id"], inst = a["inst_id"];
+    SCOPED_TRACE(std::to_string(im) + "/" + std::to_string(inst));
+    EXPECT_EQ(a["category_id"], gt[std::to_string(im)][inst]["obj_id"]);
+    EXPECT_EQ(a["segmentation"]["size"], json::array({480, 640}));
+    const RleMask rle{480, 640, DecompressRleCounts(a["segmentation"]["counts"].get<std::string>())};
+    const std::vector<uint8_t> decoded = DecodeRle(rle);
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d_%06d.png", im, inst);
+    const cv::Mat mask = cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(mask.empty());
+    int differ = 0;
+    for (int v = 0; v < 480; ++v) {
+      for (int u = 0; u < 640; ++u) differ += (mask.at<uint8_t>(v, u) != 0) != (decoded[v * 640 + u] != 0);
+    }
+    EXPECT_EQ(differ, 0);
+    EXPECT_EQ(a["area"], cv::countNonZero(mask));
+    EXPECT_EQ(a["bbox"], gt_info[std::to_string(im)][inst]["bbox_visib"]);
+    ++annotations;
+  }
+  EXPECT_EQ(annotations, 4);  // both instances show in both views
+
+  // Merged by split: with 2 images and every 4th a test image, both are training images.
+  std::vector<SceneSplit> scenes(4);
+  scenes[3] = split;
+  WriteMergedCoco(dir.path(), options, scenes, {{7, "block"}, {8, "pin"}});
+  const json train = ReadJson(dir / "coco" / "train.json");
+  ASSERT_EQ(train["images"].size(), 2u);
+  EXPECT_EQ(train["images"][1]["file_name"], "train/000003/rgb/000001.png");
+  EXPECT_EQ(train["images"][1]["id"], 2);
+  EXPECT_EQ(train["categories"], json::parse(R"([{"id":7,"name":"block","supercategory":"cadsynth"},
+                                                  {"id":8,"name":"pin","supercategory":"cadsynth"}])"));
+  ASSERT_EQ(train["annotations"].size(), 4u);
+  EXPECT_EQ(train["annotations"][3]["category_id"], 8);  // the pin's class
+  EXPECT_EQ(train["annotations"][3]["obj_id"], 2);
+  EXPECT_EQ(train["annotations"][3]["image_id"], 2);
+  EXPECT_EQ(ReadJson(dir / "coco" / "test.json")["images"].size(), 0u);
 }
 
 }  // namespace

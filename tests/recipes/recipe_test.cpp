@@ -45,7 +45,8 @@ tessellation: {linear_deflection: 20 um, angular_deflection: 10}
 parts: [{family: round_peg}]
 scene: {layout: row, gap: 1 in}
 render: {floor: false, background: [1, 1, 1]}
-output: {dir: out/x, depth_scale: 1.0, split: val}
+output: {dir: out/x, depth_scale: 1.0, split: val, coco: false, model_points: 500, point_sampling: even,
+         point_seed: 4, test_fraction: 0.1, split_seed: 2}
 )", "r.yaml", "/base");
   EXPECT_EQ(spec.intrinsics.width, 320);
   EXPECT_DOUBLE_EQ(spec.intrinsics.fx, 262.5);
@@ -58,6 +59,20 @@ output: {dir: out/x, depth_scale: 1.0, split: val}
   EXPECT_FALSE(spec.look.floor);
   EXPECT_EQ(spec.output, std::filesystem::path("/base/out/x"));
   EXPECT_EQ(spec.bop.split, "val");
+  EXPECT_FALSE(spec.bop.coco);
+  EXPECT_EQ(spec.bop.model_points, 500);
+  EXPECT_TRUE(spec.bop.even_points);
+  EXPECT_EQ(spec.bop.point_seed, 4u);
+  EXPECT_EQ(spec.bop.test_every, 0);
+  EXPECT_DOUBLE_EQ(spec.bop.test_fraction, 0.1);
+  EXPECT_EQ(spec.bop.split_seed, 2u);
+  try {
+    ParseRecipe("output: {point_sampling: poisson}\n", "r.yaml", ".");
+    FAIL() << "an unknown sampling must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("r.yaml:1"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'area' or 'even'"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Recipe, CamerasSamplersAndFilter) {

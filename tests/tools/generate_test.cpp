@@ -87,7 +87,8 @@ TEST(Generate, DefaultJobIsThePapersThreeDemoSets) {
 
   const auto files = ReadTree(dir / "data");
   for (const char* f : {"camera.json", "models/models_info.json", "models/obj_000013.ply", "variants.json",
-                        "models/points/obj_000013.ply", "models/keypoints.json",
+                        "models/points/obj_000013.ply", "models/keypoints.json", "coco/train.json",
+                        "coco/test.json", "train/000001/scene_gt_coco.json",
                         "splits/train.txt", "splits/test.txt", "test_targets_bop19.json",
                         "train/000000/rgb/000001.png", "train/000001/scene_gt.json",
                         "train/000002/mask_visib/000001_000004.png", "train/000002/scene_gt_info.json"}) {

@@ -57,18 +57,6 @@ bool BopOptions::IsTest(int index, int count) const {
 
 namespace {
 
-std::string Id6(int id) {
-  char buffer[16];
-  std::snprintf(buffer, sizeof(buffer), "%06d", id);
-  return buffer;
-}
-
-void CreateFolder(const std::filesystem::path& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw Error(dir.string() + ": cannot create folder: " + ec.message());
-}
-
 Json RowMajor(const Eigen::Matrix3d& r) {
   Json out = Json::array();
   for (int i = 0; i < 3; ++i) {

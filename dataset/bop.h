@@ -47,6 +47,11 @@ struct BopOptions {
   // COCO instance annotations of the visible masks (compressed RLE): SCENE/scene_gt_coco.json as
   // BOP writes it, and coco/{train,test}.json merged over the scenes by split.
   bool coco = true;
+  // Formats derived from the same frames (dataset/paper_layout.h): the reference paper's layout
+  // under paper/, PVN3D's YCB-style -meta.mat files beside it, grasp-detector point arrays.
+  bool paper_layout = false;
+  bool pvn3d_meta = false;
+  bool grasp_points = false;
   bool even_points = false;
   uint64_t point_seed = 0;
 

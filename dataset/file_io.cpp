@@ -32,4 +32,25 @@ void WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes) 
   }
 }
 
+void CreateFolder(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error(dir.string() + ": cannot create folder: " + ec.message());
+}
+
+void LinkOrCopy(const std::filesystem::path& from, const std::filesystem::path& to) {
+  std::error_code ec;
+  std::filesystem::remove(to, ec);
+  std::filesystem::create_hard_link(from, to, ec);
+  if (!ec) return;
+  std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, ec);
+  if (ec) throw Error(to.string() + ": cannot link or copy " + from.string() + ": " + ec.message());
+}
+
+std::string Id6(int id) {
+  char buffer[16];
+  std::snprintf(buffer, sizeof(buffer), "%06d", id);
+  return buffer;
+}
+
 }  // namespace cadsynth

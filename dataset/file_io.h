@@ -11,4 +11,14 @@ namespace cadsynth {
 // place. Throws Error naming the file (with the system's reason, e.g. a full disk) on failure.
 void WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes);
 
+// Creates `dir` and its parents; throws Error naming it on failure.
+void CreateFolder(const std::filesystem::path& dir);
+
+// Makes `to` a hard link to `from` (no extra disk space), or a copy where links are not possible
+// (another file system); replaces an existing `to`. Throws Error naming the files on failure.
+void LinkOrCopy(const std::filesystem::path& from, const std::filesystem::path& to);
+
+// A BOP id: six digits, zero-padded ("000042").
+std::string Id6(int id);
+
 }  // namespace cadsynth

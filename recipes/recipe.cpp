@@ -575,8 +575,29 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed",
-                               "model_points", "point_sampling", "point_seed", "coco"});
-  if (node["coco"]) spec->bop.coco = r.Bool(node["coco"], "output.coco");
+                               "model_points", "point_sampling", "point_seed", "formats"});
+  if (const YAML::Node formats = node["formats"]) {
+    if (!formats.IsSequence()) r.Fail(formats, "output.formats", "expected a list, e.g. [bop, coco, paper]");
+    spec->bop.coco = spec->bop.paper_layout = spec->bop.pvn3d_meta = spec->bop.grasp_points = false;
+    bool bop = false;
+    for (const YAML::Node& f : formats) {
+      const std::string name = r.Scalar(f, "output.formats");
+      if (name == "bop") {
+        bop = true;
+      } else if (name == "coco") {
+        spec->bop.coco = true;
+      } else if (name == "paper") {
+        spec->bop.paper_layout = true;
+      } else if (name == "pvn3d") {
+        spec->bop.pvn3d_meta = true;
+      } else if (name == "grasp") {
+        spec->bop.grasp_points = true;
+      } else {
+        r.Fail(f, "output.formats", "unknown format '" + name + "' (known: bop, coco, paper, pvn3d, grasp)");
+      }
+    }
+    if (!bop) r.Fail(formats, "output.formats", "bop is always written (the other formats derive from it): list it");
+  }
   if (node["model_points"]) spec->bop.model_points = r.Integer(node["model_points"], "output.model_points");
   if (node["point_seed"]) spec->bop.point_seed = static_cast<uint64_t>(r.Integer(node["point_seed"], "output.point_seed"));
   if (node["point_sampling"]) {

@@ -20,6 +20,7 @@
 #include "cad/import.h"
 #include "dataset/bop.h"
 #include "dataset/file_io.h"
+#include "dataset/paper_layout.h"
 #include "render/renderer.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
@@ -364,6 +365,13 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
     }
     writer.SetCocoCategories(std::move(categories));
+    std::vector<PaperInstance> paper_instances;
+    for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
+      const Instance& instance = prepared.scenes[s].instances[i];
+      paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
+                                 instance.name, instance.world_from_model});
+    }
+    const PaperSceneWriter paper(staging.path(), static_cast<int>(s), spec.bop, std::move(paper_instances));
     size_t next = 0;
     const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
     using FramePtr = std::shared_ptr<const Frame>;
@@ -391,6 +399,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                     ++(visible == 0 ? empty_views : sparse_views);
                   } else {
                     writer.WriteFrame(static_cast<int>(item.first), *item.second);
+                    paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir());
                   }
                   const size_t n = ++done;
                   if (options.progress) options.progress(n, total_frames);

@@ -45,7 +45,7 @@ tessellation: {linear_deflection: 20 um, angular_deflection: 10}
 parts: [{family: round_peg}]
 scene: {layout: row, gap: 1 in}
 render: {floor: false, background: [1, 1, 1]}
-output: {dir: out/x, depth_scale: 1.0, split: val, coco: false, model_points: 500, point_sampling: even,
+output: {dir: out/x, depth_scale: 1.0, split: val, formats: [bop, pvn3d, grasp], model_points: 500, point_sampling: even,
          point_seed: 4, test_fraction: 0.1, split_seed: 2}
 )", "r.yaml", "/base");
   EXPECT_EQ(spec.intrinsics.width, 320);
@@ -60,6 +60,12 @@ output: {dir: out/x, depth_scale: 1.0, split: val, coco: false, model_points: 50
   EXPECT_EQ(spec.output, std::filesystem::path("/base/out/x"));
   EXPECT_EQ(spec.bop.split, "val");
   EXPECT_FALSE(spec.bop.coco);
+  EXPECT_FALSE(spec.bop.paper_layout);
+  EXPECT_TRUE(spec.bop.pvn3d_meta);
+  EXPECT_TRUE(spec.bop.grasp_points);
+  for (const char* bad : {"output: {formats: [bop, yolo]}\n", "output: {formats: [coco]}\n", "output: {formats: bop}\n"}) {
+    EXPECT_THROW(ParseRecipe(bad, "r.yaml", "."), Error) << bad;
+  }
   EXPECT_EQ(spec.bop.model_points, 500);
   EXPECT_TRUE(spec.bop.even_points);
   EXPECT_EQ(spec.bop.point_seed, 4u);

@@ -1,0 +1,49 @@
+#include "dataset/grasp.h"
+
+#include <bit>
+#include <cstring>
+
+#include "dataset/bop.h"
+
+namespace cadsynth {
+
+std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instance, double depth_scale) {
+  const Intrinsics& k = frame.camera.intrinsics;
+  const int w = frame.width(), h = frame.height();
+  const uint16_t id = static_cast<uint16_t>(instance + 1);
+  std::vector<Eigen::Vector3f> points;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const size_t p = static_cast<size_t>(v) * w + u;
+      if (frame.instance[p] != id) continue;
+      const uint16_t units = EncodeDepth(frame.depth[p], depth_scale);
+      if (units == 0) continue;
+      const double z = units * depth_scale / 1000.0;  // as a reader of the depth PNG gets it, in m
+      points.emplace_back(static_cast<float>((u + 0.5 - k.cx) * z / k.fx), static_cast<float>((v + 0.5 - k.cy) * z / k.fy),
+                          static_cast<float>(z));
+    }
+  }
+  return points;
+}
+
+std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points) {
+  static_assert(std::endian::native == std::endian::little, "the .npy writer copies floats as they are in memory");
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(points.size()) + ", 3), }";
+  // Magic (6) + version (2) + header length (2) + header, padded with spaces to a multiple of 64
+  // bytes and ended by a newline.
+  const size_t unpadded = 10 + header.size() + 1;
+  header.append((64 - unpadded % 64) % 64, ' ');
+  header += '\n';
+  std::string out("\x93NUMPY\x01\x00", 8);
+  out += static_cast<char>(header.size() & 0xff);
+  out += static_cast<char>(header.size() >> 8);
+  out += header;
+  const size_t start = out.size();
+  out.resize(start + points.size() * 3 * sizeof(float));
+  for (size_t i = 0; i < points.size(); ++i) {
+    std::memcpy(&out[start + i * 3 * sizeof(float)], points[i].data(), 3 * sizeof(float));
+  }
+  return out;
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,165 @@
+#include "dataset/paper_layout.h"
+
+#include <matio.h>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cad/error.h"
+#include "dataset/file_io.h"
+#include "dataset/grasp.h"
+
+namespace cadsynth {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json Matrix4(const Eigen::Isometry3d& t) {
+  Json rows = Json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({t.matrix()(r, 0), t.matrix()(r, 1), t.matrix()(r, 2), t.matrix()(r, 3)});
+  return rows;
+}
+
+// One MATLAB double array, column-major `data` with `dims`.
+void WriteMatDouble(mat_t* mat, const char* name, std::vector<size_t> dims, std::vector<double> data,
+                    const std::filesystem::path& path) {
+  matvar_t* var = Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, static_cast<int>(dims.size()), dims.data(),
+                                data.data(), 0);
+  if (var == nullptr) throw Error(path.string() + ": cannot create MATLAB variable " + name);
+  const int status = Mat_VarWrite(mat, var, MAT_COMPRESSION_NONE);
+  Mat_VarFree(var);
+  if (status != 0) throw Error(path.string() + ": cannot write MATLAB variable " + name);
+}
+
+}  // namespace
+
+void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const std::vector<int>& cls_of_instance,
+                    double depth_scale) {
+  std::vector<size_t> shown;
+  for (size_t i = 0; i < frame.instances.size(); ++i) {
+    if (frame.instances[i].px_count_visib > 0) shown.push_back(i);
+  }
+  const size_t n = shown.size();
+  std::vector<double> cls(n), poses(12 * n), center(2 * n);
+  const Intrinsics& k = frame.camera.intrinsics;
+  for (size_t j = 0; j < n; ++j) {
+    const Eigen::Isometry3d& m2c = frame.instances[shown[j]].cam_from_model;
+    cls[j] = cls_of_instance.at(shown[j]);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) poses[r + 3 * c + 12 * j] = m2c.linear()(r, c);
+      poses[r + 3 * 3 + 12 * j] = m2c.translation()(r) / 1000.0;
+    }
+    const Eigen::Vector3d t = m2c.translation();
+    center[j] = k.fx * t.x() / t.z() + k.cx;      // column 0: u
+    center[j + n] = k.fy * t.y() / t.z() + k.cy;  // column 1: v
+  }
+  std::vector<double> kmat(9), w2c(12);
+  const Eigen::Matrix3d kk = k.K();
+  const Eigen::Isometry3d cam_from_world = frame.camera.world_from_cam.inverse();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      kmat[r + 3 * c] = kk(r, c);
+      w2c[r + 3 * c] = cam_from_world.linear()(r, c);
+    }
+    w2c[r + 9] = cam_from_world.translation()(r) / 1000.0;
+  }
+
+  const std::string temporary = path.string() + ".tmp";
+  mat_t* mat = Mat_CreateVer(temporary.c_str(), nullptr, MAT_FT_MAT5);
+  if (mat == nullptr) throw Error(path.string() + ": cannot create MATLAB file");
+  try {
+    WriteMatDouble(mat, "cls_indexes", {n, 1}, cls, path);
+    WriteMatDouble(mat, "poses", {3, 4, n}, poses, path);
+    WriteMatDouble(mat, "intrinsic_matrix", {3, 3}, kmat, path);
+    WriteMatDouble(mat, "factor_depth", {1, 1}, {1000.0 / depth_scale}, path);
+    WriteMatDouble(mat, "center", {n, 2}, center, path);
+    WriteMatDouble(mat, "rotation_translation_matrix", {3, 4}, w2c, path);
+  } catch (...) {
+    Mat_Close(mat);
+    std::filesystem::remove(temporary);
+    throw;
+  }
+  Mat_Close(mat);
+  std::error_code ec;
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) throw Error(path.string() + ": cannot move file into place: " + ec.message());
+}
+
+PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
+                                   std::vector<PaperInstance> instances)
+    : paper_dir_(root / "paper" / Id6(scene_id)),
+      grasp_dir_(root / "grasp" / Id6(scene_id)),
+      options_(options),
+      instances_(std::move(instances)) {
+  if (options_.paper_layout || options_.pvn3d_meta) {
+    for (const char* sub : {"rgb", "depth", "mask", "meta"}) CreateFolder(paper_dir_ / sub);
+  }
+  if (options_.grasp_points) CreateFolder(grasp_dir_);
+}
+
+void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir) const {
+  if (frame.instances.size() != instances_.size()) {
+    throw Error("paper layout: frame has " + std::to_string(frame.instances.size()) + " instances, the scene " +
+                std::to_string(instances_.size()));
+  }
+  const std::string im = Id6(image_id);
+  std::vector<int> labels;
+  for (const PaperInstance& p : instances_) labels.push_back(p.obj_id);
+  if (options_.paper_layout || options_.pvn3d_meta) {
+    LinkOrCopy(bop_scene_dir / "rgb" / (im + ".png"), paper_dir_ / "rgb" / (im + ".png"));
+    LinkOrCopy(bop_scene_dir / "depth" / (im + ".png"), paper_dir_ / "depth" / (im + ".png"));
+    // The mask: each visible pixel gets its object's obj_id as grey value (8 or 16 bit).
+    const int w = frame.width(), h = frame.height();
+    const bool wide = *std::max_element(labels.begin(), labels.end()) > 255;
+    cv::Mat mask(h, w, wide ? CV_16UC1 : CV_8UC1, cv::Scalar(0));
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const uint16_t id = frame.instance[static_cast<size_t>(v) * w + u];
+        if (id == 0) continue;
+        if (wide) {
+          mask.at<uint16_t>(v, u) = static_cast<uint16_t>(labels[id - 1]);
+        } else {
+          mask.at<uint8_t>(v, u) = static_cast<uint8_t>(labels[id - 1]);
+        }
+      }
+    }
+    std::vector<uchar> png;
+    const std::filesystem::path mask_path = paper_dir_ / "mask" / (im + ".png");
+    if (!cv::imencode(".png", mask, png)) throw Error(mask_path.string() + ": PNG encoding failed");
+    WriteFileAtomic(mask_path, std::string(png.begin(), png.end()));
+
+    const Eigen::Isometry3d& world_from_cam = frame.camera.world_from_cam;
+    Json objects = Json::array();
+    for (size_t i = 0; i < instances_.size(); ++i) {
+      const PaperInstance& p = instances_[i];
+      objects.push_back({{"inst_id", i},
+                         {"obj_id", p.obj_id},
+                         {"class_id", p.object_class.id},
+                         {"class_name", p.object_class.name},
+                         {"name", p.name},
+                         {"grey", p.obj_id},
+                         {"px_count_visib", frame.instances[i].px_count_visib},
+                         {"T_O_C", Matrix4(frame.instances[i].cam_from_model)},
+                         {"T_O_W", Matrix4(p.world_from_model)}});
+    }
+    const Eigen::Matrix3d k = frame.camera.intrinsics.K();
+    const Json meta = {{"K", {{k(0, 0), k(0, 1), k(0, 2)}, {k(1, 0), k(1, 1), k(1, 2)}, {k(2, 0), k(2, 1), k(2, 2)}}},
+                       {"depth_scale", options_.depth_scale},
+                       {"width", w},
+                       {"height", h},
+                       {"T_C_W", Matrix4(world_from_cam)},
+                       {"objects", objects}};
+    WriteFileAtomic(paper_dir_ / "meta" / (im + ".json"), meta.dump(2) + "\n");
+    if (options_.pvn3d_meta) WritePvn3dMeta(paper_dir_ / "meta" / (im + "-meta.mat"), frame, labels, options_.depth_scale);
+  }
+  if (options_.grasp_points) {
+    for (size_t i = 0; i < instances_.size(); ++i) {
+      if (frame.instances[i].px_count_visib == 0) continue;
+      const auto points = BackProjectInstance(frame, static_cast<int>(i), options_.depth_scale);
+      WriteFileAtomic(grasp_dir_ / (im + "_" + Id6(static_cast<int>(i)) + ".npy"), EncodeNpy(points));
+    }
+  }
+}
+
+}  // namespace cadsynth

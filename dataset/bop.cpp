@@ -32,6 +32,10 @@ bool BopOptions::Check(std::string* why) const {
     *why = "depth_scale must be positive";
     return false;
   }
+  if (jpeg_quality < 0 || jpeg_quality > 100) {
+    *why = "jpeg_quality must be 1 to 100 (0: PNG)";
+    return false;
+  }
   if (model_points < 0 || model_points > 10000000) {
     *why = "model_points must be 0 to 10,000,000";
     return false;
@@ -304,8 +308,16 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
   cv::Mat rgb(h, w, CV_8UC3, const_cast<uint8_t*>(frame.rgb.data()));
   cv::Mat bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  const std::filesystem::path rgb_path = scene_dir_ / "rgb" / (im + ".png");
-  WriteFileAtomic(rgb_path, EncodePng(bgr, rgb_path));
+  const std::filesystem::path rgb_path = scene_dir_ / "rgb" / (im + options_.RgbExtension());
+  if (options_.jpeg_quality > 0) {
+    std::vector<uchar> bytes;
+    if (!cv::imencode(".jpg", bgr, bytes, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
+      throw Error(rgb_path.string() + ": JPEG encoding failed");
+    }
+    WriteFileAtomic(rgb_path, std::string(bytes.begin(), bytes.end()));
+  } else {
+    WriteFileAtomic(rgb_path, EncodePng(bgr, rgb_path));
+  }
 
   cv::Mat depth(h, w, CV_16UC1);
   for (int v = 0; v < h; ++v) {
@@ -480,7 +492,7 @@ SceneSplit BopSceneWriter::Finish() {
     const Json entry = Json::parse(line);
     const int w = entry["width"], h = entry["height"];
     coco_images.push_back(
-        {{"id", image_ids_[n]}, {"file_name", "rgb/" + Id6(image_ids_[n]) + ".png"}, {"width", w}, {"height", h}});
+        {{"id", image_ids_[n]}, {"file_name", "rgb/" + Id6(image_ids_[n]) + options_.RgbExtension()}, {"width", w}, {"height", h}});
     for (const Json& a : entry["annotations"]) {
       const Json annotation = {{"id", ++annotation_id},
                                {"image_id", image_ids_[n]},

@@ -47,6 +47,9 @@ struct BopOptions {
   // COCO instance annotations of the visible masks (compressed RLE): SCENE/scene_gt_coco.json as
   // BOP writes it, and coco/{train,test}.json merged over the scenes by split.
   bool coco = true;
+  // Colour images as lossless PNG (default) or as JPEG of this quality (1-100; 0: PNG).
+  int jpeg_quality = 0;
+  std::string RgbExtension() const { return jpeg_quality > 0 ? ".jpg" : ".png"; }
   // Formats derived from the same frames (dataset/paper_layout.h): the reference paper's layout
   // under paper/, PVN3D's YCB-style -meta.mat files beside it, grasp-detector point arrays.
   bool paper_layout = false;

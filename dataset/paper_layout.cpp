@@ -107,7 +107,8 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::f
   std::vector<int> labels;
   for (const PaperInstance& p : instances_) labels.push_back(p.obj_id);
   if (options_.paper_layout || options_.pvn3d_meta) {
-    LinkOrCopy(bop_scene_dir / "rgb" / (im + ".png"), paper_dir_ / "rgb" / (im + ".png"));
+    const std::string rgb = im + options_.RgbExtension();
+    LinkOrCopy(bop_scene_dir / "rgb" / rgb, paper_dir_ / "rgb" / rgb);
     LinkOrCopy(bop_scene_dir / "depth" / (im + ".png"), paper_dir_ / "depth" / (im + ".png"));
     // The mask: each visible pixel gets its object's obj_id as grey value (8 or 16 bit).
     const int w = frame.width(), h = frame.height();

@@ -575,7 +575,22 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed",
-                               "model_points", "point_sampling", "point_seed", "formats"});
+                               "model_points", "point_sampling", "point_seed", "formats", "rgb",
+                               "jpeg_quality"});
+  if (node["rgb"]) {
+    const std::string kind = r.Scalar(node["rgb"], "output.rgb");
+    if (kind != "png" && kind != "jpg" && kind != "jpeg") {
+      r.Fail(node["rgb"], "output.rgb", "expected png or jpg, got '" + kind + "'");
+    }
+    spec->bop.jpeg_quality = kind == "png" ? 0 : 95;
+  }
+  if (node["jpeg_quality"]) {
+    if (spec->bop.jpeg_quality == 0) r.Fail(node["jpeg_quality"], "output.jpeg_quality", "needs rgb: jpg");
+    spec->bop.jpeg_quality = r.Integer(node["jpeg_quality"], "output.jpeg_quality");
+    if (spec->bop.jpeg_quality < 1 || spec->bop.jpeg_quality > 100) {
+      r.Fail(node["jpeg_quality"], "output.jpeg_quality", "expected 1 to 100");
+    }
+  }
   if (const YAML::Node formats = node["formats"]) {
     if (!formats.IsSequence()) r.Fail(formats, "output.formats", "expected a list, e.g. [bop, coco, paper]");
     spec->bop.coco = spec->bop.paper_layout = spec->bop.pvn3d_meta = spec->bop.grasp_points = false;

@@ -204,6 +204,33 @@ TEST(Bop, EveryFourthImageIsATestImageWithItsTargets) {
   EXPECT_EQ(fraction.IsTest(17, 1000), fraction.IsTest(17, 1000));
 }
 
+TEST(Bop, JpegColourWhenAsked) {
+  testing::ScratchDir dir;
+  const std::vector<Part> parts = {MakePart("box", MakeBox(60, 40, 20), TessellationOptions{})};
+  Scene scene;
+  scene.instances = {Instance{0, "a", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))}};
+  Camera camera;
+  camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.4, 0.8, 400.0);
+  const Frame frame = Renderer(parts, scene).Render(camera);
+  BopOptions options;
+  options.jpeg_quality = 90;
+  BopSceneWriter writer(dir.path(), 0, options, {1});
+  writer.WriteFrame(0, frame);
+  writer.Finish();
+  const auto scene_dir = dir / "train" / "000000";
+  EXPECT_FALSE(std::filesystem::exists(scene_dir / "rgb" / "000000.png"));
+  const cv::Mat bgr = cv::imread((scene_dir / "rgb" / "000000.jpg").string(), cv::IMREAD_COLOR);
+  ASSERT_EQ(bgr.type(), CV_8UC3);
+  double error = 0;  // mean absolute error per channel: small at quality 90
+  for (int v = 0; v < bgr.rows; ++v) {
+    for (int u = 0; u < bgr.cols; ++u) {
+      for (int c = 0; c < 3; ++c) error += std::abs(bgr.at<cv::Vec3b>(v, u)[2 - c] - frame.rgb[3 * (v * bgr.cols + u) + c]);
+    }
+  }
+  EXPECT_LT(error / (bgr.total() * 3), 2.0);
+  EXPECT_EQ(ReadJson(scene_dir / "scene_gt_coco.json")["images"][0]["file_name"], "rgb/000000.jpg");
+}
+
 TEST(Bop, NormalsAreWrittenWhenRendered) {
   testing::ScratchDir dir;
   Scene scene;  // the floor, seen straight down: normal (0, 0, -1) in the camera frame

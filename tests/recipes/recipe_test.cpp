@@ -46,7 +46,7 @@ parts: [{family: round_peg}]
 scene: {layout: row, gap: 1 in}
 render: {floor: false, background: [1, 1, 1]}
 output: {dir: out/x, depth_scale: 1.0, split: val, formats: [bop, pvn3d, grasp], model_points: 500, point_sampling: even,
-         point_seed: 4, test_fraction: 0.1, split_seed: 2}
+         point_seed: 4, test_fraction: 0.1, split_seed: 2, rgb: jpg, jpeg_quality: 90}
 )", "r.yaml", "/base");
   EXPECT_EQ(spec.intrinsics.width, 320);
   EXPECT_DOUBLE_EQ(spec.intrinsics.fx, 262.5);
@@ -60,6 +60,10 @@ output: {dir: out/x, depth_scale: 1.0, split: val, formats: [bop, pvn3d, grasp],
   EXPECT_EQ(spec.output, std::filesystem::path("/base/out/x"));
   EXPECT_EQ(spec.bop.split, "val");
   EXPECT_FALSE(spec.bop.coco);
+  EXPECT_EQ(spec.bop.jpeg_quality, 90);
+  EXPECT_EQ(spec.bop.RgbExtension(), ".jpg");
+  EXPECT_THROW(ParseRecipe("output: {jpeg_quality: 80}\n", "r.yaml", "."), Error);  // PNG has no quality
+  EXPECT_THROW(ParseRecipe("output: {rgb: jpg, jpeg_quality: 101}\n", "r.yaml", "."), Error);
   EXPECT_FALSE(spec.bop.paper_layout);
   EXPECT_TRUE(spec.bop.pvn3d_meta);
   EXPECT_TRUE(spec.bop.grasp_points);

@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,8 @@
 
 #include "cad/error.h"
 #include "recipes/recipe.h"
+#include "dataset/file_io.h"
+#include "dataset/preview.h"
 #include "tools/eval.h"
 #include "tools/export.h"
 #include "tools/generate.h"
@@ -28,6 +31,7 @@ usage:
   cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
   cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
   cadsynth eval DATASET RESULTS.csv [--json FILE]
+  cadsynth preview DATASET [-o FILE.png] [--count N | --frames S/I,...] [--width PX]
   cadsynth --help | --version
 
 generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
@@ -52,6 +56,13 @@ eval       Scores pose estimates in the BOP results format (scene_id,im_id,obj_i
            against DATASET's test split: ADD, ADD-S (for symmetric parts), the share within 10%
            of the diameter and the AUC of accuracy up to 0.1 m, per object and overall.
   --json FILE  also write the scores as JSON
+
+preview    Writes a contact sheet PNG: per frame the colour image with every object's projected
+           3D box and axes (x red, y green, z blue), the coloured depth and the visible masks.
+  -o FILE        output (default: DATASET/preview.png)
+  --count N      frames spread evenly over the dataset (default 4)
+  --frames LIST  exactly these frames, as scene/image pairs: 0/0,2/17
+  --width PX     width of each of the three panels (default 320)
 )";
 
 struct UsageError {
@@ -216,6 +227,54 @@ int RunEval(const std::vector<std::string>& args) {
   return 0;
 }
 
+int ParseCount(const std::string& option, const std::string& text, int lo, int hi) {
+  char* end = nullptr;
+  const long value = std::strtol(text.c_str(), &end, 10);
+  if (end == text.c_str() || *end != '\0' || value < lo || value > hi) {
+    throw UsageError{option + " takes a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) +
+                     ", got '" + text + "'"};
+  }
+  return static_cast<int>(value);
+}
+
+int RunPreview(const std::vector<std::string>& args) {
+  std::optional<std::string> dataset, output;
+  cadsynth::PreviewOptions options;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    const bool takes_value = a == "-o" || a == "--count" || a == "--frames" || a == "--width";
+    if (takes_value && i + 1 >= args.size()) throw UsageError{a + " needs a value"};
+    if (a == "-o") {
+      output = args[++i];
+    } else if (a == "--count") {
+      options.count = ParseCount(a, args[++i], 1, 1000);
+    } else if (a == "--width") {
+      options.panel_width = ParseCount(a, args[++i], 32, 4096);
+    } else if (a == "--frames") {
+      std::stringstream list(args[++i]);
+      for (std::string item; std::getline(list, item, ',');) {
+        const size_t slash = item.find('/');
+        if (slash == std::string::npos) throw UsageError{"--frames takes scene/image pairs like 0/12, got '" + item + "'"};
+        options.frames.push_back({ParseCount("--frames scene", item.substr(0, slash), 0, 999999),
+                                  ParseCount("--frames image", item.substr(slash + 1), 0, 999999)});
+      }
+    } else if (!a.empty() && a[0] == '-') {
+      throw UsageError{"unknown option '" + a + "'"};
+    } else if (dataset) {
+      throw UsageError{"one dataset at a time"};
+    } else {
+      dataset = a;
+    }
+  }
+  if (!dataset) throw UsageError{"preview needs a DATASET folder"};
+  const std::filesystem::path out = output ? std::filesystem::path(*output) : std::filesystem::path(*dataset) / "preview.png";
+  std::vector<std::pair<int, int>> shown;
+  const std::string png = cadsynth::RenderPreview(*dataset, options, &shown);
+  cadsynth::WriteFileAtomic(out, png);
+  std::cout << "wrote " << out.string() << " (" << shown.size() << " frames)\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -233,6 +292,7 @@ int main(int argc, char** argv) {
     if (args[0] == "inspect") return RunInspect({args.begin() + 1, args.end()});
     if (args[0] == "variants") return RunVariants({args.begin() + 1, args.end()});
     if (args[0] == "eval") return RunEval({args.begin() + 1, args.end()});
+    if (args[0] == "preview") return RunPreview({args.begin() + 1, args.end()});
     throw UsageError{"unknown command '" + args[0] + "'"};
   } catch (const UsageError& e) {
     std::cerr << "error: " << e.what << "\n(run 'cadsynth --help' for usage)\n";

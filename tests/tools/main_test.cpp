@@ -100,7 +100,7 @@ TEST(Cli, GenerateWithoutArgumentsWritesTheDefaultDataset) {
   EXPECT_NE(again.err.find("already exists (pass --overwrite"), std::string::npos);
 }
 
-TEST(Cli, EvalErrorsAreOneLine) {
+TEST(Cli, EvalAndPreviewErrorsAreOneLine) {
   ScratchDir dir;
   EXPECT_EQ(Cadsynth("eval only_one_arg", dir).code, 2);
   std::ofstream(dir / "r.csv") << "0,0,1,0.9,1 0 0 0 1 0 0 0 1,0 0 500,-1\n";
@@ -108,6 +108,12 @@ TEST(Cli, EvalErrorsAreOneLine) {
   EXPECT_EQ(run.code, 1);
   EXPECT_EQ(run.err, "error: nowhere: no such dataset folder\n");
   EXPECT_FALSE(std::filesystem::exists(dir / "scores.json"));
+  EXPECT_EQ(Cadsynth("preview nowhere --frames 0-1", dir).code, 2);
+  const CliRun preview = Cadsynth("preview nowhere -o sheet.png", dir);
+  EXPECT_EQ(preview.code, 1);
+  EXPECT_EQ(Lines(preview.err), 1u) << preview.err;
+  EXPECT_NE(preview.err.find("nowhere/train: no such folder"), std::string::npos) << preview.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "sheet.png"));
 }
 
 }  // namespace

@@ -1,13 +1,16 @@
+// The commands that read a generated dataset: eval and preview.
 #include "tools/eval.h"
 
 #include <fstream>
 #include <map>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <gtest/gtest.h>
 
 #include "cad/error.h"
+#include "dataset/preview.h"
 #include "tests/test_support.h"
 #include "tools/generate.h"
 
@@ -16,6 +19,11 @@ namespace {
 
 using nlohmann::json;
 using testing::ScratchDir;
+
+json ReadJson(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return json::parse(in);
+}
 
 // The default job (the paper's three demo sets) at 160 x 120, 2 views, every image a test image.
 std::filesystem::path SmallDataset(const ScratchDir& dir) {
@@ -116,6 +124,54 @@ TEST(Eval, BadResultsNameTheFileAndLine) {
   std::ofstream(csv) << "0,0,1,0.9,2 0 0 0 1 0 0 0 1,0 0 500,-1\n";
   EXPECT_THROW(Evaluate(dataset, csv), Error);  // not a rotation
   EXPECT_THROW(Evaluate(dir / "nowhere", csv), Error);
+}
+
+// Every object's projected 3D box encloses the object's full silhouette (bbox_obj of
+// scene_gt_info.json): the preview draws the boxes where the objects are.
+TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
+  ScratchDir dir;
+  const auto dataset = SmallDataset(dir);
+  const json info = ReadJson(dataset / "models" / "models_info.json");
+  int checked = 0;
+  for (int scene = 0; scene < 3; ++scene) {
+    const auto scene_dir = dataset / "train" / ("00000" + std::to_string(scene));
+    const json cams = ReadJson(scene_dir / "scene_camera.json"), gt = ReadJson(scene_dir / "scene_gt.json"),
+               gt_info = ReadJson(scene_dir / "scene_gt_info.json");
+    for (const auto& [im, list] : gt.items()) {
+      Eigen::Matrix3d k;
+      for (int i = 0; i < 9; ++i) k(i / 3, i % 3) = cams[im]["cam_K"][i];
+      for (size_t i = 0; i < list.size(); ++i) {
+        const json& m = info[std::to_string(list[i]["obj_id"].get<int>())];
+        const Eigen::Vector3d lo(m["min_x"], m["min_y"], m["min_z"]), size(m["size_x"], m["size_y"], m["size_z"]);
+        Eigen::Isometry3d m2c = Eigen::Isometry3d::Identity();
+        for (int j = 0; j < 9; ++j) m2c.linear()(j / 3, j % 3) = list[i]["cam_R_m2c"][j];
+        for (int j = 0; j < 3; ++j) m2c.translation()(j) = list[i]["cam_t_m2c"][j];
+        Eigen::AlignedBox2d projected;
+        for (const Eigen::Vector2d& c : ProjectBox(k, m2c, Eigen::AlignedBox3d(lo, lo + size))) projected.extend(c);
+        const json& b = gt_info[im][i]["bbox_obj"];
+        if (b[0] == -1) continue;
+        // Pixels [x, x + w) x [y, y + h) have their centres inside the projected box.
+        EXPECT_LE(projected.min().x(), b[0].get<double>() + 0.5);
+        EXPECT_LE(projected.min().y(), b[1].get<double>() + 0.5);
+        EXPECT_GE(projected.max().x(), b[0].get<double>() + b[2].get<double>() - 0.5);
+        EXPECT_GE(projected.max().y(), b[1].get<double>() + b[3].get<double>() - 0.5);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 2 * 15);
+
+  PreviewOptions options;
+  options.count = 3;
+  options.panel_width = 100;
+  std::vector<std::pair<int, int>> shown;
+  const std::string png = RenderPreview(dataset, options, &shown);
+  EXPECT_EQ(shown, (std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {2, 0}}));  // spread over 6 frames
+  const cv::Mat sheet = cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR);
+  EXPECT_EQ(sheet.cols, 300);
+  EXPECT_EQ(sheet.rows, 3 * 75);  // 160 x 120 images at 100 px wide
+  options.frames = {{1, 7}};
+  EXPECT_THROW(RenderPreview(dataset, options), Error);  // no such image
 }
 
 }  // namespace

@@ -1,0 +1,174 @@
+#include "dataset/preview.h"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "cad/error.h"
+#include "dataset/file_io.h"
+
+namespace cadsynth {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+Json ReadJsonFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open");
+  try {
+    return Json::parse(in);
+  } catch (const Json::exception& e) {
+    throw Error(path.string() + ": not valid JSON: " + e.what());
+  }
+}
+
+cv::Mat ReadImage(const fs::path& path, int flags) {
+  cv::Mat image = cv::imread(path.string(), flags);
+  if (image.empty()) throw Error(path.string() + ": missing or not an image");
+  return image;
+}
+
+// Distinct, saturated colours (BGR) for instance i.
+cv::Scalar InstanceColour(size_t i) {
+  cv::Mat hsv(1, 1, CV_8UC3, cv::Scalar(static_cast<double>((i * 47) % 180), 220, 255)), bgr;
+  cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
+  const cv::Vec3b c = bgr.at<cv::Vec3b>(0, 0);
+  return cv::Scalar(c[0], c[1], c[2]);
+}
+
+// Depth (uint16) to a colour map, near = warm; no depth = black.
+cv::Mat ColourDepth(const cv::Mat& depth) {
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(depth, &lo, &hi, nullptr, nullptr, depth > 0);
+  cv::Mat scaled;
+  depth.convertTo(scaled, CV_8U, hi > lo ? -255.0 / (hi - lo) : 0.0, hi > lo ? 255.0 * hi / (hi - lo) : 128.0);
+  cv::Mat coloured;
+  cv::applyColorMap(scaled, coloured, cv::COLORMAP_TURBO);
+  coloured.setTo(cv::Scalar(0, 0, 0), depth == 0);
+  return coloured;
+}
+
+Eigen::Matrix3d Matrix3(const Json& v) {
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = v.at(i).get<double>();
+  return m;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k, const Eigen::Isometry3d& cam_from_model,
+                                        const Eigen::AlignedBox3d& box) {
+  std::vector<Eigen::Vector2d> corners;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p = k * (cam_from_model * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
+    corners.emplace_back(p.x() / p.z(), p.y() / p.z());
+  }
+  return corners;
+}
+
+std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options,
+                          std::vector<std::pair<int, int>>* shown) {
+  if (options.panel_width < 32 || options.panel_width > 4096) throw Error("preview: panel width must be 32 to 4096");
+  const fs::path split_dir = dataset / options.split;
+  if (!fs::is_directory(split_dir)) throw Error(split_dir.string() + ": no such folder (is this a cadsynth dataset?)");
+  const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
+
+  // All (scene, image) pairs, in order, to choose from.
+  std::vector<std::pair<int, int>> all;
+  std::vector<fs::path> scene_dirs;
+  for (const auto& e : fs::directory_iterator(split_dir)) {
+    if (fs::exists(e.path() / "scene_gt.json")) scene_dirs.push_back(e.path());
+  }
+  std::sort(scene_dirs.begin(), scene_dirs.end());
+  std::map<int, Json> cameras, gts;
+  for (const fs::path& dir : scene_dirs) {
+    const int scene = std::stoi(dir.filename().string());
+    cameras[scene] = ReadJsonFile(dir / "scene_camera.json");
+    gts[scene] = ReadJsonFile(dir / "scene_gt.json");
+    std::vector<int> ims;
+    for (const auto& [key, value] : gts[scene].items()) ims.push_back(std::stoi(key));
+    std::sort(ims.begin(), ims.end());
+    for (int im : ims) all.push_back({scene, im});
+  }
+  if (all.empty()) throw Error(split_dir.string() + ": no images");
+  std::vector<std::pair<int, int>> chosen = options.frames;
+  if (chosen.empty()) {
+    const int n = std::clamp(options.count, 1, static_cast<int>(all.size()));
+    for (int i = 0; i < n; ++i) chosen.push_back(all[static_cast<size_t>(i) * all.size() / n]);
+  }
+  if (shown) *shown = chosen;
+
+  std::vector<cv::Mat> rows;
+  for (const auto& [scene, im] : chosen) {
+    const std::string where = "scene " + std::to_string(scene) + " image " + std::to_string(im);
+    if (!gts.count(scene) || !gts[scene].contains(std::to_string(im))) throw Error("preview: no " + where + " in " + split_dir.string());
+    const fs::path dir = split_dir / Id6(scene);
+    const std::string name = Id6(im);
+    fs::path rgb_path = dir / "rgb" / (name + ".png");
+    if (!fs::exists(rgb_path)) rgb_path = dir / "rgb" / (name + ".jpg");
+    cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
+    const cv::Mat depth = ReadImage(dir / "depth" / (name + ".png"), cv::IMREAD_UNCHANGED);
+    const Json& gt = gts[scene][std::to_string(im)];
+    const Eigen::Matrix3d k = Matrix3(cameras[scene].at(std::to_string(im)).at("cam_K"));
+
+    cv::Mat masks = rgb * 0.35;
+    for (size_t i = 0; i < gt.size(); ++i) {
+      const fs::path mask_path = dir / "mask_visib" / (name + "_" + Id6(static_cast<int>(i)) + ".png");
+      const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_GRAYSCALE);
+      masks.setTo(InstanceColour(i), mask > 0);
+    }
+    // Boxes and axes (x red, y green, z blue) on the colour image.
+    const int thickness = std::max(1, rgb.cols / 320);
+    for (size_t i = 0; i < gt.size(); ++i) {
+      const Json& g = gt[i];
+      const Json& m = info.at(std::to_string(g.at("obj_id").get<int>()));
+      const Eigen::Vector3d lo(m.at("min_x"), m.at("min_y"), m.at("min_z"));
+      const Eigen::Vector3d size(m.at("size_x"), m.at("size_y"), m.at("size_z"));
+      Eigen::Isometry3d m2c = Eigen::Isometry3d::Identity();
+      m2c.linear() = Matrix3(g.at("cam_R_m2c"));
+      m2c.translation() = Eigen::Vector3d(g.at("cam_t_m2c")[0], g.at("cam_t_m2c")[1], g.at("cam_t_m2c")[2]);
+      if (m2c.translation().z() <= 0) continue;
+      const auto c = ProjectBox(k, m2c, Eigen::AlignedBox3d(lo, lo + size));
+      const auto pt = [](const Eigen::Vector2d& p) { return cv::Point(cvRound(p.x()), cvRound(p.y())); };
+      for (int a = 0; a < 8; ++a) {
+        for (int b = a + 1; b < 8; ++b) {
+          const int diff = a ^ b;  // corners differ in one coordinate: an edge
+          if (diff == 1 || diff == 2 || diff == 4) cv::line(rgb, pt(c[a]), pt(c[b]), InstanceColour(i), thickness, cv::LINE_AA);
+        }
+      }
+      const double axis = 0.5 * size.maxCoeff();
+      const Eigen::Vector3d o = k * m2c.translation();
+      for (int a = 0; a < 3; ++a) {
+        const Eigen::Vector3d e = k * (m2c * (axis * Eigen::Vector3d::Unit(a)));
+        if (e.z() <= 0) continue;
+        cv::line(rgb, pt(o.head<2>() / o.z()), pt(e.head<2>() / e.z()),
+                 a == 0 ? cv::Scalar(0, 0, 255) : a == 1 ? cv::Scalar(0, 200, 0) : cv::Scalar(255, 0, 0), thickness,
+                 cv::LINE_AA);
+      }
+    }
+    std::vector<cv::Mat> panels = {rgb, ColourDepth(depth), masks};
+    const double scale = static_cast<double>(options.panel_width) / rgb.cols;
+    for (cv::Mat& p : panels) {
+      cv::resize(p, p, cv::Size(options.panel_width, std::max(1, cvRound(rgb.rows * scale))), 0, 0, cv::INTER_AREA);
+    }
+    cv::putText(panels[0], where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1,
+                cv::LINE_AA);
+    cv::Mat row;
+    cv::hconcat(panels, row);
+    rows.push_back(row);
+  }
+  cv::Mat sheet;  // rows share the width (3 panels), heights may differ
+  cv::vconcat(rows, sheet);
+  std::vector<uchar> png;
+  if (!cv::imencode(".png", sheet, png)) throw Error("preview: PNG encoding failed");
+  return std::string(png.begin(), png.end());
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,31 @@
+// A contact sheet of dataset frames for checking a dataset by eye: colour with each object's
+// projected 3D bounding box and axes, coloured depth, coloured visible masks.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace cadsynth {
+
+struct PreviewOptions {
+  int count = 4;  // frames spread evenly over all scenes' images, when `frames` is empty
+  std::vector<std::pair<int, int>> frames;  // (scene_id, im_id) to show, in order
+  int panel_width = 320;  // each of the three panels per frame is scaled to this width
+  std::string split = "train";
+};
+
+// The 8 corners of `box` (model frame, mm) projected with `k` at pose `cam_from_model`, in pixel
+// coordinates (x right, y down, pixel (u, v) covering [u, u+1) x [v, v+1)).
+std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k, const Eigen::Isometry3d& cam_from_model,
+                                        const Eigen::AlignedBox3d& box);
+
+// Reads DATASET (BOP layout) and returns the contact sheet as PNG bytes: one row per frame.
+// Sets *shown to the frames it shows. Throws Error naming the file on missing or bad input.
+std::string RenderPreview(const std::filesystem::path& dataset, const PreviewOptions& options,
+                          std::vector<std::pair<int, int>>* shown = nullptr);
+
+}  // namespace cadsynth

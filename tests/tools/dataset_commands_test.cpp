@@ -1,4 +1,4 @@
-// The commands that read a generated dataset: eval and preview.
+// Reading a generated dataset back: the schema of every BOP file, eval and preview.
 #include "tools/eval.h"
 
 #include <fstream>
@@ -172,6 +172,105 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   EXPECT_EQ(sheet.rows, 3 * 75);  // 160 x 120 images at 100 px wide
   options.frames = {{1, 7}};
   EXPECT_THROW(RenderPreview(dataset, options), Error);  // no such image
+}
+
+// A small schema language for the checks below: "int", "number", "string", "bool",
+// ["list", N, ITEM] (N = -1: any length), {"each": VALUE} (an object of any keys), or
+// {"keys": {NAME: SCHEMA}} (exactly these keys; "?NAME" for optional ones).
+void ExpectSchema(const json& value, const json& schema, const std::string& where) {
+  if (schema.is_string()) {
+    const std::string type = schema;
+    const bool ok = type == "int"      ? value.is_number_integer()
+                    : type == "number" ? value.is_number()
+                    : type == "string" ? value.is_string()
+                    : type == "bool"   ? value.is_boolean()
+                                       : false;
+    EXPECT_TRUE(ok) << where << ": expected " << type << ", got " << value.dump();
+  } else if (schema.is_array()) {
+    ASSERT_TRUE(value.is_array()) << where << ": expected a list, got " << value.dump().substr(0, 80);
+    if (schema[1] >= 0) EXPECT_EQ(value.size(), schema[1].get<size_t>()) << where;
+    for (size_t i = 0; i < value.size(); ++i) ExpectSchema(value[i], schema[2], where + "[" + std::to_string(i) + "]");
+  } else if (schema.contains("each")) {
+    ASSERT_TRUE(value.is_object()) << where;
+    for (const auto& [key, item] : value.items()) ExpectSchema(item, schema["each"], where + "." + key);
+  } else {
+    ASSERT_TRUE(value.is_object()) << where;
+    for (const auto& [name, sub] : schema["keys"].items()) {
+      const bool optional = name[0] == '?';
+      const std::string key = optional ? name.substr(1) : name;
+      if (!value.contains(key)) {
+        EXPECT_TRUE(optional) << where << ": missing " << key;
+        continue;
+      }
+      ExpectSchema(value[key], sub, where + "." + key);
+    }
+    for (const auto& [key, item] : value.items()) {
+      EXPECT_TRUE(schema["keys"].contains(key) || schema["keys"].contains("?" + key)) << where << ": unexpected " << key;
+    }
+  }
+}
+
+// bop_toolkit's docs/bop_datasets_format.md, key by key, on every BOP file of a generated dataset.
+TEST(BopSchema, EveryFileHasTheDocumentedKeysAndTypes) {
+  ScratchDir dir;
+  const auto dataset = SmallDataset(dir);
+  const json vec3 = json::array({"list", 3, "number"}), mat3 = json::array({"list", 9, "number"});
+  const json box = json::array({"list", 4, "int"});
+  ExpectSchema(ReadJson(dataset / "camera.json"),
+               {{"keys", {{"cx", "number"}, {"cy", "number"}, {"fx", "number"}, {"fy", "number"},
+                          {"height", "int"}, {"width", "int"}, {"depth_scale", "number"}}}},
+               "camera.json");
+  const json model = {{"keys",
+                       {{"diameter", "number"}, {"min_x", "number"}, {"min_y", "number"}, {"min_z", "number"},
+                        {"size_x", "number"}, {"size_y", "number"}, {"size_z", "number"},
+                        {"?symmetries_discrete", json::array({"list", -1, json::array({"list", 16, "number"})})},
+                        {"?symmetries_continuous",
+                         json::array({"list", -1, {{"keys", {{"axis", vec3}, {"offset", vec3}}}}})}}}};
+  ExpectSchema(ReadJson(dataset / "models" / "models_info.json"), {{"each", model}}, "models_info.json");
+  ExpectSchema(ReadJson(dataset / "test_targets_bop19.json"),
+               json::array({"list", -1, {{"keys", {{"im_id", "int"}, {"inst_count", "int"}, {"obj_id", "int"},
+                                                   {"scene_id", "int"}}}}}),
+               "test_targets_bop19.json");
+  for (int scene = 0; scene < 3; ++scene) {
+    const auto scene_dir = dataset / "train" / ("00000" + std::to_string(scene));
+    ExpectSchema(ReadJson(scene_dir / "scene_camera.json"),
+                 {{"each", {{"keys", {{"cam_K", mat3}, {"depth_scale", "number"}, {"cam_R_w2c", mat3},
+                                      {"cam_t_w2c", vec3}}}}}},
+                 "scene_camera.json");
+    ExpectSchema(ReadJson(scene_dir / "scene_gt.json"),
+                 {{"each", json::array({"list", -1, {{"keys", {{"cam_R_m2c", mat3}, {"cam_t_m2c", vec3},
+                                                               {"obj_id", "int"}}}}})}},
+                 "scene_gt.json");
+    const json gt_info = ReadJson(scene_dir / "scene_gt_info.json");
+    ExpectSchema(gt_info,
+                 {{"each", json::array({"list", -1, {{"keys", {{"bbox_obj", box}, {"bbox_visib", box},
+                                                               {"px_count_all", "int"}, {"px_count_valid", "int"},
+                                                               {"px_count_visib", "int"},
+                                                               {"visib_fract", "number"}}}}})}},
+                 "scene_gt_info.json");
+    for (const auto& [im, list] : gt_info.items()) {
+      for (const json& entry : list) {
+        EXPECT_GE(entry["visib_fract"].get<double>(), 0.0);
+        EXPECT_LE(entry["visib_fract"].get<double>(), 1.0);
+        EXPECT_LE(entry["px_count_visib"].get<int>(), entry["px_count_all"].get<int>());
+      }
+    }
+    const json rle = {{"keys", {{"size", json::array({"list", 2, "int"})}, {"counts", "string"}}}};
+    ExpectSchema(ReadJson(scene_dir / "scene_gt_coco.json"),
+                 {{"keys",
+                   {{"annotations",
+                     json::array({"list", -1, {{"keys", {{"id", "int"}, {"image_id", "int"}, {"category_id", "int"},
+                                                         {"iscrowd", "int"}, {"area", "int"}, {"bbox", box},
+                                                         {"segmentation", rle}, {"width", "int"}, {"height", "int"},
+                                                         {"inst_id", "int"}}}}})},
+                    {"categories", json::array({"list", -1, {{"keys", {{"id", "int"}, {"name", "string"},
+                                                                       {"supercategory", "string"}}}}})},
+                    {"images", json::array({"list", -1, {{"keys", {{"id", "int"}, {"file_name", "string"},
+                                                                   {"width", "int"}, {"height", "int"}}}}})},
+                    {"info", {{"keys", {{"description", "string"}}}}},
+                    {"licenses", json::array({"list", 0, "int"})}}}},
+                 "scene_gt_coco.json");
+  }
 }
 
 }  // namespace

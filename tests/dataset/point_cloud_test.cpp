@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "cad/assembly.h"
@@ -68,6 +70,11 @@ TEST(Keypoints, FarthestPointsStartAtOppositeCornersAndSpread) {
     for (size_t j = i + 1; j < k.fps8.size(); ++j) min_gap = std::min(min_gap, (k.fps8[i] - k.fps8[j]).norm());
   }
   EXPECT_GT(min_gap, 20.0f);  // 8 random surface points would typically be far closer
+  // Every keypoint lies on the box's surface: one coordinate at its face.
+  for (const Eigen::Vector3f& p : k.fps16) {
+    const float face = std::max({std::abs(p.x()) / 30.0f, std::abs(p.y()) / 20.0f, std::abs(p.z()) / 10.0f});
+    EXPECT_NEAR(face, 1.0f, 1e-4f) << p.transpose();
+  }
   EXPECT_EQ(std::vector<Eigen::Vector3f>(k.fps16.begin(), k.fps16.begin() + 8), k.fps8);  // FPS is greedy
 }
 

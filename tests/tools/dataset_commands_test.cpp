@@ -188,7 +188,9 @@ void ExpectSchema(const json& value, const json& schema, const std::string& wher
     EXPECT_TRUE(ok) << where << ": expected " << type << ", got " << value.dump();
   } else if (schema.is_array()) {
     ASSERT_TRUE(value.is_array()) << where << ": expected a list, got " << value.dump().substr(0, 80);
-    if (schema[1] >= 0) EXPECT_EQ(value.size(), schema[1].get<size_t>()) << where;
+    if (schema[1] >= 0) {
+      EXPECT_EQ(value.size(), schema[1].get<size_t>()) << where;
+    }
     for (size_t i = 0; i < value.size(); ++i) ExpectSchema(value[i], schema[2], where + "[" + std::to_string(i) + "]");
   } else if (schema.contains("each")) {
     ASSERT_TRUE(value.is_object()) << where;

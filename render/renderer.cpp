@@ -262,28 +262,33 @@ struct RayGen {
   }
 };
 
+// Sets lane j of a packet to the camera ray along world direction `d`, with no hit yet.
+void SetLane(RTCRayHit16* rh, int j, const Eigen::Vector3f& origin, const Eigen::Vector3f& d, float tnear,
+             float tfar) {
+  rh->ray.org_x[j] = origin.x();
+  rh->ray.org_y[j] = origin.y();
+  rh->ray.org_z[j] = origin.z();
+  rh->ray.dir_x[j] = d.x();
+  rh->ray.dir_y[j] = d.y();
+  rh->ray.dir_z[j] = d.z();
+  rh->ray.tnear[j] = tnear;
+  rh->ray.tfar[j] = tfar;
+  rh->ray.time[j] = 0.0f;
+  rh->ray.mask[j] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: set every bit
+  rh->ray.id[j] = static_cast<unsigned>(j);
+  rh->ray.flags[j] = 0;
+  rh->hit.geomID[j] = kInvalid;
+  rh->hit.primID[j] = kInvalid;
+  rh->hit.instID[0][j] = kInvalid;
+}
+
 // Fills a 16-ray packet for the 4 x 4 tile at (u0, v0) from tabulated x(u), y(v).
 void InitPacket(const RayGen& gen, int u0, int v0, int w, int h, const std::vector<float>& xs,
                 const std::vector<float>& ys, float tnear, float tfar, RTCRayHit16* rh, int valid[16]) {
   for (int j = 0; j < 16; ++j) {
     const int u = u0 + j % kTile, v = v0 + j / kTile;
     valid[j] = (u < w && v < h) ? -1 : 0;
-    const Eigen::Vector3f d = gen.col0 * xs[u] + gen.col1 * ys[v] + gen.col2;
-    rh->ray.org_x[j] = gen.origin.x();
-    rh->ray.org_y[j] = gen.origin.y();
-    rh->ray.org_z[j] = gen.origin.z();
-    rh->ray.dir_x[j] = d.x();
-    rh->ray.dir_y[j] = d.y();
-    rh->ray.dir_z[j] = d.z();
-    rh->ray.tnear[j] = tnear;
-    rh->ray.tfar[j] = tfar;
-    rh->ray.time[j] = 0.0f;
-    rh->ray.mask[j] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: set every bit
-    rh->ray.id[j] = static_cast<unsigned>(j);
-    rh->ray.flags[j] = 0;
-    rh->hit.geomID[j] = kInvalid;
-    rh->hit.primID[j] = kInvalid;
-    rh->hit.instID[0][j] = kInvalid;
+    SetLane(rh, j, gen.origin, gen.col0 * xs[u] + gen.col1 * ys[v] + gen.col2, tnear, tfar);
   }
 }
 
@@ -296,22 +301,7 @@ void InitCanvasPacket(const RayGen& gen, int u0, int v0, const PixelRect& rect, 
     const int u = u0 + j % kTile, v = v0 + j / kTile;
     valid[j] = (u < rect.u1 && v < rect.v1) ? -1 : 0;
     const float x = static_cast<float>((u + 0.5 - k.cx) / k.fx), y = static_cast<float>((v + 0.5 - k.cy) / k.fy);
-    const Eigen::Vector3f d = gen.col0 * x + gen.col1 * y + gen.col2;
-    rh->ray.org_x[j] = gen.origin.x();
-    rh->ray.org_y[j] = gen.origin.y();
-    rh->ray.org_z[j] = gen.origin.z();
-    rh->ray.dir_x[j] = d.x();
-    rh->ray.dir_y[j] = d.y();
-    rh->ray.dir_z[j] = d.z();
-    rh->ray.tnear[j] = tnear;
-    rh->ray.tfar[j] = tfar;
-    rh->ray.time[j] = 0.0f;
-    rh->ray.mask[j] = 0xFFFFFFFFu;
-    rh->ray.id[j] = static_cast<unsigned>(j);
-    rh->ray.flags[j] = 0;
-    rh->hit.geomID[j] = kInvalid;
-    rh->hit.primID[j] = kInvalid;
-    rh->hit.instID[0][j] = kInvalid;
+    SetLane(rh, j, gen.origin, gen.col0 * x + gen.col1 * y + gen.col2, tnear, tfar);
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <matio.h>
 
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -112,7 +114,7 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::f
     LinkOrCopy(bop_scene_dir / "depth" / (im + ".png"), paper_dir_ / "depth" / (im + ".png"));
     // The mask: each visible pixel gets its object's obj_id as grey value (8 or 16 bit).
     const int w = frame.width(), h = frame.height();
-    const bool wide = *std::max_element(labels.begin(), labels.end()) > 255;
+    const bool wide = !labels.empty() && *std::max_element(labels.begin(), labels.end()) > 255;
     cv::Mat mask(h, w, wide ? CV_16UC1 : CV_8UC1, cv::Scalar(0));
     for (int v = 0; v < h; ++v) {
       for (int u = 0; u < w; ++u) {

@@ -21,13 +21,14 @@
 #include "tools/export.h"
 #include "tools/generate.h"
 #include "tools/inspect.h"
+#include "tools/progress.h"
 
 namespace {
 
 constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data out.
 
 usage:
-  cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--quiet]
+  cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--progress=MODE] [--quiet]
   cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
   cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
   cadsynth eval DATASET RESULTS.csv [--json FILE]
@@ -39,7 +40,9 @@ generate   Renders every view of the recipe's camera sweep and writes a BOP data
   -o DIR       output folder (default: the recipe's output.dir, else ./cadsynth_dataset)
   --overwrite  replace DIR if it exists (the old one stays until the new one is complete)
   --threads N  worker threads (default: all cores); results do not depend on it
-  --quiet      no progress or info lines, only warnings and errors
+  --progress=MODE  auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON
+               line every 5 s (done, total, seconds, frames_per_s, eta_s) for cluster logs
+  --quiet      no progress or info lines, only warnings and errors (--progress=json still prints)
 
 inspect    Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb .3mf .off) and
            prints what cadsynth sees: format, declared unit, parts with instance counts, size in
@@ -82,6 +85,7 @@ int RunGenerate(const std::vector<std::string>& args) {
   std::optional<std::string> recipe, output;
   bool overwrite = false, quiet = false;
   int threads = 0;
+  std::string progress = "auto";
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     const auto value = [&]() -> std::string {
@@ -96,6 +100,11 @@ int RunGenerate(const std::vector<std::string>& args) {
       quiet = true;
     } else if (a == "--threads" || a == "-j") {
       threads = ParseThreads(value());
+    } else if (a.rfind("--progress", 0) == 0) {
+      progress = a.size() > 10 && a[10] == '=' ? a.substr(11) : a == "--progress" ? value() : "?";
+      if (progress != "auto" && progress != "bar" && progress != "lines" && progress != "json") {
+        throw UsageError{"--progress takes auto, bar, lines or json, got '" + progress + "'"};
+      }
     } else if (!a.empty() && a[0] == '-') {
       throw UsageError{"unknown option '" + a + "'"};
     } else if (recipe) {
@@ -118,17 +127,16 @@ int RunGenerate(const std::vector<std::string>& args) {
   options.overwrite = overwrite;
   if (!quiet) {
     options.info = [](const std::string& line) { std::cout << line << "\n" << std::flush; };
-    const bool tty = ::isatty(STDERR_FILENO) != 0;
-    auto mutex = std::make_shared<std::mutex>();
-    options.progress = [tty, mutex](size_t done, size_t total) {
-      std::lock_guard<std::mutex> lock(*mutex);
-      if (tty) {
-        std::fprintf(stderr, "\rrendered %zu/%zu frames", done, total);
-        if (done == total) std::fprintf(stderr, "\n");
-      } else if (done == total || done % std::max<size_t>(1, total / 10) == 0) {
-        std::fprintf(stderr, "rendered %zu/%zu frames\n", done, total);
-      }
-    };
+  }
+  if (!quiet || progress == "json") {
+    using Mode = cadsynth::ProgressReporter::Mode;
+    const Mode mode = progress == "json"  ? Mode::kJson
+                      : progress == "bar" ? Mode::kBar
+                      : progress == "lines" ? Mode::kLines
+                      : ::isatty(STDERR_FILENO) != 0 ? Mode::kBar
+                                                     : Mode::kLines;
+    auto reporter = std::make_shared<cadsynth::ProgressReporter>(mode, stderr);
+    options.progress = [reporter](size_t done, size_t total) { reporter->Update(done, total); };
   }
   const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);
   if (summary.skipped_empty + summary.skipped_sparse > 0) {

@@ -1,0 +1,49 @@
+#include "tools/progress.h"
+
+#include <cstdio>
+
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+
+namespace cadsynth {
+namespace {
+
+TEST(Progress, BarShowsShareRateAndEta) {
+  EXPECT_EQ(FormatProgressBar(1665, 3330, 19.0, 10), "[#####-----]  50%  1665/3330 frames  87.6 frames/s  ETA 0:19");
+  EXPECT_EQ(FormatProgressBar(3330, 3330, 3725.0, 4), "[####] 100%  3330/3330 frames  0.9 frames/s  in 1:02:05");
+  EXPECT_EQ(FormatProgressBar(0, 10, 0.0, 0), "  0%  0/10 frames");  // no rate before the first frame
+}
+
+TEST(Progress, JsonLineHasTheNumbersAClusterLogNeeds) {
+  const auto j = nlohmann::json::parse(FormatProgressJson(250, 1000, 10.0));
+  EXPECT_EQ(j["done"], 250);
+  EXPECT_EQ(j["total"], 1000);
+  EXPECT_DOUBLE_EQ(j["frames_per_s"].get<double>(), 25.0);
+  EXPECT_DOUBLE_EQ(j["eta_s"].get<double>(), 30.0);
+  EXPECT_TRUE(nlohmann::json::parse(FormatProgressJson(0, 1000, 0.0))["eta_s"].is_null());
+}
+
+// JSON mode prints at most one line per interval, always the last one, and ignores late counts.
+TEST(Progress, JsonLinesAreThrottledAndTheLastAlwaysComes) {
+  char* buffer = nullptr;
+  size_t size = 0;
+  std::FILE* out = open_memstream(&buffer, &size);
+  double now = 0;
+  {
+    ProgressReporter reporter(ProgressReporter::Mode::kJson, out, 5.0, [&] { return now; });
+    for (size_t done = 1; done <= 100; ++done) {
+      now = done * 0.2;  // 20 s in all: lines at 0.2 s, then every 5 s
+      reporter.Update(done, 100);
+    }
+    reporter.Update(99, 100);  // late: ignored
+  }
+  std::fclose(out);
+  const std::string text(buffer, size);
+  std::free(buffer);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 5) << text;  // 0.2, 5.2, 10.2, 15.2 s and the end
+  EXPECT_NE(text.find("{\"done\":100,\"total\":100"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace cadsynth

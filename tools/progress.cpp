@@ -1,0 +1,88 @@
+#include "tools/progress.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+namespace cadsynth {
+namespace {
+
+std::string Duration(double seconds) {
+  const long s = std::lround(std::max(0.0, seconds));
+  char buffer[32];
+  if (s >= 3600) {
+    std::snprintf(buffer, sizeof(buffer), "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
+  } else {
+    std::snprintf(buffer, sizeof(buffer), "%ld:%02ld", s / 60, s % 60);
+  }
+  return buffer;
+}
+
+}  // namespace
+
+std::string FormatProgressBar(size_t done, size_t total, double seconds, int width) {
+  const double fraction = total > 0 ? std::min(1.0, static_cast<double>(done) / total) : 1.0;
+  const int filled = static_cast<int>(fraction * width);
+  std::string bar;
+  if (width > 0) {
+    bar.push_back('[');
+    bar.append(static_cast<size_t>(filled), '#');
+    bar.append(static_cast<size_t>(width - filled), '-');
+    bar.append("] ");
+  }
+  char text[160];
+  std::snprintf(text, sizeof(text), "%3d%%  %zu/%zu frames", static_cast<int>(100 * fraction), done, total);
+  bar += text;
+  if (seconds > 0 && done > 0) {
+    const double rate = done / seconds;
+    std::snprintf(text, sizeof(text), "  %.1f frames/s  %s %s", rate, done < total ? "ETA" : "in",
+                  Duration(done < total ? (total - done) / rate : seconds).c_str());
+    bar += text;
+  }
+  return bar;
+}
+
+std::string FormatProgressJson(size_t done, size_t total, double seconds) {
+  const double rate = seconds > 0 ? done / seconds : 0.0;
+  nlohmann::ordered_json j = {{"done", done}, {"total", total}, {"seconds", std::round(seconds * 100) / 100},
+                              {"frames_per_s", std::round(rate * 10) / 10}};
+  j["eta_s"] = rate > 0 ? nlohmann::ordered_json(std::round((total - std::min(done, total)) / rate * 10) / 10)
+                        : nlohmann::ordered_json(nullptr);
+  return j.dump();
+}
+
+ProgressReporter::ProgressReporter(Mode mode, std::FILE* out, double interval_s, std::function<double()> clock)
+    : mode_(mode), out_(out), interval_s_(interval_s), clock_(std::move(clock)) {
+  if (!clock_) {
+    const auto start = std::chrono::steady_clock::now();
+    clock_ = [start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  }
+}
+
+void ProgressReporter::Update(size_t done, size_t total) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (done < last_done_) return;  // an older count arriving late
+  last_done_ = done;
+  const double now = clock_();
+  const bool last = done >= total;
+  switch (mode_) {
+    case Mode::kBar:
+      if (!last && now - last_report_ < 0.1) return;  // redraw at most 10 times a second
+      std::fprintf(out_, "\r%s%s", FormatProgressBar(done, total, now).c_str(), last ? "\n" : "");
+      break;
+    case Mode::kLines:
+      if (!last && done % std::max<size_t>(1, total / 10) != 0) return;
+      std::fprintf(out_, "%s\n", FormatProgressBar(done, total, now, 0).c_str());
+      break;
+    case Mode::kJson:
+      if (!last && now - last_report_ < interval_s_) return;
+      std::fprintf(out_, "%s\n", FormatProgressJson(done, total, now).c_str());
+      break;
+  }
+  last_report_ = now;
+  std::fflush(out_);
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,40 @@
+// Progress of a long run on the terminal or in a cluster log.
+#pragma once
+
+#include <cstdio>
+#include <functional>
+#include <mutex>
+#include <string>
+
+namespace cadsynth {
+
+// "[##########----------]  50%  1665/3330 frames  87.4 frames/s  ETA 0:19" (width = bar cells;
+// 0: no bar). When done, "ETA" becomes "in" and the total time.
+std::string FormatProgressBar(size_t done, size_t total, double seconds, int width = 30);
+// One JSON object (no newline): {"done":..,"total":..,"seconds":..,"frames_per_s":..,"eta_s":..}.
+std::string FormatProgressJson(size_t done, size_t total, double seconds);
+
+class ProgressReporter {
+ public:
+  enum class Mode {
+    kBar,    // one line redrawn in place (a terminal)
+    kLines,  // a line at every 10% (a log file)
+    kJson,   // a JSON line at most every `interval_s` seconds, and at the end (cluster logs)
+  };
+  // `clock` returns seconds since some start (default: a steady clock started now).
+  ProgressReporter(Mode mode, std::FILE* out, double interval_s = 5.0, std::function<double()> clock = {});
+
+  // Thread-safe; call with the running count of finished frames.
+  void Update(size_t done, size_t total);
+
+ private:
+  Mode mode_;
+  std::FILE* out_;
+  double interval_s_;
+  std::function<double()> clock_;
+  std::mutex mutex_;
+  double last_report_ = -1e300;
+  size_t last_done_ = 0;
+};
+
+}  // namespace cadsynth

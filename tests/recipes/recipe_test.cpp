@@ -269,9 +269,11 @@ TEST(Recipe, ShippedRecipesParse) {
     ++parsed;
   }
   EXPECT_GE(parsed, 1);
-  EXPECT_EQ(LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "paper_sweep.yaml")
-                .sweep.NumViews(),
-            3330u);
+  const RunSpec paper = LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "paper_sweep.yaml");
+  EXPECT_EQ(paper.sweep.NumViews(), 3330u);
+  EXPECT_TRUE(paper.bop.paper_layout && paper.bop.pvn3d_meta && paper.bop.grasp_points && paper.bop.coco);
+  EXPECT_EQ(paper.bop.test_every, 4);
+  EXPECT_EQ(paper.bop.model_points, 3000);
 }
 
 }  // namespace

@@ -295,9 +295,23 @@ BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
   std::string why;
   if (!options.Check(&why)) throw Error("bop: " + why);
   for (const char* sub : {"rgb", "depth", "mask", "mask_visib", ".fragments"}) CreateFolder(scene_dir_ / sub);
+  // Frames of an interrupted run: complete where the fragment (written last) exists.
+  for (const auto& entry : std::filesystem::directory_iterator(scene_dir_ / ".fragments")) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() == 11 && name.substr(6) == ".json") image_ids_.push_back(std::stoi(name.substr(0, 6)));
+  }
 }
 
-void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
+bool BopSceneWriter::HasFrame(int image_id) const {
+  return std::filesystem::exists(scene_dir_ / ".fragments" / (Id6(image_id) + ".json"));
+}
+
+void BopSceneWriter::RemoveFragments() {
+  std::error_code ec;
+  std::filesystem::remove_all(scene_dir_ / ".fragments", ec);
+}
+
+void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::function<void()>& before_fragment) {
   if (frame.instances.size() != obj_ids_.size()) {
     throw Error("bop: frame has " + std::to_string(frame.instances.size()) +
                 " instances, the scene " + std::to_string(obj_ids_.size()));
@@ -418,6 +432,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame) {
                             {"counts", CompressRleCounts(rle.counts)}});
     }
   }
+  if (before_fragment) before_fragment();
   // One fragment per frame: four lines of compact JSON, read back in order by Finish().
   WriteFileAtomic(scene_dir_ / ".fragments" / (im + ".json"),
                   camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n" +
@@ -537,8 +552,6 @@ SceneSplit BopSceneWriter::Finish() {
     std::filesystem::rename(scene_dir_ / (std::string(names[f]) + ".tmp"), scene_dir_ / names[f], ec);
     if (ec) throw Error((scene_dir_ / names[f]).string() + ": cannot move file into place: " + ec.message());
   }
-  std::error_code ec;
-  std::filesystem::remove_all(scene_dir_ / ".fragments", ec);
   return split;
 }
 

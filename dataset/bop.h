@@ -18,6 +18,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -133,13 +134,19 @@ class BopSceneWriter {
   BopSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
                  std::vector<int> obj_id_of_instance);
 
-  // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`, and the
-  // frame's JSON entries to a fragment file (so memory does not grow with the number of frames).
-  void WriteFrame(int image_id, const Frame& frame);
+  // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`, calls
+  // `before_fragment` (other formats of the same frame), and last writes the frame's JSON entries
+  // to a fragment file (so memory does not grow with the number of frames). A frame whose
+  // fragment exists is complete: a writer opened on a folder with fragments (an interrupted run)
+  // takes those frames as written.
+  void WriteFrame(int image_id, const Frame& frame, const std::function<void()>& before_fragment = {});
+  bool HasFrame(int image_id) const;
 
-  // Writes scene_camera.json, scene_gt.json and scene_gt_info.json from the fragments, ordered by
-  // image id, streaming one frame at a time, removes the fragments, and returns the scene's split.
+  // Writes scene_camera.json, scene_gt.json and scene_gt_info.json (and scene_gt_coco.json) from
+  // the fragments, ordered by image id, streaming one frame at a time, and returns the scene's
+  // split. The fragments stay (a resumed run finishes the scene again) until RemoveFragments().
   SceneSplit Finish();
+  void RemoveFragments();
 
   // Writes scene_gt_world.json (cadsynth): the world pose of every instance of this static scene,
   // in scene_gt order: obj_id, world_R_m2w (row-major) and world_t_m2w (mm), so that

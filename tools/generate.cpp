@@ -1,9 +1,14 @@
 #include "tools/generate.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <set>
@@ -122,21 +127,51 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const
 
 namespace {
 
-// Removes a folder tree on scope exit unless released.
-class StagingFolder {
+// What must match for a run to continue an interrupted one: the recipe file's text, the parts
+// and their variants, every view, the image size and the output options.
+std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views) {
+  std::ostringstream key;
+  key.precision(17);
+  key << "cadsynth run key 1\n";
+  if (!spec.recipe.empty()) {
+    std::ifstream in(spec.recipe, std::ios::binary);
+    key << "recipe " << spec.recipe.string() << "\n" << in.rdbuf() << "\n";
+  }
+  key << prepared.variants_json << "\n";
+  const Intrinsics& k = spec.intrinsics;
+  key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " " << k.cy << "\n";
+  const BopOptions& b = spec.bop;
+  key << "output " << b.depth_scale << " " << b.split << " " << b.test_every << " " << b.test_fraction << " "
+      << b.split_seed << " " << b.model_points << " " << b.even_points << " " << b.point_seed << " " << b.coco << " "
+      << b.paper_layout << " " << b.pvn3d_meta << " " << b.grasp_points << " " << b.jpeg_quality << " "
+      << spec.min_visible_pixels << "\n";
+  for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
+  return key.str();
+}
+
+// One run at a time per output: an exclusive lock on STAGING.lock beside the staging folder.
+class RunLock {
  public:
-  explicit StagingFolder(std::filesystem::path path) : path_(std::move(path)) {}
-  ~StagingFolder() {
-    if (!path_.empty()) {
-      std::error_code ec;
-      std::filesystem::remove_all(path_, ec);
+  explicit RunLock(const std::filesystem::path& staging) : path_(staging.string() + ".lock") {
+    fd_ = ::open(path_.c_str(), O_CREAT | O_RDWR, 0644);
+    if (fd_ < 0) throw Error(path_ + ": cannot create lock file: " + std::strerror(errno));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      throw Error(staging.string() + ": another cadsynth run is writing this dataset");
     }
   }
-  const std::filesystem::path& path() const { return path_; }
-  void Release() { path_.clear(); }
+  ~RunLock() { Release(); }
+  void Release() {
+    if (fd_ < 0) return;
+    std::error_code ec;
+    std::filesystem::remove(path_, ec);
+    ::close(fd_);
+    fd_ = -1;
+  }
 
  private:
-  std::filesystem::path path_;
+  std::string path_;
+  int fd_ = -1;
 };
 
 void MoveIntoPlace(const std::filesystem::path& staging, const std::filesystem::path& output, bool overwrite) {
@@ -339,26 +374,46 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     }
   }
 
+  const auto info = [&](const std::string& line) {
+    if (options.info) options.info(line);
+  };
   // Everything goes to a hidden staging folder beside the output, renamed into place at the end.
+  // An interrupted run (killed, disk full) leaves it; the same run started again continues from
+  // the frames it completed, if its run key (recipe text, parts, views, output options) matches.
   std::filesystem::create_directories(output.parent_path(), ec);
   if (ec) throw Error(output.parent_path().string() + ": cannot create folder: " + ec.message());
-  std::string hidden = ".";
-  hidden.append(output.filename().string()).append(".partial-").append(std::to_string(::getpid()));
-  StagingFolder staging(output.parent_path() / hidden);
-  std::filesystem::remove_all(staging.path(), ec);
+  const std::filesystem::path staging_path = output.parent_path() / ("." + output.filename().string() + ".partial");
+  const std::string run_key = RunKey(spec, prepared, views);
+  RunLock lock(staging_path);
+  size_t resumed = 0;
+  {
+    std::ifstream in(staging_path / ".run_key");
+    std::stringstream old_key;
+    old_key << in.rdbuf();
+    if (old_key.str() != run_key) {
+      std::filesystem::remove_all(staging_path, ec);
+      CreateFolder(staging_path);
+      WriteFileAtomic(staging_path / ".run_key", run_key);
+    } else {
+      info("resuming the interrupted run in " + staging_path.string());
+    }
+  }
+  // The staging folder is kept on errors from here on: a rerun resumes from it.
 
-  WriteBopCamera(staging.path(), spec.intrinsics, spec.bop);
-  WriteBopModels(staging.path(), parts, prepared.classes);
-  WriteModelPoints(staging.path(), parts, spec.bop);
-  WriteFileAtomic(staging.path() / "variants.json", prepared.variants_json);
+  WriteBopCamera(staging_path, spec.intrinsics, spec.bop);
+  WriteBopModels(staging_path, parts, prepared.classes);
+  WriteModelPoints(staging_path, parts, spec.bop);
+  WriteFileAtomic(staging_path / "variants.json", prepared.variants_json);
 
   // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
   // showing too little of the scene are skipped (image ids keep their view index).
   std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
   std::vector<SceneSplit> splits;
+  std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < prepared.scenes.size(); ++s) {
     const Renderer renderer(parts, prepared.scenes[s], spec.render);
-    BopSceneWriter writer(staging.path(), static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
+    auto writer_ptr = std::make_unique<BopSceneWriter>(staging_path, static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
+    BopSceneWriter& writer = *writer_ptr;
     writer.WriteWorldPoses(prepared.scenes[s].instances);
     std::vector<BopSceneWriter::CocoCategory> categories;
     for (size_t p = 0; p < parts.size(); ++p) {
@@ -371,14 +426,19 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
                                  instance.name, instance.world_from_model});
     }
-    const PaperSceneWriter paper(staging.path(), static_cast<int>(s), spec.bop, std::move(paper_instances));
+    const PaperSceneWriter paper(staging_path, static_cast<int>(s), spec.bop, std::move(paper_instances));
     size_t next = 0;
+    for (size_t i = 0; i < views.size(); ++i) resumed += writer.HasFrame(static_cast<int>(i));
     const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
     using FramePtr = std::shared_ptr<const Frame>;
     tbb::parallel_pipeline(
         tokens,
         tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
                                        [&](tbb::flow_control& control) -> size_t {
+                                         while (next < views.size() && writer.HasFrame(static_cast<int>(next))) {
+                                           if (options.progress) options.progress(++done, total_frames);
+                                           ++next;
+                                         }
                                          if (next >= views.size()) {
                                            control.stop();
                                            return 0;
@@ -398,18 +458,23 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                   if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
                     ++(visible == 0 ? empty_views : sparse_views);
                   } else {
-                    writer.WriteFrame(static_cast<int>(item.first), *item.second);
-                    paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir());
+                    writer.WriteFrame(static_cast<int>(item.first), *item.second, [&] {
+                      paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir());
+                    });
                   }
                   const size_t n = ++done;
                   if (options.progress) options.progress(n, total_frames);
                 }));
     splits.push_back(writer.Finish());
+    writers.push_back(std::move(writer_ptr));
   }
-  WriteSplits(staging.path(), splits);
-  WriteMergedCoco(staging.path(), spec.bop, splits, prepared.classes);
-  MoveIntoPlace(staging.path(), output, options.overwrite);
-  staging.Release();
+  WriteSplits(staging_path, splits);
+  WriteMergedCoco(staging_path, spec.bop, splits, prepared.classes);
+  for (const auto& writer : writers) writer->RemoveFragments();
+  std::filesystem::remove(staging_path / ".run_key", ec);
+  lock.Release();
+  MoveIntoPlace(staging_path, output, options.overwrite);
+  if (resumed > 0) info("resumed: " + std::to_string(resumed) + " frames were already written");
 
   GenerateSummary summary;
   summary.skipped_empty = empty_views;

@@ -18,6 +18,7 @@ namespace cadsynth {
 namespace {
 
 using nlohmann::json;
+using testing::ReadTree;
 using testing::ScratchDir;
 
 // The default job at a small size: 2 views of 160x120.
@@ -49,18 +50,6 @@ RunSpec OneScene(std::vector<PartSource> sources, Layout layout = Layout::kAssem
 json ReadJson(const std::filesystem::path& path) {
   std::ifstream in(path);
   return json::parse(in);
-}
-
-std::map<std::string, std::string> ReadTree(const std::filesystem::path& root) {
-  std::map<std::string, std::string> files;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-    if (!entry.is_regular_file()) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    std::stringstream bytes;
-    bytes << in.rdbuf();
-    files[std::filesystem::relative(entry.path(), root).string()] = bytes.str();
-  }
-  return files;
 }
 
 size_t EntriesIn(const std::filesystem::path& dir) {

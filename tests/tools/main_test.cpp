@@ -124,19 +124,6 @@ TEST(Cli, EvalAndPreviewErrorsAreOneLine) {
   EXPECT_FALSE(std::filesystem::exists(dir / "sheet.png"));
 }
 
-// Every file under `root` (path relative to root -> bytes).
-std::map<std::string, std::string> Tree(const std::filesystem::path& root) {
-  std::map<std::string, std::string> files;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-    if (!entry.is_regular_file()) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    std::stringstream bytes;
-    bytes << in.rdbuf();
-    files[std::filesystem::relative(entry.path(), root).string()] = bytes.str();
-  }
-  return files;
-}
-
 // Kill a run three times at random moments (SIGKILL), start it again each time: the finished
 // dataset has the same files, byte for byte, as a run that was never interrupted.
 TEST(Cli, KilledRunsResumeToTheSameBytes) {
@@ -178,7 +165,7 @@ TEST(Cli, KilledRunsResumeToTheSameBytes) {
     ASSERT_EQ(last.code, 0) << last.err;
   }
   EXPECT_GE(interrupted, 1);
-  const auto whole = Tree(dir / "whole"), resumed = Tree(dir / "resumed");
+  const auto whole = cadsynth::testing::ReadTree(dir / "whole"), resumed = cadsynth::testing::ReadTree(dir / "resumed");
   ASSERT_EQ(whole.size(), resumed.size());
   for (const auto& [name, bytes] : whole) {
     ASSERT_TRUE(resumed.count(name)) << name;

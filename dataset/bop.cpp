@@ -626,4 +626,23 @@ void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& option
   }
 }
 
+std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset) {
+  if (!std::filesystem::is_directory(dataset)) throw Error(dataset.string() + ": no such dataset folder");
+  std::vector<std::filesystem::path> roots;
+  for (const auto& entry : std::filesystem::directory_iterator(dataset)) {
+    if (!entry.is_directory()) continue;
+    for (const auto& scene : std::filesystem::directory_iterator(entry.path())) {
+      if (std::filesystem::exists(scene.path() / "scene_gt.json")) {
+        roots.push_back(entry.path());
+        break;
+      }
+    }
+  }
+  if (roots.size() != 1) {
+    throw Error(dataset.string() + ": expected one folder of scenes with scene_gt.json, found " +
+                std::to_string(roots.size()));
+  }
+  return roots[0];
+}
+
 }  // namespace cadsynth

@@ -73,6 +73,10 @@ struct SceneSplit {
   std::vector<Target> targets;
 };
 
+// The folder of DATASET holding the scene folders (e.g. DATASET/train): the one whose
+// subfolders have scene_gt.json. Throws Error when there is none or more than one.
+std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset);
+
 // Writes ROOT/splits/{train,test}.txt ("scene_id image_id" per line) and
 // ROOT/test_targets_bop19.json for the given scenes' splits.
 void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit>& scenes);

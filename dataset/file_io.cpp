@@ -53,4 +53,16 @@ std::string Id6(int id) {
   return buffer;
 }
 
+std::string ReadFileText(const std::filesystem::path& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
+  std::string text;
+  char buffer[65536];
+  for (size_t n; (n = std::fread(buffer, 1, sizeof(buffer), file)) > 0;) text.append(buffer, n);
+  const bool failed = std::ferror(file) != 0;
+  std::fclose(file);
+  if (failed) throw Error(path.string() + ": cannot read");
+  return text;
+}
+
 }  // namespace cadsynth

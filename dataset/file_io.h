@@ -18,6 +18,9 @@ void CreateFolder(const std::filesystem::path& dir);
 // (another file system); replaces an existing `to`. Throws Error naming the files on failure.
 void LinkOrCopy(const std::filesystem::path& from, const std::filesystem::path& to);
 
+// The whole file; throws Error naming it when it cannot be read.
+std::string ReadFileText(const std::filesystem::path& path);
+
 // A BOP id: six digits, zero-padded ("000042").
 std::string Id6(int id);
 

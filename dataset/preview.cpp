@@ -1,9 +1,7 @@
 #include "dataset/preview.h"
 
 #include <algorithm>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -11,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cad/error.h"
+#include "dataset/bop.h"
 #include "dataset/file_io.h"
 
 namespace cadsynth {
@@ -20,10 +19,8 @@ namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
 Json ReadJsonFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open");
   try {
-    return Json::parse(in);
+    return Json::parse(ReadFileText(path));
   } catch (const Json::exception& e) {
     throw Error(path.string() + ": not valid JSON: " + e.what());
   }
@@ -76,8 +73,8 @@ std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k, const Eigen::I
 std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options,
                           std::vector<std::pair<int, int>>* shown) {
   if (options.panel_width < 32 || options.panel_width > 4096) throw Error("preview: panel width must be 32 to 4096");
-  const fs::path split_dir = dataset / options.split;
-  if (!fs::is_directory(split_dir)) throw Error(split_dir.string() + ": no such folder (is this a cadsynth dataset?)");
+  const fs::path split_dir = options.split.empty() ? FindSceneFolder(dataset) : dataset / options.split;
+  if (!fs::is_directory(split_dir)) throw Error(split_dir.string() + ": no such folder");
   const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
 
   // All (scene, image) pairs, in order, to choose from.

@@ -15,7 +15,7 @@ struct PreviewOptions {
   int count = 4;  // frames spread evenly over all scenes' images, when `frames` is empty
   std::vector<std::pair<int, int>> frames;  // (scene_id, im_id) to show, in order
   int panel_width = 320;  // each of the three panels per frame is scaled to this width
-  std::string split = "train";
+  std::string split;  // the folder of scenes; empty: the dataset's only one (train/ by default)
 };
 
 // The 8 corners of `box` (model frame, mm) projected with `k` at pose `cam_from_model`, in pixel

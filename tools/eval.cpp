@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <map>
@@ -13,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include "cad/error.h"
+#include "dataset/bop.h"
 #include "dataset/file_io.h"
 #include "dataset/point_cloud.h"
 #include "dataset/pose_metrics.h"
@@ -25,17 +25,9 @@ using Json = nlohmann::json;
 
 constexpr double kAucMaxMm = 100.0;  // 0.1 m, as PoseCNN and PVN3D
 
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open");
-  std::stringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
-
 Json ReadJsonFile(const fs::path& path) {
   try {
-    return Json::parse(ReadText(path));
+    return Json::parse(ReadFileText(path));
   } catch (const Json::exception& e) {
     throw Error(path.string() + ": not valid JSON: " + e.what());
   }
@@ -67,7 +59,7 @@ using ImageKey = std::pair<int, int>;  // scene, image
 
 // BOP results: scene_id,im_id,obj_id,score,R,t,time with R and t space-separated.
 std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::path& path) {
-  std::istringstream in(ReadText(path));
+  std::istringstream in(ReadFileText(path));
   std::map<std::pair<ImageKey, int>, std::vector<Estimate>> out;
   std::string line;
   for (int line_no = 1; std::getline(in, line); ++line_no) {
@@ -92,6 +84,11 @@ std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::
     };
     const auto ids = numbers(fields[0] + " " + fields[1] + " " + fields[2] + " " + fields[3], 4,
                              "scene_id, im_id, obj_id and score");
+    for (int i = 0; i < 3; ++i) {
+      if (ids[i] != std::floor(ids[i]) || ids[i] < 0) {
+        throw Error(where + ": scene_id, im_id and obj_id must be whole numbers, got '" + fields[i] + "'");
+      }
+    }
     const auto r = numbers(fields[4], 9, "R");
     const auto t = numbers(fields[5], 3, "t");
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -104,25 +101,6 @@ std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::
     out[{{static_cast<int>(ids[0]), static_cast<int>(ids[1])}, static_cast<int>(ids[2])}].push_back({ids[3], pose});
   }
   return out;
-}
-
-// The folder holding the scene folders: the one (e.g. train/) whose subfolders have scene_gt.json.
-fs::path SceneRoot(const fs::path& dataset) {
-  std::vector<fs::path> roots;
-  for (const auto& entry : fs::directory_iterator(dataset)) {
-    if (!entry.is_directory()) continue;
-    for (const auto& scene : fs::directory_iterator(entry.path())) {
-      if (fs::exists(scene.path() / "scene_gt.json")) {
-        roots.push_back(entry.path());
-        break;
-      }
-    }
-  }
-  if (roots.size() != 1) {
-    throw Error(dataset.string() + ": expected one folder of scenes with scene_gt.json, found " +
-                std::to_string(roots.size()));
-  }
-  return roots[0];
 }
 
 void Score(ObjectScores* s, const std::vector<double>& add_s, const std::vector<double>& add_or_s,
@@ -163,7 +141,7 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
     if (!fs::exists(cloud)) {
       throw Error(cloud.string() + ": missing; eval needs the model clouds (generate with output.model_points > 0)");
     }
-    m.points = DecodePointPly(ReadText(cloud), cloud.string());
+    m.points = DecodePointPly(ReadFileText(cloud), cloud.string());
     models[std::stoi(key)] = std::move(m);
   }
 
@@ -175,7 +153,7 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
   const fs::path test_list = dataset / "splits" / "test.txt";
   const bool use_split = fs::exists(test_list);
   if (use_split) {
-    std::istringstream in(ReadText(test_list));
+    std::istringstream in(ReadFileText(test_list));
     int scene, image;
     while (in >> scene >> image) test_images.insert({scene, image});
     if (!in.eof()) throw Error(test_list.string() + ": expected 'scene_id image_id' per line");
@@ -193,7 +171,7 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
   };
   std::vector<Instance> truth;
   std::set<ImageKey> images;
-  const fs::path root = SceneRoot(dataset);
+  const fs::path root = FindSceneFolder(dataset);
   for (const auto& scene_dir : fs::directory_iterator(root)) {
     const fs::path gt_file = scene_dir.path() / "scene_gt.json";
     if (!fs::exists(gt_file)) continue;

@@ -100,8 +100,8 @@ int RunGenerate(const std::vector<std::string>& args) {
       quiet = true;
     } else if (a == "--threads" || a == "-j") {
       threads = ParseThreads(value());
-    } else if (a.rfind("--progress", 0) == 0) {
-      progress = a.size() > 10 && a[10] == '=' ? a.substr(11) : a == "--progress" ? value() : "?";
+    } else if (a == "--progress" || a.rfind("--progress=", 0) == 0) {
+      progress = a == "--progress" ? value() : a.substr(11);
       if (progress != "auto" && progress != "bar" && progress != "lines" && progress != "json") {
         throw UsageError{"--progress takes auto, bar, lines or json, got '" + progress + "'"};
       }

@@ -123,6 +123,8 @@ TEST(Eval, BadResultsNameTheFileAndLine) {
   }
   std::ofstream(csv) << "0,0,1,0.9,2 0 0 0 1 0 0 0 1,0 0 500,-1\n";
   EXPECT_THROW(Evaluate(dataset, csv), Error);  // not a rotation
+  std::ofstream(csv) << "0,0.5,1,0.9,1 0 0 0 1 0 0 0 1,0 0 500,-1\n";
+  EXPECT_THROW(Evaluate(dataset, csv), Error);  // not an image id
   EXPECT_THROW(Evaluate(dir / "nowhere", csv), Error);
 }
 
@@ -172,6 +174,13 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   EXPECT_EQ(sheet.rows, 3 * 75);  // 160 x 120 images at 100 px wide
   options.frames = {{1, 7}};
   EXPECT_THROW(RenderPreview(dataset, options), Error);  // no such image
+  // The folder of scenes is found whatever its name (output.split).
+  std::filesystem::rename(dataset / "train", dataset / "val");
+  EXPECT_EQ(cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR).size(),
+            cv::imdecode([&] {
+              const std::string again = RenderPreview(dataset, PreviewOptions{.count = 3, .panel_width = 100});
+              return std::vector<uchar>(again.begin(), again.end());
+            }(), cv::IMREAD_COLOR).size());
 }
 
 // A small schema language for the checks below: "int", "number", "string", "bool",

@@ -52,6 +52,8 @@ TEST(Cli, HelpVersionAndUsageErrors) {
   EXPECT_EQ(bad.code, 2);
   EXPECT_EQ(bad.err.rfind("error: unknown command 'frobnicate'", 0), 0u);
   EXPECT_EQ(Cadsynth("generate --threads zero", dir).code, 2);
+  EXPECT_EQ(Cadsynth("generate --progress=fancy", dir).code, 2);
+  EXPECT_EQ(Cadsynth("generate --progressx", dir).err, "error: unknown option '--progressx'\n(run 'cadsynth --help' for usage)\n");
 }
 
 TEST(Cli, MissingRecipeIsOneLineAndNoOutput) {
@@ -120,7 +122,7 @@ TEST(Cli, EvalAndPreviewErrorsAreOneLine) {
   const CliRun preview = Cadsynth("preview nowhere -o sheet.png", dir);
   EXPECT_EQ(preview.code, 1);
   EXPECT_EQ(Lines(preview.err), 1u) << preview.err;
-  EXPECT_NE(preview.err.find("nowhere/train: no such folder"), std::string::npos) << preview.err;
+  EXPECT_NE(preview.err.find("nowhere: no such dataset folder"), std::string::npos) << preview.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "sheet.png"));
 }
 

@@ -289,7 +289,8 @@ void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,
 
 BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
                                const BopOptions& options, std::vector<int> obj_id_of_instance)
-    : scene_dir_(root / options.split / Id6(scene_id)),
+    : root_(root),
+      scene_dir_(root / options.split / Id6(scene_id)),
       options_(options),
       obj_ids_(std::move(obj_id_of_instance)) {
   std::string why;
@@ -306,18 +307,58 @@ bool BopSceneWriter::HasFrame(int image_id) const {
   return std::filesystem::exists(scene_dir_ / ".fragments" / (Id6(image_id) + ".json"));
 }
 
+std::vector<int> BopSceneWriter::WrittenFrames() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<int> ids = image_ids_;
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
+}
+
+std::string BopSceneWriter::CheckFrame(int image_id) const {
+  const std::filesystem::path fragment = scene_dir_ / ".fragments" / (Id6(image_id) + ".json");
+  std::ifstream in(fragment, std::ios::binary);
+  std::string line;
+  for (int n = 0; n < 5; ++n) {
+    if (!std::getline(in, line)) return fragment.string() + ": incomplete manifest entry";
+  }
+  Json entry;
+  try {
+    entry = Json::parse(line);
+  } catch (const Json::exception&) {
+    return fragment.string() + ": unreadable manifest entry";
+  }
+  for (const Json& file : entry.value("files", Json::array())) {
+    const FileRecord record{file.at(0).get<std::string>(), file.at(1).get<uint64_t>(), file.at(2).get<uint32_t>()};
+    const std::string problem = CheckFile(root_, record);
+    if (!problem.empty()) return (root_ / record.path).string() + ": " + problem;
+  }
+  return {};
+}
+
+void BopSceneWriter::ForgetFrame(int image_id) {
+  std::error_code ec;
+  std::filesystem::remove(scene_dir_ / ".fragments" / (Id6(image_id) + ".json"), ec);
+  if (ec) throw Error((scene_dir_ / ".fragments").string() + ": cannot remove the record of image " +
+                      std::to_string(image_id) + ": " + ec.message());
+  std::lock_guard<std::mutex> lock(mutex_);
+  image_ids_.erase(std::remove(image_ids_.begin(), image_ids_.end(), image_id), image_ids_.end());
+}
+
 void BopSceneWriter::RemoveFragments() {
   std::error_code ec;
   std::filesystem::remove_all(scene_dir_ / ".fragments", ec);
 }
 
-void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::function<void()>& before_fragment) {
+void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
+                                const std::function<void(FileLog&)>& before_fragment) {
   if (frame.instances.size() != obj_ids_.size()) {
     throw Error("bop: frame has " + std::to_string(frame.instances.size()) +
                 " instances, the scene " + std::to_string(obj_ids_.size()));
   }
   const int w = frame.width(), h = frame.height();
   const std::string im = Id6(image_id);
+  FileLog files(root_);
 
   cv::Mat rgb(h, w, CV_8UC3, const_cast<uint8_t*>(frame.rgb.data()));
   cv::Mat bgr;
@@ -328,9 +369,9 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::fun
     if (!cv::imencode(".jpg", bgr, bytes, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
       throw Error(rgb_path.string() + ": JPEG encoding failed");
     }
-    WriteFileAtomic(rgb_path, std::string(bytes.begin(), bytes.end()));
+    files.Write(rgb_path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
   } else {
-    WriteFileAtomic(rgb_path, EncodePng(bgr, rgb_path));
+    files.Write(rgb_path, EncodePng(bgr, rgb_path));
   }
 
   cv::Mat depth(h, w, CV_16UC1);
@@ -341,7 +382,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::fun
     }
   }
   const std::filesystem::path depth_path = scene_dir_ / "depth" / (im + ".png");
-  WriteFileAtomic(depth_path, EncodePng(depth, depth_path));
+  files.Write(depth_path, EncodePng(depth, depth_path));
 
   if (!frame.normals.empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
     CreateFolder(scene_dir_ / "normal");
@@ -357,7 +398,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::fun
       }
     }
     const std::filesystem::path normal_path = scene_dir_ / "normal" / (im + ".png");
-    WriteFileAtomic(normal_path, EncodePng(normals, normal_path));
+    files.Write(normal_path, EncodePng(normals, normal_path));
   }
 
   Json camera_entry, gt_entry = Json::array(), gt_info_entry = Json::array();
@@ -401,7 +442,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::fun
         for (int u = std::max(0, info.bbox_obj[0]); u < u_end; ++u) out[u] = in[u] != 0 ? 255 : 0;
       }
     }
-    WriteFileAtomic(scene_dir_ / "mask" / name, EncodePng(mask, scene_dir_ / "mask" / name));
+    files.Write(scene_dir_ / "mask" / name, EncodePng(mask, scene_dir_ / "mask" / name));
     mask.setTo(0);
     if (info.bbox_visib[0] >= 0) {
       for (int v = info.bbox_visib[1]; v < info.bbox_visib[1] + info.bbox_visib[3]; ++v) {
@@ -412,8 +453,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::fun
         }
       }
     }
-    WriteFileAtomic(scene_dir_ / "mask_visib" / name,
-                    EncodePng(mask, scene_dir_ / "mask_visib" / name));
+    files.Write(scene_dir_ / "mask_visib" / name, EncodePng(mask, scene_dir_ / "mask_visib" / name));
   }
   // COCO: the visible mask of every instance that shows, as compressed RLE.
   Json coco_entry = Json::array();
@@ -432,11 +472,15 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::fun
                             {"counts", CompressRleCounts(rle.counts)}});
     }
   }
-  if (before_fragment) before_fragment();
-  // One fragment per frame: four lines of compact JSON, read back in order by Finish().
+  if (before_fragment) before_fragment(files);
+  // One fragment per frame, written last: four lines of compact JSON read back in order by
+  // Finish(), and the frame's manifest entry: every file it wrote with size and CRC-32.
+  Json manifest = Json::array();
+  for (const FileRecord& r : files.records()) manifest.push_back({r.path, r.size, r.crc32});
   WriteFileAtomic(scene_dir_ / ".fragments" / (im + ".json"),
                   camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n" +
-                      Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() + "\n");
+                      Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() + "\n" +
+                      Json{{"files", manifest}}.dump() + "\n");
   std::lock_guard<std::mutex> lock(mutex_);
   image_ids_.push_back(image_id);
 }

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "cad/part.h"
+#include "dataset/file_io.h"
 #include "render/camera.h"
 #include "render/frame.h"
 
@@ -143,8 +144,15 @@ class BopSceneWriter {
   // to a fragment file (so memory does not grow with the number of frames). A frame whose
   // fragment exists is complete: a writer opened on a folder with fragments (an interrupted run)
   // takes those frames as written.
-  void WriteFrame(int image_id, const Frame& frame, const std::function<void()>& before_fragment = {});
+  void WriteFrame(int image_id, const Frame& frame, const std::function<void(FileLog&)>& before_fragment = {});
   bool HasFrame(int image_id) const;
+  // Image ids whose fragment exists (this writer's and those found when it was opened), sorted.
+  std::vector<int> WrittenFrames() const;
+  // Empty when every file of the frame's manifest entry is on disk with its recorded size and
+  // CRC-32; otherwise the first problem, naming the file.
+  std::string CheckFrame(int image_id) const;
+  // Drops a written frame's record, so that it counts as not written (e.g. a damaged file).
+  void ForgetFrame(int image_id);
 
   // Writes scene_camera.json, scene_gt.json and scene_gt_info.json (and scene_gt_coco.json) from
   // the fragments, ordered by image id, streaming one frame at a time, and returns the scene's
@@ -168,10 +176,10 @@ class BopSceneWriter {
   const std::filesystem::path& scene_dir() const { return scene_dir_; }
 
  private:
-  std::filesystem::path scene_dir_;
+  std::filesystem::path root_, scene_dir_;
   BopOptions options_;
   std::vector<int> obj_ids_;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::vector<int> image_ids_;  // written so far
   std::vector<CocoCategory> categories_;
 };

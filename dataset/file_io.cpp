@@ -3,7 +3,10 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <algorithm>
 #include <system_error>
+
+#include <zlib.h>
 
 #include "cad/error.h"
 
@@ -45,6 +48,60 @@ void LinkOrCopy(const std::filesystem::path& from, const std::filesystem::path& 
   if (!ec) return;
   std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, ec);
   if (ec) throw Error(to.string() + ": cannot link or copy " + from.string() + ": " + ec.message());
+}
+
+uint32_t Crc32(std::string_view bytes, uint32_t crc) {
+  // zlib takes lengths as uInt: feed large buffers in pieces.
+  uLong value = crc;
+  while (!bytes.empty()) {
+    const size_t n = std::min<size_t>(bytes.size(), 1u << 30);
+    value = ::crc32(value, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(n));
+    bytes.remove_prefix(n);
+  }
+  return static_cast<uint32_t>(value);
+}
+
+std::string CheckFile(const std::filesystem::path& root, const FileRecord& record) {
+  const std::filesystem::path path = root / record.path;
+  std::error_code ec;
+  const uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) return "missing";
+  if (size != record.size) {
+    return std::to_string(size) + " bytes, the manifest says " + std::to_string(record.size);
+  }
+  std::string text;
+  try {
+    text = ReadFileText(path);
+  } catch (const Error&) {
+    return "unreadable";
+  }
+  return Crc32(text) == record.crc32 ? std::string() : "checksum differs from the manifest";
+}
+
+std::string FileLog::Relative(const std::filesystem::path& path) const {
+  return path.lexically_relative(root_).generic_string();
+}
+
+void FileLog::Write(const std::filesystem::path& path, std::string_view bytes) {
+  WriteFileAtomic(path, bytes);
+  records_.push_back({Relative(path), bytes.size(), Crc32(bytes)});
+}
+
+void FileLog::Link(const std::filesystem::path& from, const std::filesystem::path& to) {
+  LinkOrCopy(from, to);
+  const std::string source = Relative(from);
+  for (const FileRecord& r : records_) {
+    if (r.path == source) {
+      records_.push_back({Relative(to), r.size, r.crc32});
+      return;
+    }
+  }
+  Add(to);
+}
+
+void FileLog::Add(const std::filesystem::path& path) {
+  const std::string text = ReadFileText(path);
+  records_.push_back({Relative(path), text.size(), Crc32(text)});
 }
 
 std::string Id6(int id) {

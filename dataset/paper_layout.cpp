@@ -82,7 +82,10 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const
     std::filesystem::remove(temporary);
     throw;
   }
-  Mat_Close(mat);
+  if (Mat_Close(mat) != 0) {
+    std::filesystem::remove(temporary);
+    throw Error(path.string() + ": cannot write MATLAB file (disk full?)");
+  }
   std::error_code ec;
   std::filesystem::rename(temporary, path, ec);
   if (ec) throw Error(path.string() + ": cannot move file into place: " + ec.message());
@@ -90,7 +93,8 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const
 
 PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
                                    std::vector<PaperInstance> instances)
-    : paper_dir_(root / "paper" / Id6(scene_id)),
+    : root_(root),
+      paper_dir_(root / "paper" / Id6(scene_id)),
       grasp_dir_(root / "grasp" / Id6(scene_id)),
       options_(options),
       instances_(std::move(instances)) {
@@ -100,7 +104,10 @@ PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_
   if (options_.grasp_points) CreateFolder(grasp_dir_);
 }
 
-void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir) const {
+void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir,
+                                  FileLog* files_or_null) const {
+  FileLog own(root_);
+  FileLog& files = files_or_null != nullptr ? *files_or_null : own;
   if (frame.instances.size() != instances_.size()) {
     throw Error("paper layout: frame has " + std::to_string(frame.instances.size()) + " instances, the scene " +
                 std::to_string(instances_.size()));
@@ -110,8 +117,8 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::f
   for (const PaperInstance& p : instances_) labels.push_back(p.obj_id);
   if (options_.paper_layout || options_.pvn3d_meta) {
     const std::string rgb = im + options_.RgbExtension();
-    LinkOrCopy(bop_scene_dir / "rgb" / rgb, paper_dir_ / "rgb" / rgb);
-    LinkOrCopy(bop_scene_dir / "depth" / (im + ".png"), paper_dir_ / "depth" / (im + ".png"));
+    files.Link(bop_scene_dir / "rgb" / rgb, paper_dir_ / "rgb" / rgb);
+    files.Link(bop_scene_dir / "depth" / (im + ".png"), paper_dir_ / "depth" / (im + ".png"));
     // The mask: each visible pixel gets its object's obj_id as grey value (8 or 16 bit).
     const int w = frame.width(), h = frame.height();
     const bool wide = !labels.empty() && *std::max_element(labels.begin(), labels.end()) > 255;
@@ -130,7 +137,7 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::f
     std::vector<uchar> png;
     const std::filesystem::path mask_path = paper_dir_ / "mask" / (im + ".png");
     if (!cv::imencode(".png", mask, png)) throw Error(mask_path.string() + ": PNG encoding failed");
-    WriteFileAtomic(mask_path, std::string(png.begin(), png.end()));
+    files.Write(mask_path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 
     const Eigen::Isometry3d& world_from_cam = frame.camera.world_from_cam;
     Json objects = Json::array();
@@ -153,14 +160,18 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::f
                        {"height", h},
                        {"T_C_W", Matrix4(world_from_cam)},
                        {"objects", objects}};
-    WriteFileAtomic(paper_dir_ / "meta" / (im + ".json"), meta.dump(2) + "\n");
-    if (options_.pvn3d_meta) WritePvn3dMeta(paper_dir_ / "meta" / (im + "-meta.mat"), frame, labels, options_.depth_scale);
+    files.Write(paper_dir_ / "meta" / (im + ".json"), meta.dump(2) + "\n");
+    if (options_.pvn3d_meta) {
+      const std::filesystem::path mat = paper_dir_ / "meta" / (im + "-meta.mat");
+      WritePvn3dMeta(mat, frame, labels, options_.depth_scale);
+      files.Add(mat);
+    }
   }
   if (options_.grasp_points) {
     for (size_t i = 0; i < instances_.size(); ++i) {
       if (frame.instances[i].px_count_visib == 0) continue;
       const auto points = BackProjectInstance(frame, static_cast<int>(i), options_.depth_scale);
-      WriteFileAtomic(grasp_dir_ / (im + "_" + Id6(static_cast<int>(i)) + ".npy"), EncodeNpy(points));
+      files.Write(grasp_dir_ / (im + "_" + Id6(static_cast<int>(i)) + ".npy"), EncodeNpy(points));
     }
   }
 }

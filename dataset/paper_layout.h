@@ -38,10 +38,12 @@ class PaperSceneWriter {
 
   // Call after BopSceneWriter::WriteFrame of the same image: links its colour and depth images
   // from `bop_scene_dir`. Thread-safe for different images.
-  void WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir) const;
+  // Every file goes through `files` (the frame's manifest entry; null: not recorded).
+  void WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir,
+                  FileLog* files = nullptr) const;
 
  private:
-  std::filesystem::path paper_dir_, grasp_dir_;
+  std::filesystem::path root_, paper_dir_, grasp_dir_;
   BopOptions options_;
   std::vector<PaperInstance> instances_;
 };

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -353,10 +354,12 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   if (options.output.empty()) throw Error("no output folder given");
   const std::filesystem::path output = std::filesystem::absolute(options.output).lexically_normal();
+  const std::optional<ShardSpec>& shard = options.shard;
   std::error_code ec;
-  if (std::filesystem::exists(output, ec) && !options.overwrite) {
+  if (!shard && std::filesystem::exists(output, ec) && !options.overwrite) {
     throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
   }
+  if (shard && options.overwrite) throw Error("--overwrite does not apply to shards (they share one folder)");
   std::string why;
   if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
@@ -367,76 +370,120 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   std::string why_sampler;
   if (!spec.sampler.Check(&why_sampler)) throw Error("sweep: " + why_sampler);
   const std::vector<SweepView> views = SampleViews(spec.sampler, spec.sweep);
-  const size_t total_frames = views.size() * prepared.scenes.size();
-  for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-    for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
-      Warn("scene '" + spec.scenes[s].name + "': " + warning);
+  const bool common = !shard || shard->index == 0;  // writes the files every dataset has once
+  if (common) {
+    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+      for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
+        Warn("scene '" + spec.scenes[s].name + "': " + warning);
+      }
     }
+  }
+  // Work unit g = scene * views + view; a shard renders the units it owns.
+  const auto owns = [&](size_t scene, size_t view) { return !shard || shard->Owns(scene * views.size() + view); };
+  size_t total_frames = 0;
+  for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+    for (size_t i = 0; i < views.size(); ++i) total_frames += owns(s, i);
   }
 
   const auto info = [&](const std::string& line) {
     if (options.info) options.info(line);
   };
-  // Everything goes to a hidden staging folder beside the output, renamed into place at the end.
-  // An interrupted run (killed, disk full) leaves it; the same run started again continues from
-  // the frames it completed, if its run key (recipe text, parts, views, output options) matches.
-  std::filesystem::create_directories(output.parent_path(), ec);
-  if (ec) throw Error(output.parent_path().string() + ": cannot create folder: " + ec.message());
-  const std::filesystem::path staging_path = output.parent_path() / ("." + output.filename().string() + ".partial");
   const std::string run_key = RunKey(spec, prepared, views);
-  RunLock lock(staging_path);
-  size_t resumed = 0;
-  {
-    std::ifstream in(staging_path / ".run_key");
+  // A single run writes to a hidden staging folder beside the output, renamed into place at the
+  // end. An interrupted run (killed, disk full) leaves it; the same run started again continues
+  // from the frames it completed, if its run key (recipe text, parts, views, output options)
+  // matches. Shards write into the output folder itself and agree on the key there.
+  std::filesystem::path root;
+  std::unique_ptr<RunLock> lock;
+  std::unique_ptr<ShardTree> tree;
+  if (shard) {
+    root = output;
+    tree = std::make_unique<ShardTree>(output, *shard, run_key);
+  } else {
+    std::filesystem::create_directories(output.parent_path(), ec);
+    if (ec) throw Error(output.parent_path().string() + ": cannot create folder: " + ec.message());
+    root = output.parent_path() / ("." + output.filename().string() + ".partial");
+    lock = std::make_unique<RunLock>(root);
+    const std::filesystem::path key_path = root / ".run_key";
+    std::ifstream in(key_path);
     std::stringstream old_key;
     old_key << in.rdbuf();
     if (old_key.str() != run_key) {
-      std::filesystem::remove_all(staging_path, ec);
-      CreateFolder(staging_path);
-      WriteFileAtomic(staging_path / ".run_key", run_key);
+      if (std::filesystem::exists(root, ec)) info("starting over: " + root.string() + " holds an interrupted run of something else");
+      std::filesystem::remove_all(root, ec);
+      CreateFolder(root);
+      WriteFileAtomic(key_path, run_key);
     } else {
-      info("resuming the interrupted run in " + staging_path.string());
+      info("resuming the interrupted run in " + root.string());
     }
   }
-  // The staging folder is kept on errors from here on: a rerun resumes from it.
+  // The staging folder (or shard tree) is kept on errors from here on: a rerun resumes from it.
 
-  WriteBopCamera(staging_path, spec.intrinsics, spec.bop);
-  WriteBopModels(staging_path, parts, prepared.classes);
-  WriteModelPoints(staging_path, parts, spec.bop);
-  WriteFileAtomic(staging_path / "variants.json", prepared.variants_json);
+  if (common) {
+    WriteBopCamera(root, spec.intrinsics, spec.bop);
+    WriteBopModels(root, parts, prepared.classes);
+    WriteModelPoints(root, parts, spec.bop);
+    WriteFileAtomic(root / "variants.json", prepared.variants_json);
+  }
+  std::vector<BopSceneWriter::CocoCategory> categories;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
+  }
+  if (shard && shard->index == 0) {
+    ShardRunInfo run;
+    run.shards = shard->count;
+    run.views = views.size();
+    run.bop = spec.bop;
+    run.obj_ids = prepared.obj_ids;
+    run.categories = categories;
+    run.classes = prepared.classes;
+    tree->WriteRunInfo(run);
+  }
 
   // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
   // showing too little of the scene are skipped (image ids keep their view index).
   std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
+  size_t resumed = 0, damaged = 0, frames = 0;
   std::vector<SceneSplit> splits;
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < prepared.scenes.size(); ++s) {
     const Renderer renderer(parts, prepared.scenes[s], spec.render);
-    auto writer_ptr = std::make_unique<BopSceneWriter>(staging_path, static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
+    auto writer_ptr = std::make_unique<BopSceneWriter>(root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
     BopSceneWriter& writer = *writer_ptr;
-    writer.WriteWorldPoses(prepared.scenes[s].instances);
-    std::vector<BopSceneWriter::CocoCategory> categories;
-    for (size_t p = 0; p < parts.size(); ++p) {
-      categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
-    }
-    writer.SetCocoCategories(std::move(categories));
+    if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
+    writer.SetCocoCategories(categories);
     std::vector<PaperInstance> paper_instances;
     for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
       const Instance& instance = prepared.scenes[s].instances[i];
       paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
                                  instance.name, instance.world_from_model});
     }
-    const PaperSceneWriter paper(staging_path, static_cast<int>(s), spec.bop, std::move(paper_instances));
+    const PaperSceneWriter paper(root, static_cast<int>(s), spec.bop, std::move(paper_instances));
+    // Frames of an interrupted attempt count when every file matches their manifest entry.
+    std::vector<int> earlier;
+    for (int id : writer.WrittenFrames()) {
+      if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id))) earlier.push_back(id);
+    }
+    std::vector<std::string> problems(earlier.size());
+    tbb::parallel_for(size_t{0}, earlier.size(), [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
+    for (size_t k = 0; k < earlier.size(); ++k) {
+      if (problems[k].empty()) {
+        ++resumed;
+        continue;
+      }
+      Warn(problems[k] + ": rendering image " + std::to_string(earlier[k]) + " again");
+      writer.ForgetFrame(earlier[k]);
+      ++damaged;
+    }
     size_t next = 0;
-    for (size_t i = 0; i < views.size(); ++i) resumed += writer.HasFrame(static_cast<int>(i));
     const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
     using FramePtr = std::shared_ptr<const Frame>;
     tbb::parallel_pipeline(
         tokens,
         tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
                                        [&](tbb::flow_control& control) -> size_t {
-                                         while (next < views.size() && writer.HasFrame(static_cast<int>(next))) {
-                                           if (options.progress) options.progress(++done, total_frames);
+                                         while (next < views.size() && (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+                                           if (owns(s, next) && options.progress) options.progress(++done, total_frames);
                                            ++next;
                                          }
                                          if (next >= views.size()) {
@@ -458,28 +505,40 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                   if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
                     ++(visible == 0 ? empty_views : sparse_views);
                   } else {
-                    writer.WriteFrame(static_cast<int>(item.first), *item.second, [&] {
-                      paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir());
+                    writer.WriteFrame(static_cast<int>(item.first), *item.second, [&](FileLog& files) {
+                      paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir(), &files);
                     });
                   }
                   const size_t n = ++done;
                   if (options.progress) options.progress(n, total_frames);
                 }));
-    splits.push_back(writer.Finish());
+    for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
+    if (!shard) splits.push_back(writer.Finish());
     writers.push_back(std::move(writer_ptr));
   }
-  WriteSplits(staging_path, splits);
-  WriteMergedCoco(staging_path, spec.bop, splits, prepared.classes);
-  for (const auto& writer : writers) writer->RemoveFragments();
-  std::filesystem::remove(staging_path / ".run_key", ec);
-  lock.Release();
-  MoveIntoPlace(staging_path, output, options.overwrite);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (shard) {
+    std::ostringstream marker;
+    marker << "{\"shard\": " << shard->index << ", \"of\": " << shard->count << ", \"units\": " << total_frames
+           << ", \"frames\": " << frames << ", \"skipped_empty\": " << empty_views
+           << ", \"skipped_sparse\": " << sparse_views << ", \"seconds\": " << seconds << "}";
+    tree->MarkDone(marker.str());
+  } else {
+    WriteSplits(root, splits);
+    WriteMergedCoco(root, spec.bop, splits, prepared.classes);
+    for (const auto& writer : writers) writer->RemoveFragments();
+    std::filesystem::remove(root / ".run_key", ec);
+    lock->Release();
+    MoveIntoPlace(root, output, options.overwrite);
+  }
   if (resumed > 0) info("resumed: " + std::to_string(resumed) + " frames were already written");
+  if (damaged > 0) info("rendered again: " + std::to_string(damaged) + " frames whose files did not match the manifest");
 
   GenerateSummary summary;
   summary.skipped_empty = empty_views;
   summary.skipped_sparse = sparse_views;
-  summary.frames = total_frames - summary.skipped_empty - summary.skipped_sparse;
+  summary.frames = frames;
+  summary.resumed = resumed;
   summary.scenes = prepared.scenes.size();
   summary.objects = parts.size();
   summary.instances = 0;

@@ -3,17 +3,22 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "dataset/bop.h"
 #include "recipes/recipe.h"
 #include "render/scene.h"
+#include "tools/shards.h"
 
 namespace cadsynth {
 
 struct GenerateOptions {
   std::filesystem::path output;  // dataset folder to create
   bool overwrite = false;        // replace an existing folder (only once the new one is complete)
+  // Render only this shard's units, straight into `output` (a shard tree; see tools/shards.h),
+  // to be joined by Merge once every shard has finished.
+  std::optional<ShardSpec> shard;
   // Called after each written frame with (frames done, frames total); may be empty.
   std::function<void(size_t, size_t)> progress;
   // Receives one line per notable fact (what was read, placement); may be empty.
@@ -21,7 +26,8 @@ struct GenerateOptions {
 };
 
 struct GenerateSummary {
-  size_t frames = 0;          // written
+  size_t frames = 0;          // written (a shard: its own, including those of an earlier attempt)
+  size_t resumed = 0;         // of these, written by an interrupted earlier run
   size_t skipped_empty = 0;   // views with no object pixel visible (sweep.min_visible_pixels > 0)
   size_t skipped_sparse = 0;  // views with fewer than sweep.min_visible_pixels object pixels
   size_t scenes = 0;
@@ -51,8 +57,11 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const
 
 // Reads the files and builds the family variants of every scene, merges repeated shapes into one
 // object each, arranges each scene on the floor, renders every view of the sweep per scene and
-// writes the BOP dataset (scene i in SPLIT/00000i) plus variants.json. Everything is written into a hidden staging folder next to `output` and renamed into
-// place at the end, so a failed run leaves no half-written dataset. Throws Error.
+// writes the BOP dataset (scene i in SPLIT/00000i) plus variants.json. Everything is written into
+// a hidden staging folder next to `output` and renamed into place at the end, so a failed run
+// leaves no half-written dataset; the same run started again continues from the frames the
+// failed one completed (checked against their manifest entries). With options.shard, renders
+// that shard's units into `output` directly. Throws Error.
 GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options);
 
 }  // namespace cadsynth

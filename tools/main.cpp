@@ -22,13 +22,15 @@
 #include "tools/generate.h"
 #include "tools/inspect.h"
 #include "tools/progress.h"
+#include "tools/shards.h"
 
 namespace {
 
 constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data out.
 
 usage:
-  cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--threads N] [--progress=MODE] [--quiet]
+  cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--shard I/N] [--threads N] [--progress=MODE] [--quiet]
+  cadsynth merge DIR
   cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
   cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
   cadsynth eval DATASET RESULTS.csv [--json FILE]
@@ -39,10 +41,18 @@ generate   Renders every view of the recipe's camera sweep and writes a BOP data
            Without a recipe it runs the built-in default job (no input files needed).
   -o DIR       output folder (default: the recipe's output.dir, else ./cadsynth_dataset)
   --overwrite  replace DIR if it exists (the old one stays until the new one is complete)
+  --shard I/N  render only shard I of N (0 <= I < N) into DIR, beside the other shards; join
+               them with 'cadsynth merge DIR' once all have finished (tools/slurm/ runs both)
   --threads N  worker threads (default: all cores); results do not depend on it
   --progress=MODE  auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON
                line every 5 s (done, total, seconds, frames_per_s, eta_s) for cluster logs
   --quiet      no progress or info lines, only warnings and errors (--progress=json still prints)
+
+           A killed or failed run continues where it stopped when started again (same command).
+
+merge      Joins the shards in DIR (written by generate --shard) into one dataset, byte for byte
+           the one a single process writes; refuses, naming them, while shards are unfinished,
+           and checks every frame's files against the manifest (size and CRC-32).
 
 inspect    Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb .3mf .off) and
            prints what cadsynth sees: format, declared unit, parts with instance counts, size in
@@ -86,6 +96,7 @@ int RunGenerate(const std::vector<std::string>& args) {
   bool overwrite = false, quiet = false;
   int threads = 0;
   std::string progress = "auto";
+  std::optional<cadsynth::ShardSpec> shard;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     const auto value = [&]() -> std::string {
@@ -96,6 +107,13 @@ int RunGenerate(const std::vector<std::string>& args) {
       output = value();
     } else if (a == "--overwrite") {
       overwrite = true;
+    } else if (a == "--shard" || a.rfind("--shard=", 0) == 0) {
+      const std::string text = a == "--shard" ? value() : a.substr(8);
+      try {
+        shard = cadsynth::ParseShard(text);
+      } catch (const cadsynth::Error& e) {
+        throw UsageError{e.what()};
+      }
     } else if (a == "--quiet" || a == "-q") {
       quiet = true;
     } else if (a == "--threads" || a == "-j") {
@@ -125,6 +143,7 @@ int RunGenerate(const std::vector<std::string>& args) {
   options.output = output ? std::filesystem::path(*output)
                           : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
   options.overwrite = overwrite;
+  options.shard = shard;
   if (!quiet) {
     options.info = [](const std::string& line) { std::cout << line << "\n" << std::flush; };
   }
@@ -144,10 +163,27 @@ int RunGenerate(const std::vector<std::string>& args) {
                 summary.skipped_empty + summary.skipped_sparse, summary.skipped_empty, summary.skipped_sparse,
                 spec.min_visible_pixels);
   }
-  std::printf("wrote %zu frames (%zu scene%s) of %zu objects (%zu instances) to %s in %.1f s (%.1f frames/s)\n",
+  const size_t rendered = summary.frames - summary.resumed;
+  std::printf("wrote %zu frames (%zu scene%s) of %zu objects (%zu instances)%s to %s in %.1f s (%.1f frames/s)\n",
               summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.objects, summary.instances,
+              shard ? (" as shard " + shard->Name()).c_str() : "",
               std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,
-              summary.seconds > 0 ? summary.frames / summary.seconds : 0.0);
+              summary.seconds > 0 ? rendered / summary.seconds : 0.0);
+  return 0;
+}
+
+int RunMerge(const std::vector<std::string>& args) {
+  std::optional<std::string> dir;
+  for (const std::string& a : args) {
+    if (!a.empty() && a[0] == '-') throw UsageError{"unknown option '" + a + "'"};
+    if (dir) throw UsageError{"one folder at a time"};
+    dir = a;
+  }
+  if (!dir) throw UsageError{"merge needs the DIR the shards wrote to"};
+  const cadsynth::MergeSummary summary = cadsynth::Merge(*dir);
+  std::printf("merged %d shard%s into %s: %zu frames in %zu scene%s, %.1f s\n", summary.shards,
+              summary.shards == 1 ? "" : "s", std::filesystem::absolute(*dir).lexically_normal().c_str(),
+              summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.seconds);
   return 0;
 }
 
@@ -297,6 +333,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args[0] == "generate") return RunGenerate({args.begin() + 1, args.end()});
+    if (args[0] == "merge") return RunMerge({args.begin() + 1, args.end()});
     if (args[0] == "inspect") return RunInspect({args.begin() + 1, args.end()});
     if (args[0] == "variants") return RunVariants({args.begin() + 1, args.end()});
     if (args[0] == "eval") return RunEval({args.begin() + 1, args.end()});

@@ -8,7 +8,7 @@ packages=(
   libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev
   libocct-foundation-dev libocct-ocaf-dev libocct-visualization-dev
   libcgal-dev libeigen3-dev libassimp-dev libembree-dev libopencv-dev libtbb-dev
-  libyaml-cpp-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libmatio-dev
+  libyaml-cpp-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libmatio-dev zlib1g-dev
 )
 
 missing=()

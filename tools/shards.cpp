@@ -1,0 +1,324 @@
+#include "tools/shards.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <system_error>
+
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+
+#include "cad/error.h"
+#include "dataset/file_io.h"
+
+namespace cadsynth {
+namespace {
+
+using Json = nlohmann::ordered_json;
+namespace fs = std::filesystem;
+
+fs::path Meta(const fs::path& dir) { return dir / ".shards"; }
+std::string ShardFile(int index, int count, const char* ext) {
+  return std::to_string(index) + "-of-" + std::to_string(count) + ext;
+}
+
+Json OptionsJson(const BopOptions& b) {
+  return {{"depth_scale", b.depth_scale},     {"split", b.split},
+          {"test_every", b.test_every},       {"test_fraction", b.test_fraction},
+          {"split_seed", b.split_seed},       {"target_min_visib_fract", b.target_min_visib_fract},
+          {"model_points", b.model_points},   {"coco", b.coco},
+          {"jpeg_quality", b.jpeg_quality},   {"paper_layout", b.paper_layout},
+          {"pvn3d_meta", b.pvn3d_meta},       {"grasp_points", b.grasp_points},
+          {"even_points", b.even_points},     {"point_seed", b.point_seed}};
+}
+
+BopOptions OptionsFromJson(const Json& j) {
+  BopOptions b;
+  b.depth_scale = j.at("depth_scale");
+  b.split = j.at("split");
+  b.test_every = j.at("test_every");
+  b.test_fraction = j.at("test_fraction");
+  b.split_seed = j.at("split_seed");
+  b.target_min_visib_fract = j.at("target_min_visib_fract");
+  b.model_points = j.at("model_points");
+  b.coco = j.at("coco");
+  b.jpeg_quality = j.at("jpeg_quality");
+  b.paper_layout = j.at("paper_layout");
+  b.pvn3d_meta = j.at("pvn3d_meta");
+  b.grasp_points = j.at("grasp_points");
+  b.even_points = j.at("even_points");
+  b.point_seed = j.at("point_seed");
+  return b;
+}
+
+ShardRunInfo ReadRunInfo(const fs::path& path) {
+  try {
+    const Json j = Json::parse(ReadFileText(path));
+    ShardRunInfo info;
+    info.shards = j.at("shards");
+    info.views = j.at("views");
+    info.bop = OptionsFromJson(j.at("output"));
+    for (const Json& scene : j.at("scenes")) info.obj_ids.push_back(scene.at("obj_ids").get<std::vector<int>>());
+    for (const Json& o : j.at("objects")) {
+      info.categories.push_back({o.at("obj_id"), o.at("name"), o.at("class_name")});
+      info.classes.push_back({o.at("class_id"), o.at("class_name")});
+    }
+    if (info.shards < 1 || info.views < 1 || info.obj_ids.empty()) throw Error("impossible counts");
+    return info;
+  } catch (const Json::exception& e) {
+    throw Error(path.string() + ": unreadable: " + e.what());
+  } catch (const Error& e) {
+    throw Error(path.string() + ": " + e.what());
+  }
+}
+
+// The shard count written in a run key's last line ("shards N"), or 0.
+int ShardsOfKey(const std::string& key) {
+  const size_t at = key.rfind("shards ");
+  return at == std::string::npos ? 0 : std::atoi(key.c_str() + at + 7);
+}
+
+// An exclusive, non-blocking flock; -1 when another process holds it.
+int TryLock(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_CREAT | O_RDWR, 0644);
+  if (fd < 0) throw Error(path.string() + ": cannot create lock file: " + std::strerror(errno));
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+}  // namespace
+
+ShardSpec ParseShard(const std::string& text) {
+  const size_t slash = text.find('/');
+  const auto number = [&](const std::string& part, long* out) {
+    char* end = nullptr;
+    *out = std::strtol(part.c_str(), &end, 10);
+    return !part.empty() && end != part.c_str() && *end == '\0';
+  };
+  long index = 0, count = 0;
+  if (slash == std::string::npos || !number(text.substr(0, slash), &index) || !number(text.substr(slash + 1), &count)) {
+    throw Error("--shard takes I/N (shard I of N, counting from 0), got '" + text + "'");
+  }
+  if (count < 1 || count > 1000000 || index < 0 || index >= count) {
+    throw Error("--shard " + text + ": I must be at least 0 and less than N (N from 1 to 1000000)");
+  }
+  return {static_cast<int>(index), static_cast<int>(count)};
+}
+
+ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& run_key) : dir_(dir), shard_(shard) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::exists(Meta(dir), ec) && !fs::is_empty(dir, ec)) {
+    throw Error(dir.string() + ": exists and is not a shard folder (a finished dataset?): shards need a new or "
+                "empty folder, or the folder their run started");
+  }
+  CreateFolder(Meta(dir));
+  const fs::path lock = Meta(dir) / ShardFile(shard.index, shard.count, ".lock");
+  lock_fd_ = TryLock(lock);
+  if (lock_fd_ < 0) throw Error(dir.string() + ": shard " + shard.Name() + " is already running on this folder");
+
+  // The first shard to arrive publishes the key: written under a name of its own, then linked
+  // (link fails if another shard got there first; it is atomic on NFS as well).
+  const std::string key = run_key + "shards " + std::to_string(shard.count) + "\n";
+  const fs::path key_path = Meta(dir) / "run_key";
+  if (!fs::exists(key_path, ec)) {
+    const fs::path mine = Meta(dir) / ShardFile(shard.index, shard.count, ".key");
+    WriteFileAtomic(mine, key);
+    if (::link(mine.c_str(), key_path.c_str()) != 0 && errno != EEXIST) {
+      throw Error(key_path.string() + ": cannot create: " + std::strerror(errno));
+    }
+    fs::remove(mine, ec);
+  }
+  const std::string agreed = ReadFileText(key_path);
+  if (agreed != key) {
+    const int started = ShardsOfKey(agreed);
+    if (started != shard.count && agreed.substr(0, agreed.rfind("shards ")) == run_key) {
+      throw Error(dir.string() + ": this run was started with " + std::to_string(started) +
+                  " shards; this is shard " + shard.Name() + ": use --shard I/" + std::to_string(started));
+    }
+    throw Error(dir.string() + ": holds shards of a different run (the recipe, its parts, views or output "
+                "options changed since it started): remove the folder or write to another one");
+  }
+}
+
+ShardTree::~ShardTree() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+void ShardTree::WriteRunInfo(const ShardRunInfo& info) const {
+  Json scenes = Json::array(), objects = Json::array();
+  for (const std::vector<int>& ids : info.obj_ids) scenes.push_back({{"obj_ids", ids}});
+  for (size_t o = 0; o < info.categories.size(); ++o) {
+    objects.push_back({{"obj_id", info.categories[o].id},
+                       {"name", info.categories[o].name},
+                       {"class_id", info.classes.at(o).id},
+                       {"class_name", info.classes.at(o).name}});
+  }
+  const Json j = {{"shards", info.shards}, {"views", info.views},     {"output", OptionsJson(info.bop)},
+                  {"scenes", scenes},      {"objects", objects}};
+  WriteFileAtomic(Meta(dir_) / "run.json", j.dump(2) + "\n");
+}
+
+void ShardTree::MarkDone(const std::string& summary_json) const {
+  WriteFileAtomic(Meta(dir_) / ShardFile(shard_.index, shard_.count, ".done"), summary_json + "\n");
+}
+
+MergeSummary Merge(const fs::path& dir_in, const std::function<void(const std::string&)>& info_sink) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto info = [&](const std::string& line) {
+    if (info_sink) info_sink(line);
+  };
+  const fs::path dir = fs::absolute(dir_in).lexically_normal();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(dir.string() + ": no such folder");
+  const fs::path meta = Meta(dir);
+  if (!fs::exists(meta / "run.json", ec)) {
+    if (!fs::exists(meta, ec)) {
+      if (fs::exists(dir / "camera.json", ec)) throw Error(dir.string() + ": already a complete dataset; nothing to merge");
+      throw Error(dir.string() + ": not a shard folder (no .shards/): write one with "
+                  "cadsynth generate RECIPE --shard I/N -o " + dir.string());
+    }
+    const int n = fs::exists(meta / "run_key", ec) ? ShardsOfKey(ReadFileText(meta / "run_key")) : 0;
+    throw Error(dir.string() + ": cannot merge yet: shard 0/" + (n > 0 ? std::to_string(n) : std::string("N")) +
+                " has not started (it writes .shards/run.json)");
+  }
+  const ShardRunInfo run = ReadRunInfo(meta / "run.json");
+  const int n = run.shards;
+
+  // No shard may run while merging: hold every shard's lock.
+  std::vector<int> locks;
+  struct Unlock {
+    std::vector<int>* fds;
+    ~Unlock() {
+      for (int fd : *fds) ::close(fd);
+    }
+  } unlock{&locks};
+  std::vector<std::string> not_ready;
+  std::vector<bool> running(n, false);
+  for (int i = 0; i < n; ++i) {
+    const int fd = TryLock(meta / ShardFile(i, n, ".lock"));
+    if (fd < 0) {
+      running[i] = true;
+      not_ready.push_back("shard " + std::to_string(i) + "/" + std::to_string(n) + " is running");
+    } else {
+      locks.push_back(fd);
+    }
+  }
+
+  const size_t scenes = run.obj_ids.size();
+  std::vector<std::unique_ptr<BopSceneWriter>> writers;
+  for (size_t s = 0; s < scenes; ++s) {
+    writers.push_back(std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), run.bop, run.obj_ids[s]));
+    writers.back()->SetCocoCategories(run.categories);
+  }
+  // Frames per shard: written (fragments) and declared (done markers).
+  std::vector<size_t> written(n, 0), units(n, 0);
+  for (size_t s = 0; s < scenes; ++s) {
+    for (size_t v = 0; v < run.views; ++v) ++units[(s * run.views + v) % n];
+    for (int id : writers[s]->WrittenFrames()) {
+      if (id >= 0 && static_cast<size_t>(id) < run.views) ++written[(s * run.views + id) % n];
+    }
+  }
+  std::vector<size_t> declared(n, 0);
+  for (int i = 0; i < n; ++i) {
+    const fs::path marker = meta / ShardFile(i, n, ".done");
+    if (running[i]) continue;
+    if (!fs::exists(marker, ec)) {
+      const std::string name = "shard " + std::to_string(i) + "/" + std::to_string(n);
+      if (written[i] == 0) {
+        not_ready.push_back(name + " has not started");
+      } else {
+        not_ready.push_back(name + " has not finished (" + std::to_string(written[i]) + " of " +
+                            std::to_string(units[i]) + " views done)");
+      }
+      continue;
+    }
+    try {
+      declared[i] = Json::parse(ReadFileText(marker)).at("frames").get<size_t>();
+    } catch (const Json::exception&) {
+      not_ready.push_back(marker.string() + ": unreadable");
+    }
+  }
+  if (!not_ready.empty()) {
+    std::string list;
+    const size_t shown = std::min<size_t>(not_ready.size(), 8);
+    for (size_t k = 0; k < shown; ++k) list += (k ? "; " : "") + not_ready[k];
+    if (not_ready.size() > shown) list += "; and " + std::to_string(not_ready.size() - shown) + " more";
+    throw Error(dir.string() + ": cannot merge yet: " + list);
+  }
+
+  // Every frame's files against its manifest entry, in parallel.
+  std::vector<std::pair<size_t, int>> frames;
+  for (size_t s = 0; s < scenes; ++s) {
+    for (int id : writers[s]->WrittenFrames()) frames.push_back({s, id});
+  }
+  std::vector<std::string> problems(frames.size());
+  tbb::parallel_for(size_t{0}, frames.size(),
+                    [&](size_t k) { problems[k] = writers[frames[k].first]->CheckFrame(frames[k].second); });
+  std::set<int> rerun;
+  std::vector<std::string> damaged;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    if (problems[k].empty()) continue;
+    const int owner = static_cast<int>((frames[k].first * run.views + frames[k].second) % n);
+    writers[frames[k].first]->ForgetFrame(frames[k].second);
+    rerun.insert(owner);
+    damaged.push_back(problems[k]);
+  }
+  for (int i = 0; i < n; ++i) {
+    if (written[i] != declared[i] && !rerun.count(i)) {
+      rerun.insert(i);
+      damaged.push_back("shard " + std::to_string(i) + "/" + std::to_string(n) + " reported " +
+                        std::to_string(declared[i]) + " frames, the folder holds " + std::to_string(written[i]));
+    }
+  }
+  if (!rerun.empty()) {
+    std::string shards_text;
+    for (int i : rerun) {
+      fs::remove(meta / ShardFile(i, n, ".done"), ec);
+      shards_text += (shards_text.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(n);
+    }
+    std::string list;
+    for (size_t k = 0; k < std::min<size_t>(damaged.size(), 5); ++k) list += "\n  " + damaged[k];
+    if (damaged.size() > 5) list += "\n  and " + std::to_string(damaged.size() - 5) + " more";
+    throw Error(dir.string() + ": " + std::to_string(damaged.size()) + " damaged or missing frame(s):" + list +
+                "\nrun shard(s) " + shards_text + " again (they re-render what is missing), then merge");
+  }
+
+  // What a single process does at its end, in the same order: the same bytes.
+  std::vector<SceneSplit> splits;
+  size_t frame_count = 0;
+  for (size_t s = 0; s < scenes; ++s) {
+    frame_count += writers[s]->WrittenFrames().size();
+    splits.push_back(writers[s]->Finish());
+  }
+  WriteSplits(dir, splits);
+  WriteMergedCoco(dir, run.bop, splits, run.classes);
+  for (const auto& writer : writers) writer->RemoveFragments();
+  for (int fd : locks) ::close(fd);
+  locks.clear();
+  fs::remove_all(meta, ec);
+  if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());
+  info("merged " + std::to_string(n) + " shard(s): " + std::to_string(frame_count) + " frames in " +
+       std::to_string(scenes) + " scene(s)");
+
+  MergeSummary summary;
+  summary.shards = n;
+  summary.scenes = scenes;
+  summary.frames = frame_count;
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace cadsynth

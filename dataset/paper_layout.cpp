@@ -68,7 +68,9 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const
   }
 
   const std::string temporary = path.string() + ".tmp";
-  mat_t* mat = Mat_CreateVer(temporary.c_str(), nullptr, MAT_FT_MAT5);
+  // A fixed header: matio's default one carries the creation time, and the same run must give
+  // the same bytes (resumed runs, shards).
+  mat_t* mat = Mat_CreateVer(temporary.c_str(), "MATLAB 5.0 MAT-file, written by cadsynth", MAT_FT_MAT5);
   if (mat == nullptr) throw Error(path.string() + ": cannot create MATLAB file");
   try {
     WriteMatDouble(mat, "cls_indexes", {n, 1}, cls, path);

@@ -15,31 +15,13 @@
 #include <gtest/gtest.h>
 
 #include "tests/test_support.h"
+#include "tests/tools/cli_support.h"
 
 namespace {
 
+using cadsynth::testing::CliRun;
+using cadsynth::testing::Cadsynth;
 using cadsynth::testing::ScratchDir;
-
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-CliRun Cadsynth(const std::string& args, const ScratchDir& dir) {
-  const std::string command = "cd '" + dir.path().string() + "' && '" CADSYNTH_EXE "' " + args +
-                              " > stdout.txt 2> stderr.txt";
-  const int status = std::system(command.c_str());
-  CliRun run;
-  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  for (auto [name, text] : {std::pair{"stdout.txt", &run.out}, std::pair{"stderr.txt", &run.err}}) {
-    std::ifstream in(dir / name);
-    std::stringstream s;
-    s << in.rdbuf();
-    *text = s.str();
-    std::filesystem::remove(dir / name);
-  }
-  return run;
-}
 
 size_t Lines(const std::string& text) { return std::count(text.begin(), text.end(), '\n'); }
 

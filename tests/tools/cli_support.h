@@ -1,0 +1,38 @@
+// Running the cadsynth executable from a test (tools_tests only: CADSYNTH_EXE is its path).
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tests/test_support.h"
+
+namespace cadsynth::testing {
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+// Runs `cadsynth ARGS` in `dir` (a shell command line), capturing exit code, stdout and stderr.
+inline CliRun Cadsynth(const std::string& args, const ScratchDir& dir) {
+  const std::string command = "cd '" + dir.path().string() + "' && '" CADSYNTH_EXE "' " + args +
+                              " > stdout.txt 2> stderr.txt";
+  const int status = std::system(command.c_str());
+  CliRun run;
+  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  for (auto [name, text] : {std::pair{"stdout.txt", &run.out}, std::pair{"stderr.txt", &run.err}}) {
+    std::ifstream in(dir / name);
+    std::stringstream s;
+    s << in.rdbuf();
+    *text = s.str();
+    std::filesystem::remove(dir / name);
+  }
+  return run;
+}
+
+}  // namespace cadsynth::testing

@@ -1,0 +1,232 @@
+// Farm runs in-process: shards write one tree, merge makes it the single-process dataset; an
+// interrupted single run resumes, starts over when the run changed, and re-renders damaged frames.
+#include "tools/shards.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "tests/test_support.h"
+#include "tools/generate.h"
+
+namespace cadsynth {
+namespace {
+
+using testing::ReadTree;
+using testing::ScratchDir;
+using Tree = std::map<std::string, std::string>;
+
+// The default job (three scenes) at 160x120, four views each (12 units), every output format.
+RunSpec SmallFarmSpec() {
+  RunSpec spec = DefaultRunSpec();
+  spec.intrinsics = Intrinsics{160, 120, 131.25, 131.25, 79.5, 59.5};
+  spec.sweep.yaw_rad = {0.0, 1.5, 3.0, 4.5};
+  spec.sweep.pitch_rad = {0.6};
+  spec.sweep.radius_mm = {700.0};
+  spec.bop.paper_layout = spec.bop.pvn3d_meta = spec.bop.grasp_points = true;
+  spec.bop.model_points = 200;
+  return spec;
+}
+
+GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out, std::optional<ShardSpec> shard = {}) {
+  GenerateOptions options;
+  options.output = out;
+  options.shard = shard;
+  return Generate(spec, options);
+}
+
+void ExpectSameTree(const Tree& expected, const Tree& actual) {
+  ASSERT_EQ(expected.size(), actual.size());
+  for (const auto& [name, bytes] : expected) {
+    ASSERT_TRUE(actual.count(name)) << name << " is missing";
+    EXPECT_TRUE(actual.at(name) == bytes) << name << " differs";
+  }
+}
+
+std::string MergeError(const std::filesystem::path& dir) {
+  try {
+    Merge(dir);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Shards, ParseShardTakesIOfN) {
+  EXPECT_EQ(ParseShard("0/1").index, 0);
+  EXPECT_EQ(ParseShard("3/4").index, 3);
+  EXPECT_EQ(ParseShard("3/4").count, 4);
+  for (const char* bad : {"4/4", "-1/4", "1/0", "1", "a/b", "1/4x", "/4", "1/"}) {
+    EXPECT_THROW(ParseShard(bad), Error) << bad;
+  }
+  const ShardSpec s{1, 3};
+  EXPECT_FALSE(s.Owns(0));
+  EXPECT_TRUE(s.Owns(1));
+  EXPECT_TRUE(s.Owns(4));
+}
+
+TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {
+  ScratchDir dir;
+  const RunSpec spec = SmallFarmSpec();
+  const GenerateSummary whole = RunJob(spec, dir / "whole");
+  EXPECT_EQ(whole.frames, 12u);
+  // Four shards, in no particular order; each renders every 4th unit of scene * views + view.
+  size_t frames = 0;
+  for (int i : {2, 0, 3, 1}) {
+    const GenerateSummary part = RunJob(spec, dir / "tree", ShardSpec{i, 4});
+    EXPECT_EQ(part.frames, 3u);
+    frames += part.frames;
+  }
+  EXPECT_EQ(frames, 12u);
+  // Shard 1 owns units 1, 5, 9: scene 0 image 1, scene 1 image 1, scene 2 image 1.
+  for (const char* scene : {"000000", "000001", "000002"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "tree" / "train" / scene / ".fragments" / "000001.json"));
+  }
+  const MergeSummary merged = Merge(dir / "tree");
+  EXPECT_EQ(merged.shards, 4);
+  EXPECT_EQ(merged.frames, 12u);
+  EXPECT_EQ(merged.scenes, 3u);
+  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "tree"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "tree" / ".shards"));
+  EXPECT_NE(MergeError(dir / "tree").find("already a complete dataset"), std::string::npos);
+}
+
+TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {
+  ScratchDir dir;
+  const RunSpec spec = SmallFarmSpec();
+  EXPECT_NE(MergeError(dir / "tree").find("no such folder"), std::string::npos);
+  RunJob(spec, dir / "tree", ShardSpec{1, 3});
+  EXPECT_NE(MergeError(dir / "tree").find("shard 0/3 has not started"), std::string::npos);
+  RunJob(spec, dir / "tree", ShardSpec{0, 3});
+  EXPECT_NE(MergeError(dir / "tree").find("shard 2/3 has not started"), std::string::npos);
+  RunJob(spec, dir / "tree", ShardSpec{2, 3});
+  // A shard that wrote frames but did not finish (its done marker gone) is counted.
+  std::filesystem::remove(dir / "tree" / ".shards" / "2-of-3.done");
+  EXPECT_NE(MergeError(dir / "tree").find("shard 2/3 has not finished (4 of 4 views done)"), std::string::npos);
+  RunJob(spec, dir / "tree", ShardSpec{2, 3});  // resumes: nothing left to render
+  // A running shard holds its lock.
+  const std::string lock = (dir / "tree" / ".shards" / "1-of-3.lock").string();
+  const int fd = ::open(lock.c_str(), O_RDWR);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  EXPECT_NE(MergeError(dir / "tree").find("shard 1/3 is running"), std::string::npos);
+  EXPECT_THROW(RunJob(spec, dir / "tree", ShardSpec{1, 3}), Error);  // the same shard twice
+  ::close(fd);
+  EXPECT_EQ(MergeError(dir / "tree"), "");
+}
+
+TEST(Shards, DamagedFramesAreNamedAndTheirShardRendersThemAgain) {
+  ScratchDir dir;
+  const RunSpec spec = SmallFarmSpec();
+  RunJob(spec, dir / "whole");
+  for (int i = 0; i < 2; ++i) RunJob(spec, dir / "tree", ShardSpec{i, 2});
+  // Unit 3 (scene 0, image 3) belongs to shard 1: damage its mask, delete its grasp points.
+  const std::filesystem::path mask = dir / "tree" / "train" / "000000" / "mask_visib" / "000003_000001.png";
+  std::ofstream(mask, std::ios::binary | std::ios::app) << "x";
+  bool removed = false;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "tree" / "grasp" / "000000")) {
+    if (!removed && e.path().filename().string().rfind("000003_", 0) == 0) removed = std::filesystem::remove(e.path());
+  }
+  ASSERT_TRUE(removed);
+  const std::string why = MergeError(dir / "tree");
+  EXPECT_NE(why.find("1 damaged or missing frame(s)"), std::string::npos) << why;
+  EXPECT_NE(why.find("000003_000001.png: "), std::string::npos) << why;
+  EXPECT_NE(why.find("run shard(s) 1/2 again"), std::string::npos) << why;
+  // Until shard 1 runs again, merge still refuses.
+  EXPECT_NE(MergeError(dir / "tree").find("shard 1/2 has not finished (5 of 6 views done)"), std::string::npos);
+  const GenerateSummary again = RunJob(spec, dir / "tree", ShardSpec{1, 2});
+  EXPECT_EQ(again.resumed, 5u);
+  EXPECT_EQ(again.frames, 6u);
+  Merge(dir / "tree");
+  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "tree"));
+}
+
+TEST(Shards, ShardsOfAnotherRunOrCountAreRefused) {
+  ScratchDir dir;
+  RunSpec spec = SmallFarmSpec();
+  RunJob(spec, dir / "tree", ShardSpec{0, 3});
+  try {
+    RunJob(spec, dir / "tree", ShardSpec{1, 2});
+    ADD_FAILURE() << "another shard count was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("started with 3 shards"), std::string::npos) << e.what();
+  }
+  spec.bop.depth_scale = 1.0;
+  try {
+    RunJob(spec, dir / "tree", ShardSpec{1, 3});
+    ADD_FAILURE() << "a changed run was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("different run"), std::string::npos) << e.what();
+  }
+  // A finished dataset is not a shard folder.
+  RunJob(spec, dir / "whole");
+  EXPECT_THROW(RunJob(spec, dir / "whole", ShardSpec{0, 2}), Error);
+}
+
+// An error inside the run (here: from the progress callback after 5 frames) stands in for a kill.
+void Interrupt(const RunSpec& spec, const std::filesystem::path& out, std::vector<std::string>* info = nullptr) {
+  GenerateOptions options;
+  options.output = out;
+  options.progress = [](size_t done, size_t) {
+    if (done == 5) throw Error("interrupted on purpose");
+  };
+  if (info != nullptr) options.info = [info](const std::string& line) { info->push_back(line); };
+  EXPECT_THROW(Generate(spec, options), Error);
+}
+
+bool Says(const std::vector<std::string>& lines, const std::string& text) {
+  for (const std::string& line : lines) {
+    if (line.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(Resume, AChangedRunStartsOverAndADamagedFrameIsRenderedAgain) {
+  ScratchDir dir;
+  RunSpec spec = SmallFarmSpec();
+  RunJob(spec, dir / "whole");
+  const std::filesystem::path partial = dir / ".out.partial";
+
+  // Interrupted, then resumed unchanged: the completed frames are kept.
+  Interrupt(spec, dir / "out");
+  ASSERT_TRUE(std::filesystem::exists(partial));
+  // Damage one completed frame: truncate its colour image.
+  std::vector<std::string> complete;  // frames whose fragment (written last) exists
+  for (const auto& e : std::filesystem::directory_iterator(partial / "train" / "000000" / ".fragments")) {
+    complete.push_back(e.path().stem().string());
+  }
+  ASSERT_FALSE(complete.empty());
+  std::filesystem::resize_file(partial / "train" / "000000" / "rgb" / (complete.front() + ".png"), 100);
+  std::vector<std::string> info;
+  GenerateOptions options;
+  options.output = dir / "out";
+  options.info = [&](const std::string& line) { info.push_back(line); };
+  const GenerateSummary resumed = Generate(spec, options);
+  EXPECT_TRUE(Says(info, "resuming the interrupted run")) << ::testing::PrintToString(info);
+  EXPECT_TRUE(Says(info, "rendered again: 1 frames")) << ::testing::PrintToString(info);
+  EXPECT_GE(resumed.resumed, 1u);
+  EXPECT_EQ(resumed.frames, 12u);
+  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "out"));
+
+  // Interrupted, then started with a changed recipe: the old frames are discarded.
+  std::filesystem::remove_all(dir / "out");
+  Interrupt(spec, dir / "out");
+  spec.bop.depth_scale = 1.0;
+  info.clear();
+  const GenerateSummary changed = Generate(spec, options);
+  EXPECT_TRUE(Says(info, "starting over")) << ::testing::PrintToString(info);
+  EXPECT_EQ(changed.resumed, 0u);
+  RunJob(spec, dir / "fresh");
+  ExpectSameTree(ReadTree(dir / "fresh"), ReadTree(dir / "out"));
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -418,103 +418,107 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     }
   }
   // The staging folder (or shard tree) is kept on errors from here on: a rerun resumes from it.
-
-  if (common) {
-    WriteBopCamera(root, spec.intrinsics, spec.bop);
-    WriteBopModels(root, parts, prepared.classes);
-    WriteModelPoints(root, parts, spec.bop);
-    WriteFileAtomic(root / "variants.json", prepared.variants_json);
-  }
-  std::vector<BopSceneWriter::CocoCategory> categories;
-  for (size_t p = 0; p < parts.size(); ++p) {
-    categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
-  }
-  if (shard && shard->index == 0) {
-    ShardRunInfo run;
-    run.shards = shard->count;
-    run.views = views.size();
-    run.bop = spec.bop;
-    run.obj_ids = prepared.obj_ids;
-    run.categories = categories;
-    run.classes = prepared.classes;
-    tree->WriteRunInfo(run);
-  }
-
-  // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
-  // showing too little of the scene are skipped (image ids keep their view index).
   std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
   size_t resumed = 0, damaged = 0, frames = 0;
   std::vector<SceneSplit> splits;
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
-  for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-    const Renderer renderer(parts, prepared.scenes[s], spec.render);
-    auto writer_ptr = std::make_unique<BopSceneWriter>(root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
-    BopSceneWriter& writer = *writer_ptr;
-    if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
-    writer.SetCocoCategories(categories);
-    std::vector<PaperInstance> paper_instances;
-    for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
-      const Instance& instance = prepared.scenes[s].instances[i];
-      paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
-                                 instance.name, instance.world_from_model});
+  try {
+    if (common) {
+      WriteBopCamera(root, spec.intrinsics, spec.bop);
+      WriteBopModels(root, parts, prepared.classes);
+      WriteModelPoints(root, parts, spec.bop);
+      WriteFileAtomic(root / "variants.json", prepared.variants_json);
     }
-    const PaperSceneWriter paper(root, static_cast<int>(s), spec.bop, std::move(paper_instances));
-    // Frames of an interrupted attempt count when every file matches their manifest entry.
-    std::vector<int> earlier;
-    for (int id : writer.WrittenFrames()) {
-      if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id))) earlier.push_back(id);
+    std::vector<BopSceneWriter::CocoCategory> categories;
+    for (size_t p = 0; p < parts.size(); ++p) {
+      categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
     }
-    std::vector<std::string> problems(earlier.size());
-    tbb::parallel_for(size_t{0}, earlier.size(), [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
-    for (size_t k = 0; k < earlier.size(); ++k) {
-      if (problems[k].empty()) {
-        ++resumed;
-        continue;
+    if (shard && shard->index == 0) {
+      ShardRunInfo run;
+      run.shards = shard->count;
+      run.views = views.size();
+      run.bop = spec.bop;
+      run.obj_ids = prepared.obj_ids;
+      run.categories = categories;
+      run.classes = prepared.classes;
+      tree->WriteRunInfo(run);
+    }
+
+    // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
+    // showing too little of the scene are skipped (image ids keep their view index).
+    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+      const Renderer renderer(parts, prepared.scenes[s], spec.render);
+      auto writer_ptr = std::make_unique<BopSceneWriter>(root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
+      BopSceneWriter& writer = *writer_ptr;
+      if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
+      writer.SetCocoCategories(categories);
+      std::vector<PaperInstance> paper_instances;
+      for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
+        const Instance& instance = prepared.scenes[s].instances[i];
+        paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
+                                   instance.name, instance.world_from_model});
       }
-      Warn(problems[k] + ": rendering image " + std::to_string(earlier[k]) + " again");
-      writer.ForgetFrame(earlier[k]);
-      ++damaged;
+      const PaperSceneWriter paper(root, static_cast<int>(s), spec.bop, std::move(paper_instances));
+      // Frames of an interrupted attempt count when every file matches their manifest entry.
+      std::vector<int> earlier;
+      for (int id : writer.WrittenFrames()) {
+        if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id))) earlier.push_back(id);
+      }
+      std::vector<std::string> problems(earlier.size());
+      tbb::parallel_for(size_t{0}, earlier.size(), [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
+      for (size_t k = 0; k < earlier.size(); ++k) {
+        if (problems[k].empty()) {
+          ++resumed;
+          continue;
+        }
+        Warn(problems[k] + ": rendering image " + std::to_string(earlier[k]) + " again");
+        writer.ForgetFrame(earlier[k]);
+        ++damaged;
+      }
+      size_t next = 0;
+      const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
+      using FramePtr = std::shared_ptr<const Frame>;
+      tbb::parallel_pipeline(
+          tokens,
+          tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                         [&](tbb::flow_control& control) -> size_t {
+                                           while (next < views.size() && (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+                                             if (owns(s, next) && options.progress) options.progress(++done, total_frames);
+                                             ++next;
+                                           }
+                                           if (next >= views.size()) {
+                                             control.stop();
+                                             return 0;
+                                           }
+                                           return next++;
+                                         }) &
+              tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
+                  tbb::filter_mode::parallel,
+                  [&](size_t i) {
+                    const Camera camera{spec.intrinsics, views[i].world_from_cam};
+                    return std::make_pair(i, std::make_shared<const Frame>(renderer.Render(camera)));
+                  }) &
+              tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                  tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
+                    int visible = 0;
+                    for (const Frame::InstanceTruth& t : item.second->instances) visible += t.px_count_visib;
+                    if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
+                      ++(visible == 0 ? empty_views : sparse_views);
+                    } else {
+                      writer.WriteFrame(static_cast<int>(item.first), *item.second, [&](FileLog& files) {
+                        paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir(), &files);
+                      });
+                    }
+                    const size_t n = ++done;
+                    if (options.progress) options.progress(n, total_frames);
+                  }));
+      for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
+      if (!shard) splits.push_back(writer.Finish());
+      writers.push_back(std::move(writer_ptr));
     }
-    size_t next = 0;
-    const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
-    using FramePtr = std::shared_ptr<const Frame>;
-    tbb::parallel_pipeline(
-        tokens,
-        tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                       [&](tbb::flow_control& control) -> size_t {
-                                         while (next < views.size() && (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
-                                           if (owns(s, next) && options.progress) options.progress(++done, total_frames);
-                                           ++next;
-                                         }
-                                         if (next >= views.size()) {
-                                           control.stop();
-                                           return 0;
-                                         }
-                                         return next++;
-                                       }) &
-            tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
-                tbb::filter_mode::parallel,
-                [&](size_t i) {
-                  const Camera camera{spec.intrinsics, views[i].world_from_cam};
-                  return std::make_pair(i, std::make_shared<const Frame>(renderer.Render(camera)));
-                }) &
-            tbb::make_filter<std::pair<size_t, FramePtr>, void>(
-                tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                  int visible = 0;
-                  for (const Frame::InstanceTruth& t : item.second->instances) visible += t.px_count_visib;
-                  if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
-                    ++(visible == 0 ? empty_views : sparse_views);
-                  } else {
-                    writer.WriteFrame(static_cast<int>(item.first), *item.second, [&](FileLog& files) {
-                      paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir(), &files);
-                    });
-                  }
-                  const size_t n = ++done;
-                  if (options.progress) options.progress(n, total_frames);
-                }));
-    for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
-    if (!shard) splits.push_back(writer.Finish());
-    writers.push_back(std::move(writer_ptr));
+  } catch (const Error& e) {
+    throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + root.string() +
+                ": the same command continues from them)");
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (shard) {

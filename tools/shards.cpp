@@ -15,8 +15,8 @@
 #include <set>
 #include <system_error>
 
-#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <nlohmann/json.hpp>
 
 #include "cad/error.h"
 #include "dataset/file_io.h"
@@ -33,13 +33,13 @@ std::string ShardFile(int index, int count, const char* ext) {
 }
 
 Json OptionsJson(const BopOptions& b) {
-  return {{"depth_scale", b.depth_scale},     {"split", b.split},
-          {"test_every", b.test_every},       {"test_fraction", b.test_fraction},
-          {"split_seed", b.split_seed},       {"target_min_visib_fract", b.target_min_visib_fract},
-          {"model_points", b.model_points},   {"coco", b.coco},
-          {"jpeg_quality", b.jpeg_quality},   {"paper_layout", b.paper_layout},
-          {"pvn3d_meta", b.pvn3d_meta},       {"grasp_points", b.grasp_points},
-          {"even_points", b.even_points},     {"point_seed", b.point_seed}};
+  return {{"depth_scale", b.depth_scale},   {"split", b.split},
+          {"test_every", b.test_every},     {"test_fraction", b.test_fraction},
+          {"split_seed", b.split_seed},     {"target_min_visib_fract", b.target_min_visib_fract},
+          {"model_points", b.model_points}, {"coco", b.coco},
+          {"jpeg_quality", b.jpeg_quality}, {"paper_layout", b.paper_layout},
+          {"pvn3d_meta", b.pvn3d_meta},     {"grasp_points", b.grasp_points},
+          {"even_points", b.even_points},   {"point_seed", b.point_seed}};
 }
 
 BopOptions OptionsFromJson(const Json& j) {
@@ -68,7 +68,8 @@ ShardRunInfo ReadRunInfo(const fs::path& path) {
     info.shards = j.at("shards");
     info.views = j.at("views");
     info.bop = OptionsFromJson(j.at("output"));
-    for (const Json& scene : j.at("scenes")) info.obj_ids.push_back(scene.at("obj_ids").get<std::vector<int>>());
+    for (const Json& scene : j.at("scenes"))
+      info.obj_ids.push_back(scene.at("obj_ids").get<std::vector<int>>());
     for (const Json& o : j.at("objects")) {
       info.categories.push_back({o.at("obj_id"), o.at("name"), o.at("class_name")});
       info.classes.push_back({o.at("class_id"), o.at("class_name")});
@@ -109,7 +110,8 @@ ShardSpec ParseShard(const std::string& text) {
     return !part.empty() && end != part.c_str() && *end == '\0';
   };
   long index = 0, count = 0;
-  if (slash == std::string::npos || !number(text.substr(0, slash), &index) || !number(text.substr(slash + 1), &count)) {
+  if (slash == std::string::npos || !number(text.substr(0, slash), &index) ||
+      !number(text.substr(slash + 1), &count)) {
     throw Error("--shard takes I/N (shard I of N, counting from 0), got '" + text + "'");
   }
   if (count < 1 || count > 1000000 || index < 0 || index >= count) {
@@ -118,16 +120,19 @@ ShardSpec ParseShard(const std::string& text) {
   return {static_cast<int>(index), static_cast<int>(count)};
 }
 
-ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& run_key) : dir_(dir), shard_(shard) {
+ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& run_key)
+    : dir_(dir), shard_(shard) {
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::exists(Meta(dir), ec) && !fs::is_empty(dir, ec)) {
-    throw Error(dir.string() + ": exists and is not a shard folder (a finished dataset?): shards need a new or "
+    throw Error(dir.string() +
+                ": exists and is not a shard folder (a finished dataset?): shards need a new or "
                 "empty folder, or the folder their run started");
   }
   CreateFolder(Meta(dir));
   const fs::path lock = Meta(dir) / ShardFile(shard.index, shard.count, ".lock");
   lock_fd_ = TryLock(lock);
-  if (lock_fd_ < 0) throw Error(dir.string() + ": shard " + shard.Name() + " is already running on this folder");
+  if (lock_fd_ < 0)
+    throw Error(dir.string() + ": shard " + shard.Name() + " is already running on this folder");
 
   // The first shard to arrive publishes the key: written under a name of its own, then linked
   // (link fails if another shard got there first; it is atomic on NFS as well).
@@ -146,9 +151,11 @@ ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& ru
     const int started = ShardsOfKey(agreed);
     if (started != shard.count && agreed.substr(0, agreed.rfind("shards ")) == run_key) {
       throw Error(dir.string() + ": this run was started with " + std::to_string(started) +
-                  " shards; this is shard " + shard.Name() + ": use --shard I/" + std::to_string(started));
+                  " shards; this is shard " + shard.Name() + ": use --shard I/" +
+                  std::to_string(started));
     }
-    throw Error(dir.string() + ": holds shards of a different run (the recipe, its parts, views or output "
+    throw Error(dir.string() +
+                ": holds shards of a different run (the recipe, its parts, views or output "
                 "options changed since it started): remove the folder or write to another one");
   }
 }
@@ -166,8 +173,11 @@ void ShardTree::WriteRunInfo(const ShardRunInfo& info) const {
                        {"class_id", info.classes.at(o).id},
                        {"class_name", info.classes.at(o).name}});
   }
-  const Json j = {{"shards", info.shards}, {"views", info.views},     {"output", OptionsJson(info.bop)},
-                  {"scenes", scenes},      {"objects", objects}};
+  const Json j = {{"shards", info.shards},
+                  {"views", info.views},
+                  {"output", OptionsJson(info.bop)},
+                  {"scenes", scenes},
+                  {"objects", objects}};
   WriteFileAtomic(Meta(dir_) / "run.json", j.dump(2) + "\n");
 }
 
@@ -175,7 +185,8 @@ void ShardTree::MarkDone(const std::string& summary_json) const {
   WriteFileAtomic(Meta(dir_) / ShardFile(shard_.index, shard_.count, ".done"), summary_json + "\n");
 }
 
-MergeSummary Merge(const fs::path& dir_in, const std::function<void(const std::string&)>& info_sink) {
+MergeSummary Merge(const fs::path& dir_in,
+                   const std::function<void(const std::string&)>& info_sink) {
   const auto start = std::chrono::steady_clock::now();
   const auto info = [&](const std::string& line) {
     if (info_sink) info_sink(line);
@@ -186,12 +197,17 @@ MergeSummary Merge(const fs::path& dir_in, const std::function<void(const std::s
   const fs::path meta = Meta(dir);
   if (!fs::exists(meta / "run.json", ec)) {
     if (!fs::exists(meta, ec)) {
-      if (fs::exists(dir / "camera.json", ec)) throw Error(dir.string() + ": already a complete dataset; nothing to merge");
-      throw Error(dir.string() + ": not a shard folder (no .shards/): write one with "
-                  "cadsynth generate RECIPE --shard I/N -o " + dir.string());
+      if (fs::exists(dir / "camera.json", ec))
+        throw Error(dir.string() + ": already a complete dataset; nothing to merge");
+      throw Error(dir.string() +
+                  ": not a shard folder (no .shards/): write one with "
+                  "cadsynth generate RECIPE --shard I/N -o " +
+                  dir.string());
     }
-    const int n = fs::exists(meta / "run_key", ec) ? ShardsOfKey(ReadFileText(meta / "run_key")) : 0;
-    throw Error(dir.string() + ": cannot merge yet: shard 0/" + (n > 0 ? std::to_string(n) : std::string("N")) +
+    const int n =
+        fs::exists(meta / "run_key", ec) ? ShardsOfKey(ReadFileText(meta / "run_key")) : 0;
+    throw Error(dir.string() + ": cannot merge yet: shard 0/" +
+                (n > 0 ? std::to_string(n) : std::string("N")) +
                 " has not started (it writes .shards/run.json)");
   }
   const ShardRunInfo run = ReadRunInfo(meta / "run.json");
@@ -220,7 +236,8 @@ MergeSummary Merge(const fs::path& dir_in, const std::function<void(const std::s
   const size_t scenes = run.obj_ids.size();
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < scenes; ++s) {
-    writers.push_back(std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), run.bop, run.obj_ids[s]));
+    writers.push_back(
+        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), run.bop, run.obj_ids[s]));
     writers.back()->SetCocoCategories(run.categories);
   }
   // Frames per shard: written (fragments) and declared (done markers).
@@ -255,7 +272,8 @@ MergeSummary Merge(const fs::path& dir_in, const std::function<void(const std::s
     std::string list;
     const size_t shown = std::min<size_t>(not_ready.size(), 8);
     for (size_t k = 0; k < shown; ++k) list += (k ? "; " : "") + not_ready[k];
-    if (not_ready.size() > shown) list += "; and " + std::to_string(not_ready.size() - shown) + " more";
+    if (not_ready.size() > shown)
+      list += "; and " + std::to_string(not_ready.size() - shown) + " more";
     throw Error(dir.string() + ": cannot merge yet: " + list);
   }
 
@@ -265,8 +283,9 @@ MergeSummary Merge(const fs::path& dir_in, const std::function<void(const std::s
     for (int id : writers[s]->WrittenFrames()) frames.push_back({s, id});
   }
   std::vector<std::string> problems(frames.size());
-  tbb::parallel_for(size_t{0}, frames.size(),
-                    [&](size_t k) { problems[k] = writers[frames[k].first]->CheckFrame(frames[k].second); });
+  tbb::parallel_for(size_t{0}, frames.size(), [&](size_t k) {
+    problems[k] = writers[frames[k].first]->CheckFrame(frames[k].second);
+  });
   std::set<int> rerun;
   std::vector<std::string> damaged;
   for (size_t k = 0; k < frames.size(); ++k) {
@@ -280,20 +299,23 @@ MergeSummary Merge(const fs::path& dir_in, const std::function<void(const std::s
     if (written[i] != declared[i] && !rerun.count(i)) {
       rerun.insert(i);
       damaged.push_back("shard " + std::to_string(i) + "/" + std::to_string(n) + " reported " +
-                        std::to_string(declared[i]) + " frames, the folder holds " + std::to_string(written[i]));
+                        std::to_string(declared[i]) + " frames, the folder holds " +
+                        std::to_string(written[i]));
     }
   }
   if (!rerun.empty()) {
     std::string shards_text;
     for (int i : rerun) {
       fs::remove(meta / ShardFile(i, n, ".done"), ec);
-      shards_text += (shards_text.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(n);
+      shards_text +=
+          (shards_text.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(n);
     }
     std::string list;
     for (size_t k = 0; k < std::min<size_t>(damaged.size(), 5); ++k) list += "\n  " + damaged[k];
     if (damaged.size() > 5) list += "\n  and " + std::to_string(damaged.size() - 5) + " more";
-    throw Error(dir.string() + ": " + std::to_string(damaged.size()) + " damaged or missing frame(s):" + list +
-                "\nrun shard(s) " + shards_text + " again (they re-render what is missing), then merge");
+    throw Error(dir.string() + ": " + std::to_string(damaged.size()) +
+                " damaged or missing frame(s):" + list + "\nrun shard(s) " + shards_text +
+                " again (they re-render what is missing), then merge");
   }
 
   // What a single process does at its end, in the same order: the same bytes.

@@ -29,7 +29,9 @@ namespace cadsynth {
 struct ShardSpec {
   int index = 0;
   int count = 1;
-  bool Owns(size_t unit) const { return unit % static_cast<size_t>(count) == static_cast<size_t>(index); }
+  bool Owns(size_t unit) const {
+    return unit % static_cast<size_t>(count) == static_cast<size_t>(index);
+  }
   std::string Name() const { return std::to_string(index) + "/" + std::to_string(count); }
 };
 
@@ -41,7 +43,7 @@ struct ShardRunInfo {
   int shards = 1;
   size_t views = 0;
   BopOptions bop;
-  std::vector<std::vector<int>> obj_ids;  // per scene, obj_id of each instance
+  std::vector<std::vector<int>> obj_ids;                 // per scene, obj_id of each instance
   std::vector<BopSceneWriter::CocoCategory> categories;  // per object (id = obj_id)
   std::vector<ObjectClass> classes;                      // per object
 };
@@ -78,6 +80,7 @@ struct MergeSummary {
 // manifest, then writes the scene files, splits and merged COCO files and removes the shard
 // bookkeeping. Throws Error naming the shards that have not finished, or the damaged files (whose
 // frames it forgets, so that running their shards again re-renders them).
-MergeSummary Merge(const std::filesystem::path& dir, const std::function<void(const std::string&)>& info = {});
+MergeSummary Merge(const std::filesystem::path& dir,
+                   const std::function<void(const std::string&)>& info = {});
 
 }  // namespace cadsynth

@@ -20,10 +20,11 @@ struct CliRun {
 
 // Runs `cadsynth ARGS` in `dir` (a shell command line), capturing exit code, stdout and stderr
 // (through files named with `tag`: runs at the same time need different tags).
-inline CliRun Cadsynth(const std::string& args, const ScratchDir& dir, const std::string& tag = "") {
+inline CliRun Cadsynth(const std::string& args, const ScratchDir& dir,
+                       const std::string& tag = "") {
   const std::string out_name = "stdout" + tag + ".txt", err_name = "stderr" + tag + ".txt";
-  const std::string command = "cd '" + dir.path().string() + "' && '" CADSYNTH_EXE "' " + args + " > " + out_name +
-                              " 2> " + err_name;
+  const std::string command = "cd '" + dir.path().string() + "' && '" CADSYNTH_EXE "' " + args +
+                              " > " + out_name + " 2> " + err_name;
   const int status = std::system(command.c_str());
   CliRun run;
   run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -26,13 +26,15 @@ using cadsynth::testing::ScratchDir;
 
 // The default job's three scenes at 320x240, 12 views each.
 void WriteSmallRecipe(const ScratchDir& dir) {
-  std::ofstream(dir / "r.yaml") << "camera: {preset: kinect_v1, width: 320, height: 240, fx: 262.5, fy: 262.5,\n"
-                                   "         cx: 159.5, cy: 119.5}\n"
-                                   "sweep: {yaw: {from: 0, to: 330, step: 30}, pitch: [40], radius: 0.8 m}\n"
-                                   "output: {formats: [bop, coco, paper, pvn3d, grasp]}\n";
+  std::ofstream(dir / "r.yaml")
+      << "camera: {preset: kinect_v1, width: 320, height: 240, fx: 262.5, fy: 262.5,\n"
+         "         cx: 159.5, cy: 119.5}\n"
+         "sweep: {yaw: {from: 0, to: 330, step: 30}, pitch: [40], radius: 0.8 m}\n"
+         "output: {formats: [bop, coco, paper, pvn3d, grasp]}\n";
 }
 
-void ExpectSameTree(const std::filesystem::path& expected_dir, const std::filesystem::path& actual_dir) {
+void ExpectSameTree(const std::filesystem::path& expected_dir,
+                    const std::filesystem::path& actual_dir) {
   const auto expected = ReadTree(expected_dir), actual = ReadTree(actual_dir);
   ASSERT_EQ(expected.size(), actual.size());
   for (const auto& [name, bytes] : expected) {
@@ -49,15 +51,18 @@ TEST(Farm, ShardProcessesAtTheSameTimeMergeToTheSingleRun) {
   std::vector<CliRun> runs(3);
   for (int i = 0; i < 3; ++i) {
     shards.emplace_back([&, i] {
-      runs[i] = Cadsynth("generate r.yaml --shard " + std::to_string(i) + "/3 --threads 1 -o tree --progress=json", dir,
-                         std::to_string(i));
+      runs[i] = Cadsynth(
+          "generate r.yaml --shard " + std::to_string(i) + "/3 --threads 1 -o tree --progress=json",
+          dir, std::to_string(i));
     });
   }
   for (std::thread& t : shards) t.join();
   for (int i = 0; i < 3; ++i) {
     EXPECT_EQ(runs[i].code, 0) << runs[i].err;
-    EXPECT_NE(runs[i].out.find("as shard " + std::to_string(i) + "/3"), std::string::npos) << runs[i].out;
-    EXPECT_NE(runs[i].err.find("\"done\":12,\"total\":12"), std::string::npos) << runs[i].err;  // 36 units / 3
+    EXPECT_NE(runs[i].out.find("as shard " + std::to_string(i) + "/3"), std::string::npos)
+        << runs[i].out;
+    EXPECT_NE(runs[i].err.find("\"done\":12,\"total\":12"), std::string::npos)
+        << runs[i].err;  // 36 units / 3
   }
   const CliRun merge = Cadsynth("merge tree", dir);
   ASSERT_EQ(merge.code, 0) << merge.err;
@@ -74,9 +79,10 @@ TEST(Farm, MergeOfAnUnfinishedTreeIsOneLineNamingTheShards) {
   ASSERT_EQ(Cadsynth("generate r.yaml --shard 0/4 -o tree --quiet", dir).code, 0);
   const CliRun merge = Cadsynth("merge tree", dir);
   EXPECT_EQ(merge.code, 1);
-  EXPECT_EQ(merge.err, "error: " + (dir / "tree").string() +
-                           ": cannot merge yet: shard 1/4 has not started; shard 2/4 has not started; "
-                           "shard 3/4 has not started\n");
+  EXPECT_EQ(merge.err,
+            "error: " + (dir / "tree").string() +
+                ": cannot merge yet: shard 1/4 has not started; shard 2/4 has not started; "
+                "shard 3/4 has not started\n");
   EXPECT_EQ(Cadsynth("merge", dir).code, 2);
   EXPECT_EQ(Cadsynth("generate r.yaml --shard 2 -o tree", dir).code, 2);
   EXPECT_EQ(Cadsynth("generate r.yaml --shard 0/4 --overwrite -o tree", dir).code, 1);
@@ -112,7 +118,8 @@ class SmallDisk {
 
 size_t TreeBytes(const std::filesystem::path& root) {
   size_t total = 0;
-  for (const auto& [name, bytes] : ReadTree(root)) total += bytes.size() + 4096;  // a block per file, roughly
+  for (const auto& [name, bytes] : ReadTree(root))
+    total += bytes.size() + 4096;  // a block per file, roughly
   return total;
 }
 
@@ -144,14 +151,18 @@ TEST(Farm, AFullDiskIsOneClearErrorAndTheRunResumesOnceThereIsRoom) {
   ASSERT_EQ(Cadsynth("generate r.yaml -o whole --quiet", dir).code, 0);
   const size_t needed = TreeBytes(dir / "whole");
   SmallDisk disk(dir / "disk", needed / 2);
-  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a small tmpfs to fill (needs root): " << disk.why();
+  if (!disk.mounted())
+    GTEST_SKIP() << "cannot mount a small tmpfs to fill (needs root): " << disk.why();
 
   const CliRun full = Cadsynth("generate r.yaml -o disk/out --quiet", dir);
   EXPECT_EQ(full.code, 1);
   EXPECT_NE(full.err.find("No space left on device"), std::string::npos) << full.err;
-  EXPECT_NE(full.err.find((dir / "disk").string()), std::string::npos) << "the error names the file: " << full.err;
+  EXPECT_NE(full.err.find((dir / "disk").string()), std::string::npos)
+      << "the error names the file: " << full.err;
   size_t errors = 0;  // one error line (placement warnings may come before it)
-  for (size_t at = full.err.find("error:"); at != std::string::npos; at = full.err.find("error:", at + 1)) ++errors;
+  for (size_t at = full.err.find("error:"); at != std::string::npos;
+       at = full.err.find("error:", at + 1))
+    ++errors;
   EXPECT_EQ(errors, 1u) << full.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "disk" / "out"));
   // What was complete stays complete.
@@ -162,7 +173,8 @@ TEST(Farm, AFullDiskIsOneClearErrorAndTheRunResumesOnceThereIsRoom) {
   ASSERT_TRUE(disk.Grow(needed * 3));
   const CliRun resumed = Cadsynth("generate r.yaml -o disk/out", dir);
   ASSERT_EQ(resumed.code, 0) << resumed.err;
-  EXPECT_NE(resumed.out.find("resumed: " + std::to_string(complete) + " frames"), std::string::npos) << resumed.out;
+  EXPECT_NE(resumed.out.find("resumed: " + std::to_string(complete) + " frames"), std::string::npos)
+      << resumed.out;
   ExpectSameTree(dir / "whole", dir / "disk" / "out");
 }
 

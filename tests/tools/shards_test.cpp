@@ -36,7 +36,8 @@ RunSpec SmallFarmSpec() {
   return spec;
 }
 
-GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out, std::optional<ShardSpec> shard = {}) {
+GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out,
+                       std::optional<ShardSpec> shard = {}) {
   GenerateOptions options;
   options.output = out;
   options.shard = shard;
@@ -88,7 +89,8 @@ TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {
   EXPECT_EQ(frames, 12u);
   // Shard 1 owns units 1, 5, 9: scene 0 image 1, scene 1 image 1, scene 2 image 1.
   for (const char* scene : {"000000", "000001", "000002"}) {
-    EXPECT_TRUE(std::filesystem::exists(dir / "tree" / "train" / scene / ".fragments" / "000001.json"));
+    EXPECT_TRUE(
+        std::filesystem::exists(dir / "tree" / "train" / scene / ".fragments" / "000001.json"));
   }
   const MergeSummary merged = Merge(dir / "tree");
   EXPECT_EQ(merged.shards, 4);
@@ -110,7 +112,8 @@ TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {
   RunJob(spec, dir / "tree", ShardSpec{2, 3});
   // A shard that wrote frames but did not finish (its done marker gone) is counted.
   std::filesystem::remove(dir / "tree" / ".shards" / "2-of-3.done");
-  EXPECT_NE(MergeError(dir / "tree").find("shard 2/3 has not finished (4 of 4 views done)"), std::string::npos);
+  EXPECT_NE(MergeError(dir / "tree").find("shard 2/3 has not finished (4 of 4 views done)"),
+            std::string::npos);
   RunJob(spec, dir / "tree", ShardSpec{2, 3});  // resumes: nothing left to render
   // A running shard holds its lock.
   const std::string lock = (dir / "tree" / ".shards" / "1-of-3.lock").string();
@@ -129,11 +132,13 @@ TEST(Shards, DamagedFramesAreNamedAndTheirShardRendersThemAgain) {
   RunJob(spec, dir / "whole");
   for (int i = 0; i < 2; ++i) RunJob(spec, dir / "tree", ShardSpec{i, 2});
   // Unit 3 (scene 0, image 3) belongs to shard 1: damage its mask, delete its grasp points.
-  const std::filesystem::path mask = dir / "tree" / "train" / "000000" / "mask_visib" / "000003_000001.png";
+  const std::filesystem::path mask =
+      dir / "tree" / "train" / "000000" / "mask_visib" / "000003_000001.png";
   std::ofstream(mask, std::ios::binary | std::ios::app) << "x";
   bool removed = false;
   for (const auto& e : std::filesystem::directory_iterator(dir / "tree" / "grasp" / "000000")) {
-    if (!removed && e.path().filename().string().rfind("000003_", 0) == 0) removed = std::filesystem::remove(e.path());
+    if (!removed && e.path().filename().string().rfind("000003_", 0) == 0)
+      removed = std::filesystem::remove(e.path());
   }
   ASSERT_TRUE(removed);
   const std::string why = MergeError(dir / "tree");
@@ -141,7 +146,8 @@ TEST(Shards, DamagedFramesAreNamedAndTheirShardRendersThemAgain) {
   EXPECT_NE(why.find("000003_000001.png: "), std::string::npos) << why;
   EXPECT_NE(why.find("run shard(s) 1/2 again"), std::string::npos) << why;
   // Until shard 1 runs again, merge still refuses.
-  EXPECT_NE(MergeError(dir / "tree").find("shard 1/2 has not finished (5 of 6 views done)"), std::string::npos);
+  EXPECT_NE(MergeError(dir / "tree").find("shard 1/2 has not finished (5 of 6 views done)"),
+            std::string::npos);
   const GenerateSummary again = RunJob(spec, dir / "tree", ShardSpec{1, 2});
   EXPECT_EQ(again.resumed, 5u);
   EXPECT_EQ(again.frames, 6u);
@@ -172,7 +178,8 @@ TEST(Shards, ShardsOfAnotherRunOrCountAreRefused) {
 }
 
 // An error inside the run (here: from the progress callback after 5 frames) stands in for a kill.
-void Interrupt(const RunSpec& spec, const std::filesystem::path& out, std::vector<std::string>* info = nullptr) {
+void Interrupt(const RunSpec& spec, const std::filesystem::path& out,
+               std::vector<std::string>* info = nullptr) {
   GenerateOptions options;
   options.output = out;
   options.progress = [](size_t done, size_t) {
@@ -200,11 +207,13 @@ TEST(Resume, AChangedRunStartsOverAndADamagedFrameIsRenderedAgain) {
   ASSERT_TRUE(std::filesystem::exists(partial));
   // Damage one completed frame: truncate its colour image.
   std::vector<std::string> complete;  // frames whose fragment (written last) exists
-  for (const auto& e : std::filesystem::directory_iterator(partial / "train" / "000000" / ".fragments")) {
+  for (const auto& e :
+       std::filesystem::directory_iterator(partial / "train" / "000000" / ".fragments")) {
     complete.push_back(e.path().stem().string());
   }
   ASSERT_FALSE(complete.empty());
-  std::filesystem::resize_file(partial / "train" / "000000" / "rgb" / (complete.front() + ".png"), 100);
+  std::filesystem::resize_file(partial / "train" / "000000" / "rgb" / (complete.front() + ".png"),
+                               100);
   std::vector<std::string> info;
   GenerateOptions options;
   options.output = dir / "out";

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages cadsynth builds with, if any are missing. Run as root (or with
 # sudo available). Does nothing, and needs no network, when everything is already there.
+#   tools/setup.sh            what building and running cadsynth needs
+#   tools/setup.sh --tests    also Slurm and munge: a test starts a single-node Slurm cluster
 set -euo pipefail
 
 packages=(
@@ -10,6 +12,11 @@ packages=(
   libcgal-dev libeigen3-dev libassimp-dev libembree-dev libopencv-dev libtbb-dev
   libyaml-cpp-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libmatio-dev zlib1g-dev
 )
+case "${1:-}" in
+  --tests) packages+=(slurm-wlm munge) ;;
+  "") ;;
+  *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -128,15 +128,25 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const
 
 namespace {
 
-// What must match for a run to continue an interrupted one: the recipe file's text, the parts
-// and their variants, every view, the image size and the output options.
+// What must match for a run to continue an interrupted one (and for shards to join): the recipe
+// file's text, the CAD files' bytes, the parts and their variants, every view, the image size and
+// the output options.
 std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views) {
   std::ostringstream key;
   key.precision(17);
-  key << "cadsynth run key 1\n";
-  if (!spec.recipe.empty()) {
-    std::ifstream in(spec.recipe, std::ios::binary);
-    key << "recipe " << spec.recipe.string() << "\n" << in.rdbuf() << "\n";
+  key << "cadsynth run key 2\n";
+  if (!spec.recipe.empty()) key << "recipe\n" << ReadFileText(spec.recipe) << "\n";
+  // The bytes of every CAD file, not only its name: a file edited between a kill and the rerun
+  // (or between two shards) would otherwise mix frames of two geometries.
+  std::set<std::filesystem::path> files;
+  for (const SceneSpec& scene : spec.scenes) {
+    for (const PartSource& source : scene.sources) {
+      if (source.kind == PartSource::Kind::kFile) files.insert(source.path);
+    }
+  }
+  for (const std::filesystem::path& file : files) {
+    const std::string bytes = ReadFileText(file);
+    key << "file " << file.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
   }
   key << prepared.variants_json << "\n";
   const Intrinsics& k = spec.intrinsics;
@@ -444,12 +454,12 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       tree->WriteRunInfo(run);
     }
 
-    // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
-    // showing too little of the scene are skipped (image ids keep their view index).
+    // Every scene's writers first: frames of an interrupted attempt count when every file still
+    // matches their manifest entry; the others are rendered (again).
+    std::vector<std::unique_ptr<PaperSceneWriter>> papers;
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      const Renderer renderer(parts, prepared.scenes[s], spec.render);
-      auto writer_ptr = std::make_unique<BopSceneWriter>(root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]);
-      BopSceneWriter& writer = *writer_ptr;
+      auto& writer = *writers.emplace_back(
+          std::make_unique<BopSceneWriter>(root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]));
       if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
       writer.SetCocoCategories(categories);
       std::vector<PaperInstance> paper_instances;
@@ -458,8 +468,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
         paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
                                    instance.name, instance.world_from_model});
       }
-      const PaperSceneWriter paper(root, static_cast<int>(s), spec.bop, std::move(paper_instances));
-      // Frames of an interrupted attempt count when every file matches their manifest entry.
+      papers.push_back(
+          std::make_unique<PaperSceneWriter>(root, static_cast<int>(s), spec.bop, std::move(paper_instances)));
       std::vector<int> earlier;
       for (int id : writer.WrittenFrames()) {
         if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id))) earlier.push_back(id);
@@ -475,6 +485,17 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
         writer.ForgetFrame(earlier[k]);
         ++damaged;
       }
+    }
+    // Progress counts the frames this attempt renders.
+    const size_t to_render = total_frames - resumed;
+    if (options.progress) options.progress(0, to_render);
+
+    // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
+    // showing too little of the scene are skipped (image ids keep their view index).
+    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+      const Renderer renderer(parts, prepared.scenes[s], spec.render);
+      BopSceneWriter& writer = *writers[s];
+      const PaperSceneWriter& paper = *papers[s];
       size_t next = 0;
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
       using FramePtr = std::shared_ptr<const Frame>;
@@ -483,7 +504,6 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
           tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
                                          [&](tbb::flow_control& control) -> size_t {
                                            while (next < views.size() && (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
-                                             if (owns(s, next) && options.progress) options.progress(++done, total_frames);
                                              ++next;
                                            }
                                            if (next >= views.size()) {
@@ -510,11 +530,10 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                       });
                     }
                     const size_t n = ++done;
-                    if (options.progress) options.progress(n, total_frames);
+                    if (options.progress) options.progress(n, to_render);
                   }));
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
       if (!shard) splits.push_back(writer.Finish());
-      writers.push_back(std::move(writer_ptr));
     }
   } catch (const Error& e) {
     throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + root.string() +

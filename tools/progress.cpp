@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -56,8 +57,11 @@ std::string FormatProgressJson(size_t done, size_t total, double seconds) {
 ProgressReporter::ProgressReporter(Mode mode, std::FILE* out, double interval_s, std::function<double()> clock)
     : mode_(mode), out_(out), interval_s_(interval_s), clock_(std::move(clock)) {
   if (!clock_) {
-    const auto start = std::chrono::steady_clock::now();
-    clock_ = [start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+    clock_ = [start = std::optional<std::chrono::steady_clock::time_point>()]() mutable {
+      const auto now = std::chrono::steady_clock::now();
+      if (!start) start = now;
+      return std::chrono::duration<double>(now - *start).count();
+    };
   }
 }
 

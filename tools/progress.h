@@ -21,7 +21,8 @@ class ProgressReporter {
     kLines,  // a line at every 10% (a log file)
     kJson,   // a JSON line at most every `interval_s` seconds, and at the end (cluster logs)
   };
-  // `clock` returns seconds since some start (default: a steady clock started now).
+  // `clock` returns seconds since some start (default: a steady clock started at the first
+  // Update, so that rates count the rendering only, not reading the CAD).
   ProgressReporter(Mode mode, std::FILE* out, double interval_s = 5.0, std::function<double()> clock = {});
 
   // Thread-safe; call with the running count of finished frames.

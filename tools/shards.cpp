@@ -212,6 +212,19 @@ MergeSummary Merge(const fs::path& dir_in,
   }
   const ShardRunInfo run = ReadRunInfo(meta / "run.json");
   const int n = run.shards;
+  if (fs::exists(meta / "merged", ec)) {  // an earlier merge completed the dataset, then stopped
+    MergeSummary summary;
+    summary.shards = n;
+    summary.scenes = run.obj_ids.size();
+    summary.frames = std::stoul(ReadFileText(meta / "merged"));
+    for (size_t s = 0; s < run.obj_ids.size(); ++s) {
+      fs::remove_all(dir / run.bop.split / Id6(static_cast<int>(s)) / ".fragments", ec);
+    }
+    fs::remove_all(meta, ec);
+    if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());
+    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return summary;
+  }
 
   // No shard may run while merging: hold every shard's lock.
   std::vector<int> locks;
@@ -327,6 +340,8 @@ MergeSummary Merge(const fs::path& dir_in,
   }
   WriteSplits(dir, splits);
   WriteMergedCoco(dir, run.bop, splits, run.classes);
+  // From here the dataset is complete: a merge interrupted while cleaning up only cleans up.
+  WriteFileAtomic(meta / "merged", std::to_string(frame_count) + "\n");
   for (const auto& writer : writers) writer->RemoveFragments();
   for (int fd : locks) ::close(fd);
   locks.clear();

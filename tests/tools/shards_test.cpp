@@ -99,6 +99,19 @@ TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {
   ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "tree"));
   EXPECT_FALSE(std::filesystem::exists(dir / "tree" / ".shards"));
   EXPECT_NE(MergeError(dir / "tree").find("already a complete dataset"), std::string::npos);
+
+  // A merge stopped after the dataset was complete (its "merged" mark written) but before the
+  // bookkeeping was removed only cleans up when run again.
+  RunJob(spec, dir / "again", ShardSpec{0, 1});
+  std::filesystem::copy_file(dir / "again" / ".shards" / "run.json", dir / "run.json");
+  Merge(dir / "again");
+  std::filesystem::create_directories(dir / "again" / ".shards");
+  std::filesystem::copy_file(dir / "run.json", dir / "again" / ".shards" / "run.json");
+  std::ofstream(dir / "again" / ".shards" / "merged") << "12\n";
+  std::filesystem::create_directories(dir / "again" / "train" / "000001" / ".fragments");
+  std::ofstream(dir / "again" / "train" / "000001" / ".fragments" / "000000.json") << "stale";
+  EXPECT_EQ(Merge(dir / "again").frames, 12u);
+  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "again"));
 }
 
 TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {

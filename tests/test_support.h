@@ -65,4 +65,17 @@ inline std::map<std::string, std::string> ReadTree(const std::filesystem::path& 
   return files;
 }
 
+// Both folders hold the same files with the same bytes (named when not).
+inline void ExpectSameTree(const std::filesystem::path& expected_dir, const std::filesystem::path& actual_dir) {
+  const auto expected = ReadTree(expected_dir), actual = ReadTree(actual_dir);
+  EXPECT_EQ(expected.size(), actual.size()) << expected_dir << " vs " << actual_dir;
+  for (const auto& [name, bytes] : expected) {
+    if (!actual.count(name)) {
+      ADD_FAILURE() << name << " is missing from " << actual_dir;
+      continue;
+    }
+    EXPECT_TRUE(actual.at(name) == bytes) << name << " differs";
+  }
+}
+
 }  // namespace cadsynth::testing

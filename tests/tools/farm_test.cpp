@@ -21,6 +21,7 @@ namespace {
 
 using cadsynth::testing::Cadsynth;
 using cadsynth::testing::CliRun;
+using cadsynth::testing::ExpectSameTree;
 using cadsynth::testing::ReadTree;
 using cadsynth::testing::ScratchDir;
 
@@ -31,16 +32,6 @@ void WriteSmallRecipe(const ScratchDir& dir) {
          "         cx: 159.5, cy: 119.5}\n"
          "sweep: {yaw: {from: 0, to: 330, step: 30}, pitch: [40], radius: 0.8 m}\n"
          "output: {formats: [bop, coco, paper, pvn3d, grasp]}\n";
-}
-
-void ExpectSameTree(const std::filesystem::path& expected_dir,
-                    const std::filesystem::path& actual_dir) {
-  const auto expected = ReadTree(expected_dir), actual = ReadTree(actual_dir);
-  ASSERT_EQ(expected.size(), actual.size());
-  for (const auto& [name, bytes] : expected) {
-    ASSERT_TRUE(actual.count(name)) << name << " is missing";
-    EXPECT_TRUE(actual.at(name) == bytes) << name << " differs";
-  }
 }
 
 TEST(Farm, ShardProcessesAtTheSameTimeMergeToTheSingleRun) {

@@ -149,12 +149,7 @@ TEST(Cli, KilledRunsResumeToTheSameBytes) {
     ASSERT_EQ(last.code, 0) << last.err;
   }
   EXPECT_GE(interrupted, 1);
-  const auto whole = cadsynth::testing::ReadTree(dir / "whole"), resumed = cadsynth::testing::ReadTree(dir / "resumed");
-  ASSERT_EQ(whole.size(), resumed.size());
-  for (const auto& [name, bytes] : whole) {
-    ASSERT_TRUE(resumed.count(name)) << name;
-    EXPECT_TRUE(resumed.at(name) == bytes) << name << " differs";
-  }
+  cadsynth::testing::ExpectSameTree(dir / "whole", dir / "resumed");
   for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
     EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
   }

@@ -20,9 +20,8 @@
 namespace cadsynth {
 namespace {
 
-using testing::ReadTree;
+using testing::ExpectSameTree;
 using testing::ScratchDir;
-using Tree = std::map<std::string, std::string>;
 
 // The default job (three scenes) at 160x120, four views each (12 units), every output format.
 RunSpec SmallFarmSpec() {
@@ -42,14 +41,6 @@ GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out,
   options.output = out;
   options.shard = shard;
   return Generate(spec, options);
-}
-
-void ExpectSameTree(const Tree& expected, const Tree& actual) {
-  ASSERT_EQ(expected.size(), actual.size());
-  for (const auto& [name, bytes] : expected) {
-    ASSERT_TRUE(actual.count(name)) << name << " is missing";
-    EXPECT_TRUE(actual.at(name) == bytes) << name << " differs";
-  }
 }
 
 std::string MergeError(const std::filesystem::path& dir) {
@@ -96,7 +87,7 @@ TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {
   EXPECT_EQ(merged.shards, 4);
   EXPECT_EQ(merged.frames, 12u);
   EXPECT_EQ(merged.scenes, 3u);
-  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "tree"));
+  ExpectSameTree(dir / "whole", dir / "tree");
   EXPECT_FALSE(std::filesystem::exists(dir / "tree" / ".shards"));
   EXPECT_NE(MergeError(dir / "tree").find("already a complete dataset"), std::string::npos);
 
@@ -111,7 +102,7 @@ TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {
   std::filesystem::create_directories(dir / "again" / "train" / "000001" / ".fragments");
   std::ofstream(dir / "again" / "train" / "000001" / ".fragments" / "000000.json") << "stale";
   EXPECT_EQ(Merge(dir / "again").frames, 12u);
-  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "again"));
+  ExpectSameTree(dir / "whole", dir / "again");
 }
 
 TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {
@@ -165,7 +156,7 @@ TEST(Shards, DamagedFramesAreNamedAndTheirShardRendersThemAgain) {
   EXPECT_EQ(again.resumed, 5u);
   EXPECT_EQ(again.frames, 6u);
   Merge(dir / "tree");
-  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "tree"));
+  ExpectSameTree(dir / "whole", dir / "tree");
 }
 
 TEST(Shards, ShardsOfAnotherRunOrCountAreRefused) {
@@ -236,7 +227,7 @@ TEST(Resume, AChangedRunStartsOverAndADamagedFrameIsRenderedAgain) {
   EXPECT_TRUE(Says(info, "rendered again: 1 frames")) << ::testing::PrintToString(info);
   EXPECT_GE(resumed.resumed, 1u);
   EXPECT_EQ(resumed.frames, 12u);
-  ExpectSameTree(ReadTree(dir / "whole"), ReadTree(dir / "out"));
+  ExpectSameTree(dir / "whole", dir / "out");
 
   // Interrupted, then started with a changed recipe: the old frames are discarded.
   std::filesystem::remove_all(dir / "out");
@@ -247,7 +238,7 @@ TEST(Resume, AChangedRunStartsOverAndADamagedFrameIsRenderedAgain) {
   EXPECT_TRUE(Says(info, "starting over")) << ::testing::PrintToString(info);
   EXPECT_EQ(changed.resumed, 0u);
   RunJob(spec, dir / "fresh");
-  ExpectSameTree(ReadTree(dir / "fresh"), ReadTree(dir / "out"));
+  ExpectSameTree(dir / "fresh", dir / "out");
 }
 
 }  // namespace

@@ -529,7 +529,7 @@ Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::strin
 
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "render", {"background", "floor", "floor_color", "ambient", "lights", "shadows", "colors",
-                               "near", "far", "supersampling", "normals"});
+                               "near", "far", "supersampling", "normals", "isa"});
   Scene& look = spec->look;
   if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
   if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
@@ -570,6 +570,7 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (node["far"]) spec->render.far_mm = r.Length(node["far"], "render.far");
   if (node["supersampling"]) spec->render.supersampling = r.Integer(node["supersampling"], "render.supersampling");
   if (node["normals"]) spec->render.normals = r.Bool(node["normals"], "render.normals");
+  if (node["isa"]) spec->render.isa = r.Scalar(node["isa"], "render.isa");
   r.Check(spec->render, node, "render");
 }
 

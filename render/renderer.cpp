@@ -13,11 +13,43 @@
 
 namespace cadsynth {
 
+namespace {
+// Embree's kernel widths, narrowest first, as its `isa=` device setting names them.
+constexpr const char* kIsas[] = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
+}  // namespace
+
+std::string TracingIsa(const std::string& requested) {
+  // What this CPU (and its OS) supports, the way Embree decides: AVX-512 means the Skylake-server
+  // set (F, CD, DQ, BW, VL); AVX2 comes with FMA and BMI1/2.
+  int cpu = 0;
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("sse4.2")) cpu = 1;
+  if (cpu == 1 && __builtin_cpu_supports("avx")) cpu = 2;
+  if (cpu == 2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi") &&
+      __builtin_cpu_supports("bmi2")) {
+    cpu = 3;
+  }
+  if (cpu == 3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
+      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+      __builtin_cpu_supports("avx512vl")) {
+    cpu = 4;
+  }
+#endif
+  int wanted = 4;
+  for (int i = 0; i < 5; ++i) {
+    if (requested == kIsas[i]) wanted = i;
+  }
+  return kIsas[std::min(cpu, wanted)];
+}
+
 bool RenderOptions::Check(std::string* why) const {
   if (!(near_mm >= 0) || !(far_mm > near_mm)) {
     *why = "the clip range needs 0 <= near < far";
   } else if (supersampling < 1 || supersampling > 8) {
     *why = "supersampling must be 1 to 8 samples per axis";
+  } else if (std::find(std::begin(kIsas), std::end(kIsas), isa) == std::end(kIsas) && isa != "auto") {
+    *why = "isa must be auto, sse2, sse4.2, avx, avx2 or avx512, got '" + isa + "'";
   } else {
     return true;
   }
@@ -109,7 +141,8 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     throw Error("renderer: at most 65534 instances per scene");
   }
 
-  im.device = rtcNewDevice(nullptr);
+  const std::string device_config = options.isa == "auto" ? std::string() : "isa=" + options.isa;
+  im.device = rtcNewDevice(device_config.empty() ? nullptr : device_config.c_str());
   if (im.device == nullptr) throw Error("renderer: could not create an Embree device");
   rtcSetDeviceErrorFunction(im.device, OnEmbreeError, &im.errors);
 

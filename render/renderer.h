@@ -24,9 +24,17 @@ struct RenderOptions {
   // For profiling only (a dataset needs both): skip shading (RGB stays black) or the amodal masks.
   bool shade = true;
   bool amodal_masks = true;
+  // Embree's kernels: "auto" (the widest this CPU has) or the widest to use: sse2, sse4.2, avx,
+  // avx2, avx512. Kernels of different widths differ in the last bits of some hit distances, so
+  // machines that must write the same bytes (the shards of one farm run) must use the same ones.
+  std::string isa = "auto";
 
   bool Check(std::string* why) const;
 };
+
+// The kernels Embree traces with on this machine for `requested` (see RenderOptions::isa): the
+// requested width, or the widest this CPU has if it is narrower. E.g. "avx512", "avx2".
+std::string TracingIsa(const std::string& requested = "auto");
 
 // Builds the acceleration structures once; Render() may then be called from many threads.
 // One ray per pixel through its centre, traced as 16-ray packets over 4 x 4 pixel tiles (tiles in

@@ -52,15 +52,20 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
+// The whole file (empty when it cannot be read).
+inline std::string ReadFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
 // Every file under `root`: path relative to root -> bytes.
 inline std::map<std::string, std::string> ReadTree(const std::filesystem::path& root) {
   std::map<std::string, std::string> files;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
     if (!entry.is_regular_file()) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    std::stringstream bytes;
-    bytes << in.rdbuf();
-    files[std::filesystem::relative(entry.path(), root).string()] = bytes.str();
+    files[std::filesystem::relative(entry.path(), root).string()] = ReadFile(entry.path());
   }
   return files;
 }

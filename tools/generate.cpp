@@ -157,6 +157,8 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::
       << b.paper_layout << " " << b.pvn3d_meta << " " << b.grasp_points << " " << b.jpeg_quality << " "
       << spec.min_visible_pixels << "\n";
   for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
+  // Embree's kernels on this machine: different widths give different last bits.
+  key << "trace " << TracingIsa(spec.render.isa) << "\n";
   return key.str();
 }
 
@@ -399,6 +401,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     if (options.info) options.info(line);
   };
   const std::string run_key = RunKey(spec, prepared, views);
+  info("tracing with Embree's " + TracingIsa(spec.render.isa) + " kernels");
   // A single run writes to a hidden staging folder beside the output, renamed into place at the
   // end. An interrupted run (killed, disk full) leaves it; the same run started again continues
   // from the frames it completed, if its run key (recipe text, parts, views, output options)

@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -89,6 +90,23 @@ int ShardsOfKey(const std::string& key) {
   return at == std::string::npos ? 0 : std::atoi(key.c_str() + at + 7);
 }
 
+// The rest of the line of `key` that starts with `prefix` ("" when there is none).
+std::string KeyLine(const std::string& key, const std::string& prefix) {
+  const size_t at = key.find("\n" + prefix);
+  if (at == std::string::npos) return "";
+  const size_t begin = at + 1 + prefix.size();
+  return key.substr(begin, key.find('\n', begin) - begin);
+}
+
+// Of two Embree kernel names, the narrower (the one both machines have).
+std::string Narrower(const std::string& a, const std::string& b) {
+  const std::vector<std::string> order = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
+  const auto rank = [&](const std::string& isa) {
+    return std::find(order.begin(), order.end(), isa) - order.begin();
+  };
+  return rank(a) <= rank(b) ? a : b;
+}
+
 // An exclusive, non-blocking flock; -1 when another process holds it.
 int TryLock(const fs::path& path) {
   const int fd = ::open(path.c_str(), O_CREAT | O_RDWR, 0644);
@@ -134,29 +152,42 @@ ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& ru
   if (lock_fd_ < 0)
     throw Error(dir.string() + ": shard " + shard.Name() + " is already running on this folder");
 
-  // The first shard to arrive publishes the key: written under a name of its own, then linked
-  // (link fails if another shard got there first; it is atomic on NFS as well).
-  const std::string key = run_key + "shards " + std::to_string(shard.count) + "\n";
-  const fs::path key_path = Meta(dir) / "run_key";
-  if (!fs::exists(key_path, ec)) {
-    const fs::path mine = Meta(dir) / ShardFile(shard.index, shard.count, ".key");
-    WriteFileAtomic(mine, key);
-    if (::link(mine.c_str(), key_path.c_str()) != 0 && errno != EEXIST) {
-      throw Error(key_path.string() + ": cannot create: " + std::strerror(errno));
+  try {  // the lock is released if the tree turns out not to be ours
+    // The first shard to arrive publishes the key: written under a name of its own, then linked
+    // (link fails if another shard got there first; it is atomic on NFS as well).
+    const std::string key = run_key + "shards " + std::to_string(shard.count) + "\n";
+    const fs::path key_path = Meta(dir) / "run_key";
+    if (!fs::exists(key_path, ec)) {
+      const fs::path mine = Meta(dir) / ShardFile(shard.index, shard.count, ".key");
+      WriteFileAtomic(mine, key);
+      if (::link(mine.c_str(), key_path.c_str()) != 0 && errno != EEXIST) {
+        throw Error(key_path.string() + ": cannot create: " + std::strerror(errno));
+      }
+      fs::remove(mine, ec);
     }
-    fs::remove(mine, ec);
-  }
-  const std::string agreed = ReadFileText(key_path);
-  if (agreed != key) {
-    const int started = ShardsOfKey(agreed);
-    if (started != shard.count && agreed.substr(0, agreed.rfind("shards ")) == run_key) {
-      throw Error(dir.string() + ": this run was started with " + std::to_string(started) +
-                  " shards; this is shard " + shard.Name() + ": use --shard I/" +
-                  std::to_string(started));
+    const std::string agreed = ReadFileText(key_path);
+    if (agreed != key) {
+      const std::string theirs = KeyLine(agreed, "trace "), mine = KeyLine(key, "trace ");
+      if (theirs != mine) {
+        throw Error(dir.string() + ": this machine traces with Embree's " + mine +
+                    " kernels, the run started with " + theirs +
+                    " ones (the bytes would differ): set render: {isa: " + Narrower(theirs, mine) +
+                    "} in the recipe so that every machine uses the same, and start the run again");
+      }
+      const int started = ShardsOfKey(agreed);
+      if (started != shard.count && agreed.substr(0, agreed.rfind("shards ")) == run_key) {
+        throw Error(dir.string() + ": this run was started with " + std::to_string(started) +
+                    " shards; this is shard " + shard.Name() + ": use --shard I/" +
+                    std::to_string(started));
+      }
+      throw Error(dir.string() +
+                  ": holds shards of a different run (the recipe, its parts, views or output "
+                  "options changed since it started): remove the folder or write to another one");
     }
-    throw Error(dir.string() +
-                ": holds shards of a different run (the recipe, its parts, views or output "
-                "options changed since it started): remove the folder or write to another one");
+  } catch (...) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw;
   }
 }
 
@@ -222,7 +253,8 @@ MergeSummary Merge(const fs::path& dir_in,
     }
     fs::remove_all(meta, ec);
     if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());
-    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return summary;
   }
 

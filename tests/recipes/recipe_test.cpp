@@ -112,6 +112,8 @@ sweep:
   EXPECT_EQ(ErrorOf("camera: {preset: kinect_v2}\n"),
             "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, realsense_d435, realsense_d435_640)");
   EXPECT_EQ(ErrorOf("camera: {hfov: 200}\n"), "r.yaml:1:16: camera.hfov: must lie between 0 and 180 degrees");
+  EXPECT_EQ(ParseRecipe("render: {isa: avx2}\n", "r", ".").render.isa, "avx2");
+  EXPECT_NE(ErrorOf("render: {isa: neon}\n").find("isa must be auto, sse2, sse4.2, avx, avx2 or avx512"), std::string::npos);
 }
 
 TEST(Recipe, Classes) {

@@ -305,5 +305,34 @@ TEST(Renderer, RejectsInstancesOfMissingParts) {
   EXPECT_THROW(Renderer({}, scene), Error);
 }
 
+// Embree's kernel width is a setting: never wider than asked for, never wider than the CPU's.
+TEST(Renderer, KernelWidthFollowsTheSettingAndTheCpu) {
+  const std::vector<std::string> order = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
+  const auto rank = [&](const std::string& isa) { return std::find(order.begin(), order.end(), isa) - order.begin(); };
+  const std::string widest = TracingIsa("auto");
+  ASSERT_LT(rank(widest), 5) << widest;
+  for (const std::string& isa : order) {
+    EXPECT_EQ(rank(TracingIsa(isa)), std::min(rank(isa), rank(widest))) << isa;
+  }
+  RenderOptions options;
+  std::string why;
+  options.isa = "avx3";
+  EXPECT_FALSE(options.Check(&why));
+  EXPECT_NE(why.find("isa must be"), std::string::npos);
+  // The narrowest kernels trace the same picture (BoxFaceSeenHeadOnCoversExactlyItsPixels).
+  const std::vector<Part> parts = {MakePart("box", MakeBox(100, 100, 40), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.instances = {Place(0, parts[0], {0, 0, 20})};
+  options.isa = "sse2";
+  Camera camera;
+  camera.intrinsics = Intrinsics{640, 640, 525.0, 525.0, 320.0, 320.0};
+  camera.world_from_cam = LookingDown({0, 0, 40 + 525});
+  const Frame frame = Renderer(parts, scene, options).Render(camera);
+  EXPECT_EQ(frame.instances[0].px_count_visib, 100 * 100);
+  EXPECT_EQ(Count(frame.instances[0].amodal_mask), 100 * 100);
+  EXPECT_FLOAT_EQ(frame.depth[300 * 640 + 300], 525.0f);
+}
+
 }  // namespace
 }  // namespace cadsynth

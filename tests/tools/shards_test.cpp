@@ -176,6 +176,21 @@ TEST(Shards, ShardsOfAnotherRunOrCountAreRefused) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("different run"), std::string::npos) << e.what();
   }
+  // A machine whose CPU gives Embree other kernels than the first shard's: the key says so.
+  spec.bop.depth_scale = SmallFarmSpec().bop.depth_scale;
+  const std::filesystem::path key = dir / "tree" / ".shards" / "run_key";
+  std::string text = testing::ReadFile(key);
+  const size_t at = text.find("\ntrace ");
+  ASSERT_NE(at, std::string::npos);
+  text = text.substr(0, at) + "\ntrace sse2" + text.substr(text.find('\n', at + 1));
+  std::ofstream(key, std::ios::binary | std::ios::trunc) << text;
+  try {
+    RunJob(spec, dir / "tree", ShardSpec{1, 3});
+    ADD_FAILURE() << "a machine with other kernels was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the run started with sse2 ones"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("set render: {isa: sse2}"), std::string::npos) << e.what();
+  }
   // A finished dataset is not a shard folder.
   RunJob(spec, dir / "whole");
   EXPECT_THROW(RunJob(spec, dir / "whole", ShardSpec{0, 2}), Error);

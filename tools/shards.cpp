@@ -90,9 +90,9 @@ int ShardsOfKey(const std::string& key) {
   return at == std::string::npos ? 0 : std::atoi(key.c_str() + at + 7);
 }
 
-// The rest of the line of `key` that starts with `prefix` ("" when there is none).
+// The rest of the last line of `key` that starts with `prefix` ("" when there is none).
 std::string KeyLine(const std::string& key, const std::string& prefix) {
-  const size_t at = key.find("\n" + prefix);
+  const size_t at = key.rfind("\n" + prefix);  // the last such line: the recipe text comes first
   if (at == std::string::npos) return "";
   const size_t begin = at + 1 + prefix.size();
   return key.substr(begin, key.find('\n', begin) - begin);

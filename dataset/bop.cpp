@@ -623,50 +623,103 @@ void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& option
   std::map<int, std::string> class_names;
   for (const ObjectClass& c : classes) class_names[c.id] = c.name;
   for (const auto& [id, name] : class_names) categories.push_back({{"id", id}, {"name", name}, {"supercategory", "cadsynth"}});
+  // Streamed, so that memory does not grow with the dataset: the scene files are read as
+  // Finish() writes them (one annotation per line, the image list on one line), annotations in
+  // a first pass over the scenes and images in a second. Images are numbered from 1 in scene
+  // order, then image order; an image's number is its rank in its scene's (sorted) split list.
+  const auto scene_file = [&](size_t s) {
+    return root / options.split / Id6(static_cast<int>(s)) / "scene_gt_coco.json";
+  };
+  const auto strip = [](std::string line) {  // "    {...}," -> "{...}"
+    const size_t begin = line.find_first_not_of(' ');
+    while (!line.empty() && (line.back() == ',' || line.back() == '\r')) line.pop_back();
+    return begin == std::string::npos ? std::string() : line.substr(begin);
+  };
   for (const bool test : {false, true}) {
-    Json images = Json::array(), annotations = Json::array();
+    const std::filesystem::path path = root / "coco" / (test ? "test.json" : "train.json");
+    const std::string temporary = path.string() + ".tmp";
+    std::ofstream out(temporary, std::ios::binary);
+    if (!out) throw Error(path.string() + ": cannot create file");
+    out << "{\"annotations\":[";
+    size_t annotation_count = 0, image_base = 0;
     for (size_t s = 0; s < scenes.size(); ++s) {
       const std::vector<int>& wanted = test ? scenes[s].test : scenes[s].train;
       if (wanted.empty()) continue;
+      std::ifstream in(scene_file(s), std::ios::binary);
+      if (!in) throw Error(scene_file(s).string() + ": cannot open");
+      std::string line;
+      bool in_annotations = false;
+      while (std::getline(in, line)) {
+        if (line.rfind("  \"annotations\": [", 0) == 0) {
+          in_annotations = true;
+          continue;
+        }
+        if (!in_annotations) continue;
+        if (line.rfind("  ]", 0) == 0 || line.rfind("  \"", 0) == 0) break;
+        const std::string text = strip(line);
+        if (text.empty()) continue;
+        Json a;
+        try {
+          a = Json::parse(text);
+        } catch (const Json::exception& e) {
+          throw Error(scene_file(s).string() + ": unreadable annotation: " + e.what());
+        }
+        const int im = a["image_id"];
+        const auto found = std::lower_bound(wanted.begin(), wanted.end(), im);
+        if (found == wanted.end() || *found != im) continue;
+        const int obj = a["category_id"];
+        a["id"] = static_cast<int>(++annotation_count);
+        a["image_id"] = static_cast<int>(image_base + (found - wanted.begin()) + 1);
+        a["category_id"] = obj >= 1 && obj <= static_cast<int>(classes.size()) ? classes[obj - 1].id : obj;
+        a["obj_id"] = obj;
+        a["scene_id"] = s;
+        a["im_id"] = im;
+        out << (annotation_count == 1 ? "" : ",") << a.dump();
+      }
+      image_base += wanted.size();
+    }
+    out << "],\"categories\":" << categories.dump() << ",\"images\":[";
+    size_t image_count = 0;
+    for (size_t s = 0; s < scenes.size(); ++s) {
+      const std::vector<int>& wanted = test ? scenes[s].test : scenes[s].train;
+      if (wanted.empty()) continue;
+      std::ifstream in(scene_file(s), std::ios::binary);
+      std::string line;
+      Json images;
+      while (std::getline(in, line)) {
+        if (line.rfind("  \"images\": ", 0) != 0) continue;
+        images = Json::parse(strip(line.substr(12)), nullptr, false);
+        break;
+      }
+      if (!images.is_array()) throw Error(scene_file(s).string() + ": no readable image list");
       const std::string scene_folder = options.split + "/" + Id6(static_cast<int>(s));
-      const std::filesystem::path file = root / scene_folder / "scene_gt_coco.json";
-      std::ifstream in(file, std::ios::binary);
-      if (!in) throw Error(file.string() + ": cannot open");
-      const Json scene = Json::parse(in);
-      std::map<int, int> image_number;  // im_id -> merged image id
-      for (const Json& image : scene["images"]) {
+      size_t listed = 0;
+      for (const Json& image : images) {
         const int im = image["id"];
         if (!std::binary_search(wanted.begin(), wanted.end(), im)) continue;
-        image_number[im] = static_cast<int>(images.size()) + 1;
-        images.push_back({{"id", image_number[im]},
-                          {"file_name", scene_folder + "/" + image["file_name"].get<std::string>()},
-                          {"width", image["width"]},
-                          {"height", image["height"]},
-                          {"scene_id", s},
-                          {"im_id", im}});
+        ++listed;
+        out << (image_count++ == 0 ? "" : ",")
+            << Json{{"id", image_count},
+                    {"file_name", scene_folder + "/" + image["file_name"].get<std::string>()},
+                    {"width", image["width"]},
+                    {"height", image["height"]},
+                    {"scene_id", s},
+                    {"im_id", im}}
+                   .dump();
       }
-      for (const Json& a : scene["annotations"]) {
-        const auto found = image_number.find(a["image_id"].get<int>());
-        if (found == image_number.end()) continue;
-        const int obj = a["category_id"];
-        Json merged = a;
-        merged["id"] = static_cast<int>(annotations.size()) + 1;
-        merged["image_id"] = found->second;
-        merged["category_id"] = obj >= 1 && obj <= static_cast<int>(classes.size()) ? classes[obj - 1].id : obj;
-        merged["obj_id"] = obj;
-        merged["scene_id"] = s;
-        merged["im_id"] = found->first;
-        annotations.push_back(std::move(merged));
+      if (listed != wanted.size()) {
+        throw Error(scene_file(s).string() + ": lists " + std::to_string(listed) + " of the " +
+                    std::to_string(wanted.size()) + " images of its split");
       }
     }
-    WriteFileAtomic(root / "coco" / (test ? "test.json" : "train.json"),
-                    Json{{"annotations", annotations},
-                         {"categories", categories},
-                         {"images", images},
-                         {"info", {{"description", test ? "cadsynth test split" : "cadsynth train split"}}},
-                         {"licenses", Json::array()}}
-                            .dump() +
-                        "\n");
+    out << "],\"info\":"
+        << Json{{"description", test ? "cadsynth test split" : "cadsynth train split"}}.dump()
+        << ",\"licenses\":[]}\n";
+    out.close();
+    if (!out) throw Error(path.string() + ": cannot write file (disk full?)");
+    std::error_code ec;
+    std::filesystem::rename(temporary, path, ec);
+    if (ec) throw Error(path.string() + ": cannot move file into place: " + ec.message());
   }
 }
 

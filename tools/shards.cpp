@@ -153,6 +153,11 @@ ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& ru
     throw Error(dir.string() + ": shard " + shard.Name() + " is already running on this folder");
 
   try {  // the lock is released if the tree turns out not to be ours
+    if (fs::exists(Meta(dir) / "merging", ec)) {
+      throw Error(dir.string() +
+                  ": is being merged (.shards/merging): shards can start again once the merge "
+                  "has failed or finished (a merge that was killed leaves the mark: run merge again)");
+    }
     // The first shard to arrive publishes the key: written under a name of its own, then linked
     // (link fails if another shard got there first; it is atomic on NFS as well).
     const std::string key = run_key + "shards " + std::to_string(shard.count) + "\n";
@@ -258,14 +263,18 @@ MergeSummary Merge(const fs::path& dir_in,
     return summary;
   }
 
-  // No shard may run while merging: hold every shard's lock.
-  std::vector<int> locks;
-  struct Unlock {
-    std::vector<int>* fds;
-    ~Unlock() {
-      for (int fd : *fds) ::close(fd);
+  // No shard may run while merging: the "merging" mark keeps new shards from starting (they look
+  // for it once they hold their lock), and every shard lock must be free after it is written.
+  // Locks are tried one at a time: a farm may have more shards than a process may open files.
+  const fs::path merging = meta / "merging";
+  WriteFileAtomic(merging, "merge\n");
+  struct Unmark {  // removed unless the merge completes (then all of .shards goes)
+    fs::path path;
+    ~Unmark() {
+      std::error_code ignored;
+      if (!path.empty()) fs::remove(path, ignored);
     }
-  } unlock{&locks};
+  } unmark{merging};
   std::vector<std::string> not_ready;
   std::vector<bool> running(n, false);
   for (int i = 0; i < n; ++i) {
@@ -274,7 +283,7 @@ MergeSummary Merge(const fs::path& dir_in,
       running[i] = true;
       not_ready.push_back("shard " + std::to_string(i) + "/" + std::to_string(n) + " is running");
     } else {
-      locks.push_back(fd);
+      ::close(fd);
     }
   }
 
@@ -375,8 +384,7 @@ MergeSummary Merge(const fs::path& dir_in,
   // From here the dataset is complete: a merge interrupted while cleaning up only cleans up.
   WriteFileAtomic(meta / "merged", std::to_string(frame_count) + "\n");
   for (const auto& writer : writers) writer->RemoveFragments();
-  for (int fd : locks) ::close(fd);
-  locks.clear();
+  unmark.path.clear();
   fs::remove_all(meta, ec);
   if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());
   info("merged " + std::to_string(n) + " shard(s): " + std::to_string(frame_count) + " frames in " +

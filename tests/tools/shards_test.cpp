@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -127,7 +128,36 @@ TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {
   EXPECT_NE(MergeError(dir / "tree").find("shard 1/3 is running"), std::string::npos);
   EXPECT_THROW(RunJob(spec, dir / "tree", ShardSpec{1, 3}), Error);  // the same shard twice
   ::close(fd);
+  // A refused merge takes its "merging" mark back; while the mark is there, shards do not start.
+  EXPECT_FALSE(std::filesystem::exists(dir / "tree" / ".shards" / "merging"));
+  std::ofstream(dir / "tree" / ".shards" / "merging") << "merge\n";
+  try {
+    RunJob(spec, dir / "tree", ShardSpec{1, 3});
+    ADD_FAILURE() << "a shard started during a merge";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("is being merged"), std::string::npos) << e.what();
+  }
   EXPECT_EQ(MergeError(dir / "tree"), "");
+}
+
+// Merge checks the shard locks one at a time: a farm may have more shards than a process may
+// open files. Twelve shards of one unit each, merged with room for only a few more open files.
+TEST(Shards, MergeOpensFewFilesWhateverTheShardCount) {
+  ScratchDir dir;
+  const RunSpec spec = SmallFarmSpec();
+  RunJob(spec, dir / "whole");
+  for (int i = 0; i < 12; ++i) RunJob(spec, dir / "tree", ShardSpec{i, 12});
+  size_t open_files = 0;
+  for ([[maybe_unused]] const auto& fd : std::filesystem::directory_iterator("/proc/self/fd")) ++open_files;
+  rlimit old_limit{};
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &old_limit), 0);
+  rlimit tight = old_limit;
+  tight.rlim_cur = open_files + 10;  // fewer than the 12 locks the first merge held at once
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &tight), 0);
+  const std::string why = MergeError(dir / "tree");
+  ::setrlimit(RLIMIT_NOFILE, &old_limit);
+  EXPECT_EQ(why, "");
+  ExpectSameTree(dir / "whole", dir / "tree");
 }
 
 TEST(Shards, DamagedFramesAreNamedAndTheirShardRendersThemAgain) {

@@ -155,6 +155,7 @@ int RunGenerate(const std::vector<std::string>& args) {
                       : ::isatty(STDERR_FILENO) != 0 ? Mode::kBar
                                                      : Mode::kLines;
     auto reporter = std::make_shared<cadsynth::ProgressReporter>(mode, stderr);
+    if (shard) reporter->SetShard(shard->Name());
     options.progress = [reporter](size_t done, size_t total) { reporter->Update(done, total); };
   }
   const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);

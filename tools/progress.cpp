@@ -45,10 +45,14 @@ std::string FormatProgressBar(size_t done, size_t total, double seconds, int wid
   return bar;
 }
 
-std::string FormatProgressJson(size_t done, size_t total, double seconds) {
+std::string FormatProgressJson(size_t done, size_t total, double seconds, const std::string& shard) {
   const double rate = seconds > 0 ? done / seconds : 0.0;
-  nlohmann::ordered_json j = {{"done", done}, {"total", total}, {"seconds", std::round(seconds * 100) / 100},
-                              {"frames_per_s", std::round(rate * 10) / 10}};
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  if (!shard.empty()) j["shard"] = shard;
+  j["done"] = done;
+  j["total"] = total;
+  j["seconds"] = std::round(seconds * 100) / 100;
+  j["frames_per_s"] = std::round(rate * 10) / 10;
   j["eta_s"] = rate > 0 ? nlohmann::ordered_json(std::round((total - std::min(done, total)) / rate * 10) / 10)
                         : nlohmann::ordered_json(nullptr);
   return j.dump();
@@ -82,7 +86,7 @@ void ProgressReporter::Update(size_t done, size_t total) {
       break;
     case Mode::kJson:
       if (!last && now - last_report_ < interval_s_) return;
-      std::fprintf(out_, "%s\n", FormatProgressJson(done, total, now).c_str());
+      std::fprintf(out_, "%s\n", FormatProgressJson(done, total, now, shard_).c_str());
       break;
   }
   last_report_ = now;

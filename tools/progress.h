@@ -11,8 +11,9 @@ namespace cadsynth {
 // "[##########----------]  50%  1665/3330 frames  87.4 frames/s  ETA 0:19" (width = bar cells;
 // 0: no bar). When done, "ETA" becomes "in" and the total time.
 std::string FormatProgressBar(size_t done, size_t total, double seconds, int width = 30);
-// One JSON object (no newline): {"done":..,"total":..,"seconds":..,"frames_per_s":..,"eta_s":..}.
-std::string FormatProgressJson(size_t done, size_t total, double seconds);
+// One JSON object (no newline): {"done":..,"total":..,"seconds":..,"frames_per_s":..,"eta_s":..},
+// led by "shard":"I/N" when `shard` is not empty (cluster logs mix many shards).
+std::string FormatProgressJson(size_t done, size_t total, double seconds, const std::string& shard = "");
 
 class ProgressReporter {
  public:
@@ -27,6 +28,8 @@ class ProgressReporter {
 
   // Thread-safe; call with the running count of finished frames.
   void Update(size_t done, size_t total);
+  // Names the shard in JSON lines ("I/N"); call before the first Update.
+  void SetShard(std::string shard) { shard_ = std::move(shard); }
 
  private:
   Mode mode_;
@@ -36,6 +39,7 @@ class ProgressReporter {
   std::mutex mutex_;
   double last_report_ = -1e300;
   size_t last_done_ = 0;
+  std::string shard_;
 };
 
 }  // namespace cadsynth

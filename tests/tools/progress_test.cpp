@@ -22,6 +22,7 @@ TEST(Progress, JsonLineHasTheNumbersAClusterLogNeeds) {
   EXPECT_DOUBLE_EQ(j["frames_per_s"].get<double>(), 25.0);
   EXPECT_DOUBLE_EQ(j["eta_s"].get<double>(), 30.0);
   EXPECT_TRUE(nlohmann::json::parse(FormatProgressJson(0, 1000, 0.0))["eta_s"].is_null());
+  EXPECT_EQ(FormatProgressJson(250, 1000, 10.0, "3/100").rfind("{\"shard\":\"3/100\",\"done\":250,", 0), 0u);
 }
 
 // JSON mode prints at most one line per interval, always the last one, and ignores late counts.

@@ -128,6 +128,21 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const
 
 namespace {
 
+// The size and CRC-32 of the running executable, read once ("unknown" where it cannot be read).
+const std::string& BuildId() {
+  static const std::string id = [] {
+    try {
+      const std::string bytes = ReadFileText("/proc/self/exe");
+      std::ostringstream out;
+      out << bytes.size() << "-" << std::hex << Crc32(bytes);
+      return out.str();
+    } catch (const Error&) {
+      return std::string("unknown");
+    }
+  }();
+  return id;
+}
+
 // What must match for a run to continue an interrupted one (and for shards to join): the recipe
 // file's text, the CAD files' bytes, the parts and their variants, every view, the image size and
 // the output options.
@@ -159,6 +174,9 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::
   for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
   // Embree's kernels on this machine: different widths give different last bits.
   key << "trace " << TracingIsa(spec.render.isa) << "\n";
+  // This build of cadsynth (our libraries are linked in statically): another build may write
+  // other bytes, so it neither resumes this run nor joins its shards.
+  key << "build " << BuildId() << "\n";
   return key.str();
 }
 

@@ -154,9 +154,10 @@ ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& ru
 
   try {  // the lock is released if the tree turns out not to be ours
     if (fs::exists(Meta(dir) / "merging", ec)) {
-      throw Error(dir.string() +
-                  ": is being merged (.shards/merging): shards can start again once the merge "
-                  "has failed or finished (a merge that was killed leaves the mark: run merge again)");
+      throw Error(
+          dir.string() +
+          ": is being merged (.shards/merging): shards can start again once the merge "
+          "has failed or finished (a merge that was killed leaves the mark: run merge again)");
     }
     // The first shard to arrive publishes the key: written under a name of its own, then linked
     // (link fails if another shard got there first; it is atomic on NFS as well).
@@ -178,6 +179,12 @@ ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& ru
                     " kernels, the run started with " + theirs +
                     " ones (the bytes would differ): set render: {isa: " + Narrower(theirs, mine) +
                     "} in the recipe so that every machine uses the same, and start the run again");
+      }
+      if (KeyLine(agreed, "build ") != KeyLine(key, "build ")) {
+        throw Error(
+            dir.string() +
+            ": this run was started by another build of cadsynth (its bytes "
+            "could differ): run every shard with the same executable, or start the run again");
       }
       const int started = ShardsOfKey(agreed);
       if (started != shard.count && agreed.substr(0, agreed.rfind("shards ")) == run_key) {

@@ -140,10 +140,11 @@ class BopSceneWriter {
                  std::vector<int> obj_id_of_instance);
 
   // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`, calls
-  // `before_fragment` (other formats of the same frame), and last writes the frame's JSON entries
-  // to a fragment file (so memory does not grow with the number of frames). A frame whose
-  // fragment exists is complete: a writer opened on a folder with fragments (an interrupted run)
-  // takes those frames as written.
+  // `before_fragment` with the frame's file log (other formats of the same frame write through
+  // it), and last writes the frame's fragment: its JSON entries (so memory does not grow with the
+  // number of frames) and its manifest entry, every file it wrote with size and CRC-32. A frame
+  // whose fragment exists is complete: a writer opened on a folder with fragments (an
+  // interrupted run, other shards) takes those frames as written.
   void WriteFrame(int image_id, const Frame& frame, const std::function<void(FileLog&)>& before_fragment = {});
   bool HasFrame(int image_id) const;
   // Image ids whose fragment exists (this writer's and those found when it was opened), sorted.

@@ -1,9 +1,9 @@
 #include "dataset/file_io.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <algorithm>
 #include <system_error>
 
 #include <zlib.h>

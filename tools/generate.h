@@ -19,7 +19,8 @@ struct GenerateOptions {
   // Render only this shard's units, straight into `output` (a shard tree; see tools/shards.h),
   // to be joined by Merge once every shard has finished.
   std::optional<ShardSpec> shard;
-  // Called after each written frame with (frames done, frames total); may be empty.
+  // Called with (frames rendered, frames to render) by this attempt: once with 0 before the first
+  // frame, then after each (frames an interrupted run completed do not count); may be empty.
   std::function<void(size_t, size_t)> progress;
   // Receives one line per notable fact (what was read, placement); may be empty.
   std::function<void(const std::string&)> info;

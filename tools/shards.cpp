@@ -259,7 +259,11 @@ MergeSummary Merge(const fs::path& dir_in,
     MergeSummary summary;
     summary.shards = n;
     summary.scenes = run.obj_ids.size();
-    summary.frames = std::stoul(ReadFileText(meta / "merged"));
+    const std::string count = ReadFileText(meta / "merged");
+    char* end = nullptr;
+    summary.frames = std::strtoul(count.c_str(), &end, 10);
+    if (end == count.c_str())
+      throw Error((meta / "merged").string() + ": unreadable (expected a frame count)");
     for (size_t s = 0; s < run.obj_ids.size(); ++s) {
       fs::remove_all(dir / run.bop.split / Id6(static_cast<int>(s)) / ".fragments", ec);
     }

@@ -45,6 +45,10 @@ bool BopOptions::Check(std::string* why) const {
     *why = "test_every must not be negative; test_fraction and target_min_visib_fract lie in 0..1";
     return false;
   }
+  if (!(visib_delta_mm >= 0.0) || !std::isfinite(visib_delta_mm)) {
+    *why = "the visibility delta must be a length of 0 mm or more";
+    return false;
+  }
   if (split.empty() || split.find('/') != std::string::npos || split == "." || split == "..") {
     *why = "split must be a plain folder name";
     return false;
@@ -90,37 +94,92 @@ uint16_t EncodeDepth(float depth_mm, double depth_scale) {
   return static_cast<uint16_t>(units);
 }
 
-std::vector<GtInfo> ComputeGtInfos(const Frame& frame, double depth_scale) {
+VisibleMasks::VisibleMasks(const Frame& frame, const BopOptions& options)
+    : frame_(frame), exact_(options.visibility == BopOptions::Visibility::kExact) {
+  if (exact_) return;
+  // bop_toolkit's visibility.estimate_visib_mask_gt, visib_mode "bop19": visible where the model
+  // rendered alone is hit and its distance minus the scene's is at most delta, or the scene's
+  // (written) depth is 0. Distances as misc.depth_im_to_dist_im_fast makes them: depth times
+  // |((u - cx) / fx, (v - cy) / fy, 1)| at the pixel index (u, v).
+  const Intrinsics& k = frame.camera.intrinsics;
+  const int w = frame.width();
+  masks_.resize(frame.instances.size());
+  for (size_t i = 0; i < frame.instances.size(); ++i) {
+    const Frame::InstanceTruth& truth = frame.instances[i];
+    const int u0 = std::max(0, truth.roi[0]), v0 = std::max(0, truth.roi[1]);
+    const int u1 = std::min(w, truth.roi[2]), v1 = std::min(frame.height(), truth.roi[3]);
+    const size_t area = static_cast<size_t>(std::max(0, u1 - u0)) * std::max(0, v1 - v0);
+    if (truth.amodal_depth.size() != area) {
+      throw Error("bop: the bop19 visibility rule needs each instance's depth rendered alone (amodal depth)");
+    }
+    std::vector<uint8_t>& mask = masks_[i];
+    mask.assign(area, 0);
+    for (int v = v0; v < v1; ++v) {
+      const double y = (v - k.cy) / k.fy;
+      for (int u = u0; u < u1; ++u) {
+        const size_t q = static_cast<size_t>(v - v0) * (u1 - u0) + (u - u0);
+        const float model = truth.amodal_depth[q];
+        if (!(model > 0.0f)) continue;
+        const double x = (u - k.cx) / k.fx;
+        const double scene = EncodeDepth(frame.depth[static_cast<size_t>(v) * w + u], options.depth_scale) *
+                             options.depth_scale;
+        const double stretch = std::sqrt(x * x + y * y + 1.0);
+        mask[q] = scene == 0.0 || (model - scene) * stretch <= options.visib_delta_mm;
+      }
+    }
+  }
+}
+
+bool VisibleMasks::operator()(size_t i, int u, int v) const {
+  if (exact_) return frame_.instance[static_cast<size_t>(v) * frame_.width() + u] == i + 1;
+  const int* roi = frame_.instances[i].roi;
+  const int u0 = std::max(0, roi[0]), v0 = std::max(0, roi[1]);
+  const int u1 = std::min(frame_.width(), roi[2]), v1 = std::min(frame_.height(), roi[3]);
+  if (u < u0 || u >= u1 || v < v0 || v >= v1) return false;
+  return masks_[i][static_cast<size_t>(v - v0) * (u1 - u0) + (u - u0)] != 0;
+}
+
+namespace {
+
+std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options, const VisibleMasks& visible) {
   const int w = frame.width(), h = frame.height();
   const size_t n = frame.instances.size();
   std::vector<GtInfo> infos(n);
-  // Visible: one pass over the instance ids.
+  // Visible pixels: their count and inclusive bounds.
   std::vector<int> u0(n, w), v0(n, h), u1(n, -1), v1(n, -1);
-  for (int v = 0; v < h; ++v) {
-    const uint16_t* row = &frame.instance[static_cast<size_t>(v) * w];
-    for (int u = 0; u < w; ++u) {
-      if (row[u] == 0) continue;
-      const size_t i = row[u] - 1;
-      ++infos[i].px_count_visib;
-      u0[i] = std::min(u0[i], u);
-      u1[i] = std::max(u1[i], u);
-      v0[i] = std::min(v0[i], v);
-      v1[i] = std::max(v1[i], v);
+  const auto see = [&](size_t i, int u, int v) {
+    ++infos[i].px_count_visib;
+    u0[i] = std::min(u0[i], u);
+    u1[i] = std::max(u1[i], u);
+    v0[i] = std::min(v0[i], v);
+    v1[i] = std::max(v1[i], v);
+  };
+  if (options.visibility == BopOptions::Visibility::kExact) {  // one pass over the instance ids
+    for (int v = 0; v < h; ++v) {
+      const uint16_t* row = &frame.instance[static_cast<size_t>(v) * w];
+      for (int u = 0; u < w; ++u) {
+        if (row[u] != 0) see(row[u] - 1u, u, v);
+      }
+    }
+  } else {  // visible pixels lie inside the full silhouette's rectangle
+    for (size_t i = 0; i < n; ++i) {
+      const int* roi = frame.instances[i].roi;
+      for (int v = std::max(0, roi[1]); v < std::min(h, roi[3]); ++v) {
+        for (int u = std::max(0, roi[0]); u < std::min(w, roi[2]); ++u) {
+          if (visible(i, u, v)) see(i, u, v);
+        }
+      }
     }
   }
+  // bop_toolkit's misc.calc_2d_bbox: width = max - min.
   const auto box = [](int a0, int b0, int a1, int b1, int out[4]) {
-    if (a1 < 0) {
-      out[0] = out[1] = out[2] = out[3] = -1;
-    } else {
-      out[0] = a0;
-      out[1] = b0;
-      out[2] = a1 - a0 + 1;
-      out[3] = b1 - b0 + 1;
-    }
+    out[0] = a0;
+    out[1] = b0;
+    out[2] = a1 - a0;
+    out[3] = b1 - b0;
   };
   for (size_t i = 0; i < n; ++i) {
     GtInfo& info = infos[i];
-    box(u0[i], v0[i], u1[i], v1[i], info.bbox_visib);
     // Full silhouette: only inside the rectangle the renderer traced.
     const Frame::InstanceTruth& truth = frame.instances[i];
     int a0 = w, b0 = h, a1 = -1, b1 = -1;
@@ -130,7 +189,7 @@ std::vector<GtInfo> ComputeGtInfos(const Frame& frame, double depth_scale) {
           const size_t p = static_cast<size_t>(v) * w + u;
           if (truth.amodal_mask[p] == 0) continue;
           ++info.px_count_all;
-          if (EncodeDepth(frame.depth[p], depth_scale) != 0) ++info.px_count_valid;
+          if (EncodeDepth(frame.depth[p], options.depth_scale) != 0) ++info.px_count_valid;
           a0 = std::min(a0, u);
           a1 = std::max(a1, u);
           b0 = std::min(b0, v);
@@ -138,24 +197,31 @@ std::vector<GtInfo> ComputeGtInfos(const Frame& frame, double depth_scale) {
         }
       }
     }
-    box(a0, b0, a1, b1, info.bbox_obj);
     // As bop_toolkit: count and box on the 3x canvas, so truncated parts count (bbox_obj may
     // reach outside the image). Hand-made frames without the canvas keep the in-image values.
     if (truth.px_count_canvas > 0) {
       info.px_count_all = truth.px_count_canvas;
       const int* c = truth.bbox_canvas;  // may lie wholly left of or above the image
-      info.bbox_obj[0] = c[0];
-      info.bbox_obj[1] = c[1];
-      info.bbox_obj[2] = c[2] - c[0] + 1;
-      info.bbox_obj[3] = c[3] - c[1] + 1;
+      a0 = c[0], b0 = c[1], a1 = c[2], b1 = c[3];
+    }
+    // Both boxes only for instances that show (bop_toolkit: [-1, -1, -1, -1] otherwise).
+    if (info.px_count_visib > 0) {
+      box(u0[i], v0[i], u1[i], v1[i], info.bbox_visib);
+      box(a0, b0, a1, b1, info.bbox_obj);
     }
     info.visib_fract = info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
   }
   return infos;
 }
 
-GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale) {
-  return ComputeGtInfos(frame, depth_scale).at(static_cast<size_t>(instance));
+}  // namespace
+
+std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options) {
+  return ComputeGtInfos(frame, options, VisibleMasks(frame, options));
+}
+
+GtInfo ComputeGtInfo(const Frame& frame, int instance, const BopOptions& options) {
+  return ComputeGtInfos(frame, options).at(static_cast<size_t>(instance));
 }
 
 std::vector<ObjectClass> AssignClasses(
@@ -413,8 +479,10 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
                    {"cam_R_w2c", RowMajor(cam_from_world.linear())},
                    {"cam_t_w2c", Vec(cam_from_world.translation())}};
 
-  const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_.depth_scale);
+  const VisibleMasks visible(frame, options_);
+  const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_, visible);
   cv::Mat mask(h, w, CV_8UC1);
+  Json coco_entry = Json::array();
   for (size_t i = 0; i < frame.instances.size(); ++i) {
     const Frame::InstanceTruth& truth = frame.instances[i];
     gt_entry.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
@@ -431,46 +499,47 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
          {"visib_fract", info.visib_fract}});
 
     const std::string name = im + "_" + Id6(static_cast<int>(i)) + ".png";
-    const uint16_t visible_id = static_cast<uint16_t>(i + 1);
-    // Masks are zero outside their boxes: fill only inside.
+    // Masks are zero outside the full silhouette's rectangle: fill only inside. The in-image box
+    // of the full silhouette (inclusive) is COCO's amodal box.
+    const int r0 = std::max(0, truth.roi[0]), r1 = std::max(0, truth.roi[1]);
+    const int r2 = std::min(w, truth.roi[2]), r3 = std::min(h, truth.roi[3]);
+    int full[4] = {w, h, -1, -1};
     mask.setTo(0);
-    if (info.bbox_obj[0] >= 0) {  // the box may reach outside the image: clip it
-      const int u_end = std::min(w, info.bbox_obj[0] + info.bbox_obj[2]);
-      for (int v = std::max(0, info.bbox_obj[1]); v < std::min(h, info.bbox_obj[1] + info.bbox_obj[3]); ++v) {
-        auto* out = mask.ptr<uint8_t>(v);
-        const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v) * w];
-        for (int u = std::max(0, info.bbox_obj[0]); u < u_end; ++u) out[u] = in[u] != 0 ? 255 : 0;
+    for (int v = r1; v < r3 && !truth.amodal_mask.empty(); ++v) {
+      auto* out = mask.ptr<uint8_t>(v);
+      const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v) * w];
+      for (int u = r0; u < r2; ++u) {
+        if (in[u] == 0) continue;
+        out[u] = 255;
+        full[0] = std::min(full[0], u), full[1] = std::min(full[1], v);
+        full[2] = std::max(full[2], u), full[3] = std::max(full[3], v);
       }
     }
     files.Write(scene_dir_ / "mask" / name, EncodePng(mask, scene_dir_ / "mask" / name));
     mask.setTo(0);
-    if (info.bbox_visib[0] >= 0) {
-      for (int v = info.bbox_visib[1]; v < info.bbox_visib[1] + info.bbox_visib[3]; ++v) {
-        auto* out = mask.ptr<uint8_t>(v);
-        const uint16_t* in = &frame.instance[static_cast<size_t>(v) * w];
-        for (int u = info.bbox_visib[0]; u < info.bbox_visib[0] + info.bbox_visib[2]; ++u) {
-          out[u] = in[u] == visible_id ? 255 : 0;
-        }
-      }
+    const int* b = info.bbox_visib;  // inclusive: [b0, b0 + b2] x [b1, b1 + b3]
+    for (int v = b[1]; info.px_count_visib > 0 && v <= b[1] + b[3]; ++v) {
+      auto* out = mask.ptr<uint8_t>(v);
+      for (int u = b[0]; u <= b[0] + b[2]; ++u) out[u] = visible(i, u, v) ? 255 : 0;
     }
     files.Write(scene_dir_ / "mask_visib" / name, EncodePng(mask, scene_dir_ / "mask_visib" / name));
-  }
-  // COCO: the visible mask of every instance that shows, as compressed RLE.
-  Json coco_entry = Json::array();
-  if (options_.coco) {
-    for (size_t i = 0; i < infos.size(); ++i) {
-      const GtInfo& info = infos[i];
-      if (info.px_count_visib == 0) continue;
-      const int* b = info.bbox_visib;
-      const uint16_t id = static_cast<uint16_t>(i + 1);
-      const RleMask rle = EncodeRle(w, h, b[0], b[1], b[0] + b[2], b[1] + b[3],
-                                    [&](size_t p) { return frame.instance[p] == id; });
-      coco_entry.push_back({{"inst_id", i},
-                            {"obj_id", obj_ids_[i]},
-                            {"area", info.px_count_visib},
-                            {"bbox", {b[0], b[1], b[2], b[3]}},
-                            {"counts", CompressRleCounts(rle.counts)}});
-    }
+
+    // COCO, as bop_toolkit's calc_gt_coco.py: every instance with a visible pixel, its visible
+    // mask as compressed RLE, the amodal (or modal) box with COCO's width max - min + 1, and
+    // "ignore" below 10% visibility.
+    if (!options_.coco || info.px_count_visib == 0 || (options_.coco_amodal_bbox && full[2] < 0)) continue;
+    const RleMask rle = EncodeRle(w, h, b[0], b[1], b[0] + b[2] + 1, b[1] + b[3] + 1, [&](size_t p) {
+      return visible(i, static_cast<int>(p % w), static_cast<int>(p / w));
+    });
+    const Json coco_box = options_.coco_amodal_bbox
+                              ? Json{full[0], full[1], full[2] - full[0] + 1, full[3] - full[1] + 1}
+                              : Json{b[0], b[1], b[2] + 1, b[3] + 1};
+    coco_entry.push_back({{"inst_id", i},
+                          {"obj_id", obj_ids_[i]},
+                          {"area", info.px_count_visib},
+                          {"bbox", coco_box},
+                          {"ignore", info.visib_fract < 0.1},
+                          {"counts", CompressRleCounts(rle.counts)}});
   }
   if (before_fragment) before_fragment(files);
   // One fragment per frame, written last: four lines of compact JSON read back in order by
@@ -562,6 +631,7 @@ SceneSplit BopSceneWriter::Finish() {
                                {"segmentation", {{"size", {h, w}}, {"counts", a["counts"]}}},
                                {"width", w},
                                {"height", h},
+                               {"ignore", a["ignore"]},
                                {"inst_id", a["inst_id"]}};
       coco << (annotation_id == 1 ? "\n    " : ",\n    ") << annotation.dump();
     }

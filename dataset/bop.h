@@ -43,6 +43,21 @@ struct BopOptions {
   uint64_t split_seed = 0;
   // Test targets count instances at least this visible (bop_toolkit: 0.1).
   double target_min_visib_fract = 0.1;
+  // Which pixels of an instance are visible: in mask_visib/, scene_gt_info.json (px_count_visib,
+  // visib_fract, bbox_visib), COCO and the test targets.
+  //   kExact: where the instance is the front-most surface (the default);
+  //   kBop19: bop_toolkit's rule (calc_gt_masks.py, calc_gt_info.py, visib_mode "bop19"): where
+  //     the instance rendered alone lies at most `visib_delta_mm` behind the written depth
+  //     (compared as distances from the camera centre), or the written depth has no value. Two
+  //     touching instances can then both be visible in one pixel.
+  enum class Visibility { kExact, kBop19 };
+  Visibility visibility = Visibility::kExact;
+  double visib_delta_mm = 15.0;  // bop_toolkit: 15 (5 for ITODD)
+  // Box of each COCO annotation (scene_gt_coco.json and the merged coco/ files): the full
+  // silhouette's box inside the image (amodal, as bop_toolkit's calc_gt_coco.py writes by
+  // default) or the visible mask's box (modal). Annotations with visib_fract < 0.1 carry
+  // "ignore": true either way, as bop_toolkit's.
+  bool coco_amodal_bbox = true;
   // Model point clouds (models/points/obj_*.ply): points per part (the paper: 3,000; 0: none),
   // spread uniformly by area or evenly spaced, seeded.
   int model_points = 3000;
@@ -114,20 +129,38 @@ void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& intrinsics,
                     const BopOptions& options);
 
-// Ground-truth statistics of one instance in one frame, as scene_gt_info.json holds them.
+// Ground-truth statistics of one instance in one frame, as scene_gt_info.json holds them, computed
+// as bop_toolkit's calc_gt_info.py computes them. Boxes are x, y, width, height with width =
+// x_max - x_min (bop_toolkit's misc.calc_2d_bbox: a one-pixel box has width 0), and
+// [-1, -1, -1, -1] for both boxes of an instance with no visible pixel.
 struct GtInfo {
-  // x, y, width, height of the full silhouette on the 3x canvas: not clipped to the image.
+  // The full silhouette on the 3x canvas: not clipped to the image.
   int bbox_obj[4] = {-1, -1, -1, -1};
-  int bbox_visib[4] = {-1, -1, -1, -1};  // of the visible part
+  int bbox_visib[4] = {-1, -1, -1, -1};  // the visible pixels
   int px_count_all = 0;    // full silhouette on the 3x canvas (truncated parts count)
   int px_count_valid = 0;  // silhouette pixels with a depth value in the written depth image
   int px_count_visib = 0;
   double visib_fract = 0.0;
 };
-// `instance` is the index in frame.instances; `depth_scale` decides which depths are writable.
-GtInfo ComputeGtInfo(const Frame& frame, int instance, double depth_scale);
+// `instance` is the index in frame.instances; options.depth_scale decides which depths are
+// writable and options.visibility which pixels are visible (kBop19 needs the frame's amodal
+// depth: RenderOptions::amodal_depth).
+GtInfo ComputeGtInfo(const Frame& frame, int instance, const BopOptions& options);
 // All instances at once: one pass over the visible ids, and one over each amodal mask's rectangle.
-std::vector<GtInfo> ComputeGtInfos(const Frame& frame, double depth_scale);
+std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options);
+
+// The pixels where each instance of a frame counts as visible, by options.visibility.
+class VisibleMasks {
+ public:
+  VisibleMasks(const Frame& frame, const BopOptions& options);
+  // Whether pixel (u, v) of the image is a visible pixel of instance i (index in frame.instances).
+  bool operator()(size_t i, int u, int v) const;
+
+ private:
+  const Frame& frame_;
+  bool exact_;
+  std::vector<std::vector<uint8_t>> masks_;  // kBop19: per instance, inside its roi
+};
 
 // Depth in mm to BOP's uint16 units; 0 where there is no return or the value does not fit.
 uint16_t EncodeDepth(float depth_mm, double depth_scale);

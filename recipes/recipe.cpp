@@ -577,7 +577,28 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed",
                                "model_points", "point_sampling", "point_seed", "formats", "rgb",
-                               "jpeg_quality"});
+                               "jpeg_quality", "visibility", "visibility_delta", "coco_bbox"});
+  if (node["visibility"]) {
+    const std::string rule = r.Scalar(node["visibility"], "output.visibility");
+    if (rule != "exact" && rule != "bop19") {
+      r.Fail(node["visibility"], "output.visibility", "expected 'exact' or 'bop19', got '" + rule + "'");
+    }
+    spec->bop.visibility = rule == "bop19" ? BopOptions::Visibility::kBop19 : BopOptions::Visibility::kExact;
+  }
+  if (node["visibility_delta"]) {
+    if (spec->bop.visibility != BopOptions::Visibility::kBop19) {
+      r.Fail(node["visibility_delta"], "output.visibility_delta", "needs visibility: bop19");
+    }
+    spec->bop.visib_delta_mm = r.Length(node["visibility_delta"], "output.visibility_delta");
+    if (!(spec->bop.visib_delta_mm >= 0)) r.Fail(node["visibility_delta"], "output.visibility_delta", "must not be negative");
+  }
+  if (node["coco_bbox"]) {
+    const std::string kind = r.Scalar(node["coco_bbox"], "output.coco_bbox");
+    if (kind != "amodal" && kind != "modal") {
+      r.Fail(node["coco_bbox"], "output.coco_bbox", "expected 'amodal' or 'modal', got '" + kind + "'");
+    }
+    spec->bop.coco_amodal_bbox = kind == "amodal";
+  }
   if (node["rgb"]) {
     const std::string kind = r.Scalar(node["rgb"], "output.rgb");
     if (kind != "png" && kind != "jpg" && kind != "jpeg") {

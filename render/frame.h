@@ -28,6 +28,10 @@ struct Frame {
     // The mask is zero outside the pixel rectangle [roi[0], roi[2]) x [roi[1], roi[3]) (clamped
     // to the image; the default is the whole image).
     int roi[4] = {0, 0, 1 << 30, 1 << 30};
+    // RenderOptions::amodal_depth: the depth (mm) of the instance rendered alone, 0 where it is
+    // not hit, inside the rectangle roi (clamped to the image), row-major: pixel (u, v) at
+    // (v - roi[1]) * (roi[2] - roi[0]) + (u - roi[0]). Empty otherwise.
+    std::vector<float> amodal_depth;
     int px_count_all = 0;    // pixels of the amodal mask inside the image
     // The silhouette on the canvas of three times the image size, [-w, 2w) x [-h, 2h) (as
     // bop_toolkit renders it), so that truncated parts count: its pixel count and its bounding

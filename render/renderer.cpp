@@ -573,6 +573,8 @@ Frame Renderer::Render(const Camera& camera) const {
     truth.roi[1] = std::clamp(r.v0, 0, h);
     truth.roi[2] = std::clamp(r.u1, 0, w);
     truth.roi[3] = std::clamp(r.v1, 0, h);
+    const int roi_w = truth.roi[2] - truth.roi[0];
+    if (o.amodal_depth) truth.amodal_depth.assign(static_cast<size_t>(roi_w) * (truth.roi[3] - truth.roi[1]), 0.0f);
     int count = 0, canvas_count = 0;
     int box[4] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::min(),
                   std::numeric_limits<int>::min()};
@@ -592,6 +594,9 @@ Frame Renderer::Render(const Camera& camera) const {
           box[2] = std::max(box[2], u), box[3] = std::max(box[3], v);
           if (u < 0 || v < 0 || u >= w || v >= h) continue;
           truth.amodal_mask[static_cast<size_t>(v) * w + u] = 1;
+          if (o.amodal_depth) {
+            truth.amodal_depth[static_cast<size_t>(v - truth.roi[1]) * roi_w + (u - truth.roi[0])] = rh.ray.tfar[j];
+          }
           ++count;
         }
       }

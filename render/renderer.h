@@ -24,6 +24,9 @@ struct RenderOptions {
   // For profiling only (a dataset needs both): skip shading (RGB stays black) or the amodal masks.
   bool shade = true;
   bool amodal_masks = true;
+  // Also keep each instance's depth rendered alone (Frame::InstanceTruth::amodal_depth), for
+  // visibility rules that compare it with the scene's depth (bop_toolkit's).
+  bool amodal_depth = false;
   // Embree's kernels: "auto" (the widest this CPU has) or the widest to use: sse2, sse4.2, avx,
   // avx2, avx512. Kernels of different widths differ in the last bits of some hit distances, so
   // machines that must write the same bytes (the shards of one farm run) must use the same ones.

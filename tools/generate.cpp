@@ -170,7 +170,10 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::
   key << "output " << b.depth_scale << " " << b.split << " " << b.test_every << " " << b.test_fraction << " "
       << b.split_seed << " " << b.model_points << " " << b.even_points << " " << b.point_seed << " " << b.coco << " "
       << b.paper_layout << " " << b.pvn3d_meta << " " << b.grasp_points << " " << b.jpeg_quality << " "
-      << spec.min_visible_pixels << "\n";
+      << spec.min_visible_pixels << " " << b.target_min_visib_fract << " " << static_cast<int>(b.visibility) << " "
+      << b.visib_delta_mm << " " << b.coco_amodal_bbox << "\n";
+  const RenderOptions& r = spec.render;
+  key << "render " << r.near_mm << " " << r.far_mm << " " << r.supersampling << " " << r.normals << "\n";
   for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
   // Embree's kernels on this machine: different widths give different last bits.
   key << "trace " << TracingIsa(spec.render.isa) << "\n";
@@ -514,7 +517,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
     // showing too little of the scene are skipped (image ids keep their view index).
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      const Renderer renderer(parts, prepared.scenes[s], spec.render);
+      RenderOptions render = spec.render;
+      render.amodal_depth = spec.bop.visibility == BopOptions::Visibility::kBop19;
+      const Renderer renderer(parts, prepared.scenes[s], render);
       BopSceneWriter& writer = *writers[s];
       const PaperSceneWriter& paper = *papers[s];
       size_t next = 0;

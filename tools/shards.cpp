@@ -40,7 +40,9 @@ Json OptionsJson(const BopOptions& b) {
           {"model_points", b.model_points}, {"coco", b.coco},
           {"jpeg_quality", b.jpeg_quality}, {"paper_layout", b.paper_layout},
           {"pvn3d_meta", b.pvn3d_meta},     {"grasp_points", b.grasp_points},
-          {"even_points", b.even_points},   {"point_seed", b.point_seed}};
+          {"even_points", b.even_points},   {"point_seed", b.point_seed},
+          {"visibility", b.visibility == BopOptions::Visibility::kBop19 ? "bop19" : "exact"},
+          {"visib_delta_mm", b.visib_delta_mm}, {"coco_amodal_bbox", b.coco_amodal_bbox}};
 }
 
 BopOptions OptionsFromJson(const Json& j) {
@@ -59,6 +61,9 @@ BopOptions OptionsFromJson(const Json& j) {
   b.grasp_points = j.at("grasp_points");
   b.even_points = j.at("even_points");
   b.point_seed = j.at("point_seed");
+  b.visibility = j.at("visibility") == "bop19" ? BopOptions::Visibility::kBop19 : BopOptions::Visibility::kExact;
+  b.visib_delta_mm = j.at("visib_delta_mm");
+  b.coco_amodal_bbox = j.at("coco_amodal_bbox");
   return b;
 }
 

@@ -5,9 +5,11 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <gtest/gtest.h>
 
+#include "cad/error.h"
 #include "cad/shape.h"
 #include "dataset/coco.h"
 #include "render/renderer.h"
@@ -61,25 +63,95 @@ Frame HandFrame() {
 
 TEST(GtInfo, HandWorkedFrame) {
   const Frame f = HandFrame();
-  const GtInfo a = ComputeGtInfo(f, 0, 0.1);
+  const GtInfo a = ComputeGtInfo(f, 0, BopOptions{});
   EXPECT_EQ(a.px_count_all, 2);
   EXPECT_EQ(a.px_count_visib, 2);
   EXPECT_EQ(a.px_count_valid, 2);
   EXPECT_DOUBLE_EQ(a.visib_fract, 1.0);
-  EXPECT_EQ(std::vector<int>(a.bbox_obj, a.bbox_obj + 4), (std::vector<int>{1, 0, 2, 1}));
-  const GtInfo b = ComputeGtInfo(f, 1, 0.1);
+  EXPECT_EQ(std::vector<int>(a.bbox_obj, a.bbox_obj + 4), (std::vector<int>{1, 0, 1, 0}));  // bop_toolkit: width = max - min
+  const GtInfo b = ComputeGtInfo(f, 1, BopOptions{});
   EXPECT_EQ(b.px_count_all, 4);
   EXPECT_EQ(b.px_count_visib, 3);
   EXPECT_EQ(b.px_count_valid, 3);  // (2,0) via instance 0's depth, (2,1), (3,1); not (3,2)
   EXPECT_DOUBLE_EQ(b.visib_fract, 0.75);
-  EXPECT_EQ(std::vector<int>(b.bbox_obj, b.bbox_obj + 4), (std::vector<int>{2, 0, 2, 3}));
-  EXPECT_EQ(std::vector<int>(b.bbox_visib, b.bbox_visib + 4), (std::vector<int>{2, 1, 2, 2}));
+  EXPECT_EQ(std::vector<int>(b.bbox_obj, b.bbox_obj + 4), (std::vector<int>{2, 0, 1, 2}));
+  EXPECT_EQ(std::vector<int>(b.bbox_visib, b.bbox_visib + 4), (std::vector<int>{2, 1, 1, 1}));
   Frame hidden = HandFrame();
   std::fill(hidden.instances[0].amodal_mask.begin(), hidden.instances[0].amodal_mask.end(), 0);
   std::replace(hidden.instance.begin(), hidden.instance.end(), uint16_t{1}, uint16_t{0});
-  const GtInfo none = ComputeGtInfo(hidden, 0, 0.1);
+  const GtInfo none = ComputeGtInfo(hidden, 0, BopOptions{});
   EXPECT_EQ(std::vector<int>(none.bbox_obj, none.bbox_obj + 4), (std::vector<int>{-1, -1, -1, -1}));
   EXPECT_EQ(none.visib_fract, 0.0);
+}
+
+// bop_toolkit's "bop19" rule on the hand-worked frame: instance 1, rendered alone, lies 10 mm
+// behind instance 0 at pixel (2, 0) and has no written depth at (3, 2). Distances are depths times
+// |((u - cx) / fx, (v - cy) / fy, 1)|, which at (2, 0) is |(0, -0.15, 1)| = 1.01119.
+TEST(GtInfo, Bop19RuleWorkedByHand) {
+  Frame f = HandFrame();
+  for (auto& t : f.instances) t.roi[2] = 4, t.roi[3] = 3;  // the whole 4 x 3 image
+  f.instances[0].amodal_depth.assign(12, 0.0f);
+  f.instances[0].amodal_depth[1] = f.instances[0].amodal_depth[2] = 100.0f;
+  f.instances[1].amodal_depth.assign(12, 0.0f);
+  f.instances[1].amodal_depth[2] = 110.0f;   // behind instance 0 (100 mm)
+  f.instances[1].amodal_depth[6] = f.instances[1].amodal_depth[7] = 200.0f;
+  f.instances[1].amodal_depth[11] = 9000.0f;  // its written depth is 0: visible in bop19
+
+  BopOptions bop19;
+  bop19.visibility = BopOptions::Visibility::kBop19;
+  bop19.visib_delta_mm = 15.0;  // 10 mm * 1.01119 = 10.11 <= 15: (2, 0) is visible
+  const GtInfo b = ComputeGtInfo(f, 1, bop19);
+  EXPECT_EQ(b.px_count_visib, 4);
+  EXPECT_DOUBLE_EQ(b.visib_fract, 1.0);
+  EXPECT_EQ(std::vector<int>(b.bbox_visib, b.bbox_visib + 4), (std::vector<int>{2, 0, 1, 2}));
+  EXPECT_EQ(ComputeGtInfo(f, 0, bop19).px_count_visib, 2);  // both are visible at (2, 0)
+
+  bop19.visib_delta_mm = 10.1;  // 10.11 > 10.1: hidden, as in the exact rule
+  EXPECT_EQ(ComputeGtInfo(f, 1, bop19).px_count_visib, 3);
+  bop19.visib_delta_mm = 10.12;
+  EXPECT_EQ(ComputeGtInfo(f, 1, bop19).px_count_visib, 4);
+  EXPECT_EQ(ComputeGtInfo(f, 1, BopOptions{}).px_count_visib, 3);  // exact: (2, 0) shows instance 0
+
+  Frame no_depth = HandFrame();  // bop19 without the renderer's amodal depth is refused
+  EXPECT_THROW(ComputeGtInfos(no_depth, bop19), Error);
+}
+
+// Two touching boxes seen straight down: a 60 x 60 x T mm block resting on a 200 x 200 x 20 mm
+// slab, the camera 500 mm above the block. Under the block the slab is T mm farther than the
+// block's top, T times at most 1.07 as a distance (the block spans 32 px from the principal
+// point at f = 525). With T = 10 mm and delta 15 mm bop_toolkit calls the whole slab visible; with
+// T = 20 mm the part under the block is hidden, as in the exact rule.
+TEST(GtInfo, Bop19TwoTouchingBoxes) {
+  for (const double t : {10.0, 20.0}) {
+    SCOPED_TRACE(t);
+    const std::vector<Part> parts = {MakePart("slab", MakeBox(200, 200, 20), TessellationOptions{}),
+                                     MakePart("block", MakeBox(60, 60, t), TessellationOptions{})};
+    Scene scene;
+    scene.instances = {Instance{0, "slab", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
+                       Instance{1, "block", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 20 + t / 2))}};
+    Camera camera;
+    camera.intrinsics = Intrinsics{640, 480, 525.0, 525.0, 320.0, 240.0};
+    camera.world_from_cam.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // looking down
+    camera.world_from_cam.translation() = Eigen::Vector3d(0, 0, 20 + t + 500);
+    RenderOptions render;
+    render.amodal_depth = true;
+    const Frame frame = Renderer(parts, scene, render).Render(camera);
+    const std::vector<GtInfo> exact = ComputeGtInfos(frame, BopOptions{});
+    BopOptions options;
+    options.visibility = BopOptions::Visibility::kBop19;
+    const std::vector<GtInfo> bop19 = ComputeGtInfos(frame, options);
+    // The block's top face: 60 mm at 500 mm is 63 px on a side.
+    EXPECT_NEAR(exact[1].px_count_all, 63 * 63, 2 * 64);
+    EXPECT_EQ(exact[1].px_count_visib, exact[1].px_count_all);
+    EXPECT_EQ(exact[0].px_count_visib, exact[0].px_count_all - exact[1].px_count_all);
+    EXPECT_EQ(bop19[1].px_count_visib, exact[1].px_count_all);
+    if (t == 10.0) {
+      EXPECT_EQ(bop19[0].px_count_visib, exact[0].px_count_all);
+      EXPECT_DOUBLE_EQ(bop19[0].visib_fract, 1.0);
+    } else {
+      EXPECT_EQ(bop19[0].px_count_visib, exact[0].px_count_visib);
+    }
+  }
 }
 
 // bop_toolkit's definition, recomputed independently: render each instance alone with a camera
@@ -100,13 +172,13 @@ TEST(GtInfo, TruncatedAndOccludedMatchTheThreeTimesCanvas) {
   camera.world_from_cam.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // looking down
   camera.world_from_cam.translation() = Eigen::Vector3d(0, 0, 40 + 525);
   const Frame frame = Renderer(parts, scene).Render(camera);
-  const std::vector<GtInfo> infos = ComputeGtInfos(frame, 0.1);
+  const std::vector<GtInfo> infos = ComputeGtInfos(frame, BopOptions{});
 
   // Hand-worked for the big box: the top face covers u in [-50, 50), v in [190, 290); the side
   // wall facing the optical axis (x = -270, 525...565 mm deep) adds u up to 320 - 525 * 270 / 565
-  // = 69.1, so 119 columns. The box is not clipped at u = 0.
+  // = 69.1, so 119 columns (bop_toolkit writes width 118 = max - min). Not clipped at u = 0.
   EXPECT_GT(infos[0].px_count_all, 100 * 100);
-  EXPECT_EQ(std::vector<int>(infos[0].bbox_obj, infos[0].bbox_obj + 4), (std::vector<int>{-50, 190, 119, 100}));
+  EXPECT_EQ(std::vector<int>(infos[0].bbox_obj, infos[0].bbox_obj + 4), (std::vector<int>{-50, 190, 118, 99}));
   EXPECT_LT(infos[0].px_count_visib, frame.instances[0].px_count_all);  // occluded inside the image
 
   Camera canvas = camera;
@@ -127,7 +199,7 @@ TEST(GtInfo, TruncatedAndOccludedMatchTheThreeTimesCanvas) {
     }
     EXPECT_EQ(infos[i].px_count_all, count);
     EXPECT_EQ(std::vector<int>(infos[i].bbox_obj, infos[i].bbox_obj + 4),
-              (std::vector<int>{u0, v0, u1 - u0 + 1, v1 - v0 + 1}));
+              (std::vector<int>{u0, v0, u1 - u0, v1 - v0}));
     // Visible pixels straight from the id image, and the fraction of the whole.
     int visible = 0;
     for (uint16_t id : frame.instance) visible += id == i + 1;
@@ -360,7 +432,12 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
     }
     EXPECT_EQ(differ, 0);
     EXPECT_EQ(a["area"], cv::countNonZero(mask));
-    EXPECT_EQ(a["bbox"], gt_info[std::to_string(im)][inst]["bbox_visib"]);
+    // bop_toolkit's calc_gt_coco.py: the amodal box, bbox_from_binary_mask of the full mask
+    // (width max - min + 1), and "ignore" below 10% visibility.
+    const cv::Mat full = cv::imread((scene_dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
+    const cv::Rect box = cv::boundingRect(full);
+    EXPECT_EQ(a["bbox"], json::array({box.x, box.y, box.width, box.height}));
+    EXPECT_EQ(a["ignore"], gt_info[std::to_string(im)][inst]["visib_fract"].get<double>() < 0.1);
     ++annotations;
   }
   EXPECT_EQ(annotations, 4);  // both instances show in both views

@@ -197,6 +197,25 @@ TEST(Recipe, FamilyErrorsPointAtTheKey) {
   EXPECT_EQ(ErrorOf("scenes: [{name: a}]\n"), "r.yaml:1:10: scenes[0]: a scene needs 'parts'");
 }
 
+TEST(Recipe, VisibilityRuleAndCocoBoxes) {
+  const RunSpec defaults = ParseRecipe("output: {}\n", "r.yaml", ".");
+  EXPECT_EQ(defaults.bop.visibility, BopOptions::Visibility::kExact);
+  EXPECT_TRUE(defaults.bop.coco_amodal_bbox);
+  const RunSpec spec =
+      ParseRecipe("output: {visibility: bop19, visibility_delta: 5 mm, coco_bbox: modal}\n", "r.yaml", ".");
+  EXPECT_EQ(spec.bop.visibility, BopOptions::Visibility::kBop19);
+  EXPECT_DOUBLE_EQ(spec.bop.visib_delta_mm, 5.0);
+  EXPECT_FALSE(spec.bop.coco_amodal_bbox);
+  EXPECT_DOUBLE_EQ(ParseRecipe("output: {visibility: bop19}\n", "r.yaml", ".").bop.visib_delta_mm, 15.0);
+  EXPECT_EQ(ErrorOf("output: {visibility: bop18}\n"),
+            "r.yaml:1:22: output.visibility: expected 'exact' or 'bop19', got 'bop18'");
+  EXPECT_EQ(ErrorOf("output: {visibility_delta: 5}\n"), "r.yaml:1:28: output.visibility_delta: needs visibility: bop19");
+  EXPECT_EQ(ErrorOf("output: {visibility: bop19, visibility_delta: -1 mm}\n"),
+            "r.yaml:1:47: output.visibility_delta: must not be negative");
+  EXPECT_EQ(ErrorOf("output: {coco_bbox: visible}\n"),
+            "r.yaml:1:21: output.coco_bbox: expected 'amodal' or 'modal', got 'visible'");
+}
+
 TEST(Recipe, ErrorsPointAtLineAndColumn) {
   EXPECT_EQ(ErrorOf("camera:\n  preset: kinect_v1\n  fxx: 500\n"),
             "r.yaml:3:3: unknown key 'camera.fxx' (did you mean 'fx'?)");

@@ -39,9 +39,17 @@ struct Face {
 
 std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& com) {
   if (points.size() < 4) throw Error("stable poses: need at least 4 points");
+  // Meshes repeat a vertex once per smoothing group (per flat face on faceted parts): hull each
+  // position once.
+  std::vector<Eigen::Vector3d> unique = points;
+  const auto less = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(unique.begin(), unique.end(), less);
+  unique.erase(std::unique(unique.begin(), unique.end()), unique.end());
   std::vector<Point> input;
-  input.reserve(points.size());
-  for (const auto& p : points) input.emplace_back(p.x(), p.y(), p.z());
+  input.reserve(unique.size());
+  for (const auto& p : unique) input.emplace_back(p.x(), p.y(), p.z());
   HullMesh hull;
   CGAL::convex_hull_3(input.begin(), input.end(), hull);
   if (hull.number_of_faces() < 4) throw Error("stable poses: the points are flat (no volume to rest)");

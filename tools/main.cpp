@@ -1,6 +1,7 @@
 // The cadsynth command line. Owns threads (one tbb::global_control), logging and exit codes.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 
 #include "cad/error.h"
@@ -36,6 +38,7 @@ usage:
   cadsynth eval DATASET RESULTS.csv [--json FILE]
   cadsynth preview DATASET [-o FILE.png] [--count N | --frames S/I,...] [--width PX]
   cadsynth --help | --version
+  cadsynth COMMAND --help       every option of one command
 
 generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
            Without a recipe it runs the built-in default job (no input files needed).
@@ -82,76 +85,56 @@ struct UsageError {
   std::string what;
 };
 
-int ParseThreads(const std::string& text) {
-  char* end = nullptr;
-  const long value = std::strtol(text.c_str(), &end, 10);
-  if (end == text.c_str() || *end != '\0' || value < 1 || value > 1024) {
-    throw UsageError{"--threads takes a whole number from 1 to 1024, got '" + text + "'"};
-  }
-  return static_cast<int>(value);
-}
-
-int RunGenerate(const std::vector<std::string>& args) {
-  std::optional<std::string> recipe, output;
+// What a subcommand was given on the command line; filled by CLI11, read by Run*.
+struct Args {
+  // generate
+  std::string recipe, output, shard, progress = "auto";
   bool overwrite = false, quiet = false;
   int threads = 0;
-  std::string progress = "auto";
+  // merge, preview
+  std::string dir;
+  // inspect
+  std::string file, unit, encoding;
+  double deflection_mm = cadsynth::ImportOptions{}.tessellation.linear_deflection_mm;
+  bool json = false;
+  // variants
+  std::string export_dir;
+  // eval
+  std::string results, json_file;
+  // preview
+  std::string frames;
+  int count = 4, width = 320;
+};
+
+int RunGenerate(const Args& a) {
   std::optional<cadsynth::ShardSpec> shard;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw UsageError{a + " needs a value"};
-      return args[++i];
-    };
-    if (a == "-o" || a == "--output") {
-      output = value();
-    } else if (a == "--overwrite") {
-      overwrite = true;
-    } else if (a == "--shard" || a.rfind("--shard=", 0) == 0) {
-      const std::string text = a == "--shard" ? value() : a.substr(8);
-      try {
-        shard = cadsynth::ParseShard(text);
-      } catch (const cadsynth::Error& e) {
-        throw UsageError{e.what()};
-      }
-    } else if (a == "--quiet" || a == "-q") {
-      quiet = true;
-    } else if (a == "--threads" || a == "-j") {
-      threads = ParseThreads(value());
-    } else if (a == "--progress" || a.rfind("--progress=", 0) == 0) {
-      progress = a == "--progress" ? value() : a.substr(11);
-      if (progress != "auto" && progress != "bar" && progress != "lines" && progress != "json") {
-        throw UsageError{"--progress takes auto, bar, lines or json, got '" + progress + "'"};
-      }
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError{"unknown option '" + a + "'"};
-    } else if (recipe) {
-      throw UsageError{"one recipe at a time (got '" + *recipe + "' and '" + a + "')"};
-    } else {
-      recipe = a;
+  if (!a.shard.empty()) {
+    try {
+      shard = cadsynth::ParseShard(a.shard);
+    } catch (const cadsynth::Error& e) {
+      throw UsageError{e.what()};
     }
   }
-
   std::unique_ptr<tbb::global_control> thread_limit;
-  if (threads > 0) {
-    thread_limit = std::make_unique<tbb::global_control>(
-        tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  if (a.threads > 0) {
+    thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                         static_cast<size_t>(a.threads));
   }
 
-  const cadsynth::RunSpec spec = recipe ? cadsynth::LoadRecipe(*recipe) : cadsynth::DefaultRunSpec();
+  const cadsynth::RunSpec spec = !a.recipe.empty() ? cadsynth::LoadRecipe(a.recipe) : cadsynth::DefaultRunSpec();
   cadsynth::GenerateOptions options;
-  options.output = output ? std::filesystem::path(*output)
-                          : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
-  options.overwrite = overwrite;
+  options.output = !a.output.empty() ? std::filesystem::path(a.output)
+                                     : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
+  options.overwrite = a.overwrite;
   options.shard = shard;
-  if (!quiet) {
+  if (!a.quiet) {
     options.info = [](const std::string& line) { std::cout << line << "\n" << std::flush; };
   }
-  if (!quiet || progress == "json") {
+  if (!a.quiet || a.progress == "json") {
     using Mode = cadsynth::ProgressReporter::Mode;
-    const Mode mode = progress == "json"  ? Mode::kJson
-                      : progress == "bar" ? Mode::kBar
-                      : progress == "lines" ? Mode::kLines
+    const Mode mode = a.progress == "json"    ? Mode::kJson
+                      : a.progress == "bar"   ? Mode::kBar
+                      : a.progress == "lines" ? Mode::kLines
                       : ::isatty(STDERR_FILENO) != 0 ? Mode::kBar
                                                      : Mode::kLines;
     auto reporter = std::make_shared<cadsynth::ProgressReporter>(mode, stderr);
@@ -173,102 +156,39 @@ int RunGenerate(const std::vector<std::string>& args) {
   return 0;
 }
 
-int RunMerge(const std::vector<std::string>& args) {
-  std::optional<std::string> dir;
-  for (const std::string& a : args) {
-    if (!a.empty() && a[0] == '-') throw UsageError{"unknown option '" + a + "'"};
-    if (dir) throw UsageError{"one folder at a time"};
-    dir = a;
-  }
-  if (!dir) throw UsageError{"merge needs the DIR the shards wrote to"};
-  const cadsynth::MergeSummary summary = cadsynth::Merge(*dir);
+int RunMerge(const Args& a) {
+  const cadsynth::MergeSummary summary = cadsynth::Merge(a.dir);
   std::printf("merged %d shard%s into %s: %zu frames in %zu scene%s, %.1f s\n", summary.shards,
-              summary.shards == 1 ? "" : "s", std::filesystem::absolute(*dir).lexically_normal().c_str(),
+              summary.shards == 1 ? "" : "s", std::filesystem::absolute(a.dir).lexically_normal().c_str(),
               summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.seconds);
   return 0;
 }
 
-int RunInspect(const std::vector<std::string>& args) {
-  std::optional<std::string> file;
-  bool json = false;
+int RunInspect(const Args& a) {
   cadsynth::ImportOptions options;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw UsageError{a + " needs a value"};
-      return args[++i];
-    };
-    if (a == "--json") {
-      json = true;
-    } else if (a == "--unit") {
-      options.unit = value();
-    } else if (a == "--encoding") {
-      options.encoding = value();
-    } else if (a == "--deflection") {
-      const std::string text = value();
-      char* end = nullptr;
-      options.tessellation.linear_deflection_mm = std::strtod(text.c_str(), &end);
-      if (end == text.c_str() || *end != '\0') throw UsageError{"--deflection takes a number of mm, got '" + text + "'"};
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError{"unknown option '" + a + "'"};
-    } else if (file) {
-      throw UsageError{"one file at a time"};
-    } else {
-      file = a;
-    }
-  }
-  if (!file) throw UsageError{"inspect needs a FILE"};
-  std::cout << (json ? cadsynth::InspectJson(*file, options) : cadsynth::InspectText(*file, options));
+  options.unit = a.unit;
+  options.encoding = a.encoding;
+  options.tessellation.linear_deflection_mm = a.deflection_mm;
+  std::cout << (a.json ? cadsynth::InspectJson(a.file, options) : cadsynth::InspectText(a.file, options));
   return 0;
 }
 
-int RunVariants(const std::vector<std::string>& args) {
-  std::optional<std::string> recipe, dir;
-  bool overwrite = false;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--export-step") {
-      if (i + 1 >= args.size()) throw UsageError{"--export-step needs a folder"};
-      dir = args[++i];
-    } else if (a == "--overwrite") {
-      overwrite = true;
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError{"unknown option '" + a + "'"};
-    } else if (recipe) {
-      throw UsageError{"one recipe at a time"};
-    } else {
-      recipe = a;
-    }
-  }
-  const cadsynth::RunSpec spec = recipe ? cadsynth::LoadRecipe(*recipe) : cadsynth::DefaultRunSpec();
-  if (!dir) {
+int RunVariants(const Args& a) {
+  const cadsynth::RunSpec spec = !a.recipe.empty() ? cadsynth::LoadRecipe(a.recipe) : cadsynth::DefaultRunSpec();
+  if (a.export_dir.empty()) {
     for (const cadsynth::VariantListing& v : cadsynth::ListVariants(spec)) std::cout << v.id << "  " << v.params << "\n";
     return 0;
   }
-  const auto written = cadsynth::ExportVariants(spec, *dir, overwrite);
+  const auto written = cadsynth::ExportVariants(spec, a.export_dir, a.overwrite);
   for (const cadsynth::VariantListing& v : written) std::cout << v.step.string() << "  " << v.params << "\n";
   std::cout << "wrote " << written.size() << " STEP files\n";
   return 0;
 }
 
-int RunEval(const std::vector<std::string>& args) {
-  std::vector<std::string> positional;
-  std::optional<std::string> json;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--json") {
-      if (i + 1 >= args.size()) throw UsageError{"--json needs a file"};
-      json = args[++i];
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError{"unknown option '" + a + "'"};
-    } else {
-      positional.push_back(a);
-    }
-  }
-  if (positional.size() != 2) throw UsageError{"eval needs DATASET and RESULTS.csv"};
-  const cadsynth::EvalReport report = cadsynth::Evaluate(positional[0], positional[1]);
+int RunEval(const Args& a) {
+  const cadsynth::EvalReport report = cadsynth::Evaluate(a.dir, a.results);
   std::cout << cadsynth::EvalTable(report);
-  if (json) cadsynth::WriteEvalJson(*json, report);
+  if (!a.json_file.empty()) cadsynth::WriteEvalJson(a.json_file, report);
   return 0;
 }
 
@@ -282,67 +202,169 @@ int ParseCount(const std::string& option, const std::string& text, int lo, int h
   return static_cast<int>(value);
 }
 
-int RunPreview(const std::vector<std::string>& args) {
-  std::optional<std::string> dataset, output;
+int RunPreview(const Args& a) {
   cadsynth::PreviewOptions options;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const bool takes_value = a == "-o" || a == "--count" || a == "--frames" || a == "--width";
-    if (takes_value && i + 1 >= args.size()) throw UsageError{a + " needs a value"};
-    if (a == "-o") {
-      output = args[++i];
-    } else if (a == "--count") {
-      options.count = ParseCount(a, args[++i], 1, 1000);
-    } else if (a == "--width") {
-      options.panel_width = ParseCount(a, args[++i], 32, 4096);
-    } else if (a == "--frames") {
-      std::stringstream list(args[++i]);
-      for (std::string item; std::getline(list, item, ',');) {
-        const size_t slash = item.find('/');
-        if (slash == std::string::npos) throw UsageError{"--frames takes scene/image pairs like 0/12, got '" + item + "'"};
-        options.frames.push_back({ParseCount("--frames scene", item.substr(0, slash), 0, 999999),
-                                  ParseCount("--frames image", item.substr(slash + 1), 0, 999999)});
-      }
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError{"unknown option '" + a + "'"};
-    } else if (dataset) {
-      throw UsageError{"one dataset at a time"};
-    } else {
-      dataset = a;
-    }
+  options.count = a.count;
+  options.panel_width = a.width;
+  std::stringstream list(a.frames);
+  for (std::string item; std::getline(list, item, ',');) {
+    const size_t slash = item.find('/');
+    if (slash == std::string::npos) throw UsageError{"--frames takes scene/image pairs like 0/12, got '" + item + "'"};
+    options.frames.push_back({ParseCount("--frames scene", item.substr(0, slash), 0, 999999),
+                              ParseCount("--frames image", item.substr(slash + 1), 0, 999999)});
   }
-  if (!dataset) throw UsageError{"preview needs a DATASET folder"};
-  const std::filesystem::path out = output ? std::filesystem::path(*output) : std::filesystem::path(*dataset) / "preview.png";
+  const std::filesystem::path out =
+      !a.output.empty() ? std::filesystem::path(a.output) : std::filesystem::path(a.dir) / "preview.png";
   std::vector<std::pair<int, int>> shown;
-  const std::string png = cadsynth::RenderPreview(*dataset, options, &shown);
+  const std::string png = cadsynth::RenderPreview(a.dir, options, &shown);
   cadsynth::WriteFileAtomic(out, png);
   std::cout << "wrote " << out.string() << " (" << shown.size() << " frames)\n";
   return 0;
 }
 
+// The subcommands and their options, each described once: CLI11 parses them and writes each
+// subcommand's --help from the descriptions.
+struct Command {
+  CLI::App* app;
+  int (*run)(const Args&);
+};
+
+std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
+  std::vector<Command> commands;
+  const auto add = [&](const char* name, const char* what, int (*run)(const Args&)) {
+    CLI::App* sub = app.add_subcommand(name, what);
+    sub->formatter(app.get_formatter());
+    sub->set_help_flag("-h,--help", "this help");
+    commands.push_back({sub, run});
+    return sub;
+  };
+
+  CLI::App* gen = add("generate",
+                      "Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR. Without "
+                      "a recipe it runs the built-in default job (no input files needed). A killed or failed run "
+                      "continues where it stopped when started again (same command).",
+                      RunGenerate);
+  gen->add_option("RECIPE", a.recipe, "recipe (YAML); none: the built-in default job");
+  gen->add_option("-o,--output", a.output, "output folder (default: the recipe's output.dir, else ./cadsynth_dataset)")
+      ->type_name("DIR");
+  gen->add_flag("--overwrite", a.overwrite, "replace DIR if it exists (the old one stays until the new one is complete)");
+  gen->add_option("--shard", a.shard,
+                  "render only shard I of N (0 <= I < N) into DIR, beside the other shards; join them with "
+                  "'cadsynth merge DIR' once all have finished (tools/slurm/ runs both)")
+      ->type_name("I/N");
+  gen->add_option("-j,--threads", a.threads, "worker threads (default: all cores); results do not depend on it")
+      ->check(CLI::Range(1, 1024))
+      ->type_name("N");
+  gen->add_option("--progress", a.progress,
+                  "auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON line every 5 s "
+                  "(done, total, seconds, frames_per_s, eta_s) for cluster logs")
+      ->check(CLI::IsMember({"auto", "bar", "lines", "json"}))
+      ->type_name("MODE");
+  gen->add_flag("-q,--quiet", a.quiet, "no progress or info lines, only warnings and errors (--progress=json still prints)");
+
+  CLI::App* merge = add("merge",
+                        "Joins the shards in DIR (written by generate --shard) into one dataset, byte for byte the "
+                        "one a single process writes; refuses, naming them, while shards are unfinished, and "
+                        "checks every frame's files against the manifest (size and CRC-32).",
+                        RunMerge);
+  merge->add_option("DIR", a.dir, "the folder the shards wrote to")->required();
+
+  CLI::App* inspect = add("inspect",
+                          "Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb .3mf .off) and "
+                          "prints what cadsynth sees: format, declared unit, parts with instance counts, size in "
+                          "mm, triangles, colour, volume and whether the mesh is closed, and every instance.",
+                          RunInspect);
+  inspect->add_option("FILE", a.file, "the CAD or mesh file")->required();
+  inspect->add_flag("--json", a.json, "machine-readable output");
+  inspect->add_option("--unit", a.unit, "the unit the file's numbers are really in (overrides the file; meshes: mm)")
+      ->type_name("UNIT");
+  inspect->add_option("--encoding", a.encoding, "STEP names written as raw bytes of a code page: cp1251, cp1252, sjis, ...")
+      ->type_name("CODEPAGE");
+  inspect->add_option("--deflection", a.deflection_mm, "tessellation tolerance in mm")
+      ->check(CLI::PositiveNumber)
+      ->type_name("MM")
+      ->capture_default_str();
+
+  CLI::App* variants = add("variants",
+                           "Lists every variant of the recipe's part families (id and parameters, as in "
+                           "variants.json); with --export-step writes each as DIR/<id>.step (exact B-rep, mm).",
+                           RunVariants);
+  variants->add_option("RECIPE", a.recipe, "recipe (YAML); none: the built-in default job");
+  variants->add_option("--export-step", a.export_dir, "write each variant as DIR/<id>.step")->type_name("DIR");
+  variants->add_flag("--overwrite", a.overwrite, "replace existing STEP files");
+
+  CLI::App* eval = add("eval",
+                       "Scores pose estimates in the BOP results format (scene_id,im_id,obj_id,score,R,t,time) "
+                       "against DATASET's test split: ADD, ADD-S (for symmetric parts), the share within 10% of "
+                       "the diameter and the AUC of accuracy up to 0.1 m, per object and overall.",
+                       RunEval);
+  eval->add_option("DATASET", a.dir, "a dataset cadsynth wrote")->required();
+  eval->add_option("RESULTS", a.results, "the estimates, BOP's CSV format")->required();
+  eval->add_option("--json", a.json_file, "also write the scores as JSON to FILE")->type_name("FILE");
+
+  CLI::App* preview = add("preview",
+                          "Writes a contact sheet PNG: per frame the colour image with every object's projected "
+                          "3D box and axes (x red, y green, z blue), the coloured depth and the visible masks.",
+                          RunPreview);
+  preview->add_option("DATASET", a.dir, "a dataset cadsynth wrote")->required();
+  preview->add_option("-o,--output", a.output, "output PNG (default: DATASET/preview.png)")->type_name("FILE");
+  auto* count = preview->add_option("--count", a.count, "frames spread evenly over the dataset")
+                    ->check(CLI::Range(1, 1000))
+                    ->type_name("N")
+                    ->capture_default_str();
+  preview->add_option("--frames", a.frames, "exactly these frames, as scene/image pairs: 0/0,2/17")
+      ->type_name("LIST")
+      ->excludes(count);
+  preview->add_option("--width", a.width, "width of each of the three panels in pixels")
+      ->check(CLI::Range(32, 4096))
+      ->type_name("PX")
+      ->capture_default_str();
+  return commands;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> args(argv + 1, argv + argc);
-  try {
-    if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
-      std::cout << kUsage;
-      return args.empty() ? 2 : 0;
-    }
-    if (args[0] == "--version") {
-      std::cout << "cadsynth " << CADSYNTH_VERSION << "\n";
-      return 0;
-    }
-    if (args[0] == "generate") return RunGenerate({args.begin() + 1, args.end()});
-    if (args[0] == "merge") return RunMerge({args.begin() + 1, args.end()});
-    if (args[0] == "inspect") return RunInspect({args.begin() + 1, args.end()});
-    if (args[0] == "variants") return RunVariants({args.begin() + 1, args.end()});
-    if (args[0] == "eval") return RunEval({args.begin() + 1, args.end()});
-    if (args[0] == "preview") return RunPreview({args.begin() + 1, args.end()});
-    throw UsageError{"unknown command '" + args[0] + "'"};
-  } catch (const UsageError& e) {
-    std::cerr << "error: " << e.what << "\n(run 'cadsynth --help' for usage)\n";
+  CLI::App app{"cadsynth: CAD in, labelled RGB-D training data out.", "cadsynth"};
+  app.set_help_flag();  // the top-level help is the curated usage text below
+  app.set_version_flag("--version", std::string("cadsynth ") + CADSYNTH_VERSION);
+  app.require_subcommand(0, 1);
+  app.get_formatter()->column_width(24);
+  Args args;
+  const std::vector<Command> commands = DefineCommands(app, args);
+  const std::string first = argc > 1 ? argv[1] : "";
+  if (argc < 2 || first == "--help" || first == "-h" || first == "help") {
+    std::cout << kUsage;
+    return argc < 2 ? 2 : 0;
+  }
+  const auto usage_error = [&](const std::string& what, const std::string& command) {
+    std::cerr << "error: " << what << "\n(run 'cadsynth " << (command.empty() ? "" : command + " ")
+              << "--help' for usage)\n";
     return 2;
+  };
+  const bool known = first == "--version" ||
+                     std::any_of(commands.begin(), commands.end(), [&](const Command& c) { return c.app->get_name() == first; });
+  if (!known) return usage_error((first[0] == '-' ? "unknown option '" : "unknown command '") + first + "'", "");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help of a subcommand, --version
+  } catch (const CLI::ParseError& e) {
+    // CLI11's words for an unexpected argument; ours names it.
+    std::string what = e.what();
+    const std::string extra = "The following argument was not expected: ";
+    if (what.rfind(extra, 0) == 0 && what.size() > extra.size() && what[extra.size()] == '-') {
+      what = "unknown option '" + what.substr(extra.size()) + "'";
+    }
+    return usage_error(what, first);
+  }
+  try {
+    for (const Command& command : commands) {
+      if (command.app->parsed()) return command.run(args);
+    }
+    return usage_error("no command given", "");
+  } catch (const UsageError& e) {
+    return usage_error(e.what, first);
   } catch (const cadsynth::Error& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;

@@ -35,7 +35,31 @@ TEST(Cli, HelpVersionAndUsageErrors) {
   EXPECT_EQ(bad.err.rfind("error: unknown command 'frobnicate'", 0), 0u);
   EXPECT_EQ(Cadsynth("generate --threads zero", dir).code, 2);
   EXPECT_EQ(Cadsynth("generate --progress=fancy", dir).code, 2);
-  EXPECT_EQ(Cadsynth("generate --progressx", dir).err, "error: unknown option '--progressx'\n(run 'cadsynth --help' for usage)\n");
+  EXPECT_EQ(Cadsynth("generate --progressx", dir).err,
+            "error: unknown option '--progressx'\n(run 'cadsynth generate --help' for usage)\n");
+  EXPECT_EQ(Cadsynth("merge", dir).err, "error: DIR is required\n(run 'cadsynth merge --help' for usage)\n");
+}
+
+// Every subcommand describes its own options.
+TEST(Cli, EverySubcommandHasHelp) {
+  ScratchDir dir;
+  const std::map<std::string, std::vector<std::string>> options = {
+      {"generate", {"--output", "--overwrite", "--shard", "--threads", "--progress", "--quiet"}},
+      {"merge", {"DIR"}},
+      {"inspect", {"FILE", "--json", "--unit", "--encoding", "--deflection"}},
+      {"variants", {"RECIPE", "--export-step", "--overwrite"}},
+      {"eval", {"DATASET", "RESULTS", "--json"}},
+      {"preview", {"DATASET", "--output", "--count", "--frames", "--width"}},
+  };
+  for (const auto& [command, names] : options) {
+    for (const char* flag : {"--help", "-h"}) {
+      const CliRun run = Cadsynth(command + " " + flag, dir);
+      EXPECT_EQ(run.code, 0) << command << " " << flag << ": " << run.err;
+      EXPECT_NE(run.out.find("Usage: cadsynth " + command), std::string::npos) << run.out;
+      for (const std::string& name : names) EXPECT_NE(run.out.find(name), std::string::npos) << command << ": " << name;
+    }
+  }
+  EXPECT_NE(Cadsynth("--help", dir).out.find("cadsynth COMMAND --help"), std::string::npos);
 }
 
 TEST(Cli, MissingRecipeIsOneLineAndNoOutput) {

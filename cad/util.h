@@ -1,4 +1,4 @@
-// Small utilities every module may use: seeded draws and name suggestions.
+// Small utilities every module may use: name suggestions. Seeded draws: cad/random.h.
 #pragma once
 
 #include <cstdint>
@@ -6,10 +6,6 @@
 #include <vector>
 
 namespace cadsynth {
-
-// A portable, seeded uniform number in [0, 1) from (seed, stream, index): SplitMix64, the same on
-// every machine and compiler (std:: distributions are not).
-double UniformDraw(uint64_t seed, uint64_t stream, uint64_t index);
 
 // Levenshtein distance between two names.
 size_t EditDistance(const std::string& a, const std::string& b);

@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for.h>
 
+#include "cad/random.h"
 #include "cad/error.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"
@@ -60,7 +61,7 @@ bool BopOptions::IsTest(int index, int count) const {
   if (test_every > 0) return index % test_every == test_every - 1;
   // Each image is a test image with probability test_fraction, drawn from (seed, its index).
   (void)count;
-  return UniformDraw(split_seed, 40, static_cast<uint64_t>(index)) < test_fraction;
+  return UniformDraw(split_seed, streams::kTestImage, static_cast<uint64_t>(index)) < test_fraction;
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "cad/random.h"
 #include "cad/error.h"
 #include "cad/util.h"
 
@@ -24,10 +25,10 @@ std::vector<Eigen::Vector3f> SampleSurface(const Mesh& mesh, int count, uint64_t
   std::vector<Eigen::Vector3f> points;
   points.reserve(count);
   for (int i = 0; i < count; ++i) {
-    const double pick = UniformDraw(seed, 50, i) * total;
+    const double pick = UniformDraw(seed, streams::kPointTriangle, i) * total;
     const size_t t = std::min(static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin()),
                               cumulative.size() - 1);
-    double r1 = UniformDraw(seed, 51, i), r2 = UniformDraw(seed, 52, i);
+    double r1 = UniformDraw(seed, streams::kPointU, i), r2 = UniformDraw(seed, streams::kPointV, i);
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;  // fold into the triangle: uniform by area
     const auto& tri = mesh.triangles[t];
     const Eigen::Vector3f a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];

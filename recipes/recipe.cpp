@@ -9,6 +9,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "cad/random.h"
 #include "cad/error.h"
 #include "cad/step.h"
 #include "variants/families.h"
@@ -270,7 +271,7 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
     // Each parameter draws from its own stream (its index in the family), variant by variant.
     struct Draw {
       const FamilyParam* param;
-      size_t stream;
+      std::string stream;  // family.param.NAME (cad/random.h)
       std::vector<ParamValue> choices;  // a list: pick one
       double from = 0, to = 0;          // a range
     };
@@ -278,7 +279,7 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
     for (auto it = params.begin(); it != params.end(); ++it) {
       const FamilyParam& p = Param(r, *family, it->first, key + ".random.params");
       const std::string k = key + ".random.params." + p.name;
-      Draw d{&p, static_cast<size_t>(&p - family->params.data()), {}, 0, 0};
+      Draw d{&p, std::string(streams::kFamilyParam.name) + "." + p.name, {}, 0, 0};
       if (it->second.IsMap()) {
         r.ExpectMap(it->second, k, {"from", "to"});
         if (!it->second["from"] || !it->second["to"] || p.kind == FamilyParam::Kind::kText) {

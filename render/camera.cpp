@@ -1,5 +1,6 @@
 #include "render/camera.h"
 
+#include "cad/random.h"
 #include "cad/util.h"
 
 #include <cmath>
@@ -134,10 +135,10 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       break;
     case ViewSampler::Kind::kRandom:
       for (int i = 0; i < sampler.count; ++i) {
-        const double yaw = 2 * M_PI * UniformDraw(sampler.seed, 10, i);
-        const double pitch = PitchForArea(UniformDraw(sampler.seed, 11, i), sampler.min_pitch_rad, sampler.max_pitch_rad);
+        const double yaw = 2 * M_PI * UniformDraw(sampler.seed, streams::kViewYaw, i);
+        const double pitch = PitchForArea(UniformDraw(sampler.seed, streams::kViewPitch, i), sampler.min_pitch_rad, sampler.max_pitch_rad);
         const double radius =
-            sampler.min_radius_mm + UniformDraw(sampler.seed, 12, i) * (sampler.max_radius_mm - sampler.min_radius_mm);
+            sampler.min_radius_mm + UniformDraw(sampler.seed, streams::kViewRadius, i) * (sampler.max_radius_mm - sampler.min_radius_mm);
         views.push_back({yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
       }
       break;
@@ -148,8 +149,8 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       // Aim at a point in a ball around the target (uniform in volume), then roll.
       Eigen::Vector3d offset = Eigen::Vector3d::Zero();
       if (sampler.target_jitter_mm > 0) {
-        const double z = 2 * UniformDraw(sampler.seed, 20, i) - 1, a = 2 * M_PI * UniformDraw(sampler.seed, 21, i);
-        const double r = sampler.target_jitter_mm * std::cbrt(UniformDraw(sampler.seed, 22, i));
+        const double z = 2 * UniformDraw(sampler.seed, streams::kTargetHeight, i) - 1, a = 2 * M_PI * UniformDraw(sampler.seed, streams::kTargetAzimuth, i);
+        const double r = sampler.target_jitter_mm * std::cbrt(UniformDraw(sampler.seed, streams::kTargetRadius, i));
         offset = r * Eigen::Vector3d(std::sqrt(1 - z * z) * std::cos(a), std::sqrt(1 - z * z) * std::sin(a), z);
       }
       const Eigen::Vector3d eye = v.world_from_cam.translation();
@@ -162,7 +163,7 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       pose.linear().col(0) = x;
       pose.linear().col(1) = z.cross(x);
       pose.linear().col(2) = z;
-      const double roll = sampler.roll_jitter_rad * (2 * UniformDraw(sampler.seed, 23, i) - 1);
+      const double roll = sampler.roll_jitter_rad * (2 * UniformDraw(sampler.seed, streams::kViewRoll, i) - 1);
       pose.linear() = pose.linear() * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       v.world_from_cam = pose;
     }

@@ -5,6 +5,7 @@
 #include <map>
 #include <sstream>
 
+#include "cad/random.h"
 #include "cad/error.h"
 #include "variants/families.h"
 #include "variants/stable_pose.h"
@@ -136,7 +137,7 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
     const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned ? std::vector<StablePose>{} : StablePoses(parts, all.instances);
     size_t pick = 0;
     if (o.pose == PoseMode::kRandom) {
-      double u = UniformDraw(o.seed, 7, 0), acc = 0;
+      double u = UniformDraw(o.seed, streams::kAssembledPose, 0), acc = 0;
       while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
     }
     Rest(parts, o, poses, pick, 0.0, &all);
@@ -159,11 +160,11 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
         const uint64_t index = (static_cast<uint64_t>(g) << 32) + static_cast<uint64_t>(c) * faces + f;
         size_t pick = o.pose == PoseMode::kAll ? f : 0;
         if (o.pose == PoseMode::kRandom) {
-          const double u = UniformDraw(o.seed, 1, index);
+          const double u = UniformDraw(o.seed, streams::kCopyPose, index);
           double acc = 0;
           while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
         }
-        const double yaw = (clutter || o.pose == PoseMode::kRandom) ? 2 * M_PI * UniformDraw(o.seed, 2, index) : 0.0;
+        const double yaw = (clutter || o.pose == PoseMode::kRandom) ? 2 * M_PI * UniformDraw(o.seed, streams::kCopyYaw, index) : 0.0;
         Body body = groups[g];
         Rest(parts, o, poses, pick, yaw, &body);
         bodies.push_back(std::move(body));
@@ -213,8 +214,8 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
       bool done = false;
       for (int attempt = 0; attempt < 500 && !done; ++attempt) {
         const uint64_t index = (static_cast<uint64_t>(b) << 20) + static_cast<uint64_t>(attempt);
-        const double r = o.clutter_radius_mm * std::sqrt(UniformDraw(o.seed, 3, index));
-        const double phi = 2 * M_PI * UniformDraw(o.seed, 4, index);
+        const double r = o.clutter_radius_mm * std::sqrt(UniformDraw(o.seed, streams::kClutterRadius, index));
+        const double phi = 2 * M_PI * UniformDraw(o.seed, streams::kClutterAngle, index);
         const Eigen::Vector2d at(r * std::cos(phi), r * std::sin(phi));
         Polygon moved = footprint[b];
         bool inside = true;

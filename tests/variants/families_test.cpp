@@ -44,28 +44,6 @@ TEST(Families, ParametersAreCheckedByNameAndKind) {
   EXPECT_EQ(FindFamily("sprocket"), nullptr);
 }
 
-TEST(UniformDraw, SameInputsSameNumberAndEvenlySpread) {
-  EXPECT_EQ(UniformDraw(7, 2, 99), UniformDraw(7, 2, 99));
-  EXPECT_NE(UniformDraw(7, 2, 99), UniformDraw(8, 2, 99));
-  EXPECT_NE(UniformDraw(7, 2, 99), UniformDraw(7, 3, 99));
-  // 100,000 draws in 10 bins: chi-square below 27.88, the 0.1% critical value for 9 degrees of
-  // freedom; and neighbouring indices uncorrelated.
-  std::vector<int> bins(10, 0);
-  double previous = 0, product = 0;
-  for (uint64_t i = 0; i < 100000; ++i) {
-    const double u = UniformDraw(1, 0, i);
-    ASSERT_GE(u, 0.0);
-    ASSERT_LT(u, 1.0);
-    ++bins[static_cast<int>(u * 10)];
-    product += (u - 0.5) * (previous - 0.5);
-    previous = u;
-  }
-  double chi2 = 0;
-  for (int count : bins) chi2 += (count - 10000.0) * (count - 10000.0) / 10000.0;
-  EXPECT_LT(chi2, 27.88);
-  EXPECT_LT(std::abs(product / 100000 / (1.0 / 12)), 0.02);  // lag-1 correlation
-}
-
 TEST(ScaleVariant, UniformPerAxisAndMeshes) {
   testing::ScratchDir dir;
   const Eigen::Isometry3d turned(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));

@@ -1,0 +1,80 @@
+// Named random streams. Every random number cadsynth draws comes from one stream listed here, as a
+// fixed function of (seed, stream, index): never of the clock, the thread or the order of work,
+// so that any thread count, shard or resumed run draws the same numbers.
+//
+// A stream's id is the 64-bit FNV-1a hash of its name, so streams never share draws (two magic
+// numbers could), adding a stream moves no other, and a draw can be named in documentation and
+// in a bug report. kRandomStreams lists every stream once; README's "Random streams" table is
+// written from it, and a test checks that names and ids are unique.
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+
+namespace cadsynth {
+
+// 64-bit FNV-1a of `text`.
+constexpr uint64_t Fnv1a64(std::string_view text) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (char c : text) {
+    h ^= static_cast<uint8_t>(c);
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+struct RandomStream {
+  std::string_view name;  // dotted: module.what
+  std::string_view what;  // what one draw decides, and what its index counts
+  uint64_t id() const { return Fnv1a64(name); }
+};
+
+// The streams, by the seed they use. Indices that combine several counters are written as
+// (a << k) + b in the code that draws.
+namespace streams {
+// recipes: parts.random.seed
+inline constexpr RandomStream kFamilyParam{
+    "family.param", "a random family variant's parameter: stream 'family.param.NAME', index = variant"};
+// recipes: scene.seed (arrangement)
+inline constexpr RandomStream kAssembledPose{"arrange.assembled_pose",
+                                             "the stable pose of an assembled scene (pose: random); index 0"};
+inline constexpr RandomStream kCopyPose{"arrange.copy_pose",
+                                        "the stable pose of one copy (pose: random); index = (group << 32) + copy"};
+inline constexpr RandomStream kCopyYaw{"arrange.copy_yaw",
+                                       "the yaw of one copy (clutter, pose: random); index as arrange.copy_pose"};
+inline constexpr RandomStream kClutterRadius{
+    "arrange.clutter_radius", "a clutter placement's distance from the centre; index = (body << 20) + attempt"};
+inline constexpr RandomStream kClutterAngle{"arrange.clutter_angle",
+                                            "a clutter placement's direction; index as arrange.clutter_radius"};
+// recipes: sweep.seed (random view samplers)
+inline constexpr RandomStream kViewYaw{"view.yaw", "a random view's yaw; index = view"};
+inline constexpr RandomStream kViewPitch{"view.pitch", "a random view's pitch (uniform by area); index = view"};
+inline constexpr RandomStream kViewRadius{"view.radius", "a random view's distance; index = view"};
+inline constexpr RandomStream kTargetHeight{"view.target_z", "the target jitter's height; index = view"};
+inline constexpr RandomStream kTargetAzimuth{"view.target_azimuth", "the target jitter's direction; index = view"};
+inline constexpr RandomStream kTargetRadius{"view.target_radius", "the target jitter's distance; index = view"};
+inline constexpr RandomStream kViewRoll{"view.roll", "a view's roll jitter; index = view"};
+// recipes: output.split_seed
+inline constexpr RandomStream kTestImage{"split.test_image",
+                                         "whether an image is a test image (test_fraction); index = image"};
+// recipes: output.point_seed (+ the object's index)
+inline constexpr RandomStream kPointTriangle{"points.triangle", "the triangle of a model point (by area); index = point"};
+inline constexpr RandomStream kPointU{"points.u", "a model point's first barycentric draw; index = point"};
+inline constexpr RandomStream kPointV{"points.v", "a model point's second barycentric draw; index = point"};
+}  // namespace streams
+
+inline constexpr RandomStream kRandomStreams[] = {
+    streams::kFamilyParam,   streams::kAssembledPose, streams::kCopyPose,     streams::kCopyYaw,
+    streams::kClutterRadius, streams::kClutterAngle,  streams::kViewYaw,      streams::kViewPitch,
+    streams::kViewRadius,    streams::kTargetHeight,  streams::kTargetAzimuth, streams::kTargetRadius,
+    streams::kViewRoll,      streams::kTestImage,     streams::kPointTriangle, streams::kPointU,
+    streams::kPointV,
+};
+
+// A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every
+// machine and compiler (std:: distributions are not).
+double UniformDraw(uint64_t seed, const RandomStream& stream, uint64_t index);
+// The same for a stream named at run time ("family.param.teeth").
+double UniformDraw(uint64_t seed, std::string_view stream_name, uint64_t index);
+
+}  // namespace cadsynth

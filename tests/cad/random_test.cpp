@@ -1,0 +1,84 @@
+#include "cad/random.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace cadsynth {
+namespace {
+
+TEST(RandomStreams, NamesAndIdsAreUniqueAndFnv1aIsTheStandardOne) {
+  // FNV-1a test vectors (Fowler, Noll and Vo).
+  EXPECT_EQ(Fnv1a64(""), 0xcbf29ce484222325ull);
+  EXPECT_EQ(Fnv1a64("a"), 0xaf63dc4c8601ec8cull);
+  EXPECT_EQ(Fnv1a64("foobar"), 0x85944171f73967e8ull);
+  std::set<std::string_view> names;
+  std::set<uint64_t> ids;
+  for (const RandomStream& s : kRandomStreams) {
+    EXPECT_TRUE(names.insert(s.name).second) << s.name;
+    EXPECT_TRUE(ids.insert(s.id()).second) << s.name;
+    EXPECT_FALSE(s.what.empty()) << s.name;
+  }
+  EXPECT_GE(names.size(), 14u);
+}
+
+// README's table of streams lists exactly these, in this order.
+TEST(RandomStreams, ReadmeListsEveryStream) {
+  std::ifstream in(std::string(CADSYNTH_SOURCE_DIR) + "/README.md");
+  ASSERT_TRUE(in);
+  std::vector<std::string> listed;
+  bool inside = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("### Random streams", 0) == 0) inside = true;
+    if (inside && line.rfind("### ", 0) == 0 && line != "### Random streams") break;
+    if (inside && line.rfind("| `", 0) == 0) listed.push_back(line.substr(3, line.find('`', 3) - 3));
+  }
+  std::vector<std::string> streams;
+  for (const RandomStream& s : kRandomStreams) streams.emplace_back(s.name);
+  EXPECT_EQ(listed, streams);
+}
+
+TEST(RandomStreams, KnownValuesDoNotChange) {
+  // The draws are part of the recipe format: the same seed must give the same scene forever.
+  EXPECT_EQ(UniformDraw(0, streams::kViewYaw, 0), 0.35975937202718167);
+  EXPECT_EQ(UniformDraw(2026, streams::kCopyYaw, 7), 0.23708567615439158);
+  EXPECT_EQ(UniformDraw(1, "family.param.teeth", 3), 0.36559306266537139);
+}
+
+TEST(RandomStreams, StreamsSeedsAndIndicesGiveIndependentDraws) {
+  EXPECT_EQ(UniformDraw(7, streams::kViewYaw, 99), UniformDraw(7, streams::kViewYaw, 99));
+  EXPECT_EQ(UniformDraw(7, streams::kViewYaw, 99), UniformDraw(7, "view.yaw", 99));
+  EXPECT_NE(UniformDraw(7, streams::kViewYaw, 99), UniformDraw(8, streams::kViewYaw, 99));
+  EXPECT_NE(UniformDraw(7, streams::kViewYaw, 99), UniformDraw(7, streams::kViewPitch, 99));
+  // Every stream, 20,000 draws in 10 bins: chi-square below 27.88, the 0.1% critical value for 9
+  // degrees of freedom; neighbouring indices and two streams at the same index uncorrelated.
+  for (const RandomStream& s : kRandomStreams) {
+    SCOPED_TRACE(std::string(s.name));
+    std::vector<int> bins(10, 0);
+    double previous = 0.5, lag = 0, cross = 0;
+    const int n = 20000;
+    for (int i = 0; i < n; ++i) {
+      const double u = UniformDraw(1, s, static_cast<uint64_t>(i));
+      ASSERT_GE(u, 0.0);
+      ASSERT_LT(u, 1.0);
+      ++bins[static_cast<int>(u * 10)];
+      lag += (u - 0.5) * (previous - 0.5);
+      cross += (u - 0.5) * (UniformDraw(1, "family.param.teeth", static_cast<uint64_t>(i)) - 0.5);
+      previous = u;
+    }
+    double chi2 = 0;
+    for (int count : bins) chi2 += (count - n / 10.0) * (count - n / 10.0) / (n / 10.0);
+    EXPECT_LT(chi2, 27.88);
+    // Correlations of independent uniforms: sd 1/sqrt(n) = 0.007 of the variance 1/12.
+    EXPECT_LT(std::abs(lag / n / (1.0 / 12)), 0.03);
+    EXPECT_LT(std::abs(cross / n / (1.0 / 12)), 0.03);
+  }
+}
+
+}  // namespace
+}  // namespace cadsynth

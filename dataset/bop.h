@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "cad/part.h"
+#include "cad/schema.h"
 #include "dataset/file_io.h"
 #include "render/camera.h"
 #include "render/frame.h"
@@ -77,6 +78,39 @@ struct BopOptions {
 
   bool Check(std::string* why) const;
   bool IsTest(int index, int count) const;  // index-th of `count` images of a scene
+
+  // Every field, once (cad/schema.h): the recipe's `output:` section, the run key, the shard file.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.depth_scale, Field{"depth_scale", "number", "mm per depth PNG unit (0.1: 0.1 mm steps, up to 6.5535 m)"});
+    visit(o.split, Field{"split", "text", "folder of the scenes (train, test, ...)"});
+    visit(o.test_every, Field{"test_every", "integer",
+                              "every Nth image of each scene is a test image (the paper: 4); 0: use test_fraction",
+                              {}, true});
+    visit(o.test_fraction, Field{"test_fraction", "number",
+                                 "or: each image a test image with this probability (seeded by split_seed)", {}, true});
+    visit(o.split_seed, Field{"split_seed", "integer", "seed of the test_fraction draws"});
+    visit(o.target_min_visib_fract,
+          Field{"target_min_visib_fract", "number", "test targets count instances at least this visible (0..1)"});
+    visit(o.model_points, Field{"model_points", "integer", "points per model cloud in models/points/ (0: none)"});
+    visit(o.even_points, Field{"point_sampling", "choice",
+                               "area: uniform by surface area; even: farthest-point thinning of 10x as many",
+                               {"area", "even"}});
+    visit(o.point_seed, Field{"point_seed", "integer", "seed of the model clouds"});
+    visit(o.coco, Field{"", "bool", "COCO files (formats: coco)", {}, true, "coco"});
+    visit(o.paper_layout, Field{"", "bool", "the reference paper's layout (formats: paper)", {}, true, "paper_layout"});
+    visit(o.pvn3d_meta, Field{"", "bool", "PVN3D meta files (formats: pvn3d)", {}, true, "pvn3d_meta"});
+    visit(o.grasp_points, Field{"", "bool", "grasp-detector point arrays (formats: grasp)", {}, true, "grasp_points"});
+    visit(o.jpeg_quality, Field{"jpeg_quality", "integer", "with rgb: jpg, the JPEG quality 1-100 (0: PNG)", {}, true});
+    visit(o.visibility, Field{"visibility", "choice",
+                              "exact: the front-most surface; bop19: bop_toolkit's rule with visibility_delta",
+                              {"exact", "bop19"}});
+    visit(o.visib_delta_mm, Field{"visibility_delta", "length",
+                                  "with visibility: bop19, bop_toolkit's delta (15 mm; 5 mm for ITODD)", {}, true});
+    visit(o.coco_amodal_bbox, Field{"coco_bbox", "choice",
+                                    "COCO boxes: amodal (full silhouette, as bop_toolkit) or modal (visible part)",
+                                    {"modal", "amodal"}});
+  }
 };
 
 // One scene's split, as BopSceneWriter::Finish sees it.

@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cad/random.h"
+#include "cad/schema.h"
 #include "cad/error.h"
 #include "cad/step.h"
 #include "variants/families.h"
@@ -42,14 +43,14 @@ class Reader {
   // A mapping whose keys must all be in `allowed`.
   void ExpectMap(const YAML::Node& node, const std::string& key,
                  std::initializer_list<const char*> allowed) const {
+    ExpectMap(node, key, std::vector<std::string>(allowed.begin(), allowed.end()));
+  }
+  void ExpectMap(const YAML::Node& node, const std::string& key, const std::vector<std::string>& allowed) const {
     if (!node.IsMap()) Fail(node, key, "expected a mapping of keys to values");
     for (auto it = node.begin(); it != node.end(); ++it) {
       const std::string k = it->first.as<std::string>();
-      if (std::find_if(allowed.begin(), allowed.end(), [&](const char* a) { return k == a; }) !=
-          allowed.end()) {
-        continue;
-      }
-      const std::string best = NearestName(k, std::vector<std::string>(allowed.begin(), allowed.end()));
+      if (std::find(allowed.begin(), allowed.end(), k) != allowed.end()) continue;
+      const std::string best = NearestName(k, allowed);
       std::string what = "unknown key '" + (key.empty() ? k : key + "." + k) + "'";
       if (!best.empty()) what += " (did you mean '" + best + "'?)";
       throw Error(Where(it->first) + ": " + what);
@@ -528,9 +529,55 @@ Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::strin
   return v;
 }
 
+// One described field (cad/schema.h) from the recipe, by its kind.
+template <typename T>
+void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field, T* value) {
+  if constexpr (std::is_enum_v<T> || std::is_same_v<T, bool>) {
+    if (field.kind == "choice") {
+      const std::string text = r.Scalar(node, key);
+      std::string known;
+      for (size_t i = 0; i < field.choices.size(); ++i) {
+        if (text == field.choices[i]) {
+          *value = static_cast<T>(i);
+          return;
+        }
+        known += (i == 0 ? "'" : i + 1 == field.choices.size() ? " or '" : ", '") + std::string(field.choices[i]) + "'";
+      }
+      r.Fail(node, key, "expected " + known + ", got '" + text + "'");
+    } else if constexpr (std::is_same_v<T, bool>) {
+      *value = r.Bool(node, key);
+    }
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    *value = r.Scalar(node, key);
+  } else if constexpr (std::is_floating_point_v<T>) {
+    *value = static_cast<T>(field.kind == "length" ? r.Length(node, key) : r.Number(node, key));
+  } else if constexpr (std::is_same_v<T, uint64_t>) {
+    const int n = r.Integer(node, key);
+    if (n < 0) r.Fail(node, key, "must not be negative");
+    *value = static_cast<uint64_t>(n);
+  } else {
+    *value = r.Integer(node, key);
+  }
+}
+
+// Every described field of `options` that the recipe section `node` gives, except those read by
+// hand; checks that every key of the section is a described field or in `by_hand`.
+template <typename Options>
+void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section, Options* options,
+                std::vector<std::string> by_hand) {
+  Options::Fields(*options, [&](const auto&, const Field& field) {
+    if (!field.key.empty()) by_hand.emplace_back(field.key);
+  });
+  r.ExpectMap(node, section, by_hand);
+  Options::Fields(*options, [&](auto& value, const Field& field) {
+    if (field.key.empty() || field.by_hand || !node[std::string(field.key)]) return;
+    ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field, &value);
+  });
+}
+
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "render", {"background", "floor", "floor_color", "ambient", "lights", "shadows", "colors",
-                               "near", "far", "supersampling", "normals", "isa"});
+  ReadFields(r, node, "render", &spec->render,
+             {"background", "floor", "floor_color", "ambient", "lights", "shadows", "colors"});
   Scene& look = spec->look;
   if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
   if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
@@ -567,38 +614,18 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     }
     spec->cad_colors = colors == "cad";
   }
-  if (node["near"]) spec->render.near_mm = r.Length(node["near"], "render.near");
-  if (node["far"]) spec->render.far_mm = r.Length(node["far"], "render.far");
-  if (node["supersampling"]) spec->render.supersampling = r.Integer(node["supersampling"], "render.supersampling");
-  if (node["normals"]) spec->render.normals = r.Bool(node["normals"], "render.normals");
-  if (node["isa"]) spec->render.isa = r.Scalar(node["isa"], "render.isa");
   r.Check(spec->render, node, "render");
 }
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "output", {"dir", "depth_scale", "split", "test_every", "test_fraction", "split_seed",
-                               "model_points", "point_sampling", "point_seed", "formats", "rgb",
-                               "jpeg_quality", "visibility", "visibility_delta", "coco_bbox"});
-  if (node["visibility"]) {
-    const std::string rule = r.Scalar(node["visibility"], "output.visibility");
-    if (rule != "exact" && rule != "bop19") {
-      r.Fail(node["visibility"], "output.visibility", "expected 'exact' or 'bop19', got '" + rule + "'");
-    }
-    spec->bop.visibility = rule == "bop19" ? BopOptions::Visibility::kBop19 : BopOptions::Visibility::kExact;
-  }
+  ReadFields(r, node, "output", &spec->bop, {"dir", "formats", "rgb"});
+  // Keys that depend on others.
   if (node["visibility_delta"]) {
     if (spec->bop.visibility != BopOptions::Visibility::kBop19) {
       r.Fail(node["visibility_delta"], "output.visibility_delta", "needs visibility: bop19");
     }
     spec->bop.visib_delta_mm = r.Length(node["visibility_delta"], "output.visibility_delta");
     if (!(spec->bop.visib_delta_mm >= 0)) r.Fail(node["visibility_delta"], "output.visibility_delta", "must not be negative");
-  }
-  if (node["coco_bbox"]) {
-    const std::string kind = r.Scalar(node["coco_bbox"], "output.coco_bbox");
-    if (kind != "amodal" && kind != "modal") {
-      r.Fail(node["coco_bbox"], "output.coco_bbox", "expected 'amodal' or 'modal', got '" + kind + "'");
-    }
-    spec->bop.coco_amodal_bbox = kind == "amodal";
   }
   if (node["rgb"]) {
     const std::string kind = r.Scalar(node["rgb"], "output.rgb");
@@ -636,15 +663,6 @@ void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     }
     if (!bop) r.Fail(formats, "output.formats", "bop is always written (the other formats derive from it): list it");
   }
-  if (node["model_points"]) spec->bop.model_points = r.Integer(node["model_points"], "output.model_points");
-  if (node["point_seed"]) spec->bop.point_seed = static_cast<uint64_t>(r.Integer(node["point_seed"], "output.point_seed"));
-  if (node["point_sampling"]) {
-    const std::string mode = r.Scalar(node["point_sampling"], "output.point_sampling");
-    if (mode != "area" && mode != "even") {
-      r.Fail(node["point_sampling"], "output.point_sampling", "expected 'area' or 'even', got '" + mode + "'");
-    }
-    spec->bop.even_points = mode == "even";
-  }
   if (node["test_every"] && node["test_fraction"]) {
     r.Fail(node["test_fraction"], "output.test_fraction", "give test_every or test_fraction, not both");
   }
@@ -653,13 +671,10 @@ void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     spec->bop.test_every = 0;
     spec->bop.test_fraction = r.Number(node["test_fraction"], "output.test_fraction");
   }
-  if (node["split_seed"]) spec->bop.split_seed = static_cast<uint64_t>(r.Integer(node["split_seed"], "output.split_seed"));
   if (node["dir"]) {
     std::filesystem::path dir = r.Scalar(node["dir"], "output.dir");
     spec->output = (dir.is_relative() ? r.base_dir() / dir : dir).lexically_normal();
   }
-  if (node["depth_scale"]) spec->bop.depth_scale = r.Number(node["depth_scale"], "output.depth_scale");
-  if (node["split"]) spec->bop.split = r.Scalar(node["split"], "output.split");
   r.Check(spec->bop, node, "output");
 }
 

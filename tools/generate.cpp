@@ -143,9 +143,8 @@ const std::string& BuildId() {
   return id;
 }
 
-// What must match for a run to continue an interrupted one (and for shards to join): the recipe
-// file's text, the CAD files' bytes, the parts and their variants, every view, the image size and
-// the output options.
+}  // namespace
+
 std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views) {
   std::ostringstream key;
   key.precision(17);
@@ -166,14 +165,17 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::
   key << prepared.variants_json << "\n";
   const Intrinsics& k = spec.intrinsics;
   key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " " << k.cy << "\n";
-  const BopOptions& b = spec.bop;
-  key << "output " << b.depth_scale << " " << b.split << " " << b.test_every << " " << b.test_fraction << " "
-      << b.split_seed << " " << b.model_points << " " << b.even_points << " " << b.point_seed << " " << b.coco << " "
-      << b.paper_layout << " " << b.pvn3d_meta << " " << b.grasp_points << " " << b.jpeg_quality << " "
-      << spec.min_visible_pixels << " " << b.target_min_visib_fract << " " << static_cast<int>(b.visibility) << " "
-      << b.visib_delta_mm << " " << b.coco_amodal_bbox << "\n";
-  const RenderOptions& r = spec.render;
-  key << "render " << r.near_mm << " " << r.far_mm << " " << r.supersampling << " " << r.normals << "\n";
+  // Every described option (cad/schema.h), by name.
+  const auto fields = [&key](const char* section, const auto& options) {
+    key << section;
+    std::decay_t<decltype(options)>::Fields(options, [&key](const auto& value, const Field& field) {
+      key << " " << field.Name() << "=" << FieldText(value, field);
+    });
+    key << "\n";
+  };
+  fields("output", spec.bop);
+  fields("render", spec.render);
+  key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
   for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
   // Embree's kernels on this machine: different widths give different last bits.
   key << "trace " << TracingIsa(spec.render.isa) << "\n";
@@ -182,6 +184,8 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::
   key << "build " << BuildId() << "\n";
   return key.str();
 }
+
+namespace {
 
 // One run at a time per output: an exclusive lock on STAGING.lock beside the staging folder.
 class RunLock {

@@ -56,6 +56,12 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
 std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
                                            const Intrinsics& intrinsics, const SweepOptions& sweep);
 
+// What must match for a run to continue an interrupted one (and for shards to join): the recipe
+// file's text, the CAD files' bytes, the parts and their variants, every view, the image size,
+// every output and render option (each by its described name, cad/schema.h), the kernels and
+// this build of cadsynth.
+std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views);
+
 // Reads the files and builds the family variants of every scene, merges repeated shapes into one
 // object each, arranges each scene on the floor, renders every view of the sweep per scene and
 // writes the BOP dataset (scene i in SPLIT/00000i) plus variants.json. Everything is written into

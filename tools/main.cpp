@@ -17,6 +17,7 @@
 
 #include "cad/error.h"
 #include "recipes/recipe.h"
+#include "recipes/reference.h"
 #include "dataset/file_io.h"
 #include "dataset/preview.h"
 #include "tools/eval.h"
@@ -89,7 +90,7 @@ struct UsageError {
 struct Args {
   // generate
   std::string recipe, output, shard, progress = "auto";
-  bool overwrite = false, quiet = false;
+  bool overwrite = false, quiet = false, help_recipe = false;
   int threads = 0;
   // merge, preview
   std::string dir;
@@ -107,6 +108,10 @@ struct Args {
 };
 
 int RunGenerate(const Args& a) {
+  if (a.help_recipe) {
+    std::cout << cadsynth::RecipeReference();
+    return 0;
+  }
   std::optional<cadsynth::ShardSpec> shard;
   if (!a.shard.empty()) {
     try {
@@ -261,6 +266,7 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
       ->check(CLI::IsMember({"auto", "bar", "lines", "json"}))
       ->type_name("MODE");
   gen->add_flag("-q,--quiet", a.quiet, "no progress or info lines, only warnings and errors (--progress=json still prints)");
+  gen->add_flag("--help-recipe", a.help_recipe, "print the recipe keys of the output and render sections with their defaults");
 
   CLI::App* merge = add("merge",
                         "Joins the shards in DIR (written by generate --shard) into one dataset, byte for byte the "

@@ -33,39 +33,50 @@ std::string ShardFile(int index, int count, const char* ext) {
   return std::to_string(index) + "-of-" + std::to_string(count) + ext;
 }
 
+// The output options by their described names (cad/schema.h); enums and choice bools by name.
 Json OptionsJson(const BopOptions& b) {
-  return {{"depth_scale", b.depth_scale},   {"split", b.split},
-          {"test_every", b.test_every},     {"test_fraction", b.test_fraction},
-          {"split_seed", b.split_seed},     {"target_min_visib_fract", b.target_min_visib_fract},
-          {"model_points", b.model_points}, {"coco", b.coco},
-          {"jpeg_quality", b.jpeg_quality}, {"paper_layout", b.paper_layout},
-          {"pvn3d_meta", b.pvn3d_meta},     {"grasp_points", b.grasp_points},
-          {"even_points", b.even_points},   {"point_seed", b.point_seed},
-          {"visibility", b.visibility == BopOptions::Visibility::kBop19 ? "bop19" : "exact"},
-          {"visib_delta_mm", b.visib_delta_mm}, {"coco_amodal_bbox", b.coco_amodal_bbox}};
+  Json j = Json::object();
+  BopOptions::Fields(b, [&j](const auto& value, const Field& field) {
+    using T = std::decay_t<decltype(value)>;
+    if constexpr (std::is_enum_v<T>) {
+      j[std::string(field.Name())] = FieldText(value, field);
+    } else {
+      j[std::string(field.Name())] = value;
+    }
+  });
+  return j;
 }
 
 BopOptions OptionsFromJson(const Json& j) {
   BopOptions b;
-  b.depth_scale = j.at("depth_scale");
-  b.split = j.at("split");
-  b.test_every = j.at("test_every");
-  b.test_fraction = j.at("test_fraction");
-  b.split_seed = j.at("split_seed");
-  b.target_min_visib_fract = j.at("target_min_visib_fract");
-  b.model_points = j.at("model_points");
-  b.coco = j.at("coco");
-  b.jpeg_quality = j.at("jpeg_quality");
-  b.paper_layout = j.at("paper_layout");
-  b.pvn3d_meta = j.at("pvn3d_meta");
-  b.grasp_points = j.at("grasp_points");
-  b.even_points = j.at("even_points");
-  b.point_seed = j.at("point_seed");
-  b.visibility = j.at("visibility") == "bop19" ? BopOptions::Visibility::kBop19 : BopOptions::Visibility::kExact;
-  b.visib_delta_mm = j.at("visib_delta_mm");
-  b.coco_amodal_bbox = j.at("coco_amodal_bbox");
+  BopOptions::Fields(b, [&j](auto& value, const Field& field) {
+    using T = std::decay_t<decltype(value)>;
+    const Json& v = j.at(std::string(field.Name()));
+    if constexpr (std::is_enum_v<T>) {
+      const std::string name = v.get<std::string>();
+      const auto it = std::find(field.choices.begin(), field.choices.end(), name);
+      if (it == field.choices.end()) throw Error("unknown " + std::string(field.Name()) + " '" + name + "'");
+      value = static_cast<T>(it - field.choices.begin());
+    } else {
+      value = v.get<T>();
+    }
+  });
   return b;
 }
+
+}  // namespace
+
+std::string OutputOptionsJson(const BopOptions& options) { return OptionsJson(options).dump(); }
+
+BopOptions OutputOptionsFromJson(const std::string& text) {
+  try {
+    return OptionsFromJson(Json::parse(text));
+  } catch (const Json::exception& e) {
+    throw Error(std::string("output options: ") + e.what());
+  }
+}
+
+namespace {
 
 ShardRunInfo ReadRunInfo(const fs::path& path) {
   try {

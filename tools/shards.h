@@ -48,6 +48,11 @@ struct ShardRunInfo {
   std::vector<ObjectClass> classes;                      // per object
 };
 
+// The output options as the shard file holds them (JSON, each option by its described name) and
+// back; throws Error on a missing or unknown value.
+std::string OutputOptionsJson(const BopOptions& options);
+BopOptions OutputOptionsFromJson(const std::string& text);
+
 // One shard's hold on the output tree: creates DIR/.shards, agrees the run key with the other
 // shards (the first to arrive writes it; a different key is an error naming what to do), and
 // locks the shard. Throws Error when DIR is not a shard tree of the same run.

@@ -213,7 +213,7 @@ TEST(Recipe, VisibilityRuleAndCocoBoxes) {
   EXPECT_EQ(ErrorOf("output: {visibility: bop19, visibility_delta: -1 mm}\n"),
             "r.yaml:1:47: output.visibility_delta: must not be negative");
   EXPECT_EQ(ErrorOf("output: {coco_bbox: visible}\n"),
-            "r.yaml:1:21: output.coco_bbox: expected 'amodal' or 'modal', got 'visible'");
+            "r.yaml:1:21: output.coco_bbox: expected 'modal' or 'amodal', got 'visible'");
 }
 
 TEST(Recipe, ErrorsPointAtLineAndColumn) {

@@ -1,0 +1,46 @@
+#include "recipes/reference.h"
+
+#include <sstream>
+
+#include "cad/schema.h"
+#include "dataset/bop.h"
+#include "render/renderer.h"
+
+namespace cadsynth {
+namespace {
+
+template <typename Options>
+void Section(std::ostringstream& out, const char* name, const char* what) {
+  out << name << ":  # " << what << "\n";
+  const Options defaults;
+  Options::Fields(defaults, [&out](const auto& value, const Field& field) {
+    if (field.key.empty()) return;
+    std::string line = "  " + std::string(field.key) + ": " + FieldText(value, field);
+    if (field.kind == "length") line += " mm";
+    line.resize(std::max<size_t>(line.size() + 1, 34), ' ');
+    out << line << "# " << field.kind;
+    if (!field.choices.empty()) {
+      out << " (";
+      for (size_t i = 0; i < field.choices.size(); ++i) out << (i ? " | " : "") << field.choices[i];
+      out << ")";
+    }
+    out << ": " << field.doc << "\n";
+  });
+}
+
+}  // namespace
+
+std::string RecipeReference() {
+  std::ostringstream out;
+  out << "# The recipe keys whose options are described once in the code (cad/schema.h), with their\n"
+         "# defaults; lengths take a unit (mm, cm, m, in), a bare number is mm. README's \"Recipes\"\n"
+         "# section has every section with examples.\n";
+  Section<BopOptions>(out, "output",
+                      "dataset layout and formats; also dir (the output folder), formats: [bop, coco, paper, "
+                      "pvn3d, grasp] and rgb: png | jpg");
+  Section<RenderOptions>(out, "render",
+                         "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors");
+  return out.str();
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,142 @@
+// Every described option (cad/schema.h) reaches everything that must know it: a change of any one
+// changes the run key, survives the shard file, is read from its recipe key, and is listed in the
+// recipe reference and README.
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "tools/generate.h"
+#include "recipes/reference.h"
+#include "tools/shards.h"
+
+namespace cadsynth {
+namespace {
+
+// A value other than `value` that the options still accept where possible.
+template <typename T>
+T Changed(const T& value, const Field& field) {
+  if constexpr (std::is_enum_v<T>) {
+    return static_cast<T>((static_cast<size_t>(value) + 1) % std::max<size_t>(2, field.choices.size()));
+  } else if constexpr (std::is_same_v<T, bool>) {
+    return !value;
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    return field.key == "isa" ? (value == "auto" ? "sse2" : "auto") : value + "x";
+  } else if constexpr (std::is_floating_point_v<T>) {
+    return value > 0 && value < 1 ? value / 2 : value + 1;
+  } else {
+    return value + 1;
+  }
+}
+
+// Every field of `Options` inside `spec` (found by `select`), one at a time.
+template <typename Options, typename Select, typename Check>
+int ForEachChange(const RunSpec& base, Select select, Check check) {
+  int n = 0;
+  for (int index = 0;; ++index) {
+    RunSpec spec = base;
+    int at = 0;
+    std::string name;
+    Options::Fields(select(spec), [&](auto& value, const Field& field) {
+      if (at++ == index) {
+        value = Changed(value, field);
+        name = field.Name();
+      }
+    });
+    if (name.empty()) return n;
+    check(spec, name);
+    ++n;
+  }
+}
+
+TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
+  RunSpec spec = DefaultRunSpec();
+  spec.scenes.resize(1);
+  const PreparedRun prepared = Prepare(spec);
+  const std::vector<SweepView> views = ExpandSweep(spec.sweep);
+  const std::string base = RunKey(spec, prepared, views);
+  std::set<std::string> keys = {base};
+  const auto check = [&](const RunSpec& changed, const std::string& name) {
+    const std::string key = RunKey(changed, prepared, views);
+    EXPECT_NE(key, base) << name << " is not in the run key";
+    EXPECT_TRUE(keys.insert(key).second) << name;
+  };
+  EXPECT_EQ(ForEachChange<BopOptions>(spec, [](RunSpec& s) -> BopOptions& { return s.bop; }, check), 17);
+  EXPECT_EQ(ForEachChange<RenderOptions>(spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check), 8);
+}
+
+TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {
+  const auto text = [](const BopOptions& b) {
+    std::string all;
+    BopOptions::Fields(b, [&](const auto& value, const Field& field) {
+      all += std::string(field.Name()) + "=" + FieldText(value, field) + ";";
+    });
+    return all;
+  };
+  ForEachChange<BopOptions>(RunSpec{}, [](RunSpec& s) -> BopOptions& { return s.bop; },
+                            [&](const RunSpec& changed, const std::string& name) {
+                              EXPECT_EQ(text(OutputOptionsFromJson(OutputOptionsJson(changed.bop))), text(changed.bop))
+                                  << name;
+                            });
+  EXPECT_THROW(OutputOptionsFromJson("{\"depth_scale\": 0.1}"), Error);  // the rest is missing
+}
+
+// Each option with a recipe key is read from it: the recipe that writes the changed value (as
+// the reference prints it) gives the changed options.
+TEST(Schema, EveryRecipeKeyIsRead) {
+  int read = 0;
+  const auto section = [&](const char* name, auto select) {
+    using Options = std::decay_t<decltype(select(std::declval<RunSpec&>()))>;
+    ForEachChange<Options>(RunSpec{}, select, [&](const RunSpec& changed, const std::string&) {
+      Options::Fields(select(const_cast<RunSpec&>(changed)), [&](const auto& value, const Field& field) {
+        using T = std::decay_t<decltype(value)>;
+        if (field.key.empty() || field.by_hand) return;
+        T expected = value;
+        std::string text = FieldText(value, field);
+        if (field.kind == "length") text += " mm";
+        const RunSpec parsed =
+            ParseRecipe(std::string(name) + ":\n  " + std::string(field.key) + ": " + text + "\n", "r.yaml", ".");
+        Options::Fields(select(const_cast<RunSpec&>(parsed)), [&](const auto& got, const Field& other) {
+          if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
+            if (other.Name() == field.Name()) {
+              EXPECT_EQ(got, expected) << name << "." << field.key;
+            }
+          }
+        });
+        ++read;
+      });
+    });
+  };
+  section("output", [](RunSpec& s) -> BopOptions& { return s.bop; });
+  section("render", [](RunSpec& s) -> RenderOptions& { return s.render; });
+  EXPECT_GT(read, 100);
+}
+
+// `cadsynth generate --help-recipe` and README list every recipe key of the described sections.
+TEST(Schema, ReferenceAndReadmeListEveryKey) {
+  const std::string reference = RecipeReference();
+  std::ifstream in(std::string(CADSYNTH_SOURCE_DIR) + "/README.md");
+  std::stringstream readme;
+  readme << in.rdbuf();
+  const auto expect_key = [&](const std::string& section, const Field& field) {
+    if (field.key.empty()) return;
+    const std::string line = "  " + std::string(field.key) + ":";
+    EXPECT_NE(reference.find(section + ":"), std::string::npos) << section;
+    EXPECT_NE(reference.find(line), std::string::npos) << section << "." << field.key;
+    // README's recipe example lists it, set or commented out.
+    EXPECT_TRUE(readme.str().find(line) != std::string::npos ||
+                readme.str().find("  # " + std::string(field.key) + ":") != std::string::npos)
+        << "README lacks " << section << "." << field.key;
+  };
+  const BopOptions bop;
+  const RenderOptions render;
+  BopOptions::Fields(bop, [&](const auto&, const Field& f) { expect_key("output", f); });
+  RenderOptions::Fields(render, [&](const auto&, const Field& f) { expect_key("render", f); });
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -20,12 +20,12 @@
 #include "recipes/reference.h"
 #include "dataset/file_io.h"
 #include "dataset/preview.h"
-#include "tools/eval.h"
-#include "tools/export.h"
-#include "tools/generate.h"
-#include "tools/inspect.h"
-#include "tools/progress.h"
-#include "tools/shards.h"
+#include "tools/pipeline/eval.h"
+#include "tools/pipeline/export.h"
+#include "tools/pipeline/generate.h"
+#include "tools/pipeline/inspect.h"
+#include "tools/pipeline/progress.h"
+#include "tools/pipeline/shards.h"
 
 namespace {
 

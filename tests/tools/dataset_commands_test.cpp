@@ -1,5 +1,5 @@
 // Reading a generated dataset back: the schema of every BOP file, eval and preview.
-#include "tools/eval.h"
+#include "tools/pipeline/eval.h"
 
 #include <fstream>
 #include <map>
@@ -12,7 +12,7 @@
 #include "cad/error.h"
 #include "dataset/preview.h"
 #include "tests/test_support.h"
-#include "tools/generate.h"
+#include "tools/pipeline/generate.h"
 
 namespace cadsynth {
 namespace {

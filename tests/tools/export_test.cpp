@@ -1,4 +1,4 @@
-#include "tools/export.h"
+#include "tools/pipeline/export.h"
 
 #include <gtest/gtest.h>
 

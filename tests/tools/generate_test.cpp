@@ -1,4 +1,4 @@
-#include "tools/generate.h"
+#include "tools/pipeline/generate.h"
 
 #include <fstream>
 #include <map>

@@ -10,7 +10,7 @@
 
 #include "tests/test_support.h"
 #include "dataset/coco.h"
-#include "tools/generate.h"
+#include "tools/pipeline/generate.h"
 
 namespace cadsynth {
 namespace {

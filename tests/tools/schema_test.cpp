@@ -10,9 +10,10 @@
 #include <gtest/gtest.h>
 
 #include "cad/error.h"
-#include "tools/generate.h"
+#include "tools/pipeline/generate.h"
+#include "tools/pipeline/journal.h"
 #include "recipes/reference.h"
-#include "tools/shards.h"
+#include "tools/pipeline/shards.h"
 
 namespace cadsynth {
 namespace {

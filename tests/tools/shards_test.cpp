@@ -1,6 +1,6 @@
 // Farm runs in-process: shards write one tree, merge makes it the single-process dataset; an
 // interrupted single run resumes, starts over when the run changed, and re-renders damaged frames.
-#include "tools/shards.h"
+#include "tools/pipeline/shards.h"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -16,7 +16,7 @@
 
 #include "cad/error.h"
 #include "tests/test_support.h"
-#include "tools/generate.h"
+#include "tools/pipeline/generate.h"
 
 namespace cadsynth {
 namespace {

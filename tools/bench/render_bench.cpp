@@ -18,7 +18,7 @@
 
 #include "dataset/bop.h"
 #include "render/renderer.h"
-#include "tools/generate.h"
+#include "tools/pipeline/generate.h"
 
 namespace cadsynth {
 namespace {

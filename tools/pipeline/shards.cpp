@@ -1,4 +1,4 @@
-#include "tools/shards.h"
+#include "tools/pipeline/shards.h"
 
 #include <fcntl.h>
 #include <sys/file.h>

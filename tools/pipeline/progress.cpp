@@ -1,4 +1,4 @@
-#include "tools/progress.h"
+#include "tools/pipeline/progress.h"
 
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-#include "tools/inspect.h"
+#include "tools/pipeline/inspect.h"
 
 #include <cstdio>
 #include <sstream>

@@ -1,4 +1,5 @@
-// The `generate` job: RunSpec in, BOP dataset out. Used by the command line and the tests.
+// The `generate` job: RunSpec in, BOP dataset out: prepare (tools/pipeline/prepare.h), plan the
+// views and units, render and write every frame, finish. Used by the command line and the tests.
 #pragma once
 
 #include <filesystem>
@@ -9,14 +10,15 @@
 #include "dataset/bop.h"
 #include "recipes/recipe.h"
 #include "render/scene.h"
-#include "tools/shards.h"
+#include "tools/pipeline/prepare.h"
+#include "tools/pipeline/shards.h"
 
 namespace cadsynth {
 
 struct GenerateOptions {
   std::filesystem::path output;  // dataset folder to create
   bool overwrite = false;        // replace an existing folder (only once the new one is complete)
-  // Render only this shard's units, straight into `output` (a shard tree; see tools/shards.h),
+  // Render only this shard's units, straight into `output` (a shard tree; see tools/pipeline/shards.h),
   // to be joined by Merge once every shard has finished.
   std::optional<ShardSpec> shard;
   // Called with (frames rendered, frames to render) by this attempt: once with 0 before the first
@@ -36,31 +38,6 @@ struct GenerateSummary {
   size_t instances = 0;
   double seconds = 0.0;
 };
-
-// Everything a run renders, before rendering: the objects (all scenes share them), their classes,
-// each scene arranged on the floor with the obj_id of each instance, and variants.json's text.
-struct PreparedRun {
-  std::vector<Part> parts;
-  std::vector<ObjectClass> classes;
-  std::vector<Scene> scenes;
-  std::vector<std::vector<int>> obj_ids;
-  std::string variants_json;
-};
-
-// Reads the files and builds the family variants of every scene (in parallel), merges repeated
-// shapes, assigns classes and arranges each scene. Throws Error naming the recipe entry.
-PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info = {});
-
-// What a user should hear about a scene before rendering it: whether its objects fit the view at
-// the nearest camera radius, and whether the smallest is still a few pixels at the farthest.
-std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                                           const Intrinsics& intrinsics, const SweepOptions& sweep);
-
-// What must match for a run to continue an interrupted one (and for shards to join): the recipe
-// file's text, the CAD files' bytes, the parts and their variants, every view, the image size,
-// every output and render option (each by its described name, cad/schema.h), the kernels and
-// this build of cadsynth.
-std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views);
 
 // Reads the files and builds the family variants of every scene, merges repeated shapes into one
 // object each, arranges each scene on the floor, renders every view of the sweep per scene and

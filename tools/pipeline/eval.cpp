@@ -1,4 +1,4 @@
-#include "tools/eval.h"
+#include "tools/pipeline/eval.h"
 
 #include <algorithm>
 #include <cmath>

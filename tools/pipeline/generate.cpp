@@ -1,0 +1,220 @@
+#include "tools/pipeline/generate.h"
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <system_error>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
+#include "cad/error.h"
+#include "dataset/bop.h"
+#include "dataset/file_io.h"
+#include "dataset/paper_layout.h"
+#include "render/renderer.h"
+#include "tools/pipeline/journal.h"
+
+namespace cadsynth {
+
+GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (options.output.empty()) throw Error("no output folder given");
+  const std::filesystem::path output = std::filesystem::absolute(options.output).lexically_normal();
+  const std::optional<ShardSpec>& shard = options.shard;
+  std::error_code ec;
+  if (!shard && std::filesystem::exists(output, ec) && !options.overwrite) {
+    throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
+  }
+  if (shard && options.overwrite) throw Error("--overwrite does not apply to shards (they share one folder)");
+  std::string why;
+  if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
+  if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
+  if (!spec.bop.Check(&why)) throw Error("output: " + why);
+
+  PreparedRun prepared = Prepare(spec, options.info);
+  const std::vector<Part>& parts = prepared.parts;
+  std::string why_sampler;
+  if (!spec.sampler.Check(&why_sampler)) throw Error("sweep: " + why_sampler);
+  const std::vector<SweepView> views = SampleViews(spec.sampler, spec.sweep);
+  const bool common = !shard || shard->index == 0;  // writes the files every dataset has once
+  if (common) {
+    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+      for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
+        Warn("scene '" + spec.scenes[s].name + "': " + warning);
+      }
+    }
+  }
+  // Work unit g = scene * views + view; a shard renders the units it owns.
+  const auto owns = [&](size_t scene, size_t view) { return !shard || shard->Owns(scene * views.size() + view); };
+  size_t total_frames = 0;
+  for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+    for (size_t i = 0; i < views.size(); ++i) total_frames += owns(s, i);
+  }
+
+  const auto info = [&](const std::string& line) {
+    if (options.info) options.info(line);
+  };
+  const std::string run_key = RunKey(spec, prepared, views);
+  info("tracing with Embree's " + TracingIsa(spec.render.isa) + " kernels");
+  // A single run writes to a hidden staging folder beside the output, renamed into place at the
+  // end. An interrupted run (killed, disk full) leaves it; the same run started again continues
+  // from the frames it completed, if its run key (recipe text, parts, views, output options)
+  // matches. Shards write into the output folder itself and agree on the key there.
+  std::filesystem::path root;
+  std::unique_ptr<StagingRun> staging;
+  std::unique_ptr<ShardTree> tree;
+  if (shard) {
+    root = output;
+    tree = std::make_unique<ShardTree>(output, *shard, run_key);
+  } else {
+    staging = std::make_unique<StagingRun>(output, run_key, options.info);
+    root = staging->root();
+  }
+  // The staging folder (or shard tree) is kept on errors from here on: a rerun resumes from it.
+  std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
+  size_t resumed = 0, damaged = 0, frames = 0;
+  std::vector<SceneSplit> splits;
+  std::vector<std::unique_ptr<BopSceneWriter>> writers;
+  try {
+    if (common) {
+      WriteBopCamera(root, spec.intrinsics, spec.bop);
+      WriteBopModels(root, parts, prepared.classes);
+      WriteModelPoints(root, parts, spec.bop);
+      WriteFileAtomic(root / "variants.json", prepared.variants_json);
+    }
+    std::vector<BopSceneWriter::CocoCategory> categories;
+    for (size_t p = 0; p < parts.size(); ++p) {
+      categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
+    }
+    if (shard && shard->index == 0) {
+      ShardRunInfo run;
+      run.shards = shard->count;
+      run.views = views.size();
+      run.bop = spec.bop;
+      run.obj_ids = prepared.obj_ids;
+      run.categories = categories;
+      run.classes = prepared.classes;
+      tree->WriteRunInfo(run);
+    }
+
+    // Every scene's writers first: frames of an interrupted attempt count when every file still
+    // matches their manifest entry; the others are rendered (again).
+    std::vector<std::unique_ptr<PaperSceneWriter>> papers;
+    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+      auto& writer = *writers.emplace_back(
+          std::make_unique<BopSceneWriter>(root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]));
+      if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
+      writer.SetCocoCategories(categories);
+      std::vector<PaperInstance> paper_instances;
+      for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
+        const Instance& instance = prepared.scenes[s].instances[i];
+        paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
+                                   instance.name, instance.world_from_model});
+      }
+      papers.push_back(
+          std::make_unique<PaperSceneWriter>(root, static_cast<int>(s), spec.bop, std::move(paper_instances)));
+      std::vector<int> earlier;
+      for (int id : writer.WrittenFrames()) {
+        if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id))) earlier.push_back(id);
+      }
+      std::vector<std::string> problems(earlier.size());
+      tbb::parallel_for(size_t{0}, earlier.size(), [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
+      for (size_t k = 0; k < earlier.size(); ++k) {
+        if (problems[k].empty()) {
+          ++resumed;
+          continue;
+        }
+        Warn(problems[k] + ": rendering image " + std::to_string(earlier[k]) + " again");
+        writer.ForgetFrame(earlier[k]);
+        ++damaged;
+      }
+    }
+    // Progress counts the frames this attempt renders.
+    const size_t to_render = total_frames - resumed;
+    if (options.progress) options.progress(0, to_render);
+
+    // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
+    // showing too little of the scene are skipped (image ids keep their view index).
+    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
+      RenderOptions render = spec.render;
+      render.amodal_depth = spec.bop.visibility == BopOptions::Visibility::kBop19;
+      const Renderer renderer(parts, prepared.scenes[s], render);
+      BopSceneWriter& writer = *writers[s];
+      const PaperSceneWriter& paper = *papers[s];
+      size_t next = 0;
+      const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
+      using FramePtr = std::shared_ptr<const Frame>;
+      tbb::parallel_pipeline(
+          tokens,
+          tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                         [&](tbb::flow_control& control) -> size_t {
+                                           while (next < views.size() && (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+                                             ++next;
+                                           }
+                                           if (next >= views.size()) {
+                                             control.stop();
+                                             return 0;
+                                           }
+                                           return next++;
+                                         }) &
+              tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
+                  tbb::filter_mode::parallel,
+                  [&](size_t i) {
+                    const Camera camera{spec.intrinsics, views[i].world_from_cam};
+                    return std::make_pair(i, std::make_shared<const Frame>(renderer.Render(camera)));
+                  }) &
+              tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                  tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
+                    int visible = 0;
+                    for (const Frame::InstanceTruth& t : item.second->instances) visible += t.px_count_visib;
+                    if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
+                      ++(visible == 0 ? empty_views : sparse_views);
+                    } else {
+                      writer.WriteFrame(static_cast<int>(item.first), *item.second, [&](FileLog& files) {
+                        paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir(), &files);
+                      });
+                    }
+                    const size_t n = ++done;
+                    if (options.progress) options.progress(n, to_render);
+                  }));
+      for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
+      if (!shard) splits.push_back(writer.Finish());
+    }
+  } catch (const Error& e) {
+    throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + root.string() +
+                ": the same command continues from them)");
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (shard) {
+    std::ostringstream marker;
+    marker << "{\"shard\": " << shard->index << ", \"of\": " << shard->count << ", \"units\": " << total_frames
+           << ", \"frames\": " << frames << ", \"skipped_empty\": " << empty_views
+           << ", \"skipped_sparse\": " << sparse_views << ", \"seconds\": " << seconds << "}";
+    tree->MarkDone(marker.str());
+  } else {
+    WriteSplits(root, splits);
+    WriteMergedCoco(root, spec.bop, splits, prepared.classes);
+    for (const auto& writer : writers) writer->RemoveFragments();
+    staging->Publish(output, options.overwrite);
+  }
+  if (resumed > 0) info("resumed: " + std::to_string(resumed) + " frames were already written");
+  if (damaged > 0) info("rendered again: " + std::to_string(damaged) + " frames whose files did not match the manifest");
+
+  GenerateSummary summary;
+  summary.skipped_empty = empty_views;
+  summary.skipped_sparse = sparse_views;
+  summary.frames = frames;
+  summary.resumed = resumed;
+  summary.scenes = prepared.scenes.size();
+  summary.objects = parts.size();
+  summary.instances = 0;
+  for (const Scene& scene : prepared.scenes) summary.instances += scene.instances.size();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace cadsynth

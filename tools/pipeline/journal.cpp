@@ -1,0 +1,146 @@
+#include "tools/pipeline/journal.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <system_error>
+
+#include "cad/error.h"
+#include "dataset/file_io.h"
+#include "render/renderer.h"
+
+namespace cadsynth {
+namespace {
+
+// The size and CRC-32 of the running executable, read once ("unknown" where it cannot be read).
+const std::string& BuildId() {
+  static const std::string id = [] {
+    try {
+      const std::string bytes = ReadFileText("/proc/self/exe");
+      std::ostringstream out;
+      out << bytes.size() << "-" << std::hex << Crc32(bytes);
+      return out.str();
+    } catch (const Error&) {
+      return std::string("unknown");
+    }
+  }();
+  return id;
+}
+
+}  // namespace
+
+std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views) {
+  std::ostringstream key;
+  key.precision(17);
+  key << "cadsynth run key 2\n";
+  if (!spec.recipe.empty()) key << "recipe\n" << ReadFileText(spec.recipe) << "\n";
+  // The bytes of every CAD file, not only its name: a file edited between a kill and the rerun
+  // (or between two shards) would otherwise mix frames of two geometries.
+  std::set<std::filesystem::path> files;
+  for (const SceneSpec& scene : spec.scenes) {
+    for (const PartSource& source : scene.sources) {
+      if (source.kind == PartSource::Kind::kFile) files.insert(source.path);
+    }
+  }
+  for (const std::filesystem::path& file : files) {
+    const std::string bytes = ReadFileText(file);
+    key << "file " << file.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
+  }
+  key << prepared.variants_json << "\n";
+  const Intrinsics& k = spec.intrinsics;
+  key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " " << k.cy << "\n";
+  // Every described option (cad/schema.h), by name.
+  const auto fields = [&key](const char* section, const auto& options) {
+    key << section;
+    std::decay_t<decltype(options)>::Fields(options, [&key](const auto& value, const Field& field) {
+      key << " " << field.Name() << "=" << FieldText(value, field);
+    });
+    key << "\n";
+  };
+  fields("output", spec.bop);
+  fields("render", spec.render);
+  key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
+  for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
+  // Embree's kernels on this machine: different widths give different last bits.
+  key << "trace " << TracingIsa(spec.render.isa) << "\n";
+  // This build of cadsynth (our libraries are linked in statically): another build may write
+  // other bytes, so it neither resumes this run nor joins its shards.
+  key << "build " << BuildId() << "\n";
+  return key.str();
+}
+
+RunLock::RunLock(const std::filesystem::path& staging) : path_(staging.string() + ".lock") {
+  fd_ = ::open(path_.c_str(), O_CREAT | O_RDWR, 0644);
+  if (fd_ < 0) throw Error(path_ + ": cannot create lock file: " + std::strerror(errno));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd_);
+    throw Error(staging.string() + ": another cadsynth run is writing this dataset");
+  }
+}
+
+void RunLock::Release() {
+  if (fd_ < 0) return;
+  std::error_code ec;
+  std::filesystem::remove(path_, ec);
+  ::close(fd_);
+  fd_ = -1;
+}
+
+StagingRun::StagingRun(const std::filesystem::path& output, const std::string& run_key,
+                       const std::function<void(const std::string&)>& info) {
+  std::error_code ec;
+  std::filesystem::create_directories(output.parent_path(), ec);
+  if (ec) throw Error(output.parent_path().string() + ": cannot create folder: " + ec.message());
+  std::string name = ".";
+  name += output.filename().string();
+  name += ".partial";
+  root_ = output.parent_path() / name;
+  lock_ = std::make_unique<RunLock>(root_);
+  const std::filesystem::path key_path = root_ / ".run_key";
+  std::ifstream in(key_path);
+  std::stringstream old_key;
+  old_key << in.rdbuf();
+  if (old_key.str() != run_key) {
+    if (std::filesystem::exists(root_, ec) && info) {
+      info("starting over: " + root_.string() + " holds an interrupted run of something else");
+    }
+    std::filesystem::remove_all(root_, ec);
+    CreateFolder(root_);
+    WriteFileAtomic(key_path, run_key);
+  } else if (info) {
+    info("resuming the interrupted run in " + root_.string());
+  }
+}
+
+StagingRun::~StagingRun() = default;
+
+void StagingRun::Publish(const std::filesystem::path& output, bool overwrite) {
+  std::error_code ec;
+  std::filesystem::remove(root_ / ".run_key", ec);
+  lock_->Release();
+  if (std::filesystem::exists(output, ec)) {
+    if (!overwrite) throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
+    std::filesystem::path old = output;
+    old += ".old-" + std::to_string(::getpid());
+    std::filesystem::rename(output, old, ec);
+    if (ec) throw Error(output.string() + ": cannot move the old dataset aside: " + ec.message());
+    std::filesystem::rename(root_, output, ec);
+    if (ec) {
+      std::error_code restore;
+      std::filesystem::rename(old, output, restore);
+      throw Error(output.string() + ": cannot move the new dataset into place: " + ec.message());
+    }
+    std::filesystem::remove_all(old, ec);
+    return;
+  }
+  std::filesystem::rename(root_, output, ec);
+  if (ec) throw Error(output.string() + ": cannot move the dataset into place: " + ec.message());
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,58 @@
+// The run journal of a single-process run: its key, its lock and its staging folder. A run writes
+// into a hidden staging folder beside the output (DIR/../.NAME.partial) and renames it into place
+// at the end, so a failed run leaves no half-written dataset; the same run started again finds
+// its key there and continues from the frames it completed (each frame's manifest entry, written
+// last, lists its files with size and CRC-32: dataset/bop.h). Shards agree on the same key in a
+// shard tree instead (tools/pipeline/shards.h).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "render/camera.h"
+#include "tools/pipeline/prepare.h"
+
+namespace cadsynth {
+
+// What must match for a run to continue an interrupted one (and for shards to join): the recipe
+// file's text, the CAD files' bytes, the parts and their variants, every view, the image size,
+// every output and render option (each by its described name, cad/schema.h), the kernels and
+// this build of cadsynth.
+std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views);
+
+// One run at a time per output: an exclusive lock (flock) on STAGING.lock beside the staging
+// folder. Throws Error when another run holds it.
+class RunLock {
+ public:
+  explicit RunLock(const std::filesystem::path& staging);
+  ~RunLock() { Release(); }
+  RunLock(const RunLock&) = delete;
+  RunLock& operator=(const RunLock&) = delete;
+  void Release();
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
+// The staging folder of a run writing `output`: locked, and started afresh unless it holds an
+// interrupted run with the same key (then the run continues in it).
+class StagingRun {
+ public:
+  StagingRun(const std::filesystem::path& output, const std::string& run_key,
+             const std::function<void(const std::string&)>& info);
+  ~StagingRun();
+  const std::filesystem::path& root() const { return root_; }
+  // Moves the finished dataset to `output` (replacing an old one only with `overwrite`, and only
+  // once the new one is complete) and releases the lock.
+  void Publish(const std::filesystem::path& output, bool overwrite);
+
+ private:
+  std::filesystem::path root_;
+  std::unique_ptr<RunLock> lock_;
+};
+
+}  // namespace cadsynth

@@ -1,0 +1,265 @@
+#include "tools/pipeline/prepare.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+
+#include "cad/assembly.h"
+#include "cad/error.h"
+#include "cad/import.h"
+#include "variants/arrangement.h"
+#include "variants/families.h"
+
+namespace cadsynth {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// One thing to build: a file, or one variant of a family; a rigid group in its scene.
+struct Job {
+  int scene = 0;
+  const PartSource* source = nullptr;
+  size_t variant = 0;
+  std::string id;  // stable: scene/entry/family-or-file/variant
+  Assembly assembly;
+  std::string error;
+};
+
+
+Json ParamsJson(const ParamValues& values) {
+  Json out = Json::object();
+  for (const auto& [name, value] : values) {
+    if (const double* x = std::get_if<double>(&value)) out[name] = *x; else out[name] = std::get<std::string>(value);
+  }
+  return out;
+}
+
+void Build(const RunSpec& spec, Job* job) {
+  ImportOptions options;
+  options.tessellation = spec.tessellation;
+  options.crease_angle_rad = spec.crease_angle_rad;
+  const PartSource& source = *job->source;
+  try {
+    if (source.kind == PartSource::Kind::kFile) {
+      options.unit = source.unit;
+      options.encoding = source.encoding;
+      job->assembly = ImportCad(source.path, options);
+    } else {
+      job->assembly = BuildVariant(*FindFamily(source.family), source.variants[job->variant], options);
+    }
+    if (spec.class_by == RunSpec::ClassBy::kAssembly) job->assembly = FuseAssembly(job->assembly);
+  } catch (const Error& e) {
+    std::string where = source.where.empty() ? "" : source.where + ": ";
+    if (source.kind == PartSource::Kind::kFamily) {
+      where += "variant " + std::to_string(job->variant) + " (" + DescribeParams(source.variants[job->variant]) + "): ";
+    }
+    job->error = where + e.what();
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                                           const Intrinsics& k, const SweepOptions& sweep) {
+  std::vector<std::string> warnings;
+  if (instances.empty() || sweep.radius_mm.empty()) return warnings;
+  const double nearest = *std::min_element(sweep.radius_mm.begin(), sweep.radius_mm.end());
+  const double farthest = *std::max_element(sweep.radius_mm.begin(), sweep.radius_mm.end());
+  // The camera always looks at the target: the scene must fit in the cone of the narrower half
+  // field of view at the nearest radius.
+  const double half_fov = std::min(std::atan2(std::min(k.cx, k.width - k.cx), k.fx),
+                                   std::atan2(std::min(k.cy, k.height - k.cy), k.fy));
+  double reach = 0;
+  for (const Instance& i : instances) {
+    for (const Eigen::Vector3f& p : parts[i.part].mesh.positions) {
+      reach = std::max(reach, (i.world_from_model * p.cast<double>() - sweep.target).norm());
+    }
+  }
+  std::ostringstream out;
+  out.precision(4);
+  if (reach >= nearest) {
+    out << "the scene reaches " << std::lround(reach) << " mm from the target, beyond the nearest camera radius "
+        << std::lround(nearest) << " mm: the camera will be inside or touching it";
+    warnings.push_back(out.str());
+  } else if (std::asin(reach / nearest) > half_fov) {
+    out << "the scene reaches " << std::lround(reach) << " mm from the target; at the nearest radius "
+        << std::lround(nearest) << " mm the camera sees only " << std::lround(nearest * std::sin(half_fov))
+        << " mm around it: objects will be cut off";
+    warnings.push_back(out.str());
+  }
+  // The smallest object at the farthest radius.
+  double smallest = 1e300;
+  std::string name;
+  for (const Instance& i : instances) {
+    const double d = parts[i.part].mesh.Bounds().sizes().maxCoeff();
+    if (d < smallest) smallest = d, name = parts[i.part].name;
+  }
+  const double pixels = k.fx * smallest / farthest;
+  if (pixels < 10.0) {
+    std::ostringstream small;
+    small.precision(3);
+    small << "'" << name << "' (" << smallest << " mm) spans only " << pixels << " px at the farthest radius "
+          << std::lround(farthest) << " mm";
+    warnings.push_back(small.str());
+  }
+  return warnings;
+}
+
+PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info_sink) {
+  const auto info = [&](const std::string& line) {
+    if (info_sink) info_sink(line);
+  };
+  if (spec.scenes.empty()) throw Error("no scenes to render");
+  // Every file and every variant, built in parallel; errors reported in recipe order.
+  std::vector<Job> jobs;
+  for (size_t s = 0; s < spec.scenes.size(); ++s) {
+    const SceneSpec& scene = spec.scenes[s];
+    if (scene.sources.empty()) throw Error("scene '" + scene.name + "' has no parts");
+    for (size_t e = 0; e < scene.sources.size(); ++e) {
+      const PartSource& source = scene.sources[e];
+      const std::string base = scene.name + "/" + std::to_string(e) + "/";
+      if (source.kind == PartSource::Kind::kFile) {
+        jobs.push_back({static_cast<int>(s), &source, 0, base + source.path.filename().string(), {}, {}});
+      } else {
+        for (size_t v = 0; v < source.variants.size(); ++v) {
+          jobs.push_back({static_cast<int>(s), &source, v, base + source.family + "/" + std::to_string(v), {}, {}});
+        }
+      }
+    }
+  }
+  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) { Build(spec, &jobs[j]); });
+  for (const Job& job : jobs) {
+    if (!job.error.empty()) throw Error(job.error);
+  }
+
+  // One list of parts; instances remember their job (a rigid group) and scene.
+  Assembly all;
+  std::vector<int> job_of_instance;
+  std::vector<std::string> label_of_part;
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    Assembly& a = jobs[j].assembly;
+    const PartSource& source = *jobs[j].source;
+    if (source.kind == PartSource::Kind::kFile) {
+      std::ostringstream line;
+      line << "read " << source.path.string() << " (" << a.format << "): '" << a.name << "', unit "
+           << (a.length_unit.empty() ? "?" : a.length_unit) << ", " << a.parts.size() << " parts, "
+           << a.instances.size() << " instances";
+      info(line.str());
+    }
+    const int offset = static_cast<int>(all.parts.size());
+    for (Part& part : a.parts) {
+      label_of_part.push_back(source.one_class ? source.family : std::string());
+      all.parts.push_back(std::move(part));
+    }
+    for (Instance instance : a.instances) {
+      instance.part += offset;
+      all.instances.push_back(std::move(instance));
+      job_of_instance.push_back(static_cast<int>(j));
+    }
+  }
+  for (const SceneSpec& scene : spec.scenes) {
+    for (const PartSource& source : scene.sources) {
+      if (source.kind == PartSource::Kind::kFamily) {
+        info("built " + std::to_string(source.variants.size()) + " variant(s) of " + source.family + " for scene '" +
+             scene.name + "'");
+      }
+    }
+  }
+  // The same shape from several files, variants or scenes is one object.
+  {
+    std::vector<int> first_instance_part(all.instances.size());
+    for (size_t i = 0; i < all.instances.size(); ++i) first_instance_part[i] = all.instances[i].part;
+    const size_t merged = MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3);
+    if (merged > 0) info("merged " + std::to_string(merged) + " parts that repeat the shape of another");
+    std::vector<std::string> labels(all.parts.size());
+    for (size_t i = 0; i < all.instances.size(); ++i) {
+      std::string& label = labels[all.instances[i].part];
+      if (label.empty()) label = label_of_part[first_instance_part[i]];
+    }
+    label_of_part = std::move(labels);
+  }
+  std::vector<Part>& parts = all.parts;
+  std::vector<std::string> names, empty_groups;
+  for (const Part& part : parts) names.push_back(part.name);
+  const std::vector<ObjectClass> classes = AssignClasses(names, label_of_part, spec.class_groups, &empty_groups);
+  for (const std::string& group : empty_groups) Warn("class '" + group + "' matches no part");
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const Eigen::Vector3d size = parts[i].mesh.Bounds().sizes();
+    std::ostringstream p;
+    p.precision(4);
+    p << "  obj_id " << i + 1 << ": '" << parts[i].name << "' " << size.x() << " x " << size.y() << " x "
+      << size.z() << " mm, " << parts[i].mesh.num_triangles() << " triangles, class " << classes[i].id << " '"
+      << classes[i].name << "'";
+    info(p.str());
+  }
+
+  // Scenes: arrange each scene's groups on the floor.
+  PreparedRun prepared;
+  struct SceneRun {
+    Scene scene;
+    std::vector<int> obj_ids;
+  };
+  std::vector<SceneRun> runs(spec.scenes.size());
+  for (size_t s = 0; s < spec.scenes.size(); ++s) {
+    std::vector<Instance> instances;
+    std::vector<int> groups;
+    for (size_t i = 0; i < all.instances.size(); ++i) {
+      if (jobs[job_of_instance[i]].scene != static_cast<int>(s)) continue;
+      instances.push_back(all.instances[i]);
+      groups.push_back(job_of_instance[i]);
+    }
+    SceneRun& run = runs[s];
+    run.scene = spec.look;
+    try {
+      run.scene.instances = Arrange(parts, instances, spec.scenes[s].arrangement, groups).instances;
+    } catch (const Error& e) {
+      throw Error("scene '" + spec.scenes[s].name + "': " + e.what());
+    }
+    run.scene.part_colors.clear();
+    for (size_t i = 0; i < parts.size(); ++i) {
+      const Eigen::Vector3f palette = PaletteColor(static_cast<int>(i));
+      run.scene.part_colors.push_back(spec.cad_colors ? parts[i].color.value_or(palette) : palette);
+    }
+    if (!spec.cad_colors) {
+      for (Instance& instance : run.scene.instances) instance.color.reset();
+    }
+    for (const Instance& instance : run.scene.instances) run.obj_ids.push_back(instance.part + 1);
+  }
+  // variants.json: what each file or variant is, and which objects it became.
+  Json variants = Json::array();
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    std::set<int> obj_ids, class_ids;
+    for (size_t i = 0; i < all.instances.size(); ++i) {
+      if (job_of_instance[i] != static_cast<int>(j)) continue;
+      obj_ids.insert(all.instances[i].part + 1);
+      class_ids.insert(classes[all.instances[i].part].id);
+    }
+    const PartSource& source = *jobs[j].source;
+    Json entry = {{"id", jobs[j].id}, {"scene_id", jobs[j].scene}, {"scene", spec.scenes[jobs[j].scene].name}};
+    if (source.kind == PartSource::Kind::kFile) {
+      entry["file"] = source.path.string();
+    } else {
+      entry["family"] = source.family;
+      entry["params"] = ParamsJson(source.variants[jobs[j].variant]);
+    }
+    entry["obj_ids"] = obj_ids;
+    entry["class_ids"] = class_ids;
+    variants.push_back(entry);
+  }
+  prepared.variants_json = Json{{"variants", variants}}.dump(2) + "\n";
+
+  for (SceneRun& run : runs) {
+    prepared.scenes.push_back(std::move(run.scene));
+    prepared.obj_ids.push_back(std::move(run.obj_ids));
+  }
+  prepared.parts = std::move(all.parts);
+  prepared.classes = classes;
+  return prepared;
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,34 @@
+// Stage 1 of a run, prepare: the recipe's parts read and built, repeated shapes merged, classes
+// assigned, each scene arranged on the floor. Everything later stages need, as plain data.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "dataset/bop.h"
+#include "recipes/recipe.h"
+#include "render/scene.h"
+
+namespace cadsynth {
+
+// Everything a run renders, before rendering: the objects (all scenes share them), their classes,
+// each scene arranged on the floor with the obj_id of each instance, and variants.json's text.
+struct PreparedRun {
+  std::vector<Part> parts;
+  std::vector<ObjectClass> classes;
+  std::vector<Scene> scenes;
+  std::vector<std::vector<int>> obj_ids;
+  std::string variants_json;
+};
+
+// Reads the files and builds the family variants of every scene (in parallel), merges repeated
+// shapes, assigns classes and arranges each scene. Throws Error naming the recipe entry.
+PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info = {});
+
+// What a user should hear about a scene before rendering it: whether its objects fit the view at
+// the nearest camera radius, and whether the smallest is still a few pixels at the farthest.
+std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                                           const Intrinsics& intrinsics, const SweepOptions& sweep);
+
+}  // namespace cadsynth

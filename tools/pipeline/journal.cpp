@@ -122,10 +122,11 @@ StagingRun::~StagingRun() = default;
 
 void StagingRun::Publish(const std::filesystem::path& output, bool overwrite) {
   std::error_code ec;
+  const bool replace = std::filesystem::exists(output, ec);
+  // Refused before anything changes: the staging folder stays resumable.
+  if (replace && !overwrite) throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
   std::filesystem::remove(root_ / ".run_key", ec);
-  lock_->Release();
-  if (std::filesystem::exists(output, ec)) {
-    if (!overwrite) throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
+  if (replace) {
     std::filesystem::path old = output;
     old += ".old-" + std::to_string(::getpid());
     std::filesystem::rename(output, old, ec);
@@ -137,10 +138,11 @@ void StagingRun::Publish(const std::filesystem::path& output, bool overwrite) {
       throw Error(output.string() + ": cannot move the new dataset into place: " + ec.message());
     }
     std::filesystem::remove_all(old, ec);
-    return;
+  } else {
+    std::filesystem::rename(root_, output, ec);
+    if (ec) throw Error(output.string() + ": cannot move the dataset into place: " + ec.message());
   }
-  std::filesystem::rename(root_, output, ec);
-  if (ec) throw Error(output.string() + ": cannot move the dataset into place: " + ec.message());
+  lock_->Release();
 }
 
 }  // namespace cadsynth

@@ -46,7 +46,8 @@ SurfaceMoments Moments(const Mesh& mesh) {
     m.area += w;
     first += w * sum / 3.0;
     // Integral of x x^T over a triangle: w/12 (a a^T + b b^T + c c^T + sum sum^T).
-    second += w / 12.0 * (a * a.transpose() + b * b.transpose() + c * c.transpose() + sum * sum.transpose());
+    second += w / 12.0 *
+              (a * a.transpose() + b * b.transpose() + c * c.transpose() + sum * sum.transpose());
   }
   if (m.area <= 0.0) return m;
   m.centroid = first / m.area;
@@ -101,7 +102,9 @@ class SurfaceDistance {
   }
 
  private:
-  static int64_t Key(int64_t i, int64_t j, int64_t k) { return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791); }
+  static int64_t Key(int64_t i, int64_t j, int64_t k) {
+    return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791);
+  }
   Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
     return (p / grid_cell_).array().floor().cast<int>();
   }
@@ -139,16 +142,21 @@ class SurfaceDistance {
 std::vector<Eigen::Vector3d> Vertices(const Mesh& mesh, size_t at_most) {
   std::vector<Eigen::Vector3d> points;
   const size_t step = std::max<size_t>(1, mesh.num_vertices() / std::max<size_t>(1, at_most));
-  for (size_t i = 0; i < mesh.num_vertices(); i += step) points.push_back(mesh.positions[i].cast<double>());
+  for (size_t i = 0; i < mesh.num_vertices(); i += step)
+    points.push_back(mesh.positions[i].cast<double>());
   return points;
 }
 
-bool Near(double x, double y, double relative) { return std::abs(x - y) <= relative * std::max(std::abs(x), std::abs(y)) + 1e-9; }
+bool Near(double x, double y, double relative) {
+  return std::abs(x - y) <= relative * std::max(std::abs(x), std::abs(y)) + 1e-9;
+}
 
 }  // namespace
 
-double MaxSurfaceDistance(const Mesh& surface, const Mesh& points, const Eigen::Isometry3d& transform) {
-  return SurfaceDistance(surface).MaxDistance(Vertices(points, points.num_vertices()), transform, 1e300);
+double MaxSurfaceDistance(const Mesh& surface, const Mesh& points,
+                          const Eigen::Isometry3d& transform) {
+  return SurfaceDistance(surface).MaxDistance(Vertices(points, points.num_vertices()), transform,
+                                              1e300);
 }
 
 std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, double tolerance_mm) {
@@ -160,7 +168,9 @@ std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, do
   for (int k = 0; k < 3; ++k) {
     if (std::abs(ma.eigenvalues[k] - mb.eigenvalues[k]) > 0.01 * scale) return std::nullopt;
   }
-  const auto equal = [&](int i, int j) { return std::abs(ma.eigenvalues[i] - ma.eigenvalues[j]) < 1e-3 * scale; };
+  const auto equal = [&](int i, int j) {
+    return std::abs(ma.eigenvalues[i] - ma.eigenvalues[j]) < 1e-3 * scale;
+  };
 
   // Candidate rotations a_from_b (about the centroids).
   std::vector<Eigen::Matrix3d> candidates;
@@ -191,7 +201,8 @@ std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, do
     const Eigen::Vector3d ua = ma.axes.col(unique), ub = mb.axes.col(unique);
     const std::vector<Eigen::Vector3d> probe = Vertices(b, 64);
     for (double flip : {1.0, -1.0}) {
-      const Eigen::Matrix3d align = Eigen::Quaterniond::FromTwoVectors(ub, flip * ua).toRotationMatrix();
+      const Eigen::Matrix3d align =
+          Eigen::Quaterniond::FromTwoVectors(ub, flip * ua).toRotationMatrix();
       double best = 0.0, best_score = 1e300;
       // An angle's score stops counting once it exceeds the best so far (it cannot win), which
       // skips most of the probe points of most angles.
@@ -219,12 +230,14 @@ std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, do
 
   // Verify both ways on every vertex.
   const SurfaceDistance surface_b(b);
-  const std::vector<Eigen::Vector3d> va = Vertices(a, a.num_vertices()), vb = Vertices(b, b.num_vertices());
+  const std::vector<Eigen::Vector3d> va = Vertices(a, a.num_vertices()),
+                                     vb = Vertices(b, b.num_vertices());
   for (const Eigen::Matrix3d& r : candidates) {
     Eigen::Isometry3d a_from_b = Eigen::Isometry3d::Identity();
     a_from_b.linear() = r;
     a_from_b.translation() = ma.centroid - r * mb.centroid;
-    if (surface_a.AllWithin(vb, a_from_b, tolerance_mm) && surface_b.AllWithin(va, a_from_b.inverse(), tolerance_mm)) {
+    if (surface_a.AllWithin(vb, a_from_b, tolerance_mm) &&
+        surface_b.AllWithin(va, a_from_b.inverse(), tolerance_mm)) {
       return a_from_b;
     }
   }
@@ -245,7 +258,8 @@ size_t MergeIdenticalParts(Assembly* assembly, double tolerance_mm) {
           !Near(kept[k].mass.volume_mm3, parts[i].mass.volume_mm3, 1e-6)) {
         continue;
       }
-      const std::optional<Eigen::Isometry3d> congruence = FindCongruence(kept[k].mesh, parts[i].mesh, tolerance_mm);
+      const std::optional<Eigen::Isometry3d> congruence =
+          FindCongruence(kept[k].mesh, parts[i].mesh, tolerance_mm);
       if (congruence) {
         found = static_cast<int>(k);
         kept_from_part[i] = *congruence;
@@ -269,7 +283,8 @@ size_t MergeIdenticalParts(Assembly* assembly, double tolerance_mm) {
 }
 
 Assembly FuseAssembly(const Assembly& assembly) {
-  if (assembly.instances.empty()) throw Error("assembly '" + assembly.name + "' has no instances to fuse");
+  if (assembly.instances.empty())
+    throw Error("assembly '" + assembly.name + "' has no instances to fuse");
   Part fused;
   fused.name = assembly.name;
   fused.watertight = true;
@@ -298,7 +313,8 @@ Assembly FuseAssembly(const Assembly& assembly) {
       const Eigen::Matrix3d r = instance.world_from_model.linear();
       const Eigen::Vector3d d = instance.world_from_model * part.mass.center_of_mass - com;
       inertia += r * part.mass.inertia * r.transpose() +
-                 part.mass.volume_mm3 * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+                 part.mass.volume_mm3 *
+                     (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
     }
     fused.mass.volume_mm3 = volume;
     fused.mass.center_of_mass = com - centre;

@@ -12,7 +12,8 @@ namespace cadsynth {
 
 // Largest distance (mm) from the vertices of `points`, moved by `transform`, to the surface of
 // `surface`. Zero for a symmetry of a mesh (up to tessellation differences).
-double MaxSurfaceDistance(const Mesh& surface, const Mesh& points, const Eigen::Isometry3d& transform);
+double MaxSurfaceDistance(const Mesh& surface, const Mesh& points,
+                          const Eigen::Isometry3d& transform);
 
 // The rigid motion that carries mesh `b` onto mesh `a` (x_a = a_from_b * x_b, model frames), if
 // the two are the same shape: every vertex of each lies within `tolerance_mm` of the other's

@@ -33,7 +33,8 @@ bool ImportOptions::Check(std::string* why) const {
     return false;
   }
   if (!encoding.empty() && StepCodePage(encoding).empty()) {
-    *why = "unknown encoding '" + encoding + "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312, iso8859-5)";
+    *why =
+        "unknown encoding '" + encoding + "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312, iso8859-5)";
     return false;
   }
   if (!(crease_angle_rad >= 0.0) || crease_angle_rad > M_PI) {
@@ -168,10 +169,18 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
   const CadFormat format = DetectFormat(path);
   Assembly assembly;
   switch (format) {
-    case CadFormat::kStep: assembly = ReadStep(path, options.tessellation, options.encoding); break;
-    case CadFormat::kIges: assembly = ReadIges(path, options.tessellation); break;
-    case CadFormat::kBrep: assembly = ReadBrep(path, options.tessellation); break;
-    case CadFormat::kMesh: assembly = ReadMesh(path, options.crease_angle_rad); break;
+    case CadFormat::kStep:
+      assembly = ReadStep(path, options.tessellation, options.encoding);
+      break;
+    case CadFormat::kIges:
+      assembly = ReadIges(path, options.tessellation);
+      break;
+    case CadFormat::kBrep:
+      assembly = ReadBrep(path, options.tessellation);
+      break;
+    case CadFormat::kMesh:
+      assembly = ReadMesh(path, options.crease_angle_rad);
+      break;
   }
 
   if (options.crease_angle_rad == 0.0) {
@@ -194,9 +203,10 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
     }
     const double stated_mm = *LengthUnitMm(options.unit);
     ScaleAssembly(&assembly, stated_mm / assumed_mm);
-    assembly.length_unit = options.unit + " (stated by the recipe" +
-                           (assembly.length_unit.empty() ? std::string(")")
-                                                         : ", file declares " + assembly.length_unit + ")");
+    assembly.length_unit =
+        options.unit + " (stated by the recipe" +
+        (assembly.length_unit.empty() ? std::string(")")
+                                      : ", file declares " + assembly.length_unit + ")");
     assumed_mm = stated_mm;
   } else if (!declares_unit) {
     assembly.length_unit = "none (taken as mm)";
@@ -204,13 +214,15 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
 
   // A part over 5 m or under 1 mm is most likely in another unit than assumed.
   double largest = 0.0;
-  for (const Part& part : assembly.parts) largest = std::max(largest, part.mesh.Bounds().sizes().maxCoeff());
+  for (const Part& part : assembly.parts)
+    largest = std::max(largest, part.mesh.Bounds().sizes().maxCoeff());
   if (largest > 5000.0 || largest < 1.0) {
     std::ostringstream message;
     message.precision(4);
     const double in_file_units = largest / assumed_mm;
     const std::string likely = LikelyUnit(in_file_units);
-    message << file << ": largest part is " << largest << " mm, implausible for a part; if the file's "
+    message << file << ": largest part is " << largest
+            << " mm, implausible for a part; if the file's "
             << "numbers are in " << likely << ", state `unit: " << likely << "` (it would then be "
             << in_file_units * *LengthUnitMm(likely) << " mm)";
     Warn(message.str());

@@ -35,7 +35,8 @@ void Mesh::MakeFaceted() {
   positions.reserve(3 * triangles.size());
   normals.reserve(3 * triangles.size());
   for (auto& t : triangles) {
-    const Eigen::Vector3f a = this->positions[t[0]], b = this->positions[t[1]], c = this->positions[t[2]];
+    const Eigen::Vector3f a = this->positions[t[0]], b = this->positions[t[1]],
+                          c = this->positions[t[2]];
     Eigen::Vector3f n = (b - a).cross(c - a);
     n = n.norm() > 0 ? n.normalized() : Eigen::Vector3f::UnitZ();
     const auto base = static_cast<uint32_t>(positions.size());

@@ -13,7 +13,8 @@ struct PositionHash {
   size_t operator()(const Eigen::Vector3f& p) const {
     uint32_t bits[3];
     std::memcpy(bits, p.data(), sizeof(bits));
-    return (size_t{bits[0]} * 73856093u) ^ (size_t{bits[1]} * 19349663u) ^ (size_t{bits[2]} * 83492791u);
+    return (size_t{bits[0]} * 73856093u) ^ (size_t{bits[1]} * 19349663u) ^
+           (size_t{bits[2]} * 83492791u);
   }
 };
 
@@ -43,9 +44,8 @@ MeshTopology AnalyzeTopology(const Mesh& mesh) {
       uses.push_back({std::min(a, b), std::max(a, b), a < b});
     }
   }
-  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
-    return x.lo != y.lo ? x.lo < y.lo : x.hi < y.hi;
-  });
+  std::sort(uses.begin(), uses.end(),
+            [](const Use& x, const Use& y) { return x.lo != y.lo ? x.lo < y.lo : x.hi < y.hi; });
   MeshTopology topology;
   for (size_t i = 0; i < uses.size();) {
     size_t j = i;

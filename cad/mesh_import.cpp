@@ -1,7 +1,7 @@
 // Triangle meshes through assimp: one file, one part.
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include <cmath>
 
@@ -20,11 +20,13 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
   importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS);
   importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE,
                             static_cast<float>(crease_angle_rad * 180.0 / M_PI));
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // Keep the file's own axes (COLLADA files here are Z_UP, like our world).
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
-  const unsigned flags = aiProcess_Triangulate | aiProcess_RemoveComponent | aiProcess_GenSmoothNormals |
-                         aiProcess_PreTransformVertices | aiProcess_SortByPType;
+  const unsigned flags = aiProcess_Triangulate | aiProcess_RemoveComponent |
+                         aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
+                         aiProcess_SortByPType;
   const aiScene* scene = importer.ReadFile(file, flags);
   if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
     std::string why = importer.GetErrorString();
@@ -50,7 +52,8 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
     for (unsigned f = 0; f < in->mNumFaces; ++f) {
       const aiFace& face = in->mFaces[f];
       if (face.mNumIndices != 3) continue;
-      mesh.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]);
+      mesh.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1],
+                                  base + face.mIndices[2]);
     }
     // A colour only from a material the file defines: assimp gives colourless formats (STL) a
     // default material of its own.

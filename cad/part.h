@@ -8,8 +8,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "cad/mesh.h"
 #include "cad/brep.h"
+#include "cad/mesh.h"
 
 namespace cadsynth {
 
@@ -61,8 +61,8 @@ struct Part {
 // One placed copy of a part. A point of the part moves to the world (or to the frame of the
 // assembly it belongs to) as x_in_world = world_from_model * x_in_model.
 struct Instance {
-  int part = 0;        // index into the owning list of parts
-  std::string name;    // instance name from the CAD file, or generated
+  int part = 0;      // index into the owning list of parts
+  std::string name;  // instance name from the CAD file, or generated
   Eigen::Isometry3d world_from_model = Eigen::Isometry3d::Identity();
   std::optional<Eigen::Vector3f> color;  // overrides the part's colour for this instance
   // Where it sits in the file's assembly tree: names from the root down, joined by '/'.

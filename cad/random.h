@@ -34,41 +34,52 @@ struct RandomStream {
 namespace streams {
 // recipes: parts.random.seed
 inline constexpr RandomStream kFamilyParam{
-    "family.param", "a random family variant's parameter: stream 'family.param.NAME', index = variant"};
+    "family.param",
+    "a random family variant's parameter: stream 'family.param.NAME', index = variant"};
 // recipes: scene.seed (arrangement)
-inline constexpr RandomStream kAssembledPose{"arrange.assembled_pose",
-                                             "the stable pose of an assembled scene (pose: random); index 0"};
-inline constexpr RandomStream kCopyPose{"arrange.copy_pose",
-                                        "the stable pose of one copy (pose: random); index = (group << 32) + copy"};
-inline constexpr RandomStream kCopyYaw{"arrange.copy_yaw",
-                                       "the yaw of one copy (clutter, pose: random); index as arrange.copy_pose"};
+inline constexpr RandomStream kAssembledPose{
+    "arrange.assembled_pose", "the stable pose of an assembled scene (pose: random); index 0"};
+inline constexpr RandomStream kCopyPose{
+    "arrange.copy_pose",
+    "the stable pose of one copy (pose: random); index = (group << 32) + copy"};
+inline constexpr RandomStream kCopyYaw{
+    "arrange.copy_yaw", "the yaw of one copy (clutter, pose: random); index as arrange.copy_pose"};
 inline constexpr RandomStream kClutterRadius{
-    "arrange.clutter_radius", "a clutter placement's distance from the centre; index = (body << 20) + attempt"};
-inline constexpr RandomStream kClutterAngle{"arrange.clutter_angle",
-                                            "a clutter placement's direction; index as arrange.clutter_radius"};
+    "arrange.clutter_radius",
+    "a clutter placement's distance from the centre; index = (body << 20) + attempt"};
+inline constexpr RandomStream kClutterAngle{
+    "arrange.clutter_angle", "a clutter placement's direction; index as arrange.clutter_radius"};
 // recipes: sweep.seed (random view samplers)
 inline constexpr RandomStream kViewYaw{"view.yaw", "a random view's yaw; index = view"};
-inline constexpr RandomStream kViewPitch{"view.pitch", "a random view's pitch (uniform by area); index = view"};
+inline constexpr RandomStream kViewPitch{"view.pitch",
+                                         "a random view's pitch (uniform by area); index = view"};
 inline constexpr RandomStream kViewRadius{"view.radius", "a random view's distance; index = view"};
-inline constexpr RandomStream kTargetHeight{"view.target_z", "the target jitter's height; index = view"};
-inline constexpr RandomStream kTargetAzimuth{"view.target_azimuth", "the target jitter's direction; index = view"};
-inline constexpr RandomStream kTargetRadius{"view.target_radius", "the target jitter's distance; index = view"};
+inline constexpr RandomStream kTargetHeight{"view.target_z",
+                                            "the target jitter's height; index = view"};
+inline constexpr RandomStream kTargetAzimuth{"view.target_azimuth",
+                                             "the target jitter's direction; index = view"};
+inline constexpr RandomStream kTargetRadius{"view.target_radius",
+                                            "the target jitter's distance; index = view"};
 inline constexpr RandomStream kViewRoll{"view.roll", "a view's roll jitter; index = view"};
 // recipes: output.split_seed
-inline constexpr RandomStream kTestImage{"split.test_image",
-                                         "whether an image is a test image (test_fraction); index = image"};
+inline constexpr RandomStream kTestImage{
+    "split.test_image", "whether an image is a test image (test_fraction); index = image"};
 // recipes: output.point_seed (+ the object's index)
-inline constexpr RandomStream kPointTriangle{"points.triangle", "the triangle of a model point (by area); index = point"};
-inline constexpr RandomStream kPointU{"points.u", "a model point's first barycentric draw; index = point"};
-inline constexpr RandomStream kPointV{"points.v", "a model point's second barycentric draw; index = point"};
+inline constexpr RandomStream kPointTriangle{
+    "points.triangle", "the triangle of a model point (by area); index = point"};
+inline constexpr RandomStream kPointU{"points.u",
+                                      "a model point's first barycentric draw; index = point"};
+inline constexpr RandomStream kPointV{"points.v",
+                                      "a model point's second barycentric draw; index = point"};
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
-    streams::kFamilyParam,   streams::kAssembledPose, streams::kCopyPose,     streams::kCopyYaw,
-    streams::kClutterRadius, streams::kClutterAngle,  streams::kViewYaw,      streams::kViewPitch,
-    streams::kViewRadius,    streams::kTargetHeight,  streams::kTargetAzimuth, streams::kTargetRadius,
-    streams::kViewRoll,      streams::kTestImage,     streams::kPointTriangle, streams::kPointU,
-    streams::kPointV,
+    streams::kFamilyParam,  streams::kAssembledPose, streams::kCopyPose,
+    streams::kCopyYaw,      streams::kClutterRadius, streams::kClutterAngle,
+    streams::kViewYaw,      streams::kViewPitch,     streams::kViewRadius,
+    streams::kTargetHeight, streams::kTargetAzimuth, streams::kTargetRadius,
+    streams::kViewRoll,     streams::kTestImage,     streams::kPointTriangle,
+    streams::kPointU,       streams::kPointV,
 };
 
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every

@@ -8,7 +8,6 @@
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_GTransform.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
-#include <gp_GTrsf.hxx>
 #include <BRepCheck_Analyzer.hxx>
 #include <BRepGProp.hxx>
 #include <BRepLProp_SLProps.hxx>
@@ -27,6 +26,7 @@
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
+#include <gp_GTrsf.hxx>
 #include <gp_Trsf.hxx>
 
 #include "cad/error.h"
@@ -125,7 +125,7 @@ namespace {
 // Distance from `p` to the face's surface: Gauss-Newton on |S(u, v) - p|^2 from (u, v), which
 // converges in a few steps for a point near its own triangle; where it does not (degenerate
 // parametrisations such as sphere poles), OpenCASCADE's global projection decides.
-double DistanceToSurface(const BRepAdaptor_Surface& surface, const Handle(Geom_Surface)& geometry,
+double DistanceToSurface(const BRepAdaptor_Surface& surface, const Handle(Geom_Surface) & geometry,
                          const gp_Pnt& p, double u, double v) {
   gp_Pnt s;
   gp_Vec du, dv;
@@ -155,7 +155,8 @@ Shape Scaled(const Shape& shape, const Eigen::Vector3d& f) {
   if (f.x() == f.y() && f.y() == f.z()) {
     gp_Trsf scale;
     scale.SetScale(gp_Pnt(0, 0, 0), f.x());
-    return Build(BRepBuilderAPI_Transform(OcctShape(shape), scale, /*copy=*/true), "a scaled shape");
+    return Build(BRepBuilderAPI_Transform(OcctShape(shape), scale, /*copy=*/true),
+                 "a scaled shape");
   }
   gp_GTrsf scale;
   scale.SetValue(1, 1, f.x());
@@ -251,7 +252,8 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options, double* 
           if (d >= 0.0) *max_deviation_mm = std::max(*max_deviation_mm, d);
         };
         const gp_Pnt a = point(0), b = point(1), c = point(2);
-        sample(gp_Pnt((a.XYZ() + b.XYZ() + c.XYZ()) / 3.0), (uv[0].X() + uv[1].X() + uv[2].X()) / 3.0,
+        sample(gp_Pnt((a.XYZ() + b.XYZ() + c.XYZ()) / 3.0),
+               (uv[0].X() + uv[1].X() + uv[2].X()) / 3.0,
                (uv[0].Y() + uv[1].Y() + uv[2].Y()) / 3.0);
         for (int k = 0; k < 3; ++k) {
           const int l = (k + 1) % 3;
@@ -325,7 +327,8 @@ Part MakePart(const std::string& name, const Shape& shape, const TessellationOpt
       Warn(message.str());
     }
   }
-  part.mesh = Tessellate(shape, effective, options.measure_deviation ? &part.max_deviation_mm : nullptr);
+  part.mesh =
+      Tessellate(shape, effective, options.measure_deviation ? &part.max_deviation_mm : nullptr);
   const Eigen::Vector3d centre = part.mesh.Bounds().center();
   part.cad_from_model = Eigen::Translation3d(centre);
   part.mesh.Transform(part.cad_from_model.inverse());

@@ -5,9 +5,10 @@
 #include <fstream>
 
 #include <IFSelect_ReturnStatus.hxx>
-#include <Interface_Static.hxx>
 #include <Interface_Check.hxx>
 #include <Interface_CheckIterator.hxx>
+#include <Interface_Static.hxx>
+#include <Quantity_Color.hxx>
 #include <STEPCAFControl_Reader.hxx>
 #include <STEPCAFControl_Writer.hxx>
 #include <STEPControl_Reader.hxx>
@@ -17,7 +18,6 @@
 #include <TDocStd_Document.hxx>
 #include <TopLoc_Location.hxx>
 #include <XCAFApp_Application.hxx>
-#include <Quantity_Color.hxx>
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
@@ -53,7 +53,11 @@ bool IsValidUtf8(const std::string& bytes) {
   size_t i = 0;
   while (i < bytes.size()) {
     const auto c = static_cast<unsigned char>(bytes[i]);
-    const int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : -1;
+    const int extra = c < 0x80           ? 0
+                      : (c >> 5) == 0x6  ? 1
+                      : (c >> 4) == 0xE  ? 2
+                      : (c >> 3) == 0x1E ? 3
+                                         : -1;
     if (extra < 0 || i + extra >= bytes.size() + (extra == 0 ? 1 : 0)) return false;
     for (int k = 1; k <= extra; ++k) {
       if ((static_cast<unsigned char>(bytes[i + k]) >> 6) != 0x2) return false;
@@ -69,10 +73,12 @@ void WarnOnRawNonUtf8(const std::filesystem::path& path, const std::string& file
   std::ifstream in(path, std::ios::binary);
   std::string line;
   while (std::getline(in, line)) {
-    const bool raw = std::any_of(line.begin(), line.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x80; });
+    const bool raw = std::any_of(line.begin(), line.end(),
+                                 [](char c) { return static_cast<unsigned char>(c) >= 0x80; });
     if (raw && !IsValidUtf8(line)) {
-      Warn(file + ": names hold bytes that are not UTF-8 (a local code page); state it, e.g. "
-                  "`encoding: cp1251` for Cyrillic, `cp1252` for Western European, `sjis` for Japanese");
+      Warn(file +
+           ": names hold bytes that are not UTF-8 (a local code page); state it, e.g. "
+           "`encoding: cp1251` for Cyrillic, `cp1252` for Western European, `sjis` for Japanese");
       return;
     }
   }
@@ -82,11 +88,12 @@ void WarnOnRawNonUtf8(const std::filesystem::path& path, const std::string& file
 
 std::string StepCodePage(const std::string& encoding) {
   static const char* const kNames[] = {
-      "UTF8",   "SJIS",   "EUC",    "GB",        "CP850",     "CP1250",    "CP1251",    "CP1252",
-      "CP1253", "CP1254", "CP1255", "CP1256",    "CP1257",    "CP1258",    "iso8859-1", "iso8859-2",
-      "iso8859-3", "iso8859-4", "iso8859-5", "iso8859-6", "iso8859-7", "iso8859-8", "iso8859-9"};
+      "UTF8",      "SJIS",      "EUC",       "GB",        "CP850",     "CP1250",
+      "CP1251",    "CP1252",    "CP1253",    "CP1254",    "CP1255",    "CP1256",
+      "CP1257",    "CP1258",    "iso8859-1", "iso8859-2", "iso8859-3", "iso8859-4",
+      "iso8859-5", "iso8859-6", "iso8859-7", "iso8859-8", "iso8859-9"};
   static const std::pair<const char*, const char*> kAliases[] = {
-      {"utf-8", "UTF8"}, {"shift_jis", "SJIS"}, {"shift-jis", "SJIS"}, {"gb2312", "GB"},
+      {"utf-8", "UTF8"}, {"shift_jis", "SJIS"},   {"shift-jis", "SJIS"},   {"gb2312", "GB"},
       {"gbk", "GB"},     {"latin1", "iso8859-1"}, {"latin-1", "iso8859-1"}};
   const auto lower = [](std::string s) {
     for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -187,10 +194,12 @@ void WriteStep(const std::filesystem::path& path, const std::string& assembly_na
       if (component.color) {
         const Eigen::Vector3f& c = *component.color;
         XCAFDoc_DocumentTool::ColorTool(document.doc->Main())
-            ->SetColor(part, Quantity_Color(c.x(), c.y(), c.z(), Quantity_TOC_sRGB), XCAFDoc_ColorSurf);
+            ->SetColor(part, Quantity_Color(c.x(), c.y(), c.z(), Quantity_TOC_sRGB),
+                       XCAFDoc_ColorSurf);
       }
       for (size_t k = 0; k < component.placements.size(); ++k) {
-        const TDF_Label placed = tool->AddComponent(root, part, TopLoc_Location(ToTrsf(component.placements[k])));
+        const TDF_Label placed =
+            tool->AddComponent(root, part, TopLoc_Location(ToTrsf(component.placements[k])));
         const std::string name = component.name + "_" + std::to_string(k + 1);
         TDataStd_Name::Set(placed, TCollection_ExtendedString(name.c_str(), true));
       }
@@ -202,7 +211,8 @@ void WriteStep(const std::filesystem::path& path, const std::string& assembly_na
     if (!writer.Transfer(document.doc, STEPControl_AsIs)) {
       fail("OpenCASCADE could not translate the shapes to STEP");
     }
-    if (writer.Write(temporary.string().c_str()) != IFSelect_RetDone) fail("could not write the STEP file");
+    if (writer.Write(temporary.string().c_str()) != IFSelect_RetDone)
+      fail("could not write the STEP file");
   } catch (const Standard_Failure& failure) {
     fail(std::string("OpenCASCADE failed while writing: ") + failure.GetMessageString());
   }

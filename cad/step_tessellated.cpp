@@ -65,7 +65,8 @@ class Parser {
 
  private:
   [[noreturn]] void Fail(const std::string& what) const {
-    const size_t line = static_cast<size_t>(std::count(s_.begin(), s_.begin() + std::min(i_, s_.size()), '\n')) + 1;
+    const size_t line =
+        static_cast<size_t>(std::count(s_.begin(), s_.begin() + std::min(i_, s_.size()), '\n')) + 1;
     throw Error(file_ + ": line " + std::to_string(line) + ": " + what);
   }
   void Skip() {
@@ -93,7 +94,8 @@ class Parser {
   }
   std::string Keyword() {
     const size_t start = i_;
-    while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_')) ++i_;
+    while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_'))
+      ++i_;
     if (start == i_) Fail("expected an entity type");
     return s_.substr(start, i_ - start);
   }
@@ -170,7 +172,8 @@ class Parser {
       ++i_;
       p.kind = Param::kList;
       p.list = List(')');
-    } else if (std::isalpha(static_cast<unsigned char>(c))) {  // typed value, e.g. LENGTH_MEASURE(1.)
+    } else if (std::isalpha(
+                   static_cast<unsigned char>(c))) {  // typed value, e.g. LENGTH_MEASURE(1.)
       Keyword();
       Skip();
       Expect('(');
@@ -193,27 +196,30 @@ class Parser {
 };
 
 struct Face {
-  std::vector<Eigen::Vector3f> points;   // positions of the face's points (via pnindex)
-  std::vector<Eigen::Vector3f> normals;  // one per point, or empty
+  std::vector<Eigen::Vector3f> points;        // positions of the face's points (via pnindex)
+  std::vector<Eigen::Vector3f> normals;       // one per point, or empty
   std::vector<std::array<int, 3>> triangles;  // 0-based into points
 };
 
 // Reads a (COMPLEX_)TRIANGULATED_FACE into points and triangles.
-Face ReadFace(const Record& face, const std::unordered_map<long, Record>& records, const std::string& file, long id) {
+Face ReadFace(const Record& face, const std::unordered_map<long, Record>& records,
+              const std::string& file, long id) {
   const auto fail = [&](const std::string& what) -> void {
     throw Error(file + ": #" + std::to_string(id) + " " + face.type + ": " + what);
   };
   Face out;
   if (face.params.size() < 7 || face.params[1].kind != Param::kRef) fail("too few parameters");
   const auto coords = records.find(face.params[1].ref);
-  if (coords == records.end() || coords->second.type != "COORDINATES_LIST" || coords->second.params.size() < 3) {
+  if (coords == records.end() || coords->second.type != "COORDINATES_LIST" ||
+      coords->second.params.size() < 3) {
     fail("its coordinates are not a COORDINATES_LIST");
   }
   const std::vector<Param>& xyz = coords->second.params[2].list;
   const std::vector<Param>& pnindex = face.params[5].list;
   const size_t count = pnindex.empty() ? xyz.size() : pnindex.size();
   for (size_t k = 0; k < count; ++k) {
-    const long index = pnindex.empty() ? static_cast<long>(k) + 1 : static_cast<long>(pnindex[k].number);
+    const long index =
+        pnindex.empty() ? static_cast<long>(k) + 1 : static_cast<long>(pnindex[k].number);
     if (index < 1 || static_cast<size_t>(index) > xyz.size() || xyz[index - 1].list.size() != 3) {
       fail("point index " + std::to_string(index) + " is outside its coordinates list");
     }
@@ -224,17 +230,20 @@ Face ReadFace(const Record& face, const std::unordered_map<long, Record>& record
   if (normals.size() == out.points.size() || normals.size() == 1) {
     for (size_t k = 0; k < out.points.size(); ++k) {
       const auto& n = normals[normals.size() == 1 ? 0 : k].list;
-      if (n.size() == 3) out.normals.emplace_back(float(n[0].number), float(n[1].number), float(n[2].number));
+      if (n.size() == 3)
+        out.normals.emplace_back(float(n[0].number), float(n[1].number), float(n[2].number));
     }
     if (out.normals.size() != out.points.size()) out.normals.clear();
   }
   const auto index = [&](const Param& p) {
     const long i = static_cast<long>(p.number);
-    if (i < 1 || static_cast<size_t>(i) > out.points.size()) fail("triangle index " + std::to_string(i) + " out of range");
+    if (i < 1 || static_cast<size_t>(i) > out.points.size())
+      fail("triangle index " + std::to_string(i) + " out of range");
     return static_cast<int>(i - 1);
   };
   const auto add = [&](int a, int b, int c) {
-    if (a != b && b != c && a != c) out.triangles.push_back({a, b, c});  // repeated indices: strip joins
+    if (a != b && b != c && a != c)
+      out.triangles.push_back({a, b, c});  // repeated indices: strip joins
   };
   if (face.type == "TRIANGULATED_FACE") {
     for (const Param& t : face.params[6].list) {
@@ -242,10 +251,15 @@ Face ReadFace(const Record& face, const std::unordered_map<long, Record>& record
       add(index(t.list[0]), index(t.list[1]), index(t.list[2]));
     }
   } else {
-    for (const Param& strip : face.params[6].list) {  // each new point closes a triangle, alternating
+    for (const Param& strip :
+         face.params[6].list) {  // each new point closes a triangle, alternating
       for (size_t k = 2; k < strip.list.size(); ++k) {
-        const int a = index(strip.list[k - 2]), b = index(strip.list[k - 1]), c = index(strip.list[k]);
-        if (k % 2 == 0) add(a, b, c); else add(b, a, c);
+        const int a = index(strip.list[k - 2]), b = index(strip.list[k - 1]),
+                  c = index(strip.list[k]);
+        if (k % 2 == 0)
+          add(a, b, c);
+        else
+          add(b, a, c);
       }
     }
     if (face.params.size() > 7) {
@@ -260,12 +274,14 @@ Face ReadFace(const Record& face, const std::unordered_map<long, Record>& record
 }
 
 // The first COLOUR_RGB reachable from a styling record (STYLED_ITEM -> ... -> COLOUR_RGB).
-std::optional<Eigen::Vector3f> FindColour(long id, const std::unordered_map<long, Record>& records, int depth) {
+std::optional<Eigen::Vector3f> FindColour(long id, const std::unordered_map<long, Record>& records,
+                                          int depth) {
   const auto it = records.find(id);
   if (it == records.end() || depth > 8) return std::nullopt;
   const Record& r = it->second;
   if (r.type == "COLOUR_RGB" && r.params.size() >= 4) {
-    return Eigen::Vector3f(float(r.params[1].number), float(r.params[2].number), float(r.params[3].number));
+    return Eigen::Vector3f(float(r.params[1].number), float(r.params[2].number),
+                           float(r.params[3].number));
   }
   std::vector<const Param*> stack;
   for (const Param& p : r.params) stack.push_back(&p);
@@ -290,7 +306,8 @@ Assembly ReadStepTessellated(const std::filesystem::path& path, double unit_mm) 
   buffer << in.rdbuf();
   const std::string text = buffer.str();
   Assembly assembly;
-  if (text.find("TESSELLATED_SOLID") == std::string::npos && text.find("TESSELLATED_SHELL") == std::string::npos) {
+  if (text.find("TESSELLATED_SOLID") == std::string::npos &&
+      text.find("TESSELLATED_SHELL") == std::string::npos) {
     return assembly;
   }
   const std::unordered_map<long, Record> records = Parser(text, file).Records();
@@ -310,7 +327,8 @@ Assembly ReadStepTessellated(const std::filesystem::path& path, double unit_mm) 
   }
   std::vector<long> solids;
   for (const auto& [id, r] : records) {
-    if ((r.type == "TESSELLATED_SOLID" || r.type == "TESSELLATED_SHELL") && !constructive.count(id)) {
+    if ((r.type == "TESSELLATED_SOLID" || r.type == "TESSELLATED_SHELL") &&
+        !constructive.count(id)) {
       solids.push_back(id);
     }
   }
@@ -318,10 +336,12 @@ Assembly ReadStepTessellated(const std::filesystem::path& path, double unit_mm) 
   for (long id : solids) {
     const Record& solid = records.at(id);
     Part part;
-    part.name = solid.params.empty() || solid.params[0].text.empty() ? "tessellated_" + std::to_string(id)
-                                                                      : solid.params[0].text;
+    part.name = solid.params.empty() || solid.params[0].text.empty()
+                    ? "tessellated_" + std::to_string(id)
+                    : solid.params[0].text;
     std::map<std::array<float, 3>, size_t> colour_votes;
-    if (solid.params.size() < 2) throw Error(file + ": #" + std::to_string(id) + " " + solid.type + ": no faces");
+    if (solid.params.size() < 2)
+      throw Error(file + ": #" + std::to_string(id) + " " + solid.type + ": no faces");
     for (const Param& item : solid.params[1].list) {
       const auto face_record = records.find(item.ref);
       if (item.kind != Param::kRef || face_record == records.end()) continue;
@@ -329,12 +349,15 @@ Assembly ReadStepTessellated(const std::filesystem::path& path, double unit_mm) 
       if (type != "TRIANGULATED_FACE" && type != "COMPLEX_TRIANGULATED_FACE") continue;
       const Face face = ReadFace(face_record->second, records, file, item.ref);
       const auto base = static_cast<uint32_t>(part.mesh.positions.size());
-      for (const Eigen::Vector3f& p : face.points) part.mesh.positions.push_back(p * float(unit_mm));
+      for (const Eigen::Vector3f& p : face.points)
+        part.mesh.positions.push_back(p * float(unit_mm));
       for (const auto& t : face.triangles) {
         Eigen::Matrix<uint32_t, 3, 1> tri(base + t[0], base + t[1], base + t[2]);
         if (!face.normals.empty()) {  // wind to agree with the file's normals
-          const Eigen::Vector3f n = (face.points[t[1]] - face.points[t[0]]).cross(face.points[t[2]] - face.points[t[0]]);
-          if (n.dot(face.normals[t[0]] + face.normals[t[1]] + face.normals[t[2]]) < 0) std::swap(tri[1], tri[2]);
+          const Eigen::Vector3f n =
+              (face.points[t[1]] - face.points[t[0]]).cross(face.points[t[2]] - face.points[t[0]]);
+          if (n.dot(face.normals[t[0]] + face.normals[t[1]] + face.normals[t[2]]) < 0)
+            std::swap(tri[1], tri[2]);
         }
         part.mesh.triangles.push_back(tri);
       }
@@ -342,23 +365,28 @@ Assembly ReadStepTessellated(const std::filesystem::path& path, double unit_mm) 
       std::vector<Eigen::Vector3f> normals = face.normals;
       if (normals.empty()) {
         normals.assign(face.points.size(), Eigen::Vector3f::Zero());
-        for (size_t k = part.mesh.triangles.size() - face.triangles.size(); k < part.mesh.triangles.size(); ++k) {
+        for (size_t k = part.mesh.triangles.size() - face.triangles.size();
+             k < part.mesh.triangles.size(); ++k) {
           const auto& tri = part.mesh.triangles[k];
           const Eigen::Vector3f& a = part.mesh.positions[tri[0]];
-          const Eigen::Vector3f n = (part.mesh.positions[tri[1]] - a).cross(part.mesh.positions[tri[2]] - a);
+          const Eigen::Vector3f n =
+              (part.mesh.positions[tri[1]] - a).cross(part.mesh.positions[tri[2]] - a);
           for (int c = 0; c < 3; ++c) normals[tri[c] - base] += n;
         }
       }
-      for (Eigen::Vector3f n : normals) part.mesh.normals.push_back(n.norm() > 0 ? n.normalized() : Eigen::Vector3f::UnitZ());
+      for (Eigen::Vector3f n : normals)
+        part.mesh.normals.push_back(n.norm() > 0 ? n.normalized() : Eigen::Vector3f::UnitZ());
       const auto colour = colour_of.find(item.ref);
       if (colour != colour_of.end()) {
-        colour_votes[{colour->second.x(), colour->second.y(), colour->second.z()}] += face.triangles.size();
+        colour_votes[{colour->second.x(), colour->second.y(), colour->second.z()}] +=
+            face.triangles.size();
       }
     }
     if (part.mesh.empty()) continue;
     if (!colour_votes.empty()) {
-      const auto best = std::max_element(colour_votes.begin(), colour_votes.end(),
-                                         [](const auto& a, const auto& b) { return a.second < b.second; });
+      const auto best =
+          std::max_element(colour_votes.begin(), colour_votes.end(),
+                           [](const auto& a, const auto& b) { return a.second < b.second; });
       part.color = Eigen::Vector3f(best->first[0], best->first[1], best->first[2]);
     }
     const Eigen::Vector3d centre = part.mesh.Bounds().center();
@@ -366,7 +394,8 @@ Assembly ReadStepTessellated(const std::filesystem::path& path, double unit_mm) 
     part.mesh.Transform(part.cad_from_model.inverse());
     part.watertight = AnalyzeTopology(part.mesh).watertight();
     if (part.watertight) part.mass = ComputeMeshMassProperties(part.mesh);
-    assembly.instances.push_back(Instance{static_cast<int>(assembly.parts.size()), part.name, part.cad_from_model});
+    assembly.instances.push_back(
+        Instance{static_cast<int>(assembly.parts.size()), part.name, part.cad_from_model});
     assembly.parts.push_back(std::move(part));
   }
   return assembly;

@@ -1,32 +1,32 @@
 #include "cad/xde.h"
 
-#include <filesystem>
 #include <algorithm>
 #include <array>
+#include <filesystem>
 #include <map>
 #include <system_error>
 
+#include <tbb/parallel_for.h>
+#include <BRepGProp.hxx>
+#include <GProp_GProps.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
-#include <BRepGProp.hxx>
-#include <GProp_GProps.hxx>
 #include <Quantity_Color.hxx>
-#include <TopExp_Explorer.hxx>
 #include <Standard_Failure.hxx>
 #include <TCollection_AsciiString.hxx>
 #include <TDF_Label.hxx>
 #include <TDF_LabelSequence.hxx>
 #include <TDF_Tool.hxx>
 #include <TDataStd_Name.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopLoc_Location.hxx>
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <gp_Trsf.hxx>
-#include <tbb/parallel_for.h>
 
 #include "cad/error.h"
 #include "cad/mesh_analysis.h"
@@ -48,17 +48,21 @@ Eigen::Vector3f ToVector(const Quantity_Color& c) {
   return Eigen::Vector3f(float(r), float(g), float(b));
 }
 
-std::optional<Eigen::Vector3f> LabelColor(const Handle(XCAFDoc_ColorTool)& colors, const TDF_Label& label) {
+std::optional<Eigen::Vector3f> LabelColor(const Handle(XCAFDoc_ColorTool) & colors,
+                                          const TDF_Label& label) {
   Quantity_Color c;
-  if (colors->GetColor(label, XCAFDoc_ColorSurf, c) || colors->GetColor(label, XCAFDoc_ColorGen, c)) {
+  if (colors->GetColor(label, XCAFDoc_ColorSurf, c) ||
+      colors->GetColor(label, XCAFDoc_ColorGen, c)) {
     return ToVector(c);
   }
   return std::nullopt;
 }
 
-std::optional<Eigen::Vector3f> ShapeColor(const Handle(XCAFDoc_ColorTool)& colors, const TopoDS_Shape& shape) {
+std::optional<Eigen::Vector3f> ShapeColor(const Handle(XCAFDoc_ColorTool) & colors,
+                                          const TopoDS_Shape& shape) {
   Quantity_Color c;
-  if (colors->GetColor(shape, XCAFDoc_ColorSurf, c) || colors->GetColor(shape, XCAFDoc_ColorGen, c)) {
+  if (colors->GetColor(shape, XCAFDoc_ColorSurf, c) ||
+      colors->GetColor(shape, XCAFDoc_ColorGen, c)) {
     return ToVector(c);
   }
   return std::nullopt;
@@ -66,8 +70,8 @@ std::optional<Eigen::Vector3f> ShapeColor(const Handle(XCAFDoc_ColorTool)& color
 
 // A part's colour: its label's, else its first coloured solid's, else the colour covering the
 // largest area of its faces (files that colour faces only).
-std::optional<Eigen::Vector3f> PartColor(const Handle(XCAFDoc_ColorTool)& colors, const TDF_Label& label,
-                                         const TopoDS_Shape& shape) {
+std::optional<Eigen::Vector3f> PartColor(const Handle(XCAFDoc_ColorTool) & colors,
+                                         const TDF_Label& label, const TopoDS_Shape& shape) {
   if (auto c = LabelColor(colors, label)) return c;
   for (TopExp_Explorer it(shape, TopAbs_SOLID); it.More(); it.Next()) {
     if (auto c = ShapeColor(colors, it.Current())) return c;
@@ -81,8 +85,8 @@ std::optional<Eigen::Vector3f> PartColor(const Handle(XCAFDoc_ColorTool)& colors
     }
   }
   if (area.empty()) return std::nullopt;
-  const auto best = std::max_element(area.begin(), area.end(),
-                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  const auto best = std::max_element(
+      area.begin(), area.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
   return Eigen::Vector3f(best->first[0], best->first[1], best->first[2]);
 }
 
@@ -125,7 +129,8 @@ struct Walker {
     }
     TCollection_AsciiString entry;
     TDF_Tool::Entry(label, entry);
-    auto [slot, inserted] = part_by_entry.emplace(entry.ToCString(), static_cast<int>(out->part_names.size()));
+    auto [slot, inserted] =
+        part_by_entry.emplace(entry.ToCString(), static_cast<int>(out->part_names.size()));
     if (inserted) {
       std::string part_name = LabelName(label);
       if (part_name.empty()) part_name = "part_" + std::to_string(out->part_names.size());
@@ -138,7 +143,8 @@ struct Walker {
     instance.part = slot->second;
     instance.name = name.empty() ? out->part_names[slot->second] : name;
     instance.path = path;
-    instance.world_from_model = ToIsometry(location.Transformation(), file + ": instance '" + instance.name + "'");
+    instance.world_from_model =
+        ToIsometry(location.Transformation(), file + ": instance '" + instance.name + "'");
     instance.color = color;
     out->instances.push_back(std::move(instance));
   }
@@ -158,7 +164,9 @@ void InitOcct() {
   });
 }
 
-DocumentGuard::DocumentGuard() { XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc); }
+DocumentGuard::DocumentGuard() {
+  XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+}
 DocumentGuard::~DocumentGuard() { XCAFApp_Application::GetApplication()->Close(doc); }
 
 std::mutex& XdeMutex() {
@@ -175,7 +183,7 @@ void RequireReadableFile(const std::string& file) {
   if (std::filesystem::file_size(path, ec) == 0) throw Error(file + ": file is empty");
 }
 
-CadContents CollectDocument(const Handle(TDocStd_Document)& doc, const std::string& file) {
+CadContents CollectDocument(const Handle(TDocStd_Document) & doc, const std::string& file) {
   CadContents contents;
   const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
   Walker walker{file, XCAFDoc_DocumentTool::ColorTool(doc->Main()), &contents, {}};
@@ -198,7 +206,9 @@ Assembly BuildAssembly(const std::string& file, CadContents contents,
     try {
       bool healed = false;
       const Shape shape = Heal(contents.part_shapes[i], &healed);
-      if (healed) Warn(file + ": part '" + contents.part_names[i] + "' had invalid geometry; repaired by shape healing");
+      if (healed)
+        Warn(file + ": part '" + contents.part_names[i] +
+             "' had invalid geometry; repaired by shape healing");
       parts[i] = MakePart(contents.part_names[i], shape, options);
       parts[i].color = contents.part_colors[i];
     } catch (const Error& e) {
@@ -208,7 +218,8 @@ Assembly BuildAssembly(const std::string& file, CadContents contents,
     }
   });
   Assembly assembly;
-  assembly.name = contents.name.empty() ? std::filesystem::path(file).stem().string() : contents.name;
+  assembly.name =
+      contents.name.empty() ? std::filesystem::path(file).stem().string() : contents.name;
   std::vector<int> new_index(n, -1);
   for (size_t i = 0; i < n; ++i) {
     if (!errors[i].empty()) {

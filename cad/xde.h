@@ -40,7 +40,7 @@ struct CadContents {
 
 // Walks the free shapes and their assembly structure: one part per distinct prototype label, one
 // instance per occurrence, names and colours (an instance's colour wins over its part's).
-CadContents CollectDocument(const Handle(TDocStd_Document)& doc, const std::string& file);
+CadContents CollectDocument(const Handle(TDocStd_Document) & doc, const std::string& file);
 
 // Tessellates the parts in parallel (parts that yield no triangles are dropped with a warning),
 // moves each into its model frame and fixes the instance poses to match. Throws when nothing is

@@ -2,27 +2,27 @@
 
 #include <fnmatch.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <algorithm>
 #include <limits>
 #include <map>
 #include <system_error>
 
+#include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <tbb/parallel_for.h>
 
-#include "cad/random.h"
 #include "cad/error.h"
+#include "cad/random.h"
+#include "cad/util.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"
 #include "dataset/models.h"
 #include "dataset/point_cloud.h"
-#include "cad/util.h"
 
 namespace cadsynth {
 
@@ -111,7 +111,9 @@ VisibleMasks::VisibleMasks(const Frame& frame, const BopOptions& options)
     const int u1 = std::min(w, truth.roi[2]), v1 = std::min(frame.height(), truth.roi[3]);
     const size_t area = static_cast<size_t>(std::max(0, u1 - u0)) * std::max(0, v1 - v0);
     if (truth.amodal_depth.size() != area) {
-      throw Error("bop: the bop19 visibility rule needs each instance's depth rendered alone (amodal depth)");
+      throw Error(
+          "bop: the bop19 visibility rule needs each instance's depth rendered alone (amodal "
+          "depth)");
     }
     std::vector<uint8_t>& mask = masks_[i];
     mask.assign(area, 0);
@@ -122,8 +124,9 @@ VisibleMasks::VisibleMasks(const Frame& frame, const BopOptions& options)
         const float model = truth.amodal_depth[q];
         if (!(model > 0.0f)) continue;
         const double x = (u - k.cx) / k.fx;
-        const double scene = EncodeDepth(frame.depth[static_cast<size_t>(v) * w + u], options.depth_scale) *
-                             options.depth_scale;
+        const double scene =
+            EncodeDepth(frame.depth[static_cast<size_t>(v) * w + u], options.depth_scale) *
+            options.depth_scale;
         const double stretch = std::sqrt(x * x + y * y + 1.0);
         mask[q] = scene == 0.0 || (model - scene) * stretch <= options.visib_delta_mm;
       }
@@ -142,7 +145,8 @@ bool VisibleMasks::operator()(size_t i, int u, int v) const {
 
 namespace {
 
-std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options, const VisibleMasks& visible) {
+std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options,
+                                   const VisibleMasks& visible) {
   const int w = frame.width(), h = frame.height();
   const size_t n = frame.instances.size();
   std::vector<GtInfo> infos(n);
@@ -210,7 +214,8 @@ std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options
       box(u0[i], v0[i], u1[i], v1[i], info.bbox_visib);
       box(a0, b0, a1, b1, info.bbox_obj);
     }
-    info.visib_fract = info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
+    info.visib_fract =
+        info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
   }
   return infos;
 }
@@ -261,7 +266,8 @@ std::vector<ObjectClass> AssignClasses(
 void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts,
                     const std::vector<ObjectClass>& classes) {
   if (!classes.empty() && classes.size() != parts.size()) {
-    throw Error("bop: " + std::to_string(classes.size()) + " classes for " + std::to_string(parts.size()) + " parts");
+    throw Error("bop: " + std::to_string(classes.size()) + " classes for " +
+                std::to_string(parts.size()) + " parts");
   }
   const std::filesystem::path dir = root / "models";
   CreateFolder(dir);
@@ -276,8 +282,8 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
   for (size_t i = 0; i < parts.size(); ++i) {
     const Eigen::AlignedBox3d box = parts[i].mesh.Bounds();
     const std::string key = std::to_string(i + 1);
-    info[key] = {{"diameter", diameters[i]},
-                 {"min_x", box.min().x()}, {"min_y", box.min().y()}, {"min_z", box.min().z()},
+    info[key] = {{"diameter", diameters[i]},  {"min_x", box.min().x()},
+                 {"min_y", box.min().y()},    {"min_z", box.min().z()},
                  {"size_x", box.sizes().x()}, {"size_y", box.sizes().y()},
                  {"size_z", box.sizes().z()}};
     // Symmetries as bop_toolkit reads them: 4x4 row-major transforms, and axes with offsets.
@@ -287,7 +293,8 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
       for (const Eigen::Isometry3d& t : sym.discrete) {
         Json m = Json::array();
         for (int r = 0; r < 4; ++r) {
-          for (int c = 0; c < 4; ++c) m.push_back(std::abs(t.matrix()(r, c)) < 1e-12 ? 0.0 : t.matrix()(r, c));
+          for (int c = 0; c < 4; ++c)
+            m.push_back(std::abs(t.matrix()(r, c)) < 1e-12 ? 0.0 : t.matrix()(r, c));
         }
         discrete.push_back(m);
       }
@@ -319,15 +326,18 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
   WriteJson(dir / "models_cad.json", cad);
 }
 
-void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts, const BopOptions& options) {
+void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts,
+                      const BopOptions& options) {
   if (options.model_points <= 0) return;
   CreateFolder(root / "models" / "points");
   std::vector<Keypoints> keypoints(parts.size());
   tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
     const std::vector<Eigen::Vector3f> points =
-        options.even_points ? SampleEvenly(parts[i].mesh, options.model_points, options.point_seed + i)
-                            : SampleSurface(parts[i].mesh, options.model_points, options.point_seed + i);
-    WriteFileAtomic(root / "models" / "points" / ("obj_" + Id6(static_cast<int>(i) + 1) + ".ply"), EncodePointPly(points));
+        options.even_points
+            ? SampleEvenly(parts[i].mesh, options.model_points, options.point_seed + i)
+            : SampleSurface(parts[i].mesh, options.model_points, options.point_seed + i);
+    WriteFileAtomic(root / "models" / "points" / ("obj_" + Id6(static_cast<int>(i) + 1) + ".ply"),
+                    EncodePointPly(points));
     keypoints[i] = ComputeKeypoints(parts[i].mesh, points);
   });
   const auto list = [](const auto& points) {
@@ -349,9 +359,13 @@ void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,
                     const BopOptions& options) {
   CreateFolder(root);
-  WriteJson(root / "camera.json", Json{{"cx", k.cx}, {"cy", k.cy},
-                                       {"depth_scale", options.depth_scale}, {"fx", k.fx},
-                                       {"fy", k.fy}, {"height", k.height}, {"width", k.width}});
+  WriteJson(root / "camera.json", Json{{"cx", k.cx},
+                                       {"cy", k.cy},
+                                       {"depth_scale", options.depth_scale},
+                                       {"fx", k.fx},
+                                       {"fy", k.fy},
+                                       {"height", k.height},
+                                       {"width", k.width}});
 }
 
 BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
@@ -362,11 +376,13 @@ BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
       obj_ids_(std::move(obj_id_of_instance)) {
   std::string why;
   if (!options.Check(&why)) throw Error("bop: " + why);
-  for (const char* sub : {"rgb", "depth", "mask", "mask_visib", ".fragments"}) CreateFolder(scene_dir_ / sub);
+  for (const char* sub : {"rgb", "depth", "mask", "mask_visib", ".fragments"})
+    CreateFolder(scene_dir_ / sub);
   // Frames of an interrupted run: complete where the fragment (written last) exists.
   for (const auto& entry : std::filesystem::directory_iterator(scene_dir_ / ".fragments")) {
     const std::string name = entry.path().filename().string();
-    if (name.size() == 11 && name.substr(6) == ".json") image_ids_.push_back(std::stoi(name.substr(0, 6)));
+    if (name.size() == 11 && name.substr(6) == ".json")
+      image_ids_.push_back(std::stoi(name.substr(0, 6)));
   }
 }
 
@@ -396,7 +412,8 @@ std::string BopSceneWriter::CheckFrame(int image_id) const {
     return fragment.string() + ": unreadable manifest entry";
   }
   for (const Json& file : entry.value("files", Json::array())) {
-    const FileRecord record{file.at(0).get<std::string>(), file.at(1).get<uint64_t>(), file.at(2).get<uint32_t>()};
+    const FileRecord record{file.at(0).get<std::string>(), file.at(1).get<uint64_t>(),
+                            file.at(2).get<uint32_t>()};
     const std::string problem = CheckFile(root_, record);
     if (!problem.empty()) return (root_ / record.path).string() + ": " + problem;
   }
@@ -406,8 +423,9 @@ std::string BopSceneWriter::CheckFrame(int image_id) const {
 void BopSceneWriter::ForgetFrame(int image_id) {
   std::error_code ec;
   std::filesystem::remove(scene_dir_ / ".fragments" / (Id6(image_id) + ".json"), ec);
-  if (ec) throw Error((scene_dir_ / ".fragments").string() + ": cannot remove the record of image " +
-                      std::to_string(image_id) + ": " + ec.message());
+  if (ec)
+    throw Error((scene_dir_ / ".fragments").string() + ": cannot remove the record of image " +
+                std::to_string(image_id) + ": " + ec.message());
   std::lock_guard<std::mutex> lock(mutex_);
   image_ids_.erase(std::remove(image_ids_.begin(), image_ids_.end(), image_id), image_ids_.end());
 }
@@ -436,7 +454,8 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     if (!cv::imencode(".jpg", bgr, bytes, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
       throw Error(rgb_path.string() + ": JPEG encoding failed");
     }
-    files.Write(rgb_path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    files.Write(rgb_path,
+                std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
   } else {
     files.Write(rgb_path, EncodePng(bgr, rgb_path));
   }
@@ -451,7 +470,8 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
   const std::filesystem::path depth_path = scene_dir_ / "depth" / (im + ".png");
   files.Write(depth_path, EncodePng(depth, depth_path));
 
-  if (!frame.normals.empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
+  if (!frame.normals
+           .empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
     CreateFolder(scene_dir_ / "normal");
     cv::Mat normals(h, w, CV_8UC3, cv::Scalar(0, 0, 0));
     for (int v = 0; v < h; ++v) {
@@ -460,7 +480,8 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         const Eigen::Vector3f& n = frame.normals[static_cast<size_t>(v) * w + u];
         if (n.isZero()) continue;
         for (int c = 0; c < 3; ++c) {
-          row[u][2 - c] = static_cast<uint8_t>(std::clamp((n[c] + 1.0f) * 127.5f + 0.5f, 0.0f, 255.0f));  // BGR
+          row[u][2 - c] =
+              static_cast<uint8_t>(std::clamp((n[c] + 1.0f) * 127.5f + 0.5f, 0.0f, 255.0f));  // BGR
         }
       }
     }
@@ -476,9 +497,9 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     for (int c = 0; c < 3; ++c) k.push_back(kmat(r, c));
   }
   camera_entry = {{"cam_K", k},
-                   {"depth_scale", options_.depth_scale},
-                   {"cam_R_w2c", RowMajor(cam_from_world.linear())},
-                   {"cam_t_w2c", Vec(cam_from_world.translation())}};
+                  {"depth_scale", options_.depth_scale},
+                  {"cam_R_w2c", RowMajor(cam_from_world.linear())},
+                  {"cam_t_w2c", Vec(cam_from_world.translation())}};
 
   const VisibleMasks visible(frame, options_);
   const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_, visible);
@@ -487,8 +508,8 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
   for (size_t i = 0; i < frame.instances.size(); ++i) {
     const Frame::InstanceTruth& truth = frame.instances[i];
     gt_entry.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
-                         {"cam_t_m2c", Vec(truth.cam_from_model.translation())},
-                         {"obj_id", obj_ids_[i]}});
+                        {"cam_t_m2c", Vec(truth.cam_from_model.translation())},
+                        {"obj_id", obj_ids_[i]}});
     const GtInfo& info = infos[i];
     gt_info_entry.push_back(
         {{"bbox_obj", {info.bbox_obj[0], info.bbox_obj[1], info.bbox_obj[2], info.bbox_obj[3]}},
@@ -523,15 +544,17 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
       auto* out = mask.ptr<uint8_t>(v);
       for (int u = b[0]; u <= b[0] + b[2]; ++u) out[u] = visible(i, u, v) ? 255 : 0;
     }
-    files.Write(scene_dir_ / "mask_visib" / name, EncodePng(mask, scene_dir_ / "mask_visib" / name));
+    files.Write(scene_dir_ / "mask_visib" / name,
+                EncodePng(mask, scene_dir_ / "mask_visib" / name));
 
     // COCO, as bop_toolkit's calc_gt_coco.py: every instance with a visible pixel, its visible
     // mask as compressed RLE, the amodal (or modal) box with COCO's width max - min + 1, and
     // "ignore" below 10% visibility.
-    if (!options_.coco || info.px_count_visib == 0 || (options_.coco_amodal_bbox && full[2] < 0)) continue;
-    const RleMask rle = EncodeRle(w, h, b[0], b[1], b[0] + b[2] + 1, b[1] + b[3] + 1, [&](size_t p) {
-      return visible(i, static_cast<int>(p % w), static_cast<int>(p / w));
-    });
+    if (!options_.coco || info.px_count_visib == 0 || (options_.coco_amodal_bbox && full[2] < 0))
+      continue;
+    const RleMask rle = EncodeRle(
+        w, h, b[0], b[1], b[0] + b[2] + 1, b[1] + b[3] + 1,
+        [&](size_t p) { return visible(i, static_cast<int>(p % w), static_cast<int>(p / w)); });
     const Json coco_box = options_.coco_amodal_bbox
                               ? Json{full[0], full[1], full[2] - full[0] + 1, full[3] - full[1] + 1}
                               : Json{b[0], b[1], b[2] + 1, b[3] + 1};
@@ -548,15 +571,16 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
   Json manifest = Json::array();
   for (const FileRecord& r : files.records()) manifest.push_back({r.path, r.size, r.crc32});
   WriteFileAtomic(scene_dir_ / ".fragments" / (im + ".json"),
-                  camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n" +
-                      Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() + "\n" +
-                      Json{{"files", manifest}}.dump() + "\n");
+                  camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() +
+                      "\n" + Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() +
+                      "\n" + Json{{"files", manifest}}.dump() + "\n");
   std::lock_guard<std::mutex> lock(mutex_);
   image_ids_.push_back(image_id);
 }
 
 void BopSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
-  if (instances.size() != obj_ids_.size()) throw Error("bop: world poses for a different number of instances");
+  if (instances.size() != obj_ids_.size())
+    throw Error("bop: world poses for a different number of instances");
   Json list = Json::array();
   for (size_t i = 0; i < instances.size(); ++i) {
     list.push_back({{"obj_id", obj_ids_[i]},
@@ -599,7 +623,8 @@ SceneSplit BopSceneWriter::Finish() {
     coco << "{\n  \"annotations\": [";
   }
   for (size_t n = 0; n < image_ids_.size(); ++n) {
-    const std::filesystem::path fragment = scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json");
+    const std::filesystem::path fragment =
+        scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json");
     std::ifstream in(fragment, std::ios::binary);
     std::string line;
     const bool test = options_.IsTest(static_cast<int>(n), static_cast<int>(image_ids_.size()));
@@ -611,17 +636,21 @@ SceneSplit BopSceneWriter::Finish() {
       if (test && f == 2) {  // gt_info: count the instances visible enough, per object
         std::map<int, int> counts;
         for (size_t i = 0; i < entry.size() && i < obj_ids_.size(); ++i) {
-          if (entry[i]["visib_fract"].get<double>() >= options_.target_min_visib_fract) ++counts[obj_ids_[i]];
+          if (entry[i]["visib_fract"].get<double>() >= options_.target_min_visib_fract)
+            ++counts[obj_ids_[i]];
         }
-        for (const auto& [obj, count] : counts) split.targets.push_back({image_ids_[n], obj, count});
+        for (const auto& [obj, count] : counts)
+          split.targets.push_back({image_ids_[n], obj, count});
       }
     }
     if (!options_.coco) continue;
     if (!std::getline(in, line)) throw Error(fragment.string() + ": incomplete fragment");
     const Json entry = Json::parse(line);
     const int w = entry["width"], h = entry["height"];
-    coco_images.push_back(
-        {{"id", image_ids_[n]}, {"file_name", "rgb/" + Id6(image_ids_[n]) + options_.RgbExtension()}, {"width", w}, {"height", h}});
+    coco_images.push_back({{"id", image_ids_[n]},
+                           {"file_name", "rgb/" + Id6(image_ids_[n]) + options_.RgbExtension()},
+                           {"width", w},
+                           {"height", h}});
     for (const Json& a : entry["annotations"]) {
       const Json annotation = {{"id", ++annotation_id},
                                {"image_id", image_ids_[n]},
@@ -645,7 +674,8 @@ SceneSplit BopSceneWriter::Finish() {
     for (int id : ids) {
       Json c = {{"id", id}, {"name", std::to_string(id)}, {"supercategory", "cadsynth"}};
       for (const CocoCategory& known : categories_) {
-        if (known.id == id) c = {{"id", id}, {"name", known.name}, {"supercategory", known.supercategory}};
+        if (known.id == id)
+          c = {{"id", id}, {"name", known.name}, {"supercategory", known.supercategory}};
       }
       categories.push_back(c);
     }
@@ -664,8 +694,11 @@ SceneSplit BopSceneWriter::Finish() {
     out[f].close();
     if (!out[f]) throw Error((scene_dir_ / names[f]).string() + ": cannot write file (disk full?)");
     std::error_code ec;
-    std::filesystem::rename(scene_dir_ / (std::string(names[f]) + ".tmp"), scene_dir_ / names[f], ec);
-    if (ec) throw Error((scene_dir_ / names[f]).string() + ": cannot move file into place: " + ec.message());
+    std::filesystem::rename(scene_dir_ / (std::string(names[f]) + ".tmp"), scene_dir_ / names[f],
+                            ec);
+    if (ec)
+      throw Error((scene_dir_ / names[f]).string() +
+                  ": cannot move file into place: " + ec.message());
   }
   return split;
 }
@@ -678,7 +711,10 @@ void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit
     for (int im : scenes[s].train) train += Id6(static_cast<int>(s)) + " " + Id6(im) + "\n";
     for (int im : scenes[s].test) test += Id6(static_cast<int>(s)) + " " + Id6(im) + "\n";
     for (const SceneSplit::Target& t : scenes[s].targets) {
-      targets.push_back({{"im_id", t.im_id}, {"inst_count", t.inst_count}, {"obj_id", t.obj_id}, {"scene_id", s}});
+      targets.push_back({{"im_id", t.im_id},
+                         {"inst_count", t.inst_count},
+                         {"obj_id", t.obj_id},
+                         {"scene_id", s}});
     }
   }
   WriteFileAtomic(root / "splits" / "train.txt", train);
@@ -687,13 +723,15 @@ void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit
 }
 
 void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& options,
-                     const std::vector<SceneSplit>& scenes, const std::vector<ObjectClass>& classes) {
+                     const std::vector<SceneSplit>& scenes,
+                     const std::vector<ObjectClass>& classes) {
   if (!options.coco) return;
   CreateFolder(root / "coco");
   Json categories = Json::array();
   std::map<int, std::string> class_names;
   for (const ObjectClass& c : classes) class_names[c.id] = c.name;
-  for (const auto& [id, name] : class_names) categories.push_back({{"id", id}, {"name", name}, {"supercategory", "cadsynth"}});
+  for (const auto& [id, name] : class_names)
+    categories.push_back({{"id", id}, {"name", name}, {"supercategory", "cadsynth"}});
   // Streamed, so that memory does not grow with the dataset: the scene files are read as
   // Finish() writes them (one annotation per line, the image list on one line), annotations in
   // a first pass over the scenes and images in a second. Images are numbered from 1 in scene
@@ -741,7 +779,8 @@ void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& option
         const int obj = a["category_id"];
         a["id"] = static_cast<int>(++annotation_count);
         a["image_id"] = static_cast<int>(image_base + (found - wanted.begin()) + 1);
-        a["category_id"] = obj >= 1 && obj <= static_cast<int>(classes.size()) ? classes[obj - 1].id : obj;
+        a["category_id"] =
+            obj >= 1 && obj <= static_cast<int>(classes.size()) ? classes[obj - 1].id : obj;
         a["obj_id"] = obj;
         a["scene_id"] = s;
         a["im_id"] = im;
@@ -795,7 +834,8 @@ void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& option
 }
 
 std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset) {
-  if (!std::filesystem::is_directory(dataset)) throw Error(dataset.string() + ": no such dataset folder");
+  if (!std::filesystem::is_directory(dataset))
+    throw Error(dataset.string() + ": no such dataset folder");
   std::vector<std::filesystem::path> roots;
   for (const auto& entry : std::filesystem::directory_iterator(dataset)) {
     if (!entry.is_directory()) continue;

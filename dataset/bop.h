@@ -38,7 +38,8 @@ struct BopOptions {
   std::string split = "train";  // folder holding the scenes
   // Train/test split of each scene's images, in image order: every `test_every`-th image is a test
   // image (the reference paper: every 4th, 75/25), or, when test_every is 0, each image is a test
-  // image with probability `test_fraction` (seeded). Test images also go to test_targets_bop19.json.
+  // image with probability `test_fraction` (seeded). Test images also go to
+  // test_targets_bop19.json.
   int test_every = 4;
   double test_fraction = 0.25;
   uint64_t split_seed = 0;
@@ -82,41 +83,73 @@ struct BopOptions {
   // Every field, once (cad/schema.h): the recipe's `output:` section, the run key, the shard file.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
-    visit(o.depth_scale, Field{"depth_scale", "number", "mm per depth PNG unit (0.1: 0.1 mm steps, up to 6.5535 m)"});
+    visit(o.depth_scale, Field{"depth_scale", "number",
+                               "mm per depth PNG unit (0.1: 0.1 mm steps, up to 6.5535 m)"});
     visit(o.split, Field{"split", "text", "folder of the scenes (train, test, ...)"});
-    visit(o.test_every, Field{"test_every", "integer",
-                              "every Nth image of each scene is a test image (the paper: 4); 0: use test_fraction",
-                              {}, true});
-    visit(o.test_fraction, Field{"test_fraction", "number",
-                                 "or: each image a test image with this probability (seeded by split_seed)", {}, true});
+    visit(
+        o.test_every,
+        Field{"test_every",
+              "integer",
+              "every Nth image of each scene is a test image (the paper: 4); 0: use test_fraction",
+              {},
+              true});
+    visit(o.test_fraction,
+          Field{"test_fraction",
+                "number",
+                "or: each image a test image with this probability (seeded by split_seed)",
+                {},
+                true});
     visit(o.split_seed, Field{"split_seed", "integer", "seed of the test_fraction draws"});
     visit(o.target_min_visib_fract,
-          Field{"target_min_visib_fract", "number", "test targets count instances at least this visible (0..1)"});
-    visit(o.model_points, Field{"model_points", "integer", "points per model cloud in models/points/ (0: none)"});
-    visit(o.even_points, Field{"point_sampling", "choice",
-                               "area: uniform by surface area; even: farthest-point thinning of 10x as many",
-                               {"area", "even"}});
+          Field{"target_min_visib_fract", "number",
+                "test targets count instances at least this visible (0..1)"});
+    visit(o.model_points,
+          Field{"model_points", "integer", "points per model cloud in models/points/ (0: none)"});
+    visit(o.even_points,
+          Field{"point_sampling",
+                "choice",
+                "area: uniform by surface area; even: farthest-point thinning of 10x as many",
+                {"area", "even"}});
     visit(o.point_seed, Field{"point_seed", "integer", "seed of the model clouds"});
     visit(o.coco, Field{"", "bool", "COCO files (formats: coco)", {}, true, "coco"});
-    visit(o.paper_layout, Field{"", "bool", "the reference paper's layout (formats: paper)", {}, true, "paper_layout"});
-    visit(o.pvn3d_meta, Field{"", "bool", "PVN3D meta files (formats: pvn3d)", {}, true, "pvn3d_meta"});
-    visit(o.grasp_points, Field{"", "bool", "grasp-detector point arrays (formats: grasp)", {}, true, "grasp_points"});
-    visit(o.jpeg_quality, Field{"jpeg_quality", "integer", "with rgb: jpg, the JPEG quality 1-100 (0: PNG)", {}, true});
-    visit(o.visibility, Field{"visibility", "choice",
-                              "exact: the front-most surface; bop19: bop_toolkit's rule with visibility_delta",
-                              {"exact", "bop19"}});
-    visit(o.visib_delta_mm, Field{"visibility_delta", "length",
-                                  "with visibility: bop19, bop_toolkit's delta (15 mm; 5 mm for ITODD)", {}, true});
-    visit(o.coco_amodal_bbox, Field{"coco_bbox", "choice",
-                                    "COCO boxes: amodal (full silhouette, as bop_toolkit) or modal (visible part)",
-                                    {"modal", "amodal"}});
+    visit(
+        o.paper_layout,
+        Field{
+            "", "bool", "the reference paper's layout (formats: paper)", {}, true, "paper_layout"});
+    visit(o.pvn3d_meta,
+          Field{"", "bool", "PVN3D meta files (formats: pvn3d)", {}, true, "pvn3d_meta"});
+    visit(
+        o.grasp_points,
+        Field{
+            "", "bool", "grasp-detector point arrays (formats: grasp)", {}, true, "grasp_points"});
+    visit(
+        o.jpeg_quality,
+        Field{
+            "jpeg_quality", "integer", "with rgb: jpg, the JPEG quality 1-100 (0: PNG)", {}, true});
+    visit(o.visibility,
+          Field{"visibility",
+                "choice",
+                "exact: the front-most surface; bop19: bop_toolkit's rule with visibility_delta",
+                {"exact", "bop19"}});
+    visit(o.visib_delta_mm,
+          Field{"visibility_delta",
+                "length",
+                "with visibility: bop19, bop_toolkit's delta (15 mm; 5 mm for ITODD)",
+                {},
+                true});
+    visit(o.coco_amodal_bbox,
+          Field{"coco_bbox",
+                "choice",
+                "COCO boxes: amodal (full silhouette, as bop_toolkit) or modal (visible part)",
+                {"modal", "amodal"}});
   }
 };
 
 // One scene's split, as BopSceneWriter::Finish sees it.
 struct SceneSplit {
   std::vector<int> train, test;  // image ids
-  // BOP test targets: (image id, obj_id, number of instances at least target_min_visib_fract visible).
+  // BOP test targets: (image id, obj_id, number of instances at least target_min_visib_fract
+  // visible).
   struct Target {
     int im_id, obj_id, inst_count;
   };
@@ -157,7 +190,8 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
 // Writes ROOT/models/points/obj_OBJID.ply (options.model_points surface points per part) and
 // ROOT/models/keypoints.json: per obj_id, 8 and 16 farthest-point keypoints on the surface, the
 // centre and the 8 bounding-box corners (model frame, mm), as PVN3D uses.
-void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts, const BopOptions& options);
+void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts,
+                      const BopOptions& options);
 
 // Writes ROOT/camera.json.
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& intrinsics,
@@ -171,7 +205,7 @@ struct GtInfo {
   // The full silhouette on the 3x canvas: not clipped to the image.
   int bbox_obj[4] = {-1, -1, -1, -1};
   int bbox_visib[4] = {-1, -1, -1, -1};  // the visible pixels
-  int px_count_all = 0;    // full silhouette on the 3x canvas (truncated parts count)
+  int px_count_all = 0;                  // full silhouette on the 3x canvas (truncated parts count)
   int px_count_valid = 0;  // silhouette pixels with a depth value in the written depth image
   int px_count_visib = 0;
   double visib_fract = 0.0;
@@ -212,7 +246,8 @@ class BopSceneWriter {
   // number of frames) and its manifest entry, every file it wrote with size and CRC-32. A frame
   // whose fragment exists is complete: a writer opened on a folder with fragments (an
   // interrupted run, other shards) takes those frames as written.
-  void WriteFrame(int image_id, const Frame& frame, const std::function<void(FileLog&)>& before_fragment = {});
+  void WriteFrame(int image_id, const Frame& frame,
+                  const std::function<void(FileLog&)>& before_fragment = {});
   bool HasFrame(int image_id) const;
   // Image ids whose fragment exists (this writer's and those found when it was opened), sorted.
   std::vector<int> WrittenFrames() const;
@@ -239,7 +274,9 @@ class BopSceneWriter {
     int id = 0;
     std::string name, supercategory;
   };
-  void SetCocoCategories(std::vector<CocoCategory> categories) { categories_ = std::move(categories); }
+  void SetCocoCategories(std::vector<CocoCategory> categories) {
+    categories_ = std::move(categories);
+  }
 
   const std::filesystem::path& scene_dir() const { return scene_dir_; }
 
@@ -256,6 +293,7 @@ class BopSceneWriter {
 // the split, images numbered from 1 with file names relative to ROOT, and categories the object
 // classes: `classes[obj_id - 1]` (each annotation also keeps obj_id, scene_id, im_id, inst_id).
 void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& options,
-                     const std::vector<SceneSplit>& scenes, const std::vector<ObjectClass>& classes);
+                     const std::vector<SceneSplit>& scenes,
+                     const std::vector<ObjectClass>& classes);
 
 }  // namespace cadsynth

@@ -55,7 +55,8 @@ std::vector<uint8_t> DecodeRle(const RleMask& rle) {
       }
     }
   }
-  if (pos != n) throw Error("RLE: runs cover " + std::to_string(pos) + " of " + std::to_string(n) + " pixels");
+  if (pos != n)
+    throw Error("RLE: runs cover " + std::to_string(pos) + " of " + std::to_string(n) + " pixels");
   return mask;
 }
 

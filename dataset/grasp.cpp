@@ -7,7 +7,8 @@
 
 namespace cadsynth {
 
-std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instance, double depth_scale) {
+std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instance,
+                                                 double depth_scale) {
   const Intrinsics& k = frame.camera.intrinsics;
   const int w = frame.width(), h = frame.height();
   const uint16_t id = static_cast<uint16_t>(instance + 1);
@@ -19,16 +20,18 @@ std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instanc
       const uint16_t units = EncodeDepth(frame.depth[p], depth_scale);
       if (units == 0) continue;
       const double z = units * depth_scale / 1000.0;  // as a reader of the depth PNG gets it, in m
-      points.emplace_back(static_cast<float>((u + 0.5 - k.cx) * z / k.fx), static_cast<float>((v + 0.5 - k.cy) * z / k.fy),
-                          static_cast<float>(z));
+      points.emplace_back(static_cast<float>((u + 0.5 - k.cx) * z / k.fx),
+                          static_cast<float>((v + 0.5 - k.cy) * z / k.fy), static_cast<float>(z));
     }
   }
   return points;
 }
 
 std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points) {
-  static_assert(std::endian::native == std::endian::little, "the .npy writer copies floats as they are in memory");
-  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(points.size()) + ", 3), }";
+  static_assert(std::endian::native == std::endian::little,
+                "the .npy writer copies floats as they are in memory");
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
+                       std::to_string(points.size()) + ", 3), }";
   // Magic (6) + version (2) + header length (2) + header, padded with spaces to a multiple of 64
   // bytes and ended by a newline.
   const size_t unpadded = 10 + header.size() + 1;

@@ -13,7 +13,8 @@ namespace cadsynth {
 // The pixels where `instance` is visible and the written depth image (at `depth_scale` mm per
 // unit) has a value, back-projected through the pixel centre into the camera frame, in metres:
 // z = depth, x = (u + 0.5 - cx) z / fx, y = (v + 0.5 - cy) z / fy. Row-major pixel order.
-std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instance, double depth_scale);
+std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instance,
+                                                 double depth_scale);
 
 // A NumPy .npy file (format 1.0) holding `points` as a little-endian float32 array (N, 3).
 std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points);

@@ -54,10 +54,12 @@ void Put(std::string* out, T value) {
 std::string EncodePly(const Mesh& mesh) {
   std::string out =
       "ply\nformat binary_little_endian 1.0\ncomment cadsynth model, units: mm\n"
-      "element vertex " + std::to_string(mesh.num_vertices()) +
+      "element vertex " +
+      std::to_string(mesh.num_vertices()) +
       "\nproperty float x\nproperty float y\nproperty float z\n"
       "property float nx\nproperty float ny\nproperty float nz\n"
-      "element face " + std::to_string(mesh.num_triangles()) +
+      "element face " +
+      std::to_string(mesh.num_triangles()) +
       "\nproperty list uchar int vertex_indices\nend_header\n";
   out.reserve(out.size() + mesh.num_vertices() * 24 + mesh.num_triangles() * 13);
   const bool has_normals = mesh.normals.size() == mesh.positions.size();

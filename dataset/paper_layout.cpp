@@ -19,15 +19,16 @@ using Json = nlohmann::ordered_json;
 
 Json Matrix4(const Eigen::Isometry3d& t) {
   Json rows = Json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({t.matrix()(r, 0), t.matrix()(r, 1), t.matrix()(r, 2), t.matrix()(r, 3)});
+  for (int r = 0; r < 4; ++r)
+    rows.push_back({t.matrix()(r, 0), t.matrix()(r, 1), t.matrix()(r, 2), t.matrix()(r, 3)});
   return rows;
 }
 
 // One MATLAB double array, column-major `data` with `dims`.
-void WriteMatDouble(mat_t* mat, const char* name, std::vector<size_t> dims, std::vector<double> data,
-                    const std::filesystem::path& path) {
-  matvar_t* var = Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, static_cast<int>(dims.size()), dims.data(),
-                                data.data(), 0);
+void WriteMatDouble(mat_t* mat, const char* name, std::vector<size_t> dims,
+                    std::vector<double> data, const std::filesystem::path& path) {
+  matvar_t* var = Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, static_cast<int>(dims.size()),
+                                dims.data(), data.data(), 0);
   if (var == nullptr) throw Error(path.string() + ": cannot create MATLAB variable " + name);
   const int status = Mat_VarWrite(mat, var, MAT_COMPRESSION_NONE);
   Mat_VarFree(var);
@@ -36,8 +37,8 @@ void WriteMatDouble(mat_t* mat, const char* name, std::vector<size_t> dims, std:
 
 }  // namespace
 
-void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const std::vector<int>& cls_of_instance,
-                    double depth_scale) {
+void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame,
+                    const std::vector<int>& cls_of_instance, double depth_scale) {
   std::vector<size_t> shown;
   for (size_t i = 0; i < frame.instances.size(); ++i) {
     if (frame.instances[i].px_count_visib > 0) shown.push_back(i);
@@ -70,7 +71,8 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const
   const std::string temporary = path.string() + ".tmp";
   // A fixed header: matio's default one carries the creation time, and the same run must give
   // the same bytes (resumed runs, shards).
-  mat_t* mat = Mat_CreateVer(temporary.c_str(), "MATLAB 5.0 MAT-file, written by cadsynth", MAT_FT_MAT5);
+  mat_t* mat =
+      Mat_CreateVer(temporary.c_str(), "MATLAB 5.0 MAT-file, written by cadsynth", MAT_FT_MAT5);
   if (mat == nullptr) throw Error(path.string() + ": cannot create MATLAB file");
   try {
     WriteMatDouble(mat, "cls_indexes", {n, 1}, cls, path);
@@ -93,8 +95,8 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const
   if (ec) throw Error(path.string() + ": cannot move file into place: " + ec.message());
 }
 
-PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
-                                   std::vector<PaperInstance> instances)
+PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_id,
+                                   const BopOptions& options, std::vector<PaperInstance> instances)
     : root_(root),
       paper_dir_(root / "paper" / Id6(scene_id)),
       grasp_dir_(root / "grasp" / Id6(scene_id)),
@@ -106,13 +108,14 @@ PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_
   if (options_.grasp_points) CreateFolder(grasp_dir_);
 }
 
-void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir,
+void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame,
+                                  const std::filesystem::path& bop_scene_dir,
                                   FileLog* files_or_null) const {
   FileLog own(root_);
   FileLog& files = files_or_null != nullptr ? *files_or_null : own;
   if (frame.instances.size() != instances_.size()) {
-    throw Error("paper layout: frame has " + std::to_string(frame.instances.size()) + " instances, the scene " +
-                std::to_string(instances_.size()));
+    throw Error("paper layout: frame has " + std::to_string(frame.instances.size()) +
+                " instances, the scene " + std::to_string(instances_.size()));
   }
   const std::string im = Id6(image_id);
   std::vector<int> labels;
@@ -156,12 +159,14 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const std::f
                          {"T_O_W", Matrix4(p.world_from_model)}});
     }
     const Eigen::Matrix3d k = frame.camera.intrinsics.K();
-    const Json meta = {{"K", {{k(0, 0), k(0, 1), k(0, 2)}, {k(1, 0), k(1, 1), k(1, 2)}, {k(2, 0), k(2, 1), k(2, 2)}}},
-                       {"depth_scale", options_.depth_scale},
-                       {"width", w},
-                       {"height", h},
-                       {"T_C_W", Matrix4(world_from_cam)},
-                       {"objects", objects}};
+    const Json meta = {
+        {"K",
+         {{k(0, 0), k(0, 1), k(0, 2)}, {k(1, 0), k(1, 1), k(1, 2)}, {k(2, 0), k(2, 1), k(2, 2)}}},
+        {"depth_scale", options_.depth_scale},
+        {"width", w},
+        {"height", h},
+        {"T_C_W", Matrix4(world_from_cam)},
+        {"objects", objects}};
     files.Write(paper_dir_ / "meta" / (im + ".json"), meta.dump(2) + "\n");
     if (options_.pvn3d_meta) {
       const std::filesystem::path mat = paper_dir_ / "meta" / (im + "-meta.mat");

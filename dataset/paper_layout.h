@@ -54,7 +54,7 @@ class PaperSceneWriter {
 // rotation_translation_matrix (3 x 4, world to camera, metres). Lists the instances with visible
 // pixels, in instance order; cls_of_instance[i] is the label of instance i (its grey value in the
 // mask image).
-void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame, const std::vector<int>& cls_of_instance,
-                    double depth_scale);
+void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame,
+                    const std::vector<int>& cls_of_instance, double depth_scale);
 
 }  // namespace cadsynth

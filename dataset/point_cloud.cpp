@@ -5,8 +5,8 @@
 #include <limits>
 #include <sstream>
 
-#include "cad/random.h"
 #include "cad/error.h"
+#include "cad/random.h"
 #include "cad/util.h"
 
 namespace cadsynth {
@@ -19,19 +19,24 @@ std::vector<Eigen::Vector3f> SampleSurface(const Mesh& mesh, int count, uint64_t
   double total = 0;
   for (const auto& t : mesh.triangles) {
     const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>();
-    total += 0.5 * (mesh.positions[t[1]].cast<double>() - a).cross(mesh.positions[t[2]].cast<double>() - a).norm();
+    total += 0.5 * (mesh.positions[t[1]].cast<double>() - a)
+                       .cross(mesh.positions[t[2]].cast<double>() - a)
+                       .norm();
     cumulative.push_back(total);
   }
   std::vector<Eigen::Vector3f> points;
   points.reserve(count);
   for (int i = 0; i < count; ++i) {
     const double pick = UniformDraw(seed, streams::kPointTriangle, i) * total;
-    const size_t t = std::min(static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin()),
-                              cumulative.size() - 1);
+    const size_t t =
+        std::min(static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) -
+                                     cumulative.begin()),
+                 cumulative.size() - 1);
     double r1 = UniformDraw(seed, streams::kPointU, i), r2 = UniformDraw(seed, streams::kPointV, i);
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;  // fold into the triangle: uniform by area
     const auto& tri = mesh.triangles[t];
-    const Eigen::Vector3f a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+    const Eigen::Vector3f a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
+                          c = mesh.positions[tri[2]];
     points.push_back(a + float(r1) * (b - a) + float(r2) * (c - a));
   }
   return points;
@@ -45,7 +50,8 @@ std::vector<int> FarthestPoints(const std::vector<Eigen::Vector3f>& points, int 
   std::vector<float> nearest(points.size(), std::numeric_limits<float>::infinity());
   int next = 0;
   for (size_t i = 1; i < points.size(); ++i) {
-    if ((points[i] - centroid).squaredNorm() > (points[next] - centroid).squaredNorm()) next = static_cast<int>(i);
+    if ((points[i] - centroid).squaredNorm() > (points[next] - centroid).squaredNorm())
+      next = static_cast<int>(i);
   }
   while (static_cast<int>(chosen.size()) < std::min<int>(k, static_cast<int>(points.size()))) {
     chosen.push_back(next);
@@ -73,14 +79,15 @@ Keypoints ComputeKeypoints(const Mesh& mesh, const std::vector<Eigen::Vector3f>&
   for (int i : FarthestPoints(surface_points, 16)) k.fps16.push_back(surface_points[i]);
   const Eigen::AlignedBox3d box = mesh.Bounds();
   k.center = box.center().cast<float>();
-  for (int c = 0; c < 8; ++c) k.corners[c] = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)).cast<float>();
+  for (int c = 0; c < 8; ++c)
+    k.corners[c] = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)).cast<float>();
   return k;
 }
 
 std::string EncodePointPly(const std::vector<Eigen::Vector3f>& points) {
   std::ostringstream out;
-  out << "ply\nformat ascii 1.0\ncomment cadsynth model points, units: mm\nelement vertex " << points.size()
-      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  out << "ply\nformat ascii 1.0\ncomment cadsynth model points, units: mm\nelement vertex "
+      << points.size() << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   out.precision(7);
   for (const auto& p : points) out << p.x() << " " << p.y() << " " << p.z() << "\n";
   return out.str();
@@ -102,7 +109,9 @@ std::vector<Eigen::Vector3f> DecodePointPly(const std::string& text, const std::
     }
   }
   if (!header_done || !ascii || count < 0) {
-    throw Error(origin + ": not an ASCII point PLY (needs 'format ascii', 'element vertex N' and 'end_header')");
+    throw Error(
+        origin +
+        ": not an ASCII point PLY (needs 'format ascii', 'element vertex N' and 'end_header')");
   }
   std::vector<Eigen::Vector3f> points;
   points.reserve(static_cast<size_t>(count));
@@ -110,8 +119,8 @@ std::vector<Eigen::Vector3f> DecodePointPly(const std::string& text, const std::
     ++line_no;
     Eigen::Vector3f p;
     if (!std::getline(in, line) || !(std::istringstream(line) >> p.x() >> p.y() >> p.z())) {
-      throw Error(origin + ":" + std::to_string(line_no) + ": expected vertex " + std::to_string(i + 1) + " of " +
-                  std::to_string(count) + " as 'x y z'");
+      throw Error(origin + ":" + std::to_string(line_no) + ": expected vertex " +
+                  std::to_string(i + 1) + " of " + std::to_string(count) + " as 'x y z'");
     }
     points.push_back(p);
   }

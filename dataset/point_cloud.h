@@ -26,8 +26,8 @@ std::vector<int> FarthestPoints(const std::vector<Eigen::Vector3f>& points, int 
 
 struct Keypoints {
   std::vector<Eigen::Vector3f> fps8, fps16;  // farthest-point keypoints on the surface
-  Eigen::Vector3f center;                     // the model origin: the bounding-box centre
-  std::array<Eigen::Vector3f, 8> corners;     // bounding-box corners
+  Eigen::Vector3f center;                    // the model origin: the bounding-box centre
+  std::array<Eigen::Vector3f, 8> corners;    // bounding-box corners
 };
 Keypoints ComputeKeypoints(const Mesh& mesh, const std::vector<Eigen::Vector3f>& surface_points);
 

@@ -6,7 +6,8 @@
 namespace cadsynth {
 namespace {
 
-std::vector<Eigen::Vector3d> Transformed(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& pose) {
+std::vector<Eigen::Vector3d> Transformed(const std::vector<Eigen::Vector3f>& points,
+                                         const Eigen::Isometry3d& pose) {
   std::vector<Eigen::Vector3d> out;
   out.reserve(points.size());
   for (const Eigen::Vector3f& p : points) out.push_back(pose * p.cast<double>());
@@ -26,8 +27,8 @@ double AddError(const std::vector<Eigen::Vector3f>& model_points, const Eigen::I
   return sum / static_cast<double>(model_points.size());
 }
 
-double AddSError(const std::vector<Eigen::Vector3f>& model_points, const Eigen::Isometry3d& estimate,
-                 const Eigen::Isometry3d& truth) {
+double AddSError(const std::vector<Eigen::Vector3f>& model_points,
+                 const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
   if (model_points.empty()) return 0.0;
   const std::vector<Eigen::Vector3d> est = Transformed(model_points, estimate);
   const std::vector<Eigen::Vector3d> gt = Transformed(model_points, truth);
@@ -51,7 +52,8 @@ double AccuracyAuc(const std::vector<double>& errors, double max_threshold) {
 
 double ShareBelow(const std::vector<double>& errors, double threshold) {
   if (errors.empty()) return 0.0;
-  const auto hits = std::count_if(errors.begin(), errors.end(), [&](double e) { return e < threshold; });
+  const auto hits =
+      std::count_if(errors.begin(), errors.end(), [&](double e) { return e < threshold; });
   return static_cast<double>(hits) / static_cast<double>(errors.size());
 }
 

@@ -16,8 +16,8 @@ double AddError(const std::vector<Eigen::Vector3f>& model_points, const Eigen::I
                 const Eigen::Isometry3d& truth);
 
 // Exact nearest neighbours (brute force over the cloud; 3,000 points take a few ms).
-double AddSError(const std::vector<Eigen::Vector3f>& model_points, const Eigen::Isometry3d& estimate,
-                 const Eigen::Isometry3d& truth);
+double AddSError(const std::vector<Eigen::Vector3f>& model_points,
+                 const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);
 
 // The area under the accuracy-threshold curve for thresholds 0..max_threshold, divided by
 // max_threshold (PoseCNN / PVN3D report it with max_threshold = 0.1 m). Accuracy at t is the share

@@ -45,7 +45,8 @@ cv::Mat ColourDepth(const cv::Mat& depth) {
   double lo = 0, hi = 0;
   cv::minMaxLoc(depth, &lo, &hi, nullptr, nullptr, depth > 0);
   cv::Mat scaled;
-  depth.convertTo(scaled, CV_8U, hi > lo ? -255.0 / (hi - lo) : 0.0, hi > lo ? 255.0 * hi / (hi - lo) : 128.0);
+  depth.convertTo(scaled, CV_8U, hi > lo ? -255.0 / (hi - lo) : 0.0,
+                  hi > lo ? 255.0 * hi / (hi - lo) : 128.0);
   cv::Mat coloured;
   cv::applyColorMap(scaled, coloured, cv::COLORMAP_TURBO);
   coloured.setTo(cv::Scalar(0, 0, 0), depth == 0);
@@ -60,11 +61,13 @@ Eigen::Matrix3d Matrix3(const Json& v) {
 
 }  // namespace
 
-std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k, const Eigen::Isometry3d& cam_from_model,
+std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k,
+                                        const Eigen::Isometry3d& cam_from_model,
                                         const Eigen::AlignedBox3d& box) {
   std::vector<Eigen::Vector2d> corners;
   for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d p = k * (cam_from_model * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
+    const Eigen::Vector3d p =
+        k * (cam_from_model * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
     corners.emplace_back(p.x() / p.z(), p.y() / p.z());
   }
   return corners;
@@ -72,8 +75,10 @@ std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k, const Eigen::I
 
 std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options,
                           std::vector<std::pair<int, int>>* shown) {
-  if (options.panel_width < 32 || options.panel_width > 4096) throw Error("preview: panel width must be 32 to 4096");
-  const fs::path split_dir = options.split.empty() ? FindSceneFolder(dataset) : dataset / options.split;
+  if (options.panel_width < 32 || options.panel_width > 4096)
+    throw Error("preview: panel width must be 32 to 4096");
+  const fs::path split_dir =
+      options.split.empty() ? FindSceneFolder(dataset) : dataset / options.split;
   if (!fs::is_directory(split_dir)) throw Error(split_dir.string() + ": no such folder");
   const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
 
@@ -105,7 +110,8 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
   std::vector<cv::Mat> rows;
   for (const auto& [scene, im] : chosen) {
     const std::string where = "scene " + std::to_string(scene) + " image " + std::to_string(im);
-    if (!gts.count(scene) || !gts[scene].contains(std::to_string(im))) throw Error("preview: no " + where + " in " + split_dir.string());
+    if (!gts.count(scene) || !gts[scene].contains(std::to_string(im)))
+      throw Error("preview: no " + where + " in " + split_dir.string());
     const fs::path dir = split_dir / Id6(scene);
     const std::string name = Id6(im);
     fs::path rgb_path = dir / "rgb" / (name + ".png");
@@ -117,7 +123,8 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
 
     cv::Mat masks = rgb * 0.35;
     for (size_t i = 0; i < gt.size(); ++i) {
-      const fs::path mask_path = dir / "mask_visib" / (name + "_" + Id6(static_cast<int>(i)) + ".png");
+      const fs::path mask_path =
+          dir / "mask_visib" / (name + "_" + Id6(static_cast<int>(i)) + ".png");
       const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_GRAYSCALE);
       masks.setTo(InstanceColour(i), mask > 0);
     }
@@ -130,14 +137,18 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
       const Eigen::Vector3d size(m.at("size_x"), m.at("size_y"), m.at("size_z"));
       Eigen::Isometry3d m2c = Eigen::Isometry3d::Identity();
       m2c.linear() = Matrix3(g.at("cam_R_m2c"));
-      m2c.translation() = Eigen::Vector3d(g.at("cam_t_m2c")[0], g.at("cam_t_m2c")[1], g.at("cam_t_m2c")[2]);
+      m2c.translation() =
+          Eigen::Vector3d(g.at("cam_t_m2c")[0], g.at("cam_t_m2c")[1], g.at("cam_t_m2c")[2]);
       if (m2c.translation().z() <= 0) continue;
       const auto c = ProjectBox(k, m2c, Eigen::AlignedBox3d(lo, lo + size));
-      const auto pt = [](const Eigen::Vector2d& p) { return cv::Point(cvRound(p.x()), cvRound(p.y())); };
+      const auto pt = [](const Eigen::Vector2d& p) {
+        return cv::Point(cvRound(p.x()), cvRound(p.y()));
+      };
       for (int a = 0; a < 8; ++a) {
         for (int b = a + 1; b < 8; ++b) {
           const int diff = a ^ b;  // corners differ in one coordinate: an edge
-          if (diff == 1 || diff == 2 || diff == 4) cv::line(rgb, pt(c[a]), pt(c[b]), InstanceColour(i), thickness, cv::LINE_AA);
+          if (diff == 1 || diff == 2 || diff == 4)
+            cv::line(rgb, pt(c[a]), pt(c[b]), InstanceColour(i), thickness, cv::LINE_AA);
         }
       }
       const double axis = 0.5 * size.maxCoeff();
@@ -146,17 +157,20 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
         const Eigen::Vector3d e = k * (m2c * (axis * Eigen::Vector3d::Unit(a)));
         if (e.z() <= 0) continue;
         cv::line(rgb, pt(o.head<2>() / o.z()), pt(e.head<2>() / e.z()),
-                 a == 0 ? cv::Scalar(0, 0, 255) : a == 1 ? cv::Scalar(0, 200, 0) : cv::Scalar(255, 0, 0), thickness,
-                 cv::LINE_AA);
+                 a == 0   ? cv::Scalar(0, 0, 255)
+                 : a == 1 ? cv::Scalar(0, 200, 0)
+                          : cv::Scalar(255, 0, 0),
+                 thickness, cv::LINE_AA);
       }
     }
     std::vector<cv::Mat> panels = {rgb, ColourDepth(depth), masks};
     const double scale = static_cast<double>(options.panel_width) / rgb.cols;
     for (cv::Mat& p : panels) {
-      cv::resize(p, p, cv::Size(options.panel_width, std::max(1, cvRound(rgb.rows * scale))), 0, 0, cv::INTER_AREA);
+      cv::resize(p, p, cv::Size(options.panel_width, std::max(1, cvRound(rgb.rows * scale))), 0, 0,
+                 cv::INTER_AREA);
     }
-    cv::putText(panels[0], where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1,
-                cv::LINE_AA);
+    cv::putText(panels[0], where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     cv::Mat row;
     cv::hconcat(panels, row);
     rows.push_back(row);

@@ -15,12 +15,13 @@ struct PreviewOptions {
   int count = 4;  // frames spread evenly over all scenes' images, when `frames` is empty
   std::vector<std::pair<int, int>> frames;  // (scene_id, im_id) to show, in order
   int panel_width = 320;  // each of the three panels per frame is scaled to this width
-  std::string split;  // the folder of scenes; empty: the dataset's only one (train/ by default)
+  std::string split;      // the folder of scenes; empty: the dataset's only one (train/ by default)
 };
 
 // The 8 corners of `box` (model frame, mm) projected with `k` at pose `cam_from_model`, in pixel
 // coordinates (x right, y down, pixel (u, v) covering [u, u+1) x [v, v+1)).
-std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k, const Eigen::Isometry3d& cam_from_model,
+std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k,
+                                        const Eigen::Isometry3d& cam_from_model,
                                         const Eigen::AlignedBox3d& box);
 
 // Reads DATASET (BOP layout) and returns the contact sheet as PNG bytes: one row per frame.

@@ -9,14 +9,14 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "cad/error.h"
 #include "cad/random.h"
 #include "cad/schema.h"
-#include "cad/error.h"
 #include "cad/step.h"
-#include "variants/families.h"
 #include "cad/units.h"
 #include "cad/util.h"
 #include "recipes/units.h"
+#include "variants/families.h"
 
 namespace cadsynth {
 namespace {
@@ -36,7 +36,8 @@ class Reader {
     return name_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
   }
 
-  [[noreturn]] void Fail(const YAML::Node& node, const std::string& key, const std::string& what) const {
+  [[noreturn]] void Fail(const YAML::Node& node, const std::string& key,
+                         const std::string& what) const {
     throw Error(Where(node) + ": " + (key.empty() ? "" : key + ": ") + what);
   }
 
@@ -45,7 +46,8 @@ class Reader {
                  std::initializer_list<const char*> allowed) const {
     ExpectMap(node, key, std::vector<std::string>(allowed.begin(), allowed.end()));
   }
-  void ExpectMap(const YAML::Node& node, const std::string& key, const std::vector<std::string>& allowed) const {
+  void ExpectMap(const YAML::Node& node, const std::string& key,
+                 const std::vector<std::string>& allowed) const {
     if (!node.IsMap()) Fail(node, key, "expected a mapping of keys to values");
     for (auto it = node.begin(); it != node.end(); ++it) {
       const std::string k = it->first.as<std::string>();
@@ -124,7 +126,8 @@ class Reader {
     } else if (node.IsMap()) {
       ExpectMap(node, key, {"from", "to", "step"});
       for (const char* k : {"from", "to", "step"}) {
-        if (!node[k]) Fail(node, key, std::string("a range needs 'from', 'to' and 'step' (no '") + k + "')");
+        if (!node[k])
+          Fail(node, key, std::string("a range needs 'from', 'to' and 'step' (no '") + k + "')");
       }
       const double from = parse(node["from"], key + ".from");
       const double to = parse(node["to"], key + ".to");
@@ -166,7 +169,7 @@ class Reader {
 };
 
 void DetectFormatOrFail(const Reader& r, const YAML::Node& node, const std::string& key,
-                       const std::filesystem::path& path) {
+                        const std::filesystem::path& path) {
   try {
     DetectFormat(path);
   } catch (const Error& e) {
@@ -175,12 +178,17 @@ void DetectFormatOrFail(const Reader& r, const YAML::Node& node, const std::stri
 }
 
 // One value of a family parameter, by its kind.
-ParamValue ReadParam(const Reader& r, const YAML::Node& node, const std::string& key, const FamilyParam& p) {
+ParamValue ReadParam(const Reader& r, const YAML::Node& node, const std::string& key,
+                     const FamilyParam& p) {
   switch (p.kind) {
-    case FamilyParam::Kind::kLength: return r.Length(node, key);
-    case FamilyParam::Kind::kAngle: return r.Angle(node, key);
-    case FamilyParam::Kind::kCount: return double(r.Integer(node, key));
-    case FamilyParam::Kind::kNumber: return r.Number(node, key);
+    case FamilyParam::Kind::kLength:
+      return r.Length(node, key);
+    case FamilyParam::Kind::kAngle:
+      return r.Angle(node, key);
+    case FamilyParam::Kind::kCount:
+      return double(r.Integer(node, key));
+    case FamilyParam::Kind::kNumber:
+      return r.Number(node, key);
     case FamilyParam::Kind::kText:
       if (p.name == "file") return r.ResolvePath(node, key).string();
       return r.Scalar(node, key);
@@ -188,7 +196,8 @@ ParamValue ReadParam(const Reader& r, const YAML::Node& node, const std::string&
   return 0.0;
 }
 
-const FamilyParam& Param(const Reader& r, const FamilyInfo& family, const YAML::Node& key_node, const std::string& where) {
+const FamilyParam& Param(const Reader& r, const FamilyInfo& family, const YAML::Node& key_node,
+                         const std::string& where) {
   const std::string name = key_node.as<std::string>();
   if (const FamilyParam* p = family.Find(name)) return *p;
   try {
@@ -200,7 +209,8 @@ const FamilyParam& Param(const Reader& r, const FamilyInfo& family, const YAML::
 }
 
 // Values of one parameter for a grid: a value, a list, or an inclusive range.
-std::vector<ParamValue> ReadSeries(const Reader& r, const YAML::Node& node, const std::string& key, const FamilyParam& p) {
+std::vector<ParamValue> ReadSeries(const Reader& r, const YAML::Node& node, const std::string& key,
+                                   const FamilyParam& p) {
   std::vector<ParamValue> values;
   if (p.kind == FamilyParam::Kind::kText) {
     if (node.IsSequence()) {
@@ -211,12 +221,16 @@ std::vector<ParamValue> ReadSeries(const Reader& r, const YAML::Node& node, cons
     if (values.empty()) r.Fail(node, key, "the list is empty");
     return values;
   }
-  const auto one = [&](const YAML::Node& n, const std::string& k) { return std::get<double>(ReadParam(r, n, k, p)); };
-  for (double v : r.Series(node, key, one)) values.push_back(p.kind == FamilyParam::Kind::kCount ? std::round(v) : v);
+  const auto one = [&](const YAML::Node& n, const std::string& k) {
+    return std::get<double>(ReadParam(r, n, k, p));
+  };
+  for (double v : r.Series(node, key, one))
+    values.push_back(p.kind == FamilyParam::Kind::kCount ? std::round(v) : v);
   return values;
 }
 
-void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key, PartSource* source) {
+void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
+                PartSource* source) {
   source->kind = PartSource::Kind::kFamily;
   source->family = r.Scalar(item["family"], key + ".family");
   source->where = r.Where(item["family"]);
@@ -224,7 +238,8 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
   if (family == nullptr) {
     std::string known;
     for (const FamilyInfo& f : Families()) known += (known.empty() ? "" : ", ") + f.name;
-    r.Fail(item["family"], key + ".family", "unknown family '" + source->family + "' (known: " + known + ")");
+    r.Fail(item["family"], key + ".family",
+           "unknown family '" + source->family + "' (known: " + known + ")");
   }
   ParamValues fixed;
   if (item["params"]) {
@@ -263,16 +278,20 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
   } else if (item["random"]) {
     const YAML::Node random = item["random"];
     r.ExpectMap(random, key + ".random", {"count", "seed", "params"});
-    if (!random["count"] || !random["params"]) r.Fail(random, key + ".random", "give 'count' and 'params'");
+    if (!random["count"] || !random["params"])
+      r.Fail(random, key + ".random", "give 'count' and 'params'");
     const int count = r.Integer(random["count"], key + ".random.count");
-    if (count < 1 || count > 100000) r.Fail(random["count"], key + ".random.count", "count must be 1 to 100000");
-    const uint64_t seed = random["seed"] ? static_cast<uint64_t>(r.Integer(random["seed"], key + ".random.seed")) : 0;
+    if (count < 1 || count > 100000)
+      r.Fail(random["count"], key + ".random.count", "count must be 1 to 100000");
+    const uint64_t seed =
+        random["seed"] ? static_cast<uint64_t>(r.Integer(random["seed"], key + ".random.seed")) : 0;
     const YAML::Node params = random["params"];
-    if (!params.IsMap()) r.Fail(params, key + ".random.params", "expected {parameter: {from, to} or [choices]}");
+    if (!params.IsMap())
+      r.Fail(params, key + ".random.params", "expected {parameter: {from, to} or [choices]}");
     // Each parameter draws from its own stream (its index in the family), variant by variant.
     struct Draw {
       const FamilyParam* param;
-      std::string stream;  // family.param.NAME (cad/random.h)
+      std::string stream;               // family.param.NAME (cad/random.h)
       std::vector<ParamValue> choices;  // a list: pick one
       double from = 0, to = 0;          // a range
     };
@@ -284,7 +303,8 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
       if (it->second.IsMap()) {
         r.ExpectMap(it->second, k, {"from", "to"});
         if (!it->second["from"] || !it->second["to"] || p.kind == FamilyParam::Kind::kText) {
-          r.Fail(it->second, k, "a random range needs 'from' and 'to' (text parameters take a list)");
+          r.Fail(it->second, k,
+                 "a random range needs 'from' and 'to' (text parameters take a list)");
         }
         d.from = std::get<double>(ReadParam(r, it->second["from"], k + ".from", p));
         d.to = std::get<double>(ReadParam(r, it->second["to"], k + ".to", p));
@@ -300,7 +320,8 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
       for (const Draw& d : draws) {
         const double u = UniformDraw(seed, d.stream, static_cast<uint64_t>(v));
         if (!d.choices.empty()) {
-          w[d.param->name] = d.choices[std::min(d.choices.size() - 1, static_cast<size_t>(u * d.choices.size()))];
+          w[d.param->name] =
+              d.choices[std::min(d.choices.size() - 1, static_cast<size_t>(u * d.choices.size()))];
         } else if (d.param->kind == FamilyParam::Kind::kCount) {
           w[d.param->name] = std::floor(d.from + u * (d.to - d.from + 1));
         } else {
@@ -314,12 +335,14 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
   source->variants = std::move(variants);
   if (item["class"]) {
     const std::string c = r.Scalar(item["class"], key + ".class");
-    if (c != "variant" && c != "family") r.Fail(item["class"], key + ".class", "expected 'variant' or 'family', got '" + c + "'");
+    if (c != "variant" && c != "family")
+      r.Fail(item["class"], key + ".class", "expected 'variant' or 'family', got '" + c + "'");
     source->one_class = c == "family";
   }
 }
 
-std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node, const std::string& where) {
+std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
+                                  const std::string& where) {
   if (!node.IsSequence() || node.size() == 0) {
     r.Fail(node, where, "expected a list such as [{file: part.stp}, {family: spur_gear}]");
   }
@@ -327,8 +350,10 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node, const
   for (size_t i = 0; i < node.size(); ++i) {
     const YAML::Node item = node[i];
     const std::string key = where + "[" + std::to_string(i) + "]";
-    r.ExpectMap(item, key, {"file", "unit", "encoding", "family", "params", "grid", "random", "class"});
-    if (!item["file"] == !item["family"]) r.Fail(item, key, "give exactly one of 'file' or 'family'");
+    r.ExpectMap(item, key,
+                {"file", "unit", "encoding", "family", "params", "grid", "random", "class"});
+    if (!item["file"] == !item["family"])
+      r.Fail(item, key, "give exactly one of 'file' or 'family'");
     PartSource source;
     if (item["file"]) {
       for (const char* k : {"params", "grid", "random", "class"}) {
@@ -340,19 +365,22 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node, const
       if (item["unit"]) {
         source.unit = r.Scalar(item["unit"], key + ".unit");
         if (!LengthUnitMm(source.unit)) {
-          r.Fail(item["unit"], key + ".unit", "unknown length unit '" + source.unit + "' (use um, mm, cm, m, in or ft)");
+          r.Fail(item["unit"], key + ".unit",
+                 "unknown length unit '" + source.unit + "' (use um, mm, cm, m, in or ft)");
         }
       }
       if (item["encoding"]) {
         source.encoding = r.Scalar(item["encoding"], key + ".encoding");
         if (StepCodePage(source.encoding).empty()) {
           r.Fail(item["encoding"], key + ".encoding",
-                 "unknown encoding '" + source.encoding + "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312)");
+                 "unknown encoding '" + source.encoding +
+                     "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312)");
         }
       }
       DetectFormatOrFail(r, item["file"], key + ".file", source.path);
     } else {
-      if (item["unit"] || item["encoding"]) r.Fail(item, key, "'unit' and 'encoding' go with 'file' (the scaled family has its own)");
+      if (item["unit"] || item["encoding"])
+        r.Fail(item, key, "'unit' and 'encoding' go with 'file' (the scaled family has its own)");
       ReadFamily(r, item, key, &source);
     }
     sources.push_back(std::move(source));
@@ -360,30 +388,39 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node, const
   return sources;
 }
 
-void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, ArrangementOptions* arrangement) {
+void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
+                ArrangementOptions* arrangement) {
   if (node["layout"]) {
-    static const std::map<std::string, Layout> layouts = {{"assembled", Layout::kAssembled}, {"single", Layout::kSingle},
-                                                         {"row", Layout::kRow}, {"grid", Layout::kGrid},
-                                                         {"clutter", Layout::kClutter}};
+    static const std::map<std::string, Layout> layouts = {{"assembled", Layout::kAssembled},
+                                                          {"single", Layout::kSingle},
+                                                          {"row", Layout::kRow},
+                                                          {"grid", Layout::kGrid},
+                                                          {"clutter", Layout::kClutter}};
     const std::string layout = r.Scalar(node["layout"], key + ".layout");
     const auto it = layouts.find(layout);
     if (it == layouts.end()) {
-      r.Fail(node["layout"], key + ".layout", "expected assembled, single, row, grid or clutter, got '" + layout + "'");
+      r.Fail(node["layout"], key + ".layout",
+             "expected assembled, single, row, grid or clutter, got '" + layout + "'");
     }
     arrangement->layout = it->second;
   }
   if (node["pose"]) {
-    static const std::map<std::string, PoseMode> poses = {{"stable", PoseMode::kStable}, {"random", PoseMode::kRandom},
-                                                         {"all", PoseMode::kAll}, {"as_designed", PoseMode::kAsDesigned}};
+    static const std::map<std::string, PoseMode> poses = {{"stable", PoseMode::kStable},
+                                                          {"random", PoseMode::kRandom},
+                                                          {"all", PoseMode::kAll},
+                                                          {"as_designed", PoseMode::kAsDesigned}};
     const std::string pose = r.Scalar(node["pose"], key + ".pose");
     const auto it = poses.find(pose);
-    if (it == poses.end()) r.Fail(node["pose"], key + ".pose", "expected stable, random, all or as_designed, got '" + pose + "'");
+    if (it == poses.end())
+      r.Fail(node["pose"], key + ".pose",
+             "expected stable, random, all or as_designed, got '" + pose + "'");
     arrangement->pose = it->second;
   }
   if (node["gap"]) arrangement->gap_mm = r.Length(node["gap"], key + ".gap");
   if (node["copies"]) arrangement->copies = r.Integer(node["copies"], key + ".copies");
   if (node["radius"]) arrangement->clutter_radius_mm = r.Length(node["radius"], key + ".radius");
-  if (node["seed"]) arrangement->seed = static_cast<uint64_t>(r.Integer(node["seed"], key + ".seed"));
+  if (node["seed"])
+    arrangement->seed = static_cast<uint64_t>(r.Integer(node["seed"], key + ".seed"));
   r.Check(*arrangement, node, key);
 }
 
@@ -432,7 +469,8 @@ void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (node["crease_angle"]) {
     spec->crease_angle_rad = r.Angle(node["crease_angle"], "tessellation.crease_angle");
     if (spec->crease_angle_rad < 0.0 || spec->crease_angle_rad > M_PI) {
-      r.Fail(node["crease_angle"], "tessellation.crease_angle", "must lie between 0 and 180 degrees");
+      r.Fail(node["crease_angle"], "tessellation.crease_angle",
+             "must lie between 0 and 180 degrees");
     }
   }
   if (node["linear_deflection"]) {
@@ -458,16 +496,19 @@ void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     } else if (preset == "realsense_d435_640") {
       k = Intrinsics::RealSenseD435(640);
     } else {
-      r.Fail(node["preset"], "camera.preset",
-             "unknown preset '" + preset + "' (known: kinect_v1, realsense_d435, realsense_d435_640)");
+      r.Fail(
+          node["preset"], "camera.preset",
+          "unknown preset '" + preset + "' (known: kinect_v1, realsense_d435, realsense_d435_640)");
     }
   }
   if (node["width"]) k.width = r.Integer(node["width"], "camera.width");
   if (node["height"]) k.height = r.Integer(node["height"], "camera.height");
   if (node["hfov"]) {
     const double hfov = r.Angle(node["hfov"], "camera.hfov");
-    if (!(hfov > 0 && hfov < M_PI)) r.Fail(node["hfov"], "camera.hfov", "must lie between 0 and 180 degrees");
-    if (node["fx"] || node["fy"] || node["cx"] || node["cy"]) r.Fail(node["hfov"], "camera.hfov", "give hfov or fx/fy/cx/cy, not both");
+    if (!(hfov > 0 && hfov < M_PI))
+      r.Fail(node["hfov"], "camera.hfov", "must lie between 0 and 180 degrees");
+    if (node["fx"] || node["fy"] || node["cx"] || node["cy"])
+      r.Fail(node["hfov"], "camera.hfov", "give hfov or fx/fy/cx/cy, not both");
     k = Intrinsics::FromFov(k.width, k.height, hfov);
   }
   if (node["fx"]) k.fx = r.Number(node["fx"], "camera.fx");
@@ -478,8 +519,9 @@ void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "sweep", {"yaw", "pitch", "radius", "target", "sampler", "count", "seed", "roll_jitter",
-                              "target_jitter", "min_visible_pixels"});
+  r.ExpectMap(node, "sweep",
+              {"yaw", "pitch", "radius", "target", "sampler", "count", "seed", "roll_jitter",
+               "target_jitter", "min_visible_pixels"});
   const auto angle = [&](const YAML::Node& n, const std::string& k) { return r.Angle(n, k); };
   const auto length = [&](const YAML::Node& n, const std::string& k) { return r.Length(n, k); };
   SweepOptions& s = spec->sweep;
@@ -502,7 +544,8 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     } else if (kind == "random") {
       v.kind = ViewSampler::Kind::kRandom;
     } else {
-      r.Fail(node["sampler"], "sweep.sampler", "expected grid, fibonacci or random, got '" + kind + "'");
+      r.Fail(node["sampler"], "sweep.sampler",
+             "expected grid, fibonacci or random, got '" + kind + "'");
     }
   }
   // Fibonacci and random views fill the band between the lowest and highest pitch; random radii the
@@ -514,15 +557,18 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (node["count"]) v.count = r.Integer(node["count"], "sweep.count");
   if (node["seed"]) v.seed = static_cast<uint64_t>(r.Integer(node["seed"], "sweep.seed"));
   if (node["roll_jitter"]) v.roll_jitter_rad = r.Angle(node["roll_jitter"], "sweep.roll_jitter");
-  if (node["target_jitter"]) v.target_jitter_mm = r.Length(node["target_jitter"], "sweep.target_jitter");
+  if (node["target_jitter"])
+    v.target_jitter_mm = r.Length(node["target_jitter"], "sweep.target_jitter");
   if (node["min_visible_pixels"]) {
     spec->min_visible_pixels = r.Integer(node["min_visible_pixels"], "sweep.min_visible_pixels");
-    if (spec->min_visible_pixels < 0) r.Fail(node["min_visible_pixels"], "sweep.min_visible_pixels", "must not be negative");
+    if (spec->min_visible_pixels < 0)
+      r.Fail(node["min_visible_pixels"], "sweep.min_visible_pixels", "must not be negative");
   }
   r.Check(v, node, "sweep");
 }
 
-Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::string& key, bool length) {
+Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::string& key,
+                       bool length) {
   if (!node.IsSequence() || node.size() != 3) r.Fail(node, key, "expected [x, y, z]");
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) v[i] = length ? r.Length(node[i], key) : r.Number(node[i], key);
@@ -531,7 +577,8 @@ Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::strin
 
 // One described field (cad/schema.h) from the recipe, by its kind.
 template <typename T>
-void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field, T* value) {
+void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field,
+               T* value) {
   if constexpr (std::is_enum_v<T> || std::is_same_v<T, bool>) {
     if (field.kind == "choice") {
       const std::string text = r.Scalar(node, key);
@@ -541,7 +588,10 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
           *value = static_cast<T>(i);
           return;
         }
-        known += (i == 0 ? "'" : i + 1 == field.choices.size() ? " or '" : ", '") + std::string(field.choices[i]) + "'";
+        known += (i == 0                          ? "'"
+                  : i + 1 == field.choices.size() ? " or '"
+                                                  : ", '") +
+                 std::string(field.choices[i]) + "'";
       }
       r.Fail(node, key, "expected " + known + ", got '" + text + "'");
     } else if constexpr (std::is_same_v<T, bool>) {
@@ -563,15 +613,16 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
 // Every described field of `options` that the recipe section `node` gives, except those read by
 // hand; checks that every key of the section is a described field or in `by_hand`.
 template <typename Options>
-void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section, Options* options,
-                std::vector<std::string> by_hand) {
+void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section,
+                Options* options, std::vector<std::string> by_hand) {
   Options::Fields(*options, [&](const auto&, const Field& field) {
     if (!field.key.empty()) by_hand.emplace_back(field.key);
   });
   r.ExpectMap(node, section, by_hand);
   Options::Fields(*options, [&](auto& value, const Field& field) {
     if (field.key.empty() || field.by_hand || !node[std::string(field.key)]) return;
-    ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field, &value);
+    ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field,
+              &value);
   });
 }
 
@@ -582,28 +633,35 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
   if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
   if (node["floor_color"]) look.floor_color = r.Color(node["floor_color"], "render.floor_color");
-  if (node["ambient"]) look.ambient = static_cast<float>(r.Number(node["ambient"], "render.ambient"));
+  if (node["ambient"])
+    look.ambient = static_cast<float>(r.Number(node["ambient"], "render.ambient"));
   if (look.ambient < 0.0f) r.Fail(node["ambient"], "render.ambient", "must not be negative");
   if (node["shadows"]) look.shadows = r.Bool(node["shadows"], "render.shadows");
   if (node["lights"]) {
     const YAML::Node lights = node["lights"];
-    if (!lights.IsSequence()) r.Fail(lights, "render.lights", "expected a list of {direction: [x, y, z]} or {position: [x, y, z]}");
+    if (!lights.IsSequence())
+      r.Fail(lights, "render.lights",
+             "expected a list of {direction: [x, y, z]} or {position: [x, y, z]}");
     look.lights.clear();
     for (size_t i = 0; i < lights.size(); ++i) {
       const std::string key = "render.lights[" + std::to_string(i) + "]";
       r.ExpectMap(lights[i], key, {"direction", "position", "intensity"});
-      if (!lights[i]["direction"] == !lights[i]["position"]) r.Fail(lights[i], key, "give a direction or a position");
+      if (!lights[i]["direction"] == !lights[i]["position"])
+        r.Fail(lights[i], key, "give a direction or a position");
       Scene::Light light;
       if (lights[i]["direction"]) {
         light.kind = Scene::Light::Kind::kDirectional;
         light.direction = Triple(r, lights[i]["direction"], key + ".direction", false);
-        if (light.direction.norm() == 0) r.Fail(lights[i]["direction"], key + ".direction", "the direction must not be zero");
+        if (light.direction.norm() == 0)
+          r.Fail(lights[i]["direction"], key + ".direction", "the direction must not be zero");
       } else {
         light.kind = Scene::Light::Kind::kPoint;
         light.position = Triple(r, lights[i]["position"], key + ".position", true);
       }
-      if (lights[i]["intensity"]) light.intensity = static_cast<float>(r.Number(lights[i]["intensity"], key + ".intensity"));
-      if (light.intensity < 0) r.Fail(lights[i]["intensity"], key + ".intensity", "must not be negative");
+      if (lights[i]["intensity"])
+        light.intensity = static_cast<float>(r.Number(lights[i]["intensity"], key + ".intensity"));
+      if (light.intensity < 0)
+        r.Fail(lights[i]["intensity"], key + ".intensity", "must not be negative");
       look.lights.push_back(light);
     }
   }
@@ -625,7 +683,8 @@ void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
       r.Fail(node["visibility_delta"], "output.visibility_delta", "needs visibility: bop19");
     }
     spec->bop.visib_delta_mm = r.Length(node["visibility_delta"], "output.visibility_delta");
-    if (!(spec->bop.visib_delta_mm >= 0)) r.Fail(node["visibility_delta"], "output.visibility_delta", "must not be negative");
+    if (!(spec->bop.visib_delta_mm >= 0))
+      r.Fail(node["visibility_delta"], "output.visibility_delta", "must not be negative");
   }
   if (node["rgb"]) {
     const std::string kind = r.Scalar(node["rgb"], "output.rgb");
@@ -635,14 +694,16 @@ void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     spec->bop.jpeg_quality = kind == "png" ? 0 : 95;
   }
   if (node["jpeg_quality"]) {
-    if (spec->bop.jpeg_quality == 0) r.Fail(node["jpeg_quality"], "output.jpeg_quality", "needs rgb: jpg");
+    if (spec->bop.jpeg_quality == 0)
+      r.Fail(node["jpeg_quality"], "output.jpeg_quality", "needs rgb: jpg");
     spec->bop.jpeg_quality = r.Integer(node["jpeg_quality"], "output.jpeg_quality");
     if (spec->bop.jpeg_quality < 1 || spec->bop.jpeg_quality > 100) {
       r.Fail(node["jpeg_quality"], "output.jpeg_quality", "expected 1 to 100");
     }
   }
   if (const YAML::Node formats = node["formats"]) {
-    if (!formats.IsSequence()) r.Fail(formats, "output.formats", "expected a list, e.g. [bop, coco, paper]");
+    if (!formats.IsSequence())
+      r.Fail(formats, "output.formats", "expected a list, e.g. [bop, coco, paper]");
     spec->bop.coco = spec->bop.paper_layout = spec->bop.pvn3d_meta = spec->bop.grasp_points = false;
     bool bop = false;
     for (const YAML::Node& f : formats) {
@@ -658,13 +719,17 @@ void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
       } else if (name == "grasp") {
         spec->bop.grasp_points = true;
       } else {
-        r.Fail(f, "output.formats", "unknown format '" + name + "' (known: bop, coco, paper, pvn3d, grasp)");
+        r.Fail(f, "output.formats",
+               "unknown format '" + name + "' (known: bop, coco, paper, pvn3d, grasp)");
       }
     }
-    if (!bop) r.Fail(formats, "output.formats", "bop is always written (the other formats derive from it): list it");
+    if (!bop)
+      r.Fail(formats, "output.formats",
+             "bop is always written (the other formats derive from it): list it");
   }
   if (node["test_every"] && node["test_fraction"]) {
-    r.Fail(node["test_fraction"], "output.test_fraction", "give test_every or test_fraction, not both");
+    r.Fail(node["test_fraction"], "output.test_fraction",
+           "give test_every or test_fraction, not both");
   }
   if (node["test_every"]) spec->bop.test_every = r.Integer(node["test_every"], "output.test_every");
   if (node["test_fraction"]) {
@@ -690,10 +755,11 @@ std::vector<SceneSpec> DemoScenes() {
   };
   SceneSpec planetary{"planetary_gearbox", {family("planetary")}, {.layout = Layout::kAssembled}};
   SceneSpec crank{"slider_crank", {family("slider_crank")}, {.layout = Layout::kAssembled}};
-  SceneSpec benchmark{"assembly_benchmark",
-                      {family("round_peg"), family("square_peg"), family("faceplate"), family("stepped_shaft"),
-                       family("hex_bolt", {{"size", std::string("M10")}, {"length", 40.0}})},
-                      {.layout = Layout::kGrid, .gap_mm = 30.0}};
+  SceneSpec benchmark{
+      "assembly_benchmark",
+      {family("round_peg"), family("square_peg"), family("faceplate"), family("stepped_shaft"),
+       family("hex_bolt", {{"size", std::string("M10")}, {"length", 40.0}})},
+      {.layout = Layout::kGrid, .gap_mm = 30.0}};
   return {planetary, crank, benchmark};
 }
 
@@ -720,8 +786,9 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   const Reader r(name, base_dir);
   RunSpec spec = DefaultRunSpec();
   try {
-    r.ExpectMap(root, "", {"parts", "scene", "scenes", "classes", "tessellation", "camera", "sweep", "render",
-                           "output"});
+    r.ExpectMap(root, "",
+                {"parts", "scene", "scenes", "classes", "tessellation", "camera", "sweep", "render",
+                 "output"});
     if (root["scenes"] && (root["parts"] || root["scene"])) {
       r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
     }
@@ -735,14 +802,16 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
       }
       spec.scenes = {scene};
     } else if (root["scene"]) {
-      r.Fail(root["scene"], "scene", "'scene' goes with 'parts' (without parts the default scenes are used)");
+      r.Fail(root["scene"], "scene",
+             "'scene' goes with 'parts' (without parts the default scenes are used)");
     }
     if (root["scenes"]) {
       const YAML::Node scenes = root["scenes"];
       if (scenes.IsScalar() && scenes.Scalar() == "default") {
         spec.scenes = DemoScenes();
       } else {
-        if (!scenes.IsSequence() || scenes.size() == 0) r.Fail(scenes, "scenes", "expected a list of scenes, or 'default'");
+        if (!scenes.IsSequence() || scenes.size() == 0)
+          r.Fail(scenes, "scenes", "expected a list of scenes, or 'default'");
         spec.scenes.clear();
         for (size_t i = 0; i < scenes.size(); ++i) {
           spec.scenes.push_back(ReadSceneEntry(r, scenes[i], "scenes[" + std::to_string(i) + "]"));
@@ -765,7 +834,8 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
 RunSpec LoadRecipe(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw Error(path.string() + ": no such recipe file");
-  if (std::filesystem::is_directory(path, ec)) throw Error(path.string() + ": is a folder, not a recipe");
+  if (std::filesystem::is_directory(path, ec))
+    throw Error(path.string() + ": is a folder, not a recipe");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path.string() + ": cannot open the recipe");
   std::ostringstream text;

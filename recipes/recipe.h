@@ -22,14 +22,14 @@ struct PartSource {
   enum class Kind { kFile, kFamily };
   Kind kind = Kind::kFile;
   std::filesystem::path path;  // kFile: STEP, IGES, BREP or mesh
-  std::string unit;            // kFile: the unit its numbers are in, overriding the file (see ImportOptions)
-  std::string encoding;        // kFile, STEP: code page of raw-byte names (see ImportOptions)
-  std::string family;          // kFamily: the family's name (see Families())
+  std::string unit;  // kFile: the unit its numbers are in, overriding the file (see ImportOptions)
+  std::string encoding;  // kFile, STEP: code page of raw-byte names (see ImportOptions)
+  std::string family;    // kFamily: the family's name (see Families())
   // kFamily: every variant's complete parameters, in a stable order (grid: nested loops over the
   // family's parameters in their order, the last varying fastest; random: draw order).
   std::vector<ParamValues> variants;
-  bool one_class = false;      // kFamily: all variants are one object class (class: family)
-  std::string where;           // "recipe.yaml:3:5" (empty when built in)
+  bool one_class = false;  // kFamily: all variants are one object class (class: family)
+  std::string where;       // "recipe.yaml:3:5" (empty when built in)
 };
 
 // One BOP scene: what lies on the floor together, and how.
@@ -54,10 +54,10 @@ struct RunSpec {
   std::vector<std::pair<std::string, std::vector<std::string>>> class_groups;
   Intrinsics intrinsics;
   SweepOptions sweep;
-  ViewSampler sampler;          // kGrid: the sweep as listed
-  int min_visible_pixels = 0;   // skip views where fewer object pixels are visible (0: keep all)
-  Scene look;  // floor, colours and lights (its instances are filled in by the run)
-  bool cad_colors = true;  // colours from the CAD files where they have them, else the palette
+  ViewSampler sampler;         // kGrid: the sweep as listed
+  int min_visible_pixels = 0;  // skip views where fewer object pixels are visible (0: keep all)
+  Scene look;                  // floor, colours and lights (its instances are filled in by the run)
+  bool cad_colors = true;      // colours from the CAD files where they have them, else the palette
   RenderOptions render;
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides

@@ -32,14 +32,18 @@ void Section(std::ostringstream& out, const char* name, const char* what) {
 
 std::string RecipeReference() {
   std::ostringstream out;
-  out << "# The recipe keys whose options are described once in the code (cad/schema.h), with their\n"
-         "# defaults; lengths take a unit (mm, cm, m, in), a bare number is mm. README's \"Recipes\"\n"
+  out << "# The recipe keys whose options are described once in the code (cad/schema.h), with "
+         "their\n"
+         "# defaults; lengths take a unit (mm, cm, m, in), a bare number is mm. README's "
+         "\"Recipes\"\n"
          "# section has every section with examples.\n";
-  Section<BopOptions>(out, "output",
-                      "dataset layout and formats; also dir (the output folder), formats: [bop, coco, paper, "
-                      "pvn3d, grasp] and rgb: png | jpg");
-  Section<RenderOptions>(out, "render",
-                         "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors");
+  Section<BopOptions>(
+      out, "output",
+      "dataset layout and formats; also dir (the output folder), formats: [bop, coco, paper, "
+      "pvn3d, grasp] and rgb: png | jpg");
+  Section<RenderOptions>(
+      out, "render",
+      "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors");
   return out.str();
 }
 

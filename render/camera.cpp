@@ -3,8 +3,8 @@
 #include "cad/random.h"
 #include "cad/util.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 namespace cadsynth {
@@ -94,7 +94,8 @@ bool ViewSampler::Check(std::string* why) const {
   std::ostringstream out;
   if (kind != Kind::kGrid && (count < 1 || count > 10000000)) {
     out << "count must be 1 to 10,000,000";
-  } else if (!(min_pitch_rad <= max_pitch_rad) || min_pitch_rad < -0.5 * M_PI - 1e-12 || max_pitch_rad > 0.5 * M_PI + 1e-12) {
+  } else if (!(min_pitch_rad <= max_pitch_rad) || min_pitch_rad < -0.5 * M_PI - 1e-12 ||
+             max_pitch_rad > 0.5 * M_PI + 1e-12) {
     out << "the pitch band must lie within -90 to 90 degrees, lowest first";
   } else if (kind == Kind::kRandom && !(min_radius_mm > 0 && min_radius_mm <= max_radius_mm)) {
     out << "the radius range must be positive, smallest first";
@@ -127,19 +128,24 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
     case ViewSampler::Kind::kFibonacci:
       for (double radius : sweep.radius_mm) {
         for (int i = 0; i < sampler.count; ++i) {
-          const double pitch = PitchForArea((i + 0.5) / sampler.count, sampler.min_pitch_rad, sampler.max_pitch_rad);
+          const double pitch =
+              PitchForArea((i + 0.5) / sampler.count, sampler.min_pitch_rad, sampler.max_pitch_rad);
           const double yaw = std::fmod(i * golden, 2 * M_PI);
-          views.push_back({yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
+          views.push_back(
+              {yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
         }
       }
       break;
     case ViewSampler::Kind::kRandom:
       for (int i = 0; i < sampler.count; ++i) {
         const double yaw = 2 * M_PI * UniformDraw(sampler.seed, streams::kViewYaw, i);
-        const double pitch = PitchForArea(UniformDraw(sampler.seed, streams::kViewPitch, i), sampler.min_pitch_rad, sampler.max_pitch_rad);
+        const double pitch = PitchForArea(UniformDraw(sampler.seed, streams::kViewPitch, i),
+                                          sampler.min_pitch_rad, sampler.max_pitch_rad);
         const double radius =
-            sampler.min_radius_mm + UniformDraw(sampler.seed, streams::kViewRadius, i) * (sampler.max_radius_mm - sampler.min_radius_mm);
-        views.push_back({yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
+            sampler.min_radius_mm + UniformDraw(sampler.seed, streams::kViewRadius, i) *
+                                        (sampler.max_radius_mm - sampler.min_radius_mm);
+        views.push_back(
+            {yaw, pitch, radius, WorldFromCamOnSphere(sweep.target, yaw, pitch, radius)});
       }
       break;
   }
@@ -149,9 +155,12 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       // Aim at a point in a ball around the target (uniform in volume), then roll.
       Eigen::Vector3d offset = Eigen::Vector3d::Zero();
       if (sampler.target_jitter_mm > 0) {
-        const double z = 2 * UniformDraw(sampler.seed, streams::kTargetHeight, i) - 1, a = 2 * M_PI * UniformDraw(sampler.seed, streams::kTargetAzimuth, i);
-        const double r = sampler.target_jitter_mm * std::cbrt(UniformDraw(sampler.seed, streams::kTargetRadius, i));
-        offset = r * Eigen::Vector3d(std::sqrt(1 - z * z) * std::cos(a), std::sqrt(1 - z * z) * std::sin(a), z);
+        const double z = 2 * UniformDraw(sampler.seed, streams::kTargetHeight, i) - 1,
+                     a = 2 * M_PI * UniformDraw(sampler.seed, streams::kTargetAzimuth, i);
+        const double r = sampler.target_jitter_mm *
+                         std::cbrt(UniformDraw(sampler.seed, streams::kTargetRadius, i));
+        offset = r * Eigen::Vector3d(std::sqrt(1 - z * z) * std::cos(a),
+                                     std::sqrt(1 - z * z) * std::sin(a), z);
       }
       const Eigen::Vector3d eye = v.world_from_cam.translation();
       const Eigen::Vector3d aim = sweep.target + offset;
@@ -163,8 +172,10 @@ std::vector<SweepView> SampleViews(const ViewSampler& sampler, const SweepOption
       pose.linear().col(0) = x;
       pose.linear().col(1) = z.cross(x);
       pose.linear().col(2) = z;
-      const double roll = sampler.roll_jitter_rad * (2 * UniformDraw(sampler.seed, streams::kViewRoll, i) - 1);
-      pose.linear() = pose.linear() * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const double roll =
+          sampler.roll_jitter_rad * (2 * UniformDraw(sampler.seed, streams::kViewRoll, i) - 1);
+      pose.linear() =
+          pose.linear() * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       v.world_from_cam = pose;
     }
   }

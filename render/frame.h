@@ -16,9 +16,9 @@ namespace cadsynth {
 struct Frame {
   Camera camera;
 
-  std::vector<uint8_t> rgb;       // 3 bytes per pixel: R, G, B
-  std::vector<float> depth;       // z in the camera frame, mm; 0 = no return
-  std::vector<uint16_t> instance; // visible instance: index in Scene::instances + 1; 0 = none
+  std::vector<uint8_t> rgb;        // 3 bytes per pixel: R, G, B
+  std::vector<float> depth;        // z in the camera frame, mm; 0 = no return
+  std::vector<uint16_t> instance;  // visible instance: index in Scene::instances + 1; 0 = none
   std::vector<Eigen::Vector3f> normals;  // RenderOptions::normals: unit, camera frame; 0 = none
 
   struct InstanceTruth {
@@ -32,7 +32,7 @@ struct Frame {
     // not hit, inside the rectangle roi (clamped to the image), row-major: pixel (u, v) at
     // (v - roi[1]) * (roi[2] - roi[0]) + (u - roi[0]). Empty otherwise.
     std::vector<float> amodal_depth;
-    int px_count_all = 0;    // pixels of the amodal mask inside the image
+    int px_count_all = 0;  // pixels of the amodal mask inside the image
     // The silhouette on the canvas of three times the image size, [-w, 2w) x [-h, 2h) (as
     // bop_toolkit renders it), so that truncated parts count: its pixel count and its bounding
     // box (u_min, v_min, u_max, v_max, inclusive, image coordinates; all -1 when empty).

@@ -26,8 +26,8 @@ std::string TracingIsa(const std::string& requested) {
   __builtin_cpu_init();
   if (__builtin_cpu_supports("sse4.2")) cpu = 1;
   if (cpu == 1 && __builtin_cpu_supports("avx")) cpu = 2;
-  if (cpu == 2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi") &&
-      __builtin_cpu_supports("bmi2")) {
+  if (cpu == 2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+      __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2")) {
     cpu = 3;
   }
   if (cpu == 3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
@@ -48,7 +48,8 @@ bool RenderOptions::Check(std::string* why) const {
     *why = "the clip range needs 0 <= near < far";
   } else if (supersampling < 1 || supersampling > 8) {
     *why = "supersampling must be 1 to 8 samples per axis";
-  } else if (std::find(std::begin(kIsas), std::end(kIsas), isa) == std::end(kIsas) && isa != "auto") {
+  } else if (std::find(std::begin(kIsas), std::end(kIsas), isa) == std::end(kIsas) &&
+             isa != "auto") {
     *why = "isa must be auto, sse2, sse4.2, avx, avx2 or avx512, got '" + isa + "'";
   } else {
     return true;
@@ -74,7 +75,7 @@ void OnEmbreeError(void* user, RTCError code, const char* message) {
 }
 
 struct PartBuffers {
-  std::vector<float> positions;   // xyz per vertex, plus 1 float of padding at the end for SSE loads
+  std::vector<float> positions;  // xyz per vertex, plus 1 float of padding at the end for SSE loads
   std::vector<uint32_t> indices;  // 3 per triangle
   std::vector<Eigen::Vector3f> normals;
 };
@@ -89,10 +90,10 @@ struct Renderer::Impl {
   DeviceErrors errors;
   RTCDevice device = nullptr;
   std::vector<RTCScene> part_scenes;
-  RTCScene world = nullptr;                 // every instance and the floor
-  std::vector<RTCScene> solo;               // one instance alone, for amodal masks
+  RTCScene world = nullptr;    // every instance and the floor
+  std::vector<RTCScene> solo;  // one instance alone, for amodal masks
   std::vector<PartBuffers> parts;
-  std::vector<Eigen::AlignedBox3d> model_bounds;  // per part, model frame
+  std::vector<Eigen::AlignedBox3d> model_bounds;   // per part, model frame
   std::vector<Eigen::Matrix3f> instance_rotation;  // world_from_model rotation per instance
   std::vector<Eigen::Vector3f> albedo_of;          // colour per instance
   std::vector<Eigen::Vector3f> light_dirs;         // directional lights: unit travel direction
@@ -111,14 +112,16 @@ struct Renderer::Impl {
 
   void ThrowIfFailed(const char* stage) {
     std::lock_guard<std::mutex> lock(errors.mutex);
-    if (!errors.first.empty()) throw Error(std::string("renderer (") + stage + "): " + errors.first);
+    if (!errors.first.empty())
+      throw Error(std::string("renderer (") + stage + "): " + errors.first);
   }
 
   RTCGeometry NewInstance(int index) {
     const Instance& instance = scene.instances[index];
     RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(geometry, part_scenes[instance.part]);
-    const Eigen::Matrix<float, 3, 4> m = instance.world_from_model.matrix().topRows<3>().cast<float>();
+    const Eigen::Matrix<float, 3, 4> m =
+        instance.world_from_model.matrix().topRows<3>().cast<float>();
     rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, m.data());
     rtcCommitGeometry(geometry);
     return geometry;
@@ -197,9 +200,9 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     im.instance_rotation.push_back(scene.instances[i].world_from_model.linear().cast<float>());
     const Instance& instance = scene.instances[i];
     const size_t part = static_cast<size_t>(instance.part);
-    im.albedo_of.push_back(instance.color             ? *instance.color
-                        : part < scene.part_colors.size() ? scene.part_colors[part]
-                                                          : Eigen::Vector3f(0.7f, 0.7f, 0.7f));
+    im.albedo_of.push_back(instance.color                    ? *instance.color
+                           : part < scene.part_colors.size() ? scene.part_colors[part]
+                                                             : Eigen::Vector3f(0.7f, 0.7f, 0.7f));
   }
   if (scene.floor) {
     const float h = static_cast<float>(scene.floor_half_size_mm);
@@ -243,7 +246,8 @@ namespace {
 constexpr int kTile = 4;  // 4 x 4 pixels: one 16-ray packet
 
 inline uint8_t ToByte(float value) {
-  // Round half up; for values clamped to [0, 255] this equals std::lround, at a fraction of the cost.
+  // Round half up; for values clamped to [0, 255] this equals std::lround, at a fraction of the
+  // cost.
   return static_cast<uint8_t>(std::clamp(value, 0.0f, 1.0f) * 255.0f + 0.5f);
 }
 
@@ -255,13 +259,15 @@ struct PixelRect {
 
 // The pixels that can see `model_box`, clamped to `bounds` (all of it when a corner lies behind
 // the camera).
-PixelRect ProjectedRect(const Eigen::AlignedBox3d& model_box, const Eigen::Isometry3d& cam_from_model,
-                        const Intrinsics& k, const PixelRect& bounds) {
+PixelRect ProjectedRect(const Eigen::AlignedBox3d& model_box,
+                        const Eigen::Isometry3d& cam_from_model, const Intrinsics& k,
+                        const PixelRect& bounds) {
   const PixelRect whole = bounds;
   double umin = std::numeric_limits<double>::infinity(), vmin = umin;
   double umax = -umin, vmax = -umin;
   for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d corner = model_box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
+    const Eigen::Vector3d corner =
+        model_box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
     const Eigen::Vector3d p = cam_from_model * corner;
     if (p.z() <= 1e-6) return whole;
     const double u = k.fx * p.x() / p.z() + k.cx, v = k.fy * p.y() / p.z() + k.cy;
@@ -302,8 +308,8 @@ struct RayGen {
 };
 
 // Sets lane j of a packet to the camera ray along world direction `d`, with no hit yet.
-void SetLane(RTCRayHit16* rh, int j, const Eigen::Vector3f& origin, const Eigen::Vector3f& d, float tnear,
-             float tfar) {
+void SetLane(RTCRayHit16* rh, int j, const Eigen::Vector3f& origin, const Eigen::Vector3f& d,
+             float tnear, float tfar) {
   rh->ray.org_x[j] = origin.x();
   rh->ray.org_y[j] = origin.y();
   rh->ray.org_z[j] = origin.z();
@@ -323,7 +329,8 @@ void SetLane(RTCRayHit16* rh, int j, const Eigen::Vector3f& origin, const Eigen:
 
 // Fills a 16-ray packet for the 4 x 4 tile at (u0, v0) from tabulated x(u), y(v).
 void InitPacket(const RayGen& gen, int u0, int v0, int w, int h, const std::vector<float>& xs,
-                const std::vector<float>& ys, float tnear, float tfar, RTCRayHit16* rh, int valid[16]) {
+                const std::vector<float>& ys, float tnear, float tfar, RTCRayHit16* rh,
+                int valid[16]) {
   for (int j = 0; j < 16; ++j) {
     const int u = u0 + j % kTile, v = v0 + j / kTile;
     valid[j] = (u < w && v < h) ? -1 : 0;
@@ -333,13 +340,14 @@ void InitPacket(const RayGen& gen, int u0, int v0, int w, int h, const std::vect
 
 // A 4 x 4 packet at any pixel (u0, v0) of the 3x canvas, where the tabulated directions do not
 // reach; lanes outside `rect` are off. Same directions as InitPacket inside the image.
-void InitCanvasPacket(const RayGen& gen, int u0, int v0, const PixelRect& rect, float tnear, float tfar,
-                      RTCRayHit16* rh, int valid[16]) {
+void InitCanvasPacket(const RayGen& gen, int u0, int v0, const PixelRect& rect, float tnear,
+                      float tfar, RTCRayHit16* rh, int valid[16]) {
   const Intrinsics& k = *gen.k;
   for (int j = 0; j < 16; ++j) {
     const int u = u0 + j % kTile, v = v0 + j / kTile;
     valid[j] = (u < rect.u1 && v < rect.v1) ? -1 : 0;
-    const float x = static_cast<float>((u + 0.5 - k.cx) / k.fx), y = static_cast<float>((v + 0.5 - k.cy) / k.fy);
+    const float x = static_cast<float>((u + 0.5 - k.cx) / k.fx),
+                y = static_cast<float>((v + 0.5 - k.cy) / k.fy);
     SetLane(rh, j, gen.origin, gen.col0 * x + gen.col1 * y + gen.col2, tnear, tfar);
   }
 }
@@ -351,7 +359,8 @@ void IntersectFloor(const int valid[16], float half, unsigned floor_id, RTCRayHi
     if (!valid[j] || rh->ray.dir_z[j] == 0.0f) continue;
     const float t = -rh->ray.org_z[j] / rh->ray.dir_z[j];
     if (!(t >= rh->ray.tnear[j] && t <= rh->ray.tfar[j])) continue;
-    const float x = rh->ray.org_x[j] + t * rh->ray.dir_x[j], y = rh->ray.org_y[j] + t * rh->ray.dir_y[j];
+    const float x = rh->ray.org_x[j] + t * rh->ray.dir_x[j],
+                y = rh->ray.org_y[j] + t * rh->ray.dir_y[j];
     if (!(std::abs(x) <= half && std::abs(y) <= half)) continue;
     rh->ray.tfar[j] = t;
     rh->hit.geomID[j] = floor_id;
@@ -387,8 +396,9 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
       const PartBuffers& buffers = parts[scene.instances[inst].part];
       const uint32_t* tri = &buffers.indices[3 * rh.hit.primID[j]];
       const float b1 = rh.hit.u[j], b2 = rh.hit.v[j], b0 = 1.0f - b1 - b2;
-      normal = instance_rotation[inst] *
-               (b0 * buffers.normals[tri[0]] + b1 * buffers.normals[tri[1]] + b2 * buffers.normals[tri[2]]);
+      normal =
+          instance_rotation[inst] * (b0 * buffers.normals[tri[0]] + b1 * buffers.normals[tri[1]] +
+                                     b2 * buffers.normals[tri[2]]);
       albedo[j] = albedo_of[inst];
     } else {
       normal = Eigen::Vector3f::UnitZ();
@@ -397,7 +407,8 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
     normal.normalize();
     if (normal.dot(dir) > 0.0f) normal = -normal;  // shade the side the camera sees
     out[j].normal = normal;
-    point[j] = Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) + rh.ray.tfar[j] * dir;
+    point[j] =
+        Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) + rh.ray.tfar[j] * dir;
     out[j].color = albedo[j] * scene.ambient;
   }
   for (size_t l = 0; l < scene.lights.size(); ++l) {
@@ -470,7 +481,8 @@ Frame Renderer::Render(const Camera& camera) const {
   frame.instance.assign(num_pixels, 0);
   if (o.normals) frame.normals.assign(num_pixels, Eigen::Vector3f::Zero());
 
-  const RayGen gen(camera.world_from_cam.linear().cast<float>(), camera.world_from_cam.translation().cast<float>(), &k);
+  const RayGen gen(camera.world_from_cam.linear().cast<float>(),
+                   camera.world_from_cam.translation().cast<float>(), &k);
   std::vector<float> xs, ys;  // pixel centres
   gen.Tabulate(0.5, 0.5, &xs, &ys);
   // Supersampling offsets (sx + 0.5) / ss, tabulated per sample.
@@ -499,15 +511,17 @@ Frame Renderer::Render(const Camera& camera) const {
   // projected corners holds its whole projection, with a pixel of margin.
   std::vector<uint8_t> reachable(static_cast<size_t>(tiles_x) * tiles_y, 0);
   for (size_t i = 0; i < im.scene.instances.size(); ++i) {
-    const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part], frame.instances[i].cam_from_model,
-                                      k, PixelRect{0, 0, w, h});
+    const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part],
+                                      frame.instances[i].cam_from_model, k, PixelRect{0, 0, w, h});
     for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
-      for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx) reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
+      for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
+        reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
     }
   }
   const float floor_half = static_cast<float>(im.scene.floor_half_size_mm);
   // The first hits of a packet of camera rays.
-  const auto trace = [&](int tile, RTCIntersectContext* context, const int* valid, RTCRayHit16* rh) {
+  const auto trace = [&](int tile, RTCIntersectContext* context, const int* valid,
+                         RTCRayHit16* rh) {
     if (reachable[tile]) {
       rtcInitIntersectContext(context);
       rtcIntersect16(valid, im.world, context, rh);
@@ -516,68 +530,74 @@ Frame Renderer::Render(const Camera& camera) const {
     }
   };
 
-  tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
-    RTCIntersectContext context;
-    RTCRayHit16 rh;
-    alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
-    Impl::Shaded shaded[16];
-    for (int tile = range.begin(); tile < range.end(); ++tile) {
-      const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
-      // The pixel centres: depth, instance, normal, and (without supersampling) colour.
-      InitPacket(gen, u0, v0, w, h, xs, ys, tnear, tfar, &rh, valid);
-      // Incoherent packet traversal: Embree's coherent mode (RTC_INTERSECT_CONTEXT_FLAG_COHERENT)
-      // lost parts near the image centre of straight-down views, also with robust scenes.
-      trace(tile, &context, valid, &rh);
-      Eigen::Vector3f color[16];
-      if (o.shade && (ss == 1 || o.normals)) im.ShadePacket(rh, valid, shaded);
-      for (int j = 0; j < 16; ++j) {
-        if (!valid[j]) continue;
-        const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
-        if (rh.hit.geomID[j] != kInvalid) {
-          frame.depth[pixel] = rh.ray.tfar[j];
-          const unsigned inst = rh.hit.instID[0][j];
-          if (inst != kInvalid) frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
-          if (o.normals) frame.normals[pixel] = cam_from_world_rotation * shaded[j].normal;
-        }
-        color[j] = (ss == 1 && o.shade) ? shaded[j].color : Eigen::Vector3f::Zero();
-      }
-      // Supersampled colour: a regular grid of samples in each pixel.
-      for (int sy = 0; o.shade && ss > 1 && sy < ss; ++sy) {
-        for (int sx = 0; sx < ss; ++sx) {
-          InitPacket(gen, u0, v0, w, h, sample_xs[sy * ss + sx], sample_ys[sy * ss + sx], tnear, tfar, &rh, valid);
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
+        RTCIntersectContext context;
+        RTCRayHit16 rh;
+        alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
+        Impl::Shaded shaded[16];
+        for (int tile = range.begin(); tile < range.end(); ++tile) {
+          const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
+          // The pixel centres: depth, instance, normal, and (without supersampling) colour.
+          InitPacket(gen, u0, v0, w, h, xs, ys, tnear, tfar, &rh, valid);
+          // Incoherent packet traversal: Embree's coherent mode
+          // (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) lost parts near the image centre of straight-down
+          // views, also with robust scenes.
           trace(tile, &context, valid, &rh);
-          im.ShadePacket(rh, valid, shaded);
-          for (int j = 0; j < 16; ++j) color[j] += shaded[j].color / float(ss * ss);
+          Eigen::Vector3f color[16];
+          if (o.shade && (ss == 1 || o.normals)) im.ShadePacket(rh, valid, shaded);
+          for (int j = 0; j < 16; ++j) {
+            if (!valid[j]) continue;
+            const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+            if (rh.hit.geomID[j] != kInvalid) {
+              frame.depth[pixel] = rh.ray.tfar[j];
+              const unsigned inst = rh.hit.instID[0][j];
+              if (inst != kInvalid) frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
+              if (o.normals) frame.normals[pixel] = cam_from_world_rotation * shaded[j].normal;
+            }
+            color[j] = (ss == 1 && o.shade) ? shaded[j].color : Eigen::Vector3f::Zero();
+          }
+          // Supersampled colour: a regular grid of samples in each pixel.
+          for (int sy = 0; o.shade && ss > 1 && sy < ss; ++sy) {
+            for (int sx = 0; sx < ss; ++sx) {
+              InitPacket(gen, u0, v0, w, h, sample_xs[sy * ss + sx], sample_ys[sy * ss + sx], tnear,
+                         tfar, &rh, valid);
+              trace(tile, &context, valid, &rh);
+              im.ShadePacket(rh, valid, shaded);
+              for (int j = 0; j < 16; ++j) color[j] += shaded[j].color / float(ss * ss);
+            }
+          }
+          for (int j = 0; j < 16; ++j) {
+            if (!valid[j]) continue;
+            const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+            for (int c = 0; c < 3; ++c) frame.rgb[3 * pixel + c] = ToByte(color[j][c]);
+          }
         }
-      }
-      for (int j = 0; j < 16; ++j) {
-        if (!valid[j]) continue;
-        const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
-        for (int c = 0; c < 3; ++c) frame.rgb[3 * pixel + c] = ToByte(color[j][c]);
-      }
-    }
-  });
+      });
 
   for (size_t p = 0; p < num_pixels; ++p) {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }
   if (!o.amodal_masks) return frame;
   // The silhouette is traced on bop_toolkit's canvas of three times the image size, [-w, 2w) x
-  // [-h, 2h), so that counts and boxes of truncated instances include their parts outside the image.
+  // [-h, 2h), so that counts and boxes of truncated instances include their parts outside the
+  // image.
   const PixelRect canvas{-w, -h, 2 * w, 2 * h};
   tbb::parallel_for(size_t{0}, im.scene.instances.size(), [&](size_t i) {
     Frame::InstanceTruth& truth = frame.instances[i];
     truth.amodal_mask.assign(num_pixels, 0);
-    const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, k, canvas);
+    const PixelRect r =
+        ProjectedRect(im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, k, canvas);
     truth.roi[0] = std::clamp(r.u0, 0, w);
     truth.roi[1] = std::clamp(r.v0, 0, h);
     truth.roi[2] = std::clamp(r.u1, 0, w);
     truth.roi[3] = std::clamp(r.v1, 0, h);
     const int roi_w = truth.roi[2] - truth.roi[0];
-    if (o.amodal_depth) truth.amodal_depth.assign(static_cast<size_t>(roi_w) * (truth.roi[3] - truth.roi[1]), 0.0f);
+    if (o.amodal_depth)
+      truth.amodal_depth.assign(static_cast<size_t>(roi_w) * (truth.roi[3] - truth.roi[1]), 0.0f);
     int count = 0, canvas_count = 0;
-    int box[4] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::min(),
-                  std::numeric_limits<int>::min()};
+    int box[4] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(),
+                  std::numeric_limits<int>::min(), std::numeric_limits<int>::min()};
     RTCIntersectContext context;
     RTCRayHit16 rh;
     alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
@@ -595,7 +615,8 @@ Frame Renderer::Render(const Camera& camera) const {
           if (u < 0 || v < 0 || u >= w || v >= h) continue;
           truth.amodal_mask[static_cast<size_t>(v) * w + u] = 1;
           if (o.amodal_depth) {
-            truth.amodal_depth[static_cast<size_t>(v - truth.roi[1]) * roi_w + (u - truth.roi[0])] = rh.ray.tfar[j];
+            truth.amodal_depth[static_cast<size_t>(v - truth.roi[1]) * roi_w + (u - truth.roi[0])] =
+                rh.ray.tfar[j];
           }
           ++count;
         }

@@ -38,15 +38,21 @@ struct RenderOptions {
   // Every field, once (cad/schema.h): the recipe's `render:` section, the run key, the shard file.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
-    visit(o.near_mm, Field{"near", "length", "nothing nearer than this (along the optical axis) is seen"});
+    visit(o.near_mm,
+          Field{"near", "length", "nothing nearer than this (along the optical axis) is seen"});
     visit(o.far_mm, Field{"far", "length", "nothing farther than this is seen"});
-    visit(o.supersampling, Field{"supersampling", "integer",
-                                 "N x N rays per pixel for the colour image only (1-8; labels use the centre)"});
+    visit(o.supersampling,
+          Field{"supersampling", "integer",
+                "N x N rays per pixel for the colour image only (1-8; labels use the centre)"});
     visit(o.normals, Field{"normals", "bool", "also write normal/ images (camera-frame normals)"});
-    visit(o.isa, Field{"isa", "text", "Embree kernels: auto, sse2, sse4.2, avx, avx2 or avx512 (pin for mixed farms)"});
+    visit(o.isa,
+          Field{"isa", "text",
+                "Embree kernels: auto, sse2, sse4.2, avx, avx2 or avx512 (pin for mixed farms)"});
     visit(o.shade, Field{"", "bool", "profiling: shade the colour image", {}, true, "shade"});
-    visit(o.amodal_masks, Field{"", "bool", "profiling: trace the full silhouettes", {}, true, "amodal_masks"});
-    visit(o.amodal_depth, Field{"", "bool", "set by output.visibility: bop19", {}, true, "amodal_depth"});
+    visit(o.amodal_masks,
+          Field{"", "bool", "profiling: trace the full silhouettes", {}, true, "amodal_masks"});
+    visit(o.amodal_depth,
+          Field{"", "bool", "set by output.visibility: bop19", {}, true, "amodal_depth"});
   }
 };
 

@@ -15,7 +15,7 @@ struct Scene {
   std::vector<Instance> instances;
   std::vector<Eigen::Vector3f> part_colors;  // one per part; parts without one are light grey
 
-  bool floor = true;                   // the plane z = 0, a square centred on the origin
+  bool floor = true;  // the plane z = 0, a square centred on the origin
   double floor_half_size_mm = 10000.0;
   Eigen::Vector3f floor_color{0.55f, 0.55f, 0.55f};
   Eigen::Vector3f background_color{0.12f, 0.14f, 0.18f};

@@ -25,11 +25,11 @@ inline std::filesystem::path DataFile(const std::string& relative) {
   return std::filesystem::exists(path) ? path : std::filesystem::path();
 }
 
-#define CADSYNTH_REQUIRE_DATA(var, relative)                                                  \
-  const std::filesystem::path var = ::cadsynth::testing::DataFile(relative);                 \
-  if (var.empty()) {                                                                          \
+#define CADSYNTH_REQUIRE_DATA(var, relative)                                                      \
+  const std::filesystem::path var = ::cadsynth::testing::DataFile(relative);                      \
+  if (var.empty()) {                                                                              \
     GTEST_SKIP() << "shared test data not found: " << (::cadsynth::testing::DataDir() / relative) \
-                 << " (set CADSYNTH_TEST_DATA to the shared/data folder)";                   \
+                 << " (set CADSYNTH_TEST_DATA to the shared/data folder)";                        \
   }
 
 // A fresh folder removed at the end of the test.
@@ -71,7 +71,8 @@ inline std::map<std::string, std::string> ReadTree(const std::filesystem::path& 
 }
 
 // Both folders hold the same files with the same bytes (named when not).
-inline void ExpectSameTree(const std::filesystem::path& expected_dir, const std::filesystem::path& actual_dir) {
+inline void ExpectSameTree(const std::filesystem::path& expected_dir,
+                           const std::filesystem::path& actual_dir) {
   const auto expected = ReadTree(expected_dir), actual = ReadTree(actual_dir);
   EXPECT_EQ(expected.size(), actual.size()) << expected_dir << " vs " << actual_dir;
   for (const auto& [name, bytes] : expected) {

@@ -12,14 +12,14 @@
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
 #include "cad/error.h"
-#include "recipes/recipe.h"
-#include "recipes/reference.h"
 #include "dataset/file_io.h"
 #include "dataset/preview.h"
+#include "recipes/recipe.h"
+#include "recipes/reference.h"
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/export.h"
 #include "tools/pipeline/generate.h"
@@ -122,11 +122,12 @@ int RunGenerate(const Args& a) {
   }
   std::unique_ptr<tbb::global_control> thread_limit;
   if (a.threads > 0) {
-    thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                         static_cast<size_t>(a.threads));
+    thread_limit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, static_cast<size_t>(a.threads));
   }
 
-  const cadsynth::RunSpec spec = !a.recipe.empty() ? cadsynth::LoadRecipe(a.recipe) : cadsynth::DefaultRunSpec();
+  const cadsynth::RunSpec spec =
+      !a.recipe.empty() ? cadsynth::LoadRecipe(a.recipe) : cadsynth::DefaultRunSpec();
   cadsynth::GenerateOptions options;
   options.output = !a.output.empty() ? std::filesystem::path(a.output)
                                      : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
@@ -137,9 +138,9 @@ int RunGenerate(const Args& a) {
   }
   if (!a.quiet || a.progress == "json") {
     using Mode = cadsynth::ProgressReporter::Mode;
-    const Mode mode = a.progress == "json"    ? Mode::kJson
-                      : a.progress == "bar"   ? Mode::kBar
-                      : a.progress == "lines" ? Mode::kLines
+    const Mode mode = a.progress == "json"           ? Mode::kJson
+                      : a.progress == "bar"          ? Mode::kBar
+                      : a.progress == "lines"        ? Mode::kLines
                       : ::isatty(STDERR_FILENO) != 0 ? Mode::kBar
                                                      : Mode::kLines;
     auto reporter = std::make_shared<cadsynth::ProgressReporter>(mode, stderr);
@@ -149,23 +150,26 @@ int RunGenerate(const Args& a) {
   const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);
   if (summary.skipped_empty + summary.skipped_sparse > 0) {
     std::printf("skipped %zu views: %zu showed no object, %zu fewer than %d object pixels\n",
-                summary.skipped_empty + summary.skipped_sparse, summary.skipped_empty, summary.skipped_sparse,
-                spec.min_visible_pixels);
+                summary.skipped_empty + summary.skipped_sparse, summary.skipped_empty,
+                summary.skipped_sparse, spec.min_visible_pixels);
   }
   const size_t rendered = summary.frames - summary.resumed;
-  std::printf("wrote %zu frames (%zu scene%s) of %zu objects (%zu instances)%s to %s in %.1f s (%.1f frames/s)\n",
-              summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.objects, summary.instances,
-              shard ? (" as shard " + shard->Name()).c_str() : "",
-              std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,
-              summary.seconds > 0 ? rendered / summary.seconds : 0.0);
+  std::printf(
+      "wrote %zu frames (%zu scene%s) of %zu objects (%zu instances)%s to %s in %.1f s (%.1f "
+      "frames/s)\n",
+      summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.objects,
+      summary.instances, shard ? (" as shard " + shard->Name()).c_str() : "",
+      std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,
+      summary.seconds > 0 ? rendered / summary.seconds : 0.0);
   return 0;
 }
 
 int RunMerge(const Args& a) {
   const cadsynth::MergeSummary summary = cadsynth::Merge(a.dir);
   std::printf("merged %d shard%s into %s: %zu frames in %zu scene%s, %.1f s\n", summary.shards,
-              summary.shards == 1 ? "" : "s", std::filesystem::absolute(a.dir).lexically_normal().c_str(),
-              summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.seconds);
+              summary.shards == 1 ? "" : "s",
+              std::filesystem::absolute(a.dir).lexically_normal().c_str(), summary.frames,
+              summary.scenes, summary.scenes == 1 ? "" : "s", summary.seconds);
   return 0;
 }
 
@@ -174,18 +178,22 @@ int RunInspect(const Args& a) {
   options.unit = a.unit;
   options.encoding = a.encoding;
   options.tessellation.linear_deflection_mm = a.deflection_mm;
-  std::cout << (a.json ? cadsynth::InspectJson(a.file, options) : cadsynth::InspectText(a.file, options));
+  std::cout << (a.json ? cadsynth::InspectJson(a.file, options)
+                       : cadsynth::InspectText(a.file, options));
   return 0;
 }
 
 int RunVariants(const Args& a) {
-  const cadsynth::RunSpec spec = !a.recipe.empty() ? cadsynth::LoadRecipe(a.recipe) : cadsynth::DefaultRunSpec();
+  const cadsynth::RunSpec spec =
+      !a.recipe.empty() ? cadsynth::LoadRecipe(a.recipe) : cadsynth::DefaultRunSpec();
   if (a.export_dir.empty()) {
-    for (const cadsynth::VariantListing& v : cadsynth::ListVariants(spec)) std::cout << v.id << "  " << v.params << "\n";
+    for (const cadsynth::VariantListing& v : cadsynth::ListVariants(spec))
+      std::cout << v.id << "  " << v.params << "\n";
     return 0;
   }
   const auto written = cadsynth::ExportVariants(spec, a.export_dir, a.overwrite);
-  for (const cadsynth::VariantListing& v : written) std::cout << v.step.string() << "  " << v.params << "\n";
+  for (const cadsynth::VariantListing& v : written)
+    std::cout << v.step.string() << "  " << v.params << "\n";
   std::cout << "wrote " << written.size() << " STEP files\n";
   return 0;
 }
@@ -201,8 +209,8 @@ int ParseCount(const std::string& option, const std::string& text, int lo, int h
   char* end = nullptr;
   const long value = std::strtol(text.c_str(), &end, 10);
   if (end == text.c_str() || *end != '\0' || value < lo || value > hi) {
-    throw UsageError{option + " takes a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) +
-                     ", got '" + text + "'"};
+    throw UsageError{option + " takes a whole number from " + std::to_string(lo) + " to " +
+                     std::to_string(hi) + ", got '" + text + "'"};
   }
   return static_cast<int>(value);
 }
@@ -214,12 +222,14 @@ int RunPreview(const Args& a) {
   std::stringstream list(a.frames);
   for (std::string item; std::getline(list, item, ',');) {
     const size_t slash = item.find('/');
-    if (slash == std::string::npos) throw UsageError{"--frames takes scene/image pairs like 0/12, got '" + item + "'"};
+    if (slash == std::string::npos)
+      throw UsageError{"--frames takes scene/image pairs like 0/12, got '" + item + "'"};
     options.frames.push_back({ParseCount("--frames scene", item.substr(0, slash), 0, 999999),
                               ParseCount("--frames image", item.substr(slash + 1), 0, 999999)});
   }
-  const std::filesystem::path out =
-      !a.output.empty() ? std::filesystem::path(a.output) : std::filesystem::path(a.dir) / "preview.png";
+  const std::filesystem::path out = !a.output.empty()
+                                        ? std::filesystem::path(a.output)
+                                        : std::filesystem::path(a.dir) / "preview.png";
   std::vector<std::pair<int, int>> shown;
   const std::string png = cadsynth::RenderPreview(a.dir, options, &shown);
   cadsynth::WriteFileAtomic(out, png);
@@ -244,76 +254,97 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
     return sub;
   };
 
-  CLI::App* gen = add("generate",
-                      "Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR. Without "
-                      "a recipe it runs the built-in default job (no input files needed). A killed or failed run "
-                      "continues where it stopped when started again (same command).",
-                      RunGenerate);
+  CLI::App* gen = add(
+      "generate",
+      "Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR. Without "
+      "a recipe it runs the built-in default job (no input files needed). A killed or failed run "
+      "continues where it stopped when started again (same command).",
+      RunGenerate);
   gen->add_option("RECIPE", a.recipe, "recipe (YAML); none: the built-in default job");
-  gen->add_option("-o,--output", a.output, "output folder (default: the recipe's output.dir, else ./cadsynth_dataset)")
+  gen->add_option("-o,--output", a.output,
+                  "output folder (default: the recipe's output.dir, else ./cadsynth_dataset)")
       ->type_name("DIR");
-  gen->add_flag("--overwrite", a.overwrite, "replace DIR if it exists (the old one stays until the new one is complete)");
-  gen->add_option("--shard", a.shard,
-                  "render only shard I of N (0 <= I < N) into DIR, beside the other shards; join them with "
-                  "'cadsynth merge DIR' once all have finished (tools/slurm/ runs both)")
+  gen->add_flag("--overwrite", a.overwrite,
+                "replace DIR if it exists (the old one stays until the new one is complete)");
+  gen->add_option(
+         "--shard", a.shard,
+         "render only shard I of N (0 <= I < N) into DIR, beside the other shards; join them with "
+         "'cadsynth merge DIR' once all have finished (tools/slurm/ runs both)")
       ->type_name("I/N");
-  gen->add_option("-j,--threads", a.threads, "worker threads (default: all cores); results do not depend on it")
+  gen->add_option("-j,--threads", a.threads,
+                  "worker threads (default: all cores); results do not depend on it")
       ->check(CLI::Range(1, 1024))
       ->type_name("N");
-  gen->add_option("--progress", a.progress,
-                  "auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON line every 5 s "
-                  "(done, total, seconds, frames_per_s, eta_s) for cluster logs")
+  gen->add_option(
+         "--progress", a.progress,
+         "auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON line every 5 s "
+         "(done, total, seconds, frames_per_s, eta_s) for cluster logs")
       ->check(CLI::IsMember({"auto", "bar", "lines", "json"}))
       ->type_name("MODE");
-  gen->add_flag("-q,--quiet", a.quiet, "no progress or info lines, only warnings and errors (--progress=json still prints)");
-  gen->add_flag("--help-recipe", a.help_recipe, "print the recipe keys of the output and render sections with their defaults");
+  gen->add_flag(
+      "-q,--quiet", a.quiet,
+      "no progress or info lines, only warnings and errors (--progress=json still prints)");
+  gen->add_flag("--help-recipe", a.help_recipe,
+                "print the recipe keys of the output and render sections with their defaults");
 
-  CLI::App* merge = add("merge",
-                        "Joins the shards in DIR (written by generate --shard) into one dataset, byte for byte the "
-                        "one a single process writes; refuses, naming them, while shards are unfinished, and "
-                        "checks every frame's files against the manifest (size and CRC-32).",
-                        RunMerge);
+  CLI::App* merge = add(
+      "merge",
+      "Joins the shards in DIR (written by generate --shard) into one dataset, byte for byte the "
+      "one a single process writes; refuses, naming them, while shards are unfinished, and "
+      "checks every frame's files against the manifest (size and CRC-32).",
+      RunMerge);
   merge->add_option("DIR", a.dir, "the folder the shards wrote to")->required();
 
-  CLI::App* inspect = add("inspect",
-                          "Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb .3mf .off) and "
-                          "prints what cadsynth sees: format, declared unit, parts with instance counts, size in "
-                          "mm, triangles, colour, volume and whether the mesh is closed, and every instance.",
-                          RunInspect);
+  CLI::App* inspect =
+      add("inspect",
+          "Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb .3mf .off) and "
+          "prints what cadsynth sees: format, declared unit, parts with instance counts, size in "
+          "mm, triangles, colour, volume and whether the mesh is closed, and every instance.",
+          RunInspect);
   inspect->add_option("FILE", a.file, "the CAD or mesh file")->required();
   inspect->add_flag("--json", a.json, "machine-readable output");
-  inspect->add_option("--unit", a.unit, "the unit the file's numbers are really in (overrides the file; meshes: mm)")
+  inspect
+      ->add_option("--unit", a.unit,
+                   "the unit the file's numbers are really in (overrides the file; meshes: mm)")
       ->type_name("UNIT");
-  inspect->add_option("--encoding", a.encoding, "STEP names written as raw bytes of a code page: cp1251, cp1252, sjis, ...")
+  inspect
+      ->add_option("--encoding", a.encoding,
+                   "STEP names written as raw bytes of a code page: cp1251, cp1252, sjis, ...")
       ->type_name("CODEPAGE");
   inspect->add_option("--deflection", a.deflection_mm, "tessellation tolerance in mm")
       ->check(CLI::PositiveNumber)
       ->type_name("MM")
       ->capture_default_str();
 
-  CLI::App* variants = add("variants",
-                           "Lists every variant of the recipe's part families (id and parameters, as in "
-                           "variants.json); with --export-step writes each as DIR/<id>.step (exact B-rep, mm).",
-                           RunVariants);
+  CLI::App* variants =
+      add("variants",
+          "Lists every variant of the recipe's part families (id and parameters, as in "
+          "variants.json); with --export-step writes each as DIR/<id>.step (exact B-rep, mm).",
+          RunVariants);
   variants->add_option("RECIPE", a.recipe, "recipe (YAML); none: the built-in default job");
-  variants->add_option("--export-step", a.export_dir, "write each variant as DIR/<id>.step")->type_name("DIR");
+  variants->add_option("--export-step", a.export_dir, "write each variant as DIR/<id>.step")
+      ->type_name("DIR");
   variants->add_flag("--overwrite", a.overwrite, "replace existing STEP files");
 
-  CLI::App* eval = add("eval",
-                       "Scores pose estimates in the BOP results format (scene_id,im_id,obj_id,score,R,t,time) "
-                       "against DATASET's test split: ADD, ADD-S (for symmetric parts), the share within 10% of "
-                       "the diameter and the AUC of accuracy up to 0.1 m, per object and overall.",
-                       RunEval);
+  CLI::App* eval =
+      add("eval",
+          "Scores pose estimates in the BOP results format (scene_id,im_id,obj_id,score,R,t,time) "
+          "against DATASET's test split: ADD, ADD-S (for symmetric parts), the share within 10% of "
+          "the diameter and the AUC of accuracy up to 0.1 m, per object and overall.",
+          RunEval);
   eval->add_option("DATASET", a.dir, "a dataset cadsynth wrote")->required();
   eval->add_option("RESULTS", a.results, "the estimates, BOP's CSV format")->required();
-  eval->add_option("--json", a.json_file, "also write the scores as JSON to FILE")->type_name("FILE");
+  eval->add_option("--json", a.json_file, "also write the scores as JSON to FILE")
+      ->type_name("FILE");
 
-  CLI::App* preview = add("preview",
-                          "Writes a contact sheet PNG: per frame the colour image with every object's projected "
-                          "3D box and axes (x red, y green, z blue), the coloured depth and the visible masks.",
-                          RunPreview);
+  CLI::App* preview =
+      add("preview",
+          "Writes a contact sheet PNG: per frame the colour image with every object's projected "
+          "3D box and axes (x red, y green, z blue), the coloured depth and the visible masks.",
+          RunPreview);
   preview->add_option("DATASET", a.dir, "a dataset cadsynth wrote")->required();
-  preview->add_option("-o,--output", a.output, "output PNG (default: DATASET/preview.png)")->type_name("FILE");
+  preview->add_option("-o,--output", a.output, "output PNG (default: DATASET/preview.png)")
+      ->type_name("FILE");
   auto* count = preview->add_option("--count", a.count, "frames spread evenly over the dataset")
                     ->check(CLI::Range(1, 1000))
                     ->type_name("N")
@@ -349,8 +380,11 @@ int main(int argc, char** argv) {
     return 2;
   };
   const bool known = first == "--version" ||
-                     std::any_of(commands.begin(), commands.end(), [&](const Command& c) { return c.app->get_name() == first; });
-  if (!known) return usage_error((first[0] == '-' ? "unknown option '" : "unknown command '") + first + "'", "");
+                     std::any_of(commands.begin(), commands.end(),
+                                 [&](const Command& c) { return c.app->get_name() == first; });
+  if (!known)
+    return usage_error((first[0] == '-' ? "unknown option '" : "unknown command '") + first + "'",
+                       "");
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -2,7 +2,8 @@
 # Installs the Debian 12 packages cadsynth builds with, if any are missing. Run as root (or with
 # sudo available). Does nothing, and needs no network, when everything is already there.
 #   tools/setup.sh            what building and running cadsynth needs
-#   tools/setup.sh --tests    also Slurm and munge: a test starts a single-node Slurm cluster
+#   tools/setup.sh --tests    also Slurm and munge (a test starts a single-node Slurm cluster) and
+#                             clang-format (a test checks the formatting)
 set -euo pipefail
 
 packages=(
@@ -14,7 +15,7 @@ packages=(
   libcli11-dev
 )
 case "${1:-}" in
-  --tests) packages+=(slurm-wlm munge) ;;
+  --tests) packages+=(slurm-wlm munge clang-format) ;;
   "") ;;
   *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
 esac

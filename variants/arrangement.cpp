@@ -5,8 +5,8 @@
 #include <map>
 #include <sstream>
 
-#include "cad/random.h"
 #include "cad/error.h"
+#include "cad/random.h"
 #include "variants/families.h"
 #include "variants/stable_pose.h"
 
@@ -33,11 +33,14 @@ using Polygon = std::vector<Eigen::Vector2d>;
 
 // Convex hull of 2D points, counter-clockwise (monotone chain).
 Polygon ConvexHull2D(std::vector<Eigen::Vector2d> p) {
-  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) { return a.x() != b.x() ? a.x() < b.x() : a.y() < b.y(); });
+  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) {
+    return a.x() != b.x() ? a.x() < b.x() : a.y() < b.y();
+  });
   if (p.size() < 3) return p;
   Polygon hull(2 * p.size());
   size_t k = 0;
-  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a,
+                        const Eigen::Vector2d& b) {
     return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
   };
   for (size_t i = 0; i < p.size(); ++i) {
@@ -85,7 +88,8 @@ struct Body {
 
 Eigen::AlignedBox3d Bounds(const std::vector<Part>& parts, const Body& body) {
   Eigen::AlignedBox3d box;
-  for (const Instance& i : body.instances) box.extend(parts[i.part].mesh.Bounds(i.world_from_model));
+  for (const Instance& i : body.instances)
+    box.extend(parts[i.part].mesh.Bounds(i.world_from_model));
   return box;
 }
 
@@ -95,12 +99,14 @@ void Apply(const Eigen::Isometry3d& motion, Body* body) {
 
 // Rests a body: on its most stable face, a drawn one, or `pose_index`; then yaw about z and lower
 // onto the floor. Returns false when `pose_index` is beyond its stable poses.
-void Rest(const std::vector<Part>& parts, const ArrangementOptions& o, const std::vector<StablePose>& poses,
-          size_t pose_index, double yaw, Body* body) {
+void Rest(const std::vector<Part>& parts, const ArrangementOptions& o,
+          const std::vector<StablePose>& poses, size_t pose_index, double yaw, Body* body) {
   if (o.pose != PoseMode::kAsDesigned) Apply(poses[pose_index].floor_from_body, body);
   Apply(Eigen::Isometry3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())), body);
   const Eigen::AlignedBox3d box = Bounds(parts, *body);
-  Apply(Eigen::Isometry3d(Eigen::Translation3d(-box.center().x(), -box.center().y(), -box.min().z())), body);
+  Apply(
+      Eigen::Isometry3d(Eigen::Translation3d(-box.center().x(), -box.center().y(), -box.min().z())),
+      body);
 }
 
 }  // namespace
@@ -109,7 +115,8 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
                     const ArrangementOptions& o, const std::vector<int>& group) {
   std::string why;
   if (!o.Check(&why)) throw Error("arrangement: " + why);
-  if (!group.empty() && group.size() != instances.size()) throw Error("arrangement: one group per instance");
+  if (!group.empty() && group.size() != instances.size())
+    throw Error("arrangement: one group per instance");
   for (const Instance& instance : instances) {
     if (instance.part < 0 || static_cast<size_t>(instance.part) >= parts.size()) {
       throw Error("arrangement: instance '" + instance.name + "' refers to a missing part");
@@ -128,13 +135,17 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
     groups[it->second].instances.push_back(instances[i]);
   }
   if (o.layout == Layout::kSingle && groups.size() != 1) {
-    throw Error("arrangement: the single layout takes one part or assembly (got " + std::to_string(groups.size()) + ")");
+    throw Error("arrangement: the single layout takes one part or assembly (got " +
+                std::to_string(groups.size()) + ")");
   }
   std::vector<Body> bodies;
   if (o.layout == Layout::kAssembled) {
     Body all{groups[0].group, {}};
-    for (const Body& b : groups) all.instances.insert(all.instances.end(), b.instances.begin(), b.instances.end());
-    const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned ? std::vector<StablePose>{} : StablePoses(parts, all.instances);
+    for (const Body& b : groups)
+      all.instances.insert(all.instances.end(), b.instances.begin(), b.instances.end());
+    const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned
+                                              ? std::vector<StablePose>{}
+                                              : StablePoses(parts, all.instances);
     size_t pick = 0;
     if (o.pose == PoseMode::kRandom) {
       double u = UniformDraw(o.seed, streams::kAssembledPose, 0), acc = 0;
@@ -152,19 +163,23 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
   // Copies of each group, each resting on its own: on the chosen face, at yaw 0 (or random).
   const bool clutter = o.layout == Layout::kClutter;
   for (size_t g = 0; g < groups.size(); ++g) {
-    const std::vector<StablePose> poses =
-        o.pose == PoseMode::kAsDesigned ? std::vector<StablePose>{} : StablePoses(parts, groups[g].instances);
+    const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned
+                                              ? std::vector<StablePose>{}
+                                              : StablePoses(parts, groups[g].instances);
     const size_t faces = o.pose == PoseMode::kAll ? poses.size() : 1;
     for (int c = 0; c < o.copies; ++c) {
       for (size_t f = 0; f < faces; ++f) {
-        const uint64_t index = (static_cast<uint64_t>(g) << 32) + static_cast<uint64_t>(c) * faces + f;
+        const uint64_t index =
+            (static_cast<uint64_t>(g) << 32) + static_cast<uint64_t>(c) * faces + f;
         size_t pick = o.pose == PoseMode::kAll ? f : 0;
         if (o.pose == PoseMode::kRandom) {
           const double u = UniformDraw(o.seed, streams::kCopyPose, index);
           double acc = 0;
           while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
         }
-        const double yaw = (clutter || o.pose == PoseMode::kRandom) ? 2 * M_PI * UniformDraw(o.seed, streams::kCopyYaw, index) : 0.0;
+        const double yaw = (clutter || o.pose == PoseMode::kRandom)
+                               ? 2 * M_PI * UniformDraw(o.seed, streams::kCopyYaw, index)
+                               : 0.0;
         Body body = groups[g];
         Rest(parts, o, poses, pick, yaw, &body);
         bodies.push_back(std::move(body));
@@ -201,20 +216,23 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
     for (size_t b = 0; b < bodies.size(); ++b) {
       std::vector<Eigen::Vector2d> shadow;
       for (const Instance& i : bodies[b].instances) {
-        for (const Eigen::Vector3f& p : parts[i.part].mesh.positions) shadow.push_back((i.world_from_model * p.cast<double>()).head<2>());
+        for (const Eigen::Vector3f& p : parts[i.part].mesh.positions)
+          shadow.push_back((i.world_from_model * p.cast<double>()).head<2>());
       }
       footprint[b] = ConvexHull2D(shadow);
     }
     std::vector<size_t> order(bodies.size());
     for (size_t b = 0; b < order.size(); ++b) order[b] = b;
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return Area(footprint[a]) > Area(footprint[b]); });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return Area(footprint[a]) > Area(footprint[b]); });
     std::vector<Polygon> placed;
     std::vector<Body> kept;
     for (size_t b : order) {
       bool done = false;
       for (int attempt = 0; attempt < 500 && !done; ++attempt) {
         const uint64_t index = (static_cast<uint64_t>(b) << 20) + static_cast<uint64_t>(attempt);
-        const double r = o.clutter_radius_mm * std::sqrt(UniformDraw(o.seed, streams::kClutterRadius, index));
+        const double r =
+            o.clutter_radius_mm * std::sqrt(UniformDraw(o.seed, streams::kClutterRadius, index));
         const double phi = 2 * M_PI * UniformDraw(o.seed, streams::kClutterAngle, index);
         const Eigen::Vector2d at(r * std::cos(phi), r * std::sin(phi));
         Polygon moved = footprint[b];
@@ -236,12 +254,14 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
     }
     if (kept.size() < bodies.size()) {
       std::ostringstream message;
-      message << "clutter: only " << kept.size() << " of " << bodies.size() << " parts fit in a disc of radius "
-              << o.clutter_radius_mm << " mm with " << o.gap_mm << " mm between them; give a larger radius or fewer copies";
+      message << "clutter: only " << kept.size() << " of " << bodies.size()
+              << " parts fit in a disc of radius " << o.clutter_radius_mm << " mm with " << o.gap_mm
+              << " mm between them; give a larger radius or fewer copies";
       throw Error(message.str());
     }
     // Back in input order, for stable output.
-    std::sort(kept.begin(), kept.end(), [&](const Body& a, const Body& b) { return a.group < b.group; });
+    std::sort(kept.begin(), kept.end(),
+              [&](const Body& a, const Body& b) { return a.group < b.group; });
     bodies = std::move(kept);
   }
 
@@ -254,9 +274,11 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
   // Centre everything on the z axis (clutter is centred on the disc already).
   if (!clutter) {
     Eigen::AlignedBox3d all;
-    for (const Instance& i : out.instances) all.extend(parts[i.part].mesh.Bounds(i.world_from_model));
+    for (const Instance& i : out.instances)
+      all.extend(parts[i.part].mesh.Bounds(i.world_from_model));
     for (Instance& i : out.instances) {
-      i.world_from_model = Eigen::Translation3d(-all.center().x(), -all.center().y(), 0.0) * i.world_from_model;
+      i.world_from_model =
+          Eigen::Translation3d(-all.center().x(), -all.center().y(), 0.0) * i.world_from_model;
     }
   }
   return out;

@@ -4,8 +4,8 @@
 #include <sstream>
 
 #include "cad/error.h"
-#include "cad/util.h"
 #include "cad/mesh_analysis.h"
+#include "cad/util.h"
 #include "variants/gear.h"
 #include "variants/standard_parts.h"
 
@@ -15,11 +15,21 @@ namespace {
 using Kind = FamilyParam::Kind;
 constexpr double kDeg = M_PI / 180.0;
 
-FamilyParam Length(const char* name, double mm, const char* help) { return {name, Kind::kLength, mm, "", help}; }
-FamilyParam Angle(const char* name, double deg, const char* help) { return {name, Kind::kAngle, deg * kDeg, "", help}; }
-FamilyParam Count(const char* name, int n, const char* help) { return {name, Kind::kCount, double(n), "", help}; }
-FamilyParam Number(const char* name, double x, const char* help) { return {name, Kind::kNumber, x, "", help}; }
-FamilyParam Text(const char* name, const char* text, const char* help) { return {name, Kind::kText, 0.0, text, help}; }
+FamilyParam Length(const char* name, double mm, const char* help) {
+  return {name, Kind::kLength, mm, "", help};
+}
+FamilyParam Angle(const char* name, double deg, const char* help) {
+  return {name, Kind::kAngle, deg * kDeg, "", help};
+}
+FamilyParam Count(const char* name, int n, const char* help) {
+  return {name, Kind::kCount, double(n), "", help};
+}
+FamilyParam Number(const char* name, double x, const char* help) {
+  return {name, Kind::kNumber, x, "", help};
+}
+FamilyParam Text(const char* name, const char* text, const char* help) {
+  return {name, Kind::kText, 0.0, text, help};
+}
 
 std::vector<FamilyParam> GearParams(int teeth) {
   return {Count("teeth", teeth, "number of teeth"),
@@ -33,8 +43,12 @@ std::vector<FamilyParam> GearParams(int teeth) {
 }
 
 double Num(const ParamValues& v, const char* name) { return std::get<double>(v.at(name)); }
-int Int(const ParamValues& v, const char* name) { return static_cast<int>(std::lround(Num(v, name))); }
-const std::string& Str(const ParamValues& v, const char* name) { return std::get<std::string>(v.at(name)); }
+int Int(const ParamValues& v, const char* name) {
+  return static_cast<int>(std::lround(Num(v, name)));
+}
+const std::string& Str(const ParamValues& v, const char* name) {
+  return std::get<std::string>(v.at(name));
+}
 
 GearOptions GearFrom(const ParamValues& v, const std::string& suffix = "") {
   GearOptions g;
@@ -66,7 +80,8 @@ std::vector<std::pair<double, double>> ParseSections(const std::string& text) {
     char x = 0;
     std::stringstream one(item);
     if (!(one >> d >> x >> l) || (x != 'x' && x != 'X')) {
-      throw Error("sections: expected diameter x length pairs such as '20x10, 30x40', got '" + item + "'");
+      throw Error("sections: expected diameter x length pairs such as '20x10, 30x40', got '" +
+                  item + "'");
     }
     sections.emplace_back(d, l);
   }
@@ -93,45 +108,71 @@ const std::vector<FamilyInfo>& Families() {
     std::vector<FamilyParam> ring = GearParams(60);
     ring.push_back(Length("rim_width", 0.0, "ring wall beyond the root circle (0: 2.5 modules)"));
     f.push_back({"ring_gear", "an internal (ring) gear", ring});
-    f.push_back({"gear_pair", "two external gears in mesh at the working centre distance",
-                 {Count("teeth_1", 14, "teeth of the first gear"), Count("teeth_2", 28, "teeth of the second gear"),
+    f.push_back({"gear_pair",
+                 "two external gears in mesh at the working centre distance",
+                 {Count("teeth_1", 14, "teeth of the first gear"),
+                  Count("teeth_2", 28, "teeth of the second gear"),
                   Length("module", 2.0, "normal module"), Length("face_width", 10.0, "tooth width"),
                   Angle("pressure_angle", 20.0, "normal pressure angle"),
                   Number("profile_shift_1", 0.0, "profile shift of the first gear"),
                   Number("profile_shift_2", 0.0, "profile shift of the second gear"),
-                  Length("backlash", 0.05, "tooth thinning per gear"), Angle("helix_angle", 0.0, "first gear's helix (the second is opposite)"),
+                  Length("backlash", 0.05, "tooth thinning per gear"),
+                  Angle("helix_angle", 0.0, "first gear's helix (the second is opposite)"),
                   Length("bore", 6.0, "bore of both gears")}});
-    f.push_back({"planetary", "sun, planets, ring (z_ring = z_sun + 2 z_planet) and carrier",
-                 {Count("sun_teeth", 18, "sun teeth"), Count("planet_teeth", 18, "planet teeth"),
-                  Count("planets", 3, "number of planets"), Length("module", 1.5, "module"),
-                  Length("face_width", 10.0, "tooth width"), Length("backlash", 0.05, "tooth thinning per gear"),
-                  Length("pin_diameter", 6.0, "carrier pins"), Length("carrier_thickness", 4.0, "carrier plate"),
-                  Length("sun_bore", 6.0, "sun bore")}});
-    f.push_back({"slider_crank", "base, crank, connecting rod and slider at a crank angle",
-                 {Length("crank", 40.0, "crank radius"), Length("rod", 120.0, "connecting rod length"),
-                  Angle("crank_angle", 35.0, "crank angle"), Length("link_width", 16.0, "link width"),
-                  Length("link_thickness", 6.0, "link thickness"), Length("pin_diameter", 6.0, "pin holes"),
-                  Length("slider", 30.0, "slider block length")}});
-    f.push_back({"round_peg", "a cylinder", {Length("diameter", 20.0, "diameter"), Length("length", 50.0, "length")}});
-    f.push_back({"square_peg", "a square prism", {Length("side", 20.0, "side"), Length("length", 50.0, "length")}});
-    f.push_back({"faceplate", "a plate with a grid of holes",
-                 {Length("width", 120.0, "x size"), Length("height", 80.0, "y size"), Length("thickness", 8.0, "z size"),
-                  Count("rows", 2, "hole rows"), Count("columns", 3, "hole columns"),
-                  Length("hole_diameter", 10.0, "hole diameter"), Length("margin", 15.0, "edge to outer hole centres")}});
-    f.push_back({"stepped_shaft", "cylinders one after another",
+    f.push_back(
+        {"planetary",
+         "sun, planets, ring (z_ring = z_sun + 2 z_planet) and carrier",
+         {Count("sun_teeth", 18, "sun teeth"), Count("planet_teeth", 18, "planet teeth"),
+          Count("planets", 3, "number of planets"), Length("module", 1.5, "module"),
+          Length("face_width", 10.0, "tooth width"),
+          Length("backlash", 0.05, "tooth thinning per gear"),
+          Length("pin_diameter", 6.0, "carrier pins"),
+          Length("carrier_thickness", 4.0, "carrier plate"), Length("sun_bore", 6.0, "sun bore")}});
+    f.push_back(
+        {"slider_crank",
+         "base, crank, connecting rod and slider at a crank angle",
+         {Length("crank", 40.0, "crank radius"), Length("rod", 120.0, "connecting rod length"),
+          Angle("crank_angle", 35.0, "crank angle"), Length("link_width", 16.0, "link width"),
+          Length("link_thickness", 6.0, "link thickness"), Length("pin_diameter", 6.0, "pin holes"),
+          Length("slider", 30.0, "slider block length")}});
+    f.push_back({"round_peg",
+                 "a cylinder",
+                 {Length("diameter", 20.0, "diameter"), Length("length", 50.0, "length")}});
+    f.push_back({"square_peg",
+                 "a square prism",
+                 {Length("side", 20.0, "side"), Length("length", 50.0, "length")}});
+    f.push_back(
+        {"faceplate",
+         "a plate with a grid of holes",
+         {Length("width", 120.0, "x size"), Length("height", 80.0, "y size"),
+          Length("thickness", 8.0, "z size"), Count("rows", 2, "hole rows"),
+          Count("columns", 3, "hole columns"), Length("hole_diameter", 10.0, "hole diameter"),
+          Length("margin", 15.0, "edge to outer hole centres")}});
+    f.push_back({"stepped_shaft",
+                 "cylinders one after another",
                  {Text("sections", "16x20, 24x50, 16x20", "diameter x length pairs, mm")}});
-    f.push_back({"shoulder_bolt", "ISO 7379 shoulder bolt",
-                 {Length("shoulder_diameter", 10.0, "6, 8, 10, 12, 16 or 20 mm"), Length("shoulder_length", 30.0, "shoulder length")}});
-    f.push_back({"hex_bolt", "ISO 4017 hex bolt (thread as a plain shank)",
-                 {Text("size", "M8", "M3 to M24"), Length("length", 30.0, "length under the head")}});
+    f.push_back({"shoulder_bolt",
+                 "ISO 7379 shoulder bolt",
+                 {Length("shoulder_diameter", 10.0, "6, 8, 10, 12, 16 or 20 mm"),
+                  Length("shoulder_length", 30.0, "shoulder length")}});
+    f.push_back(
+        {"hex_bolt",
+         "ISO 4017 hex bolt (thread as a plain shank)",
+         {Text("size", "M8", "M3 to M24"), Length("length", 30.0, "length under the head")}});
     f.push_back({"hex_nut", "ISO 4032 hex nut", {Text("size", "M8", "M3 to M24")}});
     f.push_back({"washer", "ISO 7089 plain washer", {Text("size", "M8", "M3 to M24")}});
-    f.push_back({"ball_bearing", "deep-groove ball bearing",
-                 {Length("bore", 20.0, "bore"), Length("outer_diameter", 47.0, "outer diameter"), Length("width", 14.0, "width")}});
-    f.push_back({"scaled", "any CAD or mesh file, scaled",
-                 {Text("file", "", "the file (relative to the recipe)"), Number("scale", 1.0, "uniform scale"),
-                  Number("scale_x", 1.0, "extra scale along x"), Number("scale_y", 1.0, "extra scale along y"),
-                  Number("scale_z", 1.0, "extra scale along z"), Text("unit", "", "the file's unit (see parts.unit)")}});
+    f.push_back({"ball_bearing",
+                 "deep-groove ball bearing",
+                 {Length("bore", 20.0, "bore"), Length("outer_diameter", 47.0, "outer diameter"),
+                  Length("width", 14.0, "width")}});
+    f.push_back(
+        {"scaled",
+         "any CAD or mesh file, scaled",
+         {Text("file", "", "the file (relative to the recipe)"),
+          Number("scale", 1.0, "uniform scale"), Number("scale_x", 1.0, "extra scale along x"),
+          Number("scale_y", 1.0, "extra scale along y"),
+          Number("scale_z", 1.0, "extra scale along z"),
+          Text("unit", "", "the file's unit (see parts.unit)")}});
     return f;
   }();
   return families;
@@ -220,22 +261,26 @@ ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& v)
     if (f == "round_peg") return Single(f, MakeRoundPeg(Num(v, "diameter"), Num(v, "length")));
     if (f == "square_peg") return Single(f, MakeSquarePeg(Num(v, "side"), Num(v, "length")));
     if (f == "faceplate") {
-      return Single(f, MakeFaceplate(Num(v, "width"), Num(v, "height"), Num(v, "thickness"), Int(v, "rows"),
-                                     Int(v, "columns"), Num(v, "hole_diameter"), Num(v, "margin")));
+      return Single(
+          f, MakeFaceplate(Num(v, "width"), Num(v, "height"), Num(v, "thickness"), Int(v, "rows"),
+                           Int(v, "columns"), Num(v, "hole_diameter"), Num(v, "margin")));
     }
     if (f == "stepped_shaft") return Single(f, MakeSteppedShaft(ParseSections(Str(v, "sections"))));
-    if (f == "shoulder_bolt") return Single(f, MakeShoulderBolt(Num(v, "shoulder_diameter"), Num(v, "shoulder_length")));
+    if (f == "shoulder_bolt")
+      return Single(f, MakeShoulderBolt(Num(v, "shoulder_diameter"), Num(v, "shoulder_length")));
     if (f == "hex_bolt") return Single(f, MakeHexBolt(Str(v, "size"), Num(v, "length")));
     if (f == "hex_nut") return Single(f, MakeHexNut(Str(v, "size")));
     if (f == "washer") return Single(f, MakeWasher(Str(v, "size")));
-    if (f == "ball_bearing") return Single(f, MakeBallBearing(Num(v, "bore"), Num(v, "outer_diameter"), Num(v, "width")));
+    if (f == "ball_bearing")
+      return Single(f, MakeBallBearing(Num(v, "bore"), Num(v, "outer_diameter"), Num(v, "width")));
   } catch (const Error& e) {
     throw Error(f + ": " + e.what());
   }
   throw Error("family '" + f + "' is not parametric (it scales a file)");
 }
 
-Assembly BuildVariant(const FamilyInfo& family, const ParamValues& v, const ImportOptions& options) {
+Assembly BuildVariant(const FamilyInfo& family, const ParamValues& v,
+                      const ImportOptions& options) {
   if (family.name != "scaled") {
     Assembly a = TessellateAssembly(BuildVariantShapes(family, v), options.tessellation);
     return a;
@@ -245,7 +290,8 @@ Assembly BuildVariant(const FamilyInfo& family, const ParamValues& v, const Impo
   import.unit = Str(v, "unit");
   const Assembly source = ImportCad(Str(v, "file"), import);
   const double s = Num(v, "scale");
-  const Eigen::Vector3d factors(s * Num(v, "scale_x"), s * Num(v, "scale_y"), s * Num(v, "scale_z"));
+  const Eigen::Vector3d factors(s * Num(v, "scale_x"), s * Num(v, "scale_y"),
+                                s * Num(v, "scale_z"));
   if (!(factors.minCoeff() > 0)) throw Error("scaled: scale factors must be positive");
   return ScaleVariant(source, factors, options.tessellation);
 }
@@ -256,19 +302,24 @@ std::string DescribeParams(const ParamValues& values) {
   bool first = true;
   for (const auto& [name, value] : values) {
     out << (first ? "" : ", ") << name << "=";
-    if (const double* x = std::get_if<double>(&value)) out << *x; else out << std::get<std::string>(value);
+    if (const double* x = std::get_if<double>(&value))
+      out << *x;
+    else
+      out << std::get<std::string>(value);
     first = false;
   }
   return out.str();
 }
 
-Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& f, const TessellationOptions& options) {
+Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& f,
+                      const TessellationOptions& options) {
   const bool uniform = f.x() == f.y() && f.y() == f.z();
   Assembly out;
   out.name = assembly.name;
   out.format = assembly.format;
   out.length_unit = assembly.length_unit;
-  const auto scaled_part = [&](const Part& part, const Eigen::Isometry3d& root_from_cad, const std::string& name) {
+  const auto scaled_part = [&](const Part& part, const Eigen::Isometry3d& root_from_cad,
+                               const std::string& name) {
     // The part's geometry in the root frame, scaled there.
     if (!part.brep.IsNull()) {
       Part p = MakePart(name, Scaled(Transformed(part.brep, root_from_cad), f), options);
@@ -282,7 +333,8 @@ Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& f, const 
     p.mesh.Transform(root_from_cad * part.cad_from_model);
     const Eigen::Vector3f ff = f.cast<float>();
     for (Eigen::Vector3f& v : p.mesh.positions) v = v.cwiseProduct(ff);
-    for (Eigen::Vector3f& n : p.mesh.normals) n = n.cwiseQuotient(ff).normalized();  // inverse transpose
+    for (Eigen::Vector3f& n : p.mesh.normals)
+      n = n.cwiseQuotient(ff).normalized();  // inverse transpose
     const Eigen::Vector3d centre = p.mesh.Bounds().center();
     p.cad_from_model = Eigen::Translation3d(centre);
     p.mesh.Transform(p.cad_from_model.inverse());
@@ -305,7 +357,8 @@ Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& f, const 
       // world_from_model = [R, t]: R stays, t scales; the new model frame is the scaled CAD frame
       // moved to its own box centre.
       const Part& old_part = assembly.parts[i.part];
-      const Eigen::Isometry3d root_from_cad = i.world_from_model * old_part.cad_from_model.inverse();
+      const Eigen::Isometry3d root_from_cad =
+          i.world_from_model * old_part.cad_from_model.inverse();
       Eigen::Isometry3d scaled_root_from_cad = root_from_cad;
       scaled_root_from_cad.translation() *= f.x();
       j.world_from_model = scaled_root_from_cad * out.parts[i.part].cad_from_model;

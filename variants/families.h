@@ -45,7 +45,8 @@ ParamValues CompleteParams(const FamilyInfo& family, const ParamValues& values);
 
 // Builds one variant as parts with instances, tessellated. `values` must be complete
 // (CompleteParams). Throws Error with the reason for impossible values.
-Assembly BuildVariant(const FamilyInfo& family, const ParamValues& values, const ImportOptions& options);
+Assembly BuildVariant(const FamilyInfo& family, const ParamValues& values,
+                      const ImportOptions& options);
 
 // The B-rep parts and placements of a parametric variant (not 'scaled'), e.g. for STEP export.
 ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& values);
@@ -57,6 +58,7 @@ std::string DescribeParams(const ParamValues& values);
 // instances; otherwise each instance becomes a part of its own (a turned part scales
 // differently). B-rep parts are scaled exactly and tessellated anew; mesh parts are scaled as
 // meshes.
-Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& scale, const TessellationOptions& options);
+Assembly ScaleVariant(const Assembly& assembly, const Eigen::Vector3d& scale,
+                      const TessellationOptions& options);
 
 }  // namespace cadsynth

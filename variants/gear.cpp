@@ -22,8 +22,8 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Wire.hxx>
 #include <gp_Ax1.hxx>
-#include <gp_Circ.hxx>
 #include <gp_Ax2.hxx>
+#include <gp_Circ.hxx>
 #include <gp_Trsf.hxx>
 #include <gp_Vec.hxx>
 
@@ -132,10 +132,11 @@ Fillet UpperFillet(const Tooth& t) {
 
 Eigen::Vector2d Mirror(const Eigen::Vector2d& p) { return {p.x(), -p.y()}; }
 
-std::vector<Eigen::Vector2d> ArcPoints(const Eigen::Vector2d& centre, double radius, double from, double to,
-                                       int count) {
+std::vector<Eigen::Vector2d> ArcPoints(const Eigen::Vector2d& centre, double radius, double from,
+                                       double to, int count) {
   std::vector<Eigen::Vector2d> points;
-  for (int i = 0; i < count; ++i) points.push_back(centre + Polar(radius, from + (to - from) * i / (count - 1)));
+  for (int i = 0; i < count; ++i)
+    points.push_back(centre + Polar(radius, from + (to - from) * i / (count - 1)));
   return points;
 }
 
@@ -158,14 +159,16 @@ std::vector<Eigen::Vector2d> ToothOutline(const Tooth& t, int n) {
     const Fillet f = UpperFillet(t);
     const double a1 = std::atan2(f.on_line.y() - f.centre.y(), f.on_line.x() - f.centre.x());
     double a0 = std::atan2(f.on_root.y() - f.centre.y(), f.on_root.x() - f.centre.x());
-    while (a0 < a1) a0 += 2 * M_PI;  // from the line (a1) round to the root point (a0), the short way
+    while (a0 < a1)
+      a0 += 2 * M_PI;  // from the line (a1) round to the root point (a0), the short way
     if (a0 - a1 > M_PI) a0 -= 2 * M_PI;
     fillet_upper = ArcPoints(f.centre, t.rho, a1, a0, n);  // line -> root
   }
   // Lower side, root to tip: fillet (root -> line), radial line, involute.
   if (t.rho > 0) {
     std::vector<Eigen::Vector2d> lower;
-    for (auto it = fillet_upper.rbegin(); it != fillet_upper.rend(); ++it) lower.push_back(Mirror(*it));
+    for (auto it = fillet_upper.rbegin(); it != fillet_upper.rend(); ++it)
+      lower.push_back(Mirror(*it));
     append(lower, false);
   }
   if (t.HasRadialSegment()) out.push_back(Mirror(Polar(t.line_end, t.RadialAngle())));
@@ -211,7 +214,8 @@ std::vector<TopoDS_Edge> ToothEdges(const Tooth& t) {
   Fillet f;
   if (t.rho > 0) f = UpperFillet(t);
   const auto fillet_mid = [&](const Fillet& fl) {
-    const Eigen::Vector2d d = (fl.on_root - fl.centre).normalized() + (fl.on_line - fl.centre).normalized();
+    const Eigen::Vector2d d =
+        (fl.on_root - fl.centre).normalized() + (fl.on_line - fl.centre).normalized();
     return Eigen::Vector2d(fl.centre + t.rho * d.normalized());
   };
   const Eigen::Vector2d base_upper = Polar(t.start, t.Angle(t.start));
@@ -219,13 +223,15 @@ std::vector<TopoDS_Edge> ToothEdges(const Tooth& t) {
     const Fillet lower{Mirror(f.centre), Mirror(f.on_root), Mirror(f.on_line)};
     edges.push_back(Arc(lower.on_root, fillet_mid(lower), lower.on_line));
   }
-  if (t.HasRadialSegment()) edges.push_back(Segment(Mirror(Polar(t.line_end, t.RadialAngle())), Mirror(base_upper)));
+  if (t.HasRadialSegment())
+    edges.push_back(Segment(Mirror(Polar(t.line_end, t.RadialAngle())), Mirror(base_upper)));
   edges.push_back(BRepBuilderAPI_MakeEdge(FlankCurve(t, true)));
   edges.push_back(Arc(Polar(t.ra, -gamma_a), Polar(t.ra, 0), Polar(t.ra, gamma_a)));
   Handle(Geom_BSplineCurve) upper = FlankCurve(t, false);
   upper->Reverse();
   edges.push_back(BRepBuilderAPI_MakeEdge(upper));
-  if (t.HasRadialSegment()) edges.push_back(Segment(base_upper, Polar(t.line_end, t.RadialAngle())));
+  if (t.HasRadialSegment())
+    edges.push_back(Segment(base_upper, Polar(t.line_end, t.RadialAngle())));
   if (t.rho > 0) edges.push_back(Arc(f.on_line, fillet_mid(f), f.on_root));
   const double end = 2 * M_PI / t.z - t.gamma_c;
   if (end - t.gamma_c > 1e-9) {
@@ -245,7 +251,8 @@ TopoDS_Wire OutlineWire(const Tooth& t, double angle, double z) {
     lift.SetTranslation(gp_Vec(0, 0, z));
     for (const TopoDS_Edge& edge : tooth) {
       wire.Add(TopoDS::Edge(BRepBuilderAPI_Transform(edge, lift * turn, /*copy=*/true).Shape()));
-      if (!wire.IsDone()) throw Error("gear: the tooth outline does not close (edge " + std::to_string(k) + ")");
+      if (!wire.IsDone())
+        throw Error("gear: the tooth outline does not close (edge " + std::to_string(k) + ")");
     }
   }
   if (!wire.Wire().Closed()) throw Error("gear: the tooth outline does not close");
@@ -288,7 +295,8 @@ TopoDS_Shape PrismWithHole(const TopoDS_Wire& outer, TopoDS_Wire inner, double h
 }
 
 TopoDS_Shape Cylinder(double radius, double z0, double z1) {
-  return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, z0), gp_Dir(0, 0, 1)), radius, z1 - z0).Shape();
+  return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, z0), gp_Dir(0, 0, 1)), radius, z1 - z0)
+      .Shape();
 }
 
 TopoDS_Shape Boolean(BRepAlgoAPI_BooleanOperation&& op, const char* what) {
@@ -304,7 +312,9 @@ double GearOptions::TransversePressureAngle() const {
   return std::atan(std::tan(pressure_angle_rad) / std::cos(helix_angle_rad));
 }
 double GearOptions::PitchRadius() const { return 0.5 * TransverseModule() * teeth; }
-double GearOptions::BaseRadius() const { return PitchRadius() * std::cos(TransversePressureAngle()); }
+double GearOptions::BaseRadius() const {
+  return PitchRadius() * std::cos(TransversePressureAngle());
+}
 double GearOptions::TipRadius() const {
   return internal ? PitchRadius() - module_mm * (1.0 - profile_shift)
                   : PitchRadius() + module_mm * (1.0 + profile_shift);
@@ -325,7 +335,8 @@ bool GearOptions::Check(std::string* why) const {
   } else if (!(face_width_mm > 0)) {
     out << "face width must be positive (got " << face_width_mm << " mm)";
   } else if (!(pressure_angle_rad >= 10.0 / deg && pressure_angle_rad <= 35.0 / deg)) {
-    out << "pressure angle must lie between 10 and 35 degrees (got " << pressure_angle_rad * deg << ")";
+    out << "pressure angle must lie between 10 and 35 degrees (got " << pressure_angle_rad * deg
+        << ")";
   } else if (!(std::abs(helix_angle_rad) < 45.0 / deg)) {
     out << "helix angle must lie between -45 and 45 degrees (got " << helix_angle_rad * deg << ")";
   } else if (!(std::abs(profile_shift) <= 1.0)) {
@@ -333,15 +344,16 @@ bool GearOptions::Check(std::string* why) const {
   } else if (!(backlash_mm >= 0) || !(root_fillet >= 0)) {
     out << "backlash and root fillet must not be negative";
   } else if (RootRadius() <= 0) {
-    out << "the root circle vanishes (" << teeth << " teeth with profile shift " << profile_shift << ")";
+    out << "the root circle vanishes (" << teeth << " teeth with profile shift " << profile_shift
+        << ")";
   } else {
     const Tooth t = MakeTooth(*this);
     const double tip_half = t.Angle(t.ra);
     if (!(t.psi > 0)) {
       out << "backlash " << backlash_mm << " mm is more than the tooth is thick";
     } else if (!(tip_half > 0.02 * M_PI / teeth)) {
-      out << "the teeth would be pointed: tip circle " << 2 * t.ra << " mm is too large for " << teeth
-          << " teeth (reduce the profile shift)";
+      out << "the teeth would be pointed: tip circle " << 2 * t.ra << " mm is too large for "
+          << teeth << " teeth (reduce the profile shift)";
     } else if (t.gamma_c >= M_PI / teeth) {
       out << "the tooth spaces close at the root: too few teeth or too much profile shift";
     } else if (!internal && bore_diameter_mm > 0 && 0.5 * bore_diameter_mm >= RootRadius()) {
@@ -350,7 +362,8 @@ bool GearOptions::Check(std::string* why) const {
     } else if (!internal && (hub_length_mm > 0) != (hub_diameter_mm > 0)) {
       out << "a hub needs both a diameter and a length";
     } else if (!internal && hub_diameter_mm > 0 && hub_diameter_mm <= bore_diameter_mm) {
-      out << "hub diameter " << hub_diameter_mm << " mm must be larger than the bore " << bore_diameter_mm << " mm";
+      out << "hub diameter " << hub_diameter_mm << " mm must be larger than the bore "
+          << bore_diameter_mm << " mm";
     } else if (internal && (bore_diameter_mm > 0 || hub_diameter_mm > 0)) {
       out << "an internal gear has no bore or hub (it is a ring)";
     } else if (!(rim_width_mm >= 0)) {
@@ -383,7 +396,8 @@ double InvoluteFitError(const GearOptions& options) {
   const Handle(Geom_BSplineCurve) curve = FlankCurve(t, false);
   double worst = 0.0;
   for (int i = 0; i <= 2000; ++i) {
-    const double u = curve->FirstParameter() + (curve->LastParameter() - curve->FirstParameter()) * i / 2000.0;
+    const double u =
+        curve->FirstParameter() + (curve->LastParameter() - curve->FirstParameter()) * i / 2000.0;
     const gp_Pnt p = curve->Value(u);
     const double radius = std::hypot(p.X(), p.Y());
     const double error = radius * std::abs(std::atan2(p.Y(), p.X()) - t.Angle(radius));
@@ -407,18 +421,22 @@ Shape MakeGear(const GearOptions& o) {
       TopoDS_Shape gear;
       bool bored = false;
       if (spur && o.bore_diameter_mm > 0 && o.hub_diameter_mm == 0) {  // no Boolean needed
-        gear = PrismWithHole(OutlineWire(t, 0.0, 0.0), CircleWire(0.5 * o.bore_diameter_mm), o.face_width_mm);
+        gear = PrismWithHole(OutlineWire(t, 0.0, 0.0), CircleWire(0.5 * o.bore_diameter_mm),
+                             o.face_width_mm);
         bored = true;
       } else {
         gear = ToothedBody(t, o.helix_angle_rad, 0.0, 0.0, o.face_width_mm);
       }
       if (o.hub_diameter_mm > 0) {
-        gear = Boolean(BRepAlgoAPI_Fuse(gear, Cylinder(0.5 * o.hub_diameter_mm, -o.hub_length_mm, 0.0)), "add the hub");
+        gear = Boolean(
+            BRepAlgoAPI_Fuse(gear, Cylinder(0.5 * o.hub_diameter_mm, -o.hub_length_mm, 0.0)),
+            "add the hub");
       }
       if (o.bore_diameter_mm > 0 && !bored) {
-        gear = Boolean(BRepAlgoAPI_Cut(gear, Cylinder(0.5 * o.bore_diameter_mm, -o.hub_length_mm - 1.0,
-                                                      o.face_width_mm + 1.0)),
-                       "cut the bore");
+        gear =
+            Boolean(BRepAlgoAPI_Cut(gear, Cylinder(0.5 * o.bore_diameter_mm, -o.hub_length_mm - 1.0,
+                                                   o.face_width_mm + 1.0)),
+                    "cut the bore");
       }
       return WrapShape(gear);
     }
@@ -426,11 +444,12 @@ Shape MakeGear(const GearOptions& o) {
     // the ring's tooth 0 points along +x.
     const double rim = o.rim_width_mm > 0 ? o.rim_width_mm : 2.5 * o.module_mm;
     if (spur) {
-      return WrapShape(PrismWithHole(CircleWire(o.RootRadius() + rim), OutlineWire(t, M_PI / o.teeth, 0.0),
-                                     o.face_width_mm));
+      return WrapShape(PrismWithHole(CircleWire(o.RootRadius() + rim),
+                                     OutlineWire(t, M_PI / o.teeth, 0.0), o.face_width_mm));
     }
     const TopoDS_Shape blank = Cylinder(o.RootRadius() + rim, 0.0, o.face_width_mm);
-    const TopoDS_Shape cutter = ToothedBody(t, o.helix_angle_rad, M_PI / o.teeth, -1.0, o.face_width_mm + 1.0);
+    const TopoDS_Shape cutter =
+        ToothedBody(t, o.helix_angle_rad, M_PI / o.teeth, -1.0, o.face_width_mm + 1.0);
     return WrapShape(Boolean(BRepAlgoAPI_Cut(blank, cutter), "cut the ring's teeth"));
   } catch (const Standard_Failure& failure) {
     throw Error(std::string("gear: OpenCASCADE failed: ") + failure.GetMessageString());

@@ -16,17 +16,17 @@ namespace cadsynth {
 
 struct GearOptions {
   int teeth = 20;
-  double module_mm = 2.0;           // normal module
+  double module_mm = 2.0;                                             // normal module
   double pressure_angle_rad = 20.0 * 3.14159265358979323846 / 180.0;  // normal pressure angle
   double face_width_mm = 10.0;
-  double profile_shift = 0.0;       // x, in modules (positive: thicker teeth, larger tip)
-  double backlash_mm = 0.0;         // tooth thinned by this much at the pitch circle
-  double root_fillet = 0.38;        // fillet radius in modules (basic rack: 0.38)
-  double helix_angle_rad = 0.0;     // 0: spur; positive: right hand
-  bool internal = false;            // a ring gear with teeth pointing inward
-  double rim_width_mm = 0.0;        // internal: ring wall beyond the root circle (0: 2.5 modules)
-  double bore_diameter_mm = 0.0;    // external: centre hole (0: none)
-  double hub_diameter_mm = 0.0;     // external: hub below the gear (0: none)
+  double profile_shift = 0.0;     // x, in modules (positive: thicker teeth, larger tip)
+  double backlash_mm = 0.0;       // tooth thinned by this much at the pitch circle
+  double root_fillet = 0.38;      // fillet radius in modules (basic rack: 0.38)
+  double helix_angle_rad = 0.0;   // 0: spur; positive: right hand
+  bool internal = false;          // a ring gear with teeth pointing inward
+  double rim_width_mm = 0.0;      // internal: ring wall beyond the root circle (0: 2.5 modules)
+  double bore_diameter_mm = 0.0;  // external: centre hole (0: none)
+  double hub_diameter_mm = 0.0;   // external: hub below the gear (0: none)
   double hub_length_mm = 0.0;
 
   // False with a reason for impossible gears (too few teeth, a bore beyond the root circle,

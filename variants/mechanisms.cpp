@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 
+#include <tbb/parallel_for.h>
 #include <BRepAlgoAPI_Fuse.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
@@ -15,7 +16,6 @@
 #include <Standard_Failure.hxx>
 #include <gp_Ax2.hxx>
 #include <gp_Circ.hxx>
-#include <tbb/parallel_for.h>
 
 #include "cad/error.h"
 #include "cad/occt_shape.h"
@@ -46,7 +46,8 @@ TopoDS_Shape Boolean(BRepAlgoAPI_BooleanOperation&& op, const char* what) {
 }
 
 TopoDS_Shape Cylinder(double radius, double x, double y, double z0, double z1) {
-  return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(x, y, z0), gp_Dir(0, 0, 1)), radius, z1 - z0).Shape();
+  return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(x, y, z0), gp_Dir(0, 0, 1)), radius, z1 - z0)
+      .Shape();
 }
 
 TopoDS_Wire Circle(double x, double y, double radius) {
@@ -60,11 +61,15 @@ TopoDS_Wire Circle(double x, double y, double radius) {
 TopoDS_Shape Link(double length, double width, double thickness, double hole) {
   const double r = 0.5 * width;
   BRepBuilderAPI_MakeWire outline;
-  outline.Add(BRepBuilderAPI_MakeEdge(GC_MakeSegment(gp_Pnt(0, -r, 0), gp_Pnt(length, -r, 0)).Value()));
+  outline.Add(
+      BRepBuilderAPI_MakeEdge(GC_MakeSegment(gp_Pnt(0, -r, 0), gp_Pnt(length, -r, 0)).Value()));
   outline.Add(BRepBuilderAPI_MakeEdge(
-      GC_MakeArcOfCircle(gp_Pnt(length, -r, 0), gp_Pnt(length + r, 0, 0), gp_Pnt(length, r, 0)).Value()));
-  outline.Add(BRepBuilderAPI_MakeEdge(GC_MakeSegment(gp_Pnt(length, r, 0), gp_Pnt(0, r, 0)).Value()));
-  outline.Add(BRepBuilderAPI_MakeEdge(GC_MakeArcOfCircle(gp_Pnt(0, r, 0), gp_Pnt(-r, 0, 0), gp_Pnt(0, -r, 0)).Value()));
+      GC_MakeArcOfCircle(gp_Pnt(length, -r, 0), gp_Pnt(length + r, 0, 0), gp_Pnt(length, r, 0))
+          .Value()));
+  outline.Add(
+      BRepBuilderAPI_MakeEdge(GC_MakeSegment(gp_Pnt(length, r, 0), gp_Pnt(0, r, 0)).Value()));
+  outline.Add(BRepBuilderAPI_MakeEdge(
+      GC_MakeArcOfCircle(gp_Pnt(0, r, 0), gp_Pnt(-r, 0, 0), gp_Pnt(0, -r, 0)).Value()));
   BRepBuilderAPI_MakeFace face(outline.Wire(), true);
   for (double x : {0.0, length}) {
     TopoDS_Wire h = Circle(x, 0, 0.5 * hole);
@@ -93,11 +98,13 @@ Assembly TessellateAssembly(const ShapeAssembly& shapes, const TessellationOptio
   assembly.parts.resize(shapes.components.size());
   tbb::parallel_for(size_t{0}, shapes.components.size(), [&](size_t i) {
     assembly.parts[i] = MakePart(shapes.components[i].name, shapes.components[i].shape, options);
-    assembly.parts[i].symmetries = shapes.components[i].symmetries.InFrame(assembly.parts[i].cad_from_model);
+    assembly.parts[i].symmetries =
+        shapes.components[i].symmetries.InFrame(assembly.parts[i].cad_from_model);
   });
   for (const ShapeAssembly::Placement& p : shapes.placements) {
-    assembly.instances.push_back(
-        {p.component, p.name, p.pose * assembly.parts[p.component].cad_from_model, std::nullopt, shapes.name + "/" + p.name});
+    assembly.instances.push_back({p.component, p.name,
+                                  p.pose * assembly.parts[p.component].cad_from_model, std::nullopt,
+                                  shapes.name + "/" + p.name});
   }
   return assembly;
 }
@@ -109,12 +116,14 @@ bool GearPairOptions::Check(std::string* why) const {
   if (first.internal || second.internal) {
     out << "a gear pair is two external gears (use the planetary set for a ring)";
   } else if (std::abs(first.module_mm - second.module_mm) > 1e-9) {
-    out << "modules differ (" << first.module_mm << " and " << second.module_mm << " mm): the gears cannot mesh";
+    out << "modules differ (" << first.module_mm << " and " << second.module_mm
+        << " mm): the gears cannot mesh";
   } else if (std::abs(first.pressure_angle_rad - second.pressure_angle_rad) > 1e-9) {
     out << "pressure angles differ: the gears cannot mesh";
   } else if (std::abs(first.helix_angle_rad + second.helix_angle_rad) > 1e-9) {
-    out << "external helical gears need opposite helix angles (got " << first.helix_angle_rad * 180 / M_PI
-        << " and " << second.helix_angle_rad * 180 / M_PI << " degrees)";
+    out << "external helical gears need opposite helix angles (got "
+        << first.helix_angle_rad * 180 / M_PI << " and " << second.helix_angle_rad * 180 / M_PI
+        << " degrees)";
   } else {
     return true;
   }
@@ -123,9 +132,11 @@ bool GearPairOptions::Check(std::string* why) const {
 }
 
 double GearPairOptions::CentreDistance() const {
-  // Working pressure angle from the profile shifts: inv(a_w) = 2 tan(a) (x1 + x2) / (z1 + z2) + inv(a).
+  // Working pressure angle from the profile shifts: inv(a_w) = 2 tan(a) (x1 + x2) / (z1 + z2) +
+  // inv(a).
   const double at = first.TransversePressureAngle();
-  const double target = 2 * std::tan(first.pressure_angle_rad) * (first.profile_shift + second.profile_shift) /
+  const double target = 2 * std::tan(first.pressure_angle_rad) *
+                            (first.profile_shift + second.profile_shift) /
                             (first.teeth + second.teeth) +
                         Involute(at);
   double aw = at;
@@ -143,10 +154,13 @@ ShapeAssembly MakeGearPair(const GearPairOptions& o) {
   return Guarded("gear pair", [&] {
     ShapeAssembly a;
     a.name = "gear_pair";
-    a.components = {{"gear_z" + std::to_string(o.first.teeth), MakeGear(o.first), GearSymmetries(o.first)},
-                    {"gear_z" + std::to_string(o.second.teeth), MakeGear(o.second), GearSymmetries(o.second)}};
-    a.placements = {{0, "gear_1", Pose(0, 0, 0, 0)},
-                    {1, "gear_2", Pose(o.CentreDistance(), 0, 0, MeshTurn(0.0, o.first.teeth, 0.0, o.second.teeth))}};
+    a.components = {
+        {"gear_z" + std::to_string(o.first.teeth), MakeGear(o.first), GearSymmetries(o.first)},
+        {"gear_z" + std::to_string(o.second.teeth), MakeGear(o.second), GearSymmetries(o.second)}};
+    a.placements = {
+        {0, "gear_1", Pose(0, 0, 0, 0)},
+        {1, "gear_2",
+         Pose(o.CentreDistance(), 0, 0, MeshTurn(0.0, o.first.teeth, 0.0, o.second.teeth))}};
     return a;
   });
 }
@@ -158,13 +172,14 @@ bool PlanetaryOptions::Check(std::string* why) const {
   if (planets < 1) {
     out << "a planetary set needs at least one planet";
   } else if ((sun_teeth + RingTeeth()) % planets != 0) {
-    out << "planets cannot be spaced evenly: (z_sun + z_ring) / planets = (" << sun_teeth << " + " << RingTeeth()
-        << ") / " << planets << " is not a whole number";
+    out << "planets cannot be spaced evenly: (z_sun + z_ring) / planets = (" << sun_teeth << " + "
+        << RingTeeth() << ") / " << planets << " is not a whole number";
   } else if (planets > 1 && pitch_gap <= planet_tip + 0.5 * module_mm) {
-    out << planets << " planets of " << planet_teeth << " teeth collide: their centres are " << pitch_gap
-        << " mm apart, their tips " << planet_tip << " mm across";
+    out << planets << " planets of " << planet_teeth << " teeth collide: their centres are "
+        << pitch_gap << " mm apart, their tips " << planet_tip << " mm across";
   } else if (!(pin_diameter_mm > 0) || pin_diameter_mm + 0.2 >= module_mm * (planet_teeth - 2.5)) {
-    out << "pin diameter " << pin_diameter_mm << " mm must be positive and fit inside the planets' root circle";
+    out << "pin diameter " << pin_diameter_mm
+        << " mm must be positive and fit inside the planets' root circle";
   } else if (!(carrier_thickness_mm > 0)) {
     out << "carrier thickness must be positive";
   } else {
@@ -176,7 +191,8 @@ bool PlanetaryOptions::Check(std::string* why) const {
       g.teeth = teeth;
       g.internal = teeth == RingTeeth();
       g.bore_diameter_mm = teeth == sun_teeth && !g.internal ? sun_bore_mm : 0.0;
-      if (!g.Check(why)) return *why = "gear of " + std::to_string(teeth) + " teeth: " + *why, false;
+      if (!g.Check(why))
+        return *why = "gear of " + std::to_string(teeth) + " teeth: " + *why, false;
     }
     return true;
   }
@@ -209,9 +225,10 @@ ShapeAssembly MakePlanetary(const PlanetaryOptions& o) {
     for (int i = 0; i < o.planets; ++i) {
       const double phi = 2 * M_PI * i / o.planets;
       planet_turn[i] = MeshTurn(phi, o.sun_teeth, 0.0, o.planet_teeth);
-      carrier = Boolean(BRepAlgoAPI_Fuse(carrier, Cylinder(0.5 * o.pin_diameter_mm, a * std::cos(phi), a * std::sin(phi),
-                                                           -gap, o.face_width_mm)),
-                        "add a carrier pin");
+      carrier =
+          Boolean(BRepAlgoAPI_Fuse(carrier, Cylinder(0.5 * o.pin_diameter_mm, a * std::cos(phi),
+                                                     a * std::sin(phi), -gap, o.face_width_mm)),
+                  "add a carrier pin");
     }
     // Ring phased from planet 0 (along +x). In an internal mesh both gears turn the same way, so
     // the difference of the phases (the planet's pointing outward, the ring's) stays fixed, at
@@ -221,14 +238,16 @@ ShapeAssembly MakePlanetary(const PlanetaryOptions& o) {
 
     ShapeAssembly s;
     s.name = "planetary_gearbox";
-    s.components = {{"sun_z" + std::to_string(o.sun_teeth), MakeGear(sun), GearSymmetries(sun)},
-                    {"planet_z" + std::to_string(o.planet_teeth), MakeGear(planet), GearSymmetries(planet)},
-                    {"ring_z" + std::to_string(o.RingTeeth()), MakeGear(ring), GearSymmetries(ring)},
-                    {"carrier", WrapShape(carrier), Symmetries::Cyclic(o.planets, false)}};
+    s.components = {
+        {"sun_z" + std::to_string(o.sun_teeth), MakeGear(sun), GearSymmetries(sun)},
+        {"planet_z" + std::to_string(o.planet_teeth), MakeGear(planet), GearSymmetries(planet)},
+        {"ring_z" + std::to_string(o.RingTeeth()), MakeGear(ring), GearSymmetries(ring)},
+        {"carrier", WrapShape(carrier), Symmetries::Cyclic(o.planets, false)}};
     s.placements.push_back({0, "sun", Pose(0, 0, 0, 0)});
     for (int i = 0; i < o.planets; ++i) {
       const double phi = 2 * M_PI * i / o.planets;
-      s.placements.push_back({1, "planet_" + std::to_string(i + 1), Pose(a * std::cos(phi), a * std::sin(phi), 0, planet_turn[i])});
+      s.placements.push_back({1, "planet_" + std::to_string(i + 1),
+                              Pose(a * std::cos(phi), a * std::sin(phi), 0, planet_turn[i])});
     }
     s.placements.push_back({2, "ring", Pose(0, 0, 0, ring_turn)});
     s.placements.push_back({3, "carrier", Pose(0, 0, 0, 0)});
@@ -246,7 +265,8 @@ bool SliderCrankOptions::Check(std::string* why) const {
   } else if (!(link_width_mm > pin_diameter_mm + 2) || !(pin_diameter_mm > 0)) {
     out << "links must be wider than their pin holes plus 2 mm";
   } else if (rod_mm - crank_mm - 0.5 * slider_mm <= crank_mm + 0.5 * link_width_mm) {
-    out << "the crank would hit the slider: rod (" << rod_mm << " mm) minus crank minus half the slider must "
+    out << "the crank would hit the slider: rod (" << rod_mm
+        << " mm) minus crank minus half the slider must "
         << "exceed the crank plus half a link width (" << crank_mm + 0.5 * link_width_mm << " mm)";
   } else if (!(link_thickness_mm > 0) || !(slider_mm > link_width_mm)) {
     out << "link thickness must be positive and the slider longer than a link is wide";
@@ -276,7 +296,8 @@ ShapeAssembly MakeSliderCrank(const SliderCrankOptions& o) {
     const TopoDS_Shape base =
         BRepPrimAPI_MakeBox(gp_Pnt(x_min, -y_half, -base_t), gp_Pnt(x_max, y_half, 0)).Shape();
     const TopoDS_Shape slider =
-        BRepPrimAPI_MakeBox(gp_Pnt(-0.5 * o.slider_mm, -0.5 * slider_w, 0), gp_Pnt(0.5 * o.slider_mm, 0.5 * slider_w, slider_h))
+        BRepPrimAPI_MakeBox(gp_Pnt(-0.5 * o.slider_mm, -0.5 * slider_w, 0),
+                            gp_Pnt(0.5 * o.slider_mm, 0.5 * slider_w, slider_h))
             .Shape();
     const double theta = o.crank_angle_rad;
     const Eigen::Vector2d pin(o.crank_mm * std::cos(theta), o.crank_mm * std::sin(theta));
@@ -289,14 +310,17 @@ ShapeAssembly MakeSliderCrank(const SliderCrankOptions& o) {
     const auto link_symmetries = [&](double length) {
       Symmetries sym;
       const Eigen::Isometry3d to_mid{Eigen::Translation3d(0.5 * length, 0, 0.5 * t)};
-      for (const Eigen::Vector3d axis : {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()}) {
+      for (const Eigen::Vector3d axis :
+           {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()}) {
         sym.discrete.push_back(to_mid * Eigen::AngleAxisd(M_PI, axis) * to_mid.inverse());
       }
       return sym;
     };
     s.components = {{"base", WrapShape(base), {}},
-                    {"crank", WrapShape(Link(o.crank_mm, w, t, o.pin_diameter_mm)), link_symmetries(o.crank_mm)},
-                    {"connecting_rod", WrapShape(Link(o.rod_mm, w, t, o.pin_diameter_mm)), link_symmetries(o.rod_mm)},
+                    {"crank", WrapShape(Link(o.crank_mm, w, t, o.pin_diameter_mm)),
+                     link_symmetries(o.crank_mm)},
+                    {"connecting_rod", WrapShape(Link(o.rod_mm, w, t, o.pin_diameter_mm)),
+                     link_symmetries(o.rod_mm)},
                     {"slider", WrapShape(slider), {}}};
     s.placements = {{0, "base", Pose(0, 0, 0, 0)},
                     {1, "crank", Pose(0, 0, 0.0, theta)},

@@ -53,7 +53,7 @@ struct PlanetaryOptions {
   int planets = 3;
   double module_mm = 1.5;
   double face_width_mm = 10.0;
-  double backlash_mm = 0.05;   // per gear
+  double backlash_mm = 0.05;  // per gear
   double pin_diameter_mm = 6.0;
   double carrier_thickness_mm = 4.0;
   double sun_bore_mm = 6.0;
@@ -67,13 +67,13 @@ ShapeAssembly MakePlanetary(const PlanetaryOptions& options);
 // Base plate, crank, connecting rod and slider, lying on the base; the crank turns about the
 // origin in the xy-plane and the slider runs along +x. Links are flat bars with round ends.
 struct SliderCrankOptions {
-  double crank_mm = 40.0;       // crank radius (pivot to pin)
-  double rod_mm = 120.0;        // connecting rod, pin to pin
+  double crank_mm = 40.0;  // crank radius (pivot to pin)
+  double rod_mm = 120.0;   // connecting rod, pin to pin
   double crank_angle_rad = 0.6;
   double link_width_mm = 16.0;
   double link_thickness_mm = 6.0;
   double pin_diameter_mm = 6.0;
-  double slider_mm = 30.0;      // slider block length (x); width = link width + 8 mm
+  double slider_mm = 30.0;  // slider block length (x); width = link width + 8 mm
   bool Check(std::string* why) const;
   // Slider pin x position for the crank angle: r cos(t) + sqrt(l^2 - r^2 sin^2(t)).
   double SliderX() const;

@@ -37,7 +37,8 @@ struct Face {
 
 }  // namespace
 
-std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& com) {
+std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
+                                    const Eigen::Vector3d& com) {
   if (points.size() < 4) throw Error("stable poses: need at least 4 points");
   // Meshes repeat a vertex once per smoothing group (per flat face on faceted parts): hull each
   // position once.
@@ -52,7 +53,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, 
   for (const auto& p : unique) input.emplace_back(p.x(), p.y(), p.z());
   HullMesh hull;
   CGAL::convex_hull_3(input.begin(), input.end(), hull);
-  if (hull.number_of_faces() < 4) throw Error("stable poses: the points are flat (no volume to rest)");
+  if (hull.number_of_faces() < 4)
+    throw Error("stable poses: the points are flat (no volume to rest)");
 
   // Size of the body, for tolerances.
   Eigen::AlignedBox3d box;
@@ -66,7 +68,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, 
   const auto triangle = [&](HullMesh::Face_index f) {
     std::array<Eigen::Vector3d, 3> t;
     int k = 0;
-    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull)) t[k++] = ToEigen(hull.point(v));
+    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull))
+      t[k++] = ToEigen(hull.point(v));
     return t;
   };
   for (auto f : handles) {
@@ -74,7 +77,9 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, 
     const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
     int found = -1;
     for (size_t i = 0; i < faces.size() && found < 0; ++i) {
-      if (faces[i].normal.dot(n) > 1 - 1e-9 && std::abs(n.dot(t[0]) - faces[i].offset) < 1e-7 * size) found = int(i);
+      if (faces[i].normal.dot(n) > 1 - 1e-9 &&
+          std::abs(n.dot(t[0]) - faces[i].offset) < 1e-7 * size)
+        found = int(i);
     }
     if (found < 0) {
       found = static_cast<int>(faces.size());
@@ -132,9 +137,12 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, 
     pose.normal = faces[f].normal;
     pose.probability = probability[f];
     pose.height = faces[f].offset - faces[f].normal.dot(com);
-    const Eigen::Matrix3d r = Eigen::Quaterniond::FromTwoVectors(faces[f].normal, -Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Matrix3d r =
+        Eigen::Quaterniond::FromTwoVectors(faces[f].normal, -Eigen::Vector3d::UnitZ())
+            .toRotationMatrix();
     pose.floor_from_body.linear() = r;
-    pose.floor_from_body.translation() = Eigen::Vector3d(0, 0, faces[f].offset);  // face plane -> z = 0
+    pose.floor_from_body.translation() =
+        Eigen::Vector3d(0, 0, faces[f].offset);  // face plane -> z = 0
     poses.push_back(pose);
   }
   // Canonical order. Faces that are one pose up to the body's symmetry rest it at the same height
@@ -162,7 +170,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, 
       return a.probability != b.probability ? a.probability < b.probability : normal_less(a, b);
     });
     for (size_t i = 0; i < level.size(); ++i) {
-      if (i == 0 || level[i].probability - groups.back().front().probability > 1e-3 * level[i].probability) {
+      if (i == 0 ||
+          level[i].probability - groups.back().front().probability > 1e-3 * level[i].probability) {
         groups.emplace_back();
       }
       groups.back().push_back(level[i]);
@@ -177,7 +186,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, 
   std::vector<size_t> order(groups.size());
   for (size_t g = 0; g < order.size(); ++g) order[g] = g;
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return std::round(total[a] * 1e9) > std::round(total[b] * 1e9);  // ties keep the lower pose first
+    return std::round(total[a] * 1e9) >
+           std::round(total[b] * 1e9);  // ties keep the lower pose first
   });
   std::vector<StablePose> sorted;
   for (size_t rank = 0; rank < order.size(); ++rank) {
@@ -190,13 +200,15 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, 
   return sorted;
 }
 
-std::vector<StablePose> StablePoses(const std::vector<Part>& parts, const std::vector<Instance>& instances) {
+std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
+                                    const std::vector<Instance>& instances) {
   std::vector<Eigen::Vector3d> points;
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
   double weight = 0;
   for (const Instance& i : instances) {
     const Part& part = parts.at(i.part);
-    for (const Eigen::Vector3f& p : part.mesh.positions) points.push_back(i.world_from_model * p.cast<double>());
+    for (const Eigen::Vector3f& p : part.mesh.positions)
+      points.push_back(i.world_from_model * p.cast<double>());
     if (part.mass.volume_mm3 > 0) {
       moment += part.mass.volume_mm3 * (i.world_from_model * part.mass.center_of_mass);
       weight += part.mass.volume_mm3;

@@ -11,9 +11,10 @@
 namespace cadsynth {
 
 struct StablePose {
-  Eigen::Vector3d normal;   // outward normal of the resting face, in the body frame (points down when resting)
-  double probability = 0;   // of a random drop ending on this face (quasi-static solid-angle method)
-  double height = 0;        // centre of mass above the floor when resting, mm
+  Eigen::Vector3d
+      normal;  // outward normal of the resting face, in the body frame (points down when resting)
+  double probability = 0;  // of a random drop ending on this face (quasi-static solid-angle method)
+  double height = 0;       // centre of mass above the floor when resting, mm
   // Faces that rest the body at the same height are one pose up to the body's symmetry (the many
   // flats of a tessellated cylinder's side); their summed probability, and the pose's index.
   double pose_probability = 0;
@@ -30,11 +31,13 @@ struct StablePose {
 // when the centre of mass projects inside it; the solid angle an unstable face subtends at the
 // centre of mass goes to the face it tips onto (over its edge furthest beyond the centre of mass),
 // repeatedly, until a stable face is reached. Throws Error for fewer than 4 non-coplanar points.
-std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& com);
+std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
+                                    const Eigen::Vector3d& com);
 
 // The stable poses of instances of `parts` taken together as one rigid body (body frame = the
 // instances' frame); the centre of mass combines the parts' volumes (or, for open meshes, their
 // box centres weighted by surface area).
-std::vector<StablePose> StablePoses(const std::vector<Part>& parts, const std::vector<Instance>& instances);
+std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
+                                    const std::vector<Instance>& instances);
 
 }  // namespace cadsynth

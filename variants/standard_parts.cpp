@@ -30,20 +30,20 @@ namespace {
 // ISO 4017 (s, k), ISO 4032 (m), ISO 7089 (d1, d2, h).
 const std::vector<MetricSize>& MetricTable() {
   static const std::vector<MetricSize> table = {
-      {"M3", 3, 5.5, 2.0, 2.4, 3.2, 7, 0.5},       {"M4", 4, 7, 2.8, 3.2, 4.3, 9, 0.8},
-      {"M5", 5, 8, 3.5, 4.7, 5.3, 10, 1.0},        {"M6", 6, 10, 4.0, 5.2, 6.4, 12, 1.6},
-      {"M8", 8, 13, 5.3, 6.8, 8.4, 16, 1.6},       {"M10", 10, 16, 6.4, 8.4, 10.5, 20, 2.0},
-      {"M12", 12, 18, 7.5, 10.8, 13, 24, 2.5},     {"M14", 14, 21, 8.8, 12.8, 15, 28, 2.5},
-      {"M16", 16, 24, 10.0, 14.8, 17, 30, 3.0},    {"M20", 20, 30, 12.5, 18.0, 21, 37, 3.0},
+      {"M3", 3, 5.5, 2.0, 2.4, 3.2, 7, 0.5},    {"M4", 4, 7, 2.8, 3.2, 4.3, 9, 0.8},
+      {"M5", 5, 8, 3.5, 4.7, 5.3, 10, 1.0},     {"M6", 6, 10, 4.0, 5.2, 6.4, 12, 1.6},
+      {"M8", 8, 13, 5.3, 6.8, 8.4, 16, 1.6},    {"M10", 10, 16, 6.4, 8.4, 10.5, 20, 2.0},
+      {"M12", 12, 18, 7.5, 10.8, 13, 24, 2.5},  {"M14", 14, 21, 8.8, 12.8, 15, 28, 2.5},
+      {"M16", 16, 24, 10.0, 14.8, 17, 30, 3.0}, {"M20", 20, 30, 12.5, 18.0, 21, 37, 3.0},
       {"M24", 24, 36, 15.0, 21.5, 25, 44, 4.0}};
   return table;
 }
 
 // ISO 7379: shoulder d, thread d, thread length, head d, head k, socket s.
 const std::vector<ShoulderSize>& ShoulderTable() {
-  static const std::vector<ShoulderSize> table = {{6, 5, 9.5, 10, 4.5, 3},   {8, 6, 11, 13, 5.5, 4},
-                                                  {10, 8, 13, 16, 7, 5},     {12, 10, 16, 18, 8, 6},
-                                                  {16, 12, 18, 24, 10, 8},   {20, 16, 22, 30, 14, 10}};
+  static const std::vector<ShoulderSize> table = {
+      {6, 5, 9.5, 10, 4.5, 3}, {8, 6, 11, 13, 5.5, 4},  {10, 8, 13, 16, 7, 5},
+      {12, 10, 16, 18, 8, 6},  {16, 12, 18, 24, 10, 8}, {20, 16, 22, 30, 14, 10}};
   return table;
 }
 
@@ -52,7 +52,9 @@ void Require(bool ok, const std::string& what) {
 }
 
 TopoDS_Wire Circle(double radius, double x = 0, double y = 0) {
-  return BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(gp_Circ(gp_Ax2(gp_Pnt(x, y, 0), gp_Dir(0, 0, 1)), radius))).Wire();
+  return BRepBuilderAPI_MakeWire(
+             BRepBuilderAPI_MakeEdge(gp_Circ(gp_Ax2(gp_Pnt(x, y, 0), gp_Dir(0, 0, 1)), radius)))
+      .Wire();
 }
 
 // Regular hexagon with width `s` across flats (flats parallel to x), centred on the origin.
@@ -67,7 +69,8 @@ TopoDS_Wire Hexagon(double s) {
   return polygon.Wire();
 }
 
-TopoDS_Shape Extrude(const TopoDS_Wire& outer, std::vector<TopoDS_Wire> holes, double height, double z0 = 0) {
+TopoDS_Shape Extrude(const TopoDS_Wire& outer, std::vector<TopoDS_Wire> holes, double height,
+                     double z0 = 0) {
   BRepBuilderAPI_MakeFace face(outer, true);
   for (TopoDS_Wire& hole : holes) {
     hole.Reverse();
@@ -134,7 +137,8 @@ const ShoulderSize& IsoShoulder(double shoulder_d) {
     if (std::abs(size.shoulder_d - shoulder_d) < 1e-9) return size;
   }
   std::ostringstream out;
-  out << "no ISO 7379 shoulder bolt with a " << shoulder_d << " mm shoulder (known: 6, 8, 10, 12, 16, 20)";
+  out << "no ISO 7379 shoulder bolt with a " << shoulder_d
+      << " mm shoulder (known: 6, 8, 10, 12, 16, 20)";
   throw Error(out.str());
 }
 
@@ -142,7 +146,8 @@ Component MakeRoundPeg(double diameter, double length) {
   Positive(diameter, "peg diameter");
   Positive(length, "peg length");
   return Guarded("round peg", [&] {
-    return Component{"round_peg", WrapShape(BRepPrimAPI_MakeCylinder(0.5 * diameter, length).Shape()),
+    return Component{"round_peg",
+                     WrapShape(BRepPrimAPI_MakeCylinder(0.5 * diameter, length).Shape()),
                      Symmetries::Revolution(true, 0.5 * length)};
   });
 }
@@ -151,23 +156,27 @@ Component MakeSquarePeg(double side, double length) {
   Positive(side, "peg side");
   Positive(length, "peg length");
   return Guarded("square peg", [&] {
-    const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(-0.5 * side, -0.5 * side, 0), gp_Pnt(0.5 * side, 0.5 * side, length)).Shape();
+    const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(-0.5 * side, -0.5 * side, 0),
+                                                 gp_Pnt(0.5 * side, 0.5 * side, length))
+                                 .Shape();
     return Component{"square_peg", WrapShape(box), Symmetries::Cyclic(4, true, 0.5 * length)};
   });
 }
 
-Component MakeFaceplate(double width, double height, double thickness, int rows, int columns, double hole_diameter,
-                        double margin) {
+Component MakeFaceplate(double width, double height, double thickness, int rows, int columns,
+                        double hole_diameter, double margin) {
   Positive(width, "faceplate width");
   Positive(height, "faceplate height");
   Positive(thickness, "faceplate thickness");
   Require(rows >= 1 && columns >= 1, "a faceplate needs at least one row and one column of holes");
   Positive(hole_diameter, "hole diameter");
   const double span_x = width - 2 * margin, span_y = height - 2 * margin;
-  const double pitch_x = columns > 1 ? span_x / (columns - 1) : 0, pitch_y = rows > 1 ? span_y / (rows - 1) : 0;
+  const double pitch_x = columns > 1 ? span_x / (columns - 1) : 0,
+               pitch_y = rows > 1 ? span_y / (rows - 1) : 0;
   std::ostringstream why;
-  why << "holes of " << hole_diameter << " mm do not fit: " << rows << " x " << columns << " holes need more than "
-      << width << " x " << height << " mm with a " << margin << " mm margin";
+  why << "holes of " << hole_diameter << " mm do not fit: " << rows << " x " << columns
+      << " holes need more than " << width << " x " << height << " mm with a " << margin
+      << " mm margin";
   Require(margin > 0.5 * hole_diameter && span_x >= 0 && span_y >= 0 &&
               (columns == 1 || pitch_x > hole_diameter) && (rows == 1 || pitch_y > hole_diameter),
           why.str());
@@ -187,7 +196,8 @@ Component MakeFaceplate(double width, double height, double thickness, int rows,
     }
     // A centred, evenly spaced grid keeps the plate's symmetries (4-fold when square).
     const bool square = std::abs(width - height) < 1e-9 && rows == columns;
-    Symmetries symmetries = square ? Symmetries::Cyclic(4, true, 0.5 * thickness) : Symmetries::Cyclic(2, true, 0.5 * thickness);
+    Symmetries symmetries = square ? Symmetries::Cyclic(4, true, 0.5 * thickness)
+                                   : Symmetries::Cyclic(2, true, 0.5 * thickness);
     return Component{"faceplate", WrapShape(Extrude(outline.Wire(), holes, thickness)), symmetries};
   });
 }
@@ -208,10 +218,12 @@ Component MakeSteppedShaft(const std::vector<std::pair<double, double>>& section
   for (size_t i = 0; i < sections.size(); ++i) {
     const auto& a = sections[i];
     const auto& b = sections[sections.size() - 1 - i];
-    palindrome = palindrome && std::abs(a.first - b.first) < 1e-9 && std::abs(a.second - b.second) < 1e-9;
+    palindrome =
+        palindrome && std::abs(a.first - b.first) < 1e-9 && std::abs(a.second - b.second) < 1e-9;
   }
   return Guarded("stepped shaft", [&] {
-    return Component{"stepped_shaft", WrapShape(Revolve(profile)), Symmetries::Revolution(palindrome, 0.5 * z)};
+    return Component{"stepped_shaft", WrapShape(Revolve(profile)),
+                     Symmetries::Revolution(palindrome, 0.5 * z)};
   });
 }
 
@@ -229,7 +241,8 @@ Component MakeShoulderBolt(double shoulder_d, double shoulder_length) {
                                        {0.5 * size.thread_d, k + shoulder_length + lt},
                                        {0, k + shoulder_length + lt}});
     const TopoDS_Shape socket = Extrude(Hexagon(size.socket_s), {}, 0.6 * k + 1.0, -1.0);
-    return Component{"shoulder_bolt", WrapShape(Boolean(BRepAlgoAPI_Cut(body, socket))), Symmetries::Cyclic(6, false)};
+    return Component{"shoulder_bolt", WrapShape(Boolean(BRepAlgoAPI_Cut(body, socket))),
+                     Symmetries::Cyclic(6, false)};
   });
 }
 
@@ -239,15 +252,19 @@ Component MakeHexBolt(const std::string& name, double length) {
   return Guarded("hex bolt", [&] {
     const TopoDS_Shape head = Extrude(Hexagon(size.s), {}, size.k);
     const TopoDS_Shape shank =
-        BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, size.k), gp_Dir(0, 0, 1)), 0.5 * size.d, length).Shape();
-    return Component{"hex_bolt_" + size.name, WrapShape(Boolean(BRepAlgoAPI_Fuse(head, shank))), Symmetries::Cyclic(6, false)};
+        BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, size.k), gp_Dir(0, 0, 1)), 0.5 * size.d,
+                                 length)
+            .Shape();
+    return Component{"hex_bolt_" + size.name, WrapShape(Boolean(BRepAlgoAPI_Fuse(head, shank))),
+                     Symmetries::Cyclic(6, false)};
   });
 }
 
 Component MakeHexNut(const std::string& name) {
   const MetricSize& size = IsoMetric(name);
   return Guarded("hex nut", [&] {
-    return Component{"hex_nut_" + size.name, WrapShape(Extrude(Hexagon(size.s), {Circle(0.5 * size.d)}, size.m)),
+    return Component{"hex_nut_" + size.name,
+                     WrapShape(Extrude(Hexagon(size.s), {Circle(0.5 * size.d)}, size.m)),
                      Symmetries::Cyclic(6, true, 0.5 * size.m)};
   });
 }
@@ -256,7 +273,8 @@ Component MakeWasher(const std::string& name) {
   const MetricSize& size = IsoMetric(name);
   return Guarded("washer", [&] {
     return Component{"washer_" + size.name,
-                     WrapShape(Extrude(Circle(0.5 * size.washer_outer), {Circle(0.5 * size.washer_inner)}, size.washer_thickness)),
+                     WrapShape(Extrude(Circle(0.5 * size.washer_outer),
+                                       {Circle(0.5 * size.washer_inner)}, size.washer_thickness)),
                      Symmetries::Revolution(true, 0.5 * size.washer_thickness)};
   });
 }
@@ -265,22 +283,27 @@ Component MakeBallBearing(double bore, double outer, double width) {
   Positive(bore, "bearing bore");
   Positive(width, "bearing width");
   std::ostringstream why;
-  why << "bearing outer diameter " << outer << " mm must exceed the bore " << bore << " mm by at least 6 mm";
+  why << "bearing outer diameter " << outer << " mm must exceed the bore " << bore
+      << " mm by at least 6 mm";
   Require(outer > bore + 6, why.str());
   return Guarded("ball bearing", [&] {
-    const double pitch = 0.25 * (bore + outer);          // pitch circle radius
+    const double pitch = 0.25 * (bore + outer);                       // pitch circle radius
     const double ball = std::min(0.3 * (outer - bore), 0.8 * width);  // ball diameter
     const int balls = std::max(3, static_cast<int>(std::floor(M_PI * 2 * pitch / (1.2 * ball))));
-    const double groove = 0.52 * ball;                    // groove radius
-    const double gap = 0.15 * ball;                        // rings stop short of the pitch circle
+    const double groove = 0.52 * ball;  // groove radius
+    const double gap = 0.15 * ball;     // rings stop short of the pitch circle
     const TopoDS_Shape torus = [&] {
-      TopoDS_Shape t = BRepPrimAPI_MakeTorus(gp_Ax2(gp_Pnt(0, 0, 0.5 * width), gp_Dir(0, 0, 1)), pitch, groove).Shape();
+      TopoDS_Shape t =
+          BRepPrimAPI_MakeTorus(gp_Ax2(gp_Pnt(0, 0, 0.5 * width), gp_Dir(0, 0, 1)), pitch, groove)
+              .Shape();
       return t;
     }();
     const TopoDS_Shape inner = Boolean(BRepAlgoAPI_Cut(
-        Revolve({{0.5 * bore, 0}, {pitch - gap, 0}, {pitch - gap, width}, {0.5 * bore, width}}), torus));
+        Revolve({{0.5 * bore, 0}, {pitch - gap, 0}, {pitch - gap, width}, {0.5 * bore, width}}),
+        torus));
     const TopoDS_Shape outer_ring = Boolean(BRepAlgoAPI_Cut(
-        Revolve({{pitch + gap, 0}, {0.5 * outer, 0}, {0.5 * outer, width}, {pitch + gap, width}}), torus));
+        Revolve({{pitch + gap, 0}, {0.5 * outer, 0}, {0.5 * outer, width}, {pitch + gap, width}}),
+        torus));
     BRep_Builder builder;
     TopoDS_Compound all;
     builder.MakeCompound(all);
@@ -288,7 +311,10 @@ Component MakeBallBearing(double bore, double outer, double width) {
     builder.Add(all, outer_ring);
     for (int i = 0; i < balls; ++i) {
       const double a = 2 * M_PI * i / balls;
-      builder.Add(all, BRepPrimAPI_MakeSphere(gp_Pnt(pitch * std::cos(a), pitch * std::sin(a), 0.5 * width), 0.5 * ball).Shape());
+      builder.Add(
+          all, BRepPrimAPI_MakeSphere(gp_Pnt(pitch * std::cos(a), pitch * std::sin(a), 0.5 * width),
+                                      0.5 * ball)
+                   .Shape());
     }
     return Component{"ball_bearing", WrapShape(all), Symmetries::Cyclic(balls, true, 0.5 * width)};
   });

@@ -13,11 +13,11 @@ namespace cadsynth {
 
 // ISO metric sizes M3 to M24: hex bolts (ISO 4017), nuts (ISO 4032), washers (ISO 7089).
 struct MetricSize {
-  std::string name;       // "M8"
-  double d;               // nominal diameter
-  double s;               // width across flats (bolt head and nut)
-  double k;               // bolt head height
-  double m;               // nut height
+  std::string name;  // "M8"
+  double d;          // nominal diameter
+  double s;          // width across flats (bolt head and nut)
+  double k;          // bolt head height
+  double m;          // nut height
   double washer_inner, washer_outer, washer_thickness;
 };
 // Throws Error listing the known sizes for an unknown one.

@@ -11,7 +11,8 @@ namespace {
 
 const TessellationOptions kFine{0.05, 0.3};
 
-// The mesh of `shape` after moving the B-rep (so the tessellation is made anew), in its model frame.
+// The mesh of `shape` after moving the B-rep (so the tessellation is made anew), in its model
+// frame.
 Mesh Remeshed(const Shape& shape, const Eigen::Isometry3d& motion) {
   return MakePart("p", Transformed(shape, motion), kFine).mesh;
 }
@@ -43,7 +44,8 @@ TEST(FindCongruence, BoxInAnyOrientation) {
 TEST(FindCongruence, CylinderTurnedAboutItsAxisMovesItsSeam) {
   const Shape cylinder = MakeCylinder(20, 50);
   const Mesh a = Remeshed(cylinder, Eigen::Isometry3d::Identity());
-  const Mesh b = Remeshed(cylinder, Eigen::Isometry3d(Eigen::AngleAxisd(0.645, Eigen::Vector3d::UnitZ())));
+  const Mesh b =
+      Remeshed(cylinder, Eigen::Isometry3d(Eigen::AngleAxisd(0.645, Eigen::Vector3d::UnitZ())));
   EXPECT_NE(a.positions, b.positions);
   EXPECT_TRUE(FindCongruence(a, b, 0.11));
 }
@@ -56,7 +58,8 @@ TEST(FindCongruence, GearRecoversTheTurnModuloOneTooth) {
   const Shape gear = MakeGear(options);
   const Mesh a = Remeshed(gear, Eigen::Isometry3d::Identity());
   const double turn = 7.0 * M_PI / 180.0;
-  const Mesh b = Remeshed(gear, Eigen::Isometry3d(Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ())));
+  const Mesh b =
+      Remeshed(gear, Eigen::Isometry3d(Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ())));
   const auto t = FindCongruence(a, b, 0.11);
   ASSERT_TRUE(t);
   // b is a turned by 7 degrees (both model frames sit on the axis), so t * turn must be one of
@@ -65,12 +68,15 @@ TEST(FindCongruence, GearRecoversTheTurnModuloOneTooth) {
   // so only vertices beyond 20 mm, the toothed outline, are compared.)
   const Eigen::Isometry3d symmetry = *t * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ());
   EXPECT_LT(VertexGap(a, a, symmetry, 20.0), 0.02);
-  EXPECT_GT(VertexGap(a, a, Eigen::Isometry3d(Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ())), 20.0), 1.0);
+  EXPECT_GT(
+      VertexGap(a, a, Eigen::Isometry3d(Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ())), 20.0),
+      1.0);
 }
 
 TEST(FindCongruence, DifferentAndMirroredShapesAreNot) {
   const Mesh a = Remeshed(MakeBox(40, 30, 20), Eigen::Isometry3d::Identity());
-  EXPECT_FALSE(FindCongruence(a, Remeshed(MakeBox(40, 30, 21), Eigen::Isometry3d::Identity()), 0.11));
+  EXPECT_FALSE(
+      FindCongruence(a, Remeshed(MakeBox(40, 30, 21), Eigen::Isometry3d::Identity()), 0.11));
   // A corner of three bars of different lengths along x, y and z is chiral: its mirror image has
   // the same moments, but no rotation maps one onto the other.
   Mesh l = Tessellate(MakeBox(40, 10, 10), kFine);
@@ -95,10 +101,12 @@ TEST(MergeIdenticalParts, CopiesBecomeInstancesAndStayWhereTheyWere) {
                     MakePart("box copy", Transformed(box, turn), kFine)};
   for (int i = 0; i < 3; ++i) {
     assembly.instances.push_back(
-        {i, std::string("i").append(std::to_string(i)), Eigen::Translation3d(100.0 * i, 0, 0) * assembly.parts[i].cad_from_model});
+        {i, std::string("i").append(std::to_string(i)),
+         Eigen::Translation3d(100.0 * i, 0, 0) * assembly.parts[i].cad_from_model});
   }
   std::vector<Eigen::AlignedBox3d> before;
-  for (const Instance& i : assembly.instances) before.push_back(assembly.parts[i.part].mesh.Bounds(i.world_from_model));
+  for (const Instance& i : assembly.instances)
+    before.push_back(assembly.parts[i.part].mesh.Bounds(i.world_from_model));
 
   EXPECT_EQ(MergeIdenticalParts(&assembly, 0.11), 1u);
   ASSERT_EQ(assembly.parts.size(), 2u);
@@ -107,7 +115,9 @@ TEST(MergeIdenticalParts, CopiesBecomeInstancesAndStayWhereTheyWere) {
   for (size_t k = 0; k < 3; ++k) {
     const Instance& i = assembly.instances[k];
     const Eigen::AlignedBox3d after = assembly.parts[i.part].mesh.Bounds(i.world_from_model);
-    EXPECT_TRUE(after.min().isApprox(before[k].min(), 1e-3) || (after.min() - before[k].min()).norm() < 0.1) << k;
+    EXPECT_TRUE(after.min().isApprox(before[k].min(), 1e-3) ||
+                (after.min() - before[k].min()).norm() < 0.1)
+        << k;
     EXPECT_LT((after.max() - before[k].max()).norm(), 0.1) << k;
   }
 }
@@ -115,9 +125,11 @@ TEST(MergeIdenticalParts, CopiesBecomeInstancesAndStayWhereTheyWere) {
 TEST(MergeIdenticalParts, ExactVolumesKeepNearTwinsApart) {
   // Two discs whose holes differ by 0.1 mm in radius: within the mesh tolerance, but not the same.
   Assembly assembly;
-  assembly.parts = {MakePart("sun", MakeCylinder(20, 10), kFine), MakePart("planet", MakeCylinder(20, 10), kFine)};
+  assembly.parts = {MakePart("sun", MakeCylinder(20, 10), kFine),
+                    MakePart("planet", MakeCylinder(20, 10), kFine)};
   assembly.parts[1].mass.volume_mm3 *= 1.001;  // as if its bore were wider
-  assembly.instances = {{0, "a", assembly.parts[0].cad_from_model}, {1, "b", assembly.parts[1].cad_from_model}};
+  assembly.instances = {{0, "a", assembly.parts[0].cad_from_model},
+                        {1, "b", assembly.parts[1].cad_from_model}};
   EXPECT_EQ(MergeIdenticalParts(&assembly, 0.21), 0u);
   assembly.parts[1].mass_from_brep = false;  // a mesh: only the geometry can tell
   EXPECT_EQ(MergeIdenticalParts(&assembly, 0.21), 1u);
@@ -139,7 +151,8 @@ TEST(FuseAssembly, OneRigidPartWithCombinedMass) {
   // Izz: two cubes (each V (a^2 + a^2) / 12) plus V d^2 each at d = 15 mm from the middle.
   EXPECT_NEAR(p.mass.inertia(2, 2), 2 * (1000.0 * 200.0 / 12.0 + 1000.0 * 225.0), 1e-6);
   EXPECT_TRUE(p.mesh.Bounds().sizes().isApprox(Eigen::Vector3d(40, 10, 10), 1e-6));
-  EXPECT_TRUE(fused.instances[0].world_from_model.translation().isApprox(Eigen::Vector3d(15, 0, 5), 1e-9));
+  EXPECT_TRUE(
+      fused.instances[0].world_from_model.translation().isApprox(Eigen::Vector3d(15, 0, 5), 1e-9));
   EXPECT_THROW(FuseAssembly(Assembly{}), Error);
 }
 

@@ -50,7 +50,8 @@ class QuietWarnings {
 
 TEST(ImportSharedData, EveryFileImportsOrFailsWithAMessageNamingIt) {
   const std::filesystem::path root = testing::DataDir();
-  if (!std::filesystem::exists(root / "step")) GTEST_SKIP() << "shared test data not found: " << root;
+  if (!std::filesystem::exists(root / "step"))
+    GTEST_SKIP() << "shared test data not found: " << root;
   QuietWarnings quiet;
   int imported = 0;
   std::vector<std::string> failed;
@@ -108,7 +109,8 @@ TEST(ImportSharedData, As1FromTwoWritersGivesTheSameParts) {
   for (const auto& [name, part] : pa) {
     ASSERT_TRUE(pb.count(name)) << name;
     if (name == "bolt") continue;  // the MicroStation file's bolt is 40 mm long, OCCT's 37 mm
-    EXPECT_NEAR(part->mass.volume_mm3, pb[name]->mass.volume_mm3, 1e-3 * part->mass.volume_mm3) << name;
+    EXPECT_NEAR(part->mass.volume_mm3, pb[name]->mass.volume_mm3, 1e-3 * part->mass.volume_mm3)
+        << name;
     std::vector<double> sa(3), sb(3);
     for (int k = 0; k < 3; ++k) {
       sa[k] = std::round(part->mesh.Bounds().sizes()[k] * 10) / 10;
@@ -136,8 +138,10 @@ TEST(ImportSharedData, InchFileComesOutInMillimetres) {
   EXPECT_EQ(inch.length_unit, "INCH");
   ASSERT_EQ(inch.parts.size(), raw.parts.size());
   for (size_t i = 0; i < inch.parts.size(); ++i) {
-    const Eigen::Vector3d a = inch.parts[i].mesh.Bounds().sizes(), b = raw.parts[i].mesh.Bounds().sizes();
-    EXPECT_TRUE(a.isApprox(25.4 * b, 1e-4)) << inch.parts[i].name << ": " << a.transpose() << " vs " << b.transpose();
+    const Eigen::Vector3d a = inch.parts[i].mesh.Bounds().sizes(),
+                          b = raw.parts[i].mesh.Bounds().sizes();
+    EXPECT_TRUE(a.isApprox(25.4 * b, 1e-4))
+        << inch.parts[i].name << ": " << a.transpose() << " vs " << b.transpose();
   }
 }
 
@@ -158,7 +162,8 @@ TEST(ImportSharedData, UnitOverrideRepairsTheFileThatDeclaresInchButHoldsMillime
   const Eigen::Vector3d reference = plate(ImportCad(oc, Coarse()));
   ASSERT_TRUE(reference.isApprox(Eigen::Vector3d(20, 150, 180), 1e-3)) << reference.transpose();
   const Assembly as_declared = ImportCad(pe, Coarse());
-  EXPECT_TRUE(plate(as_declared).isApprox(25.4 * reference, 1e-3)) << plate(as_declared).transpose();
+  EXPECT_TRUE(plate(as_declared).isApprox(25.4 * reference, 1e-3))
+      << plate(as_declared).transpose();
   const Assembly repaired = ImportCad(pe, Coarse("mm"));
   EXPECT_TRUE(plate(repaired).isApprox(reference, 1e-3)) << plate(repaired).transpose();
   EXPECT_EQ(repaired.length_unit, "mm (stated by the recipe, file declares INCH)");
@@ -216,13 +221,15 @@ END-ISO-10303-21;
   EXPECT_EQ(a.parts[0].name, "tet");
   EXPECT_TRUE(a.parts[0].watertight);
   EXPECT_NEAR(a.parts[0].mass.volume_mm3, std::pow(25.4, 3) / 6.0, 1e-2);
-  std::ofstream(dir / "bad.stp") << "ISO-10303-21;\nDATA;\n#1=TESSELLATED_SOLID('x',(#2),$);\n#2=TRIANGULATED_FACE('',#9,3,(),$,(),((1,2,3)));\nENDSEC;\n";
+  std::ofstream(dir / "bad.stp") << "ISO-10303-21;\nDATA;\n#1=TESSELLATED_SOLID('x',(#2),$);\n#2="
+                                    "TRIANGULATED_FACE('',#9,3,(),$,(),((1,2,3)));\nENDSEC;\n";
   try {
     internal::ReadStepTessellated(dir / "bad.stp", 1.0);
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), (dir / "bad.stp").string() +
-                                         ": #2 TRIANGULATED_FACE: its coordinates are not a COORDINATES_LIST");
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "bad.stp").string() +
+                  ": #2 TRIANGULATED_FACE: its coordinates are not a COORDINATES_LIST");
   }
 }
 
@@ -285,14 +292,17 @@ TEST(Import, BadFilesGiveClearErrors) {
     std::ofstream garbage(dir / "garbage.stl", std::ios::binary);
     for (int i = 0; i < 1000; ++i) garbage.put(static_cast<char>((i * 7919) % 251));
   }
-  EXPECT_EQ(ErrorOf(dir / "garbage.stl").rfind((dir / "garbage.stl").string() + ": not a readable mesh", 0), 0u)
+  EXPECT_EQ(ErrorOf(dir / "garbage.stl")
+                .rfind((dir / "garbage.stl").string() + ": not a readable mesh", 0),
+            0u)
       << ErrorOf(dir / "garbage.stl");
   std::ofstream(dir / "notes.xyz") << "hello\n";
   EXPECT_NE(ErrorOf(dir / "notes.xyz").find("unknown kind of file"), std::string::npos);
   std::ofstream(dir / "noext") << "ISO-10303-21;\nHEADER;\n";
   EXPECT_EQ(DetectFormat(dir / "noext"), CadFormat::kStep);
   ImportOptions bad_unit = Coarse("furlong");
-  EXPECT_NE(ErrorOf(dir / "noext", bad_unit).find("unknown length unit 'furlong'"), std::string::npos);
+  EXPECT_NE(ErrorOf(dir / "noext", bad_unit).find("unknown length unit 'furlong'"),
+            std::string::npos);
 }
 
 TEST(Import, TruncatedRealFileIsAnError) {
@@ -308,8 +318,9 @@ TEST(Import, TruncatedRealFileIsAnError) {
 TEST(Import, ObjMeshWithUnitAndMassProperties) {
   ScratchDir dir;
   // A closed unit cube in metres, as an OBJ with outward quads.
-  std::ofstream(dir / "cube.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-                                     "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  std::ofstream(dir / "cube.obj")
+      << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+         "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
   QuietWarnings quiet;
   const Assembly a = ImportCad(dir / "cube.obj", Coarse("cm"));
   ASSERT_EQ(a.parts.size(), 1u);
@@ -318,7 +329,8 @@ TEST(Import, ObjMeshWithUnitAndMassProperties) {
   EXPECT_TRUE(p.watertight);
   EXPECT_NEAR(p.mass.volume_mm3, 1000.0, 1e-3);  // 1 cm^3
   EXPECT_TRUE(p.mesh.Bounds().sizes().isApprox(Eigen::Vector3d(10, 10, 10), 1e-6));
-  EXPECT_TRUE(a.instances[0].world_from_model.translation().isApprox(Eigen::Vector3d(5, 5, 5), 1e-6));
+  EXPECT_TRUE(
+      a.instances[0].world_from_model.translation().isApprox(Eigen::Vector3d(5, 5, 5), 1e-6));
   EXPECT_EQ(quiet.count(), 0);
 }
 
@@ -345,7 +357,8 @@ TEST(ImportSharedData, FaceColoursGiveThePartTheColourOfMostOfItsArea) {
   const Assembly a = ImportCad(file, Coarse());
   ASSERT_EQ(a.parts.size(), 1u);
   ASSERT_TRUE(a.parts[0].color.has_value());
-  EXPECT_TRUE(a.parts[0].color->isApprox(Eigen::Vector3f(1, 1, 0), 1e-3f)) << a.parts[0].color->transpose();
+  EXPECT_TRUE(a.parts[0].color->isApprox(Eigen::Vector3f(1, 1, 0), 1e-3f))
+      << a.parts[0].color->transpose();
 }
 
 TEST(Import, BrepFileIsOnePart) {

@@ -12,8 +12,8 @@ TEST(MeshTopology, TessellatedSolidsAreWatertight) {
       {"box", MakeBox(40, 30, 20)}, {"cylinder", MakeCylinder(10, 50)}, {"sphere", MakeSphere(15)}};
   for (const auto& [name, shape] : shapes) {
     const MeshTopology t = AnalyzeTopology(Tessellate(shape, TessellationOptions{0.05, 0.3}));
-    EXPECT_TRUE(t.watertight()) << name << ": " << t.boundary_edges << " " << t.non_manifold_edges << " "
-                                << t.misoriented_edges;
+    EXPECT_TRUE(t.watertight()) << name << ": " << t.boundary_edges << " " << t.non_manifold_edges
+                                << " " << t.misoriented_edges;
   }
 }
 
@@ -36,7 +36,8 @@ TEST(MeshMassProperties, BoxMatchesTheClosedForm) {
   // Positions are floats: expect agreement to about 1e-7 relative.
   EXPECT_NEAR(m.volume_mm3, 24000.0, 24000.0 * 1e-7);
   const Eigen::Vector3d com = Eigen::Translation3d(5, 6, 7) *
-                              Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(20, 15, 10);
+                              Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()) *
+                              Eigen::Vector3d(20, 15, 10);
   EXPECT_TRUE(m.center_of_mass.isApprox(com, 1e-6));
   // Izz is invariant under rotation about z: V (a^2 + b^2) / 12.
   EXPECT_NEAR(m.inertia(2, 2), 24000.0 * (40 * 40 + 30 * 30) / 12.0, 5e6 * 1e-6);

@@ -1,8 +1,8 @@
 // Mesh formats through assimp: files written by assimp's own exporters read back the same.
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
 
 #include <fstream>
 
@@ -17,8 +17,9 @@ namespace {
 
 // A closed cube, 20 mm, one corner at the origin, written as OBJ with outward quads.
 std::filesystem::path WriteCube(const testing::ScratchDir& dir) {
-  std::ofstream(dir / "cube.obj") << "v 0 0 0\nv 20 0 0\nv 20 20 0\nv 0 20 0\nv 0 0 20\nv 20 0 20\nv 20 20 20\n"
-                                     "v 0 20 20\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  std::ofstream(dir / "cube.obj")
+      << "v 0 0 0\nv 20 0 0\nv 20 20 0\nv 0 20 0\nv 0 0 20\nv 20 0 20\nv 20 20 20\n"
+         "v 0 20 20\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
   return dir / "cube.obj";
 }
 
@@ -29,10 +30,11 @@ TEST(ReadMesh, EveryFormatAssimpWritesReadsBackAsTheSameCube) {
   ASSERT_NE(scene, nullptr) << importer.GetErrorString();
   Assimp::Exporter exporter;
   const std::pair<const char*, const char*> formats[] = {
-      {"stlb", "cube.stl"}, {"ply", "cube.ply"}, {"gltf2", "cube.gltf"}, {"glb2", "cube.glb"},
+      {"stlb", "cube.stl"}, {"ply", "cube.ply"},     {"gltf2", "cube.gltf"}, {"glb2", "cube.glb"},
       {"3mf", "cube.3mf"},  {"collada", "cube.dae"}, {"obj", "cube_out.obj"}};
   for (const auto& [id, name] : formats) {
-    ASSERT_EQ(exporter.Export(scene, id, (dir / name).string()), AI_SUCCESS) << id << ": " << exporter.GetErrorString();
+    ASSERT_EQ(exporter.Export(scene, id, (dir / name).string()), AI_SUCCESS)
+        << id << ": " << exporter.GetErrorString();
     const Assembly a = ImportCad(dir / name, ImportOptions{});
     ASSERT_EQ(a.parts.size(), 1u) << name;
     const Part& p = a.parts[0];

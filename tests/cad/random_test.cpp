@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <sstream>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -36,7 +36,8 @@ TEST(RandomStreams, ReadmeListsEveryStream) {
   for (std::string line; std::getline(in, line);) {
     if (line.rfind("### Random streams", 0) == 0) inside = true;
     if (inside && line.rfind("### ", 0) == 0 && line != "### Random streams") break;
-    if (inside && line.rfind("| `", 0) == 0) listed.push_back(line.substr(3, line.find('`', 3) - 3));
+    if (inside && line.rfind("| `", 0) == 0)
+      listed.push_back(line.substr(3, line.find('`', 3) - 3));
   }
   std::vector<std::string> streams;
   for (const RandomStream& s : kRandomStreams) streams.emplace_back(s.name);

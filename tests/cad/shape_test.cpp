@@ -21,7 +21,8 @@ TEST(Shape, BoxTessellatesToTwelveOutwardTriangles) {
   EXPECT_NEAR(mesh.SurfaceArea(), 2 * (40 * 30 + 30 * 20 + 40 * 20), 1e-6);
   const Eigen::Vector3f centre(20, 15, 10);
   for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
+    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
+                          c = mesh.positions[t[2]];
     const Eigen::Vector3f n = (b - a).cross(c - a);
     EXPECT_GT(n.dot((a + b + c) / 3 - centre), 0.0f) << "triangle winds inward";
     for (int i = 0; i < 3; ++i) EXPECT_GT(mesh.normals[t[i]].dot(n), 0.0f);
@@ -75,7 +76,8 @@ TEST(Shape, MassPropertiesAreExact) {
 
 TEST(Shape, MakePartMovesToTheBoundingBoxCentre) {
   const Eigen::Isometry3d moved = Eigen::Translation3d(100, -50, 7) * Eigen::Isometry3d::Identity();
-  const Part part = MakePart("brick", Transformed(MakeBox(40, 30, 20), moved), TessellationOptions{});
+  const Part part =
+      MakePart("brick", Transformed(MakeBox(40, 30, 20), moved), TessellationOptions{});
   EXPECT_EQ(part.name, "brick");
   EXPECT_TRUE(part.cad_from_model.translation().isApprox(Eigen::Vector3d(120, -35, 17), 1e-9));
   EXPECT_TRUE(part.mesh.Bounds().center().isZero(1e-6));
@@ -88,7 +90,8 @@ TEST(Shape, HugePartsGetACoarserDeflectionAndAWarning) {
   warnings.clear();
   const WarningSink previous = SetWarningSink([](const std::string& m) { warnings.push_back(m); });
   // A 20 m cylinder: the floor is 1e-5 of its 34.6 m box diagonal, 0.346 mm, above the 0.1 asked.
-  const Part huge = MakePart("tank", MakeCylinder(10000.0, 20000.0), TessellationOptions{0.1, 0.35});
+  const Part huge =
+      MakePart("tank", MakeCylinder(10000.0, 20000.0), TessellationOptions{0.1, 0.35});
   SetWarningSink(previous);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("part 'tank' is 34.6 m across; tessellated with 0.346 mm"),

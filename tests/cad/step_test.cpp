@@ -25,10 +25,11 @@ TEST(Step, WrittenAssemblyReadsBackWithInstancesNamesAndPlacements) {
   ScratchDir dir;
   const auto file = dir / "pair.step";
   const Eigen::Isometry3d left = Eigen::Translation3d(-100, 0, 0) * Eigen::Isometry3d::Identity();
-  const Eigen::Isometry3d right = Eigen::Translation3d(100, 0, 0) *
-                                  Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ());
+  const Eigen::Isometry3d right =
+      Eigen::Translation3d(100, 0, 0) * Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ());
   WriteStep(file, "fixture",
-            {StepComponent{"brick", MakeBox(40, 30, 20), {left, right}, Eigen::Vector3f(0.8f, 0.2f, 0.1f)},
+            {StepComponent{
+                 "brick", MakeBox(40, 30, 20), {left, right}, Eigen::Vector3f(0.8f, 0.2f, 0.1f)},
              StepComponent{"pin", MakeCylinder(5, 60)}});
   ASSERT_TRUE(std::filesystem::exists(file));
   EXPECT_FALSE(std::filesystem::exists(file.string() + ".partial"));
@@ -70,9 +71,11 @@ TEST(Step, BadFilesGiveOneClearError) {
   const TessellationOptions o;
   EXPECT_EQ(MessageOf([&] { ReadStep(dir / "missing.stp", o); }),
             (dir / "missing.stp").string() + ": no such file");
-  EXPECT_EQ(MessageOf([&] { ReadStep(dir.path(), o); }), dir.path().string() + ": is a folder, not a file");
+  EXPECT_EQ(MessageOf([&] { ReadStep(dir.path(), o); }),
+            dir.path().string() + ": is a folder, not a file");
   std::ofstream(dir / "empty.stp").close();
-  EXPECT_EQ(MessageOf([&] { ReadStep(dir / "empty.stp", o); }), (dir / "empty.stp").string() + ": file is empty");
+  EXPECT_EQ(MessageOf([&] { ReadStep(dir / "empty.stp", o); }),
+            (dir / "empty.stp").string() + ": file is empty");
   std::ofstream(dir / "notes.stp") << "these are not the droids\n";
   EXPECT_NE(MessageOf([&] { ReadStep(dir / "notes.stp", o); }).find("not a readable STEP file"),
             std::string::npos);
@@ -95,7 +98,8 @@ TEST(Step, As1AssemblyHasItsFivePartsInMillimetres) {
   for (const Part& p : a.parts) size[p.name] = p.mesh.Bounds().sizes();
   ASSERT_TRUE(size.count("plate") && size.count("l-bracket") && size.count("rod") &&
               size.count("bolt") && size.count("nut"));
-  EXPECT_TRUE(size["plate"].isApprox(Eigen::Vector3d(180, 150, 20), 1e-3)) << size["plate"].transpose();
+  EXPECT_TRUE(size["plate"].isApprox(Eigen::Vector3d(180, 150, 20), 1e-3))
+      << size["plate"].transpose();
   EXPECT_NEAR(size["rod"].maxCoeff(), 200.0, 0.01);
   // Two L-brackets, each holding three bolt-nut pairs; the rod carries two more nuts.
   std::map<std::string, int> count;

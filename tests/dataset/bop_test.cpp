@@ -68,7 +68,8 @@ TEST(GtInfo, HandWorkedFrame) {
   EXPECT_EQ(a.px_count_visib, 2);
   EXPECT_EQ(a.px_count_valid, 2);
   EXPECT_DOUBLE_EQ(a.visib_fract, 1.0);
-  EXPECT_EQ(std::vector<int>(a.bbox_obj, a.bbox_obj + 4), (std::vector<int>{1, 0, 1, 0}));  // bop_toolkit: width = max - min
+  EXPECT_EQ(std::vector<int>(a.bbox_obj, a.bbox_obj + 4),
+            (std::vector<int>{1, 0, 1, 0}));  // bop_toolkit: width = max - min
   const GtInfo b = ComputeGtInfo(f, 1, BopOptions{});
   EXPECT_EQ(b.px_count_all, 4);
   EXPECT_EQ(b.px_count_visib, 3);
@@ -93,7 +94,7 @@ TEST(GtInfo, Bop19RuleWorkedByHand) {
   f.instances[0].amodal_depth.assign(12, 0.0f);
   f.instances[0].amodal_depth[1] = f.instances[0].amodal_depth[2] = 100.0f;
   f.instances[1].amodal_depth.assign(12, 0.0f);
-  f.instances[1].amodal_depth[2] = 110.0f;   // behind instance 0 (100 mm)
+  f.instances[1].amodal_depth[2] = 110.0f;  // behind instance 0 (100 mm)
   f.instances[1].amodal_depth[6] = f.instances[1].amodal_depth[7] = 200.0f;
   f.instances[1].amodal_depth[11] = 9000.0f;  // its written depth is 0: visible in bop19
 
@@ -127,8 +128,9 @@ TEST(GtInfo, Bop19TwoTouchingBoxes) {
     const std::vector<Part> parts = {MakePart("slab", MakeBox(200, 200, 20), TessellationOptions{}),
                                      MakePart("block", MakeBox(60, 60, t), TessellationOptions{})};
     Scene scene;
-    scene.instances = {Instance{0, "slab", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
-                       Instance{1, "block", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 20 + t / 2))}};
+    scene.instances = {
+        Instance{0, "slab", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
+        Instance{1, "block", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 20 + t / 2))}};
     Camera camera;
     camera.intrinsics = Intrinsics{640, 480, 525.0, 525.0, 320.0, 240.0};
     camera.world_from_cam.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // looking down
@@ -178,7 +180,8 @@ TEST(GtInfo, TruncatedAndOccludedMatchTheThreeTimesCanvas) {
   // wall facing the optical axis (x = -270, 525...565 mm deep) adds u up to 320 - 525 * 270 / 565
   // = 69.1, so 119 columns (bop_toolkit writes width 118 = max - min). Not clipped at u = 0.
   EXPECT_GT(infos[0].px_count_all, 100 * 100);
-  EXPECT_EQ(std::vector<int>(infos[0].bbox_obj, infos[0].bbox_obj + 4), (std::vector<int>{-50, 190, 118, 99}));
+  EXPECT_EQ(std::vector<int>(infos[0].bbox_obj, infos[0].bbox_obj + 4),
+            (std::vector<int>{-50, 190, 118, 99}));
   EXPECT_LT(infos[0].px_count_visib, frame.instances[0].px_count_all);  // occluded inside the image
 
   Camera canvas = camera;
@@ -227,8 +230,9 @@ TEST(AssignClasses, GroupsByNamePatternThenOneClassPerRemainingPart) {
   EXPECT_EQ(empty, std::vector<std::string>{"screw"});
   EXPECT_EQ(AssignClasses({"a", "b"}, {}, {}, &empty)[1].id, 2);
   // Labels (a family that is one class) come before name groups take a part, after the groups.
-  const auto labelled = AssignClasses({"gear_z12", "M6 bolt", "gear_z13", "plate"}, {"spur_gear", "", "spur_gear", ""},
-                                      {{"bolt", {"*bolt*"}}}, &empty);
+  const auto labelled =
+      AssignClasses({"gear_z12", "M6 bolt", "gear_z13", "plate"},
+                    {"spur_gear", "", "spur_gear", ""}, {{"bolt", {"*bolt*"}}}, &empty);
   EXPECT_EQ(labelled[0].id, 2);
   EXPECT_EQ(labelled[0].name, "spur_gear");
   EXPECT_EQ(labelled[2].id, 2);
@@ -240,8 +244,9 @@ TEST(Bop, EveryFourthImageIsATestImageWithItsTargets) {
   testing::ScratchDir dir;
   const std::vector<Part> parts = {MakePart("box", MakeBox(60, 40, 20), TessellationOptions{})};
   Scene scene;
-  scene.instances = {Instance{0, "a", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
-                     Instance{0, "b", Eigen::Isometry3d(Eigen::Translation3d(0, 0, -500))}};  // under the floor
+  scene.instances = {
+      Instance{0, "a", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
+      Instance{0, "b", Eigen::Isometry3d(Eigen::Translation3d(0, 0, -500))}};  // under the floor
   const Renderer renderer(parts, scene);
   BopOptions options;  // every 4th
   BopSceneWriter writer(dir.path(), 0, options, {1, 1});
@@ -253,7 +258,8 @@ TEST(Bop, EveryFourthImageIsATestImageWithItsTargets) {
   const SceneSplit split = writer.Finish();
   EXPECT_EQ(split.train, (std::vector<int>{0, 1, 2, 4, 5, 6}));
   EXPECT_EQ(split.test, (std::vector<int>{3, 7}));
-  ASSERT_EQ(split.targets.size(), 2u);  // one visible box per test image; the buried one is not a target
+  ASSERT_EQ(split.targets.size(),
+            2u);  // one visible box per test image; the buried one is not a target
   EXPECT_EQ(split.targets[0].im_id, 3);
   EXPECT_EQ(split.targets[0].obj_id, 1);
   EXPECT_EQ(split.targets[0].inst_count, 1);
@@ -296,7 +302,8 @@ TEST(Bop, JpegColourWhenAsked) {
   double error = 0;  // mean absolute error per channel: small at quality 90
   for (int v = 0; v < bgr.rows; ++v) {
     for (int u = 0; u < bgr.cols; ++u) {
-      for (int c = 0; c < 3; ++c) error += std::abs(bgr.at<cv::Vec3b>(v, u)[2 - c] - frame.rgb[3 * (v * bgr.cols + u) + c]);
+      for (int c = 0; c < 3; ++c)
+        error += std::abs(bgr.at<cv::Vec3b>(v, u)[2 - c] - frame.rgb[3 * (v * bgr.cols + u) + c]);
     }
   }
   EXPECT_LT(error / (bgr.total() * 3), 2.0);
@@ -314,7 +321,8 @@ TEST(Bop, NormalsAreWrittenWhenRendered) {
   const Frame frame = Renderer({}, scene, options).Render(camera);
   BopSceneWriter writer(dir.path(), 0, BopOptions{}, {});
   writer.WriteFrame(0, frame);
-  const cv::Mat normals = cv::imread((dir / "train" / "000000" / "normal" / "000000.png").string(), cv::IMREAD_COLOR);
+  const cv::Mat normals =
+      cv::imread((dir / "train" / "000000" / "normal" / "000000.png").string(), cv::IMREAD_COLOR);
   ASSERT_EQ(normals.type(), CV_8UC3);
   const cv::Vec3b n = normals.at<cv::Vec3b>(240, 320);  // BGR of (0, 0, -1) -> (128, 128, 0)
   EXPECT_EQ(n[2], 128);
@@ -327,8 +335,9 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
   const std::vector<Part> parts = {MakePart("box", MakeBox(60, 40, 20), TessellationOptions{}),
                                    MakePart("pin", MakeCylinder(8, 50), TessellationOptions{})};
   Scene scene;
-  scene.instances = {Instance{0, "a", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
-                     Instance{1, "b", Eigen::Translation3d(50, 0, 25) * Eigen::Isometry3d::Identity()}};
+  scene.instances = {
+      Instance{0, "a", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 10))},
+      Instance{1, "b", Eigen::Translation3d(50, 0, 25) * Eigen::Isometry3d::Identity()}};
   const Renderer renderer(parts, scene);
   BopOptions options;
   WriteBopModels(dir.path(), parts);
@@ -392,7 +401,8 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
       EXPECT_EQ(gi["px_count_visib"], frames[im].instances[i].px_count_visib);
       char name[32];
       std::snprintf(name, sizeof(name), "%06d_%06d.png", im, i);
-      const cv::Mat mask = cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+      const cv::Mat mask =
+          cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
       ASSERT_FALSE(mask.empty()) << name;
       EXPECT_EQ(cv::countNonZero(mask), frames[im].instances[i].px_count_visib);
       const cv::Mat full = cv::imread((scene_dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
@@ -410,7 +420,8 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
 
   // COCO: every visible mask, decoded from its compressed RLE, is the mask_visib PNG.
   const json coco = ReadJson(scene_dir / "scene_gt_coco.json");
-  for (const char* k : {"annotations", "categories", "images", "info", "licenses"}) EXPECT_TRUE(coco.contains(k)) << k;
+  for (const char* k : {"annotations", "categories", "images", "info", "licenses"})
+    EXPECT_TRUE(coco.contains(k)) << k;
   ASSERT_EQ(coco["images"].size(), 2u);
   EXPECT_EQ(coco["images"][0]["file_name"], "rgb/000000.png");
   EXPECT_EQ(coco["categories"].size(), 2u);
@@ -420,15 +431,18 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
     SCOPED_TRACE(std::to_string(im) + "/" + std::to_string(inst));
     EXPECT_EQ(a["category_id"], gt[std::to_string(im)][inst]["obj_id"]);
     EXPECT_EQ(a["segmentation"]["size"], json::array({480, 640}));
-    const RleMask rle{480, 640, DecompressRleCounts(a["segmentation"]["counts"].get<std::string>())};
+    const RleMask rle{480, 640,
+                      DecompressRleCounts(a["segmentation"]["counts"].get<std::string>())};
     const std::vector<uint8_t> decoded = DecodeRle(rle);
     char name[32];
     std::snprintf(name, sizeof(name), "%06d_%06d.png", im, inst);
-    const cv::Mat mask = cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat mask =
+        cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
     ASSERT_FALSE(mask.empty());
     int differ = 0;
     for (int v = 0; v < 480; ++v) {
-      for (int u = 0; u < 640; ++u) differ += (mask.at<uint8_t>(v, u) != 0) != (decoded[v * 640 + u] != 0);
+      for (int u = 0; u < 640; ++u)
+        differ += (mask.at<uint8_t>(v, u) != 0) != (decoded[v * 640 + u] != 0);
     }
     EXPECT_EQ(differ, 0);
     EXPECT_EQ(a["area"], cv::countNonZero(mask));

@@ -16,15 +16,16 @@ TEST(CocoRle, ColumnMajorRunsStartWithBackground) {
   EXPECT_EQ(rle.counts, (std::vector<uint32_t>{0, 2, 2, 2}));
   EXPECT_EQ(DecodeRle(rle), mask);
   // A box that leaves out the on pixels leaves only background.
-  EXPECT_EQ(EncodeRle(2, 3, 0, 2, 1, 3, [&](size_t p) { return mask[p] != 0; }).counts, (std::vector<uint32_t>{6}));
+  EXPECT_EQ(EncodeRle(2, 3, 0, 2, 1, 3, [&](size_t p) { return mask[p] != 0; }).counts,
+            (std::vector<uint32_t>{6}));
 }
 
 TEST(CocoRle, CompressedStringsAsTheCocoApiWritesThem) {
   // Worked by hand from pycocotools' rleToString: 5 bits per character plus 48, bit 0x20 for
   // "more"; from the fourth count on, the difference to the count two before.
-  EXPECT_EQ(CompressRleCounts({1, 2, 6}), "126");      // the first three are stored as they are
-  EXPECT_EQ(CompressRleCounts({1, 2, 6, 1}), "126O");  // 1 - 2 = -1: 0x1f, sign bit set, done
-  EXPECT_EQ(CompressRleCounts({100}), "T3");           // 100 = 4 + 3 x 32: 'T' = 48 + 0x20 + 4
+  EXPECT_EQ(CompressRleCounts({1, 2, 6}), "126");          // the first three are stored as they are
+  EXPECT_EQ(CompressRleCounts({1, 2, 6, 1}), "126O");      // 1 - 2 = -1: 0x1f, sign bit set, done
+  EXPECT_EQ(CompressRleCounts({100}), "T3");               // 100 = 4 + 3 x 32: 'T' = 48 + 0x20 + 4
   EXPECT_EQ(CompressRleCounts({0, 50, 0, 10}), "0b10hN");  // 50 -> "b1"; 10 - 50 = -40 -> "hN"
   EXPECT_EQ(DecompressRleCounts("0b10hN"), (std::vector<uint32_t>{0, 50, 0, 10}));
   EXPECT_THROW(DecompressRleCounts("b"), Error);  // a continuation with nothing after it

@@ -18,7 +18,8 @@ TEST(MeshDiameter, MatchesBruteForceOnACurvedPart) {
   const Mesh cyl = Tessellate(MakeCylinder(15, 40), TessellationOptions{0.05, 0.2});
   double brute = 0;
   for (const auto& a : cyl.positions) {
-    for (const auto& b : cyl.positions) brute = std::max(brute, (a.cast<double>() - b.cast<double>()).norm());
+    for (const auto& b : cyl.positions)
+      brute = std::max(brute, (a.cast<double>() - b.cast<double>()).norm());
   }
   EXPECT_NEAR(MeshDiameter(cyl), brute, 1e-9);
   // Chords of the tessellated rim fall short of the exact 50 mm by at most twice the deflection.

@@ -27,8 +27,9 @@ struct TwoParts {
   Scene scene;
   Frame frame;
   TwoParts() {
-    scene.instances = {Instance{0, "block", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 20))},
-                       Instance{1, "pin", Eigen::Translation3d(80, 0, 25) * Eigen::Isometry3d::Identity()}};
+    scene.instances = {
+        Instance{0, "block", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 20))},
+        Instance{1, "pin", Eigen::Translation3d(80, 0, 25) * Eigen::Isometry3d::Identity()}};
     Camera camera;
     camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.3, 0.9, 500.0);
     frame = Renderer(parts, scene).Render(camera);
@@ -39,7 +40,8 @@ TEST(Grasp, BackProjectedPointsLieOnTheObject) {
   const TwoParts s;
   for (int i = 0; i < 2; ++i) {
     const std::vector<Eigen::Vector3f> points = BackProjectInstance(s.frame, i, 0.1);
-    EXPECT_EQ(static_cast<int>(points.size()), s.frame.instances[i].px_count_visib);  // every depth is valid
+    EXPECT_EQ(static_cast<int>(points.size()),
+              s.frame.instances[i].px_count_visib);  // every depth is valid
     // Back in the model frame (mm), every point is on the part's box, up to depth rounding.
     const Eigen::Isometry3d model_from_cam = s.frame.instances[i].cam_from_model.inverse();
     const Eigen::AlignedBox3d box = s.parts[i].mesh.Bounds();
@@ -58,7 +60,8 @@ TEST(Grasp, NpyHeaderIsWhatNumpyReads) {
   const size_t header = static_cast<uint8_t>(npy[8]) | static_cast<uint8_t>(npy[9]) << 8;
   EXPECT_EQ((10 + header) % 64, 0u);
   EXPECT_EQ(npy[10 + header - 1], '\n');
-  EXPECT_NE(npy.find("'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }"), std::string::npos);
+  EXPECT_NE(npy.find("'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }"),
+            std::string::npos);
   ASSERT_EQ(npy.size(), 10 + header + 6 * sizeof(float));
   float last;
   std::memcpy(&last, &npy[npy.size() - 4], 4);
@@ -98,11 +101,13 @@ TEST(PaperLayout, MaskMetaAndPvn3dMatchTheFrame) {
   const auto root = dir / "paper" / "000000";
 
   // Colour and depth are BOP's files (linked, not re-encoded).
-  EXPECT_TRUE(std::filesystem::equivalent(root / "rgb" / "000005.png", bop.scene_dir() / "rgb" / "000005.png"));
+  EXPECT_TRUE(std::filesystem::equivalent(root / "rgb" / "000005.png",
+                                          bop.scene_dir() / "rgb" / "000005.png"));
   // The mask carries each object's obj_id where that object is visible.
   const cv::Mat mask = cv::imread((root / "mask" / "000005.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(mask.type(), CV_8UC1);
-  for (int i = 0; i < 2; ++i) EXPECT_EQ(cv::countNonZero(mask == i + 1), s.frame.instances[i].px_count_visib);
+  for (int i = 0; i < 2; ++i)
+    EXPECT_EQ(cv::countNonZero(mask == i + 1), s.frame.instances[i].px_count_visib);
 
   std::ifstream in(root / "meta" / "000005.json");
   const json meta = json::parse(in);

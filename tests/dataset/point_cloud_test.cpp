@@ -13,7 +13,9 @@
 namespace cadsynth {
 namespace {
 
-Mesh Bar() { return MakePart("bar", MakeBox(100, 10, 10), TessellationOptions{}).mesh; }  // model frame
+Mesh Bar() {
+  return MakePart("bar", MakeBox(100, 10, 10), TessellationOptions{}).mesh;
+}  // model frame
 
 TEST(SampleSurface, PointsLieOnTheSurfaceSpreadByArea) {
   const Mesh bar = Bar();
@@ -67,15 +69,18 @@ TEST(Keypoints, FarthestPointsStartAtOppositeCornersAndSpread) {
   EXPECT_EQ(first ^ second, 7);  // opposite corner: every coordinate flips
   float min_gap = std::numeric_limits<float>::infinity();
   for (size_t i = 0; i < k.fps8.size(); ++i) {
-    for (size_t j = i + 1; j < k.fps8.size(); ++j) min_gap = std::min(min_gap, (k.fps8[i] - k.fps8[j]).norm());
+    for (size_t j = i + 1; j < k.fps8.size(); ++j)
+      min_gap = std::min(min_gap, (k.fps8[i] - k.fps8[j]).norm());
   }
   EXPECT_GT(min_gap, 20.0f);  // 8 random surface points would typically be far closer
   // Every keypoint lies on the box's surface: one coordinate at its face.
   for (const Eigen::Vector3f& p : k.fps16) {
-    const float face = std::max({std::abs(p.x()) / 30.0f, std::abs(p.y()) / 20.0f, std::abs(p.z()) / 10.0f});
+    const float face =
+        std::max({std::abs(p.x()) / 30.0f, std::abs(p.y()) / 20.0f, std::abs(p.z()) / 10.0f});
     EXPECT_NEAR(face, 1.0f, 1e-4f) << p.transpose();
   }
-  EXPECT_EQ(std::vector<Eigen::Vector3f>(k.fps16.begin(), k.fps16.begin() + 8), k.fps8);  // FPS is greedy
+  EXPECT_EQ(std::vector<Eigen::Vector3f>(k.fps16.begin(), k.fps16.begin() + 8),
+            k.fps8);  // FPS is greedy
 }
 
 TEST(PointPly, DecodeReadsWhatEncodeWrites) {
@@ -87,7 +92,8 @@ TEST(PointPly, DecodeReadsWhatEncodeWrites) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("bad.ply:6"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(DecodePointPly("ply\nformat binary_little_endian 1.0\nend_header\n", "b.ply"), Error);
+  EXPECT_THROW(DecodePointPly("ply\nformat binary_little_endian 1.0\nend_header\n", "b.ply"),
+               Error);
 }
 
 }  // namespace

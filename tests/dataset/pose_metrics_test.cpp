@@ -34,7 +34,8 @@ TEST(PoseMetrics, RotationBySymmetryGivesZeroAddSButNotZeroAdd) {
   EXPECT_NEAR(AddSError(SquareGrid(), estimate, truth), 0.0, 1e-9);
   // Hand-worked: a quarter turn moves a point at radius r by r sqrt(2); ADD is the mean of that.
   double expected = 0;
-  for (const Eigen::Vector3f& p : SquareGrid()) expected += p.cast<double>().norm() * std::sqrt(2.0);
+  for (const Eigen::Vector3f& p : SquareGrid())
+    expected += p.cast<double>().norm() * std::sqrt(2.0);
   expected /= SquareGrid().size();
   EXPECT_NEAR(AddError(SquareGrid(), estimate, truth), expected, 1e-9);
 }

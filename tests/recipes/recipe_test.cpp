@@ -25,7 +25,8 @@ sweep:
   yaw: {from: 0, to: 360, step: 10}
   pitch: {from: 0, to: 90, step: 10}
   radius: {from: 0.65 m, to: 1.45 m, step: 0.1 m}
-)", "r.yaml", ".");
+)",
+                                   "r.yaml", ".");
   EXPECT_EQ(spec.sweep.yaw_rad.size(), 37u);
   EXPECT_EQ(spec.sweep.pitch_rad.size(), 10u);
   ASSERT_EQ(spec.sweep.radius_mm.size(), 9u);
@@ -47,7 +48,8 @@ scene: {layout: row, gap: 1 in}
 render: {floor: false, background: [1, 1, 1]}
 output: {dir: out/x, depth_scale: 1.0, split: val, formats: [bop, pvn3d, grasp], model_points: 500, point_sampling: even,
          point_seed: 4, test_fraction: 0.1, split_seed: 2, rgb: jpg, jpeg_quality: 90}
-)", "r.yaml", "/base");
+)",
+                                   "r.yaml", "/base");
   EXPECT_EQ(spec.intrinsics.width, 320);
   EXPECT_DOUBLE_EQ(spec.intrinsics.fx, 262.5);
   EXPECT_EQ(spec.sweep.yaw_rad.size(), 3u);
@@ -62,12 +64,14 @@ output: {dir: out/x, depth_scale: 1.0, split: val, formats: [bop, pvn3d, grasp],
   EXPECT_FALSE(spec.bop.coco);
   EXPECT_EQ(spec.bop.jpeg_quality, 90);
   EXPECT_EQ(spec.bop.RgbExtension(), ".jpg");
-  EXPECT_THROW(ParseRecipe("output: {jpeg_quality: 80}\n", "r.yaml", "."), Error);  // PNG has no quality
+  EXPECT_THROW(ParseRecipe("output: {jpeg_quality: 80}\n", "r.yaml", "."),
+               Error);  // PNG has no quality
   EXPECT_THROW(ParseRecipe("output: {rgb: jpg, jpeg_quality: 101}\n", "r.yaml", "."), Error);
   EXPECT_FALSE(spec.bop.paper_layout);
   EXPECT_TRUE(spec.bop.pvn3d_meta);
   EXPECT_TRUE(spec.bop.grasp_points);
-  for (const char* bad : {"output: {formats: [bop, yolo]}\n", "output: {formats: [coco]}\n", "output: {formats: bop}\n"}) {
+  for (const char* bad : {"output: {formats: [bop, yolo]}\n", "output: {formats: [coco]}\n",
+                          "output: {formats: bop}\n"}) {
     EXPECT_THROW(ParseRecipe(bad, "r.yaml", "."), Error) << bad;
   }
   EXPECT_EQ(spec.bop.model_points, 500);
@@ -97,7 +101,8 @@ sweep:
   roll_jitter: 5
   target_jitter: 2 cm
   min_visible_pixels: 200
-)", "r.yaml", ".");
+)",
+                                   "r.yaml", ".");
   EXPECT_EQ(spec.intrinsics.width, 1280);
   EXPECT_EQ(spec.sampler.kind, ViewSampler::Kind::kRandom);
   EXPECT_EQ(spec.sampler.count, 500);
@@ -107,13 +112,19 @@ sweep:
   EXPECT_EQ(spec.sampler.max_radius_mm, 1000);
   EXPECT_EQ(spec.sampler.target_jitter_mm, 20);
   EXPECT_EQ(spec.min_visible_pixels, 200);
-  EXPECT_NEAR(ParseRecipe("camera: {width: 800, height: 600, hfov: 90}\n", "r", ".").intrinsics.fx, 400.0, 1e-9);
-  EXPECT_EQ(ErrorOf("sweep: {sampler: spiral}\n"), "r.yaml:1:18: sweep.sampler: expected grid, fibonacci or random, got 'spiral'");
+  EXPECT_NEAR(ParseRecipe("camera: {width: 800, height: 600, hfov: 90}\n", "r", ".").intrinsics.fx,
+              400.0, 1e-9);
+  EXPECT_EQ(ErrorOf("sweep: {sampler: spiral}\n"),
+            "r.yaml:1:18: sweep.sampler: expected grid, fibonacci or random, got 'spiral'");
   EXPECT_EQ(ErrorOf("camera: {preset: kinect_v2}\n"),
-            "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, realsense_d435, realsense_d435_640)");
-  EXPECT_EQ(ErrorOf("camera: {hfov: 200}\n"), "r.yaml:1:16: camera.hfov: must lie between 0 and 180 degrees");
+            "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, "
+            "realsense_d435, realsense_d435_640)");
+  EXPECT_EQ(ErrorOf("camera: {hfov: 200}\n"),
+            "r.yaml:1:16: camera.hfov: must lie between 0 and 180 degrees");
   EXPECT_EQ(ParseRecipe("render: {isa: avx2}\n", "r", ".").render.isa, "avx2");
-  EXPECT_NE(ErrorOf("render: {isa: neon}\n").find("isa must be auto, sse2, sse4.2, avx, avx2 or avx512"), std::string::npos);
+  EXPECT_NE(
+      ErrorOf("render: {isa: neon}\n").find("isa must be auto, sse2, sse4.2, avx, avx2 or avx512"),
+      std::string::npos);
 }
 
 TEST(Recipe, Classes) {
@@ -123,14 +134,17 @@ classes:
   groups:
     fastener: ["*bolt*", "*nut*"]
     plate: plate
-)", "r.yaml", ".");
+)",
+                                   "r.yaml", ".");
   EXPECT_EQ(spec.class_by, RunSpec::ClassBy::kAssembly);
   ASSERT_EQ(spec.class_groups.size(), 2u);
   EXPECT_EQ(spec.class_groups[0].first, "fastener");
   EXPECT_EQ(spec.class_groups[0].second, (std::vector<std::string>{"*bolt*", "*nut*"}));
   EXPECT_EQ(spec.class_groups[1].second, std::vector<std::string>{"plate"});
-  EXPECT_EQ(ErrorOf("classes: {by: shape}\n"), "r.yaml:1:15: classes.by: expected 'part' or 'assembly', got 'shape'");
-  EXPECT_EQ(ErrorOf("classes: {group: {}}\n"), "r.yaml:1:11: unknown key 'classes.group' (did you mean 'groups'?)");
+  EXPECT_EQ(ErrorOf("classes: {by: shape}\n"),
+            "r.yaml:1:15: classes.by: expected 'part' or 'assembly', got 'shape'");
+  EXPECT_EQ(ErrorOf("classes: {group: {}}\n"),
+            "r.yaml:1:11: unknown key 'classes.group' (did you mean 'groups'?)");
 }
 
 double Num(const ParamValues& v, const char* name) { return std::get<double>(v.at(name)); }
@@ -142,11 +156,13 @@ parts:
     params: {face_width: 1 cm, bore: 5}
     grid: {module: [1, 2], teeth: {from: 12, to: 13, step: 1}}
     class: family
-)", "r.yaml", ".");
+)",
+                                   "r.yaml", ".");
   const PartSource& s = spec.scenes.at(0).sources.at(0);
   EXPECT_EQ(s.family, "spur_gear");
   EXPECT_TRUE(s.one_class);
-  ASSERT_EQ(s.variants.size(), 4u);  // teeth comes before module in the family: teeth varies slowest
+  ASSERT_EQ(s.variants.size(),
+            4u);  // teeth comes before module in the family: teeth varies slowest
   EXPECT_EQ(Num(s.variants[0], "teeth"), 12);
   EXPECT_EQ(Num(s.variants[0], "module"), 1);
   EXPECT_EQ(Num(s.variants[1], "module"), 2);
@@ -154,14 +170,17 @@ parts:
   EXPECT_EQ(Num(s.variants[3], "face_width"), 10);
   EXPECT_EQ(Num(s.variants[3], "bore"), 5);
   EXPECT_EQ(Num(s.variants[3], "pressure_angle"), 20 * M_PI / 180);  // default filled in
-  const RunSpec full = ParseRecipe("parts: [{family: spur_gear, grid: {teeth: {from: 12, to: 40, step: 1}}}]\n", "r", ".");
+  const RunSpec full = ParseRecipe(
+      "parts: [{family: spur_gear, grid: {teeth: {from: 12, to: 40, step: 1}}}]\n", "r", ".");
   EXPECT_EQ(full.scenes[0].sources[0].variants.size(), 29u);
 }
 
 TEST(Recipe, SeededRandomFamilyIsTheSameEveryTime) {
   const auto parse = [](int seed) {
-    return ParseRecipe("parts:\n  - family: spur_gear\n    random: {count: 6, seed: " + std::to_string(seed) +
-                           ", params: {teeth: {from: 12, to: 40}, module: [1.5, 2], helix_angle: {from: 0, to: 30}}}\n",
+    return ParseRecipe("parts:\n  - family: spur_gear\n    random: {count: 6, seed: " +
+                           std::to_string(seed) +
+                           ", params: {teeth: {from: 12, to: 40}, module: [1.5, 2], helix_angle: "
+                           "{from: 0, to: 30}}}\n",
                        "r.yaml", ".")
         .scenes[0]
         .sources[0]
@@ -183,14 +202,18 @@ TEST(Recipe, SeededRandomFamilyIsTheSameEveryTime) {
 
 TEST(Recipe, FamilyErrorsPointAtTheKey) {
   EXPECT_EQ(ErrorOf("parts: [{family: spur_gear, params: {teth: 12}}]\n"),
-            "r.yaml:1:38: parts[0].params: family 'spur_gear' has no parameter 'teth' (did you mean 'teeth'?)");
+            "r.yaml:1:38: parts[0].params: family 'spur_gear' has no parameter 'teth' (did you "
+            "mean 'teeth'?)");
   EXPECT_EQ(ErrorOf("parts: [{family: spur_gear, grid: {module: 2 parsec}}]\n"),
-            "r.yaml:1:44: parts[0].grid.module: unknown length unit 'parsec' (use um, mm, cm, m, in or ft)");
+            "r.yaml:1:44: parts[0].grid.module: unknown length unit 'parsec' (use um, mm, cm, m, "
+            "in or ft)");
   EXPECT_EQ(ErrorOf("parts: [{family: spur_gear, params: {teeth: 12.5}}]\n"),
             "r.yaml:1:45: parts[0].params.teeth: expected a whole number, got '12.5'");
-  EXPECT_NE(ErrorOf("parts: [{family: sprocket}]\n").find("r.yaml:1:18: parts[0].family: unknown family 'sprocket' (known: spur_gear,"),
+  EXPECT_NE(ErrorOf("parts: [{family: sprocket}]\n")
+                .find("r.yaml:1:18: parts[0].family: unknown family 'sprocket' (known: spur_gear,"),
             std::string::npos);
-  EXPECT_EQ(ErrorOf("parts: [{family: washer, grid: {size: [M6]}, random: {count: 2, params: {size: [M8]}}}]\n"),
+  EXPECT_EQ(ErrorOf("parts: [{family: washer, grid: {size: [M6]}, random: {count: 2, params: "
+                    "{size: [M8]}}}]\n"),
             "r.yaml:1:9: parts[0]: give 'grid' or 'random', not both");
   EXPECT_EQ(ErrorOf("parts: [{family: washer, class: each}]\n"),
             "r.yaml:1:33: parts[0].class: expected 'variant' or 'family', got 'each'");
@@ -201,15 +224,17 @@ TEST(Recipe, VisibilityRuleAndCocoBoxes) {
   const RunSpec defaults = ParseRecipe("output: {}\n", "r.yaml", ".");
   EXPECT_EQ(defaults.bop.visibility, BopOptions::Visibility::kExact);
   EXPECT_TRUE(defaults.bop.coco_amodal_bbox);
-  const RunSpec spec =
-      ParseRecipe("output: {visibility: bop19, visibility_delta: 5 mm, coco_bbox: modal}\n", "r.yaml", ".");
+  const RunSpec spec = ParseRecipe(
+      "output: {visibility: bop19, visibility_delta: 5 mm, coco_bbox: modal}\n", "r.yaml", ".");
   EXPECT_EQ(spec.bop.visibility, BopOptions::Visibility::kBop19);
   EXPECT_DOUBLE_EQ(spec.bop.visib_delta_mm, 5.0);
   EXPECT_FALSE(spec.bop.coco_amodal_bbox);
-  EXPECT_DOUBLE_EQ(ParseRecipe("output: {visibility: bop19}\n", "r.yaml", ".").bop.visib_delta_mm, 15.0);
+  EXPECT_DOUBLE_EQ(ParseRecipe("output: {visibility: bop19}\n", "r.yaml", ".").bop.visib_delta_mm,
+                   15.0);
   EXPECT_EQ(ErrorOf("output: {visibility: bop18}\n"),
             "r.yaml:1:22: output.visibility: expected 'exact' or 'bop19', got 'bop18'");
-  EXPECT_EQ(ErrorOf("output: {visibility_delta: 5}\n"), "r.yaml:1:28: output.visibility_delta: needs visibility: bop19");
+  EXPECT_EQ(ErrorOf("output: {visibility_delta: 5}\n"),
+            "r.yaml:1:28: output.visibility_delta: needs visibility: bop19");
   EXPECT_EQ(ErrorOf("output: {visibility: bop19, visibility_delta: -1 mm}\n"),
             "r.yaml:1:47: output.visibility_delta: must not be negative");
   EXPECT_EQ(ErrorOf("output: {coco_bbox: visible}\n"),
@@ -221,23 +246,27 @@ TEST(Recipe, ErrorsPointAtLineAndColumn) {
             "r.yaml:3:3: unknown key 'camera.fxx' (did you mean 'fx'?)");
   EXPECT_EQ(ErrorOf("sweeep: {}\n"), "r.yaml:1:1: unknown key 'sweeep' (did you mean 'sweep'?)");
   EXPECT_EQ(ErrorOf("exposure: 3\n"), "r.yaml:1:1: unknown key 'exposure'");
-  EXPECT_EQ(ErrorOf("sweep:\n  radius: 1 parsec\n"),
-            "r.yaml:2:11: sweep.radius: unknown length unit 'parsec' (use um, mm, cm, m, in or ft)");
-  EXPECT_EQ(ErrorOf("camera: {fx: fast}\n"), "r.yaml:1:14: camera.fx: expected a number, got 'fast'");
+  EXPECT_EQ(
+      ErrorOf("sweep:\n  radius: 1 parsec\n"),
+      "r.yaml:2:11: sweep.radius: unknown length unit 'parsec' (use um, mm, cm, m, in or ft)");
+  EXPECT_EQ(ErrorOf("camera: {fx: fast}\n"),
+            "r.yaml:1:14: camera.fx: expected a number, got 'fast'");
   EXPECT_EQ(ErrorOf("camera: {width: 0}\n"),
             "r.yaml:1:9: camera: image size 0x480 must be between 1 and 16384 pixels");
   EXPECT_EQ(ErrorOf("sweep: {pitch: {from: 0, to: 90}}\n"),
             "r.yaml:1:16: sweep.pitch: a range needs 'from', 'to' and 'step' (no 'step')");
-  EXPECT_EQ(ErrorOf("sweep: {pitch: 120}\n"), "r.yaml:1:8: sweep: pitch must lie between -90 and 90 degrees");
+  EXPECT_EQ(ErrorOf("sweep: {pitch: 120}\n"),
+            "r.yaml:1:8: sweep: pitch must lie between -90 and 90 degrees");
   EXPECT_EQ(ErrorOf("camera: [1, 2\n").rfind("r.yaml:", 0), 0u);  // YAML syntax errors too
-  EXPECT_EQ(ErrorOf("- just\n- a list\n"), "r.yaml: a recipe is a mapping of sections (parts, sweep, ...)");
+  EXPECT_EQ(ErrorOf("- just\n- a list\n"),
+            "r.yaml: a recipe is a mapping of sections (parts, sweep, ...)");
 }
 
 TEST(Recipe, PartsResolveRelativeToTheRecipe) {
   testing::ScratchDir dir;
   std::ofstream(dir / "part.stp") << "ISO-10303-21;\n";
-  const RunSpec spec =
-      ParseRecipe("parts:\n  - file: part.stp\n    unit: inch\n  - family: washer\n", "r.yaml", dir.path());
+  const RunSpec spec = ParseRecipe(
+      "parts:\n  - file: part.stp\n    unit: inch\n  - family: washer\n", "r.yaml", dir.path());
   ASSERT_EQ(spec.scenes.size(), 1u);
   const std::vector<PartSource>& sources = spec.scenes[0].sources;
   ASSERT_EQ(sources.size(), 2u);
@@ -249,11 +278,13 @@ TEST(Recipe, PartsResolveRelativeToTheRecipe) {
   EXPECT_EQ(spec.scenes[0].arrangement.layout, Layout::kAssembled);
   EXPECT_EQ(ErrorOf("parts:\n  - file: nope.stp\n", dir.path()),
             "r.yaml:2:11: parts[0].file: " + (dir / "nope.stp").string() + ": no such file");
-  EXPECT_EQ(ErrorOf("parts:\n  - file: part.stp\n    unit: cubits\n", dir.path()),
-            "r.yaml:3:11: parts[0].unit: unknown length unit 'cubits' (use um, mm, cm, m, in or ft)");
+  EXPECT_EQ(
+      ErrorOf("parts:\n  - file: part.stp\n    unit: cubits\n", dir.path()),
+      "r.yaml:3:11: parts[0].unit: unknown length unit 'cubits' (use um, mm, cm, m, in or ft)");
   std::ofstream(dir / "notes.txt") << "bolts, nuts\n";
-  EXPECT_NE(ErrorOf("parts:\n  - file: notes.txt\n", dir.path()).find("r.yaml:2:11: parts[0].file: "),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf("parts:\n  - file: notes.txt\n", dir.path()).find("r.yaml:2:11: parts[0].file: "),
+      std::string::npos);
   EXPECT_EQ(ErrorOf("parts:\n  - {family: washer, file: part.stp}\n", dir.path()),
             "r.yaml:2:5: parts[0]: give exactly one of 'file' or 'family'");
   EXPECT_EQ(ErrorOf("parts:\n  - fiel: part.stp\n", dir.path()),
@@ -273,26 +304,30 @@ TEST(Recipe, LoadRecipeNamesTheFile) {
     LoadRecipe(dir / "bad.yaml");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()),
-              (dir / "bad.yaml").string() + ":2:3: unknown key 'output.dirr' (did you mean 'dir'?)");
+    EXPECT_EQ(std::string(e.what()), (dir / "bad.yaml").string() +
+                                         ":2:3: unknown key 'output.dirr' (did you mean 'dir'?)");
   }
 }
 
 TEST(Recipe, ShippedRecipesParse) {
   const bool have_data = std::filesystem::exists(testing::DataDir() / "step");
   int parsed = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes")) {
+  for (const auto& entry : std::filesystem::directory_iterator(
+           std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes")) {
     if (entry.path().extension() != ".yaml") continue;
     std::ifstream in(entry.path());
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!have_data && text.find("shared/data") != std::string::npos) continue;  // needs the shared data
+    if (!have_data && text.find("shared/data") != std::string::npos)
+      continue;  // needs the shared data
     EXPECT_NO_THROW(LoadRecipe(entry.path())) << entry.path();
     ++parsed;
   }
   EXPECT_GE(parsed, 1);
-  const RunSpec paper = LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "paper_sweep.yaml");
+  const RunSpec paper =
+      LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "paper_sweep.yaml");
   EXPECT_EQ(paper.sweep.NumViews(), 3330u);
-  EXPECT_TRUE(paper.bop.paper_layout && paper.bop.pvn3d_meta && paper.bop.grasp_points && paper.bop.coco);
+  EXPECT_TRUE(paper.bop.paper_layout && paper.bop.pvn3d_meta && paper.bop.grasp_points &&
+              paper.bop.coco);
   EXPECT_EQ(paper.bop.test_every, 4);
   EXPECT_EQ(paper.bop.model_points, 3000);
 }

@@ -97,14 +97,16 @@ TEST(ViewSampler, JitterStaysWithinItsBounds) {
   double largest_offset = 0, largest_roll = 0;
   for (size_t i = 0; i < jittered.size(); ++i) {
     const Eigen::Isometry3d& T = jittered[i].world_from_cam;
-    EXPECT_TRUE(T.translation().isApprox(plain[i].world_from_cam.translation(), 1e-12));  // same eye
+    EXPECT_TRUE(
+        T.translation().isApprox(plain[i].world_from_cam.translation(), 1e-12));  // same eye
     EXPECT_NEAR(T.linear().determinant(), 1.0, 1e-12);
     // The optical axis passes within 30 mm of the target.
     const Eigen::Vector3d in_cam = T.inverse() * sweep.target;
     const double offset = in_cam.head<2>().norm();
     EXPECT_LE(offset, 30.0 + 1e-9);
     largest_offset = std::max(largest_offset, offset);
-    if (sweep.pitch_rad[i / 8] < 80 * kDeg) {  // away from straight down, roll is the tilt of image x
+    if (sweep.pitch_rad[i / 8] <
+        80 * kDeg) {  // away from straight down, roll is the tilt of image x
       largest_roll = std::max(largest_roll, std::asin(std::abs(T.linear().col(0).z())));
       EXPECT_LE(std::asin(std::abs(T.linear().col(0).z())), 10 * kDeg + 1e-6);
     }

@@ -43,7 +43,8 @@ class ReferenceCaster {
       const Mesh& mesh = parts[scene.instances[i].part].mesh;
       const Eigen::Isometry3d& T = scene.instances[i].world_from_model;
       std::vector<Eigen::Vector3f> world;
-      for (const Eigen::Vector3f& p : mesh.positions) world.push_back((T * p.cast<double>()).cast<float>());
+      for (const Eigen::Vector3f& p : mesh.positions)
+        world.push_back((T * p.cast<double>()).cast<float>());
       std::vector<uint32_t> indices;
       for (const auto& t : mesh.triangles) indices.insert(indices.end(), {t[0], t[1], t[2]});
       Add(world, indices, static_cast<unsigned>(i + 1));
@@ -60,7 +61,8 @@ class ReferenceCaster {
   // The first hit of the ray through image point (x, y) (pixel centres at u + 0.5).
   Hit Cast(const Camera& camera, double x, double y) const {
     const Intrinsics& k = camera.intrinsics;
-    const Eigen::Vector3d d = camera.world_from_cam.linear() * Eigen::Vector3d((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1);
+    const Eigen::Vector3d d =
+        camera.world_from_cam.linear() * Eigen::Vector3d((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1);
     const Eigen::Vector3d o = camera.world_from_cam.translation();
     RTCRayHit rh;
     rh.ray.org_x = static_cast<float>(o.x());
@@ -88,15 +90,16 @@ class ReferenceCaster {
   }
 
  private:
-  void Add(const std::vector<Eigen::Vector3f>& positions, const std::vector<uint32_t>& indices, unsigned id) {
+  void Add(const std::vector<Eigen::Vector3f>& positions, const std::vector<uint32_t>& indices,
+           unsigned id) {
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), positions.size()));
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), positions.size()));
     for (size_t i = 0; i < positions.size(); ++i) {
       for (int c = 0; c < 3; ++c) v[3 * i + c] = positions[i][c];
     }
-    auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                             3 * sizeof(uint32_t), indices.size() / 3));
+    auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), indices.size() / 3));
     std::copy(indices.begin(), indices.end(), t);
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(scene_, g, id);
@@ -115,8 +118,8 @@ struct Comparison {
   std::string first_wrong;
 };
 
-Comparison CompareEveryPixel(const Renderer& renderer, const ReferenceCaster& reference, const Camera& camera,
-                             const std::string& view) {
+Comparison CompareEveryPixel(const Renderer& renderer, const ReferenceCaster& reference,
+                             const Camera& camera, const std::string& view) {
   const Frame frame = renderer.Render(camera);
   const int w = camera.intrinsics.width, h = camera.intrinsics.height;
   Comparison c;
@@ -125,13 +128,15 @@ Comparison CompareEveryPixel(const Renderer& renderer, const ReferenceCaster& re
       const size_t p = static_cast<size_t>(v) * w + u;
       ++c.pixels;
       const Hit got{frame.instance[p], frame.depth[p]};
-      if (got.owner > 0 && frame.instances[got.owner - 1].amodal_mask[p] == 0) ++c.mask_outside_amodal;
+      if (got.owner > 0 && frame.instances[got.owner - 1].amodal_mask[p] == 0)
+        ++c.mask_outside_amodal;
       const Hit want = reference.Cast(camera, u + 0.5, v + 0.5);
       if (Same(got, want, kDepthTolMm)) continue;
       // A tie: the reference, moved by kTiePx, gives the renderer's answer (the depth allowed to
       // change along the surface by as much as the move can make it).
       bool tie = false;
-      for (const auto& [du, dv] : {std::pair{kTiePx, 0.0}, {-kTiePx, 0.0}, {0.0, kTiePx}, {0.0, -kTiePx}}) {
+      for (const auto& [du, dv] :
+           {std::pair{kTiePx, 0.0}, {-kTiePx, 0.0}, {0.0, kTiePx}, {0.0, -kTiePx}}) {
         tie = tie || Same(got, reference.Cast(camera, u + 0.5 + du, v + 0.5 + dv), 0.5);
       }
       if (tie) {
@@ -139,8 +144,9 @@ Comparison CompareEveryPixel(const Renderer& renderer, const ReferenceCaster& re
         continue;
       }
       if (c.wrong++ == 0) {
-        c.first_wrong = view + " pixel (" + std::to_string(u) + ", " + std::to_string(v) + "): rendered owner " +
-                        std::to_string(got.owner) + " at " + std::to_string(got.depth) + " mm, reference owner " +
+        c.first_wrong = view + " pixel (" + std::to_string(u) + ", " + std::to_string(v) +
+                        "): rendered owner " + std::to_string(got.owner) + " at " +
+                        std::to_string(got.depth) + " mm, reference owner " +
                         std::to_string(want.owner) + " at " + std::to_string(want.depth) + " mm";
       }
     }
@@ -186,9 +192,10 @@ TEST(ExactLabels, EveryPixelMatchesRobustSingleRays) {
     for (const double pitch_deg : {90.0, 60.0, 30.0, 8.0}) {
       for (int yaw_deg = 0; yaw_deg < 360; yaw_deg += pitch_deg == 90.0 ? 45 : 60) {
         Camera camera;
-        camera.world_from_cam = WorldFromCamOnSphere(target, yaw_deg * M_PI / 180.0, pitch_deg * M_PI / 180.0, radius);
-        const std::string view = "radius " + std::to_string(radius) + " pitch " + std::to_string(pitch_deg) +
-                                 " yaw " + std::to_string(yaw_deg);
+        camera.world_from_cam =
+            WorldFromCamOnSphere(target, yaw_deg * M_PI / 180.0, pitch_deg * M_PI / 180.0, radius);
+        const std::string view = "radius " + std::to_string(radius) + " pitch " +
+                                 std::to_string(pitch_deg) + " yaw " + std::to_string(yaw_deg);
         const Comparison c = CompareEveryPixel(renderer, reference, camera, view);
         total.pixels += c.pixels;
         total.ties += c.ties;
@@ -200,9 +207,12 @@ TEST(ExactLabels, EveryPixelMatchesRobustSingleRays) {
     }
   }
   EXPECT_EQ(total.wrong, 0) << "first: " << total.first_wrong;
-  EXPECT_EQ(total.mask_outside_amodal, 0) << "visible pixels outside their instance's full silhouette";
-  EXPECT_LE(total.ties, total.pixels / 100000) << "silhouette-edge ties in " << total.pixels << " pixels";
-  std::cout << views << " views, " << total.pixels << " pixels, " << total.ties << " silhouette ties\n";
+  EXPECT_EQ(total.mask_outside_amodal, 0)
+      << "visible pixels outside their instance's full silhouette";
+  EXPECT_LE(total.ties, total.pixels / 100000)
+      << "silhouette-edge ties in " << total.pixels << " pixels";
+  std::cout << views << " views, " << total.pixels << " pixels, " << total.ties
+            << " silhouette ties\n";
 }
 
 }  // namespace

@@ -38,7 +38,8 @@ TEST(Renderer, DepthOfATiltedFloorIsTheCameraZ) {
   int checked = 0;
   for (int v = 0; v < k.height; ++v) {
     for (int u = 0; u < k.width; ++u) {
-      const Eigen::Vector3d d = T.linear() * Eigen::Vector3d((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy, 1.0);
+      const Eigen::Vector3d d =
+          T.linear() * Eigen::Vector3d((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy, 1.0);
       const float depth = frame.depth[v * k.width + u];
       if (d.z() >= 0) {
         EXPECT_EQ(depth, 0.0f);  // above the horizon: no return
@@ -56,7 +57,8 @@ TEST(Renderer, DepthOfATiltedFloorIsTheCameraZ) {
 
 TEST(Renderer, DepthOfASphereMatchesTheAnalyticIntersection) {
   const double r = 50.0;
-  const std::vector<Part> parts = {MakePart("ball", MakeSphere(r), TessellationOptions{0.004, 0.1})};
+  const std::vector<Part> parts = {
+      MakePart("ball", MakeSphere(r), TessellationOptions{0.004, 0.1})};
   Scene scene;
   scene.floor = false;
   const Eigen::Vector3d centre(12.0, -7.0, 50.0);
@@ -147,13 +149,14 @@ TEST(Renderer, FrontObjectOwnsThePixelAndTheHiddenOneKeepsItsFullMask) {
 TEST(Renderer, PosesComposeFromCameraAndInstance) {
   const std::vector<Part> parts = {MakePart("box", MakeBox(30, 20, 10), TessellationOptions{})};
   Scene scene;
-  scene.instances = {Instance{0, "b", Eigen::Translation3d(40, 10, 5) *
-                                          Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ())}};
+  scene.instances = {Instance{
+      0, "b", Eigen::Translation3d(40, 10, 5) * Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ())}};
   const Renderer renderer(parts, scene);
   Camera camera;
   camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 1.1, 0.8, 900.0);
   const Frame frame = renderer.Render(camera);
-  const Eigen::Isometry3d expected = camera.world_from_cam.inverse() * scene.instances[0].world_from_model;
+  const Eigen::Isometry3d expected =
+      camera.world_from_cam.inverse() * scene.instances[0].world_from_model;
   EXPECT_TRUE(frame.instances[0].cam_from_model.isApprox(expected, 1e-12));
   // And the model origin projects into the silhouette.
   const Eigen::Vector3d o = frame.instances[0].cam_from_model.translation();
@@ -233,9 +236,9 @@ TEST(Renderer, ShadowFallsWhereGeometrySays) {
   EXPECT_EQ(grey(110, 0), shadowed);
   EXPECT_EQ(grey(85, 15), shadowed);
   EXPECT_EQ(grey(135, -15), shadowed);
-  EXPECT_EQ(grey(110, 30), lit);   // beside the shadow
-  EXPECT_EQ(grey(150, 0), lit);    // beyond it
-  EXPECT_EQ(grey(60, 0), lit);     // between the box and its shadow
+  EXPECT_EQ(grey(110, 30), lit);  // beside the shadow
+  EXPECT_EQ(grey(150, 0), lit);   // beyond it
+  EXPECT_EQ(grey(60, 0), lit);    // between the box and its shadow
   scene.shadows = false;
   const Frame unshadowed = Renderer(parts, scene).Render(camera);
   int u;
@@ -247,7 +250,8 @@ TEST(Renderer, PointLightFollowsTheCosine) {
   Scene scene;  // floor only
   scene.floor_color = Eigen::Vector3f(1, 1, 1);
   scene.ambient = 0.0f;
-  scene.lights = {Scene::Light{Scene::Light::Kind::kPoint, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 300), 1.0f}};
+  scene.lights = {Scene::Light{Scene::Light::Kind::kPoint, Eigen::Vector3d::Zero(),
+                               Eigen::Vector3d(0, 0, 300), 1.0f}};
   Camera camera;
   camera.world_from_cam = LookingDown({0, 0, 1000});
   const Frame frame = Renderer({}, scene).Render(camera);
@@ -291,7 +295,7 @@ TEST(Renderer, ClipNormalsAndSupersampling) {
   EXPECT_EQ(smooth.instance, plain.instance);
   int differing = 0;
   for (size_t p = 0; p < plain.rgb.size(); ++p) differing += plain.rgb[p] != smooth.rgb[p];
-  EXPECT_GT(differing, 100);                          // edge pixels blend box and floor
+  EXPECT_GT(differing, 100);                         // edge pixels blend box and floor
   EXPECT_LT(differing, int(plain.rgb.size()) / 20);  // interiors stay as they were
   RenderOptions bad;
   bad.near_mm = 10;
@@ -308,7 +312,9 @@ TEST(Renderer, RejectsInstancesOfMissingParts) {
 // Embree's kernel width is a setting: never wider than asked for, never wider than the CPU's.
 TEST(Renderer, KernelWidthFollowsTheSettingAndTheCpu) {
   const std::vector<std::string> order = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
-  const auto rank = [&](const std::string& isa) { return std::find(order.begin(), order.end(), isa) - order.begin(); };
+  const auto rank = [&](const std::string& isa) {
+    return std::find(order.begin(), order.end(), isa) - order.begin();
+  };
   const std::string widest = TracingIsa("auto");
   ASSERT_LT(rank(widest), 5) << widest;
   for (const std::string& isa : order) {

@@ -30,7 +30,8 @@ TEST(Deploy, KubernetesIndexedJobShardsAndMergeAgree) {
   std::string line;
   for (const YAML::Node& word : command) line += word.as<std::string>() + " ";
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(line, m, std::regex(R"(--shard \"\$JOB_COMPLETION_INDEX/(\d+)\")"))) << line;
+  ASSERT_TRUE(std::regex_search(line, m, std::regex(R"(--shard \"\$JOB_COMPLETION_INDEX/(\d+)\")")))
+      << line;
   EXPECT_EQ(std::stoi(m[1]), completions) << "the /N in the command must equal completions";
   ASSERT_TRUE(std::regex_search(line, m, std::regex(R"(-o (\S+))"))) << line;
   const std::string dir = m[1];
@@ -44,13 +45,16 @@ TEST(Deploy, KubernetesIndexedJobShardsAndMergeAgree) {
 TEST(Deploy, SlurmScriptsCallGenerateWithAShardAndMerge) {
   const std::string generate = ReadText(kSource + "/tools/slurm/generate.sbatch");
   const std::string merge = ReadText(kSource + "/tools/slurm/merge.sbatch");
-  EXPECT_NE(generate.find("generate \"$recipe\" --shard \"$index/$count\" -o \"$out\""), std::string::npos);
+  EXPECT_NE(generate.find("generate \"$recipe\" --shard \"$index/$count\" -o \"$out\""),
+            std::string::npos);
   EXPECT_NE(generate.find("--progress=json"), std::string::npos);
   EXPECT_NE(merge.find("merge \"$1\""), std::string::npos);
   // The README shows the two commands a user types.
   const std::string readme = ReadText(kSource + "/README.md");
-  EXPECT_NE(readme.find("sbatch --parsable --array=0-99 tools/slurm/generate.sbatch"), std::string::npos);
-  EXPECT_NE(readme.find("sbatch --dependency=afterok:$jobid tools/slurm/merge.sbatch"), std::string::npos);
+  EXPECT_NE(readme.find("sbatch --parsable --array=0-99 tools/slurm/generate.sbatch"),
+            std::string::npos);
+  EXPECT_NE(readme.find("sbatch --dependency=afterok:$jobid tools/slurm/merge.sbatch"),
+            std::string::npos);
 }
 
 }  // namespace

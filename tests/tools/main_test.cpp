@@ -1,16 +1,16 @@
 // The command line as a user meets it: exit codes, one clear error line, nothing half-written.
-#include <sys/wait.h>
 #include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <map>
-#include <random>
-#include <thread>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <random>
 #include <sstream>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -19,8 +19,8 @@
 
 namespace {
 
-using cadsynth::testing::CliRun;
 using cadsynth::testing::Cadsynth;
+using cadsynth::testing::CliRun;
 using cadsynth::testing::ScratchDir;
 
 size_t Lines(const std::string& text) { return std::count(text.begin(), text.end(), '\n'); }
@@ -37,7 +37,8 @@ TEST(Cli, HelpVersionAndUsageErrors) {
   EXPECT_EQ(Cadsynth("generate --progress=fancy", dir).code, 2);
   EXPECT_EQ(Cadsynth("generate --progressx", dir).err,
             "error: unknown option '--progressx'\n(run 'cadsynth generate --help' for usage)\n");
-  EXPECT_EQ(Cadsynth("merge", dir).err, "error: DIR is required\n(run 'cadsynth merge --help' for usage)\n");
+  EXPECT_EQ(Cadsynth("merge", dir).err,
+            "error: DIR is required\n(run 'cadsynth merge --help' for usage)\n");
 }
 
 // Every subcommand describes its own options.
@@ -56,7 +57,8 @@ TEST(Cli, EverySubcommandHasHelp) {
       const CliRun run = Cadsynth(command + " " + flag, dir);
       EXPECT_EQ(run.code, 0) << command << " " << flag << ": " << run.err;
       EXPECT_NE(run.out.find("Usage: cadsynth " + command), std::string::npos) << run.out;
-      for (const std::string& name : names) EXPECT_NE(run.out.find(name), std::string::npos) << command << ": " << name;
+      for (const std::string& name : names)
+        EXPECT_NE(run.out.find(name), std::string::npos) << command << ": " << name;
     }
   }
   EXPECT_NE(Cadsynth("--help", dir).out.find("cadsynth COMMAND --help"), std::string::npos);
@@ -82,7 +84,8 @@ TEST(Cli, UnknownKeyNamesFileLineAndColumn) {
 TEST(Cli, FileThatIsNotStepFailsCleanly) {
   ScratchDir dir;
   std::ofstream(dir / "notes.stp") << "shopping list: bolts, nuts\n";
-  std::ofstream(dir / "r.yaml") << "parts:\n  - file: notes.stp\nsweep: {yaw: 0, pitch: 45, radius: 1 m}\n";
+  std::ofstream(dir / "r.yaml")
+      << "parts:\n  - file: notes.stp\nsweep: {yaw: 0, pitch: 45, radius: 1 m}\n";
   const CliRun run = Cadsynth("generate r.yaml -o out", dir);
   EXPECT_EQ(run.code, 1);
   EXPECT_EQ(Lines(run.err), 1u) << run.err;
@@ -108,9 +111,12 @@ TEST(Cli, GenerateWithoutArgumentsWritesTheDefaultDataset) {
   ScratchDir dir;
   const CliRun run = Cadsynth("generate --quiet", dir);
   ASSERT_EQ(run.code, 0) << run.err;
-  EXPECT_NE(run.out.find("wrote 432 frames (3 scenes) of 13 objects"), std::string::npos) << run.out;
-  EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000002" / "scene_gt.json"));
-  EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000000" / "rgb" / "000143.png"));
+  EXPECT_NE(run.out.find("wrote 432 frames (3 scenes) of 13 objects"), std::string::npos)
+      << run.out;
+  EXPECT_TRUE(
+      std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000002" / "scene_gt.json"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "cadsynth_dataset" / "train" / "000000" / "rgb" /
+                                      "000143.png"));
   const CliRun again = Cadsynth("generate --quiet", dir);
   EXPECT_EQ(again.code, 1);
   EXPECT_NE(again.err.find("already exists (pass --overwrite"), std::string::npos);
@@ -136,10 +142,11 @@ TEST(Cli, EvalAndPreviewErrorsAreOneLine) {
 // dataset has the same files, byte for byte, as a run that was never interrupted.
 TEST(Cli, KilledRunsResumeToTheSameBytes) {
   ScratchDir dir;
-  std::ofstream(dir / "r.yaml") << "camera: {preset: kinect_v1, width: 320, height: 240, fx: 262.5, fy: 262.5,\n"
-                                   "         cx: 159.5, cy: 119.5}\n"
-                                   "sweep: {yaw: {from: 0, to: 350, step: 10}, pitch: [20, 50, 80], radius: 0.8 m}\n"
-                                   "output: {formats: [bop, coco, paper, grasp]}\n";
+  std::ofstream(dir / "r.yaml")
+      << "camera: {preset: kinect_v1, width: 320, height: 240, fx: 262.5, fy: 262.5,\n"
+         "         cx: 159.5, cy: 119.5}\n"
+         "sweep: {yaw: {from: 0, to: 350, step: 10}, pitch: [20, 50, 80], radius: 0.8 m}\n"
+         "output: {formats: [bop, coco, paper, grasp]}\n";
   ASSERT_EQ(Cadsynth("generate r.yaml -o whole --quiet", dir).code, 0);
 
   std::mt19937 rng(std::random_device{}());
@@ -154,7 +161,8 @@ TEST(Cli, KilledRunsResumeToTheSameBytes) {
       ::chdir(dir.path().c_str());
       ::freopen("/dev/null", "w", stdout);
       ::freopen("/dev/null", "w", stderr);
-      ::execl(CADSYNTH_EXE, CADSYNTH_EXE, "generate", "r.yaml", "-o", "resumed", "--quiet", static_cast<char*>(nullptr));
+      ::execl(CADSYNTH_EXE, CADSYNTH_EXE, "generate", "r.yaml", "-o", "resumed", "--quiet",
+              static_cast<char*>(nullptr));
       ::_exit(127);
     }
     const int ms = delay_ms(rng);

@@ -27,7 +27,8 @@ Fixture Kit() {
   f.parts.push_back(MakePart("plate", MakeBox(100, 60, 10), TessellationOptions{}));
   f.parts.push_back(MakePart("cylinder", MakeCylinder(10, 40), TessellationOptions{0.05, 0.2}));
   f.parts.push_back(MakePart("cube", MakeBox(30, 30, 30), TessellationOptions{}));
-  const Eigen::Isometry3d tilted = Eigen::Translation3d(300, -200, 50) * Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 1, 0).normalized());
+  const Eigen::Isometry3d tilted = Eigen::Translation3d(300, -200, 50) *
+                                   Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 1, 0).normalized());
   for (int i = 0; i < 3; ++i) {
     f.instances.push_back({i, f.parts[i].name, tilted * f.parts[i].cad_from_model});
     f.group.push_back(i);
@@ -65,7 +66,8 @@ void ExpectResting(const Fixture& f, const Arrangement& a) {
     EXPECT_TRUE(contact.exteriorDistance(com) < 0.05) << i << ": " << com.transpose();
     // Nothing intersects anything else.
     for (size_t j = i + 1; j < a.instances.size(); ++j) {
-      const SurfaceMesh mi = Placed(part, a.instances[i]), mj = Placed(f.parts[a.instances[j].part], a.instances[j]);
+      const SurfaceMesh mi = Placed(part, a.instances[i]),
+                        mj = Placed(f.parts[a.instances[j].part], a.instances[j]);
       EXPECT_FALSE(CGAL::Polygon_mesh_processing::do_intersect(mi, mj)) << i << " and " << j;
     }
   }
@@ -83,8 +85,10 @@ TEST(Arrange, StablePosesInARow) {
   // Lying on a flat of its tessellated side, within the 0.05 mm deflection of 20 mm tall.
   EXPECT_NEAR(f.parts[1].mesh.Bounds(a.instances[1].world_from_model).sizes().z(), 20.0, 0.05);
   std::vector<Eigen::AlignedBox3d> boxes;
-  for (const Instance& i : a.instances) boxes.push_back(f.parts[i.part].mesh.Bounds(i.world_from_model));
-  for (size_t i = 1; i < boxes.size(); ++i) EXPECT_NEAR(boxes[i].min().x() - boxes[i - 1].max().x(), 25.0, 1e-4);
+  for (const Instance& i : a.instances)
+    boxes.push_back(f.parts[i.part].mesh.Bounds(i.world_from_model));
+  for (size_t i = 1; i < boxes.size(); ++i)
+    EXPECT_NEAR(boxes[i].min().x() - boxes[i - 1].max().x(), 25.0, 1e-4);
 }
 
 TEST(Arrange, AssembledRestsTheWholeAsOneBody) {
@@ -93,15 +97,18 @@ TEST(Arrange, AssembledRestsTheWholeAsOneBody) {
   o.pose = PoseMode::kAsDesigned;
   const Arrangement as_designed = Arrange(f.parts, f.instances, o, f.group);
   // As designed: the instances keep their relative poses.
-  const Eigen::Isometry3d shift = as_designed.instances[0].world_from_model * f.instances[0].world_from_model.inverse();
+  const Eigen::Isometry3d shift =
+      as_designed.instances[0].world_from_model * f.instances[0].world_from_model.inverse();
   EXPECT_TRUE(shift.linear().isIdentity(1e-12));
   for (size_t i = 0; i < 3; ++i) {
-    EXPECT_TRUE((shift * f.instances[i].world_from_model).isApprox(as_designed.instances[i].world_from_model, 1e-9));
+    EXPECT_TRUE((shift * f.instances[i].world_from_model)
+                    .isApprox(as_designed.instances[i].world_from_model, 1e-9));
   }
   o.pose = PoseMode::kStable;
   const Arrangement stable = Arrange(f.parts, f.instances, o, f.group);
   Eigen::AlignedBox3d all;
-  for (const Instance& i : stable.instances) all.extend(f.parts[i.part].mesh.Bounds(i.world_from_model));
+  for (const Instance& i : stable.instances)
+    all.extend(f.parts[i.part].mesh.Bounds(i.world_from_model));
   EXPECT_NEAR(all.min().z(), 0.0, 1e-6);
   EXPECT_NEAR(all.center().x(), 0.0, 1e-6);
 }

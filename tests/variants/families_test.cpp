@@ -28,7 +28,8 @@ TEST(Families, ParametersAreCheckedByNameAndKind) {
     CompleteParams(gear, {{"teth", 12.0}});
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "family 'spur_gear' has no parameter 'teth' (did you mean 'teeth'?)");
+    EXPECT_EQ(std::string(e.what()),
+              "family 'spur_gear' has no parameter 'teth' (did you mean 'teeth'?)");
   }
   EXPECT_THROW(CompleteParams(gear, {{"teeth", std::string("many")}}), Error);
   EXPECT_THROW(CompleteParams(gear, {{"teeth", 12.5}}), Error);
@@ -47,20 +48,29 @@ TEST(Families, ParametersAreCheckedByNameAndKind) {
 TEST(ScaleVariant, UniformPerAxisAndMeshes) {
   testing::ScratchDir dir;
   const Eigen::Isometry3d turned(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
-  WriteStep(dir / "blocks.step", "blocks",
-            {StepComponent{"block", MakeBox(10, 20, 30), {Eigen::Isometry3d::Identity(), Eigen::Translation3d(50, 0, 0) * turned}}});
+  WriteStep(
+      dir / "blocks.step", "blocks",
+      {StepComponent{"block",
+                     MakeBox(10, 20, 30),
+                     {Eigen::Isometry3d::Identity(), Eigen::Translation3d(50, 0, 0) * turned}}});
   const FamilyInfo& scaled = *FindFamily("scaled");
   const auto build = [&](double s, double sx, double sy, double sz) {
     return BuildVariant(scaled,
-                        CompleteParams(scaled, {{"file", (dir / "blocks.step").string()}, {"scale", s},
-                                                {"scale_x", sx}, {"scale_y", sy}, {"scale_z", sz}}),
+                        CompleteParams(scaled, {{"file", (dir / "blocks.step").string()},
+                                                {"scale", s},
+                                                {"scale_x", sx},
+                                                {"scale_y", sy},
+                                                {"scale_z", sz}}),
                         ImportOptions{});
   };
   const Assembly twice = build(2, 1, 1, 1);
   ASSERT_EQ(twice.parts.size(), 1u);  // uniform: still one part, two instances
   ASSERT_EQ(twice.instances.size(), 2u);
   EXPECT_NEAR(twice.parts[0].mass.volume_mm3, 8 * 6000.0, 1e-6);
-  EXPECT_TRUE(twice.parts[0].mesh.Bounds(twice.instances[1].world_from_model).min().isApprox(Eigen::Vector3d(60, 0, 0), 1e-4));
+  EXPECT_TRUE(twice.parts[0]
+                  .mesh.Bounds(twice.instances[1].world_from_model)
+                  .min()
+                  .isApprox(Eigen::Vector3d(60, 0, 0), 1e-4));
 
   // Stretched along x: the turned copy stretches along its own y, so it is a part of its own.
   const Assembly stretched = build(1, 2, 1, 1);
@@ -68,7 +78,8 @@ TEST(ScaleVariant, UniformPerAxisAndMeshes) {
   for (const Instance& i : stretched.instances) {
     EXPECT_NEAR(stretched.parts[i.part].mass.volume_mm3, 2 * 6000.0, 1e-6);
   }
-  const Eigen::Vector3d a = stretched.parts[0].mesh.Bounds().sizes(), b = stretched.parts[1].mesh.Bounds().sizes();
+  const Eigen::Vector3d a = stretched.parts[0].mesh.Bounds().sizes(),
+                        b = stretched.parts[1].mesh.Bounds().sizes();
   EXPECT_TRUE(a.isApprox(Eigen::Vector3d(20, 20, 30), 1e-5)) << a.transpose();
   EXPECT_TRUE(b.isApprox(Eigen::Vector3d(40, 10, 30), 1e-5)) << b.transpose();
 }

@@ -44,7 +44,8 @@ int CountTeeth(const std::vector<Eigen::Vector2d>& section, double pitch_radius,
                double max_radius = 1e300) {
   std::vector<std::pair<double, double>> polar;
   for (const auto& p : section) {
-    if (p.norm() > 0.5 * pitch_radius && p.norm() < max_radius) polar.emplace_back(std::atan2(p.y(), p.x()), p.norm());
+    if (p.norm() > 0.5 * pitch_radius && p.norm() < max_radius)
+      polar.emplace_back(std::atan2(p.y(), p.x()), p.norm());
   }
   std::sort(polar.begin(), polar.end());
   int climbs = 0;
@@ -138,7 +139,8 @@ TEST(Gear, HelicalGearHasTheSpurVolume) {
   o.helix_angle_rad = 20.0 * M_PI / 180.0;
   const Shape helical = MakeGear(o);
   const double area = PolygonArea(GearOutline(o, 400));  // transverse section is constant
-  EXPECT_NEAR(ComputeMassProperties(helical).volume_mm3, area * o.face_width_mm, 0.005 * area * o.face_width_mm);
+  EXPECT_NEAR(ComputeMassProperties(helical).volume_mm3, area * o.face_width_mm,
+              0.005 * area * o.face_width_mm);
   const Mesh mesh = Tessellate(helical, TessellationOptions{0.02, 0.2});
   EXPECT_EQ(CountTeeth(Section(mesh, 0.8 * o.face_width_mm), o.PitchRadius()), 18);
 }

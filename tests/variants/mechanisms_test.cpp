@@ -30,7 +30,8 @@ TEST(GearPair, MeshesAtTheCentreDistanceWithoutInterference) {
   EXPECT_LT(Overlap(pair, 0, 1), 1e-6 * Volume(pair, 0));
   // Half a pitch off, teeth sit in teeth: the check would see it.
   ShapeAssembly wrong = pair;
-  wrong.placements[1].pose = wrong.placements[1].pose * Eigen::AngleAxisd(M_PI / 31, Eigen::Vector3d::UnitZ());
+  wrong.placements[1].pose =
+      wrong.placements[1].pose * Eigen::AngleAxisd(M_PI / 31, Eigen::Vector3d::UnitZ());
   EXPECT_GT(Overlap(wrong, 0, 1), 10.0);
 }
 
@@ -73,7 +74,8 @@ TEST(Planetary, EveryMeshEngagesWithoutInterference) {
   EXPECT_LT(Overlap(box, carrier, 1), 1e-3);  // the pin passes through the planet's bore
   // A planet turned by half a pitch collides with sun and ring.
   ShapeAssembly wrong = box;
-  wrong.placements[2].pose = wrong.placements[2].pose * Eigen::AngleAxisd(M_PI / 18, Eigen::Vector3d::UnitZ());
+  wrong.placements[2].pose =
+      wrong.placements[2].pose * Eigen::AngleAxisd(M_PI / 18, Eigen::Vector3d::UnitZ());
   EXPECT_GT(Overlap(wrong, sun, 2), 10.0);
 }
 
@@ -95,7 +97,9 @@ TEST(Planetary, RefusesSetsThatCannotBeAssembled) {
   o.planets = 5;  // (18 + 54) / 5 = 14.4
   std::string why;
   EXPECT_FALSE(o.Check(&why));
-  EXPECT_EQ(why, "planets cannot be spaced evenly: (z_sun + z_ring) / planets = (18 + 54) / 5 is not a whole number");
+  EXPECT_EQ(why,
+            "planets cannot be spaced evenly: (z_sun + z_ring) / planets = (18 + 54) / 5 is not a "
+            "whole number");
   EXPECT_THROW(MakePlanetary(o), Error);
   o.planets = 6;  // 72 / 6 = 12 but six 30 mm planets on a 27 mm circle collide
   EXPECT_FALSE(o.Check(&why));
@@ -111,12 +115,17 @@ TEST(SliderCrank, PinsLineUpAndNothingCollides) {
     const Eigen::Isometry3d& rod = s.placements[2].pose;
     const Eigen::Isometry3d& slider = s.placements[3].pose;
     // Crank pin = rod's first hole; rod's second hole = slider centre (in the plane).
-    EXPECT_TRUE((crank * Eigen::Vector3d(o.crank_mm, 0, 0)).head<2>().isApprox(rod.translation().head<2>(), 1e-9));
-    EXPECT_TRUE((rod * Eigen::Vector3d(o.rod_mm, 0, 0)).head<2>().isApprox(slider.translation().head<2>(), 1e-9));
+    EXPECT_TRUE((crank * Eigen::Vector3d(o.crank_mm, 0, 0))
+                    .head<2>()
+                    .isApprox(rod.translation().head<2>(), 1e-9));
+    EXPECT_TRUE((rod * Eigen::Vector3d(o.rod_mm, 0, 0))
+                    .head<2>()
+                    .isApprox(slider.translation().head<2>(), 1e-9));
     EXPECT_NEAR(slider.translation().y(), 0.0, 1e-12);
     EXPECT_NEAR(slider.translation().x(), o.SliderX(), 1e-12);
     for (int i = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j) EXPECT_LT(Overlap(s, i, j), 1e-6) << angle << ": " << i << " " << j;
+      for (int j = i + 1; j < 4; ++j)
+        EXPECT_LT(Overlap(s, i, j), 1e-6) << angle << ": " << i << " " << j;
     }
   }
   SliderCrankOptions o;

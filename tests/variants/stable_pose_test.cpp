@@ -81,13 +81,15 @@ TEST(StablePoses, UnstableFacesTipOntoTheirNeighbours) {
   Mesh post = Tessellate(MakeBox(10, 10, 30), TessellationOptions{});
   l.Append(post);
   // Centre of mass: bar (4000 mm3 at (20, 5, 5)) and post (3000 mm3 at (5, 5, 15)) minus the
-  // shared cube (1000 mm3 at (5, 5, 5)): (80000 + 15000 - 5000, 30000, 20000 + 45000 - 5000) / 6000.
+  // shared cube (1000 mm3 at (5, 5, 5)): (80000 + 15000 - 5000, 30000, 20000 + 45000 - 5000) /
+  // 6000.
   const Eigen::Vector3d com(15.0, 5.0, 10.0);
   const auto poses = StablePoses(Points(l), com);
   EXPECT_NEAR(Sum(poses), 1.0, 1e-9);
   bool on_bar_bottom = false, on_post_side = false;
   for (const StablePose& p : poses) {
-    EXPECT_FALSE(p.normal.isApprox(Eigen::Vector3d(0, 0, 1), 1e-9)) << "the post top cannot hold it";
+    EXPECT_FALSE(p.normal.isApprox(Eigen::Vector3d(0, 0, 1), 1e-9))
+        << "the post top cannot hold it";
     on_bar_bottom = on_bar_bottom || p.normal.isApprox(Eigen::Vector3d(0, 0, -1), 1e-9);
     // The post's outer side (x = 0) is 10 x 30 mm; the centre of mass (z = 10) projects inside.
     on_post_side = on_post_side || p.normal.isApprox(Eigen::Vector3d(-1, 0, 0), 1e-9);
@@ -97,7 +99,8 @@ TEST(StablePoses, UnstableFacesTipOntoTheirNeighbours) {
 }
 
 TEST(StablePoses, RejectsFlatInput) {
-  EXPECT_THROW(StablePoses({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, Eigen::Vector3d::Zero()), Error);
+  EXPECT_THROW(StablePoses({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, Eigen::Vector3d::Zero()),
+               Error);
 }
 
 }  // namespace

@@ -16,17 +16,22 @@ double Volume(const Component& c) { return ComputeMassProperties(c.shape).volume
 void ExpectSymmetriesHold(const Component& c, double tolerance = 0.05) {
   const Mesh mesh = Tessellate(c.shape, kFine);  // CAD frame, where the symmetries are declared
   for (size_t i = 0; i < c.symmetries.discrete.size(); ++i) {
-    EXPECT_LT(MaxSurfaceDistance(mesh, mesh, c.symmetries.discrete[i]), tolerance) << c.name << " discrete " << i;
+    EXPECT_LT(MaxSurfaceDistance(mesh, mesh, c.symmetries.discrete[i]), tolerance)
+        << c.name << " discrete " << i;
   }
   for (const auto& axis : c.symmetries.continuous) {
     for (double angle : {0.3, 1.7, 4.0}) {
-      const Eigen::Isometry3d turn =
-          Eigen::Translation3d(axis.offset) * Eigen::AngleAxisd(angle, axis.direction) * Eigen::Translation3d(-axis.offset);
-      EXPECT_LT(MaxSurfaceDistance(mesh, mesh, turn), tolerance) << c.name << " continuous " << angle;
+      const Eigen::Isometry3d turn = Eigen::Translation3d(axis.offset) *
+                                     Eigen::AngleAxisd(angle, axis.direction) *
+                                     Eigen::Translation3d(-axis.offset);
+      EXPECT_LT(MaxSurfaceDistance(mesh, mesh, turn), tolerance)
+          << c.name << " continuous " << angle;
     }
   }
   // And something that is not a symmetry is caught: a small turn about a tilted axis.
-  EXPECT_GT(MaxSurfaceDistance(mesh, mesh, Eigen::Isometry3d(Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 0, 1).normalized()))),
+  EXPECT_GT(MaxSurfaceDistance(
+                mesh, mesh,
+                Eigen::Isometry3d(Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 0, 1).normalized()))),
             tolerance)
       << c.name;
 }
@@ -41,7 +46,8 @@ TEST(IsoParts, HexBoltHeadAndShankHaveTheTableDimensions) {
     EXPECT_NEAR(size.x(), 2 * m.s / std::sqrt(3.0), 1e-5) << name;  // across corners
     EXPECT_NEAR(size.z(), m.k + 40, 1e-5) << name;
     const double hexagon = std::sqrt(3.0) / 2 * m.s * m.s;
-    EXPECT_NEAR(Volume(bolt), hexagon * m.k + M_PI * m.d * m.d / 4 * 40, 1e-6 * Volume(bolt)) << name;
+    EXPECT_NEAR(Volume(bolt), hexagon * m.k + M_PI * m.d * m.d / 4 * 40, 1e-6 * Volume(bolt))
+        << name;
     ExpectSymmetriesHold(bolt);
   }
   EXPECT_EQ(IsoMetric("M8").s, 13.0);
@@ -51,7 +57,8 @@ TEST(IsoParts, HexBoltHeadAndShankHaveTheTableDimensions) {
     IsoMetric("M7");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "unknown metric size 'M7' (known: M3, M4, M5, M6, M8, M10, M12, M14, M16, M20, M24)");
+    EXPECT_EQ(std::string(e.what()),
+              "unknown metric size 'M7' (known: M3, M4, M5, M6, M8, M10, M12, M14, M16, M20, M24)");
   }
 }
 
@@ -60,7 +67,9 @@ TEST(IsoParts, NutAndWasherVolumes) {
   const Component nut = MakeHexNut("M10");
   EXPECT_NEAR(Volume(nut), (std::sqrt(3.0) / 2 * 16 * 16 - M_PI * 25) * 8.4, 1e-6 * Volume(nut));
   const Component washer = MakeWasher("M10");
-  EXPECT_NEAR(Volume(washer), M_PI / 4 * (m.washer_outer * m.washer_outer - m.washer_inner * m.washer_inner) * m.washer_thickness,
+  EXPECT_NEAR(Volume(washer),
+              M_PI / 4 * (m.washer_outer * m.washer_outer - m.washer_inner * m.washer_inner) *
+                  m.washer_thickness,
               1e-6 * Volume(washer));
   ExpectSymmetriesHold(nut);
   ExpectSymmetriesHold(washer);
@@ -86,7 +95,8 @@ TEST(StandardParts, PegsPlateShaftShoulderBoltBearing) {
 
   const Component shoulder = MakeShoulderBolt(10, 30);
   const ShoulderSize& s = IsoShoulder(10);
-  EXPECT_NEAR(Tessellate(shoulder.shape, kFine).Bounds().sizes().z(), s.head_k + 30 + s.thread_length, 1e-6);
+  EXPECT_NEAR(Tessellate(shoulder.shape, kFine).Bounds().sizes().z(),
+              s.head_k + 30 + s.thread_length, 1e-6);
   ExpectSymmetriesHold(shoulder);
 
   const Component bearing = MakeBallBearing(20, 47, 14);  // a 6204's envelope

@@ -46,7 +46,9 @@ struct Fixture {
       cast.push_back(std::make_unique<Renderer>(run.parts, scene, cast_only));
     }
   }
-  Camera CameraFor(size_t i) const { return Camera{Intrinsics::KinectV1(), views[i].world_from_cam}; }
+  Camera CameraFor(size_t i) const {
+    return Camera{Intrinsics::KinectV1(), views[i].world_from_cam};
+  }
   size_t SceneFor(size_t i) const { return i % run.scenes.size(); }
 };
 
@@ -57,7 +59,8 @@ Fixture& Get() {
 
 void Report(benchmark::State& state, size_t frames) {
   state.counters["ms_per_frame"] =
-      benchmark::Counter(static_cast<double>(frames) * 1e-3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+      benchmark::Counter(static_cast<double>(frames) * 1e-3,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.SetLabel(std::to_string(state.range(0)) + " thread(s)");
 }
 
@@ -66,11 +69,13 @@ void BM_Cast(benchmark::State& state) {
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(0));
   size_t frames = 0;
   for (auto _ : state) {
-    for (size_t i = 0; i < f.views.size(); ++i) benchmark::DoNotOptimize(f.cast[f.SceneFor(i)]->Render(f.CameraFor(i)));
+    for (size_t i = 0; i < f.views.size(); ++i)
+      benchmark::DoNotOptimize(f.cast[f.SceneFor(i)]->Render(f.CameraFor(i)));
     frames += f.views.size();
   }
   Report(state, frames);
-  state.counters["Mrays_per_s"] = benchmark::Counter(static_cast<double>(frames) * 640 * 480 * 1e-6, benchmark::Counter::kIsRate);
+  state.counters["Mrays_per_s"] = benchmark::Counter(static_cast<double>(frames) * 640 * 480 * 1e-6,
+                                                     benchmark::Counter::kIsRate);
 }
 
 void BM_Render(benchmark::State& state) {
@@ -78,7 +83,8 @@ void BM_Render(benchmark::State& state) {
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(0));
   size_t frames = 0;
   for (auto _ : state) {
-    for (size_t i = 0; i < f.views.size(); ++i) benchmark::DoNotOptimize(f.full[f.SceneFor(i)]->Render(f.CameraFor(i)));
+    for (size_t i = 0; i < f.views.size(); ++i)
+      benchmark::DoNotOptimize(f.full[f.SceneFor(i)]->Render(f.CameraFor(i)));
     frames += f.views.size();
   }
   Report(state, frames);
@@ -90,10 +96,12 @@ void BM_Encode(benchmark::State& state) {
   const std::filesystem::path dir = "/dev/shm/cadsynth_bench_encode";
   std::filesystem::remove_all(dir);
   std::vector<Frame> frames;
-  for (size_t i = 0; i < f.run.scenes.size(); ++i) frames.push_back(f.full[i]->Render(f.CameraFor(i)));
+  for (size_t i = 0; i < f.run.scenes.size(); ++i)
+    frames.push_back(f.full[i]->Render(f.CameraFor(i)));
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < f.run.scenes.size(); ++s) {
-    writers.push_back(std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), BopOptions{}, f.run.obj_ids[s]));
+    writers.push_back(
+        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), BopOptions{}, f.run.obj_ids[s]));
   }
   size_t count = 0;
   for (auto _ : state) {
@@ -111,7 +119,8 @@ void BM_EndToEnd(benchmark::State& state) {
   std::filesystem::remove_all(dir);
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < f.run.scenes.size(); ++s) {
-    writers.push_back(std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), BopOptions{}, f.run.obj_ids[s]));
+    writers.push_back(
+        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), BopOptions{}, f.run.obj_ids[s]));
   }
   size_t frames = 0;
   for (auto _ : state) {
@@ -126,10 +135,15 @@ void BM_EndToEnd(benchmark::State& state) {
                                        }) &
             tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
                 tbb::filter_mode::parallel,
-                [&](size_t i) { return std::make_pair(i, std::make_shared<const Frame>(f.full[f.SceneFor(i)]->Render(f.CameraFor(i)))); }) &
-            tbb::make_filter<std::pair<size_t, FramePtr>, void>(tbb::filter_mode::parallel, [&](const auto& item) {
-              writers[f.SceneFor(item.first)]->WriteFrame(static_cast<int>(item.first), *item.second);
-            }));
+                [&](size_t i) {
+                  return std::make_pair(i, std::make_shared<const Frame>(
+                                               f.full[f.SceneFor(i)]->Render(f.CameraFor(i))));
+                }) &
+            tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                tbb::filter_mode::parallel, [&](const auto& item) {
+                  writers[f.SceneFor(item.first)]->WriteFrame(static_cast<int>(item.first),
+                                                              *item.second);
+                }));
     frames += f.views.size();
   }
   std::filesystem::remove_all(dir);

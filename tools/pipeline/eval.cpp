@@ -8,8 +8,8 @@
 #include <set>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <nlohmann/json.hpp>
 
 #include "cad/error.h"
 #include "dataset/bop.h"
@@ -70,15 +70,16 @@ std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::
     std::stringstream split(line);
     for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
     if (fields.size() < 6) {
-      throw Error(where + ": expected scene_id,im_id,obj_id,score,R,t[,time], got " + std::to_string(fields.size()) +
-                  " fields");
+      throw Error(where + ": expected scene_id,im_id,obj_id,score,R,t[,time], got " +
+                  std::to_string(fields.size()) + " fields");
     }
     const auto numbers = [&](const std::string& text, size_t n, const char* what) {
       std::istringstream s(text);
       std::vector<double> v;
       for (double x; s >> x;) v.push_back(x);
       if (v.size() != n || !s.eof()) {
-        throw Error(where + ": " + what + " needs " + std::to_string(n) + " space-separated numbers, got '" + text + "'");
+        throw Error(where + ": " + what + " needs " + std::to_string(n) +
+                    " space-separated numbers, got '" + text + "'");
       }
       return v;
     };
@@ -86,7 +87,8 @@ std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::
                              "scene_id, im_id, obj_id and score");
     for (int i = 0; i < 3; ++i) {
       if (ids[i] != std::floor(ids[i]) || ids[i] < 0) {
-        throw Error(where + ": scene_id, im_id and obj_id must be whole numbers, got '" + fields[i] + "'");
+        throw Error(where + ": scene_id, im_id and obj_id must be whole numbers, got '" +
+                    fields[i] + "'");
       }
     }
     const auto r = numbers(fields[4], 9, "R");
@@ -98,7 +100,8 @@ std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::
     if (std::abs(det - 1.0) > 1e-3) {
       throw Error(where + ": R is not a rotation (determinant " + std::to_string(det) + ")");
     }
-    out[{{static_cast<int>(ids[0]), static_cast<int>(ids[1])}, static_cast<int>(ids[2])}].push_back({ids[3], pose});
+    out[{{static_cast<int>(ids[0]), static_cast<int>(ids[1])}, static_cast<int>(ids[2])}].push_back(
+        {ids[3], pose});
   }
   return out;
 }
@@ -132,14 +135,17 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
   for (const auto& [key, entry] : info.items()) {
     Model m;
     m.diameter = entry.at("diameter").get<double>();
-    m.symmetric = (entry.contains("symmetries_discrete") && !entry["symmetries_discrete"].empty()) ||
-                  (entry.contains("symmetries_continuous") && !entry["symmetries_continuous"].empty());
-    m.name = cad.contains(key) && cad[key].contains("name") ? cad[key]["name"].get<std::string>() : "obj_" + key;
+    m.symmetric =
+        (entry.contains("symmetries_discrete") && !entry["symmetries_discrete"].empty()) ||
+        (entry.contains("symmetries_continuous") && !entry["symmetries_continuous"].empty());
+    m.name = cad.contains(key) && cad[key].contains("name") ? cad[key]["name"].get<std::string>()
+                                                            : "obj_" + key;
     std::ostringstream file;
     file << "obj_" << std::setw(6) << std::setfill('0') << key << ".ply";
     const fs::path cloud = dataset / "models" / "points" / file.str();
     if (!fs::exists(cloud)) {
-      throw Error(cloud.string() + ": missing; eval needs the model clouds (generate with output.model_points > 0)");
+      throw Error(cloud.string() +
+                  ": missing; eval needs the model clouds (generate with output.model_points > 0)");
     }
     m.points = DecodePointPly(ReadFileText(cloud), cloud.string());
     models[std::stoi(key)] = std::move(m);
@@ -157,7 +163,8 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
     int scene, image;
     while (in >> scene >> image) test_images.insert({scene, image});
     if (!in.eof()) throw Error(test_list.string() + ": expected 'scene_id image_id' per line");
-    if (test_images.empty()) throw Error(test_list.string() + ": the test split is empty (see output.test_every)");
+    if (test_images.empty())
+      throw Error(test_list.string() + ": the test split is empty (see output.test_every)");
     report.images = "test split (" + test_list.string() + ")";
   } else {
     report.images = "all images (no splits/test.txt)";
@@ -183,7 +190,8 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
       images.insert(key);
       for (const Json& gt : list) {
         const int obj = gt.at("obj_id").get<int>();
-        if (!models.count(obj)) throw Error(gt_file.string() + ": obj_id " + std::to_string(obj) + " has no model");
+        if (!models.count(obj))
+          throw Error(gt_file.string() + ": obj_id " + std::to_string(obj) + " has no model");
         truth.push_back({key, obj, Pose(gt.at("cam_R_m2c"), gt.at("cam_t_m2c"), gt_file.string())});
       }
     }
@@ -197,14 +205,16 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
   for (size_t i = 0; i < truth.size(); ++i) groups[{truth[i].image, truth[i].obj_id}].push_back(i);
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<double> add_s(truth.size(), inf), add_or_s(truth.size(), inf);
-  std::vector<std::pair<std::pair<ImageKey, int>, std::vector<size_t>>> work(groups.begin(), groups.end());
+  std::vector<std::pair<std::pair<ImageKey, int>, std::vector<size_t>>> work(groups.begin(),
+                                                                             groups.end());
   std::vector<int> surplus(work.size(), 0);
   tbb::parallel_for(size_t{0}, work.size(), [&](size_t g) {
     const auto& [key, members] = work[g];
     auto found = estimates.find(key);
     if (found == estimates.end()) return;
     std::vector<Estimate> list = found->second;
-    std::stable_sort(list.begin(), list.end(), [](const Estimate& a, const Estimate& b) { return a.score > b.score; });
+    std::stable_sort(list.begin(), list.end(),
+                     [](const Estimate& a, const Estimate& b) { return a.score > b.score; });
     const Model& model = models.at(key.second);
     std::vector<bool> taken(members.size(), false);
     for (const Estimate& e : list) {
@@ -227,7 +237,8 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
     }
   });
   for (const auto& [key, list] : estimates) {
-    if (images.count(key.first) && !groups.count(key)) report.unmatched_estimates += static_cast<int>(list.size());
+    if (images.count(key.first) && !groups.count(key))
+      report.unmatched_estimates += static_cast<int>(list.size());
     if (!images.count(key.first)) report.ignored_estimates += static_cast<int>(list.size());
   }
   for (int s : surplus) report.unmatched_estimates += s;
@@ -258,26 +269,31 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
 std::string EvalTable(const EvalReport& report) {
   std::ostringstream out;
   out << "evaluated: " << report.images << ", " << report.image_count << " images\n";
-  out << std::left << std::setw(8) << "obj_id" << std::setw(22) << "name" << std::right << std::setw(5) << "sym"
-      << std::setw(11) << "diam mm" << std::setw(11) << "found" << std::setw(13) << "ADD(-S) mm" << std::setw(10)
-      << "<10% d" << std::setw(11) << "AUC ADD-S" << std::setw(13) << "AUC ADD(-S)" << "\n";
+  out << std::left << std::setw(8) << "obj_id" << std::setw(22) << "name" << std::right
+      << std::setw(5) << "sym" << std::setw(11) << "diam mm" << std::setw(11) << "found"
+      << std::setw(13) << "ADD(-S) mm" << std::setw(10) << "<10% d" << std::setw(11) << "AUC ADD-S"
+      << std::setw(13) << "AUC ADD(-S)"
+      << "\n";
   const auto row = [&](const ObjectScores& s) {
-    out << std::left << std::setw(8) << (s.obj_id ? std::to_string(s.obj_id) : "") << std::setw(22) << s.name
-        << std::right << std::setw(5) << (s.obj_id ? (s.symmetric ? "yes" : "no") : "") << std::setw(11)
-        << std::fixed << std::setprecision(1);
+    out << std::left << std::setw(8) << (s.obj_id ? std::to_string(s.obj_id) : "") << std::setw(22)
+        << s.name << std::right << std::setw(5) << (s.obj_id ? (s.symmetric ? "yes" : "no") : "")
+        << std::setw(11) << std::fixed << std::setprecision(1);
     if (s.obj_id) {
       out << s.diameter_mm;
     } else {
       out << "";
     }
-    out << std::setw(11) << (std::to_string(s.estimated) + "/" + std::to_string(s.instances)) << std::setw(13)
-        << std::setprecision(2) << s.mean_error_mm << std::setw(9) << std::setprecision(1) << 100 * s.within_10pct
-        << "%" << std::setw(10) << 100 * s.auc_adds << "%" << std::setw(12) << 100 * s.auc_add_or_s << "%\n";
+    out << std::setw(11) << (std::to_string(s.estimated) + "/" + std::to_string(s.instances))
+        << std::setw(13) << std::setprecision(2) << s.mean_error_mm << std::setw(9)
+        << std::setprecision(1) << 100 * s.within_10pct << "%" << std::setw(10) << 100 * s.auc_adds
+        << "%" << std::setw(12) << 100 * s.auc_add_or_s << "%\n";
   };
   for (const ObjectScores& s : report.objects) row(s);
   row(report.overall);
-  if (report.unmatched_estimates) out << report.unmatched_estimates << " estimates matched no ground-truth instance\n";
-  if (report.ignored_estimates) out << report.ignored_estimates << " estimates for images outside the evaluated set ignored\n";
+  if (report.unmatched_estimates)
+    out << report.unmatched_estimates << " estimates matched no ground-truth instance\n";
+  if (report.ignored_estimates)
+    out << report.ignored_estimates << " estimates for images outside the evaluated set ignored\n";
   return out.str();
 }
 
@@ -306,9 +322,12 @@ std::string EvalJson(const EvalReport& report) {
               {"auc_max_threshold_mm", kAucMaxMm},
               {"objects", objects},
               {"overall", scores(report.overall)}}
-             .dump(2) + "\n";
+             .dump(2) +
+         "\n";
 }
 
-void WriteEvalJson(const fs::path& path, const EvalReport& report) { WriteFileAtomic(path, EvalJson(report)); }
+void WriteEvalJson(const fs::path& path, const EvalReport& report) {
+  WriteFileAtomic(path, EvalJson(report));
+}
 
 }  // namespace cadsynth

@@ -12,8 +12,8 @@ struct ObjectScores {
   std::string name;
   bool symmetric = false;  // ADD(-S) below means ADD-S for symmetric objects, ADD otherwise
   double diameter_mm = 0;
-  int instances = 0;  // ground-truth instances evaluated
-  int estimated = 0;  // of those, matched to an estimate (the rest count as misses)
+  int instances = 0;         // ground-truth instances evaluated
+  int estimated = 0;         // of those, matched to an estimate (the rest count as misses)
   double mean_error_mm = 0;  // ADD(-S) over the matched instances (NaN if none)
   double within_10pct = 0;   // share with ADD(-S) < 10% of the diameter (the paper's Table II)
   double auc_adds = 0;       // area under the accuracy curve up to 100 mm, with ADD-S for all
@@ -23,7 +23,7 @@ struct ObjectScores {
 struct EvalReport {
   std::string images;  // which images were evaluated, in words
   int image_count = 0;
-  int ignored_estimates = 0;    // estimates for images outside the evaluated set (e.g. train images)
+  int ignored_estimates = 0;  // estimates for images outside the evaluated set (e.g. train images)
   int unmatched_estimates = 0;  // more estimates of an object in an image than instances
   std::vector<ObjectScores> objects;
   ObjectScores overall;

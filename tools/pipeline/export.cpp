@@ -24,14 +24,18 @@ std::vector<VariantListing> ListVariants(const RunSpec& spec) {
         continue;
       }
       for (size_t v = 0; v < source.variants.size(); ++v) {
-        list.push_back({base + source.family + "/" + std::to_string(v), source.family, DescribeParams(source.variants[v]), {}});
+        list.push_back({base + source.family + "/" + std::to_string(v),
+                        source.family,
+                        DescribeParams(source.variants[v]),
+                        {}});
       }
     }
   }
   return list;
 }
 
-std::vector<VariantListing> ExportVariants(const RunSpec& spec, const std::filesystem::path& dir, bool overwrite) {
+std::vector<VariantListing> ExportVariants(const RunSpec& spec, const std::filesystem::path& dir,
+                                           bool overwrite) {
   const std::filesystem::path target = std::filesystem::absolute(dir).lexically_normal();
   std::error_code ec;
   if (std::filesystem::exists(target, ec) && !overwrite) {
@@ -51,7 +55,8 @@ std::vector<VariantListing> ExportVariants(const RunSpec& spec, const std::files
         ++index;
         continue;
       }
-      for (size_t v = 0; v < source.variants.size(); ++v) jobs.push_back({&source, v, all[index++]});
+      for (size_t v = 0; v < source.variants.size(); ++v)
+        jobs.push_back({&source, v, all[index++]});
     }
   }
   if (jobs.empty()) throw Error("the recipe has no family variants to export");
@@ -70,13 +75,16 @@ std::vector<VariantListing> ExportVariants(const RunSpec& spec, const std::files
     try {
       ImportOptions options;
       options.tessellation = spec.tessellation;
-      const Assembly a = BuildVariant(*FindFamily(job.source->family), job.source->variants[job.variant], options);
+      const Assembly a =
+          BuildVariant(*FindFamily(job.source->family), job.source->variants[job.variant], options);
       std::vector<StepComponent> components;
       for (size_t p = 0; p < a.parts.size(); ++p) {
-        if (a.parts[p].brep.IsNull()) throw Error("part '" + a.parts[p].name + "' has no exact geometry to export");
+        if (a.parts[p].brep.IsNull())
+          throw Error("part '" + a.parts[p].name + "' has no exact geometry to export");
         StepComponent c{a.parts[p].name, a.parts[p].brep, {}, a.parts[p].color};
         for (const Instance& i : a.instances) {
-          if (i.part == static_cast<int>(p)) c.placements.push_back(i.world_from_model * a.parts[p].cad_from_model.inverse());
+          if (i.part == static_cast<int>(p))
+            c.placements.push_back(i.world_from_model * a.parts[p].cad_from_model.inverse());
         }
         components.push_back(std::move(c));
       }
@@ -85,8 +93,8 @@ std::vector<VariantListing> ExportVariants(const RunSpec& spec, const std::files
       job.listing.step = target / (name + ".step");
       WriteStep(staging / (name + ".step"), a.name, components);
     } catch (const Error& e) {
-      errors[j] = (job.source->where.empty() ? "" : job.source->where + ": ") + job.listing.id + " (" +
-                  job.listing.params + "): " + e.what();
+      errors[j] = (job.source->where.empty() ? "" : job.source->where + ": ") + job.listing.id +
+                  " (" + job.listing.params + "): " + e.what();
     }
   });
   for (const std::string& error : errors) {

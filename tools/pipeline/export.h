@@ -10,9 +10,9 @@
 namespace cadsynth {
 
 struct VariantListing {
-  std::string id;      // scene/entry/family/index, as in variants.json
-  std::string family;  // empty for files
-  std::string params;  // "name=value, ..." or the file
+  std::string id;              // scene/entry/family/index, as in variants.json
+  std::string family;          // empty for files
+  std::string params;          // "name=value, ..." or the file
   std::filesystem::path step;  // the written file (ExportVariants only)
 };
 
@@ -22,6 +22,7 @@ std::vector<VariantListing> ListVariants(const RunSpec& spec);
 // Builds every family variant and writes it as DIR/<id with '/' as '_'>.step (AP214, mm, exact
 // B-rep with its parts, placements and names). Files named in the recipe are not exported. The
 // folder appears complete or not at all. Throws Error naming the variant that cannot be built.
-std::vector<VariantListing> ExportVariants(const RunSpec& spec, const std::filesystem::path& dir, bool overwrite);
+std::vector<VariantListing> ExportVariants(const RunSpec& spec, const std::filesystem::path& dir,
+                                           bool overwrite);
 
 }  // namespace cadsynth

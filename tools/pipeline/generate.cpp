@@ -29,7 +29,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   if (!shard && std::filesystem::exists(output, ec) && !options.overwrite) {
     throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
   }
-  if (shard && options.overwrite) throw Error("--overwrite does not apply to shards (they share one folder)");
+  if (shard && options.overwrite)
+    throw Error("--overwrite does not apply to shards (they share one folder)");
   std::string why;
   if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
@@ -43,13 +44,16 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   const bool common = !shard || shard->index == 0;  // writes the files every dataset has once
   if (common) {
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
+      for (const std::string& warning :
+           PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
         Warn("scene '" + spec.scenes[s].name + "': " + warning);
       }
     }
   }
   // Work unit g = scene * views + view; a shard renders the units it owns.
-  const auto owns = [&](size_t scene, size_t view) { return !shard || shard->Owns(scene * views.size() + view); };
+  const auto owns = [&](size_t scene, size_t view) {
+    return !shard || shard->Owns(scene * views.size() + view);
+  };
   size_t total_frames = 0;
   for (size_t s = 0; s < prepared.scenes.size(); ++s) {
     for (size_t i = 0; i < views.size(); ++i) total_frames += owns(s, i);
@@ -105,24 +109,27 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     // matches their manifest entry; the others are rendered (again).
     std::vector<std::unique_ptr<PaperSceneWriter>> papers;
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      auto& writer = *writers.emplace_back(
-          std::make_unique<BopSceneWriter>(root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]));
+      auto& writer = *writers.emplace_back(std::make_unique<BopSceneWriter>(
+          root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]));
       if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
       writer.SetCocoCategories(categories);
       std::vector<PaperInstance> paper_instances;
       for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
         const Instance& instance = prepared.scenes[s].instances[i];
-        paper_instances.push_back({prepared.obj_ids[s][i], prepared.classes[static_cast<size_t>(instance.part)],
+        paper_instances.push_back({prepared.obj_ids[s][i],
+                                   prepared.classes[static_cast<size_t>(instance.part)],
                                    instance.name, instance.world_from_model});
       }
-      papers.push_back(
-          std::make_unique<PaperSceneWriter>(root, static_cast<int>(s), spec.bop, std::move(paper_instances)));
+      papers.push_back(std::make_unique<PaperSceneWriter>(root, static_cast<int>(s), spec.bop,
+                                                          std::move(paper_instances)));
       std::vector<int> earlier;
       for (int id : writer.WrittenFrames()) {
-        if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id))) earlier.push_back(id);
+        if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id)))
+          earlier.push_back(id);
       }
       std::vector<std::string> problems(earlier.size());
-      tbb::parallel_for(size_t{0}, earlier.size(), [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
+      tbb::parallel_for(size_t{0}, earlier.size(),
+                        [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
       for (size_t k = 0; k < earlier.size(); ++k) {
         if (problems[k].empty()) {
           ++resumed;
@@ -149,38 +156,43 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
       using FramePtr = std::shared_ptr<const Frame>;
       tbb::parallel_pipeline(
-          tokens,
-          tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                         [&](tbb::flow_control& control) -> size_t {
-                                           while (next < views.size() && (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
-                                             ++next;
-                                           }
-                                           if (next >= views.size()) {
-                                             control.stop();
-                                             return 0;
-                                           }
-                                           return next++;
-                                         }) &
-              tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
-                  tbb::filter_mode::parallel,
-                  [&](size_t i) {
-                    const Camera camera{spec.intrinsics, views[i].world_from_cam};
-                    return std::make_pair(i, std::make_shared<const Frame>(renderer.Render(camera)));
-                  }) &
-              tbb::make_filter<std::pair<size_t, FramePtr>, void>(
-                  tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                    int visible = 0;
-                    for (const Frame::InstanceTruth& t : item.second->instances) visible += t.px_count_visib;
-                    if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
-                      ++(visible == 0 ? empty_views : sparse_views);
-                    } else {
-                      writer.WriteFrame(static_cast<int>(item.first), *item.second, [&](FileLog& files) {
-                        paper.WriteFrame(static_cast<int>(item.first), *item.second, writer.scene_dir(), &files);
-                      });
-                    }
-                    const size_t n = ++done;
-                    if (options.progress) options.progress(n, to_render);
-                  }));
+          tokens, tbb::make_filter<void, size_t>(
+                      tbb::filter_mode::serial_in_order,
+                      [&](tbb::flow_control& control) -> size_t {
+                        while (next < views.size() &&
+                               (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+                          ++next;
+                        }
+                        if (next >= views.size()) {
+                          control.stop();
+                          return 0;
+                        }
+                        return next++;
+                      }) &
+                      tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
+                          tbb::filter_mode::parallel,
+                          [&](size_t i) {
+                            const Camera camera{spec.intrinsics, views[i].world_from_cam};
+                            return std::make_pair(
+                                i, std::make_shared<const Frame>(renderer.Render(camera)));
+                          }) &
+                      tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                          tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
+                            int visible = 0;
+                            for (const Frame::InstanceTruth& t : item.second->instances)
+                              visible += t.px_count_visib;
+                            if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
+                              ++(visible == 0 ? empty_views : sparse_views);
+                            } else {
+                              writer.WriteFrame(
+                                  static_cast<int>(item.first), *item.second, [&](FileLog& files) {
+                                    paper.WriteFrame(static_cast<int>(item.first), *item.second,
+                                                     writer.scene_dir(), &files);
+                                  });
+                            }
+                            const size_t n = ++done;
+                            if (options.progress) options.progress(n, to_render);
+                          }));
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
       if (!shard) splits.push_back(writer.Finish());
     }
@@ -188,12 +200,14 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + root.string() +
                 ": the same command continues from them)");
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (shard) {
     std::ostringstream marker;
-    marker << "{\"shard\": " << shard->index << ", \"of\": " << shard->count << ", \"units\": " << total_frames
-           << ", \"frames\": " << frames << ", \"skipped_empty\": " << empty_views
-           << ", \"skipped_sparse\": " << sparse_views << ", \"seconds\": " << seconds << "}";
+    marker << "{\"shard\": " << shard->index << ", \"of\": " << shard->count
+           << ", \"units\": " << total_frames << ", \"frames\": " << frames
+           << ", \"skipped_empty\": " << empty_views << ", \"skipped_sparse\": " << sparse_views
+           << ", \"seconds\": " << seconds << "}";
     tree->MarkDone(marker.str());
   } else {
     WriteSplits(root, splits);
@@ -202,7 +216,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     staging->Publish(output, options.overwrite);
   }
   if (resumed > 0) info("resumed: " + std::to_string(resumed) + " frames were already written");
-  if (damaged > 0) info("rendered again: " + std::to_string(damaged) + " frames whose files did not match the manifest");
+  if (damaged > 0)
+    info("rendered again: " + std::to_string(damaged) +
+         " frames whose files did not match the manifest");
 
   GenerateSummary summary;
   summary.skipped_empty = empty_views;

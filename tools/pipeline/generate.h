@@ -18,8 +18,8 @@ namespace cadsynth {
 struct GenerateOptions {
   std::filesystem::path output;  // dataset folder to create
   bool overwrite = false;        // replace an existing folder (only once the new one is complete)
-  // Render only this shard's units, straight into `output` (a shard tree; see tools/pipeline/shards.h),
-  // to be joined by Merge once every shard has finished.
+  // Render only this shard's units, straight into `output` (a shard tree; see
+  // tools/pipeline/shards.h), to be joined by Merge once every shard has finished.
   std::optional<ShardSpec> shard;
   // Called with (frames rendered, frames to render) by this attempt: once with 0 before the first
   // frame, then after each (frames an interrupted run completed do not count); may be empty.

@@ -12,8 +12,11 @@ namespace {
 std::string Hex(const std::optional<Eigen::Vector3f>& color) {
   if (!color) return "-";
   char buffer[16];
-  const auto byte = [](float v) { return static_cast<int>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255)); };
-  std::snprintf(buffer, sizeof(buffer), "#%02x%02x%02x", byte(color->x()), byte(color->y()), byte(color->z()));
+  const auto byte = [](float v) {
+    return static_cast<int>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255));
+  };
+  std::snprintf(buffer, sizeof(buffer), "#%02x%02x%02x", byte(color->x()), byte(color->y()),
+                byte(color->z()));
   return buffer;
 }
 
@@ -45,12 +48,13 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
   const Assembly a = Read(path, options);
   const std::vector<int> counts = InstanceCounts(a);
   std::ostringstream out;
-  out << path.string() << "\n  format " << a.format << ", unit " << (a.length_unit.empty() ? "?" : a.length_unit)
-      << ", '" << a.name << "': " << a.parts.size() << " parts, " << a.instances.size()
-      << " instances (sizes in mm)\n\n";
+  out << path.string() << "\n  format " << a.format << ", unit "
+      << (a.length_unit.empty() ? "?" : a.length_unit) << ", '" << a.name << "': " << a.parts.size()
+      << " parts, " << a.instances.size() << " instances (sizes in mm)\n\n";
   char line[512];
-  std::snprintf(line, sizeof(line), "  %3s  %-28s %5s  %-28s %9s  %-7s  %13s  %-6s  %s\n", "id", "part", "inst",
-                "size x y z", "triangles", "colour", "volume mm3", "closed", "deviation mm");
+  std::snprintf(line, sizeof(line), "  %3s  %-28s %5s  %-28s %9s  %-7s  %13s  %-6s  %s\n", "id",
+                "part", "inst", "size x y z", "triangles", "colour", "volume mm3", "closed",
+                "deviation mm");
   out << line;
   for (size_t i = 0; i < a.parts.size(); ++i) {
     const Part& p = a.parts[i];
@@ -60,13 +64,15 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
     char volume[32] = "-";
     if (p.mass.volume_mm3 > 0) std::snprintf(volume, sizeof(volume), "%.6g", p.mass.volume_mm3);
     char deviation[32] = "-";
-    if (p.max_deviation_mm >= 0) std::snprintf(deviation, sizeof(deviation), "%.3g", p.max_deviation_mm);
-    std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %5d  %-28s %9zu  %-7s  %13s  %-6s  %s\n", i + 1,
-                  Printable(p.name).c_str(), counts[i], size, p.mesh.num_triangles(), Hex(p.color).c_str(), volume,
-                  p.watertight ? "yes" : "NO", deviation);
+    if (p.max_deviation_mm >= 0)
+      std::snprintf(deviation, sizeof(deviation), "%.3g", p.max_deviation_mm);
+    std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %5d  %-28s %9zu  %-7s  %13s  %-6s  %s\n",
+                  i + 1, Printable(p.name).c_str(), counts[i], size, p.mesh.num_triangles(),
+                  Hex(p.color).c_str(), volume, p.watertight ? "yes" : "NO", deviation);
     out << line;
   }
-  out << "\n  assembly tree (instance: part id, position of its model frame in the root frame, mm):\n";
+  out << "\n  assembly tree (instance: part id, position of its model frame in the root frame, "
+         "mm):\n";
   // Print each instance under its path, opening the sub-assemblies it is in as they appear.
   std::vector<std::string> open;
   for (const Instance& i : a.instances) {
@@ -78,7 +84,8 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
       levels.push_back(path.substr(start, slash - start));
     }
     size_t common = 0;
-    while (common < open.size() && common + 1 < levels.size() && open[common] == levels[common]) ++common;
+    while (common < open.size() && common + 1 < levels.size() && open[common] == levels[common])
+      ++common;
     open.resize(common);
     for (size_t d = common; d + 1 < levels.size(); ++d) {
       out << "    " << std::string(2 * d, ' ') << Printable(levels[d]) << "\n";
@@ -86,8 +93,8 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
     }
     const Eigen::Vector3d t = i.world_from_model.translation();
     std::snprintf(line, sizeof(line), "%s: part %d at (%.4g, %.4g, %.4g)%s%s\n",
-                  Printable(levels.back()).c_str(), i.part + 1, t.x(), t.y(), t.z(), i.color ? ", colour " : "",
-                  i.color ? Hex(i.color).c_str() : "");
+                  Printable(levels.back()).c_str(), i.part + 1, t.x(), t.y(), t.z(),
+                  i.color ? ", colour " : "", i.color ? Hex(i.color).c_str() : "");
     out << "    " << std::string(2 * (levels.size() - 1), ' ') << line;
   }
   return out.str();
@@ -102,18 +109,19 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
   for (size_t i = 0; i < a.parts.size(); ++i) {
     const Part& p = a.parts[i];
     const Eigen::AlignedBox3d box = p.mesh.Bounds();
-    Json part = {{"id", i + 1},
-                 {"name", p.name},
-                 {"instances", counts[i]},
-                 {"bbox_min_mm", vec(box.min())},
-                 {"bbox_max_mm", vec(box.max())},
-                 {"size_mm", vec(box.sizes())},
-                 {"triangles", p.mesh.num_triangles()},
-                 {"color", p.color ? Json(Hex(p.color)) : Json()},
-                 {"volume_mm3", p.mass.volume_mm3 > 0 ? Json(p.mass.volume_mm3) : Json()},
-                 {"volume_from", p.mass_from_brep ? "brep" : (p.mass.volume_mm3 > 0 ? "mesh" : "none")},
-                 {"watertight", p.watertight},
-                 {"max_deviation_mm", p.max_deviation_mm >= 0 ? Json(p.max_deviation_mm) : Json()}};
+    Json part = {
+        {"id", i + 1},
+        {"name", p.name},
+        {"instances", counts[i]},
+        {"bbox_min_mm", vec(box.min())},
+        {"bbox_max_mm", vec(box.max())},
+        {"size_mm", vec(box.sizes())},
+        {"triangles", p.mesh.num_triangles()},
+        {"color", p.color ? Json(Hex(p.color)) : Json()},
+        {"volume_mm3", p.mass.volume_mm3 > 0 ? Json(p.mass.volume_mm3) : Json()},
+        {"volume_from", p.mass_from_brep ? "brep" : (p.mass.volume_mm3 > 0 ? "mesh" : "none")},
+        {"watertight", p.watertight},
+        {"max_deviation_mm", p.max_deviation_mm >= 0 ? Json(p.max_deviation_mm) : Json()}};
     parts.push_back(part);
   }
   Json instances = Json::array();
@@ -122,11 +130,14 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
     for (int r = 0; r < 4; ++r) {
       for (int c = 0; c < 4; ++c) pose.push_back(i.world_from_model.matrix()(r, c));
     }
-    instances.push_back({{"name", i.name}, {"path", i.path}, {"part", i.part + 1}, {"root_from_model", pose},
+    instances.push_back({{"name", i.name},
+                         {"path", i.path},
+                         {"part", i.part + 1},
+                         {"root_from_model", pose},
                          {"color", i.color ? Json(Hex(i.color)) : Json()}});
   }
   const Json out = {{"file", path.string()}, {"format", a.format}, {"length_unit", a.length_unit},
-                    {"name", a.name},        {"parts", parts},      {"instances", instances}};
+                    {"name", a.name},        {"parts", parts},     {"instances", instances}};
   return out.dump(2) + "\n";
 }
 

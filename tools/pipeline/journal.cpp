@@ -35,7 +35,8 @@ const std::string& BuildId() {
 
 }  // namespace
 
-std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views) {
+std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
+                   const std::vector<SweepView>& views) {
   std::ostringstream key;
   key.precision(17);
   key << "cadsynth run key 2\n";
@@ -54,7 +55,8 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::
   }
   key << prepared.variants_json << "\n";
   const Intrinsics& k = spec.intrinsics;
-  key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " " << k.cy << "\n";
+  key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " "
+      << k.cy << "\n";
   // Every described option (cad/schema.h), by name.
   const auto fields = [&key](const char* section, const auto& options) {
     key << section;
@@ -124,7 +126,8 @@ void StagingRun::Publish(const std::filesystem::path& output, bool overwrite) {
   std::error_code ec;
   const bool replace = std::filesystem::exists(output, ec);
   // Refused before anything changes: the staging folder stays resumable.
-  if (replace && !overwrite) throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
+  if (replace && !overwrite)
+    throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
   std::filesystem::remove(root_ / ".run_key", ec);
   if (replace) {
     std::filesystem::path old = output;

@@ -21,7 +21,8 @@ namespace cadsynth {
 // file's text, the CAD files' bytes, the parts and their variants, every view, the image size,
 // every output and render option (each by its described name, cad/schema.h), the kernels and
 // this build of cadsynth.
-std::string RunKey(const RunSpec& spec, const PreparedRun& prepared, const std::vector<SweepView>& views);
+std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
+                   const std::vector<SweepView>& views);
 
 // One run at a time per output: an exclusive lock (flock) on STAGING.lock beside the staging
 // folder. Throws Error when another run holds it.

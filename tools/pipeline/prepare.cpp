@@ -6,8 +6,8 @@
 #include <set>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <nlohmann/json.hpp>
 
 #include "cad/assembly.h"
 #include "cad/error.h"
@@ -30,11 +30,13 @@ struct Job {
   std::string error;
 };
 
-
 Json ParamsJson(const ParamValues& values) {
   Json out = Json::object();
   for (const auto& [name, value] : values) {
-    if (const double* x = std::get_if<double>(&value)) out[name] = *x; else out[name] = std::get<std::string>(value);
+    if (const double* x = std::get_if<double>(&value))
+      out[name] = *x;
+    else
+      out[name] = std::get<std::string>(value);
   }
   return out;
 }
@@ -50,13 +52,15 @@ void Build(const RunSpec& spec, Job* job) {
       options.encoding = source.encoding;
       job->assembly = ImportCad(source.path, options);
     } else {
-      job->assembly = BuildVariant(*FindFamily(source.family), source.variants[job->variant], options);
+      job->assembly =
+          BuildVariant(*FindFamily(source.family), source.variants[job->variant], options);
     }
     if (spec.class_by == RunSpec::ClassBy::kAssembly) job->assembly = FuseAssembly(job->assembly);
   } catch (const Error& e) {
     std::string where = source.where.empty() ? "" : source.where + ": ";
     if (source.kind == PartSource::Kind::kFamily) {
-      where += "variant " + std::to_string(job->variant) + " (" + DescribeParams(source.variants[job->variant]) + "): ";
+      where += "variant " + std::to_string(job->variant) + " (" +
+               DescribeParams(source.variants[job->variant]) + "): ";
     }
     job->error = where + e.what();
   }
@@ -64,7 +68,8 @@ void Build(const RunSpec& spec, Job* job) {
 
 }  // namespace
 
-std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
+                                           const std::vector<Instance>& instances,
                                            const Intrinsics& k, const SweepOptions& sweep) {
   std::vector<std::string> warnings;
   if (instances.empty() || sweep.radius_mm.empty()) return warnings;
@@ -83,12 +88,14 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const
   std::ostringstream out;
   out.precision(4);
   if (reach >= nearest) {
-    out << "the scene reaches " << std::lround(reach) << " mm from the target, beyond the nearest camera radius "
-        << std::lround(nearest) << " mm: the camera will be inside or touching it";
+    out << "the scene reaches " << std::lround(reach)
+        << " mm from the target, beyond the nearest camera radius " << std::lround(nearest)
+        << " mm: the camera will be inside or touching it";
     warnings.push_back(out.str());
   } else if (std::asin(reach / nearest) > half_fov) {
-    out << "the scene reaches " << std::lround(reach) << " mm from the target; at the nearest radius "
-        << std::lround(nearest) << " mm the camera sees only " << std::lround(nearest * std::sin(half_fov))
+    out << "the scene reaches " << std::lround(reach)
+        << " mm from the target; at the nearest radius " << std::lround(nearest)
+        << " mm the camera sees only " << std::lround(nearest * std::sin(half_fov))
         << " mm around it: objects will be cut off";
     warnings.push_back(out.str());
   }
@@ -103,8 +110,8 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const
   if (pixels < 10.0) {
     std::ostringstream small;
     small.precision(3);
-    small << "'" << name << "' (" << smallest << " mm) spans only " << pixels << " px at the farthest radius "
-          << std::lround(farthest) << " mm";
+    small << "'" << name << "' (" << smallest << " mm) spans only " << pixels
+          << " px at the farthest radius " << std::lround(farthest) << " mm";
     warnings.push_back(small.str());
   }
   return warnings;
@@ -124,10 +131,16 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       const PartSource& source = scene.sources[e];
       const std::string base = scene.name + "/" + std::to_string(e) + "/";
       if (source.kind == PartSource::Kind::kFile) {
-        jobs.push_back({static_cast<int>(s), &source, 0, base + source.path.filename().string(), {}, {}});
+        jobs.push_back(
+            {static_cast<int>(s), &source, 0, base + source.path.filename().string(), {}, {}});
       } else {
         for (size_t v = 0; v < source.variants.size(); ++v) {
-          jobs.push_back({static_cast<int>(s), &source, v, base + source.family + "/" + std::to_string(v), {}, {}});
+          jobs.push_back({static_cast<int>(s),
+                          &source,
+                          v,
+                          base + source.family + "/" + std::to_string(v),
+                          {},
+                          {}});
         }
       }
     }
@@ -165,17 +178,20 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   for (const SceneSpec& scene : spec.scenes) {
     for (const PartSource& source : scene.sources) {
       if (source.kind == PartSource::Kind::kFamily) {
-        info("built " + std::to_string(source.variants.size()) + " variant(s) of " + source.family + " for scene '" +
-             scene.name + "'");
+        info("built " + std::to_string(source.variants.size()) + " variant(s) of " + source.family +
+             " for scene '" + scene.name + "'");
       }
     }
   }
   // The same shape from several files, variants or scenes is one object.
   {
     std::vector<int> first_instance_part(all.instances.size());
-    for (size_t i = 0; i < all.instances.size(); ++i) first_instance_part[i] = all.instances[i].part;
-    const size_t merged = MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3);
-    if (merged > 0) info("merged " + std::to_string(merged) + " parts that repeat the shape of another");
+    for (size_t i = 0; i < all.instances.size(); ++i)
+      first_instance_part[i] = all.instances[i].part;
+    const size_t merged =
+        MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3);
+    if (merged > 0)
+      info("merged " + std::to_string(merged) + " parts that repeat the shape of another");
     std::vector<std::string> labels(all.parts.size());
     for (size_t i = 0; i < all.instances.size(); ++i) {
       std::string& label = labels[all.instances[i].part];
@@ -186,15 +202,16 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   std::vector<Part>& parts = all.parts;
   std::vector<std::string> names, empty_groups;
   for (const Part& part : parts) names.push_back(part.name);
-  const std::vector<ObjectClass> classes = AssignClasses(names, label_of_part, spec.class_groups, &empty_groups);
+  const std::vector<ObjectClass> classes =
+      AssignClasses(names, label_of_part, spec.class_groups, &empty_groups);
   for (const std::string& group : empty_groups) Warn("class '" + group + "' matches no part");
   for (size_t i = 0; i < parts.size(); ++i) {
     const Eigen::Vector3d size = parts[i].mesh.Bounds().sizes();
     std::ostringstream p;
     p.precision(4);
-    p << "  obj_id " << i + 1 << ": '" << parts[i].name << "' " << size.x() << " x " << size.y() << " x "
-      << size.z() << " mm, " << parts[i].mesh.num_triangles() << " triangles, class " << classes[i].id << " '"
-      << classes[i].name << "'";
+    p << "  obj_id " << i + 1 << ": '" << parts[i].name << "' " << size.x() << " x " << size.y()
+      << " x " << size.z() << " mm, " << parts[i].mesh.num_triangles() << " triangles, class "
+      << classes[i].id << " '" << classes[i].name << "'";
     info(p.str());
   }
 
@@ -240,7 +257,9 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       class_ids.insert(classes[all.instances[i].part].id);
     }
     const PartSource& source = *jobs[j].source;
-    Json entry = {{"id", jobs[j].id}, {"scene_id", jobs[j].scene}, {"scene", spec.scenes[jobs[j].scene].name}};
+    Json entry = {{"id", jobs[j].id},
+                  {"scene_id", jobs[j].scene},
+                  {"scene", spec.scenes[jobs[j].scene].name}};
     if (source.kind == PartSource::Kind::kFile) {
       entry["file"] = source.path.string();
     } else {

@@ -28,7 +28,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
 
 // What a user should hear about a scene before rendering it: whether its objects fit the view at
 // the nearest camera radius, and whether the smallest is still a few pixels at the farthest.
-std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
+                                           const std::vector<Instance>& instances,
                                            const Intrinsics& intrinsics, const SweepOptions& sweep);
 
 }  // namespace cadsynth

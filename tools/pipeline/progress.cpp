@@ -34,7 +34,8 @@ std::string FormatProgressBar(size_t done, size_t total, double seconds, int wid
     bar.append("] ");
   }
   char text[160];
-  std::snprintf(text, sizeof(text), "%3d%%  %zu/%zu frames", static_cast<int>(100 * fraction), done, total);
+  std::snprintf(text, sizeof(text), "%3d%%  %zu/%zu frames", static_cast<int>(100 * fraction), done,
+                total);
   bar += text;
   if (seconds > 0 && done > 0) {
     const double rate = done / seconds;
@@ -45,7 +46,8 @@ std::string FormatProgressBar(size_t done, size_t total, double seconds, int wid
   return bar;
 }
 
-std::string FormatProgressJson(size_t done, size_t total, double seconds, const std::string& shard) {
+std::string FormatProgressJson(size_t done, size_t total, double seconds,
+                               const std::string& shard) {
   const double rate = seconds > 0 ? done / seconds : 0.0;
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   if (!shard.empty()) j["shard"] = shard;
@@ -53,12 +55,15 @@ std::string FormatProgressJson(size_t done, size_t total, double seconds, const 
   j["total"] = total;
   j["seconds"] = std::round(seconds * 100) / 100;
   j["frames_per_s"] = std::round(rate * 10) / 10;
-  j["eta_s"] = rate > 0 ? nlohmann::ordered_json(std::round((total - std::min(done, total)) / rate * 10) / 10)
-                        : nlohmann::ordered_json(nullptr);
+  j["eta_s"] =
+      rate > 0
+          ? nlohmann::ordered_json(std::round((total - std::min(done, total)) / rate * 10) / 10)
+          : nlohmann::ordered_json(nullptr);
   return j.dump();
 }
 
-ProgressReporter::ProgressReporter(Mode mode, std::FILE* out, double interval_s, std::function<double()> clock)
+ProgressReporter::ProgressReporter(Mode mode, std::FILE* out, double interval_s,
+                                   std::function<double()> clock)
     : mode_(mode), out_(out), interval_s_(interval_s), clock_(std::move(clock)) {
   if (!clock_) {
     clock_ = [start = std::optional<std::chrono::steady_clock::time_point>()]() mutable {

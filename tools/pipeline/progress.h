@@ -13,7 +13,8 @@ namespace cadsynth {
 std::string FormatProgressBar(size_t done, size_t total, double seconds, int width = 30);
 // One JSON object (no newline): {"done":..,"total":..,"seconds":..,"frames_per_s":..,"eta_s":..},
 // led by "shard":"I/N" when `shard` is not empty (cluster logs mix many shards).
-std::string FormatProgressJson(size_t done, size_t total, double seconds, const std::string& shard = "");
+std::string FormatProgressJson(size_t done, size_t total, double seconds,
+                               const std::string& shard = "");
 
 class ProgressReporter {
  public:
@@ -24,7 +25,8 @@ class ProgressReporter {
   };
   // `clock` returns seconds since some start (default: a steady clock started at the first
   // Update, so that rates count the rendering only, not reading the CAD).
-  ProgressReporter(Mode mode, std::FILE* out, double interval_s = 5.0, std::function<double()> clock = {});
+  ProgressReporter(Mode mode, std::FILE* out, double interval_s = 5.0,
+                   std::function<double()> clock = {});
 
   // Thread-safe; call with the running count of finished frames.
   void Update(size_t done, size_t total);

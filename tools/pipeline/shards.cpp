@@ -55,7 +55,8 @@ BopOptions OptionsFromJson(const Json& j) {
     if constexpr (std::is_enum_v<T>) {
       const std::string name = v.get<std::string>();
       const auto it = std::find(field.choices.begin(), field.choices.end(), name);
-      if (it == field.choices.end()) throw Error("unknown " + std::string(field.Name()) + " '" + name + "'");
+      if (it == field.choices.end())
+        throw Error("unknown " + std::string(field.Name()) + " '" + name + "'");
       value = static_cast<T>(it - field.choices.begin());
     } else {
       value = v.get<T>();

@@ -42,8 +42,8 @@ std::filesystem::path SmallDataset(const ScratchDir& dir) {
 
 // Writes the ground truth of every instance as an estimate, moved by `shift` mm along the camera's
 // x axis, skipping the instances `skip` says to; returns how many it skipped.
-int WriteShiftedTruth(const std::filesystem::path& dataset, const std::filesystem::path& csv, double shift,
-                      const std::function<bool(int scene, int im, int obj)>& skip) {
+int WriteShiftedTruth(const std::filesystem::path& dataset, const std::filesystem::path& csv,
+                      double shift, const std::function<bool(int scene, int im, int obj)>& skip) {
   std::ofstream out(csv);
   out << "scene_id,im_id,obj_id,score,R,t,time\n";
   int skipped = 0;
@@ -61,8 +61,9 @@ int WriteShiftedTruth(const std::filesystem::path& dataset, const std::filesyste
         }
         out << scene << "," << im << "," << obj << ",0.9,";
         for (int i = 0; i < 9; ++i) out << (i ? " " : "") << gt["cam_R_m2c"][i].get<double>();
-        out << "," << gt["cam_t_m2c"][0].get<double>() + shift << " " << gt["cam_t_m2c"][1].get<double>() << " "
-            << gt["cam_t_m2c"][2].get<double>() << ",-1\n";
+        out << "," << gt["cam_t_m2c"][0].get<double>() + shift << " "
+            << gt["cam_t_m2c"][1].get<double>() << " " << gt["cam_t_m2c"][2].get<double>()
+            << ",-1\n";
       }
     }
   }
@@ -74,10 +75,12 @@ TEST(Eval, ShiftedTruthScoresAsWorkedOutByHand) {
   const auto dataset = SmallDataset(dir);
   const auto csv = dir / "results.csv";
   // Drop obj 1 in scene 0, image 0 (the sun gear: a symmetric part).
-  const int skipped = WriteShiftedTruth(dataset, csv, 10.0, [](int s, int im, int obj) { return s == 0 && im == 0 && obj == 1; });
+  const int skipped = WriteShiftedTruth(
+      dataset, csv, 10.0, [](int s, int im, int obj) { return s == 0 && im == 0 && obj == 1; });
   ASSERT_EQ(skipped, 1);
-  std::ofstream(csv, std::ios::app) << "7,0,1,0.5,1 0 0 0 1 0 0 0 1,0 0 500,-1\n"   // no such scene
-                                    << "0,0,5,0.5,1 0 0 0 1 0 0 0 1,0 0 500,-1\n";  // no such object there
+  std::ofstream(csv, std::ios::app)
+      << "7,0,1,0.5,1 0 0 0 1 0 0 0 1,0 0 500,-1\n"   // no such scene
+      << "0,0,5,0.5,1 0 0 0 1 0 0 0 1,0 0 500,-1\n";  // no such object there
 
   const EvalReport report = Evaluate(dataset, csv);
   EXPECT_EQ(report.image_count, 6);
@@ -113,13 +116,15 @@ TEST(Eval, BadResultsNameTheFileAndLine) {
   ScratchDir dir;
   const auto dataset = SmallDataset(dir);
   const auto csv = dir / "results.csv";
-  std::ofstream(csv) << "scene_id,im_id,obj_id,score,R,t,time\n0,0,1,0.9,1 0 0 0 1 0 0 0 1,0 0 500,-1\n"
-                     << "0,0,1,0.9,1 0 0 0 1 0,0 0 500,-1\n";
+  std::ofstream(csv)
+      << "scene_id,im_id,obj_id,score,R,t,time\n0,0,1,0.9,1 0 0 0 1 0 0 0 1,0 0 500,-1\n"
+      << "0,0,1,0.9,1 0 0 0 1 0,0 0 500,-1\n";
   try {
     Evaluate(dataset, csv);
     FAIL() << "a short R must be refused";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("results.csv:3: R needs 9"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("results.csv:3: R needs 9"), std::string::npos)
+        << e.what();
   }
   std::ofstream(csv) << "0,0,1,0.9,2 0 0 0 1 0 0 0 1,0 0 500,-1\n";
   EXPECT_THROW(Evaluate(dataset, csv), Error);  // not a rotation
@@ -137,19 +142,22 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   int checked = 0, visible = 0;
   for (int scene = 0; scene < 3; ++scene) {
     const auto scene_dir = dataset / "train" / ("00000" + std::to_string(scene));
-    const json cams = ReadJson(scene_dir / "scene_camera.json"), gt = ReadJson(scene_dir / "scene_gt.json"),
+    const json cams = ReadJson(scene_dir / "scene_camera.json"),
+               gt = ReadJson(scene_dir / "scene_gt.json"),
                gt_info = ReadJson(scene_dir / "scene_gt_info.json");
     for (const auto& [im, list] : gt.items()) {
       Eigen::Matrix3d k;
       for (int i = 0; i < 9; ++i) k(i / 3, i % 3) = cams[im]["cam_K"][i];
       for (size_t i = 0; i < list.size(); ++i) {
         const json& m = info[std::to_string(list[i]["obj_id"].get<int>())];
-        const Eigen::Vector3d lo(m["min_x"], m["min_y"], m["min_z"]), size(m["size_x"], m["size_y"], m["size_z"]);
+        const Eigen::Vector3d lo(m["min_x"], m["min_y"], m["min_z"]),
+            size(m["size_x"], m["size_y"], m["size_z"]);
         Eigen::Isometry3d m2c = Eigen::Isometry3d::Identity();
         for (int j = 0; j < 9; ++j) m2c.linear()(j / 3, j % 3) = list[i]["cam_R_m2c"][j];
         for (int j = 0; j < 3; ++j) m2c.translation()(j) = list[i]["cam_t_m2c"][j];
         Eigen::AlignedBox2d projected;
-        for (const Eigen::Vector2d& c : ProjectBox(k, m2c, Eigen::AlignedBox3d(lo, lo + size))) projected.extend(c);
+        for (const Eigen::Vector2d& c : ProjectBox(k, m2c, Eigen::AlignedBox3d(lo, lo + size)))
+          projected.extend(c);
         const json& b = gt_info[im][i]["bbox_obj"];
         visible += gt_info[im][i]["px_count_visib"].get<int>() > 0;
         if (b[0] == -1) continue;
@@ -171,7 +179,8 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   options.panel_width = 100;
   std::vector<std::pair<int, int>> shown;
   const std::string png = RenderPreview(dataset, options, &shown);
-  EXPECT_EQ(shown, (std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {2, 0}}));  // spread over 6 frames
+  EXPECT_EQ(shown,
+            (std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {2, 0}}));  // spread over 6 frames
   const cv::Mat sheet = cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR);
   EXPECT_EQ(sheet.cols, 300);
   EXPECT_EQ(sheet.rows, 3 * 75);  // 160 x 120 images at 100 px wide
@@ -180,10 +189,14 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   // The folder of scenes is found whatever its name (output.split).
   std::filesystem::rename(dataset / "train", dataset / "val");
   EXPECT_EQ(cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR).size(),
-            cv::imdecode([&] {
-              const std::string again = RenderPreview(dataset, PreviewOptions{.count = 3, .panel_width = 100});
-              return std::vector<uchar>(again.begin(), again.end());
-            }(), cv::IMREAD_COLOR).size());
+            cv::imdecode(
+                [&] {
+                  const std::string again =
+                      RenderPreview(dataset, PreviewOptions{.count = 3, .panel_width = 100});
+                  return std::vector<uchar>(again.begin(), again.end());
+                }(),
+                cv::IMREAD_COLOR)
+                .size());
 }
 
 // A small schema language for the checks below: "int", "number", "string", "bool",
@@ -199,14 +212,17 @@ void ExpectSchema(const json& value, const json& schema, const std::string& wher
                                        : false;
     EXPECT_TRUE(ok) << where << ": expected " << type << ", got " << value.dump();
   } else if (schema.is_array()) {
-    ASSERT_TRUE(value.is_array()) << where << ": expected a list, got " << value.dump().substr(0, 80);
+    ASSERT_TRUE(value.is_array()) << where << ": expected a list, got "
+                                  << value.dump().substr(0, 80);
     if (schema[1] >= 0) {
       EXPECT_EQ(value.size(), schema[1].get<size_t>()) << where;
     }
-    for (size_t i = 0; i < value.size(); ++i) ExpectSchema(value[i], schema[2], where + "[" + std::to_string(i) + "]");
+    for (size_t i = 0; i < value.size(); ++i)
+      ExpectSchema(value[i], schema[2], where + "[" + std::to_string(i) + "]");
   } else if (schema.contains("each")) {
     ASSERT_TRUE(value.is_object()) << where;
-    for (const auto& [key, item] : value.items()) ExpectSchema(item, schema["each"], where + "." + key);
+    for (const auto& [key, item] : value.items())
+      ExpectSchema(item, schema["each"], where + "." + key);
   } else {
     ASSERT_TRUE(value.is_object()) << where;
     for (const auto& [name, sub] : schema["keys"].items()) {
@@ -219,7 +235,8 @@ void ExpectSchema(const json& value, const json& schema, const std::string& wher
       ExpectSchema(value[key], sub, where + "." + key);
     }
     for (const auto& [key, item] : value.items()) {
-      EXPECT_TRUE(schema["keys"].contains(key) || schema["keys"].contains("?" + key)) << where << ": unexpected " << key;
+      EXPECT_TRUE(schema["keys"].contains(key) || schema["keys"].contains("?" + key))
+          << where << ": unexpected " << key;
     }
   }
 }
@@ -231,36 +248,66 @@ TEST(BopSchema, EveryFileHasTheDocumentedKeysAndTypes) {
   const json vec3 = json::array({"list", 3, "number"}), mat3 = json::array({"list", 9, "number"});
   const json box = json::array({"list", 4, "int"});
   ExpectSchema(ReadJson(dataset / "camera.json"),
-               {{"keys", {{"cx", "number"}, {"cy", "number"}, {"fx", "number"}, {"fy", "number"},
-                          {"height", "int"}, {"width", "int"}, {"depth_scale", "number"}}}},
+               {{"keys",
+                 {{"cx", "number"},
+                  {"cy", "number"},
+                  {"fx", "number"},
+                  {"fy", "number"},
+                  {"height", "int"},
+                  {"width", "int"},
+                  {"depth_scale", "number"}}}},
                "camera.json");
-  const json model = {{"keys",
-                       {{"diameter", "number"}, {"min_x", "number"}, {"min_y", "number"}, {"min_z", "number"},
-                        {"size_x", "number"}, {"size_y", "number"}, {"size_z", "number"},
-                        {"?symmetries_discrete", json::array({"list", -1, json::array({"list", 16, "number"})})},
-                        {"?symmetries_continuous",
-                         json::array({"list", -1, {{"keys", {{"axis", vec3}, {"offset", vec3}}}}})}}}};
-  ExpectSchema(ReadJson(dataset / "models" / "models_info.json"), {{"each", model}}, "models_info.json");
-  ExpectSchema(ReadJson(dataset / "test_targets_bop19.json"),
-               json::array({"list", -1, {{"keys", {{"im_id", "int"}, {"inst_count", "int"}, {"obj_id", "int"},
-                                                   {"scene_id", "int"}}}}}),
-               "test_targets_bop19.json");
+  const json model = {
+      {"keys",
+       {{"diameter", "number"},
+        {"min_x", "number"},
+        {"min_y", "number"},
+        {"min_z", "number"},
+        {"size_x", "number"},
+        {"size_y", "number"},
+        {"size_z", "number"},
+        {"?symmetries_discrete", json::array({"list", -1, json::array({"list", 16, "number"})})},
+        {"?symmetries_continuous",
+         json::array({"list", -1, {{"keys", {{"axis", vec3}, {"offset", vec3}}}}})}}}};
+  ExpectSchema(ReadJson(dataset / "models" / "models_info.json"), {{"each", model}},
+               "models_info.json");
+  ExpectSchema(
+      ReadJson(dataset / "test_targets_bop19.json"),
+      json::array(
+          {"list",
+           -1,
+           {{"keys",
+             {{"im_id", "int"}, {"inst_count", "int"}, {"obj_id", "int"}, {"scene_id", "int"}}}}}),
+      "test_targets_bop19.json");
   for (int scene = 0; scene < 3; ++scene) {
     const auto scene_dir = dataset / "train" / ("00000" + std::to_string(scene));
     ExpectSchema(ReadJson(scene_dir / "scene_camera.json"),
-                 {{"each", {{"keys", {{"cam_K", mat3}, {"depth_scale", "number"}, {"cam_R_w2c", mat3},
-                                      {"cam_t_w2c", vec3}}}}}},
+                 {{"each",
+                   {{"keys",
+                     {{"cam_K", mat3},
+                      {"depth_scale", "number"},
+                      {"cam_R_w2c", mat3},
+                      {"cam_t_w2c", vec3}}}}}},
                  "scene_camera.json");
-    ExpectSchema(ReadJson(scene_dir / "scene_gt.json"),
-                 {{"each", json::array({"list", -1, {{"keys", {{"cam_R_m2c", mat3}, {"cam_t_m2c", vec3},
-                                                               {"obj_id", "int"}}}}})}},
-                 "scene_gt.json");
+    ExpectSchema(
+        ReadJson(scene_dir / "scene_gt.json"),
+        {{"each",
+          json::array(
+              {"list",
+               -1,
+               {{"keys", {{"cam_R_m2c", mat3}, {"cam_t_m2c", vec3}, {"obj_id", "int"}}}}})}},
+        "scene_gt.json");
     const json gt_info = ReadJson(scene_dir / "scene_gt_info.json");
     ExpectSchema(gt_info,
-                 {{"each", json::array({"list", -1, {{"keys", {{"bbox_obj", box}, {"bbox_visib", box},
-                                                               {"px_count_all", "int"}, {"px_count_valid", "int"},
-                                                               {"px_count_visib", "int"},
-                                                               {"visib_fract", "number"}}}}})}},
+                 {{"each", json::array({"list",
+                                        -1,
+                                        {{"keys",
+                                          {{"bbox_obj", box},
+                                           {"bbox_visib", box},
+                                           {"px_count_all", "int"},
+                                           {"px_count_valid", "int"},
+                                           {"px_count_visib", "int"},
+                                           {"visib_fract", "number"}}}}})}},
                  "scene_gt_info.json");
     for (const auto& [im, list] : gt_info.items()) {
       for (const json& entry : list) {
@@ -274,20 +321,38 @@ TEST(BopSchema, EveryFileHasTheDocumentedKeysAndTypes) {
       }
     }
     const json rle = {{"keys", {{"size", json::array({"list", 2, "int"})}, {"counts", "string"}}}};
-    ExpectSchema(ReadJson(scene_dir / "scene_gt_coco.json"),
-                 {{"keys",
-                   {{"annotations",
-                     json::array({"list", -1, {{"keys", {{"id", "int"}, {"image_id", "int"}, {"category_id", "int"},
-                                                         {"iscrowd", "int"}, {"area", "int"}, {"bbox", box},
-                                                         {"segmentation", rle}, {"width", "int"}, {"height", "int"},
-                                                         {"ignore", "bool"}, {"inst_id", "int"}}}}})},
-                    {"categories", json::array({"list", -1, {{"keys", {{"id", "int"}, {"name", "string"},
-                                                                       {"supercategory", "string"}}}}})},
-                    {"images", json::array({"list", -1, {{"keys", {{"id", "int"}, {"file_name", "string"},
-                                                                   {"width", "int"}, {"height", "int"}}}}})},
-                    {"info", {{"keys", {{"description", "string"}}}}},
-                    {"licenses", json::array({"list", 0, "int"})}}}},
-                 "scene_gt_coco.json");
+    ExpectSchema(
+        ReadJson(scene_dir / "scene_gt_coco.json"),
+        {{"keys",
+          {{"annotations", json::array({"list",
+                                        -1,
+                                        {{"keys",
+                                          {{"id", "int"},
+                                           {"image_id", "int"},
+                                           {"category_id", "int"},
+                                           {"iscrowd", "int"},
+                                           {"area", "int"},
+                                           {"bbox", box},
+                                           {"segmentation", rle},
+                                           {"width", "int"},
+                                           {"height", "int"},
+                                           {"ignore", "bool"},
+                                           {"inst_id", "int"}}}}})},
+           {"categories",
+            json::array(
+                {"list",
+                 -1,
+                 {{"keys", {{"id", "int"}, {"name", "string"}, {"supercategory", "string"}}}}})},
+           {"images", json::array({"list",
+                                   -1,
+                                   {{"keys",
+                                     {{"id", "int"},
+                                      {"file_name", "string"},
+                                      {"width", "int"},
+                                      {"height", "int"}}}}})},
+           {"info", {{"keys", {{"description", "string"}}}}},
+           {"licenses", json::array({"list", 0, "int"})}}}},
+        "scene_gt_coco.json");
   }
 }
 

@@ -14,25 +14,27 @@ PartSource Family(const std::string& name, const std::vector<ParamValues>& varia
   PartSource source;
   source.kind = PartSource::Kind::kFamily;
   source.family = name;
-  for (const ParamValues& v : variants) source.variants.push_back(CompleteParams(*FindFamily(name), v));
+  for (const ParamValues& v : variants)
+    source.variants.push_back(CompleteParams(*FindFamily(name), v));
   return source;
 }
 
 TEST(ExportVariants, EveryVariantReimportsWithTheSameVolume) {
   testing::ScratchDir dir;
   RunSpec spec = DefaultRunSpec();
-  spec.scenes = {SceneSpec{"kit",
-                           {Family("spur_gear", {{{"teeth", 13.0}}, {{"teeth", 27.0}, {"helix_angle", 0.3}}}),
-                            Family("gear_pair", {{}}), Family("hex_nut", {{{"size", std::string("M6")}}})},
-                           {}}};
+  spec.scenes = {
+      SceneSpec{"kit",
+                {Family("spur_gear", {{{"teeth", 13.0}}, {{"teeth", 27.0}, {"helix_angle", 0.3}}}),
+                 Family("gear_pair", {{}}), Family("hex_nut", {{{"size", std::string("M6")}}})},
+                {}}};
   const std::vector<VariantListing> listed = ListVariants(spec);
   ASSERT_EQ(listed.size(), 4u);
   EXPECT_EQ(listed[1].id, "kit/0/spur_gear/1");
   const std::vector<VariantListing> written = ExportVariants(spec, dir / "step", false);
   ASSERT_EQ(written.size(), 4u);
   for (size_t i = 0; i < written.size(); ++i) {
-    const ParamValues& params = i < 2 ? spec.scenes[0].sources[0].variants[i]
-                                      : spec.scenes[0].sources[i - 1].variants[0];
+    const ParamValues& params =
+        i < 2 ? spec.scenes[0].sources[0].variants[i] : spec.scenes[0].sources[i - 1].variants[0];
     const std::string family = i < 2 ? "spur_gear" : (i == 2 ? "gear_pair" : "hex_nut");
     const Assembly built = BuildVariant(*FindFamily(family), params, ImportOptions{});
     const Assembly again = ImportCad(written[i].step, ImportOptions{});
@@ -49,13 +51,15 @@ TEST(ExportVariants, EveryVariantReimportsWithTheSameVolume) {
 TEST(ExportVariants, ImpossibleVariantLeavesNoFolder) {
   testing::ScratchDir dir;
   RunSpec spec = DefaultRunSpec();
-  spec.scenes = {SceneSpec{"s", {Family("spur_gear", {{{"teeth", 20.0}}, {{"teeth", 20.0}, {"bore", 60.0}}})}, {}}};
+  spec.scenes = {SceneSpec{
+      "s", {Family("spur_gear", {{{"teeth", 20.0}}, {{"teeth", 20.0}, {"bore", 60.0}}})}, {}}};
   try {
     ExportVariants(spec, dir / "step", false);
     FAIL();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("s/0/spur_gear/1"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("bore diameter 60 mm must be smaller than the root diameter 35 mm"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "bore diameter 60 mm must be smaller than the root diameter 35 mm"),
               std::string::npos)
         << e.what();
   }

@@ -4,8 +4,8 @@
 #include <map>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
+#include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
 
@@ -32,11 +32,13 @@ RunSpec SmallDefault() {
 }
 
 // A family entry with the given variants (parameters completed with the family's defaults).
-PartSource Family(const std::string& name, const std::vector<ParamValues>& variants, bool one_class = false) {
+PartSource Family(const std::string& name, const std::vector<ParamValues>& variants,
+                  bool one_class = false) {
   PartSource source;
   source.kind = PartSource::Kind::kFamily;
   source.family = name;
-  for (const ParamValues& v : variants) source.variants.push_back(CompleteParams(*FindFamily(name), v));
+  for (const ParamValues& v : variants)
+    source.variants.push_back(CompleteParams(*FindFamily(name), v));
   source.one_class = one_class;
   return source;
 }
@@ -75,12 +77,12 @@ TEST(Generate, DefaultJobIsThePapersThreeDemoSets) {
   EXPECT_EQ(summary.instances, 6u + 4u + 5u);
 
   const auto files = ReadTree(dir / "data");
-  for (const char* f : {"camera.json", "models/models_info.json", "models/obj_000013.ply", "variants.json",
-                        "models/points/obj_000013.ply", "models/keypoints.json", "coco/train.json",
-                        "coco/test.json", "train/000001/scene_gt_coco.json",
-                        "splits/train.txt", "splits/test.txt", "test_targets_bop19.json",
-                        "train/000000/rgb/000001.png", "train/000001/scene_gt.json",
-                        "train/000002/mask_visib/000001_000004.png", "train/000002/scene_gt_info.json"}) {
+  for (const char* f :
+       {"camera.json", "models/models_info.json", "models/obj_000013.ply", "variants.json",
+        "models/points/obj_000013.ply", "models/keypoints.json", "coco/train.json",
+        "coco/test.json", "train/000001/scene_gt_coco.json", "splits/train.txt", "splits/test.txt",
+        "test_targets_bop19.json", "train/000000/rgb/000001.png", "train/000001/scene_gt.json",
+        "train/000002/mask_visib/000001_000004.png", "train/000002/scene_gt_info.json"}) {
     EXPECT_TRUE(files.count(f)) << f;
   }
   // Gears carry their z-fold symmetry, pegs a continuous one.
@@ -131,9 +133,11 @@ TEST(Generate, WorldPosesAgreeWithCameraAndModelPoses) {
   for (size_t i = 0; i < world.size(); ++i) {
     EXPECT_EQ(world[i]["obj_id"], gt["1"][i]["obj_id"]);
     // world_from_model = inverse(cam_from_world) * cam_from_model
-    const Eigen::Isometry3d expected = pose(cams["1"]["cam_R_w2c"], cams["1"]["cam_t_w2c"]).inverse() *
-                                       pose(gt["1"][i]["cam_R_m2c"], gt["1"][i]["cam_t_m2c"]);
-    EXPECT_TRUE(pose(world[i]["world_R_m2w"], world[i]["world_t_m2w"]).isApprox(expected, 1e-9)) << i;
+    const Eigen::Isometry3d expected =
+        pose(cams["1"]["cam_R_w2c"], cams["1"]["cam_t_w2c"]).inverse() *
+        pose(gt["1"][i]["cam_R_m2c"], gt["1"][i]["cam_t_m2c"]);
+    EXPECT_TRUE(pose(world[i]["world_R_m2w"], world[i]["world_t_m2w"]).isApprox(expected, 1e-9))
+        << i;
   }
 }
 
@@ -181,13 +185,16 @@ TEST(PlacementWarnings, SayWhenObjectsDoNotFitOrVanish) {
   std::vector<Instance> tiny = {{1, "speck", Eigen::Isometry3d::Identity()}};
   const auto small = PlacementWarnings(parts, tiny, kinect, sweep);
   ASSERT_EQ(small.size(), 1u);
-  EXPECT_NE(small[0].find("'speck' (3 mm) spans only 1.09 px at the farthest radius 1450 mm"), std::string::npos) << small[0];
+  EXPECT_NE(small[0].find("'speck' (3 mm) spans only 1.09 px at the farthest radius 1450 mm"),
+            std::string::npos)
+      << small[0];
 }
 
 TEST(Generate, GridAndRandomFamiliesGenerateTwiceIdentically) {
   ScratchDir dir;
   std::vector<ParamValues> grid;
-  for (int z = 12; z <= 40; ++z) grid.push_back({{"teeth", double(z)}, {"module", 1.5}, {"bore", 6.0}});
+  for (int z = 12; z <= 40; ++z)
+    grid.push_back({{"teeth", double(z)}, {"module", 1.5}, {"bore", 6.0}});
   RunSpec spec = OneScene({Family("spur_gear", grid, /*one_class=*/true)}, Layout::kGrid);
   // And a second scene of seeded random helical gears and bolts, from recipe text.
   const RunSpec random = ParseRecipe(R"(
@@ -199,7 +206,8 @@ scenes:
         random: {count: 5, seed: 11, params: {teeth: {from: 15, to: 30}, helix_angle: {from: 10, to: 20}}}
       - family: hex_bolt
         random: {count: 3, seed: 11, params: {size: [M6, M8, M12], length: {from: 20 mm, to: 50 mm}}}
-)", "r.yaml", ".");
+)",
+                                     "r.yaml", ".");
   spec.scenes.push_back(random.scenes.at(0));
   spec.sweep.yaw_rad = {0.5};
   spec.sweep.radius_mm = {1400.0};
@@ -218,7 +226,7 @@ scenes:
   EXPECT_EQ(variants[28]["params"]["teeth"], 40.0);
   EXPECT_EQ(variants[29]["id"], "random/0/spur_gear/0");
   const json cad = json::parse(first.at("models/models_cad.json"));
-  EXPECT_GE(cad.size(), 29u + 5u + 1u);            // 29 objects (and the random ones) ...
+  EXPECT_GE(cad.size(), 29u + 5u + 1u);             // 29 objects (and the random ones) ...
   EXPECT_EQ(cad["29"]["class_name"], "spur_gear");  // ... of one class
   EXPECT_EQ(cad["1"]["class_id"], cad["29"]["class_id"]);
   const json info = json::parse(first.at("models/models_info.json"));
@@ -241,15 +249,18 @@ TEST(Generate, SameSpecGivesTheSameBytesWhateverTheThreadCount) {
 
 TEST(Generate, BadInputLeavesNoDatasetBehind) {
   ScratchDir dir;
-  std::ofstream(dir / "broken.stp") << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(";
-  RunSpec spec = OneScene({PartSource{.kind = PartSource::Kind::kFile, .path = dir / "broken.stp", .where = "r.yaml:2:11"}});
+  std::ofstream(dir / "broken.stp")
+      << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(";
+  RunSpec spec = OneScene({PartSource{
+      .kind = PartSource::Kind::kFile, .path = dir / "broken.stp", .where = "r.yaml:2:11"}});
   GenerateOptions options;
   options.output = dir / "out";
   try {
     Generate(spec, options);
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("r.yaml:2:11: " + (dir / "broken.stp").string() + ": ", 0), 0u)
+    EXPECT_EQ(
+        std::string(e.what()).rfind("r.yaml:2:11: " + (dir / "broken.stp").string() + ": ", 0), 0u)
         << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));
@@ -271,14 +282,18 @@ TEST(Generate, ExistingOutputNeedsOverwrite) {
   EXPECT_EQ(EntriesIn(dir.path()), 1u);
 }
 
-json ModelsCad(const std::filesystem::path& root) { return ReadJson(root / "models" / "models_cad.json"); }
+json ModelsCad(const std::filesystem::path& root) {
+  return ReadJson(root / "models" / "models_cad.json");
+}
 
 TEST(Generate, SameShapeFromTwoSourcesIsOneObject) {
   ScratchDir dir;
   // A square peg written to STEP lying on its side is the square-peg family's peg.
-  WriteStep(dir / "peg.step", "pegs",
-            {StepComponent{"turned peg", MakeBox(20, 20, 50),
-                           {Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()))}}});
+  WriteStep(
+      dir / "peg.step", "pegs",
+      {StepComponent{"turned peg",
+                     MakeBox(20, 20, 50),
+                     {Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()))}}});
   RunSpec spec = OneScene({Family("square_peg", {{}}), Family("round_peg", {{}}),
                            PartSource{.kind = PartSource::Kind::kFile, .path = dir / "peg.step"}},
                           Layout::kRow);
@@ -291,10 +306,14 @@ TEST(Generate, SameShapeFromTwoSourcesIsOneObject) {
 
 TEST(Generate, ClassesByAssemblyAndByNameGroups) {
   ScratchDir dir;
-  WriteStep(dir / "kit.step", "kit",
-            {StepComponent{"M6 bolt", MakeCylinder(3, 30), {Eigen::Isometry3d::Identity()}},
-             StepComponent{"M8 bolt", MakeCylinder(4, 40), {Eigen::Isometry3d(Eigen::Translation3d(50, 0, 0))}},
-             StepComponent{"base plate", MakeBox(100, 80, 5), {Eigen::Isometry3d(Eigen::Translation3d(0, 0, -5))}}});
+  WriteStep(
+      dir / "kit.step", "kit",
+      {StepComponent{"M6 bolt", MakeCylinder(3, 30), {Eigen::Isometry3d::Identity()}},
+       StepComponent{
+           "M8 bolt", MakeCylinder(4, 40), {Eigen::Isometry3d(Eigen::Translation3d(50, 0, 0))}},
+       StepComponent{"base plate",
+                     MakeBox(100, 80, 5),
+                     {Eigen::Isometry3d(Eigen::Translation3d(0, 0, -5))}}});
   RunSpec spec = OneScene({PartSource{.kind = PartSource::Kind::kFile, .path = dir / "kit.step"}});
   spec.class_groups = {{"bolt", {"*bolt"}}};
   GenerateOptions options;
@@ -321,7 +340,8 @@ TEST(Generate, ClassesByAssemblyAndByNameGroups) {
 TEST(Generate, As1RecipeShowsEveryPart) {
   CADSYNTH_REQUIRE_DATA(file, "step/assemblies/as1-oc-214.stp");
   ScratchDir dir;
-  RunSpec spec = LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "as1_assembly.yaml");
+  RunSpec spec =
+      LoadRecipe(std::filesystem::path(CADSYNTH_SOURCE_DIR) / "recipes" / "as1_assembly.yaml");
   spec.intrinsics = Intrinsics{320, 240, 262.5, 262.5, 159.5, 119.5};  // half size, same view
   GenerateOptions options;
   options.output = dir / "as1";

@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/test_support.h"
 #include "dataset/coco.h"
+#include "tests/test_support.h"
 #include "tools/pipeline/generate.h"
 
 namespace cadsynth {
@@ -25,7 +25,8 @@ json ReadJson(const std::filesystem::path& path) {
 
 // The default job at 320 x 240: straight down and oblique views, so that parts of the
 // slider-crank and the gearbox touch, hide each other and leave the image.
-std::filesystem::path Generated(const ScratchDir& dir, const std::string& name, BopOptions::Visibility visibility) {
+std::filesystem::path Generated(const ScratchDir& dir, const std::string& name,
+                                BopOptions::Visibility visibility) {
   RunSpec spec = DefaultRunSpec();
   spec.intrinsics = Intrinsics{320, 240, 262.5, 262.5, 159.5, 119.5};
   spec.sweep.yaw_rad = {0.0, 2.0};
@@ -60,21 +61,25 @@ struct Totals {
 
 // Checks one dataset against its masks; returns its visible instances and pixels, and every
 // image's visible masks by (scene, image, instance) name.
-Totals CheckAgainstMasks(const std::filesystem::path& root, bool exact, std::map<std::string, cv::Mat>* visible) {
+Totals CheckAgainstMasks(const std::filesystem::path& root, bool exact,
+                         std::map<std::string, cv::Mat>* visible) {
   Totals totals;
   for (int scene = 0; scene < 3; ++scene) {
     const std::filesystem::path dir = root / "train" / ("00000" + std::to_string(scene));
     const json gt_info = ReadJson(dir / "scene_gt_info.json");
     const json coco = ReadJson(dir / "scene_gt_coco.json");
     std::map<std::pair<int, int>, json> annotations;
-    for (const json& a : coco["annotations"]) annotations[{a["image_id"].get<int>(), a["inst_id"].get<int>()}] = a;
+    for (const json& a : coco["annotations"])
+      annotations[{a["image_id"].get<int>(), a["inst_id"].get<int>()}] = a;
     for (const auto& [im, list] : gt_info.items()) {
       cv::Mat owner;  // exact mode: which instance claimed each pixel
       for (size_t i = 0; i < list.size(); ++i) {
-        const std::string name = std::string(6 - im.size(), '0') + im + "_00000" + std::to_string(i) + ".png";
+        const std::string name =
+            std::string(6 - im.size(), '0') + im + "_00000" + std::to_string(i) + ".png";
         SCOPED_TRACE(dir.string() + " " + name);
         const cv::Mat mask = cv::imread((dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
-        const cv::Mat mask_visib = cv::imread((dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+        const cv::Mat mask_visib =
+            cv::imread((dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
         if (owner.empty()) owner = cv::Mat::zeros(mask.size(), CV_8UC1);
         const json& info = list[i];
         int visib_count = 0, full_count = 0;
@@ -85,7 +90,9 @@ Totals CheckAgainstMasks(const std::filesystem::path& root, bool exact, std::map
         EXPECT_EQ(info["px_count_visib"], visib_count);
         EXPECT_EQ(info["bbox_visib"], visib_box);
         EXPECT_DOUBLE_EQ(info["visib_fract"].get<double>(),
-                         info["px_count_all"] > 0 ? static_cast<double>(visib_count) / info["px_count_all"].get<int>() : 0);
+                         info["px_count_all"] > 0
+                             ? static_cast<double>(visib_count) / info["px_count_all"].get<int>()
+                             : 0);
         if (visib_count == 0) {
           ++totals.invisible;
           EXPECT_EQ(info["bbox_obj"], json::array({-1, -1, -1, -1}));
@@ -94,7 +101,8 @@ Totals CheckAgainstMasks(const std::filesystem::path& root, bool exact, std::map
         }
         // bbox_obj is the 3x canvas box: the in-image mask's where the box lies inside the image.
         const json& b = info["bbox_obj"];
-        const bool inside = b[0] >= 0 && b[1] >= 0 && b[0].get<int>() + b[2].get<int>() < mask.cols &&
+        const bool inside = b[0] >= 0 && b[1] >= 0 &&
+                            b[0].get<int>() + b[2].get<int>() < mask.cols &&
                             b[1].get<int>() + b[3].get<int>() < mask.rows;
         if (inside) {
           EXPECT_EQ(b, full_box);
@@ -128,9 +136,11 @@ Totals CheckAgainstMasks(const std::filesystem::path& root, bool exact, std::map
                                           full_box[3].get<int>() + 1}));
         EXPECT_EQ(a["ignore"], info["visib_fract"].get<double>() < 0.1);
         const std::vector<uint8_t> decoded =
-            DecodeRle(RleMask{mask.rows, mask.cols, DecompressRleCounts(a["segmentation"]["counts"].get<std::string>())});
+            DecodeRle(RleMask{mask.rows, mask.cols,
+                              DecompressRleCounts(a["segmentation"]["counts"].get<std::string>())});
         int differ = 0;
-        for (int p = 0; p < mask.rows * mask.cols; ++p) differ += (decoded[p] != 0) != (mask_visib.data[p] != 0);
+        for (int p = 0; p < mask.rows * mask.cols; ++p)
+          differ += (decoded[p] != 0) != (mask_visib.data[p] != 0);
         EXPECT_EQ(differ, 0);
       }
     }
@@ -141,8 +151,10 @@ Totals CheckAgainstMasks(const std::filesystem::path& root, bool exact, std::map
 TEST(Labels, BoxesCountsAndCocoEqualBopToolkitsFromTheWrittenMasks) {
   ScratchDir dir;
   std::map<std::string, cv::Mat> exact_masks, bop19_masks;
-  const Totals exact = CheckAgainstMasks(Generated(dir, "exact", BopOptions::Visibility::kExact), true, &exact_masks);
-  const Totals bop19 = CheckAgainstMasks(Generated(dir, "bop19", BopOptions::Visibility::kBop19), false, &bop19_masks);
+  const Totals exact = CheckAgainstMasks(Generated(dir, "exact", BopOptions::Visibility::kExact),
+                                         true, &exact_masks);
+  const Totals bop19 = CheckAgainstMasks(Generated(dir, "bop19", BopOptions::Visibility::kBop19),
+                                         false, &bop19_masks);
   EXPECT_EQ(exact.instances, bop19.instances);
   EXPECT_GT(exact.invisible, 0);  // some instances hide completely: their boxes are -1
   // bop19 keeps every front-most pixel and adds those of touching parts less than 15 mm behind.

@@ -40,10 +40,12 @@ TEST(Prepare, PlacementWarningsSayWhenTheSceneIsTooLargeOrTooSmall) {
   const PreparedRun run = Prepare(spec);
   SweepOptions near = spec.sweep;
   near.radius_mm = {30.0};  // inside the scene (it reaches 48 mm from the target)
-  const auto warnings = PlacementWarnings(run.parts, run.scenes[0].instances, spec.intrinsics, near);
+  const auto warnings =
+      PlacementWarnings(run.parts, run.scenes[0].instances, spec.intrinsics, near);
   ASSERT_FALSE(warnings.empty());
   EXPECT_NE(warnings[0].find("beyond the nearest camera radius"), std::string::npos) << warnings[0];
-  EXPECT_TRUE(PlacementWarnings(run.parts, run.scenes[0].instances, spec.intrinsics, spec.sweep).empty());
+  EXPECT_TRUE(
+      PlacementWarnings(run.parts, run.scenes[0].instances, spec.intrinsics, spec.sweep).empty());
 }
 
 }  // namespace

@@ -10,9 +10,12 @@ namespace cadsynth {
 namespace {
 
 TEST(Progress, BarShowsShareRateAndEta) {
-  EXPECT_EQ(FormatProgressBar(1665, 3330, 19.0, 10), "[#####-----]  50%  1665/3330 frames  87.6 frames/s  ETA 0:19");
-  EXPECT_EQ(FormatProgressBar(3330, 3330, 3725.0, 4), "[####] 100%  3330/3330 frames  0.9 frames/s  in 1:02:05");
-  EXPECT_EQ(FormatProgressBar(0, 10, 0.0, 0), "  0%  0/10 frames");  // no rate before the first frame
+  EXPECT_EQ(FormatProgressBar(1665, 3330, 19.0, 10),
+            "[#####-----]  50%  1665/3330 frames  87.6 frames/s  ETA 0:19");
+  EXPECT_EQ(FormatProgressBar(3330, 3330, 3725.0, 4),
+            "[####] 100%  3330/3330 frames  0.9 frames/s  in 1:02:05");
+  EXPECT_EQ(FormatProgressBar(0, 10, 0.0, 0),
+            "  0%  0/10 frames");  // no rate before the first frame
 }
 
 TEST(Progress, JsonLineHasTheNumbersAClusterLogNeeds) {
@@ -22,7 +25,9 @@ TEST(Progress, JsonLineHasTheNumbersAClusterLogNeeds) {
   EXPECT_DOUBLE_EQ(j["frames_per_s"].get<double>(), 25.0);
   EXPECT_DOUBLE_EQ(j["eta_s"].get<double>(), 30.0);
   EXPECT_TRUE(nlohmann::json::parse(FormatProgressJson(0, 1000, 0.0))["eta_s"].is_null());
-  EXPECT_EQ(FormatProgressJson(250, 1000, 10.0, "3/100").rfind("{\"shard\":\"3/100\",\"done\":250,", 0), 0u);
+  EXPECT_EQ(
+      FormatProgressJson(250, 1000, 10.0, "3/100").rfind("{\"shard\":\"3/100\",\"done\":250,", 0),
+      0u);
 }
 
 // JSON mode prints at most one line per interval, always the last one, and ignores late counts.
@@ -42,7 +47,8 @@ TEST(Progress, JsonLinesAreThrottledAndTheLastAlwaysComes) {
   std::fclose(out);
   const std::string text(buffer, size);
   std::free(buffer);
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 5) << text;  // 0.2, 5.2, 10.2, 15.2 s and the end
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 5)
+      << text;  // 0.2, 5.2, 10.2, 15.2 s and the end
   EXPECT_NE(text.find("{\"done\":100,\"total\":100"), std::string::npos) << text;
 }
 

@@ -10,9 +10,9 @@
 #include <gtest/gtest.h>
 
 #include "cad/error.h"
+#include "recipes/reference.h"
 #include "tools/pipeline/generate.h"
 #include "tools/pipeline/journal.h"
-#include "recipes/reference.h"
 #include "tools/pipeline/shards.h"
 
 namespace cadsynth {
@@ -22,7 +22,8 @@ namespace {
 template <typename T>
 T Changed(const T& value, const Field& field) {
   if constexpr (std::is_enum_v<T>) {
-    return static_cast<T>((static_cast<size_t>(value) + 1) % std::max<size_t>(2, field.choices.size()));
+    return static_cast<T>((static_cast<size_t>(value) + 1) %
+                          std::max<size_t>(2, field.choices.size()));
   } else if constexpr (std::is_same_v<T, bool>) {
     return !value;
   } else if constexpr (std::is_same_v<T, std::string>) {
@@ -66,8 +67,12 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
     EXPECT_NE(key, base) << name << " is not in the run key";
     EXPECT_TRUE(keys.insert(key).second) << name;
   };
-  EXPECT_EQ(ForEachChange<BopOptions>(spec, [](RunSpec& s) -> BopOptions& { return s.bop; }, check), 17);
-  EXPECT_EQ(ForEachChange<RenderOptions>(spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check), 8);
+  EXPECT_EQ(ForEachChange<BopOptions>(
+                spec, [](RunSpec& s) -> BopOptions& { return s.bop; }, check),
+            17);
+  EXPECT_EQ(ForEachChange<RenderOptions>(
+                spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
+            8);
 }
 
 TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {
@@ -78,11 +83,12 @@ TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {
     });
     return all;
   };
-  ForEachChange<BopOptions>(RunSpec{}, [](RunSpec& s) -> BopOptions& { return s.bop; },
-                            [&](const RunSpec& changed, const std::string& name) {
-                              EXPECT_EQ(text(OutputOptionsFromJson(OutputOptionsJson(changed.bop))), text(changed.bop))
-                                  << name;
-                            });
+  ForEachChange<BopOptions>(
+      RunSpec{}, [](RunSpec& s) -> BopOptions& { return s.bop; },
+      [&](const RunSpec& changed, const std::string& name) {
+        EXPECT_EQ(text(OutputOptionsFromJson(OutputOptionsJson(changed.bop))), text(changed.bop))
+            << name;
+      });
   EXPECT_THROW(OutputOptionsFromJson("{\"depth_scale\": 0.1}"), Error);  // the rest is missing
 }
 
@@ -93,23 +99,26 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   const auto section = [&](const char* name, auto select) {
     using Options = std::decay_t<decltype(select(std::declval<RunSpec&>()))>;
     ForEachChange<Options>(RunSpec{}, select, [&](const RunSpec& changed, const std::string&) {
-      Options::Fields(select(const_cast<RunSpec&>(changed)), [&](const auto& value, const Field& field) {
-        using T = std::decay_t<decltype(value)>;
-        if (field.key.empty() || field.by_hand) return;
-        T expected = value;
-        std::string text = FieldText(value, field);
-        if (field.kind == "length") text += " mm";
-        const RunSpec parsed =
-            ParseRecipe(std::string(name) + ":\n  " + std::string(field.key) + ": " + text + "\n", "r.yaml", ".");
-        Options::Fields(select(const_cast<RunSpec&>(parsed)), [&](const auto& got, const Field& other) {
-          if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
-            if (other.Name() == field.Name()) {
-              EXPECT_EQ(got, expected) << name << "." << field.key;
-            }
-          }
-        });
-        ++read;
-      });
+      Options::Fields(
+          select(const_cast<RunSpec&>(changed)), [&](const auto& value, const Field& field) {
+            using T = std::decay_t<decltype(value)>;
+            if (field.key.empty() || field.by_hand) return;
+            T expected = value;
+            std::string text = FieldText(value, field);
+            if (field.kind == "length") text += " mm";
+            const RunSpec parsed = ParseRecipe(
+                std::string(name) + ":\n  " + std::string(field.key) + ": " + text + "\n", "r.yaml",
+                ".");
+            Options::Fields(select(const_cast<RunSpec&>(parsed)),
+                            [&](const auto& got, const Field& other) {
+                              if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
+                                if (other.Name() == field.Name()) {
+                                  EXPECT_EQ(got, expected) << name << "." << field.key;
+                                }
+                              }
+                            });
+            ++read;
+          });
     });
   };
   section("output", [](RunSpec& s) -> BopOptions& { return s.bop; });

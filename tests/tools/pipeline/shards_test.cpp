@@ -148,7 +148,8 @@ TEST(Shards, MergeOpensFewFilesWhateverTheShardCount) {
   RunJob(spec, dir / "whole");
   for (int i = 0; i < 12; ++i) RunJob(spec, dir / "tree", ShardSpec{i, 12});
   size_t open_files = 0;
-  for ([[maybe_unused]] const auto& fd : std::filesystem::directory_iterator("/proc/self/fd")) ++open_files;
+  for ([[maybe_unused]] const auto& fd : std::filesystem::directory_iterator("/proc/self/fd"))
+    ++open_files;
   rlimit old_limit{};
   ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &old_limit), 0);
   rlimit tight = old_limit;
@@ -214,8 +215,8 @@ TEST(Shards, ShardsOfAnotherRunOrCountAreRefused) {
   const auto refusal = [&](const std::string& prefix, const std::string& value) {
     const size_t at = original.rfind("\n" + prefix);
     EXPECT_NE(at, std::string::npos) << prefix;
-    const std::string text =
-        original.substr(0, at) + "\n" + prefix + value + original.substr(original.find('\n', at + 1));
+    const std::string text = original.substr(0, at) + "\n" + prefix + value +
+                             original.substr(original.find('\n', at + 1));
     std::ofstream(key, std::ios::binary | std::ios::trunc) << text;
     try {
       RunJob(spec, dir / "tree", ShardSpec{1, 3});

@@ -72,22 +72,38 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
       t[k++] = ToEigen(hull.point(v));
     return t;
   };
+  // A face is grown from its first triangle (in the hull's order) over neighbouring triangles in
+  // that triangle's plane: a convex polytope's facet is connected, so this finds the triangles a
+  // search of every face would, in time linear in the hull's size.
+  std::vector<Eigen::Vector3d> normal_of(hull.number_of_faces());
   for (auto f : handles) {
     const auto t = triangle(f);
-    const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
-    int found = -1;
-    for (size_t i = 0; i < faces.size() && found < 0; ++i) {
-      if (faces[i].normal.dot(n) > 1 - 1e-9 &&
-          std::abs(n.dot(t[0]) - faces[i].offset) < 1e-7 * size)
-        found = int(i);
-    }
-    if (found < 0) {
-      found = static_cast<int>(faces.size());
-      faces.push_back(Face{n, n.dot(t[0]), {}, {}, 0});
-    }
-    faces[found].triangles.push_back(t);
-    face_of[f.idx()] = found;
+    normal_of[f.idx()] = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
   }
+  std::vector<HullMesh::Face_index> stack;
+  for (auto seed : handles) {
+    if (face_of[seed.idx()] >= 0) continue;
+    const int found = static_cast<int>(faces.size());
+    const Eigen::Vector3d n = normal_of[seed.idx()];
+    faces.push_back(Face{n, n.dot(triangle(seed)[0]), {}, {}, 0});
+    face_of[seed.idx()] = found;
+    stack.assign(1, seed);
+    while (!stack.empty()) {
+      const HullMesh::Face_index f = stack.back();
+      stack.pop_back();
+      for (auto h : CGAL::halfedges_around_face(hull.halfedge(f), hull)) {
+        const HullMesh::Face_index g = hull.face(hull.opposite(h));
+        if (face_of[g.idx()] >= 0) continue;
+        const auto t = triangle(g);
+        if (faces[found].normal.dot(normal_of[g.idx()]) > 1 - 1e-9 &&
+            std::abs(normal_of[g.idx()].dot(t[0]) - faces[found].offset) < 1e-7 * size) {
+          face_of[g.idx()] = found;
+          stack.push_back(g);
+        }
+      }
+    }
+  }
+  for (auto f : handles) faces[face_of[f.idx()]].triangles.push_back(triangle(f));
   // Boundary edges between different faces, and solid angles seen from the centre of mass.
   for (auto f : handles) {
     const int me = face_of[f.idx()];
@@ -118,12 +134,41 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
     return worst;
   };
   const double tolerance = 1e-9 * size;
+  // Each face rolls over its worst edge until the centre of mass projects inside the face it
+  // reached. The next face depends only on the current one, so where a face ends up is kept and
+  // reused by every roll that passes it (linear instead of quadratic in the number of faces).
+  std::vector<int> rests_on(faces.size(), -1);
+  std::vector<int> path;
+  std::vector<char> on_path(faces.size(), 0);
   std::vector<double> probability(faces.size(), 0.0);
   for (size_t f = 0; f < faces.size(); ++f) {
     int current = static_cast<int>(f), next = -1;
+    path.clear();
+    bool cycle = false;
     for (size_t step = 0; step <= faces.size(); ++step) {
+      if (rests_on[current] >= 0) {
+        current = rests_on[current];
+        break;
+      }
+      if (on_path[current]) {  // rolls round in a cycle (degenerate): bounded walk, not kept
+        cycle = true;
+        break;
+      }
       if (outside(current, &next) <= tolerance) break;
+      path.push_back(current);
+      on_path[current] = 1;
       current = next;
+    }
+    for (int p : path) on_path[p] = 0;
+    if (cycle) {
+      current = static_cast<int>(f);
+      for (size_t step = 0; step <= faces.size(); ++step) {
+        if (outside(current, &next) <= tolerance) break;
+        current = next;
+      }
+    } else {
+      for (int p : path) rests_on[p] = current;
+      rests_on[current] = current;
     }
     probability[current] += faces[f].solid_angle / (4 * M_PI);
   }

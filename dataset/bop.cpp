@@ -436,7 +436,7 @@ void BopSceneWriter::RemoveFragments() {
 }
 
 void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
-                                const std::function<void(FileLog&)>& before_fragment) {
+                                const std::vector<const FrameWriter*>& formats) {
   if (frame.instances.size() != obj_ids_.size()) {
     throw Error("bop: frame has " + std::to_string(frame.instances.size()) +
                 " instances, the scene " + std::to_string(obj_ids_.size()));
@@ -565,7 +565,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
                           {"ignore", info.visib_fract < 0.1},
                           {"counts", CompressRleCounts(rle.counts)}});
   }
-  if (before_fragment) before_fragment(files);
+  for (const FrameWriter* format : formats) format->WriteFrame(image_id, frame, scene_dir_, &files);
   // One fragment per frame, written last: four lines of compact JSON read back in order by
   // Finish(), and the frame's manifest entry: every file it wrote with size and CRC-32.
   Json manifest = Json::array();

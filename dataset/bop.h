@@ -28,6 +28,7 @@
 #include "cad/part.h"
 #include "cad/schema.h"
 #include "dataset/file_io.h"
+#include "dataset/frame_writer.h"
 #include "render/camera.h"
 #include "render/frame.h"
 
@@ -240,14 +241,14 @@ class BopSceneWriter {
   BopSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
                  std::vector<int> obj_id_of_instance);
 
-  // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`, calls
-  // `before_fragment` with the frame's file log (other formats of the same frame write through
-  // it), and last writes the frame's fragment: its JSON entries (so memory does not grow with the
-  // number of frames) and its manifest entry, every file it wrote with size and CRC-32. A frame
-  // whose fragment exists is complete: a writer opened on a folder with fragments (an
-  // interrupted run, other shards) takes those frames as written.
+  // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`, then each
+  // of `formats` (the other formats of the same frame, dataset/frame_writer.h), and last the
+  // frame's fragment: its JSON entries (so memory does not grow with the number of frames) and
+  // its manifest entry, every file it wrote with size and CRC-32. A frame whose fragment exists
+  // is complete: a writer opened on a folder with fragments (an interrupted run, other shards)
+  // takes those frames as written.
   void WriteFrame(int image_id, const Frame& frame,
-                  const std::function<void(FileLog&)>& before_fragment = {});
+                  const std::vector<const FrameWriter*>& formats = {});
   bool HasFrame(int image_id) const;
   // Image ids whose fragment exists (this writer's and those found when it was opened), sorted.
   std::vector<int> WrittenFrames() const;

@@ -18,6 +18,7 @@
 #include <Eigen/Geometry>
 
 #include "dataset/bop.h"
+#include "dataset/frame_writer.h"
 #include "render/frame.h"
 
 namespace cadsynth {
@@ -29,7 +30,7 @@ struct PaperInstance {
   Eigen::Isometry3d world_from_model = Eigen::Isometry3d::Identity();
 };
 
-class PaperSceneWriter {
+class PaperSceneWriter : public FrameWriter {
  public:
   // `instances` in Scene::instances order. Writes the formats `options` asks for
   // (paper_layout, pvn3d_meta, grasp_points).
@@ -40,7 +41,7 @@ class PaperSceneWriter {
   // from `bop_scene_dir`. Thread-safe for different images.
   // Every file goes through `files` (the frame's manifest entry; null: not recorded).
   void WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir,
-                  FileLog* files = nullptr) const;
+                  FileLog* files = nullptr) const override;
 
  private:
   std::filesystem::path root_, paper_dir_, grasp_dir_;

@@ -184,11 +184,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                             if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
                               ++(visible == 0 ? empty_views : sparse_views);
                             } else {
-                              writer.WriteFrame(
-                                  static_cast<int>(item.first), *item.second, [&](FileLog& files) {
-                                    paper.WriteFrame(static_cast<int>(item.first), *item.second,
-                                                     writer.scene_dir(), &files);
-                                  });
+                              writer.WriteFrame(static_cast<int>(item.first), *item.second,
+                                                {&paper});
                             }
                             const size_t n = ++done;
                             if (options.progress) options.progress(n, to_render);

@@ -11,6 +11,7 @@
 
 #include "cad/error.h"
 #include "dataset/preview.h"
+#include "tests/json_support.h"
 #include "tests/test_support.h"
 #include "tools/pipeline/generate.h"
 
@@ -20,10 +21,7 @@ namespace {
 using nlohmann::json;
 using testing::ScratchDir;
 
-json ReadJson(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return json::parse(in);
-}
+using testing::ReadJson;
 
 // The default job (the paper's three demo sets) at 160 x 120, 2 views, every image a test image.
 std::filesystem::path SmallDataset(const ScratchDir& dir) {

@@ -12,6 +12,7 @@
 #include "cad/error.h"
 #include "cad/shape.h"
 #include "cad/step.h"
+#include "tests/json_support.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {
@@ -49,10 +50,7 @@ RunSpec OneScene(std::vector<PartSource> sources, Layout layout = Layout::kAssem
   return spec;
 }
 
-json ReadJson(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return json::parse(in);
-}
+using testing::ReadJson;
 
 size_t EntriesIn(const std::filesystem::path& dir) {
   return static_cast<size_t>(std::distance(std::filesystem::directory_iterator(dir), {}));

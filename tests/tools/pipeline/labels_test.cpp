@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "dataset/coco.h"
+#include "tests/json_support.h"
 #include "tests/test_support.h"
 #include "tools/pipeline/generate.h"
 
@@ -18,10 +19,7 @@ namespace {
 using nlohmann::json;
 using testing::ScratchDir;
 
-json ReadJson(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return json::parse(in);
-}
+using testing::ReadJson;
 
 // The default job at 320 x 240: straight down and oblique views, so that parts of the
 // slider-crank and the gearbox touch, hide each other and leave the image.

@@ -24,9 +24,9 @@ struct Field {
   // The key in the struct's recipe section ("depth_scale"); empty for a field set by the program
   // or by another key (still part of the run key and the shard file).
   std::string_view key;
-  // How the recipe writes the value: "length" (a length with a unit, mm inside), "number",
-  // "integer", "bool", "text", or "choice" (one of `choices`; an enum's values in order, a bool's
-  // false then true).
+  // How the recipe writes the value: "length" (a length with a unit, mm inside), "angle"
+  // (degrees or with a unit, radians inside), "number", "integer", "bool", "text", or "choice"
+  // (one of `choices`; an enum's values in order, a bool's false then true).
   std::string_view kind;
   std::string_view doc;  // one line: what it does, its range
   std::vector<std::string_view> choices = {};

@@ -10,6 +10,7 @@
 #include "cad/brep.h"
 #include "cad/mesh.h"
 #include "cad/part.h"
+#include "cad/schema.h"
 
 namespace cadsynth {
 
@@ -28,6 +29,25 @@ struct TessellationOptions {
 
   // False, with a reason, when a value is out of range.
   bool Check(std::string* why) const;
+
+  // Every field, once (cad/schema.h): the recipe's `tessellation:` section, the run key.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.linear_deflection_mm,
+          Field{"linear_deflection", "length", "largest triangle-to-surface distance"});
+    visit(o.angular_deflection_rad,
+          Field{"angular_deflection", "angle",
+                "largest angle between neighbouring triangles on a curved face"});
+    visit(o.min_relative_deflection, Field{"",
+                                           "number",
+                                           "finest deflection as a fraction of the part's size",
+                                           {},
+                                           true,
+                                           "min_relative_deflection"});
+    visit(
+        o.measure_deviation,
+        Field{"", "bool", "measure the mesh-to-surface deviation", {}, true, "measure_deviation"});
+  }
 };
 
 // Primitives, all in mm.

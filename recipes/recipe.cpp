@@ -464,22 +464,67 @@ void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   }
 }
 
+// One described field (cad/schema.h) from the recipe, by its kind.
+template <typename T>
+void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field,
+               T* value) {
+  if constexpr (std::is_enum_v<T> || std::is_same_v<T, bool>) {
+    if (field.kind == "choice") {
+      const std::string text = r.Scalar(node, key);
+      std::string known;
+      for (size_t i = 0; i < field.choices.size(); ++i) {
+        if (text == field.choices[i]) {
+          *value = static_cast<T>(i);
+          return;
+        }
+        known += (i == 0                          ? "'"
+                  : i + 1 == field.choices.size() ? " or '"
+                                                  : ", '") +
+                 std::string(field.choices[i]) + "'";
+      }
+      r.Fail(node, key, "expected " + known + ", got '" + text + "'");
+    } else if constexpr (std::is_same_v<T, bool>) {
+      *value = r.Bool(node, key);
+    }
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    *value = r.Scalar(node, key);
+  } else if constexpr (std::is_floating_point_v<T>) {
+    *value = static_cast<T>(field.kind == "length"  ? r.Length(node, key)
+                            : field.kind == "angle" ? r.Angle(node, key)
+                                                    : r.Number(node, key));
+  } else if constexpr (std::is_same_v<T, uint64_t>) {
+    const int n = r.Integer(node, key);
+    if (n < 0) r.Fail(node, key, "must not be negative");
+    *value = static_cast<uint64_t>(n);
+  } else {
+    *value = r.Integer(node, key);
+  }
+}
+
+// Every described field of `options` that the recipe section `node` gives, except those read by
+// hand; checks that every key of the section is a described field or in `by_hand`.
+template <typename Options>
+void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section,
+                Options* options, std::vector<std::string> by_hand) {
+  Options::Fields(*options, [&](const auto&, const Field& field) {
+    if (!field.key.empty()) by_hand.emplace_back(field.key);
+  });
+  r.ExpectMap(node, section, by_hand);
+  Options::Fields(*options, [&](auto& value, const Field& field) {
+    if (field.key.empty() || field.by_hand || !node[std::string(field.key)]) return;
+    ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field,
+              &value);
+  });
+}
+
 void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "tessellation", {"linear_deflection", "angular_deflection", "crease_angle"});
+  ReadFields(r, node, "tessellation", &spec->tessellation, {"crease_angle"});
   if (node["crease_angle"]) {
     spec->crease_angle_rad = r.Angle(node["crease_angle"], "tessellation.crease_angle");
     if (spec->crease_angle_rad < 0.0 || spec->crease_angle_rad > M_PI) {
       r.Fail(node["crease_angle"], "tessellation.crease_angle",
              "must lie between 0 and 180 degrees");
     }
-  }
-  if (node["linear_deflection"]) {
-    spec->tessellation.linear_deflection_mm =
-        r.Length(node["linear_deflection"], "tessellation.linear_deflection");
-  }
-  if (node["angular_deflection"]) {
-    spec->tessellation.angular_deflection_rad =
-        r.Angle(node["angular_deflection"], "tessellation.angular_deflection");
   }
   r.Check(spec->tessellation, node, "tessellation");
 }
@@ -573,57 +618,6 @@ Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::strin
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) v[i] = length ? r.Length(node[i], key) : r.Number(node[i], key);
   return v;
-}
-
-// One described field (cad/schema.h) from the recipe, by its kind.
-template <typename T>
-void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field,
-               T* value) {
-  if constexpr (std::is_enum_v<T> || std::is_same_v<T, bool>) {
-    if (field.kind == "choice") {
-      const std::string text = r.Scalar(node, key);
-      std::string known;
-      for (size_t i = 0; i < field.choices.size(); ++i) {
-        if (text == field.choices[i]) {
-          *value = static_cast<T>(i);
-          return;
-        }
-        known += (i == 0                          ? "'"
-                  : i + 1 == field.choices.size() ? " or '"
-                                                  : ", '") +
-                 std::string(field.choices[i]) + "'";
-      }
-      r.Fail(node, key, "expected " + known + ", got '" + text + "'");
-    } else if constexpr (std::is_same_v<T, bool>) {
-      *value = r.Bool(node, key);
-    }
-  } else if constexpr (std::is_same_v<T, std::string>) {
-    *value = r.Scalar(node, key);
-  } else if constexpr (std::is_floating_point_v<T>) {
-    *value = static_cast<T>(field.kind == "length" ? r.Length(node, key) : r.Number(node, key));
-  } else if constexpr (std::is_same_v<T, uint64_t>) {
-    const int n = r.Integer(node, key);
-    if (n < 0) r.Fail(node, key, "must not be negative");
-    *value = static_cast<uint64_t>(n);
-  } else {
-    *value = r.Integer(node, key);
-  }
-}
-
-// Every described field of `options` that the recipe section `node` gives, except those read by
-// hand; checks that every key of the section is a described field or in `by_hand`.
-template <typename Options>
-void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section,
-                Options* options, std::vector<std::string> by_hand) {
-  Options::Fields(*options, [&](const auto&, const Field& field) {
-    if (!field.key.empty()) by_hand.emplace_back(field.key);
-  });
-  r.ExpectMap(node, section, by_hand);
-  Options::Fields(*options, [&](auto& value, const Field& field) {
-    if (field.key.empty() || field.by_hand || !node[std::string(field.key)]) return;
-    ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field,
-              &value);
-  });
 }
 
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {

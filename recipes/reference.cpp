@@ -1,8 +1,11 @@
 #include "recipes/reference.h"
 
+#include <cmath>
 #include <sstream>
+#include <type_traits>
 
 #include "cad/schema.h"
+#include "cad/shape.h"
 #include "dataset/bop.h"
 #include "render/renderer.h"
 
@@ -15,8 +18,16 @@ void Section(std::ostringstream& out, const char* name, const char* what) {
   const Options defaults;
   Options::Fields(defaults, [&out](const auto& value, const Field& field) {
     if (field.key.empty()) return;
-    std::string line = "  " + std::string(field.key) + ": " + FieldText(value, field);
-    if (field.kind == "length") line += " mm";
+    std::string line = "  " + std::string(field.key) + ": ";
+    if constexpr (std::is_floating_point_v<std::decay_t<decltype(value)>>) {
+      if (field.kind == "angle") {
+        line += FieldText(std::round(value * 180.0 / M_PI * 1e6) / 1e6, field) + " deg";
+      } else {
+        line += FieldText(value, field) + (field.kind == "length" ? " mm" : "");
+      }
+    } else {
+      line += FieldText(value, field);
+    }
     line.resize(std::max<size_t>(line.size() + 1, 34), ' ');
     out << line << "# " << field.kind;
     if (!field.choices.empty()) {
@@ -41,6 +52,8 @@ std::string RecipeReference() {
       out, "output",
       "dataset layout and formats; also dir (the output folder), formats: [bop, coco, paper, "
       "pvn3d, grasp] and rgb: png | jpg");
+  Section<TessellationOptions>(out, "tessellation",
+                               "how B-rep surfaces become triangles; also crease_angle (meshes)");
   Section<RenderOptions>(
       out, "render",
       "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors");

@@ -67,7 +67,25 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   };
   fields("output", spec.bop);
   fields("render", spec.render);
+  fields("tessellation", spec.tessellation);
   key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
+  // The rest of the spec that changes parts, classes or pixels without changing the recipe text
+  // (a RunSpec built in code has none): meshes' crease angle, classes, colours, the look.
+  key << "parts " << spec.crease_angle_rad << " " << static_cast<int>(spec.class_by) << " "
+      << spec.cad_colors << "\n";
+  for (const auto& [name, globs] : spec.class_groups) {
+    key << "class " << name;
+    for (const std::string& glob : globs) key << " " << glob;
+    key << "\n";
+  }
+  const Scene& look = spec.look;
+  key << "look " << look.floor << " " << look.floor_half_size_mm << " "
+      << look.floor_color.transpose() << " " << look.background_color.transpose() << " "
+      << look.ambient << " " << look.shadows << "\n";
+  for (const Scene::Light& light : look.lights) {
+    key << "light " << static_cast<int>(light.kind) << " " << light.direction.transpose() << " "
+        << light.position.transpose() << " " << light.intensity << "\n";
+  }
   for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
   // Embree's kernels on this machine: different widths give different last bits.
   key << "trace " << TracingIsa(spec.render.isa) << "\n";

@@ -2,6 +2,7 @@
 // changes the run key, survives the shard file, is read from its recipe key, and is listed in the
 // recipe reference and README.
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -106,6 +107,7 @@ TEST(Schema, EveryRecipeKeyIsRead) {
             T expected = value;
             std::string text = FieldText(value, field);
             if (field.kind == "length") text += " mm";
+            if (field.kind == "angle") text += " rad";
             const RunSpec parsed = ParseRecipe(
                 std::string(name) + ":\n  " + std::string(field.key) + ": " + text + "\n", "r.yaml",
                 ".");
@@ -123,6 +125,7 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   };
   section("output", [](RunSpec& s) -> BopOptions& { return s.bop; });
   section("render", [](RunSpec& s) -> RenderOptions& { return s.render; });
+  section("tessellation", [](RunSpec& s) -> TessellationOptions& { return s.tessellation; });
   EXPECT_GT(read, 100);
 }
 
@@ -146,6 +149,9 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
   const RenderOptions render;
   BopOptions::Fields(bop, [&](const auto&, const Field& f) { expect_key("output", f); });
   RenderOptions::Fields(render, [&](const auto&, const Field& f) { expect_key("render", f); });
+  const TessellationOptions tessellation;
+  TessellationOptions::Fields(tessellation,
+                              [&](const auto&, const Field& f) { expect_key("tessellation", f); });
 }
 
 }  // namespace

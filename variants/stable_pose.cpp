@@ -62,20 +62,40 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
   const double size = box.diagonal().norm();
 
   // Group hull triangles into planar faces.
-  std::vector<int> face_of(hull.number_of_faces(), -1);
+  std::vector<int> face_of(hull.number_of_faces() + hull.number_of_removed_faces(), -1);
   std::vector<Face> faces;
+  // CGAL lists the hull's vertices and triangles in an order that depends on memory addresses, so
+  // two calls on the same points could group faces from other first triangles and differ in the
+  // last bits. Everything below works in an order of the geometry alone: vertices by coordinates
+  // (their rank is their id) and triangles by their vertices' ranks, starting at the lowest.
+  std::vector<HullMesh::Vertex_index> by_position(hull.vertices().begin(), hull.vertices().end());
+  std::sort(by_position.begin(), by_position.end(),
+            [&](HullMesh::Vertex_index a, HullMesh::Vertex_index b) {
+              return less(ToEigen(hull.point(a)), ToEigen(hull.point(b)));
+            });
+  std::vector<int> rank(hull.number_of_vertices() + hull.number_of_removed_vertices(), -1);
+  for (size_t r = 0; r < by_position.size(); ++r) rank[by_position[r].idx()] = static_cast<int>(r);
+  const auto corners = [&](HullMesh::Face_index f) {
+    std::array<int, 3> c;
+    int k = 0;
+    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull)) c[k++] = rank[v.idx()];
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());  // keeps the winding
+    return c;
+  };
   std::vector<HullMesh::Face_index> handles(hull.faces().begin(), hull.faces().end());
+  std::sort(handles.begin(), handles.end(), [&](HullMesh::Face_index a, HullMesh::Face_index b) {
+    return corners(a) < corners(b);
+  });
   const auto triangle = [&](HullMesh::Face_index f) {
     std::array<Eigen::Vector3d, 3> t;
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull))
-      t[k++] = ToEigen(hull.point(v));
+    const std::array<int, 3> c = corners(f);
+    for (int k = 0; k < 3; ++k) t[k] = ToEigen(hull.point(by_position[c[k]]));
     return t;
   };
-  // A face is grown from its first triangle (in the hull's order) over neighbouring triangles in
+  // A face is grown from its first triangle (in that order) over neighbouring triangles in
   // that triangle's plane: a convex polytope's facet is connected, so this finds the triangles a
   // search of every face would, in time linear in the hull's size.
-  std::vector<Eigen::Vector3d> normal_of(hull.number_of_faces());
+  std::vector<Eigen::Vector3d> normal_of(face_of.size());
   for (auto f : handles) {
     const auto t = triangle(f);
     normal_of[f.idx()] = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
@@ -110,10 +130,36 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
     for (auto h : CGAL::halfedges_around_face(hull.halfedge(f), hull)) {
       const int other = face_of[hull.face(hull.opposite(h)).idx()];
       if (other == me) continue;
-      faces[me].edges[{int(hull.source(h).idx()), int(hull.target(h).idx())}] = other;
+      faces[me].edges[{rank[hull.source(h).idx()], rank[hull.target(h).idx()]}] = other;
     }
-    const auto t = triangle(f);
-    faces[me].solid_angle += SolidAngle(t[0] - com, t[1] - com, t[2] - com);
+  }
+  // Each face's plane and solid angle from its boundary polygon, walked from its lowest-ranked
+  // vertex: a planar face's triangulation also depends on CGAL's order, its outline does not.
+  for (Face& face : faces) {
+    std::map<int, int> next;
+    for (const auto& [edge, neighbour] : face.edges) next[edge.first] = edge.second;
+    std::vector<Eigen::Vector3d> outline;
+    int v = next.empty() ? -1 : next.begin()->first;
+    for (size_t k = 0; v >= 0 && k <= next.size(); ++k) {
+      outline.push_back(ToEigen(hull.point(by_position[v])));
+      const auto it = next.find(v);
+      v = it == next.end() ? -1 : it->second;
+      if (v == next.begin()->first) break;
+    }
+    if (v != next.begin()->first || outline.size() != next.size() || outline.size() < 3) {
+      for (const auto& t : face.triangles)
+        face.solid_angle += SolidAngle(t[0] - com, t[1] - com, t[2] - com);
+      continue;  // not one closed outline (degenerate): keep the first triangle's plane
+    }
+    Eigen::Vector3d newell = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < outline.size(); ++i) {
+      newell += outline[i].cross(outline[(i + 1) % outline.size()]);
+    }
+    face.normal = newell.normalized();
+    face.offset = face.normal.dot(outline[0]);
+    for (size_t i = 1; i + 1 < outline.size(); ++i) {
+      face.solid_angle += SolidAngle(outline[0] - com, outline[i] - com, outline[i + 1] - com);
+    }
   }
 
   // Where the centre of mass projects onto each face's plane, and how far outside the face it lies
@@ -124,8 +170,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
     double worst = -1e300;
     *next = -1;
     for (const auto& [edge, neighbour] : face.edges) {
-      const Eigen::Vector3d a = ToEigen(hull.point(HullMesh::Vertex_index(edge.first)));
-      const Eigen::Vector3d b = ToEigen(hull.point(HullMesh::Vertex_index(edge.second)));
+      const Eigen::Vector3d a = ToEigen(hull.point(by_position[edge.first]));
+      const Eigen::Vector3d b = ToEigen(hull.point(by_position[edge.second]));
       // The face lies to the left of a -> b (counter-clockwise about the outward normal).
       const Eigen::Vector3d out = (b - a).cross(face.normal).normalized();
       const double d = out.dot(p - a);

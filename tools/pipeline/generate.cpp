@@ -81,7 +81,6 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   // The staging folder (or shard tree) is kept on errors from here on: a rerun resumes from it.
   std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
   size_t resumed = 0, damaged = 0, frames = 0;
-  std::vector<SceneSplit> splits;
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   try {
     if (common) {
@@ -191,7 +190,6 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                             if (options.progress) options.progress(n, to_render);
                           }));
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
-      if (!shard) splits.push_back(writer.Finish());
     }
   } catch (const Error& e) {
     throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + root.string() +
@@ -207,8 +205,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
            << ", \"seconds\": " << seconds << "}";
     tree->MarkDone(marker.str());
   } else {
-    WriteSplits(root, splits);
-    WriteMergedCoco(root, spec.bop, splits, prepared.classes);
+    FinishDataset(root, spec.bop, writers, prepared.classes);
     for (const auto& writer : writers) writer->RemoveFragments();
     staging->Publish(output, options.overwrite);
   }

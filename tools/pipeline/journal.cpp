@@ -166,4 +166,18 @@ void StagingRun::Publish(const std::filesystem::path& output, bool overwrite) {
   lock_->Release();
 }
 
+size_t FinishDataset(const std::filesystem::path& root, const BopOptions& options,
+                     const std::vector<std::unique_ptr<BopSceneWriter>>& writers,
+                     const std::vector<ObjectClass>& classes) {
+  std::vector<SceneSplit> splits;
+  size_t frames = 0;
+  for (const auto& writer : writers) {
+    frames += writer->WrittenFrames().size();
+    splits.push_back(writer->Finish());
+  }
+  WriteSplits(root, splits);
+  WriteMergedCoco(root, options, splits, classes);
+  return frames;
+}
+
 }  // namespace cadsynth

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "dataset/bop.h"
 #include "render/camera.h"
 #include "tools/pipeline/prepare.h"
 
@@ -55,5 +56,13 @@ class StagingRun {
   std::filesystem::path root_;
   std::unique_ptr<RunLock> lock_;
 };
+
+// The finish stage, as a single run and merge both end (so both write the same bytes): each
+// scene's JSON files from its frames' fragments in image order, the splits and test targets, and
+// the merged COCO files. The fragments stay until the caller removes them (a run interrupted
+// here finishes again). Returns the number of frames.
+size_t FinishDataset(const std::filesystem::path& root, const BopOptions& options,
+                     const std::vector<std::unique_ptr<BopSceneWriter>>& writers,
+                     const std::vector<ObjectClass>& classes);
 
 }  // namespace cadsynth

@@ -21,6 +21,7 @@
 
 #include "cad/error.h"
 #include "dataset/file_io.h"
+#include "tools/pipeline/journal.h"
 
 namespace cadsynth {
 namespace {
@@ -401,14 +402,7 @@ MergeSummary Merge(const fs::path& dir_in,
   }
 
   // What a single process does at its end, in the same order: the same bytes.
-  std::vector<SceneSplit> splits;
-  size_t frame_count = 0;
-  for (size_t s = 0; s < scenes; ++s) {
-    frame_count += writers[s]->WrittenFrames().size();
-    splits.push_back(writers[s]->Finish());
-  }
-  WriteSplits(dir, splits);
-  WriteMergedCoco(dir, run.bop, splits, run.classes);
+  const size_t frame_count = FinishDataset(dir, run.bop, writers, run.classes);
   // From here the dataset is complete: a merge interrupted while cleaning up only cleans up.
   WriteFileAtomic(meta / "merged", std::to_string(frame_count) + "\n");
   for (const auto& writer : writers) writer->RemoveFragments();

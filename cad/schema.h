@@ -38,8 +38,7 @@ struct Field {
 };
 
 // The value of a field as text, for the run key and the reference: numbers exactly (the shortest
-// text that reads back the same), bools
-// as true/false, enums and choice bools by their choice name.
+// text that reads back the same), bools as true/false, enums and choice bools by their choice name.
 template <typename T>
 std::string FieldText(const T& value, const Field& field) {
   if constexpr (std::is_enum_v<T>) {

@@ -191,6 +191,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                           }));
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
     }
+    if (!shard) FinishDataset(root, spec.bop, writers, prepared.classes);
   } catch (const Error& e) {
     throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + root.string() +
                 ": the same command continues from them)");
@@ -205,7 +206,6 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
            << ", \"seconds\": " << seconds << "}";
     tree->MarkDone(marker.str());
   } else {
-    FinishDataset(root, spec.bop, writers, prepared.classes);
     for (const auto& writer : writers) writer->RemoveFragments();
     staging->Publish(output, options.overwrite);
   }

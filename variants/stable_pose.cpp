@@ -29,8 +29,7 @@ double SolidAngle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eige
 
 struct Face {
   Eigen::Vector3d normal;
-  double offset = 0;  // normal . x = offset on the face plane
-  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
+  double offset = 0;                         // normal . x = offset on the face plane
   std::map<std::pair<int, int>, int> edges;  // boundary edge (vertex ids) -> neighbouring face
   double solid_angle = 0;
 };
@@ -105,7 +104,7 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
     if (face_of[seed.idx()] >= 0) continue;
     const int found = static_cast<int>(faces.size());
     const Eigen::Vector3d n = normal_of[seed.idx()];
-    faces.push_back(Face{n, n.dot(triangle(seed)[0]), {}, {}, 0});
+    faces.push_back(Face{n, n.dot(triangle(seed)[0]), {}, 0});
     face_of[seed.idx()] = found;
     stack.assign(1, seed);
     while (!stack.empty()) {
@@ -123,7 +122,6 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
       }
     }
   }
-  for (auto f : handles) faces[face_of[f.idx()]].triangles.push_back(triangle(f));
   // Boundary edges between different faces, and solid angles seen from the centre of mass.
   for (auto f : handles) {
     const int me = face_of[f.idx()];
@@ -135,7 +133,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
   }
   // Each face's plane and solid angle from its boundary polygon, walked from its lowest-ranked
   // vertex: a planar face's triangulation also depends on CGAL's order, its outline does not.
-  for (Face& face : faces) {
+  for (size_t fi = 0; fi < faces.size(); ++fi) {
+    Face& face = faces[fi];
     std::map<int, int> next;
     for (const auto& [edge, neighbour] : face.edges) next[edge.first] = edge.second;
     std::vector<Eigen::Vector3d> outline;
@@ -146,10 +145,15 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
       v = it == next.end() ? -1 : it->second;
       if (v == next.begin()->first) break;
     }
-    if (v != next.begin()->first || outline.size() != next.size() || outline.size() < 3) {
-      for (const auto& t : face.triangles)
+    if (next.empty() || v != next.begin()->first || outline.size() != next.size() ||
+        outline.size() < 3) {
+      // Not one closed outline (degenerate): the first triangle's plane, the triangles' angles.
+      for (auto f : handles) {
+        if (face_of[f.idx()] != static_cast<int>(fi)) continue;
+        const auto t = triangle(f);
         face.solid_angle += SolidAngle(t[0] - com, t[1] - com, t[2] - com);
-      continue;  // not one closed outline (degenerate): keep the first triangle's plane
+      }
+      continue;
     }
     Eigen::Vector3d newell = Eigen::Vector3d::Zero();
     for (size_t i = 0; i < outline.size(); ++i) {

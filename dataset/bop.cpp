@@ -552,9 +552,8 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     // "ignore" below 10% visibility.
     if (!options_.coco || info.px_count_visib == 0 || (options_.coco_amodal_bbox && full[2] < 0))
       continue;
-    const RleMask rle = EncodeRle(
-        w, h, b[0], b[1], b[0] + b[2] + 1, b[1] + b[3] + 1,
-        [&](size_t p) { return visible(i, static_cast<int>(p % w), static_cast<int>(p / w)); });
+    const RleMask rle = EncodeRle(w, h, b[0], b[1], b[0] + b[2] + 1, b[1] + b[3] + 1,
+                                  [&](size_t p) { return visible.AtPixel(i, p); });
     const Json coco_box = options_.coco_amodal_bbox
                               ? Json{full[0], full[1], full[2] - full[0] + 1, full[3] - full[1] + 1}
                               : Json{b[0], b[1], b[2] + 1, b[3] + 1};

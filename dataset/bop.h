@@ -224,6 +224,12 @@ class VisibleMasks {
   VisibleMasks(const Frame& frame, const BopOptions& options);
   // Whether pixel (u, v) of the image is a visible pixel of instance i (index in frame.instances).
   bool operator()(size_t i, int u, int v) const;
+  // The same for the pixel at row-major index `pixel`.
+  bool AtPixel(size_t i, size_t pixel) const {
+    if (exact_) return frame_.instance[pixel] == i + 1;
+    const size_t w = static_cast<size_t>(frame_.width());
+    return (*this)(i, static_cast<int>(pixel % w), static_cast<int>(pixel / w));
+  }
 
  private:
   const Frame& frame_;

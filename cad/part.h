@@ -1,6 +1,7 @@
 // Parts (distinct shapes, each one object class of the dataset) and their instances.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -9,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "cad/brep.h"
+#include "cad/hull.h"
 #include "cad/mesh.h"
 
 namespace cadsynth {
@@ -56,6 +58,10 @@ struct Part {
   std::optional<Eigen::Vector3f> color;  // sRGB in [0, 1], when the CAD file gives one
   Symmetries symmetries;                 // in the model frame; empty when unknown
   Shape brep;  // the exact solid in the CAD frame (null for meshes), for scaling and export
+  // The convex hull of mesh.positions, once computed (the run's prepare stage fills it, from the
+  // part cache where it can); null otherwise, and whoever needs it computes it. Whoever moves the
+  // mesh's vertices resets it.
+  std::shared_ptr<const ConvexHull> hull;
 };
 
 // One placed copy of a part. A point of the part moves to the world (or to the frame of the

@@ -273,7 +273,7 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
   CreateFolder(dir);
   std::vector<double> diameters(parts.size());
   tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
-    diameters[i] = MeshDiameter(parts[i].mesh);
+    diameters[i] = PartDiameter(parts[i]);
     WriteFileAtomic(dir / ("obj_" + Id6(static_cast<int>(i) + 1) + ".ply"),
                     EncodePly(parts[i].mesh));
   });

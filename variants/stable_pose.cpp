@@ -4,20 +4,10 @@
 #include <cmath>
 #include <map>
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/convex_hull_3.h>
-
 #include "cad/error.h"
 
 namespace cadsynth {
 namespace {
-
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = Kernel::Point_3;
-using HullMesh = CGAL::Surface_mesh<Point>;
-
-Eigen::Vector3d ToEigen(const Point& p) { return {p.x(), p.y(), p.z()}; }
 
 // Solid angle of triangle (a, b, c) seen from the origin (Van Oosterom and Strackee).
 double SolidAngle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
@@ -38,97 +28,89 @@ struct Face {
 
 std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
                                     const Eigen::Vector3d& com) {
-  if (points.size() < 4) throw Error("stable poses: need at least 4 points");
-  // Meshes repeat a vertex once per smoothing group (per flat face on faceted parts): hull each
-  // position once.
-  std::vector<Eigen::Vector3d> unique = points;
-  const auto less = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  };
-  std::sort(unique.begin(), unique.end(), less);
-  unique.erase(std::unique(unique.begin(), unique.end()), unique.end());
-  std::vector<Point> input;
-  input.reserve(unique.size());
-  for (const auto& p : unique) input.emplace_back(p.x(), p.y(), p.z());
-  HullMesh hull;
-  CGAL::convex_hull_3(input.begin(), input.end(), hull);
-  if (hull.number_of_faces() < 4)
-    throw Error("stable poses: the points are flat (no volume to rest)");
+  return StablePoses(ComputeConvexHull(points), com);
+}
+
+std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com) {
+  if (hull.triangles.size() < 4) throw Error("stable poses: the points are flat (no volume to rest)");
+  const std::vector<Eigen::Vector3d>& vertex = hull.vertices;
+  const size_t n_triangles = hull.triangles.size();
 
   // Size of the body, for tolerances.
   Eigen::AlignedBox3d box;
-  for (const auto& p : points) box.extend(p);
+  for (const auto& p : vertex) box.extend(p);
   const double size = box.diagonal().norm();
 
-  // Group hull triangles into planar faces.
-  std::vector<int> face_of(hull.number_of_faces() + hull.number_of_removed_faces(), -1);
-  std::vector<Face> faces;
-  // CGAL lists the hull's vertices and triangles in an order that depends on memory addresses, so
-  // two calls on the same points could group faces from other first triangles and differ in the
-  // last bits. Everything below works in an order of the geometry alone: vertices by coordinates
-  // (their rank is their id) and triangles by their vertices' ranks, starting at the lowest.
-  std::vector<HullMesh::Vertex_index> by_position(hull.vertices().begin(), hull.vertices().end());
-  std::sort(by_position.begin(), by_position.end(),
-            [&](HullMesh::Vertex_index a, HullMesh::Vertex_index b) {
-              return less(ToEigen(hull.point(a)), ToEigen(hull.point(b)));
-            });
-  std::vector<int> rank(hull.number_of_vertices() + hull.number_of_removed_vertices(), -1);
-  for (size_t r = 0; r < by_position.size(); ++r) rank[by_position[r].idx()] = static_cast<int>(r);
-  const auto corners = [&](HullMesh::Face_index f) {
-    std::array<int, 3> c;
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull)) c[k++] = rank[v.idx()];
-    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());  // keeps the winding
-    return c;
+  // The triangle across each edge: directed edge (a, b) of one triangle is (b, a) of its
+  // neighbour. Edges sorted once, looked up by binary search.
+  struct Edge {
+    int a, b, triangle;
+    bool operator<(const Edge& o) const { return a != o.a ? a < o.a : b < o.b; }
   };
-  std::vector<HullMesh::Face_index> handles(hull.faces().begin(), hull.faces().end());
-  std::sort(handles.begin(), handles.end(), [&](HullMesh::Face_index a, HullMesh::Face_index b) {
-    return corners(a) < corners(b);
-  });
-  const auto triangle = [&](HullMesh::Face_index f) {
-    std::array<Eigen::Vector3d, 3> t;
-    const std::array<int, 3> c = corners(f);
-    for (int k = 0; k < 3; ++k) t[k] = ToEigen(hull.point(by_position[c[k]]));
-    return t;
-  };
-  // A face is grown from its first triangle (in that order) over neighbouring triangles in
-  // that triangle's plane: a convex polytope's facet is connected, so this finds the triangles a
-  // search of every face would, in time linear in the hull's size.
-  std::vector<Eigen::Vector3d> normal_of(face_of.size());
-  for (auto f : handles) {
-    const auto t = triangle(f);
-    normal_of[f.idx()] = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
+  std::vector<Edge> edges;
+  edges.reserve(3 * n_triangles);
+  for (size_t t = 0; t < n_triangles; ++t) {
+    const auto& c = hull.triangles[t];
+    for (int k = 0; k < 3; ++k) edges.push_back({c[k], c[(k + 1) % 3], static_cast<int>(t)});
   }
-  std::vector<HullMesh::Face_index> stack;
-  for (auto seed : handles) {
-    if (face_of[seed.idx()] >= 0) continue;
+  std::sort(edges.begin(), edges.end());
+  const auto across = [&](int a, int b) {  // the triangle on the other side of edge a -> b
+    const auto it = std::lower_bound(edges.begin(), edges.end(), Edge{b, a, 0});
+    if (it == edges.end() || it->a != b || it->b != a)
+      throw Error("stable poses: the convex hull is not closed");
+    return it->triangle;
+  };
+  std::vector<std::array<int, 3>> neighbour(n_triangles);
+  for (size_t t = 0; t < n_triangles; ++t) {
+    const auto& c = hull.triangles[t];
+    for (int k = 0; k < 3; ++k) neighbour[t][k] = across(c[k], c[(k + 1) % 3]);
+  }
+  const auto triangle = [&](size_t t) {
+    const auto& c = hull.triangles[t];
+    return std::array<Eigen::Vector3d, 3>{vertex[c[0]], vertex[c[1]], vertex[c[2]]};
+  };
+
+  // Group hull triangles into planar faces. A face is grown from its first triangle (in the
+  // hull's order) over neighbouring triangles in that triangle's plane: a convex polytope's facet
+  // is connected, so this finds the triangles a search of every face would, in time linear in the
+  // hull's size.
+  std::vector<int> face_of(n_triangles, -1);
+  std::vector<Face> faces;
+  std::vector<Eigen::Vector3d> normal_of(n_triangles);
+  for (size_t t = 0; t < n_triangles; ++t) {
+    const auto v = triangle(t);
+    normal_of[t] = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
+  }
+  std::vector<int> stack;
+  for (size_t seed = 0; seed < n_triangles; ++seed) {
+    if (face_of[seed] >= 0) continue;
     const int found = static_cast<int>(faces.size());
-    const Eigen::Vector3d n = normal_of[seed.idx()];
+    const Eigen::Vector3d n = normal_of[seed];
     faces.push_back(Face{n, n.dot(triangle(seed)[0]), {}, 0});
-    face_of[seed.idx()] = found;
-    stack.assign(1, seed);
+    face_of[seed] = found;
+    stack.assign(1, static_cast<int>(seed));
     while (!stack.empty()) {
-      const HullMesh::Face_index f = stack.back();
+      const int f = stack.back();
       stack.pop_back();
-      for (auto h : CGAL::halfedges_around_face(hull.halfedge(f), hull)) {
-        const HullMesh::Face_index g = hull.face(hull.opposite(h));
-        if (face_of[g.idx()] >= 0) continue;
+      for (int g : neighbour[f]) {
+        if (face_of[g] >= 0) continue;
         const auto t = triangle(g);
-        if (faces[found].normal.dot(normal_of[g.idx()]) > 1 - 1e-9 &&
-            std::abs(normal_of[g.idx()].dot(t[0]) - faces[found].offset) < 1e-7 * size) {
-          face_of[g.idx()] = found;
+        if (faces[found].normal.dot(normal_of[g]) > 1 - 1e-9 &&
+            std::abs(normal_of[g].dot(t[0]) - faces[found].offset) < 1e-7 * size) {
+          face_of[g] = found;
           stack.push_back(g);
         }
       }
     }
   }
   // Boundary edges between different faces, and solid angles seen from the centre of mass.
-  for (auto f : handles) {
-    const int me = face_of[f.idx()];
-    for (auto h : CGAL::halfedges_around_face(hull.halfedge(f), hull)) {
-      const int other = face_of[hull.face(hull.opposite(h)).idx()];
+  for (size_t t = 0; t < n_triangles; ++t) {
+    const int me = face_of[t];
+    const auto& c = hull.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const int other = face_of[neighbour[t][k]];
       if (other == me) continue;
-      faces[me].edges[{rank[hull.source(h).idx()], rank[hull.target(h).idx()]}] = other;
+      faces[me].edges[{c[k], c[(k + 1) % 3]}] = other;
     }
   }
   // Each face's plane and solid angle from its boundary polygon, walked from its lowest-ranked
@@ -140,7 +122,7 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
     std::vector<Eigen::Vector3d> outline;
     int v = next.empty() ? -1 : next.begin()->first;
     for (size_t k = 0; v >= 0 && k <= next.size(); ++k) {
-      outline.push_back(ToEigen(hull.point(by_position[v])));
+      outline.push_back(vertex[v]);
       const auto it = next.find(v);
       v = it == next.end() ? -1 : it->second;
       if (v == next.begin()->first) break;
@@ -148,8 +130,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
     if (next.empty() || v != next.begin()->first || outline.size() != next.size() ||
         outline.size() < 3) {
       // Not one closed outline (degenerate): the first triangle's plane, the triangles' angles.
-      for (auto f : handles) {
-        if (face_of[f.idx()] != static_cast<int>(fi)) continue;
+      for (size_t f = 0; f < n_triangles; ++f) {
+        if (face_of[f] != static_cast<int>(fi)) continue;
         const auto t = triangle(f);
         face.solid_angle += SolidAngle(t[0] - com, t[1] - com, t[2] - com);
       }
@@ -174,8 +156,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
     double worst = -1e300;
     *next = -1;
     for (const auto& [edge, neighbour] : face.edges) {
-      const Eigen::Vector3d a = ToEigen(hull.point(by_position[edge.first]));
-      const Eigen::Vector3d b = ToEigen(hull.point(by_position[edge.second]));
+      const Eigen::Vector3d& a = vertex[edge.first];
+      const Eigen::Vector3d& b = vertex[edge.second];
       // The face lies to the left of a -> b (counter-clockwise about the outward normal).
       const Eigen::Vector3d out = (b - a).cross(face.normal).normalized();
       const double d = out.dot(p - a);
@@ -302,8 +284,13 @@ std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
   double weight = 0;
   for (const Instance& i : instances) {
     const Part& part = parts.at(i.part);
-    for (const Eigen::Vector3f& p : part.mesh.positions)
-      points.push_back(i.world_from_model * p.cast<double>());
+    // The hull of the hulls' corners is the hull of every vertex, for far fewer points.
+    if (part.hull) {
+      for (const Eigen::Vector3d& p : part.hull->vertices) points.push_back(i.world_from_model * p);
+    } else {
+      for (const Eigen::Vector3f& p : part.mesh.positions)
+        points.push_back(i.world_from_model * p.cast<double>());
+    }
     if (part.mass.volume_mm3 > 0) {
       moment += part.mass.volume_mm3 * (i.world_from_model * part.mass.center_of_mass);
       weight += part.mass.volume_mm3;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "cad/hull.h"
 #include "cad/part.h"
 
 namespace cadsynth {
@@ -33,6 +34,8 @@ struct StablePose {
 // repeatedly, until a stable face is reached. Throws Error for fewer than 4 non-coplanar points.
 std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
                                     const Eigen::Vector3d& com);
+// The same from the hull itself.
+std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com);
 
 // The stable poses of instances of `parts` taken together as one rigid body (body frame = the
 // instances' frame); the centre of mass combines the parts' volumes (or, for open meshes, their

@@ -11,6 +11,7 @@
 
 #include "cad/assembly.h"
 #include "cad/error.h"
+#include "cad/hull.h"
 #include "cad/import.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
@@ -200,6 +201,14 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     label_of_part = std::move(labels);
   }
   std::vector<Part>& parts = all.parts;
+  // Each part's convex hull once, for its stable poses and its diameter (flat parts have none).
+  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
+    try {
+      parts[i].hull = std::make_shared<const ConvexHull>(ComputeConvexHull(parts[i].mesh));
+    } catch (const Error&) {
+      parts[i].hull.reset();
+    }
+  });
   std::vector<std::string> names, empty_groups;
   for (const Part& part : parts) names.push_back(part.name);
   const std::vector<ObjectClass> classes =

@@ -1,0 +1,34 @@
+// Convex hulls of point sets, as plain data in an order of the geometry alone.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cad/mesh.h"
+
+namespace cadsynth {
+
+// The convex hull of a point set (mm). Vertices are the hull's corners, each position once, sorted
+// lexicographically by (x, y, z); triangles wind counter-clockwise seen from outside, start at
+// their lowest vertex index and are sorted. Planar facets are triangulated. The same points give
+// the same bits whatever the input order, the thread or the heap (CGAL's own output order
+// depends on memory addresses).
+struct ConvexHull {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  bool empty() const { return triangles.empty(); }
+};
+
+// The hull of `points`. Throws Error when the points span no volume (fewer than 4, or all in one
+// plane): a flat mesh has no hull to rest on.
+ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points);
+// The hull of a mesh's vertex positions.
+ConvexHull ComputeConvexHull(const Mesh& mesh);
+
+// The largest distance between two of `points` (0 for fewer than two), exactly: the hull's
+// vertices are enough, as the farthest pair of a set is always a pair of hull corners.
+double PointSetDiameter(std::vector<Eigen::Vector3d> points);
+
+}  // namespace cadsynth

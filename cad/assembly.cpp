@@ -1,5 +1,7 @@
 #include "cad/assembly.h"
 
+#include "cad/part_cache.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -14,6 +16,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "cad/error.h"
+#include "cad/part_cache.h"
 
 namespace cadsynth {
 namespace {
@@ -244,7 +247,36 @@ std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, do
   return std::nullopt;
 }
 
-size_t MergeIdenticalParts(Assembly* assembly, double tolerance_mm) {
+std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, double tolerance_mm,
+                                                const PartCache* cache) {
+  if (cache == nullptr) return FindCongruence(a, b, tolerance_mm);
+  KeyHasher hasher;
+  cache->Start(&hasher, "congruence 1");
+  hasher.Geometry(a).Geometry(b).Value(tolerance_mm);
+  const CacheKey key = hasher.Key();
+  if (const std::optional<std::string> bytes = cache->Load("congruence", key)) {
+    try {
+      ByteReader in(*bytes);
+      std::optional<Eigen::Isometry3d> stored;
+      if (in.Get<uint8_t>() != 0) {
+        stored = Eigen::Isometry3d::Identity();
+        for (int k = 0; k < 16; ++k) stored->matrix().data()[k] = in.Get<double>();
+      }
+      if (in.done()) return stored;
+    } catch (const Error&) {  // damaged: computed again below
+    }
+  }
+  const std::optional<Eigen::Isometry3d> found = FindCongruence(a, b, tolerance_mm);
+  ByteWriter out;
+  out.Put<uint8_t>(found.has_value());
+  if (found) {
+    for (int k = 0; k < 16; ++k) out.Put<double>(found->matrix().data()[k]);
+  }
+  cache->Store("congruence", key, out.bytes());
+  return found;
+}
+
+size_t MergeIdenticalParts(Assembly* assembly, double tolerance_mm, const PartCache* cache) {
   std::vector<Part>& parts = assembly->parts;
   std::vector<int> target(parts.size());
   std::vector<Eigen::Isometry3d> kept_from_part(parts.size(), Eigen::Isometry3d::Identity());
@@ -259,7 +291,7 @@ size_t MergeIdenticalParts(Assembly* assembly, double tolerance_mm) {
         continue;
       }
       const std::optional<Eigen::Isometry3d> congruence =
-          FindCongruence(kept[k].mesh, parts[i].mesh, tolerance_mm);
+          FindCongruence(kept[k].mesh, parts[i].mesh, tolerance_mm, cache);
       if (congruence) {
         found = static_cast<int>(k);
         kept_from_part[i] = *congruence;

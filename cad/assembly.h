@@ -23,13 +23,18 @@ double MaxSurfaceDistance(const Mesh& surface, const Mesh& points,
 // gears) the angle about the distinct axis is searched, for three equal moments the 24 rotations
 // of the coordinate axes are tried.
 std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, double tolerance_mm);
+// The same, read from (or stored in) `cache` when given.
+class PartCache;
+std::optional<Eigen::Isometry3d> FindCongruence(const Mesh& a, const Mesh& b, double tolerance_mm,
+                                                const PartCache* cache);
 
 // Parts that are the same shape (FindCongruence, and equal exact volumes when both have a B-rep)
 // become one part, and their instances refer to
 // it with poses corrected by the congruence: a part used N times is one model with N instances,
 // even when the file stores N copies, rotated or not. The first part's name is kept. Returns the
-// number of parts merged away.
-size_t MergeIdenticalParts(Assembly* assembly, double tolerance_mm);
+// number of parts merged away. Congruence checks are read from (and stored in) `cache` if given.
+size_t MergeIdenticalParts(Assembly* assembly, double tolerance_mm,
+                           const PartCache* cache = nullptr);
 
 // The whole assembly as one rigid part: every instance's mesh in the assembly frame, joined and
 // moved to its own model frame; mass properties combined (parallel-axis theorem); watertight when

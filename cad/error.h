@@ -5,6 +5,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace cadsynth {
 
@@ -20,5 +21,24 @@ void Warn(const std::string& message);
 // Replaces the sink; pass nullptr to restore the default (stderr). Returns the previous sink.
 using WarningSink = void (*)(const std::string& message);
 WarningSink SetWarningSink(WarningSink sink);
+
+// Holds back the warnings this thread emits while it lives, so that work done in parallel can
+// report them in a fixed order and a cached result can replay them. Captures nest (the innermost
+// one on the thread collects); the destructor passes what it still holds on, in order, to the
+// enclosing capture or the sink. Create and destroy on the same thread, in stack order.
+class WarningCapture {
+ public:
+  WarningCapture();
+  ~WarningCapture();
+  WarningCapture(const WarningCapture&) = delete;
+  WarningCapture& operator=(const WarningCapture&) = delete;
+  // The warnings collected so far, which the capture then no longer holds.
+  std::vector<std::string> Take();
+
+ private:
+  friend void Warn(const std::string& message);
+  std::vector<std::string> warnings_;
+  WarningCapture* outer_;
+};
 
 }  // namespace cadsynth

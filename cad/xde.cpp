@@ -202,7 +202,9 @@ Assembly BuildAssembly(const std::string& file, CadContents contents,
   const size_t n = contents.part_shapes.size();
   std::vector<Part> parts(n);
   std::vector<std::string> errors(n);
+  std::vector<std::vector<std::string>> warnings(n);  // reported in part order, not thread order
   tbb::parallel_for(size_t{0}, n, [&](size_t i) {
+    WarningCapture capture;
     try {
       bool healed = false;
       const Shape shape = Heal(contents.part_shapes[i], &healed);
@@ -216,7 +218,11 @@ Assembly BuildAssembly(const std::string& file, CadContents contents,
     } catch (const Standard_Failure& failure) {
       errors[i] = std::string("OpenCASCADE failed: ") + failure.GetMessageString();
     }
+    warnings[i] = capture.Take();
   });
+  for (const auto& part_warnings : warnings) {
+    for (const std::string& warning : part_warnings) Warn(warning);
+  }
   Assembly assembly;
   assembly.name =
       contents.name.empty() ? std::filesystem::path(file).stem().string() : contents.name;

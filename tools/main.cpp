@@ -22,6 +22,7 @@
 #include "recipes/reference.h"
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/export.h"
+#include "cad/part_cache.h"
 #include "tools/pipeline/generate.h"
 #include "tools/pipeline/inspect.h"
 #include "tools/pipeline/progress.h"
@@ -33,6 +34,7 @@ constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data
 
 usage:
   cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--shard I/N] [--threads N] [--progress=MODE] [--quiet]
+                    [--cache DIR | --no-cache]
   cadsynth merge DIR
   cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
   cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
@@ -51,6 +53,9 @@ generate   Renders every view of the recipe's camera sweep and writes a BOP data
   --progress=MODE  auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON
                line every 5 s (done, total, seconds, frames_per_s, eta_s) for cluster logs
   --quiet      no progress or info lines, only warnings and errors (--progress=json still prints)
+  --cache DIR  the part cache (imported parts, hulls, repeated shapes; shared by runs and shards;
+               default $CADSYNTH_CACHE, else $XDG_CACHE_HOME/cadsynth or ~/.cache/cadsynth)
+  --no-cache   read and analyse every part afresh (the output is the same bytes either way)
 
            A killed or failed run continues where it stopped when started again (same command).
 
@@ -89,8 +94,8 @@ struct UsageError {
 // What a subcommand was given on the command line; filled by CLI11, read by Run*.
 struct Args {
   // generate
-  std::string recipe, output, shard, progress = "auto";
-  bool overwrite = false, quiet = false, help_recipe = false;
+  std::string recipe, output, shard, progress = "auto", cache;
+  bool overwrite = false, quiet = false, help_recipe = false, no_cache = false;
   int threads = 0;
   // merge, preview
   std::string dir;
@@ -133,6 +138,10 @@ int RunGenerate(const Args& a) {
                                      : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
   options.overwrite = a.overwrite;
   options.shard = shard;
+  if (!a.no_cache) {
+    options.cache = !a.cache.empty() ? std::optional<std::filesystem::path>(a.cache)
+                                     : cadsynth::PartCache::DefaultDirectory();
+  }
   if (!a.quiet) {
     options.info = [](const std::string& line) { std::cout << line << "\n" << std::flush; };
   }
@@ -284,6 +293,14 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   gen->add_flag(
       "-q,--quiet", a.quiet,
       "no progress or info lines, only warnings and errors (--progress=json still prints)");
+  CLI::Option* cache = gen->add_option("--cache", a.cache,
+                                       "the part cache (imported parts, hulls, repeated shapes; "
+                                       "shared by runs and shards; default $CADSYNTH_CACHE, else "
+                                       "$XDG_CACHE_HOME/cadsynth or ~/.cache/cadsynth)")
+                           ->type_name("DIR");
+  gen->add_flag("--no-cache", a.no_cache,
+                "read and analyse every part afresh (the output is the same bytes either way)")
+      ->excludes(cache);
   gen->add_flag("--help-recipe", a.help_recipe,
                 "print the recipe keys of the output and render sections with their defaults");
 

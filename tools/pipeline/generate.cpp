@@ -36,7 +36,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
   if (!spec.bop.Check(&why)) throw Error("output: " + why);
 
-  PreparedRun prepared = Prepare(spec, options.info);
+  std::optional<PartCache> cache;
+  if (options.cache) cache.emplace(*options.cache, BuildId());
+  PreparedRun prepared = Prepare(spec, options.info, cache ? &*cache : nullptr);
   const std::vector<Part>& parts = prepared.parts;
   std::string why_sampler;
   if (!spec.sampler.Check(&why_sampler)) throw Error("sweep: " + why_sampler);

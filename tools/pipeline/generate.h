@@ -26,6 +26,9 @@ struct GenerateOptions {
   std::function<void(size_t, size_t)> progress;
   // Receives one line per notable fact (what was read, placement); may be empty.
   std::function<void(const std::string&)> info;
+  // The part cache's folder (cad/part_cache.h; PartCache::DefaultDirectory() is the usual one);
+  // none: every part is read and analysed afresh. Either way the output is the same.
+  std::optional<std::filesystem::path> cache;
 };
 
 struct GenerateSummary {

@@ -16,9 +16,7 @@
 #include "render/renderer.h"
 
 namespace cadsynth {
-namespace {
 
-// The size and CRC-32 of the running executable, read once ("unknown" where it cannot be read).
 const std::string& BuildId() {
   static const std::string id = [] {
     try {
@@ -32,8 +30,6 @@ const std::string& BuildId() {
   }();
   return id;
 }
-
-}  // namespace
 
 std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
                    const std::vector<SweepView>& views) {

@@ -18,6 +18,10 @@
 
 namespace cadsynth {
 
+// The size and CRC-32 of the running executable, read once ("unknown" where it cannot be read):
+// run keys and the part cache hold it, so results of another build are never mixed in.
+const std::string& BuildId();
+
 // What must match for a run to continue an interrupted one (and for shards to join): the recipe
 // file's text, the CAD files' bytes, the parts and their variants, every view, the image size,
 // every output and render option (each by its described name, cad/schema.h), the kernels and

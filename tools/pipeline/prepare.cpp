@@ -1,6 +1,7 @@
 #include "tools/pipeline/prepare.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <set>
@@ -13,6 +14,9 @@
 #include "cad/error.h"
 #include "cad/hull.h"
 #include "cad/import.h"
+#include "cad/part_cache.h"
+#include "cad/schema.h"
+#include "dataset/file_io.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
 
@@ -28,6 +32,7 @@ struct Job {
   size_t variant = 0;
   std::string id;  // stable: scene/entry/family-or-file/variant
   Assembly assembly;
+  std::vector<std::string> warnings;  // reading or building it gave (also from the cache)
   std::string error;
 };
 
@@ -42,19 +47,97 @@ Json ParamsJson(const ParamValues& values) {
   return out;
 }
 
-void Build(const RunSpec& spec, Job* job) {
+// The options an import or variant depends on, into a cache key.
+void HashOptions(KeyHasher* hasher, const ImportOptions& options) {
+  TessellationOptions::Fields(options.tessellation, [&](const auto& value, const Field& field) {
+    hasher->Text(field.Name()).Text(FieldText(value, field));
+  });
+  hasher->Text(options.unit).Text(options.encoding).Value(options.crease_angle_rad);
+}
+
+// Formats whose file holds all of the part (OBJ, glTF and COLLADA may read other files: their
+// material or buffer files, which the key would miss).
+bool SelfContained(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) {
+    return static_cast<char>(std::tolower(c));
+  });
+  for (const char* e : {".step", ".stp", ".p21", ".iges", ".igs", ".brep", ".rle", ".stl", ".ply",
+                        ".off", ".glb", ".3mf"}) {
+    if (ext == e) return true;
+  }
+  return false;
+}
+
+// The key of a job's assembly, or nothing when it cannot be cached.
+std::optional<CacheKey> ImportKey(const PartCache& cache, const ImportOptions& options,
+                                  const PartSource& source, size_t variant) {
+  KeyHasher hasher;
+  cache.Start(&hasher, "import 1");
+  HashOptions(&hasher, options);
+  const auto hash_file = [&](const std::filesystem::path& path) {
+    hasher.Text(path.string()).Text(ReadFileText(path));  // the path: warnings name it
+  };
+  if (source.kind == PartSource::Kind::kFile) {
+    if (!SelfContained(source.path)) return std::nullopt;
+    hash_file(source.path);
+  } else {
+    hasher.Text(source.family);
+    for (const auto& [name, value] : source.variants[variant]) {
+      hasher.Text(name);
+      if (const double* x = std::get_if<double>(&value)) {
+        hasher.Value(*x);
+      } else {
+        const std::string& text = std::get<std::string>(value);
+        hasher.Text(text);
+        if (name == "file") {  // a family made from a file (scaled): its content
+          if (!SelfContained(text)) return std::nullopt;
+          hash_file(text);
+        }
+      }
+    }
+  }
+  return hasher.Key();
+}
+
+void Build(const RunSpec& spec, const PartCache* cache, Job* job) {
   ImportOptions options;
   options.tessellation = spec.tessellation;
   options.crease_angle_rad = spec.crease_angle_rad;
   const PartSource& source = *job->source;
+  if (source.kind == PartSource::Kind::kFile) {
+    options.unit = source.unit;
+    options.encoding = source.encoding;
+  }
+  // Warnings are kept with the job (and its cache entry) and reported in recipe order.
+  WarningCapture capture;
   try {
-    if (source.kind == PartSource::Kind::kFile) {
-      options.unit = source.unit;
-      options.encoding = source.encoding;
-      job->assembly = ImportCad(source.path, options);
-    } else {
-      job->assembly =
-          BuildVariant(*FindFamily(source.family), source.variants[job->variant], options);
+    std::optional<CacheKey> key;
+    if (cache) {
+      try {
+        key = ImportKey(*cache, options, source, job->variant);
+      } catch (const Error&) {  // an unreadable file: the importer says why
+      }
+    }
+    bool cached = false;
+    if (key) {
+      if (const std::optional<std::string> bytes = cache->Load("import", *key)) {
+        try {
+          job->assembly = DecodeAssembly(*bytes, &job->warnings);
+          cached = true;
+        } catch (const Error&) {  // damaged: built again below
+        }
+      }
+    }
+    if (!cached) {
+      if (source.kind == PartSource::Kind::kFile) {
+        job->assembly = ImportCad(source.path, options);
+      } else {
+        job->assembly =
+            BuildVariant(*FindFamily(source.family), source.variants[job->variant], options);
+      }
+      job->warnings = capture.Take();
+      if (key) cache->Store("import", *key, EncodeAssembly(job->assembly, job->warnings));
     }
     if (spec.class_by == RunSpec::ClassBy::kAssembly) job->assembly = FuseAssembly(job->assembly);
   } catch (const Error& e) {
@@ -65,6 +148,35 @@ void Build(const RunSpec& spec, Job* job) {
     }
     job->error = where + e.what();
   }
+  std::vector<std::string> rest = capture.Take();
+  job->warnings.insert(job->warnings.end(), rest.begin(), rest.end());
+}
+
+// The convex hull of a part's mesh, read from the cache or computed (and stored); null for a
+// flat part.
+std::shared_ptr<const ConvexHull> PartHull(const Mesh& mesh, const PartCache* cache) {
+  std::optional<CacheKey> key;
+  if (cache) {
+    KeyHasher hasher;
+    cache->Start(&hasher, "hull 1");
+    hasher.Geometry(mesh);
+    key = hasher.Key();
+    if (const std::optional<std::string> bytes = cache->Load("hull", *key)) {
+      try {
+        ConvexHull hull = DecodeHull(*bytes);
+        if (hull.empty()) return nullptr;
+        return std::make_shared<const ConvexHull>(std::move(hull));
+      } catch (const Error&) {  // damaged: computed again below
+      }
+    }
+  }
+  std::shared_ptr<const ConvexHull> hull;
+  try {
+    hull = std::make_shared<const ConvexHull>(ComputeConvexHull(mesh));
+  } catch (const Error&) {  // flat: no hull (stored as an empty one)
+  }
+  if (key) cache->Store("hull", *key, EncodeHull(hull ? *hull : ConvexHull()));
+  return hull;
 }
 
 }  // namespace
@@ -118,7 +230,8 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
   return warnings;
 }
 
-PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info_sink) {
+PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info_sink,
+                    const PartCache* cache) {
   const auto info = [&](const std::string& line) {
     if (info_sink) info_sink(line);
   };
@@ -133,7 +246,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       const std::string base = scene.name + "/" + std::to_string(e) + "/";
       if (source.kind == PartSource::Kind::kFile) {
         jobs.push_back(
-            {static_cast<int>(s), &source, 0, base + source.path.filename().string(), {}, {}});
+            {static_cast<int>(s), &source, 0, base + source.path.filename().string(), {}, {}, {}});
       } else {
         for (size_t v = 0; v < source.variants.size(); ++v) {
           jobs.push_back({static_cast<int>(s),
@@ -141,13 +254,15 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
                           v,
                           base + source.family + "/" + std::to_string(v),
                           {},
+                          {},
                           {}});
         }
       }
     }
   }
-  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) { Build(spec, &jobs[j]); });
+  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) { Build(spec, cache, &jobs[j]); });
   for (const Job& job : jobs) {
+    for (const std::string& warning : job.warnings) Warn(warning);
     if (!job.error.empty()) throw Error(job.error);
   }
 
@@ -190,7 +305,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     for (size_t i = 0; i < all.instances.size(); ++i)
       first_instance_part[i] = all.instances[i].part;
     const size_t merged =
-        MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3);
+        MergeIdenticalParts(&all, 2.0 * spec.tessellation.linear_deflection_mm + 1e-3, cache);
     if (merged > 0)
       info("merged " + std::to_string(merged) + " parts that repeat the shape of another");
     std::vector<std::string> labels(all.parts.size());
@@ -202,13 +317,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   }
   std::vector<Part>& parts = all.parts;
   // Each part's convex hull once, for its stable poses and its diameter (flat parts have none).
-  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
-    try {
-      parts[i].hull = std::make_shared<const ConvexHull>(ComputeConvexHull(parts[i].mesh));
-    } catch (const Error&) {
-      parts[i].hull.reset();
-    }
-  });
+  tbb::parallel_for(size_t{0}, parts.size(),
+                    [&](size_t i) { parts[i].hull = PartHull(parts[i].mesh, cache); });
   std::vector<std::string> names, empty_groups;
   for (const Part& part : parts) names.push_back(part.name);
   const std::vector<ObjectClass> classes =

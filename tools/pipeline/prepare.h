@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "cad/part_cache.h"
 #include "dataset/bop.h"
 #include "recipes/recipe.h"
 #include "render/scene.h"
@@ -23,8 +24,12 @@ struct PreparedRun {
 };
 
 // Reads the files and builds the family variants of every scene (in parallel), merges repeated
-// shapes, assigns classes and arranges each scene. Throws Error naming the recipe entry.
-PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info = {});
+// shapes, computes each part's convex hull, assigns classes and arranges each scene. With a
+// cache, imported files, built variants, hulls and repeated-shape checks are read from it where
+// it has them, and stored where it has not (the result is the same bytes either way). Warnings
+// come in recipe order. Throws Error naming the recipe entry.
+PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info = {},
+                    const PartCache* cache = nullptr);
 
 // What a user should hear about a scene before rendering it: whether its objects fit the view at
 // the nearest camera radius, and whether the smallest is still a few pixels at the farthest.

@@ -79,7 +79,8 @@ Mesh GetMesh(ByteReader* in) {
   mesh.face_ids = in->GetArray<uint32_t>();
   for (const auto& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
-      if (t[k] >= mesh.positions.size()) throw Error("part cache: a triangle index is out of range");
+      if (t[k] >= mesh.positions.size())
+        throw Error("part cache: a triangle index is out of range");
     }
   }
   return mesh;
@@ -322,7 +323,6 @@ std::optional<std::string> PartCache::Load(std::string_view kind, const CacheKey
 }
 
 void PartCache::Store(std::string_view kind, const CacheKey& key, std::string_view bytes) const {
-  static std::atomic<bool> warned{false};
   const std::filesystem::path path = Path(kind, key);
   std::error_code ec;
   std::filesystem::create_directories(path.parent_path(), ec);
@@ -344,7 +344,7 @@ void PartCache::Store(std::string_view kind, const CacheKey& key, std::string_vi
   }
   if (!ok) {
     std::filesystem::remove(temporary, ec);
-    if (!warned.exchange(true)) {
+    if (!warned_.exchange(true)) {
       Warn("part cache: cannot write to " + dir_.string() +
            " (full or read-only?); going on without storing results");
     }

@@ -11,6 +11,7 @@
 // run without it gives.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -133,13 +134,15 @@ class PartCache {
  public:
   // `salt` names the code whose results are stored (entries of other code are never read).
   PartCache(std::filesystem::path dir, std::string salt);
+  PartCache(const PartCache&) = delete;
+  PartCache& operator=(const PartCache&) = delete;
   const std::filesystem::path& dir() const { return dir_; }
   // A hasher already holding the salt and `kind` (name and version of the computation).
   void Start(KeyHasher* hasher, std::string_view kind) const;
   // The stored bytes, or nothing when absent, unreadable or damaged.
   std::optional<std::string> Load(std::string_view kind, const CacheKey& key) const;
-  // Stores the bytes; a failure (read-only or full file system) warns once and is otherwise
-  // ignored: the run goes on without the cache.
+  // Stores the bytes; a failure (read-only or full file system) warns once per cache and is
+  // otherwise ignored: the run goes on without the cache.
   void Store(std::string_view kind, const CacheKey& key, std::string_view bytes) const;
 
   // Where the cache lives unless told: $CADSYNTH_CACHE when set ("off" disables it), else
@@ -150,6 +153,7 @@ class PartCache {
   std::filesystem::path Path(std::string_view kind, const CacheKey& key) const;
   std::filesystem::path dir_;
   std::string salt_;
+  mutable std::atomic<bool> warned_{false};
 };
 
 }  // namespace cadsynth

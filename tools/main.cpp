@@ -16,13 +16,13 @@
 #include <CLI/CLI.hpp>
 
 #include "cad/error.h"
+#include "cad/part_cache.h"
 #include "dataset/file_io.h"
 #include "dataset/preview.h"
 #include "recipes/recipe.h"
 #include "recipes/reference.h"
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/export.h"
-#include "cad/part_cache.h"
 #include "tools/pipeline/generate.h"
 #include "tools/pipeline/inspect.h"
 #include "tools/pipeline/progress.h"

@@ -32,7 +32,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
 }
 
 std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com) {
-  if (hull.triangles.size() < 4) throw Error("stable poses: the points are flat (no volume to rest)");
+  if (hull.triangles.size() < 4)
+    throw Error("stable poses: the points are flat (no volume to rest)");
   const std::vector<Eigen::Vector3d>& vertex = hull.vertices;
   const size_t n_triangles = hull.triangles.size();
 

@@ -59,9 +59,8 @@ void HashOptions(KeyHasher* hasher, const ImportOptions& options) {
 // material or buffer files, which the key would miss).
 bool SelfContained(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) {
-    return static_cast<char>(std::tolower(c));
-  });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   for (const char* e : {".step", ".stp", ".p21", ".iges", ".igs", ".brep", ".rle", ".stl", ".ply",
                         ".off", ".glb", ".3mf"}) {
     if (ext == e) return true;

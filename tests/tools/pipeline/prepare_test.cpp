@@ -1,8 +1,12 @@
 #include "tools/pipeline/prepare.h"
 
+#include <fstream>
 #include <set>
 
 #include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "tests/test_support.h"
 
 namespace cadsynth {
 namespace {
@@ -46,6 +50,112 @@ TEST(Prepare, PlacementWarningsSayWhenTheSceneIsTooLargeOrTooSmall) {
   EXPECT_NE(warnings[0].find("beyond the nearest camera radius"), std::string::npos) << warnings[0];
   EXPECT_TRUE(
       PlacementWarnings(run.parts, run.scenes[0].instances, spec.intrinsics, spec.sweep).empty());
+}
+
+std::vector<std::string>* g_seen = nullptr;
+void Collect(const std::string& message) { g_seen->push_back(message); }
+
+// An open mesh (a tetrahedron missing a face) warns when read; a gear family variant.
+RunSpec CacheSpec(const std::filesystem::path& stl) {
+  std::ofstream out(stl);
+  out << "solid open\n";
+  const char* facets[] = {"0 0 0  0 10 0  10 0 0", "0 0 0  10 0 0  0 0 10",
+                          "0 0 0  0 0 10  0 10 0"};
+  for (const char* f : facets) {
+    std::istringstream in(f);
+    double v[9];
+    for (double& x : v) in >> x;
+    out << "facet normal 0 0 0\nouter loop\n";
+    for (int k = 0; k < 3; ++k)
+      out << "vertex " << v[3 * k] << " " << v[3 * k + 1] << " " << v[3 * k + 2] << "\n";
+    out << "endloop\nendfacet\n";
+  }
+  out << "endsolid open\n";
+  out.close();
+  RunSpec spec = DefaultRunSpec();
+  spec.scenes.resize(1);
+  PartSource file;
+  file.path = stl;
+  spec.scenes[0].sources.insert(spec.scenes[0].sources.begin(), file);
+  return spec;
+}
+
+// The part cache gives the bits a run without it gives, and the same warnings in the same order,
+// whether it is empty (cold) or full (warm); a warm run finds every entry it needs.
+TEST(Prepare, PartCacheGivesTheSameParts) {
+  testing::ScratchDir dir;
+  const RunSpec spec = CacheSpec(dir / "open.stl");
+  std::vector<std::string> seen;
+  g_seen = &seen;
+  const WarningSink previous = SetWarningSink(&Collect);
+  const PreparedRun plain = Prepare(spec);
+  const std::vector<std::string> plain_warnings = seen;
+  const PartCache cache(dir / "cache", "test build");
+  seen.clear();
+  const PreparedRun cold = Prepare(spec, {}, &cache);
+  const std::vector<std::string> cold_warnings = seen;
+  size_t entries = 0;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache"))
+    entries += e.is_regular_file();
+  seen.clear();
+  const PreparedRun warm = Prepare(spec, {}, &cache);
+  const std::vector<std::string> warm_warnings = seen;
+  SetWarningSink(previous);
+  size_t entries_after = 0;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache"))
+    entries_after += e.is_regular_file();
+  EXPECT_EQ(entries_after, entries);            // nothing new to store
+  EXPECT_GE(entries, 2u * plain.parts.size());  // an import or variant and a hull per part
+  ASSERT_FALSE(plain_warnings.empty());
+  EXPECT_NE(plain_warnings[0].find("not closed"), std::string::npos) << plain_warnings[0];
+  EXPECT_EQ(cold_warnings, plain_warnings);
+  EXPECT_EQ(warm_warnings, plain_warnings);
+  for (const PreparedRun* run : {&cold, &warm}) {
+    ASSERT_EQ(run->parts.size(), plain.parts.size());
+    for (size_t p = 0; p < plain.parts.size(); ++p) {
+      SCOPED_TRACE(plain.parts[p].name);
+      const Part& a = plain.parts[p];
+      const Part& b = run->parts[p];
+      EXPECT_EQ(b.name, a.name);
+      ASSERT_EQ(b.mesh.positions.size(), a.mesh.positions.size());
+      EXPECT_TRUE(
+          std::equal(a.mesh.positions.begin(), a.mesh.positions.end(), b.mesh.positions.begin()));
+      EXPECT_TRUE(std::equal(a.mesh.normals.begin(), a.mesh.normals.end(), b.mesh.normals.begin()));
+      EXPECT_EQ(b.mass.volume_mm3, a.mass.volume_mm3);
+      ASSERT_EQ(b.hull != nullptr, a.hull != nullptr);
+      if (a.hull) EXPECT_EQ(b.hull->triangles, a.hull->triangles);
+    }
+    ASSERT_EQ(run->scenes.size(), plain.scenes.size());
+    for (size_t s = 0; s < plain.scenes.size(); ++s) {
+      ASSERT_EQ(run->scenes[s].instances.size(), plain.scenes[s].instances.size());
+      for (size_t i = 0; i < plain.scenes[s].instances.size(); ++i) {
+        EXPECT_EQ(run->scenes[s].instances[i].world_from_model.matrix(),
+                  plain.scenes[s].instances[i].world_from_model.matrix());
+      }
+    }
+    EXPECT_EQ(run->variants_json, plain.variants_json);
+  }
+}
+
+// An entry damaged on disk is computed again, with the same result.
+TEST(Prepare, DamagedCacheEntriesAreRebuilt) {
+  testing::ScratchDir dir;
+  const RunSpec spec = CacheSpec(dir / "open.stl");
+  const PartCache cache(dir / "cache", "test build");
+  const PreparedRun cold = Prepare(spec, {}, &cache);
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache")) {
+    if (!e.is_regular_file()) continue;
+    std::string raw = testing::ReadFile(e.path());
+    raw.resize(raw.size() / 2);
+    std::ofstream(e.path(), std::ios::binary | std::ios::trunc) << raw;
+  }
+  const PreparedRun again = Prepare(spec, {}, &cache);
+  ASSERT_EQ(again.parts.size(), cold.parts.size());
+  for (size_t p = 0; p < cold.parts.size(); ++p) {
+    EXPECT_TRUE(std::equal(cold.parts[p].mesh.positions.begin(), cold.parts[p].mesh.positions.end(),
+                           again.parts[p].mesh.positions.begin()));
+  }
+  EXPECT_EQ(again.variants_json, cold.variants_json);
 }
 
 }  // namespace

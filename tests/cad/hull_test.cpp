@@ -13,9 +13,11 @@ namespace {
 
 std::vector<Eigen::Vector3d> CubeWithInside(std::mt19937* rng) {
   std::vector<Eigen::Vector3d> points;
-  for (int i = 0; i < 8; ++i) points.emplace_back(i & 1 ? 10 : -10, i & 2 ? 20 : -20, i & 4 ? 5 : 0);
+  for (int i = 0; i < 8; ++i)
+    points.emplace_back(i & 1 ? 10 : -10, i & 2 ? 20 : -20, i & 4 ? 5 : 0);
   std::uniform_real_distribution<double> u(-0.99, 0.99);
-  for (int i = 0; i < 500; ++i) points.emplace_back(10 * u(*rng), 20 * u(*rng), 2.5 + 2.5 * u(*rng));
+  for (int i = 0; i < 500; ++i)
+    points.emplace_back(10 * u(*rng), 20 * u(*rng), 2.5 + 2.5 * u(*rng));
   // Points on the faces and edges are not corners either.
   points.emplace_back(0, 0, 5);
   points.emplace_back(10, 0, 0);
@@ -34,8 +36,8 @@ TEST(ConvexHull, BoxCornersOutwardClosed) {
   ASSERT_EQ(hull.triangles.size(), 12u);
   EXPECT_TRUE(std::is_sorted(hull.vertices.begin(), hull.vertices.end(),
                              [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-                               return std::lexicographical_compare(a.data(), a.data() + 3,
-                                                                   b.data(), b.data() + 3);
+                               return std::lexicographical_compare(a.data(), a.data() + 3, b.data(),
+                                                                   b.data() + 3);
                              }));
   EXPECT_TRUE(std::is_sorted(hull.triangles.begin(), hull.triangles.end()));
   const Eigen::Vector3d centre(0, 0, 2.5);

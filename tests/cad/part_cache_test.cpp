@@ -38,7 +38,8 @@ Assembly SampleAssembly() {
   i.part = 1;
   i.name = "plate:1";
   i.path = "root/plate:1";
-  i.world_from_model = Eigen::Translation3d(1, 2, 3) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
+  i.world_from_model =
+      Eigen::Translation3d(1, 2, 3) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
   i.color = Eigen::Vector3f(1, 0, 0);
   a.instances = {Instance{0, "shaft:1", Eigen::Isometry3d::Identity(), std::nullopt, "root"}, i};
   return a;

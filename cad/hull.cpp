@@ -84,6 +84,7 @@ ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points) {
     out.triangles.push_back(c);
   }
   std::sort(out.triangles.begin(), out.triangles.end());
+  out.diameter = PointSetDiameter(out.vertices);
   return out;
 }
 
@@ -92,6 +93,33 @@ ConvexHull ComputeConvexHull(const Mesh& mesh) {
   points.reserve(mesh.positions.size());
   for (const Eigen::Vector3f& p : mesh.positions) points.push_back(p.cast<double>());
   return ComputeConvexHull(std::move(points));
+}
+
+ConvexHull TransformedHull(const ConvexHull& hull, const Eigen::Isometry3d& transform) {
+  if (transform.linear().determinant() <= 0)
+    throw Error("convex hull: a transform that mirrors would turn the triangles inside out");
+  std::vector<Eigen::Vector3d> moved(hull.vertices.size());
+  for (size_t i = 0; i < moved.size(); ++i) moved[i] = transform * hull.vertices[i];
+  std::vector<int> order(moved.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return Less(moved[a], moved[b]); });
+  ConvexHull out;
+  out.diameter = hull.diameter;
+  std::vector<int> rank(order.size());
+  for (size_t r = 0; r < order.size(); ++r) {
+    if (r > 0 && moved[order[r]] == moved[order[r - 1]])
+      throw Error("convex hull: two corners moved onto one point");
+    rank[order[r]] = static_cast<int>(r);
+    out.vertices.push_back(moved[order[r]]);
+  }
+  out.triangles.reserve(hull.triangles.size());
+  for (const auto& t : hull.triangles) {
+    std::array<int, 3> c = {rank[t[0]], rank[t[1]], rank[t[2]]};
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    out.triangles.push_back(c);
+  }
+  std::sort(out.triangles.begin(), out.triangles.end());
+  return out;
 }
 
 double PointSetDiameter(std::vector<Eigen::Vector3d> hull) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "cad/mesh.h"
 
@@ -18,6 +19,7 @@ namespace cadsynth {
 struct ConvexHull {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<std::array<int, 3>> triangles;
+  double diameter = 0;  // the largest distance between two corners (PointSetDiameter), mm
   bool empty() const { return triangles.empty(); }
 };
 
@@ -26,6 +28,10 @@ struct ConvexHull {
 ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points);
 // The hull of a mesh's vertex positions.
 ConvexHull ComputeConvexHull(const Mesh& mesh);
+
+// The same hull after a rigid motion (no mirror), in the canonical order again: the hull of the
+// moved points without computing it again (the diameter is kept).
+ConvexHull TransformedHull(const ConvexHull& hull, const Eigen::Isometry3d& transform);
 
 // The largest distance between two of `points` (0 for fewer than two), exactly: the hull's
 // vertices are enough, as the farthest pair of a set is always a pair of hull corners.

@@ -23,7 +23,7 @@ namespace {
 
 constexpr char kMagic[8] = {'c', 's', 'c', 'a', 'c', 'h', 'e', '1'};
 constexpr uint32_t kAssemblyTag = 0x41535331;  // "ASS1"
-constexpr uint32_t kHullTag = 0x48554c31;      // "HUL1"
+constexpr uint32_t kHullTag = 0x48554c32;      // "HUL2"
 
 XXH3_state_t* State(void* p) { return static_cast<XXH3_state_t*>(p); }
 
@@ -182,6 +182,7 @@ std::string EncodeHull(const ConvexHull& hull) {
   out.Put<uint32_t>(kHullTag);
   out.PutArray(hull.vertices);
   out.PutArray(hull.triangles);
+  out.Put<double>(hull.diameter);
   return std::move(out.bytes());
 }
 
@@ -191,6 +192,7 @@ ConvexHull DecodeHull(std::string_view bytes) {
   ConvexHull hull;
   hull.vertices = in.GetArray<Eigen::Vector3d>();
   hull.triangles = in.GetArray<std::array<int, 3>>();
+  hull.diameter = in.Get<double>();
   for (const auto& t : hull.triangles) {
     for (int v : t) {
       if (v < 0 || static_cast<size_t>(v) >= hull.vertices.size())

@@ -16,7 +16,7 @@ double MeshDiameter(const Mesh& mesh) {
   points.reserve(mesh.positions.size());
   for (const Eigen::Vector3f& p : mesh.positions) points.push_back(p.cast<double>());
   try {
-    return PointSetDiameter(ComputeConvexHull(std::move(points)).vertices);
+    return ComputeConvexHull(std::move(points)).diameter;
   } catch (const Error&) {  // flat or collinear: every vertex
     std::vector<Eigen::Vector3d> all;
     all.reserve(mesh.positions.size());
@@ -26,7 +26,7 @@ double MeshDiameter(const Mesh& mesh) {
 }
 
 double PartDiameter(const Part& part) {
-  return part.hull ? PointSetDiameter(part.hull->vertices) : MeshDiameter(part.mesh);
+  return part.hull ? part.hull->diameter : MeshDiameter(part.mesh);
 }
 
 namespace {

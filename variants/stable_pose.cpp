@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "cad/error.h"
 
@@ -281,12 +282,21 @@ std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3
 std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
                                     const std::vector<Instance>& instances) {
   std::vector<Eigen::Vector3d> points;
+  std::optional<ConvexHull> moved;  // one instance with its hull: the hull moved, not recomputed
+  if (instances.size() == 1 && parts.at(instances[0].part).hull) {
+    try {
+      moved = TransformedHull(*parts.at(instances[0].part).hull, instances[0].world_from_model);
+    } catch (const Error&) {  // a mirroring placement: the hull of the moved points below
+    }
+  }
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
   double weight = 0;
   for (const Instance& i : instances) {
     const Part& part = parts.at(i.part);
     // The hull of the hulls' corners is the hull of every vertex, for far fewer points.
-    if (part.hull) {
+    if (moved) {
+      // The hull above holds every corner.
+    } else if (part.hull) {
       for (const Eigen::Vector3d& p : part.hull->vertices) points.push_back(i.world_from_model * p);
     } else {
       for (const Eigen::Vector3f& p : part.mesh.positions)
@@ -302,6 +312,7 @@ std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
     }
   }
   if (weight <= 0) throw Error("stable poses: the body has no volume or area");
+  if (moved) return StablePoses(*moved, moment / weight);
   return StablePoses(points, moment / weight);
 }
 

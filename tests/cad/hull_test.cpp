@@ -57,6 +57,27 @@ TEST(ConvexHull, BoxCornersOutwardClosed) {
   }
 }
 
+// A moved hull is the hull of the moved points: same corners (in the new order) and triangles.
+TEST(ConvexHull, TransformedHullIsTheHullOfTheMovedPoints) {
+  std::mt19937 rng(5);
+  std::vector<Eigen::Vector3d> points;
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 400; ++i) points.emplace_back(20 * u(rng), 8 * u(rng), 3 * u(rng));
+  const Eigen::Isometry3d motion = Eigen::Translation3d(5, -2, 7) *
+                                   Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized());
+  const ConvexHull moved = TransformedHull(ComputeConvexHull(points), motion);
+  for (Eigen::Vector3d& p : points) p = motion * p;
+  const ConvexHull direct = ComputeConvexHull(points);
+  ASSERT_EQ(moved.vertices.size(), direct.vertices.size());
+  for (size_t i = 0; i < direct.vertices.size(); ++i)
+    EXPECT_EQ(moved.vertices[i], direct.vertices[i]);  // the same doubles: p moved once
+  EXPECT_EQ(moved.triangles, direct.triangles);        // random points: every facet a triangle
+  EXPECT_NEAR(moved.diameter, direct.diameter, 1e-12 * direct.diameter);
+  Eigen::Isometry3d mirror = Eigen::Isometry3d::Identity();
+  mirror(0, 0) = -1;
+  EXPECT_THROW(TransformedHull(direct, mirror), Error);
+}
+
 // The result is a function of the point set: shuffled input gives the same bits.
 TEST(ConvexHull, SameBitsWhateverTheInputOrder) {
   std::mt19937 rng(3);
@@ -98,7 +119,7 @@ TEST(PointSetDiameter, MatchesEveryPair) {
     for (const auto& b : points) brute = std::max(brute, (a - b).norm());
   }
   EXPECT_EQ(PointSetDiameter(points), brute);
-  EXPECT_EQ(PointSetDiameter(ComputeConvexHull(points).vertices), brute);
+  EXPECT_EQ(ComputeConvexHull(points).diameter, brute);
   EXPECT_EQ(PointSetDiameter({{1, 2, 3}}), 0.0);
 }
 

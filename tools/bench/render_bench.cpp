@@ -8,11 +8,13 @@
 //   BM_Encode     encoding and writing one frame's BOP files (RGB, depth, masks) to /dev/shm
 //   BM_EndToEnd   the generate pipeline: render and write every view, frames in flight
 // Each reports ms per frame (real time); compare BM_EndToEnd with BM_Cast + BM_Encode.
+// CADSYNTH_BENCH_RECIPE=RECIPE.yaml measures that recipe's scenes and views instead.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 
@@ -26,29 +28,38 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 struct Fixture {
+  RunSpec spec;
   PreparedRun run;
-  std::vector<SweepView> views;  // every 37th view of the paper's sweep: 90 views
+  std::vector<SweepView> views;  // default: every 37th view of the paper's sweep, 90 views
   std::vector<std::unique_ptr<Renderer>> full, cast;
   Fixture() {
-    RunSpec spec = DefaultRunSpec();
+    // CADSYNTH_BENCH_RECIPE=recipe.yaml: that recipe's scenes, camera, every view of its sweep,
+    // render and output options (the floor for a whole-process run of the same recipe).
+    const char* recipe = std::getenv("CADSYNTH_BENCH_RECIPE");
+    spec = recipe != nullptr ? LoadRecipe(recipe) : DefaultRunSpec();
     run = Prepare(spec);
-    SweepOptions sweep;
-    for (int y = 0; y <= 360; y += 10) sweep.yaw_rad.push_back(y * kDeg);
-    for (int p = 0; p <= 90; p += 10) sweep.pitch_rad.push_back(p * kDeg);
-    for (int r = 0; r < 9; ++r) sweep.radius_mm.push_back(650 + 100 * r);
-    const std::vector<SweepView> all = ExpandSweep(sweep);
-    for (size_t i = 0; i < all.size(); i += 37) views.push_back(all[i]);
-    RenderOptions cast_only;
+    if (recipe != nullptr) {
+      views = SampleViews(spec.sampler, spec.sweep);
+    } else {
+      spec.intrinsics = Intrinsics::KinectV1();
+      SweepOptions sweep;
+      for (int y = 0; y <= 360; y += 10) sweep.yaw_rad.push_back(y * kDeg);
+      for (int p = 0; p <= 90; p += 10) sweep.pitch_rad.push_back(p * kDeg);
+      for (int r = 0; r < 9; ++r) sweep.radius_mm.push_back(650 + 100 * r);
+      const std::vector<SweepView> all = ExpandSweep(sweep);
+      for (size_t i = 0; i < all.size(); i += 37) views.push_back(all[i]);
+    }
+    RenderOptions render = spec.render;
+    render.amodal_depth = spec.bop.visibility == BopOptions::Visibility::kBop19;
+    RenderOptions cast_only = render;
     cast_only.shade = false;
     cast_only.amodal_masks = false;
     for (const Scene& scene : run.scenes) {
-      full.push_back(std::make_unique<Renderer>(run.parts, scene));
+      full.push_back(std::make_unique<Renderer>(run.parts, scene, render));
       cast.push_back(std::make_unique<Renderer>(run.parts, scene, cast_only));
     }
   }
-  Camera CameraFor(size_t i) const {
-    return Camera{Intrinsics::KinectV1(), views[i].world_from_cam};
-  }
+  Camera CameraFor(size_t i) const { return Camera{spec.intrinsics, views[i].world_from_cam}; }
   size_t SceneFor(size_t i) const { return i % run.scenes.size(); }
 };
 
@@ -101,7 +112,7 @@ void BM_Encode(benchmark::State& state) {
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < f.run.scenes.size(); ++s) {
     writers.push_back(
-        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), BopOptions{}, f.run.obj_ids[s]));
+        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), f.spec.bop, f.run.obj_ids[s]));
   }
   size_t count = 0;
   for (auto _ : state) {
@@ -120,7 +131,7 @@ void BM_EndToEnd(benchmark::State& state) {
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < f.run.scenes.size(); ++s) {
     writers.push_back(
-        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), BopOptions{}, f.run.obj_ids[s]));
+        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), f.spec.bop, f.run.obj_ids[s]));
   }
   size_t frames = 0;
   for (auto _ : state) {

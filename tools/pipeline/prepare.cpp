@@ -157,7 +157,7 @@ std::shared_ptr<const ConvexHull> PartHull(const Mesh& mesh, const PartCache* ca
   std::optional<CacheKey> key;
   if (cache) {
     KeyHasher hasher;
-    cache->Start(&hasher, "hull 1");
+    cache->Start(&hasher, "hull 2");
     hasher.Geometry(mesh);
     key = hasher.Key();
     if (const std::optional<std::string> bytes = cache->Load("hull", *key)) {

@@ -1,7 +1,10 @@
 #include "cad/mesh_analysis.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstring>
+#include <map>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -96,6 +99,87 @@ MassProperties ComputeMeshMassProperties(const Mesh& mesh) {
   result.center_of_mass = com + origin;
   result.inertia = central.trace() * Eigen::Matrix3d::Identity() - central;
   return result;
+}
+
+void ComputeCreaseNormals(Mesh* mesh, double crease_angle_rad) {
+  const size_t n_triangles = mesh->triangles.size();
+  const size_t n_vertices = mesh->positions.size();
+  // Unit face normals, in double.
+  std::vector<Eigen::Vector3d> face(n_triangles, Eigen::Vector3d::Zero());
+  for (size_t t = 0; t < n_triangles; ++t) {
+    const auto& tri = mesh->triangles[t];
+    const Eigen::Vector3d a = mesh->positions[tri[0]].cast<double>();
+    const Eigen::Vector3d n = (mesh->positions[tri[1]].cast<double>() - a)
+                                  .cross(mesh->positions[tri[2]].cast<double>() - a);
+    const double length = n.norm();
+    if (length > 0 && std::isfinite(length)) face[t] = n / length;
+  }
+  // Corners grouped by position: sorted by coordinates, then triangle.
+  std::vector<uint64_t> corners(3 * n_triangles);
+  for (size_t c = 0; c < corners.size(); ++c) corners[c] = c;
+  const auto position = [&](uint64_t c) -> const Eigen::Vector3f& {
+    return mesh->positions[mesh->triangles[c / 3][c % 3]];
+  };
+  std::sort(corners.begin(), corners.end(), [&](uint64_t a, uint64_t b) {
+    const Eigen::Vector3f& p = position(a);
+    const Eigen::Vector3f& q = position(b);
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a < b;
+  });
+  const double limit = std::cos(crease_angle_rad);
+  std::vector<Eigen::Vector3f> corner_normal(3 * n_triangles);
+  for (size_t begin = 0; begin < corners.size();) {
+    size_t end = begin + 1;
+    while (end < corners.size() && position(corners[end]) == position(corners[begin])) ++end;
+    Eigen::Vector3d all = Eigen::Vector3d::Zero();  // for degenerate triangles
+    for (size_t i = begin; i < end; ++i) all += face[corners[i] / 3];
+    for (size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3d& own = face[corners[i] / 3];
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      if (own.squaredNorm() > 0) {
+        for (size_t j = begin; j < end; ++j) {
+          const Eigen::Vector3d& other = face[corners[j] / 3];
+          if (own.dot(other) >= limit) sum += other;
+        }
+      } else {
+        sum = all;
+      }
+      const double length = sum.norm();
+      corner_normal[corners[i]] = length > 0 && std::isfinite(length)
+                                      ? Eigen::Vector3f((sum / length).cast<float>())
+                                      : Eigen::Vector3f::UnitZ();
+    }
+    begin = end;
+  }
+  // Each vertex takes the normal of its first corner; corners that need another get a copy.
+  std::vector<char> assigned(n_vertices, 0);
+  mesh->normals.assign(n_vertices, Eigen::Vector3f::UnitZ());
+  std::map<std::pair<uint32_t, std::array<float, 3>>, uint32_t> copies;
+  for (size_t t = 0; t < n_triangles; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      uint32_t& v = mesh->triangles[t][k];
+      const Eigen::Vector3f& n = corner_normal[3 * t + k];
+      if (!assigned[v]) {
+        assigned[v] = 1;
+        mesh->normals[v] = n;
+        continue;
+      }
+      if (mesh->normals[v] == n) continue;
+      const auto key = std::make_pair(v, std::array<float, 3>{n.x(), n.y(), n.z()});
+      const auto found = copies.find(key);
+      if (found != copies.end()) {
+        v = found->second;
+        continue;
+      }
+      const auto copy = static_cast<uint32_t>(mesh->positions.size());
+      mesh->positions.push_back(mesh->positions[v]);
+      mesh->normals.push_back(n);
+      copies.emplace(key, copy);
+      v = copy;
+    }
+  }
 }
 
 }  // namespace cadsynth

@@ -21,6 +21,15 @@ struct MeshTopology {
 };
 MeshTopology AnalyzeTopology(const Mesh& mesh);
 
+// Per-vertex normals with sharp edges kept: a triangle corner's normal is the normalised sum of
+// the unit normals of the triangles that share its position (exactly equal coordinates) and
+// whose normal is within `crease_angle_rad` of its own triangle's. A vertex shared by triangles
+// whose corners need different normals is split (the first normal keeps the vertex, copies are
+// appended), so every triangle keeps its winding and positions. Degenerate triangles get the
+// normal of their neighbours, or +z. Time O(n log n) plus the squared number of triangles at
+// each position.
+void ComputeCreaseNormals(Mesh* mesh, double crease_angle_rad);
+
 // Volume, centre of mass and inertia (about the centre of mass, density 1) of the solid a closed,
 // outward-wound mesh bounds. For an open mesh the numbers are those of the surface closed by
 // straight lines to the origin: meaningless, so check AnalyzeTopology first.

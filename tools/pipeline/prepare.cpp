@@ -25,6 +25,10 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
+// Inputs large enough to announce before working on them.
+constexpr uintmax_t kLargeFileBytes = 50u << 20;
+constexpr size_t kLargeMeshVertices = 1000000;
+
 // One thing to build: a file, or one variant of a family; a rigid group in its scene.
 struct Job {
   int scene = 0;
@@ -259,6 +263,15 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       }
     }
   }
+  // Large files take seconds: say so before the wait (the lines after it report what was read).
+  for (const Job& job : jobs) {
+    if (job.source->kind != PartSource::Kind::kFile) continue;
+    std::error_code ec;
+    const auto bytes = std::filesystem::file_size(job.source->path, ec);
+    if (!ec && bytes >= kLargeFileBytes) {
+      info("reading " + job.source->path.string() + " (" + std::to_string(bytes >> 20) + " MB)");
+    }
+  }
   tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) { Build(spec, cache, &jobs[j]); });
   for (const Job& job : jobs) {
     for (const std::string& warning : job.warnings) Warn(warning);
@@ -316,6 +329,12 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   }
   std::vector<Part>& parts = all.parts;
   // Each part's convex hull once, for its stable poses and its diameter (flat parts have none).
+  for (const Part& part : parts) {
+    if (part.mesh.num_vertices() >= kLargeMeshVertices) {
+      info("convex hull and diameter of '" + part.name + "' (" +
+           std::to_string(part.mesh.num_vertices()) + " vertices)");
+    }
+  }
   tbb::parallel_for(size_t{0}, parts.size(),
                     [&](size_t i) { parts[i].hull = PartHull(parts[i].mesh, cache); });
   std::vector<std::string> names, empty_groups;

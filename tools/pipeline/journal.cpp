@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "cad/error.h"
+#include "cad/part_cache.h"
 #include "dataset/file_io.h"
 #include "render/renderer.h"
 
@@ -81,6 +82,22 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   for (const Scene::Light& light : look.lights) {
     key << "light " << static_cast<int>(light.kind) << " " << light.direction.transpose() << " "
         << light.position.transpose() << " " << light.intensity << "\n";
+  }
+  // What prepare made of the recipe, whatever option decided it (a RunSpec built in code can
+  // change a scene's arrangement or a part without changing the recipe text): every object's
+  // geometry and colour, and every instance's pose.
+  for (const Part& part : prepared.parts) {
+    key << "object " << part.name << " " << KeyHasher().Geometry(part.mesh).Key().Hex() << " "
+        << part.color.value_or(Eigen::Vector3f::Constant(-1)).transpose() << "\n";
+  }
+  for (const Scene& scene : prepared.scenes) {
+    key << "scene\n";
+    for (const Instance& instance : scene.instances) {
+      key << instance.part << " " << instance.world_from_model.matrix().reshaped().transpose()
+          << " " << instance.color.value_or(Eigen::Vector3f::Constant(-1)).transpose() << "\n";
+    }
+    for (const Eigen::Vector3f& color : scene.part_colors) key << color.transpose() << " ";
+    key << "\n";
   }
   for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
   // Embree's kernels on this machine: different widths give different last bits.

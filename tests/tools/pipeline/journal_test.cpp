@@ -6,6 +6,7 @@
 
 #include "cad/error.h"
 #include "tests/test_support.h"
+#include "tools/pipeline/prepare.h"
 
 namespace cadsynth {
 namespace {
@@ -54,6 +55,29 @@ TEST(StagingRun, ResumesTheSameKeyStartsOverOnAnotherAndPublishes) {
   StagingRun last(output, "key C", info);
   last.Publish(output, true);
   EXPECT_EQ(ReadFile(output / "result"), "C");
+}
+
+}  // namespace
+}  // namespace cadsynth
+
+namespace cadsynth {
+namespace {
+
+// A RunSpec built in code changes what is rendered without changing any recipe text: the run key
+// follows the prepared parts and poses, so such a run never resumes onto the old frames.
+TEST(RunKey, FollowsThePreparedScenesNotOnlyTheOptions) {
+  RunSpec spec = DefaultRunSpec();
+  spec.scenes = {spec.scenes[2]};  // the assembly benchmark's five separate parts
+  spec.scenes[0].arrangement.layout = Layout::kRow;
+  const std::vector<SweepView> views = ExpandSweep(spec.sweep);
+  const std::string key = RunKey(spec, Prepare(spec), views);
+  EXPECT_TRUE(RunKey(spec, Prepare(spec), views) == key);  // (keys are long: no printing)
+  RunSpec wider = spec;
+  wider.scenes[0].arrangement.gap_mm += 5;  // the same parts, further apart
+  EXPECT_FALSE(RunKey(wider, Prepare(wider), views) == key);
+  PreparedRun moved = Prepare(spec);
+  moved.parts[0].mesh.positions[0].x() += 0.001f;  // one vertex of one object
+  EXPECT_FALSE(RunKey(spec, moved, views) == key);
 }
 
 }  // namespace

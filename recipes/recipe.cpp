@@ -388,52 +388,6 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
   return sources;
 }
 
-void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
-                ArrangementOptions* arrangement) {
-  if (node["layout"]) {
-    static const std::map<std::string, Layout> layouts = {{"assembled", Layout::kAssembled},
-                                                          {"single", Layout::kSingle},
-                                                          {"row", Layout::kRow},
-                                                          {"grid", Layout::kGrid},
-                                                          {"clutter", Layout::kClutter}};
-    const std::string layout = r.Scalar(node["layout"], key + ".layout");
-    const auto it = layouts.find(layout);
-    if (it == layouts.end()) {
-      r.Fail(node["layout"], key + ".layout",
-             "expected assembled, single, row, grid or clutter, got '" + layout + "'");
-    }
-    arrangement->layout = it->second;
-  }
-  if (node["pose"]) {
-    static const std::map<std::string, PoseMode> poses = {{"stable", PoseMode::kStable},
-                                                          {"random", PoseMode::kRandom},
-                                                          {"all", PoseMode::kAll},
-                                                          {"as_designed", PoseMode::kAsDesigned}};
-    const std::string pose = r.Scalar(node["pose"], key + ".pose");
-    const auto it = poses.find(pose);
-    if (it == poses.end())
-      r.Fail(node["pose"], key + ".pose",
-             "expected stable, random, all or as_designed, got '" + pose + "'");
-    arrangement->pose = it->second;
-  }
-  if (node["gap"]) arrangement->gap_mm = r.Length(node["gap"], key + ".gap");
-  if (node["copies"]) arrangement->copies = r.Integer(node["copies"], key + ".copies");
-  if (node["radius"]) arrangement->clutter_radius_mm = r.Length(node["radius"], key + ".radius");
-  if (node["seed"])
-    arrangement->seed = static_cast<uint64_t>(r.Integer(node["seed"], key + ".seed"));
-  r.Check(*arrangement, node, key);
-}
-
-SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::string& key) {
-  r.ExpectMap(node, key, {"name", "parts", "layout", "pose", "gap", "copies", "radius", "seed"});
-  if (!node["parts"]) r.Fail(node, key, "a scene needs 'parts'");
-  SceneSpec scene;
-  scene.name = node["name"] ? r.Scalar(node["name"], key + ".name") : key;
-  scene.sources = ReadParts(r, node["parts"], key + ".parts");
-  ReadLayout(r, node, key, &scene.arrangement);
-  return scene;
-}
-
 void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "classes", {"by", "groups"});
   if (node["by"]) {
@@ -515,6 +469,23 @@ void ReadFields(const Reader& r, const YAML::Node& node, const std::string& sect
     ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field,
               &value);
   });
+}
+
+// A scene's arrangement keys (ArrangementOptions::Fields) besides `other` keys read elsewhere.
+void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
+                ArrangementOptions* arrangement, std::vector<std::string> other) {
+  ReadFields(r, node, key, arrangement, std::move(other));
+  r.Check(*arrangement, node, key);
+}
+
+SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::string& key) {
+  if (!node.IsMap()) r.ExpectMap(node, key, {"name", "parts"});
+  if (!node["parts"]) r.Fail(node, key, "a scene needs 'parts'");
+  SceneSpec scene;
+  ReadLayout(r, node, key, &scene.arrangement, {"name", "parts"});
+  scene.name = node["name"] ? r.Scalar(node["name"], key + ".name") : key;
+  scene.sources = ReadParts(r, node["parts"], key + ".parts");
+  return scene;
 }
 
 void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
@@ -791,8 +762,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
       scene.name = "scene";
       scene.sources = ReadParts(r, root["parts"], "parts");
       if (root["scene"]) {
-        r.ExpectMap(root["scene"], "scene", {"layout", "pose", "gap", "copies", "radius", "seed"});
-        ReadLayout(r, root["scene"], "scene", &scene.arrangement);
+        ReadLayout(r, root["scene"], "scene", &scene.arrangement, {});
       }
       spec.scenes = {scene};
     } else if (root["scene"]) {

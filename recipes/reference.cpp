@@ -8,6 +8,7 @@
 #include "cad/shape.h"
 #include "dataset/bop.h"
 #include "render/renderer.h"
+#include "variants/arrangement.h"
 
 namespace cadsynth {
 namespace {
@@ -52,6 +53,10 @@ std::string RecipeReference() {
       out, "output",
       "dataset layout and formats; also dir (the output folder), formats: [bop, coco, paper, "
       "pvn3d, grasp] and rgb: png | jpg");
+  Section<ArrangementOptions>(
+      out, "scene",
+      "how the parts lie on the floor; with parts: at the top level, or per entry of scenes: "
+      "[{name, parts, and these keys}]");
   Section<TessellationOptions>(out, "tessellation",
                                "how B-rep surfaces become triangles; also crease_angle (meshes)");
   Section<RenderOptions>(

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cad/part.h"
+#include "cad/schema.h"
 
 namespace cadsynth {
 
@@ -36,6 +37,26 @@ struct ArrangementOptions {
   uint64_t seed = 0;                 // random poses, yaws and clutter positions
 
   bool Check(std::string* why) const;
+
+  // The recipe keys of a scene (the root `scene:` section or an entry of `scenes:`); cad/schema.h.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.layout, Field{"layout",
+                          "choice",
+                          "how the part groups lie: together as designed, one group alone, side "
+                          "by side, on a grid, or dropped apart in a disc",
+                          {"assembled", "single", "row", "grid", "clutter"}});
+    visit(o.pose, Field{"pose",
+                        "choice",
+                        "which way up a group rests: most probable stable face, a face drawn by "
+                        "probability at a random yaw, one copy on every face, or as designed",
+                        {"stable", "random", "all", "as_designed"}});
+    visit(o.gap_mm, Field{"gap", "length", "least free space between groups (row, grid, clutter)"});
+    visit(o.copies,
+          Field{"copies", "integer", "each group placed this many times (not with assembled)"});
+    visit(o.clutter_radius_mm, Field{"radius", "length", "clutter: the disc the groups land in"});
+    visit(o.seed, Field{"seed", "integer", "random poses, yaws and clutter positions"});
+  }
 };
 
 struct Arrangement {

@@ -74,6 +74,39 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
             8);
+  EXPECT_EQ(
+      ForEachChange<ArrangementOptions>(
+          spec, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; }, check),
+      6);
+}
+
+// The scene keys, read from a recipe with parts (a scene section needs them).
+TEST(Schema, EverySceneKeyIsRead) {
+  RunSpec base;
+  base.scenes.resize(1);
+  base.scenes[0].arrangement.layout = Layout::kRow;  // copies and poses apply
+  const int n = ForEachChange<ArrangementOptions>(
+      base, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; },
+      [&](const RunSpec& changed, const std::string& name) {
+        std::string text = "parts:\n  - {family: hex_nut}\nscene:\n";
+        ArrangementOptions::Fields(
+            changed.scenes[0].arrangement, [&](const auto& value, const Field& field) {
+              text += "  " + std::string(field.key) + ": " + FieldText(value, field) +
+                      (field.kind == "length" ? " mm" : "") + "\n";
+            });
+        const RunSpec parsed = ParseRecipe(text, "r.yaml", ".");
+        ASSERT_EQ(parsed.scenes.size(), 1u) << name;
+        std::string got, want;
+        const auto all = [](const ArrangementOptions& a, std::string* out) {
+          ArrangementOptions::Fields(a, [&](const auto& value, const Field& field) {
+            *out += std::string(field.key) + "=" + FieldText(value, field) + ";";
+          });
+        };
+        all(parsed.scenes[0].arrangement, &got);
+        all(changed.scenes[0].arrangement, &want);
+        EXPECT_EQ(got, want) << name;
+      });
+  EXPECT_EQ(n, 6);
 }
 
 TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {
@@ -152,6 +185,9 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
   const TessellationOptions tessellation;
   TessellationOptions::Fields(tessellation,
                               [&](const auto&, const Field& f) { expect_key("tessellation", f); });
+  const ArrangementOptions arrangement;
+  ArrangementOptions::Fields(arrangement,
+                             [&](const auto&, const Field& f) { expect_key("scene", f); });
 }
 
 }  // namespace

@@ -302,7 +302,8 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
                 "read and analyse every part afresh (the output is the same bytes either way)")
       ->excludes(cache);
   gen->add_flag("--help-recipe", a.help_recipe,
-                "print the recipe keys of the output and render sections with their defaults");
+                "print the recipe keys of the output, render, tessellation and scene sections with "
+                "their defaults");
 
   CLI::App* merge = add(
       "merge",

@@ -183,6 +183,15 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
       break;
   }
 
+  // A NaN or infinite coordinate poisons everything after (hulls, bounds, the tracer).
+  for (const Part& part : assembly.parts) {
+    for (size_t v = 0; v < part.mesh.positions.size(); ++v) {
+      if (!part.mesh.positions[v].allFinite()) {
+        throw Error(file + ": part '" + part.name + "': vertex " + std::to_string(v) +
+                    " is not a finite number");
+      }
+    }
+  }
   if (options.crease_angle_rad == 0.0) {
     for (Part& part : assembly.parts) part.mesh.MakeFaceted();
   }

@@ -64,6 +64,10 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
     }
   }
   if (mesh.empty()) throw Error(file + ": the mesh file holds no triangles");
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (!mesh.positions[v].allFinite())
+      throw Error(file + ": vertex " + std::to_string(v) + " is not a finite number");
+  }
   ComputeCreaseNormals(&mesh, crease_angle_rad);
 
   Part part;

@@ -108,7 +108,8 @@ class ByteReader {
     const uint64_t n = Get<uint64_t>();
     if (n > (bytes_.size() - at_) / sizeof(T)) Fail();
     std::vector<T> values(n);
-    if (n > 0) std::memcpy(values.data(), Take(n * sizeof(T)), n * sizeof(T));
+    // (void*: Eigen vectors are plain numbers, though not trivially copyable by declaration)
+    if (n > 0) std::memcpy(static_cast<void*>(values.data()), Take(n * sizeof(T)), n * sizeof(T));
     return values;
   }
   std::string GetText();

@@ -737,6 +737,30 @@ RunSpec DefaultRunSpec() {
   return spec;
 }
 
+// yaml-cpp keeps every pair of a mapping but looks a key up by its first pair: a key (or a whole
+// section) written twice would silently lose one of its values.
+void RejectDuplicateKeys(const std::string& name, const YAML::Node& node) {
+  const auto where = [&](const YAML::Mark& mark) {
+    return name + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+  };
+  if (node.IsMap()) {
+    std::map<std::string, YAML::Mark> seen;
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      if (it->first.IsScalar()) {
+        const auto [first, fresh] = seen.emplace(it->first.Scalar(), it->first.Mark());
+        if (!fresh) {
+          throw Error(where(it->first.Mark()) + ": '" + it->first.Scalar() +
+                      "' is given twice (first at line " + std::to_string(first->second.line + 1) +
+                      ")");
+        }
+      }
+      RejectDuplicateKeys(name, it->second);
+    }
+  } else if (node.IsSequence()) {
+    for (const YAML::Node& child : node) RejectDuplicateKeys(name, child);
+  }
+}
+
 RunSpec ParseRecipe(const std::string& text, const std::string& name,
                     const std::filesystem::path& base_dir) {
   YAML::Node root;
@@ -747,6 +771,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
                 std::to_string(e.mark.column + 1) + ": not valid YAML: " + e.msg);
   }
   if (!root.IsMap()) throw Error(name + ": a recipe is a mapping of sections (parts, sweep, ...)");
+  RejectDuplicateKeys(name, root);
 
   const Reader r(name, base_dir);
   RunSpec spec = DefaultRunSpec();
@@ -797,16 +822,28 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
 
 RunSpec LoadRecipe(const std::filesystem::path& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error(path.string() + ": no such recipe file");
-  if (std::filesystem::is_directory(path, ec))
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) throw Error(path.string() + ": no such recipe file");
+  if (std::filesystem::is_directory(status))
     throw Error(path.string() + ": is a folder, not a recipe");
+  // A device or a pipe is read once and without end (/dev/zero): only regular files, bounded.
+  if (!std::filesystem::is_regular_file(status))
+    throw Error(path.string() + ": not a regular file (a recipe is a YAML file)");
+  constexpr uintmax_t kMaxRecipeBytes = 16u << 20;
+  const uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw Error(path.string() + ": cannot read the recipe: " + ec.message());
+  if (size > kMaxRecipeBytes)
+    throw Error(path.string() + ": " + std::to_string(size >> 20) +
+                " MB is too large for a recipe (at most 16 MB)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path.string() + ": cannot open the recipe");
-  std::ostringstream text;
-  text << in.rdbuf();
+  std::string text(static_cast<size_t>(size), '\0');
+  in.read(text.data(), static_cast<std::streamsize>(size));
+  text.resize(static_cast<size_t>(in.gcount()));
   const std::filesystem::path base = std::filesystem::absolute(path, ec).parent_path();
-  RunSpec spec = ParseRecipe(text.str(), path.string(), base);
+  RunSpec spec = ParseRecipe(text, path.string(), base);
   spec.recipe = path;
+  spec.recipe_text = std::move(text);
   return spec;
 }
 

@@ -42,6 +42,7 @@ struct SceneSpec {
 // Everything one run needs, each module's options filled in.
 struct RunSpec {
   std::filesystem::path recipe;  // empty for the built-in default job
+  std::string recipe_text;       // the recipe's bytes as read once (the run key holds them)
   std::vector<SceneSpec> scenes;
   TessellationOptions tessellation;
   double crease_angle_rad = ImportOptions{}.crease_angle_rad;  // meshes

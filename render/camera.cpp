@@ -56,6 +56,14 @@ bool SweepOptions::Check(std::string* why) const {
       *why = "radius must be a positive length";
       return false;
     }
+    if (radius > kMaxSceneExtentMm) {
+      *why = "radius must be at most 1 km (the tracer's single precision would lose the parts)";
+      return false;
+    }
+  }
+  if (!target.allFinite() || target.norm() > kMaxSceneExtentMm) {
+    *why = "the target must lie within 1 km of the origin";
+    return false;
   }
   return true;
 }
@@ -99,8 +107,12 @@ bool ViewSampler::Check(std::string* why) const {
     out << "the pitch band must lie within -90 to 90 degrees, lowest first";
   } else if (kind == Kind::kRandom && !(min_radius_mm > 0 && min_radius_mm <= max_radius_mm)) {
     out << "the radius range must be positive, smallest first";
+  } else if (kind == Kind::kRandom && max_radius_mm > kMaxSceneExtentMm) {
+    out << "the radius must be at most 1 km (the tracer's single precision would lose the parts)";
   } else if (!(roll_jitter_rad >= 0) || !(target_jitter_mm >= 0)) {
     out << "jitter must not be negative";
+  } else if (target_jitter_mm > kMaxSceneExtentMm) {
+    out << "the target jitter must be at most 1 km";
   } else {
     return true;
   }

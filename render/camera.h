@@ -42,6 +42,10 @@ struct Camera {
   Eigen::Isometry3d world_from_cam = Eigen::Isometry3d::Identity();
 };
 
+// Cameras and targets farther than this from the origin (1 km) are refused: Embree traces in
+// single precision, and at 1e19 mm it aborts the process.
+inline constexpr double kMaxSceneExtentMm = 1e6;
+
 // The reference paper's hemisphere sweep: the camera sits on a sphere around `target`
 // at every combination of yaw (about world +z, 0 = on the +x axis), pitch (elevation above the
 // floor plane, 90 degrees = straight down) and radius, and looks at `target`. Image x points

@@ -296,16 +296,23 @@ Assembly BuildVariant(const FamilyInfo& family, const ParamValues& v,
   return ScaleVariant(source, factors, options.tessellation);
 }
 
-std::string DescribeParams(const ParamValues& values) {
+std::string DescribeParams(const ParamValues& values, const FamilyInfo* family) {
   std::ostringstream out;
   out.precision(6);
   bool first = true;
   for (const auto& [name, value] : values) {
     out << (first ? "" : ", ") << name << "=";
-    if (const double* x = std::get_if<double>(&value))
-      out << *x;
-    else
+    if (const double* x = std::get_if<double>(&value)) {
+      // As a recipe writes it: angles in degrees (radians inside).
+      const FamilyParam* param = family != nullptr ? family->Find(name) : nullptr;
+      if (param != nullptr && param->kind == FamilyParam::Kind::kAngle) {
+        out << *x * 180.0 / M_PI << " deg";
+      } else {
+        out << *x;
+      }
+    } else {
       out << std::get<std::string>(value);
+    }
     first = false;
   }
   return out.str();

@@ -51,8 +51,9 @@ Assembly BuildVariant(const FamilyInfo& family, const ParamValues& values,
 // The B-rep parts and placements of a parametric variant (not 'scaled'), e.g. for STEP export.
 ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& values);
 
-// "name=value, ..." for messages and listings.
-std::string DescribeParams(const ParamValues& values);
+// "name=value, ..." for messages and listings; with the family, angles in degrees as recipes
+// write them ("pressure_angle=20 deg"), else every number as stored (radians).
+std::string DescribeParams(const ParamValues& values, const FamilyInfo* family = nullptr);
 
 // Every length of `assembly` scaled by (sx, sy, sz) in its root frame. Uniform scales keep
 // instances; otherwise each instance becomes a part of its own (a turned part scales

@@ -27,12 +27,75 @@ struct Face {
 
 }  // namespace
 
+namespace {
+
+// A flat body (a sheet, a planar mesh) rests on either side of its plane, each with probability
+// 1/2; nothing when the points do not span a plane (then the hull's error stands).
+std::vector<StablePose> FlatPoses(const std::vector<Eigen::Vector3d>& points,
+                                  const Eigen::Vector3d& com) {
+  if (points.empty()) return {};
+  for (const Eigen::Vector3d& p : points) {
+    if (!p.allFinite()) return {};
+  }
+  const Eigen::Vector3d a = points[0];
+  Eigen::Vector3d b = a;
+  for (const Eigen::Vector3d& p : points) {
+    if ((p - a).squaredNorm() > (b - a).squaredNorm()) b = p;
+  }
+  const Eigen::Vector3d ab = b - a;
+  if (ab.squaredNorm() == 0) return {};
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3d n = ab.cross(p - a);
+    if (n.squaredNorm() > normal.squaredNorm()) normal = n;
+  }
+  const double size = ab.norm();
+  if (!(normal.norm() > 1e-12 * size * size)) return {};  // collinear: no area to rest on
+  normal.normalize();
+  // Flat up to float rounding (mesh coordinates are floats: a tilted plane's vertices leave it
+  // by ~1e-7 of the size); a real sheet is thousands of times thicker than this.
+  for (const Eigen::Vector3d& p : points) {
+    if (std::abs(normal.dot(p - a)) > 1e-6 * size) return {};  // not flat
+  }
+  // A fixed side first: the normal whose largest component is positive.
+  int axis = 0;
+  normal.cwiseAbs().maxCoeff(&axis);
+  if (normal[axis] < 0) normal = -normal;
+  std::vector<StablePose> poses;
+  for (const double side : {1.0, -1.0}) {
+    StablePose pose;
+    pose.normal = side * normal;
+    pose.probability = 0.5;
+    pose.pose_probability = 0.5;
+    pose.pose = static_cast<int>(poses.size());
+    const double offset = pose.normal.dot(a);
+    pose.height = offset - pose.normal.dot(com);
+    pose.floor_from_body.linear() =
+        Eigen::Quaterniond::FromTwoVectors(pose.normal, -Eigen::Vector3d::UnitZ())
+            .toRotationMatrix();
+    pose.floor_from_body.translation() = Eigen::Vector3d(0, 0, offset);
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+}  // namespace
+
 std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
                                     const Eigen::Vector3d& com) {
-  return StablePoses(ComputeConvexHull(points), com);
+  if (std::vector<StablePose> flat = FlatPoses(points, com); !flat.empty()) return flat;
+  try {
+    return StablePoses(ComputeConvexHull(points), com);
+  } catch (const Error&) {
+    std::vector<StablePose> flat = FlatPoses(points, com);
+    if (flat.empty()) throw;
+    return flat;
+  }
 }
 
 std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com) {
+  // A sheet whose float vertices leave its plane by rounding has a hull of no real thickness.
+  if (std::vector<StablePose> flat = FlatPoses(hull.vertices, com); !flat.empty()) return flat;
   if (hull.triangles.size() < 4)
     throw Error("stable poses: the points are flat (no volume to rest)");
   const std::vector<Eigen::Vector3d>& vertex = hull.vertices;

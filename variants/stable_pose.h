@@ -31,7 +31,8 @@ struct StablePose {
 // probabilities sum to 1. Coplanar hull triangles form one face. A face is stable
 // when the centre of mass projects inside it; the solid angle an unstable face subtends at the
 // centre of mass goes to the face it tips onto (over its edge furthest beyond the centre of mass),
-// repeatedly, until a stable face is reached. Throws Error for fewer than 4 non-coplanar points.
+// repeatedly, until a stable face is reached. Points in one plane (a sheet) rest on either side
+// of it, probability 1/2 each. Throws Error for points that span no area, or are not finite.
 std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
                                     const Eigen::Vector3d& com);
 // The same from the hull itself.

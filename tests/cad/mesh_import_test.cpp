@@ -4,7 +4,10 @@
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 
+#include <array>
+#include <cmath>
 #include <fstream>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -65,6 +68,42 @@ TEST(ReadMesh, CreaseAngleDecidesSmoothOrSharp) {
   ImportOptions faceted;
   faceted.crease_angle_rad = 0.0;
   EXPECT_EQ(ImportCad(cube, faceted).parts[0].mesh.num_vertices(), 36u);
+}
+
+// A binary STL of the given triangles (no normals).
+std::filesystem::path WriteBinaryStl(const std::filesystem::path& path,
+                                     const std::vector<std::array<float, 9>>& triangles) {
+  std::ofstream out(path, std::ios::binary);
+  const std::string header(80, ' ');
+  out.write(header.data(), 80);
+  const uint32_t n = static_cast<uint32_t>(triangles.size());
+  out.write(reinterpret_cast<const char*>(&n), 4);
+  for (const auto& t : triangles) {
+    const float normal[3] = {0, 0, 0};
+    out.write(reinterpret_cast<const char*>(normal), 12);
+    out.write(reinterpret_cast<const char*>(t.data()), 36);
+    const uint16_t attributes = 0;
+    out.write(reinterpret_cast<const char*>(&attributes), 2);
+  }
+  return path;
+}
+
+// One NaN or infinite coordinate is refused when the file is read, naming it (generate died of
+// SIGFPE in the convex hull while inspect accepted the file).
+TEST(ReadMesh, NonFiniteVertexIsAnError) {
+  testing::ScratchDir dir;
+  for (const float bad : {std::nanf(""), std::numeric_limits<float>::infinity()}) {
+    const auto path = WriteBinaryStl(
+        dir / "bad.stl", {{0, 0, 0, 10, 0, 0, 0, 10, 0}, {0, 0, 0, 0, 10, 0, 0, 0, bad}});
+    try {
+      ImportCad(path, ImportOptions{});
+      ADD_FAILURE() << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a finite number"), std::string::npos)
+          << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind(path.string(), 0), 0u) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "recipes/recipe.h"
 
+#include <sys/stat.h>
+
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -307,6 +309,66 @@ TEST(Recipe, LoadRecipeNamesTheFile) {
     EXPECT_EQ(std::string(e.what()), (dir / "bad.yaml").string() +
                                          ":2:3: unknown key 'output.dirr' (did you mean 'dir'?)");
   }
+}
+
+// A recipe path that is a device or a pipe is refused at once (it was read without end, or
+// blocked for ever because the recipe was opened twice), and so is a huge file.
+TEST(Recipe, OnlyRegularFilesOfBoundedSizeAreRead) {
+  for (const char* device : {"/dev/zero", "/dev/urandom", "/dev/null"}) {
+    try {
+      LoadRecipe(device);
+      ADD_FAILURE() << device;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()),
+                std::string(device) + ": not a regular file (a recipe is a YAML file)");
+    }
+  }
+  testing::ScratchDir dir;
+  ASSERT_EQ(::mkfifo((dir / "pipe.yaml").c_str(), 0600), 0);
+  EXPECT_THROW(LoadRecipe(dir / "pipe.yaml"), Error);  // returns: nothing opens the pipe
+  {
+    std::ofstream big(dir / "big.yaml");
+    big << "# " << std::string(17 << 20, 'x') << "\n";
+  }
+  try {
+    LoadRecipe(dir / "big.yaml");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("too large for a recipe"), std::string::npos) << e.what();
+  }
+  // The text read is kept: the run key takes it from the spec, never from the path again.
+  std::ofstream(dir / "ok.yaml") << "sweep: {yaw: 0, pitch: 45, radius: 0.5 m}\n";
+  EXPECT_EQ(LoadRecipe(dir / "ok.yaml").recipe_text, "sweep: {yaw: 0, pitch: 45, radius: 0.5 m}\n");
+}
+
+// A key or a section written twice is an error naming both lines (yaml-cpp silently used the
+// first one).
+TEST(Recipe, DuplicateKeysAreErrors) {
+  EXPECT_EQ(ErrorOf("sweep: {yaw: 0}\nsweep: {yaw: 10}\n"),
+            "r.yaml:2:1: 'sweep' is given twice (first at line 1)");
+  EXPECT_EQ(ErrorOf("output:\n  coco: true\n  split: val\n  coco: false\n"),
+            "r.yaml:4:3: 'coco' is given twice (first at line 2)");
+  EXPECT_EQ(ErrorOf("parts:\n  - {family: washer, family: hex_nut}\n"),
+            "r.yaml:2:22: 'family' is given twice (first at line 2)");
+}
+
+// A camera a light-year away made Embree abort the process; the sweep refuses it.
+TEST(Recipe, FarCamerasAndTargetsAreRefused) {
+  EXPECT_EQ(ErrorOf("sweep: {radius: 1e19 mm}\n"),
+            "r.yaml:1:8: sweep: radius must be at most 1 km (the tracer's single precision would "
+            "lose the parts)");
+  SweepOptions sweep;
+  sweep.yaw_rad = {0};
+  sweep.pitch_rad = {0.5};
+  sweep.radius_mm = {500};
+  sweep.target = Eigen::Vector3d(0, 0, 2e6);
+  std::string why;
+  EXPECT_FALSE(sweep.Check(&why));
+  EXPECT_EQ(why, "the target must lie within 1 km of the origin");
+  sweep.target = Eigen::Vector3d(0, std::nan(""), 0);
+  EXPECT_FALSE(sweep.Check(&why));
+  sweep.target = Eigen::Vector3d(0, 0, 100);
+  EXPECT_TRUE(sweep.Check(&why));
 }
 
 TEST(Recipe, ShippedRecipesParse) {

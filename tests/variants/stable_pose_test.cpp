@@ -1,5 +1,6 @@
 #include "variants/stable_pose.h"
 
+#include <cmath>
 #include <memory>
 
 #include <gtest/gtest.h>
@@ -100,11 +101,6 @@ TEST(StablePoses, UnstableFacesTipOntoTheirNeighbours) {
   EXPECT_TRUE(on_post_side);
 }
 
-TEST(StablePoses, RejectsFlatInput) {
-  EXPECT_THROW(StablePoses({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, Eigen::Vector3d::Zero()),
-               Error);
-}
-
 }  // namespace
 }  // namespace cadsynth
 
@@ -132,6 +128,34 @@ TEST(StablePoses, SameBitsOnEveryCallWhateverTheHeap) {
     differ += !same;
   }
   EXPECT_EQ(differ, 0);
+}
+
+// A flat polygon (a sheet: no volume) rests on either side of its plane, 1/2 each, lying in the
+// floor (a planar octagon of 8 or more vertices crashed the hull before).
+TEST(StablePoses, FlatPolygonRestsOnEitherSide) {
+  std::vector<Eigen::Vector3d> octagon;
+  const Eigen::Isometry3d tilt =
+      Eigen::Translation3d(5, 6, 7) * Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 1, 0).normalized());
+  for (int i = 0; i < 8; ++i)
+    octagon.push_back(tilt *
+                      Eigen::Vector3d(10 * std::cos(i * M_PI / 4), 10 * std::sin(i * M_PI / 4), 0));
+  const std::vector<StablePose> poses = StablePoses(octagon, tilt * Eigen::Vector3d::Zero());
+  ASSERT_EQ(poses.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(poses[k].pose, static_cast<int>(k));
+    EXPECT_DOUBLE_EQ(poses[k].probability, 0.5);
+    EXPECT_NEAR(poses[k].height, 0.0, 1e-9);
+    for (const Eigen::Vector3d& p : octagon)
+      EXPECT_NEAR((poses[k].floor_from_body * p).z(), 0.0, 1e-9);
+  }
+  EXPECT_NEAR(poses[0].normal.dot(poses[1].normal), -1.0, 1e-12);
+  // Exactly flat (the hull has no volume): the same.
+  EXPECT_EQ(
+      StablePoses({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, Eigen::Vector3d::Zero()).size(),
+      2u);
+  // Collinear points have no area to rest on.
+  EXPECT_THROW(StablePoses({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}}, Eigen::Vector3d(1, 1, 1)),
+               Error);
 }
 
 }  // namespace

@@ -26,7 +26,7 @@ std::vector<VariantListing> ListVariants(const RunSpec& spec) {
       for (size_t v = 0; v < source.variants.size(); ++v) {
         list.push_back({base + source.family + "/" + std::to_string(v),
                         source.family,
-                        DescribeParams(source.variants[v]),
+                        DescribeParams(source.variants[v], FindFamily(source.family)),
                         {}});
       }
     }

@@ -31,6 +31,21 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   }
   if (shard && options.overwrite)
     throw Error("--overwrite does not apply to shards (they share one folder)");
+  // The run's input files: --overwrite must never delete a folder that holds them.
+  std::vector<std::filesystem::path> inputs;
+  if (!spec.recipe.empty()) inputs.push_back(spec.recipe);
+  for (const SceneSpec& scene : spec.scenes) {
+    for (const PartSource& source : scene.sources) {
+      if (source.kind == PartSource::Kind::kFile) inputs.push_back(source.path);
+      for (const ParamValues& values : source.variants) {
+        const auto file = values.find("file");
+        if (file != values.end() && std::holds_alternative<std::string>(file->second))
+          inputs.emplace_back(std::get<std::string>(file->second));
+      }
+    }
+  }
+  // Checked before the work, and again when the new dataset replaces the old one.
+  if (!shard && options.overwrite) CheckReplaceable(output, inputs);
   std::string why;
   if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
@@ -209,7 +224,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     tree->MarkDone(marker.str());
   } else {
     for (const auto& writer : writers) writer->RemoveFragments();
-    staging->Publish(output, options.overwrite);
+    staging->Publish(output, options.overwrite, inputs);
   }
   if (resumed > 0) info("resumed: " + std::to_string(resumed) + " frames were already written");
   if (damaged > 0)

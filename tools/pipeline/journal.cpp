@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -37,7 +38,8 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   std::ostringstream key;
   key.precision(17);
   key << "cadsynth run key 2\n";
-  if (!spec.recipe.empty()) key << "recipe\n" << ReadFileText(spec.recipe) << "\n";
+  // The recipe as it was read (not read again: it may have changed, or be a pipe).
+  if (!spec.recipe.empty()) key << "recipe\n" << spec.recipe_text << "\n";
   // The bytes of every CAD file, not only its name: a file edited between a kill and the rerun
   // (or between two shards) would otherwise mix frames of two geometries.
   std::set<std::filesystem::path> files;
@@ -126,6 +128,42 @@ void RunLock::Release() {
   fd_ = -1;
 }
 
+void MarkDataset(const std::filesystem::path& folder) {
+  WriteFileAtomic(folder / kDatasetMarker,
+                  "A dataset written by cadsynth: 'cadsynth generate --overwrite' may replace this "
+                  "folder.\n");
+}
+
+void CheckReplaceable(const std::filesystem::path& output,
+                      const std::vector<std::filesystem::path>& inputs) {
+  std::error_code ec;
+  if (!std::filesystem::exists(output, ec)) return;
+  const std::string name = output.string();
+  if (!std::filesystem::is_directory(output, ec))
+    throw Error(name + ": exists and is not a folder: --overwrite replaces only datasets");
+  if (!std::filesystem::exists(output / kDatasetMarker, ec) &&
+      !std::filesystem::exists(output / "variants.json", ec) &&
+      !std::filesystem::is_empty(output, ec)) {
+    throw Error(name + ": not a dataset written by cadsynth (no " + kDatasetMarker +
+                "): --overwrite would delete it; remove it yourself or write elsewhere");
+  }
+  if (std::filesystem::exists(output / ".shards", ec)) {
+    throw Error(name + ": holds shards of a run (" + name +
+                "/.shards): merge them or remove the folder yourself; --overwrite would delete "
+                "frames shards may still be writing");
+  }
+  const std::filesystem::path root = std::filesystem::weakly_canonical(output, ec);
+  for (const std::filesystem::path& input : inputs) {
+    if (input.empty()) continue;
+    const std::filesystem::path file = std::filesystem::weakly_canonical(input, ec);
+    const auto mismatch = std::mismatch(root.begin(), root.end(), file.begin(), file.end());
+    if (mismatch.first == root.end()) {
+      throw Error(name + ": holds " + input.string() +
+                  ", an input of this run: --overwrite would delete it");
+    }
+  }
+}
+
 StagingRun::StagingRun(const std::filesystem::path& output, const std::string& run_key,
                        const std::function<void(const std::string&)>& info) {
   std::error_code ec;
@@ -146,6 +184,7 @@ StagingRun::StagingRun(const std::filesystem::path& output, const std::string& r
     }
     std::filesystem::remove_all(root_, ec);
     CreateFolder(root_);
+    MarkDataset(root_);
     WriteFileAtomic(key_path, run_key);
   } else if (info) {
     info("resuming the interrupted run in " + root_.string());
@@ -154,12 +193,14 @@ StagingRun::StagingRun(const std::filesystem::path& output, const std::string& r
 
 StagingRun::~StagingRun() = default;
 
-void StagingRun::Publish(const std::filesystem::path& output, bool overwrite) {
+void StagingRun::Publish(const std::filesystem::path& output, bool overwrite,
+                         const std::vector<std::filesystem::path>& inputs) {
   std::error_code ec;
   const bool replace = std::filesystem::exists(output, ec);
   // Refused before anything changes: the staging folder stays resumable.
   if (replace && !overwrite)
     throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
+  if (replace) CheckReplaceable(output, inputs);
   std::filesystem::remove(root_ / ".run_key", ec);
   if (replace) {
     std::filesystem::path old = output;

@@ -44,6 +44,16 @@ class RunLock {
   int fd_ = -1;
 };
 
+// Every dataset folder cadsynth writes holds this file; `--overwrite` replaces only such folders.
+inline constexpr const char* kDatasetMarker = ".cadsynth_dataset";
+// Writes the marker into `folder`.
+void MarkDataset(const std::filesystem::path& folder);
+// Throws Error unless `output` may be replaced by --overwrite: a folder cadsynth wrote (its marker,
+// or variants.json for datasets written before the marker), holding no shard tree (shards may be
+// writing into it) and none of `inputs` (the recipe, CAD files).
+void CheckReplaceable(const std::filesystem::path& output,
+                      const std::vector<std::filesystem::path>& inputs);
+
 // The staging folder of a run writing `output`: locked, and started afresh unless it holds an
 // interrupted run with the same key (then the run continues in it).
 class StagingRun {
@@ -52,9 +62,11 @@ class StagingRun {
              const std::function<void(const std::string&)>& info);
   ~StagingRun();
   const std::filesystem::path& root() const { return root_; }
-  // Moves the finished dataset to `output` (replacing an old one only with `overwrite`, and only
-  // once the new one is complete) and releases the lock.
-  void Publish(const std::filesystem::path& output, bool overwrite);
+  // Moves the finished dataset to `output` (replacing an old one only with `overwrite`, only if
+  // CheckReplaceable(output, inputs) allows it, and only once the new one is complete) and
+  // releases the lock.
+  void Publish(const std::filesystem::path& output, bool overwrite,
+               const std::vector<std::filesystem::path>& inputs = {});
 
  private:
   std::filesystem::path root_;

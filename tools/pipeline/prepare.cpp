@@ -25,6 +25,16 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
+// A length for a message: whole millimetres (lround overflows past 9e18: printed as a huge
+// negative number), or three significant digits when it is that large.
+std::string Mm(double x) {
+  if (std::abs(x) < 1e12) return std::to_string(std::llround(x));
+  std::ostringstream out;
+  out.precision(3);
+  out << x;
+  return out.str();
+}
+
 // Inputs large enough to announce before working on them.
 constexpr uintmax_t kLargeFileBytes = 50u << 20;
 constexpr size_t kLargeMeshVertices = 1000000;
@@ -147,7 +157,7 @@ void Build(const RunSpec& spec, const PartCache* cache, Job* job) {
     std::string where = source.where.empty() ? "" : source.where + ": ";
     if (source.kind == PartSource::Kind::kFamily) {
       where += "variant " + std::to_string(job->variant) + " (" +
-               DescribeParams(source.variants[job->variant]) + "): ";
+               DescribeParams(source.variants[job->variant], FindFamily(source.family)) + "): ";
     }
     job->error = where + e.what();
   }
@@ -204,14 +214,13 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
   std::ostringstream out;
   out.precision(4);
   if (reach >= nearest) {
-    out << "the scene reaches " << std::lround(reach)
-        << " mm from the target, beyond the nearest camera radius " << std::lround(nearest)
+    out << "the scene reaches " << Mm(reach)
+        << " mm from the target, beyond the nearest camera radius " << Mm(nearest)
         << " mm: the camera will be inside or touching it";
     warnings.push_back(out.str());
   } else if (std::asin(reach / nearest) > half_fov) {
-    out << "the scene reaches " << std::lround(reach)
-        << " mm from the target; at the nearest radius " << std::lround(nearest)
-        << " mm the camera sees only " << std::lround(nearest * std::sin(half_fov))
+    out << "the scene reaches " << Mm(reach) << " mm from the target; at the nearest radius "
+        << Mm(nearest) << " mm the camera sees only " << Mm(nearest * std::sin(half_fov))
         << " mm around it: objects will be cut off";
     warnings.push_back(out.str());
   }
@@ -227,7 +236,7 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
     std::ostringstream small;
     small.precision(3);
     small << "'" << name << "' (" << smallest << " mm) spans only " << pixels
-          << " px at the farthest radius " << std::lround(farthest) << " mm";
+          << " px at the farthest radius " << Mm(farthest) << " mm";
     warnings.push_back(small.str());
   }
   return warnings;
@@ -328,6 +337,23 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     label_of_part = std::move(labels);
   }
   std::vector<Part>& parts = all.parts;
+  // Two objects of one name (some exporters call every body "SOLID") would be two COCO
+  // categories and two classes of one name: the later ones get "_2", "_3", ...
+  {
+    std::set<std::string> used;
+    for (const Part& part : parts) used.insert(part.name);
+    std::set<std::string> taken;
+    for (Part& part : parts) {
+      if (taken.insert(part.name).second) continue;
+      for (int k = 2;; ++k) {
+        const std::string name = part.name + "_" + std::to_string(k);
+        if (used.count(name) == 0 && taken.insert(name).second) {
+          part.name = name;
+          break;
+        }
+      }
+    }
+  }
   // Each part's convex hull once, for its stable poses and its diameter (flat parts have none).
   for (const Part& part : parts) {
     if (part.mesh.num_vertices() >= kLargeMeshVertices) {

@@ -1,5 +1,8 @@
 #include "tools/pipeline/progress.h"
 
+#include <sys/ioctl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -81,10 +84,41 @@ void ProgressReporter::Update(size_t done, size_t total) {
   const double now = clock_();
   const bool last = done >= total;
   switch (mode_) {
-    case Mode::kBar:
+    case Mode::kBar: {
       if (!last && now - last_report_ < 0.1) return;  // redraw at most 10 times a second
-      std::fprintf(out_, "\r%s%s", FormatProgressBar(done, total, now).c_str(), last ? "\n" : "");
+      // One line that fits the terminal: a line that wraps is no longer redrawn by '\r', it
+      // scrolls. The bar shrinks (or goes) to fit, and a line shorter than the one before blanks
+      // its leftover characters ("in 0:18" over "ETA 0:05" showed "in 0:180").
+      int columns = columns_;
+      if (columns <= 0) {
+        winsize size{};
+        columns = ::ioctl(::fileno(out_), TIOCGWINSZ, &size) == 0 && size.ws_col > 0
+                      ? static_cast<int>(size.ws_col)
+                      : 80;
+      }
+      std::string line = FormatProgressBar(done, total, now, 0);
+      const int room = columns - 1 - static_cast<int>(line.size()) - 3;
+      if (room >= 10) line = FormatProgressBar(done, total, now, std::min(30, room));
+      if (static_cast<int>(line.size()) >= columns) {  // narrow: the numbers only
+        const double fraction = total > 0 ? std::min(1.0, static_cast<double>(done) / total) : 1.0;
+        char text[160];
+        std::snprintf(text, sizeof(text), "%3d%% %zu/%zu", static_cast<int>(100 * fraction), done,
+                      total);
+        line = text;
+        if (now > 0 && done > 0) {
+          const double rate = done / now;
+          std::snprintf(text, sizeof(text), " %.1f/s %s %s", rate, last ? "in" : "ETA",
+                        Duration(last ? now : (total - done) / rate).c_str());
+          line += text;
+        }
+      }
+      if (static_cast<int>(line.size()) >= columns) line.resize(static_cast<size_t>(columns - 1));
+      const size_t width = line.size();
+      if (line.size() < last_width_) line.append(last_width_ - line.size(), ' ');
+      last_width_ = width;
+      std::fprintf(out_, "\r%s%s", line.c_str(), last ? "\n" : "");
       break;
+    }
     case Mode::kLines:
       if (!last && done % std::max<size_t>(1, total / 10) != 0) return;
       std::fprintf(out_, "%s\n", FormatProgressBar(done, total, now, 0).c_str());

@@ -32,6 +32,8 @@ class ProgressReporter {
   void Update(size_t done, size_t total);
   // Names the shard in JSON lines ("I/N"); call before the first Update.
   void SetShard(std::string shard) { shard_ = std::move(shard); }
+  // The terminal's width for the bar (default: asked of the terminal, 80 when it does not say).
+  void SetColumns(int columns) { columns_ = columns; }
 
  private:
   Mode mode_;
@@ -42,6 +44,8 @@ class ProgressReporter {
   double last_report_ = -1e300;
   size_t last_done_ = 0;
   std::string shard_;
+  int columns_ = 0;        // 0: ask the terminal
+  size_t last_width_ = 0;  // of the bar line drawn last (a shorter one must blank the rest)
 };
 
 }  // namespace cadsynth

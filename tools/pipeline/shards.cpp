@@ -165,6 +165,7 @@ ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& ru
                 "empty folder, or the folder their run started");
   }
   CreateFolder(Meta(dir));
+  MarkDataset(dir);
   const fs::path lock = Meta(dir) / ShardFile(shard.index, shard.count, ".lock");
   lock_fd_ = TryLock(lock);
   if (lock_fd_ < 0)

@@ -14,6 +14,7 @@
 #include "cad/step.h"
 #include "tests/json_support.h"
 #include "tests/test_support.h"
+#include "tools/pipeline/journal.h"
 
 namespace cadsynth {
 namespace {
@@ -265,19 +266,43 @@ TEST(Generate, BadInputLeavesNoDatasetBehind) {
   EXPECT_EQ(EntriesIn(dir.path()), 1u);  // only broken.stp: no staging folder either
 }
 
-TEST(Generate, ExistingOutputNeedsOverwrite) {
+// --overwrite replaces only a dataset cadsynth wrote: never an unrelated folder, one that holds
+// the run's own inputs, or one that shards are writing into (all were deleted before).
+TEST(Generate, OverwriteReplacesOnlyDatasetsItWrote) {
   ScratchDir dir;
   std::filesystem::create_directories(dir / "out");
   std::ofstream(dir / "out" / "keep.txt") << "mine";
   GenerateOptions options;
   options.output = dir / "out";
   EXPECT_THROW(Generate(SmallDefault(), options), Error);
-  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "keep.txt"));
   options.overwrite = true;
-  Generate(SmallDefault(), options);
-  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "keep.txt"));
+  try {
+    Generate(SmallDefault(), options);
+    ADD_FAILURE() << "an unrelated folder was replaced";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not a dataset written by cadsynth"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "keep.txt"));
+  std::filesystem::remove_all(dir / "out");
+  Generate(SmallDefault(), options);  // a new dataset, marked as cadsynth's
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / kDatasetMarker));
+  std::ofstream(dir / "out" / "extra.txt") << "left by a user";
+  Generate(SmallDefault(), options);  // replaced
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "extra.txt"));
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "camera.json"));
   EXPECT_EQ(EntriesIn(dir.path()), 1u);
+  // The recipe kept inside the dataset folder: replacing the folder would delete it.
+  RunSpec with_recipe = SmallDefault();
+  std::ofstream(dir / "out" / "r.yaml") << "parts: []\n";
+  with_recipe.recipe = dir / "out" / "r.yaml";
+  EXPECT_THROW(Generate(with_recipe, options), Error);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "r.yaml"));
+  // A shard tree: its shards may be writing.
+  std::filesystem::remove(dir / "out" / "r.yaml");
+  std::filesystem::create_directories(dir / "out" / ".shards");
+  EXPECT_THROW(Generate(SmallDefault(), options), Error);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / ".shards"));
 }
 
 json ModelsCad(const std::filesystem::path& root) {

@@ -1,5 +1,7 @@
 #include "tools/pipeline/prepare.h"
 
+#include <array>
+#include <cmath>
 #include <fstream>
 #include <set>
 
@@ -156,6 +158,59 @@ TEST(Prepare, DamagedCacheEntriesAreRebuilt) {
                            again.parts[p].mesh.positions.begin()));
   }
   EXPECT_EQ(again.variants_json, cold.variants_json);
+}
+
+void WriteAsciiStl(const std::filesystem::path& path,
+                   const std::vector<std::array<Eigen::Vector3d, 3>>& triangles) {
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream out(path);
+  out << "solid s\n";
+  for (const auto& t : triangles) {
+    out << "facet normal 0 0 0\nouter loop\n";
+    for (const auto& v : t) out << "vertex " << v.x() << " " << v.y() << " " << v.z() << "\n";
+    out << "endloop\nendfacet\n";
+  }
+  out << "endsolid s\n";
+}
+
+std::vector<std::array<Eigen::Vector3d, 3>> Tetrahedron(double s) {
+  const Eigen::Vector3d a(0, 0, 0), b(s, 0, 0), c(0, s, 0), d(0, 0, s);
+  return {{a, c, b}, {a, b, d}, {a, d, c}, {b, c, d}};  // outward
+}
+
+// Two different parts of one name (exporters call every body "SOLID") become two names, so COCO
+// gets distinct categories; a flat sheet (no volume) lies in the floor instead of failing.
+TEST(Prepare, SameNamesMadeUniqueAndFlatSheetsLieFlat) {
+  testing::ScratchDir dir;
+  WriteAsciiStl(dir / "a" / "part.stl", Tetrahedron(10));
+  WriteAsciiStl(dir / "b" / "part.stl", Tetrahedron(20));
+  std::vector<std::array<Eigen::Vector3d, 3>> octagon;
+  const auto corner = [](int i) {
+    return Eigen::Vector3d(10 * std::cos(i * M_PI / 4), 10 * std::sin(i * M_PI / 4), 3);
+  };
+  for (int i = 1; i + 1 < 8; ++i) octagon.push_back({corner(0), corner(i), corner(i + 1)});
+  WriteAsciiStl(dir / "sheet.stl", octagon);
+  RunSpec spec = DefaultRunSpec();
+  spec.scenes.resize(1);
+  spec.scenes[0].sources.clear();
+  for (const char* file : {"a/part.stl", "b/part.stl", "sheet.stl"})
+    spec.scenes[0].sources.push_back(
+        PartSource{.kind = PartSource::Kind::kFile, .path = dir / file});
+  spec.scenes[0].arrangement.layout = Layout::kRow;
+  std::vector<std::string> seen;
+  g_seen = &seen;
+  const WarningSink previous = SetWarningSink(&Collect);
+  const PreparedRun run = Prepare(spec);
+  SetWarningSink(previous);
+  ASSERT_EQ(run.parts.size(), 3u);
+  EXPECT_EQ(run.parts[0].name, "part");
+  EXPECT_EQ(run.parts[1].name, "part_2");
+  EXPECT_EQ(run.parts[2].name, "sheet");
+  EXPECT_NE(run.classes[0].name, run.classes[1].name);
+  const Instance& sheet = run.scenes[0].instances[2];
+  ASSERT_EQ(sheet.part, 2);
+  for (const Eigen::Vector3f& p : run.parts[2].mesh.positions)
+    EXPECT_NEAR((sheet.world_from_model * p.cast<double>()).z(), 0.0, 1e-4);
 }
 
 }  // namespace

@@ -52,5 +52,39 @@ TEST(Progress, JsonLinesAreThrottledAndTheLastAlwaysComes) {
   EXPECT_NE(text.find("{\"done\":100,\"total\":100"), std::string::npos) << text;
 }
 
+// The bar redraws one line: a shorter line blanks what the longer one before left ("in 0:18"
+// drawn over "ETA 0:05" showed "in 0:180"), and every line fits the terminal's width (a wrapped
+// line scrolls instead of being redrawn).
+TEST(Progress, BarLinesBlankLeftoversAndFitTheTerminal) {
+  for (const int columns : {80, 60, 40}) {
+    SCOPED_TRACE(columns);
+    char* buffer = nullptr;
+    size_t size = 0;
+    std::FILE* out = open_memstream(&buffer, &size);
+    double now = 0;
+    {
+      ProgressReporter reporter(ProgressReporter::Mode::kBar, out, 5.0, [&] { return now; });
+      reporter.SetColumns(columns);
+      now = 1.0;
+      reporter.Update(10, 1000);  // 10.0 frames/s, ETA 1:39
+      now = 18.0;
+      reporter.Update(1000, 1000);  // 55.6 frames/s, in 0:18: shorter
+    }
+    std::fclose(out);
+    const std::string text(buffer, size);
+    std::free(buffer);
+    ASSERT_EQ(text.back(), '\n');
+    const size_t last = text.rfind('\r');
+    ASSERT_NE(last, std::string::npos);
+    const std::string first_line = text.substr(1, last - 1);
+    const std::string final_line = text.substr(last + 1, text.size() - last - 2);
+    EXPECT_LT(static_cast<int>(first_line.size()), columns) << first_line;
+    EXPECT_GE(final_line.size(), first_line.size()) << "leftovers would show";
+    const std::string shown = final_line.substr(0, final_line.find_last_not_of(' ') + 1);
+    EXPECT_LT(static_cast<int>(shown.size()), columns) << shown;
+    EXPECT_EQ(shown.substr(shown.size() - 7), "in 0:18") << shown;
+  }
+}
+
 }  // namespace
 }  // namespace cadsynth

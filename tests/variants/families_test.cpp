@@ -45,6 +45,18 @@ TEST(Families, ParametersAreCheckedByNameAndKind) {
   EXPECT_EQ(FindFamily("sprocket"), nullptr);
 }
 
+// Listings write angles as recipes do, in degrees (they printed radians: 0.349066).
+TEST(Families, DescribedParametersShowAnglesInDegrees) {
+  const FamilyInfo& gear = *FindFamily("spur_gear");
+  const ParamValues v = CompleteParams(gear, {{"teeth", 31.0}});
+  const std::string text = DescribeParams(v, &gear);
+  EXPECT_NE(text.find("pressure_angle=20 deg"), std::string::npos) << text;
+  EXPECT_NE(text.find("helix_angle=0 deg"), std::string::npos) << text;
+  EXPECT_NE(text.find("teeth=31"), std::string::npos) << text;
+  EXPECT_NE(text.find("module=2,"), std::string::npos) << text;
+  EXPECT_NE(DescribeParams(v).find("pressure_angle=0.349066"), std::string::npos);  // no family
+}
+
 TEST(ScaleVariant, UniformPerAxisAndMeshes) {
   testing::ScratchDir dir;
   const Eigen::Isometry3d turned(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));

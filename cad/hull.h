@@ -13,9 +13,10 @@ namespace cadsynth {
 
 // The convex hull of a point set (mm). Vertices are the hull's corners, each position once, sorted
 // lexicographically by (x, y, z); triangles wind counter-clockwise seen from outside, start at
-// their lowest vertex index and are sorted. Planar facets are triangulated. The same points give
-// the same bits whatever the input order, the thread or the heap (CGAL's own output order
-// depends on memory addresses).
+// their lowest vertex index and are sorted. The corners and their order are a function of the
+// point set alone (CGAL's own output order depends on memory addresses). A planar facet of more
+// than three corners is split into triangles in a way that can differ from call to call; its
+// outline cannot, and that is what the stable poses use.
 struct ConvexHull {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<std::array<int, 3>> triangles;

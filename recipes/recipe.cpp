@@ -351,10 +351,25 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
     const YAML::Node item = node[i];
     const std::string key = where + "[" + std::to_string(i) + "]";
     r.ExpectMap(item, key,
-                {"file", "unit", "encoding", "family", "params", "grid", "random", "class"});
+                {"file", "unit", "encoding", "family", "params", "grid", "random", "class", "up"});
     if (!item["file"] == !item["family"])
       r.Fail(item, key, "give exactly one of 'file' or 'family'");
     PartSource source;
+    if (item["up"]) {
+      const std::string up = r.Scalar(item["up"], key + ".up");
+      const double quarter = M_PI / 2;
+      const std::map<std::string, Eigen::Matrix3d> turns = {
+          {"z", Eigen::Matrix3d::Identity()},
+          {"-z", Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix()},
+          {"y", Eigen::AngleAxisd(quarter, Eigen::Vector3d::UnitX()).toRotationMatrix()},
+          {"-y", Eigen::AngleAxisd(-quarter, Eigen::Vector3d::UnitX()).toRotationMatrix()},
+          {"x", Eigen::AngleAxisd(-quarter, Eigen::Vector3d::UnitY()).toRotationMatrix()},
+          {"-x", Eigen::AngleAxisd(quarter, Eigen::Vector3d::UnitY()).toRotationMatrix()}};
+      const auto it = turns.find(up);
+      if (it == turns.end())
+        r.Fail(item["up"], key + ".up", "expected x, y, z, -x, -y or -z, got '" + up + "'");
+      source.z_from_up = it->second;
+    }
     if (item["file"]) {
       for (const char* k : {"params", "grid", "random", "class"}) {
         if (item[k]) r.Fail(item[k], key + "." + k, "goes with 'family', not 'file'");

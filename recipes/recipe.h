@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "cad/import.h"
 #include "cad/shape.h"
 #include "dataset/bop.h"
@@ -29,7 +31,10 @@ struct PartSource {
   // family's parameters in their order, the last varying fastest; random: draw order).
   std::vector<ParamValues> variants;
   bool one_class = false;  // kFamily: all variants are one object class (class: family)
-  std::string where;       // "recipe.yaml:3:5" (empty when built in)
+  // The axis its designer drew as up (recipe `up: y` for a file drawn Y-up): this rotation turns
+  // it to +z before the scene is arranged. Identity for z.
+  Eigen::Matrix3d z_from_up = Eigen::Matrix3d::Identity();
+  std::string where;  // "recipe.yaml:3:5" (empty when built in)
 };
 
 // One BOP scene: what lies on the floor together, and how.

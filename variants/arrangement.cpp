@@ -99,6 +99,16 @@ void Apply(const Eigen::Isometry3d& motion, Body* body) {
 
 // Rests a body: on its most stable face, a drawn one, or `pose_index`; then yaw about z and lower
 // onto the floor. Returns false when `pose_index` is beyond its stable poses.
+// The stable pose whose resting face points most nearly down in the body's own (design) frame;
+// ties go to the more probable pose (the list's order).
+size_t UprightPose(const std::vector<StablePose>& poses) {
+  size_t best = 0;
+  for (size_t i = 1; i < poses.size(); ++i) {
+    if (-poses[i].normal.z() > -poses[best].normal.z() + 1e-9) best = i;
+  }
+  return best;
+}
+
 void Rest(const std::vector<Part>& parts, const ArrangementOptions& o,
           const std::vector<StablePose>& poses, size_t pose_index, double yaw, Body* body) {
   if (o.pose != PoseMode::kAsDesigned) Apply(poses[pose_index].floor_from_body, body);
@@ -112,7 +122,10 @@ void Rest(const std::vector<Part>& parts, const ArrangementOptions& o,
 }  // namespace
 
 Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                    const ArrangementOptions& o, const std::vector<int>& group) {
+                    const ArrangementOptions& options, const std::vector<int>& group) {
+  ArrangementOptions o = options;
+  if (o.pose == PoseMode::kAuto)
+    o.pose = o.layout == Layout::kAssembled ? PoseMode::kUpright : PoseMode::kStable;
   std::string why;
   if (!o.Check(&why)) throw Error("arrangement: " + why);
   if (!group.empty() && group.size() != instances.size())
@@ -150,6 +163,8 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
     if (o.pose == PoseMode::kRandom) {
       double u = UniformDraw(o.seed, streams::kAssembledPose, 0), acc = 0;
       while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
+    } else if (o.pose == PoseMode::kUpright) {
+      pick = UprightPose(poses);
     }
     Rest(parts, o, poses, pick, 0.0, &all);
     // Keep each instance's group for the caller.
@@ -172,6 +187,7 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
         const uint64_t index =
             (static_cast<uint64_t>(g) << 32) + static_cast<uint64_t>(c) * faces + f;
         size_t pick = o.pose == PoseMode::kAll ? f : 0;
+        if (o.pose == PoseMode::kUpright) pick = UprightPose(poses);
         if (o.pose == PoseMode::kRandom) {
           const double u = UniformDraw(o.seed, streams::kCopyPose, index);
           double acc = 0;

@@ -26,11 +26,13 @@ enum class PoseMode {
   kRandom,      // on a face drawn by probability, at a random yaw
   kAll,         // one copy on every stable face
   kAsDesigned,  // as the CAD has it, lowered onto the floor
+  kUpright,     // on the stable face nearest the design's down (-z): the way it was drawn standing
+  kAuto,        // upright for an assembled layout, stable for the others
 };
 
 struct ArrangementOptions {
   Layout layout = Layout::kAssembled;
-  PoseMode pose = PoseMode::kStable;
+  PoseMode pose = PoseMode::kAuto;
   double gap_mm = 40.0;              // row, grid, clutter: least free space between groups
   int copies = 1;                    // each group placed this many times (not with kAssembled)
   double clutter_radius_mm = 150.0;  // clutter: the disc the groups land in
@@ -49,8 +51,10 @@ struct ArrangementOptions {
     visit(o.pose, Field{"pose",
                         "choice",
                         "which way up a group rests: most probable stable face, a face drawn by "
-                        "probability at a random yaw, one copy on every face, or as designed",
-                        {"stable", "random", "all", "as_designed"}});
+                        "probability at a random yaw, one copy on every face, as designed, on the "
+                        "stable face nearest the design's down, or auto (upright when assembled, "
+                        "else stable)",
+                        {"stable", "random", "all", "as_designed", "upright", "auto"}});
     visit(o.gap_mm, Field{"gap", "length", "least free space between groups (row, grid, clutter)"});
     visit(o.copies,
           Field{"copies", "integer", "each group placed this many times (not with assembled)"});

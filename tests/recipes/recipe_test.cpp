@@ -371,6 +371,21 @@ TEST(Recipe, FarCamerasAndTargetsAreRefused) {
   EXPECT_TRUE(sweep.Check(&why));
 }
 
+// `up:` names the axis a file was drawn with as up; it is turned to +z.
+TEST(Recipe, UpAxisTurnsToZ) {
+  for (const char* axis : {"x", "y", "z", "-x", "-y", "-z"}) {
+    const RunSpec spec = ParseRecipe(
+        "parts:\n  - {family: hex_nut, up: " + std::string(axis) + "}\n", "r.yaml", ".");
+    Eigen::Vector3d up = Eigen::Vector3d::Zero();
+    up[std::string(axis).back() - 'x'] = axis[0] == '-' ? -1 : 1;
+    const Eigen::Matrix3d& turn = spec.scenes[0].sources[0].z_from_up;
+    EXPECT_TRUE((turn * up).isApprox(Eigen::Vector3d::UnitZ(), 1e-12)) << axis;
+    EXPECT_NEAR(turn.determinant(), 1.0, 1e-12) << axis;
+  }
+  EXPECT_EQ(ErrorOf("parts:\n  - {family: hex_nut, up: w}\n"),
+            "r.yaml:2:27: parts[0].up: expected x, y, z, -x, -y or -z, got 'w'");
+}
+
 TEST(Recipe, ShippedRecipesParse) {
   const bool have_data = std::filesystem::exists(testing::DataDir() / "step");
   int parsed = 0;

@@ -185,5 +185,37 @@ TEST(Arrange, RejectsBadInput) {
   EXPECT_TRUE(Arrange(f.parts, {}, ArrangementOptions{}).instances.empty());
 }
 
+// A "T" drawn standing: a 10 x 10 x 100 post with a 100 x 100 x 5 plate on top. Dropped at
+// random it most often lands with the plate down (its wide face or its edge); assembled, it stands
+// on its post as it
+// was drawn (pose auto = upright), which is stable: the centre of mass is above the foot.
+TEST(Arrange, AssembledStandsAsDrawnUnlessAskedForTheLikeliestFace) {
+  std::vector<Part> parts;
+  parts.push_back(MakePart("post", MakeBox(10, 10, 100), TessellationOptions{}));
+  parts.push_back(MakePart("plate", MakeBox(100, 100, 5), TessellationOptions{}));
+  const std::vector<Instance> instances = {
+      {0, "post", Eigen::Translation3d(-5, -5, 0) * parts[0].cad_from_model},
+      {1, "plate", Eigen::Translation3d(-50, -50, 100) * parts[1].cad_from_model}};
+  const auto lowest = [&](const Arrangement& a, int i) {
+    double z = 1e300;
+    for (const Eigen::Vector3f& p : parts[i].mesh.positions)
+      z = std::min(z, (a.instances[i].world_from_model * p.cast<double>()).z());
+    return z;
+  };
+  ArrangementOptions options;  // layout assembled, pose auto
+  const Arrangement upright = Arrange(parts, instances, options);
+  EXPECT_NEAR(lowest(upright, 0), 0.0, 1e-9);    // the post's foot on the floor
+  EXPECT_NEAR(lowest(upright, 1), 100.0, 1e-9);  // the plate on top
+  options.pose = PoseMode::kStable;
+  const Arrangement likeliest = Arrange(parts, instances, options);
+  EXPECT_NEAR(lowest(likeliest, 1), 0.0, 1e-9);  // the plate touches the floor: not standing
+  // Each part on its own (row): auto means the likeliest face, so the post lies down.
+  options.layout = Layout::kRow;
+  options.pose = PoseMode::kAuto;
+  const Arrangement row = Arrange(parts, instances, options, {0, 1});
+  const Eigen::AlignedBox3d post = parts[0].mesh.Bounds(row.instances[0].world_from_model);
+  EXPECT_NEAR(post.sizes().z(), 10.0, 1e-6);
+}
+
 }  // namespace
 }  // namespace cadsynth

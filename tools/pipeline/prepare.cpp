@@ -152,6 +152,12 @@ void Build(const RunSpec& spec, const PartCache* cache, Job* job) {
       job->warnings = capture.Take();
       if (key) cache->Store("import", *key, EncodeAssembly(job->assembly, job->warnings));
     }
+    // The designer's up axis turned to +z (recipe `up:`), before fusing and arranging.
+    if (!source.z_from_up.isIdentity()) {
+      const Eigen::Isometry3d turn(source.z_from_up);
+      for (Instance& instance : job->assembly.instances)
+        instance.world_from_model = turn * instance.world_from_model;
+    }
     if (spec.class_by == RunSpec::ClassBy::kAssembly) job->assembly = FuseAssembly(job->assembly);
   } catch (const Error& e) {
     std::string where = source.where.empty() ? "" : source.where + ": ";

@@ -125,7 +125,12 @@ TEST(Prepare, PartCacheGivesTheSameParts) {
       EXPECT_TRUE(std::equal(a.mesh.normals.begin(), a.mesh.normals.end(), b.mesh.normals.begin()));
       EXPECT_EQ(b.mass.volume_mm3, a.mass.volume_mm3);
       ASSERT_EQ(b.hull != nullptr, a.hull != nullptr);
-      if (a.hull) EXPECT_EQ(b.hull->triangles, a.hull->triangles);
+      // The same corners and diameter (CGAL may split a planar facet into other triangles from
+      // one call to the next; the poses use the facets' outlines, not their triangles).
+      if (a.hull) {
+        EXPECT_TRUE(a.hull->vertices == b.hull->vertices);
+        EXPECT_EQ(b.hull->diameter, a.hull->diameter);
+      }
     }
     ASSERT_EQ(run->scenes.size(), plain.scenes.size());
     for (size_t s = 0; s < plain.scenes.size(); ++s) {

@@ -129,9 +129,23 @@ void RunLock::Release() {
 }
 
 void MarkDataset(const std::filesystem::path& folder) {
-  WriteFileAtomic(folder / kDatasetMarker,
-                  "A dataset written by cadsynth: 'cadsynth generate --overwrite' may replace this "
-                  "folder.\n");
+  // Shards starting together all mark the same folder: a temporary name of this process each,
+  // then a rename (the same bytes win whichever comes last).
+  const std::filesystem::path marker = folder / kDatasetMarker;
+  std::error_code ec;
+  if (std::filesystem::exists(marker, ec)) return;
+  const std::filesystem::path temporary = marker.string() + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << "A dataset written by cadsynth: 'cadsynth generate --overwrite' may replace this "
+           "folder.\n";
+    if (!out) throw Error(marker.string() + ": cannot write the dataset marker");
+  }
+  std::filesystem::rename(temporary, marker, ec);
+  if (ec) {
+    std::filesystem::remove(temporary, ec);
+    throw Error(marker.string() + ": cannot write the dataset marker");
+  }
 }
 
 void CheckReplaceable(const std::filesystem::path& output,

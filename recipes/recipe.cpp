@@ -793,7 +793,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   try {
     r.ExpectMap(root, "",
                 {"parts", "scene", "scenes", "classes", "tessellation", "camera", "sweep", "render",
-                 "output"});
+                 "output", "limits"});
     if (root["scenes"] && (root["parts"] || root["scene"])) {
       r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
     }
@@ -828,11 +828,68 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
     if (root["sweep"]) ReadSweep(r, root["sweep"], &spec);
     if (root["render"]) ReadRender(r, root["render"], &spec);
     if (root["output"]) ReadOutput(r, root["output"], &spec);
+    if (root["limits"]) {
+      ReadFields(r, root["limits"], "limits", &spec.limits, {});
+      r.Check(spec.limits, root["limits"], "limits");
+    }
+    CheckLimits(spec, name);
   } catch (const YAML::Exception& e) {
     throw Error(name + ":" + std::to_string(e.mark.line + 1) + ":" +
                 std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
   return spec;
+}
+
+bool RunLimits::Check(std::string* why) const {
+  if (max_variants < 1 || max_count < 1) {
+    *why = "max_variants and max_count must be at least 1";
+  } else if (!(min_deflection_mm > 0) || !std::isfinite(min_deflection_mm)) {
+    *why = "min_deflection must be a positive length";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+void CheckLimits(const RunSpec& spec, const std::string& recipe) {
+  const RunLimits& limits = spec.limits;
+  size_t variants = 0;
+  for (const SceneSpec& scene : spec.scenes) {
+    for (const PartSource& source : scene.sources) {
+      const std::string where = source.where.empty() ? "" : source.where + ": ";
+      variants += source.kind == PartSource::Kind::kFile ? 1 : source.variants.size();
+      if (variants > static_cast<size_t>(limits.max_variants)) {
+        throw Error(where + "the recipe asks for more than " + std::to_string(limits.max_variants) +
+                    " parts and variants; if you mean it, raise limits.max_variants");
+      }
+      const FamilyInfo* family =
+          source.kind == PartSource::Kind::kFamily ? FindFamily(source.family) : nullptr;
+      if (family == nullptr) continue;
+      for (const ParamValues& values : source.variants) {
+        for (const FamilyParam& param : family->params) {
+          if (param.kind != FamilyParam::Kind::kCount) continue;
+          const auto it = values.find(param.name);
+          if (it == values.end() || !std::holds_alternative<double>(it->second)) continue;
+          const double count = std::get<double>(it->second);
+          if (count > limits.max_count) {
+            std::ostringstream out;
+            out << where << source.family << ": " << param.name << " = " << count
+                << " is more than " << limits.max_count
+                << " (building it would take minutes); if you mean it, raise limits.max_count";
+            throw Error(out.str());
+          }
+        }
+      }
+    }
+  }
+  if (spec.tessellation.linear_deflection_mm < limits.min_deflection_mm) {
+    std::ostringstream out;
+    out << (recipe.empty() ? "" : recipe + ": ") << "tessellation.linear_deflection "
+        << spec.tessellation.linear_deflection_mm << " mm is finer than "
+        << limits.min_deflection_mm
+        << " mm (millions of triangles per part); if you mean it, lower limits.min_deflection";
+    throw Error(out.str());
+  }
 }
 
 RunSpec LoadRecipe(const std::filesystem::path& path) {

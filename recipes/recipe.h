@@ -44,6 +44,26 @@ struct SceneSpec {
   ArrangementOptions arrangement;
 };
 
+// Bounds on how much work a recipe may ask for, so a typo (5,000 teeth, a grid of 100,000
+// variants, a 0.0001 mm tessellation) is an error at once instead of minutes of silence. A recipe
+// that means it raises them in its `limits:` section.
+struct RunLimits {
+  int max_variants = 2000;           // family variants and files, all scenes together
+  int max_count = 1000;              // any count parameter of a family (teeth, planets, ...)
+  double min_deflection_mm = 0.001;  // tessellation.linear_deflection
+
+  bool Check(std::string* why) const;
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.max_variants,
+          Field{"max_variants", "integer", "most family variants and files in one run"});
+    visit(o.max_count,
+          Field{"max_count", "integer", "largest count parameter of a family (teeth, planets)"});
+    visit(o.min_deflection_mm,
+          Field{"min_deflection", "length", "finest tessellation.linear_deflection allowed"});
+  }
+};
+
 // Everything one run needs, each module's options filled in.
 struct RunSpec {
   std::filesystem::path recipe;  // empty for the built-in default job
@@ -67,7 +87,12 @@ struct RunSpec {
   RenderOptions render;
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides
+  RunLimits limits;
 };
+
+// Throws Error, naming the recipe entry (or `recipe` for run-wide options), when `spec` asks for
+// more than its limits allow.
+void CheckLimits(const RunSpec& spec, const std::string& recipe = "");
 
 // The built-in default job: the reference paper's three demo sets rebuilt parametrically, one BOP
 // scene each (a planetary gearbox, a slider-crank mechanism, an assembly-benchmark set of pegs,

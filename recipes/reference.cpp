@@ -7,6 +7,7 @@
 #include "cad/schema.h"
 #include "cad/shape.h"
 #include "dataset/bop.h"
+#include "recipes/recipe.h"
 #include "render/renderer.h"
 #include "variants/arrangement.h"
 
@@ -62,6 +63,8 @@ std::string RecipeReference() {
   Section<RenderOptions>(
       out, "render",
       "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors");
+  Section<RunLimits>(out, "limits",
+                     "how much work a recipe may ask for (raise them if you mean it)");
   return out.str();
 }
 

@@ -386,6 +386,26 @@ TEST(Recipe, UpAxisTurnsToZ) {
             "r.yaml:2:27: parts[0].up: expected x, y, z, -x, -y or -z, got 'w'");
 }
 
+// A typo that asks for minutes of work is an error at once, with the limit to raise.
+TEST(Recipe, LimitsStopRunawayRecipes) {
+  EXPECT_EQ(ErrorOf("parts:\n  - {family: spur_gear, params: {teeth: 5000}}\n"),
+            "r.yaml:2:14: spur_gear: teeth = 5000 is more than 1000 (building it would take "
+            "minutes); if you mean it, raise limits.max_count");
+  EXPECT_EQ(ErrorOf("parts:\n  - family: ball_bearing\n    grid: {bore: {from: 1, to: 30, "
+                    "step: 0.01}}\n"),
+            "r.yaml:2:13: the recipe asks for more than 2000 parts and variants; if you mean it, "
+            "raise limits.max_variants");
+  EXPECT_EQ(ErrorOf("tessellation: {linear_deflection: 0.0001 mm}\n"),
+            "r.yaml: tessellation.linear_deflection 0.0001 mm is finer than 0.001 mm (millions "
+            "of triangles per part); if you mean it, lower limits.min_deflection");
+  const RunSpec raised = ParseRecipe(
+      "parts:\n  - {family: spur_gear, params: {teeth: 1200}}\nlimits: {max_count: 1500}\n",
+      "r.yaml", ".");
+  EXPECT_EQ(raised.limits.max_count, 1500);
+  EXPECT_EQ(ErrorOf("limits: {max_variants: 0}\n"),
+            "r.yaml:1:9: limits: max_variants and max_count must be at least 1");
+}
+
 TEST(Recipe, ShippedRecipesParse) {
   const bool have_data = std::filesystem::exists(testing::DataDir() / "step");
   int parsed = 0;

@@ -50,6 +50,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
   if (!spec.bop.Check(&why)) throw Error("output: " + why);
+  CheckLimits(spec);  // a RunSpec built in code has not been through the recipe reader
 
   std::optional<PartCache> cache;
   if (options.cache) cache.emplace(*options.cache, BuildId());

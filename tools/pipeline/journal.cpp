@@ -68,6 +68,7 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   fields("render", spec.render);
   fields("tessellation", spec.tessellation);
   for (const SceneSpec& scene : spec.scenes) fields("scene", scene.arrangement);
+  fields("limits", spec.limits);
   key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
   // The rest of the spec that changes parts, classes or pixels without changing the recipe text
   // (a RunSpec built in code has none): meshes' crease angle, classes, colours, the look.

@@ -1,9 +1,11 @@
 #include "tools/pipeline/prepare.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <map>
+#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -287,7 +289,17 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       info("reading " + job.source->path.string() + " (" + std::to_string(bytes >> 20) + " MB)");
     }
   }
-  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) { Build(spec, cache, &jobs[j]); });
+  // Many sources (a family grid): a line at every tenth built.
+  std::atomic<size_t> built{0};
+  std::mutex info_mutex;
+  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) {
+    Build(spec, cache, &jobs[j]);
+    const size_t n = ++built, total = jobs.size();
+    if (total >= 20 && (n * 10 / total) != ((n - 1) * 10 / total)) {
+      std::lock_guard<std::mutex> lock(info_mutex);
+      info("built " + std::to_string(n) + " of " + std::to_string(total) + " parts and variants");
+    }
+  });
   for (const Job& job : jobs) {
     for (const std::string& warning : job.warnings) Warn(warning);
     if (!job.error.empty()) throw Error(job.error);

@@ -159,6 +159,7 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   section("output", [](RunSpec& s) -> BopOptions& { return s.bop; });
   section("render", [](RunSpec& s) -> RenderOptions& { return s.render; });
   section("tessellation", [](RunSpec& s) -> TessellationOptions& { return s.tessellation; });
+  section("limits", [](RunSpec& s) -> RunLimits& { return s.limits; });
   EXPECT_GT(read, 100);
 }
 
@@ -188,6 +189,8 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
   const ArrangementOptions arrangement;
   ArrangementOptions::Fields(arrangement,
                              [&](const auto&, const Field& f) { expect_key("scene", f); });
+  const RunLimits limits;
+  RunLimits::Fields(limits, [&](const auto&, const Field& f) { expect_key("limits", f); });
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <fstream>
+#include <vector>
 
 #include <IFSelect_ReturnStatus.hxx>
 #include <Interface_Check.hxx>
@@ -84,6 +85,49 @@ void WarnOnRawNonUtf8(const std::filesystem::path& path, const std::string& file
   }
 }
 
+// OpenCASCADE's STEP parser recurses once per nested parenthesis: a file nested 200,000 deep
+// exhausts the stack (SIGSEGV). Real files nest a few levels; refuse absurd ones before parsing.
+// Parentheses inside strings ('...', with '' for a quote) and comments (/* */) do not count.
+void RejectDeepNesting(const std::filesystem::path& path, const std::string& file) {
+  constexpr int kMaxDepth = 1000;
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> buffer(1 << 16);
+  int depth = 0;
+  size_t line = 1;
+  bool in_string = false, in_comment = false;
+  char previous = 0;
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    const std::streamsize n = in.gcount();
+    for (std::streamsize i = 0; i < n; ++i) {
+      const char c = buffer[static_cast<size_t>(i)];
+      if (c == '\n') ++line;
+      if (in_comment) {
+        if (previous == '*' && c == '/')
+          in_comment = false, previous = 0;
+        else
+          previous = c;
+        continue;
+      }
+      if (in_string) {
+        if (c == '\'') in_string = false;  // '' is a closing and an opening quote
+      } else if (c == '\'') {
+        in_string = true;
+      } else if (c == '*' && previous == '/') {
+        in_comment = true;
+      } else if (c == '(') {
+        if (++depth > kMaxDepth) {
+          throw Error(file + ":" + std::to_string(line) + ": parentheses nested more than " +
+                      std::to_string(kMaxDepth) + " deep: not a STEP file cadsynth can read");
+        }
+      } else if (c == ')') {
+        depth = std::max(0, depth - 1);
+      }
+      previous = c;
+    }
+  }
+}
+
 }  // namespace
 
 std::string StepCodePage(const std::string& encoding) {
@@ -117,6 +161,7 @@ Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& 
   if (!options.Check(&why)) throw Error(file + ": tessellation: " + why);
   const std::string code_page = encoding.empty() ? "UTF8" : StepCodePage(encoding);
   if (code_page.empty()) throw Error(file + ": unknown encoding '" + encoding + "'");
+  RejectDeepNesting(path, file);
   if (encoding.empty()) WarnOnRawNonUtf8(path, file);
   internal::InitOcct();
 

@@ -84,6 +84,28 @@ TEST(Step, BadFilesGiveOneClearError) {
   EXPECT_EQ(truncated.rfind((dir / "truncated.stp").string() + ": ", 0), 0u) << truncated;
 }
 
+// 200,000 nested parentheses exhausted the stack inside OpenCASCADE's parser (SIGSEGV); they are
+// refused before it runs. Parentheses inside a string or a comment do not count.
+TEST(Step, AbsurdNestingIsRefusedBeforeParsing) {
+  ScratchDir dir;
+  {
+    std::ofstream out(dir / "deep.stp");
+    out << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',"
+        << std::string(200000, '(') << std::string(200000, ')') << ");\nENDSEC;\n";
+  }
+  EXPECT_EQ(MessageOf([&] { ReadStep(dir / "deep.stp", TessellationOptions{}); }),
+            (dir / "deep.stp").string() +
+                ":5: parentheses nested more than 1000 deep: not a STEP file cadsynth can read");
+  {
+    std::ofstream out(dir / "quoted.stp");
+    out << "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n/* " << std::string(5000, '(')
+        << " */\n#1=PRODUCT('" << std::string(5000, '(') << "','it''s','',());\nENDSEC;\n";
+  }
+  const std::string quoted =
+      MessageOf([&] { ReadStep(dir / "quoted.stp", TessellationOptions{}); });
+  EXPECT_EQ(quoted.find("nested"), std::string::npos) << quoted;
+}
+
 TEST(Step, CorruptedSharedFileIsAnErrorNotACrash) {
   CADSYNTH_REQUIRE_DATA(file, "step/awkward/bug32314_corrupted.stp");
   const std::string message = MessageOf([&] { ReadStep(file, TessellationOptions{}); });

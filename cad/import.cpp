@@ -200,7 +200,9 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
 
   // What one unit of the file's numbers is in mm, and what the translator already assumed.
   double assumed_mm = 1.0;
-  const bool declares_unit = format == CadFormat::kStep || format == CadFormat::kIges;
+  // STEP and IGES declare a unit, and so do COLLADA (its header) and glTF (metres).
+  const bool declares_unit = format == CadFormat::kStep || format == CadFormat::kIges ||
+                             (format == CadFormat::kMesh && !assembly.length_unit.empty());
   if (declares_unit && !assembly.length_unit.empty()) {
     const std::optional<double> declared = LengthUnitMm(assembly.length_unit);
     if (declared) assumed_mm = *declared;

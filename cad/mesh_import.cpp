@@ -4,17 +4,67 @@
 #include <assimp/Importer.hpp>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 
 #include "cad/error.h"
 #include "cad/import.h"
 #include "cad/mesh_analysis.h"
+#include "cad/units.h"
 #include "cad/xde.h"
 
 namespace cadsynth {
 
+namespace {
+
+// The `<unit meter="..."/>` a COLLADA file declares in its asset header (1 when it has none, as
+// the format says).
+double ColladaMetresPerUnit(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(1 << 16, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  const size_t unit = head.find("<unit");
+  if (unit == std::string::npos) return 1.0;
+  const size_t end = head.find('>', unit);
+  const size_t meter = head.find("meter=", unit);
+  if (meter == std::string::npos || meter > end) return 1.0;
+  const char quote = meter + 6 < head.size() ? head[meter + 6] : 0;
+  if (quote != '"' && quote != '\'') return 1.0;
+  const double value = std::strtod(head.c_str() + meter + 7, nullptr);
+  return value > 0 && std::isfinite(value) ? value : 1.0;
+}
+
+// A unit name LengthUnitMm knows, for a length in metres; else the length itself.
+std::string UnitName(double metres) {
+  for (const char* name : {"um", "mm", "cm", "m", "in", "ft"}) {
+    const double mm = *LengthUnitMm(name);
+    if (std::abs(mm / 1000.0 - metres) <= 1e-9 * metres) return name;
+  }
+  std::ostringstream out;
+  out << metres << " m";
+  return out.str();
+}
+
+}  // namespace
+
 Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
   const std::string file = path.string();
   internal::RequireReadableFile(file);
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  // Formats that state their unit: COLLADA in its header (assimp 5.2 scales the numbers by it,
+  // into metres), glTF always metres (its specification). Both are turned into mm here.
+  double mm_per_unit = 1.0;
+  std::string declared_unit;
+  if (ext == ".dae") {
+    mm_per_unit = 1000.0;
+    declared_unit = UnitName(ColladaMetresPerUnit(path));
+  } else if (ext == ".gltf" || ext == ".glb") {
+    mm_per_unit = 1000.0;
+    declared_unit = "m";
+  }
   Assimp::Importer importer;
   // The file's normals are dropped: ComputeCreaseNormals below makes them, so the crease angle
   // decides which edges stay sharp. (assimp's own smoothing, GenSmoothNormals, finds shared
@@ -68,6 +118,9 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
     if (!mesh.positions[v].allFinite())
       throw Error(file + ": vertex " + std::to_string(v) + " is not a finite number");
   }
+  if (mm_per_unit != 1.0) {
+    for (Eigen::Vector3f& p : mesh.positions) p *= static_cast<float>(mm_per_unit);
+  }
   ComputeCreaseNormals(&mesh, crease_angle_rad);
 
   Part part;
@@ -86,8 +139,7 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
 
   Assembly assembly;
   assembly.name = part.name;
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  assembly.length_unit = declared_unit;
   assembly.format = "mesh (" + ext.substr(ext.empty() ? 0 : 1) + ")";
   assembly.instances = {Instance{0, part.name, part.cad_from_model}};
   assembly.parts.push_back(std::move(part));

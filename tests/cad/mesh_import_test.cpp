@@ -38,7 +38,19 @@ TEST(ReadMesh, EveryFormatAssimpWritesReadsBackAsTheSameCube) {
   for (const auto& [id, name] : formats) {
     ASSERT_EQ(exporter.Export(scene, id, (dir / name).string()), AI_SUCCESS)
         << id << ": " << exporter.GetErrorString();
-    const Assembly a = ImportCad(dir / name, ImportOptions{});
+    // glTF is in metres, and assimp's COLLADA writer says metres: the cube's 20 is 20 m there,
+    // unless the recipe states the numbers are mm.
+    const std::string ext = std::filesystem::path(name).extension().string();
+    const bool metres = ext == ".gltf" || ext == ".glb" || ext == ".dae";
+    if (metres) {
+      const Assembly m = ImportCad(dir / name, ImportOptions{});
+      EXPECT_EQ(m.length_unit, "m") << name;
+      EXPECT_TRUE(m.parts[0].mesh.Bounds().sizes().isApprox(Eigen::Vector3d::Constant(2e4), 1e-5))
+          << name;
+    }
+    ImportOptions options;
+    if (metres) options.unit = "mm";
+    const Assembly a = ImportCad(dir / name, options);
     ASSERT_EQ(a.parts.size(), 1u) << name;
     const Part& p = a.parts[0];
     EXPECT_EQ(p.mesh.num_triangles(), 12u) << name;
@@ -68,6 +80,25 @@ TEST(ReadMesh, CreaseAngleDecidesSmoothOrSharp) {
   ImportOptions faceted;
   faceted.crease_angle_rad = 0.0;
   EXPECT_EQ(ImportCad(cube, faceted).parts[0].mesh.num_vertices(), 36u);
+}
+
+// COLLADA's <unit meter="..."> is honoured: the same cube declared in millimetres is 20 mm.
+TEST(ReadMesh, ColladaUnitIsHonoured) {
+  testing::ScratchDir dir;
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(WriteCube(dir).string(), aiProcess_Triangulate);
+  ASSERT_NE(scene, nullptr);
+  Assimp::Exporter exporter;
+  ASSERT_EQ(exporter.Export(scene, "collada", (dir / "m.dae").string()), AI_SUCCESS);
+  std::string text = testing::ReadFile(dir / "m.dae");
+  const size_t unit = text.find("meter=\"1\"");
+  ASSERT_NE(unit, std::string::npos) << text.substr(0, 600);
+  text.replace(unit, 9, "meter=\"0.001\"");
+  std::ofstream(dir / "mm.dae") << text;
+  const Assembly a = ImportCad(dir / "mm.dae", ImportOptions{});
+  EXPECT_EQ(a.length_unit, "mm");
+  EXPECT_TRUE(a.parts[0].mesh.Bounds().sizes().isApprox(Eigen::Vector3d(20, 20, 20), 1e-5))
+      << a.parts[0].mesh.Bounds().sizes().transpose();
 }
 
 // A binary STL of the given triangles (no normals).

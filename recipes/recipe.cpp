@@ -845,6 +845,8 @@ bool RunLimits::Check(std::string* why) const {
     *why = "max_variants and max_count must be at least 1";
   } else if (!(min_deflection_mm > 0) || !std::isfinite(min_deflection_mm)) {
     *why = "min_deflection must be a positive length";
+  } else if (!(read_timeout_s > 0) || !std::isfinite(read_timeout_s)) {
+    *why = "read_timeout must be a positive number of seconds";
   } else {
     return true;
   }

@@ -51,6 +51,7 @@ struct RunLimits {
   int max_variants = 2000;           // family variants and files, all scenes together
   int max_count = 1000;              // any count parameter of a family (teeth, planets, ...)
   double min_deflection_mm = 0.001;  // tessellation.linear_deflection
+  double read_timeout_s = 600;       // a CAD or mesh reader still busy after this is stopped
 
   bool Check(std::string* why) const;
   template <class Self, class Visit>
@@ -61,6 +62,9 @@ struct RunLimits {
           Field{"max_count", "integer", "largest count parameter of a family (teeth, planets)"});
     visit(o.min_deflection_mm,
           Field{"min_deflection", "length", "finest tessellation.linear_deflection allowed"});
+    visit(o.read_timeout_s,
+          Field{"read_timeout", "number",
+                "seconds a CAD or mesh file may take to read before its reader is stopped"});
   }
 };
 

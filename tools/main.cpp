@@ -24,6 +24,7 @@
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/export.h"
 #include "tools/pipeline/generate.h"
+#include "tools/pipeline/guarded_import.h"
 #include "tools/pipeline/inspect.h"
 #include "tools/pipeline/progress.h"
 #include "tools/pipeline/shards.h"
@@ -112,6 +113,14 @@ struct Args {
   int count = 4, width = 320;
 };
 
+// This executable, to read CAD and mesh files in child processes (a reader that crashes or hangs
+// on a file then ends in an error, not in a signal).
+std::filesystem::path SelfExecutable() {
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path() : self;
+}
+
 int RunGenerate(const Args& a) {
   if (a.help_recipe) {
     std::cout << cadsynth::RecipeReference();
@@ -138,6 +147,7 @@ int RunGenerate(const Args& a) {
                                      : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
   options.overwrite = a.overwrite;
   options.shard = shard;
+  options.reader = SelfExecutable();
   if (!a.no_cache) {
     options.cache = !a.cache.empty() ? std::optional<std::filesystem::path>(a.cache)
                                      : cadsynth::PartCache::DefaultDirectory();
@@ -187,8 +197,12 @@ int RunInspect(const Args& a) {
   options.unit = a.unit;
   options.encoding = a.encoding;
   options.tessellation.linear_deflection_mm = a.deflection_mm;
-  std::cout << (a.json ? cadsynth::InspectJson(a.file, options)
-                       : cadsynth::InspectText(a.file, options));
+  std::optional<cadsynth::ReaderProcess> reader;
+  if (const std::filesystem::path self = SelfExecutable(); !self.empty())
+    reader = cadsynth::ReaderProcess{self, cadsynth::RunLimits{}.read_timeout_s};
+  const cadsynth::ReaderProcess* guard = reader ? &*reader : nullptr;
+  std::cout << (a.json ? cadsynth::InspectJson(a.file, options, guard)
+                       : cadsynth::InspectText(a.file, options, guard));
   return 0;
 }
 
@@ -388,6 +402,8 @@ int main(int argc, char** argv) {
   Args args;
   const std::vector<Command> commands = DefineCommands(app, args);
   const std::string first = argc > 1 ? argv[1] : "";
+  // The child of a guarded read (tools/pipeline/guarded_import.h): not a user command.
+  if (first == "__read-part") return cadsynth::ReadPartMain({argv + 2, argv + argc});
   if (argc < 2 || first == "--help" || first == "-h" || first == "help") {
     std::cout << kUsage;
     return argc < 2 ? 2 : 0;

@@ -54,7 +54,10 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
 
   std::optional<PartCache> cache;
   if (options.cache) cache.emplace(*options.cache, BuildId());
-  PreparedRun prepared = Prepare(spec, options.info, cache ? &*cache : nullptr);
+  std::optional<ReaderProcess> reader;
+  if (!options.reader.empty()) reader = ReaderProcess{options.reader, spec.limits.read_timeout_s};
+  PreparedRun prepared =
+      Prepare(spec, options.info, cache ? &*cache : nullptr, reader ? &*reader : nullptr);
   const std::vector<Part>& parts = prepared.parts;
   std::string why_sampler;
   if (!spec.sampler.Check(&why_sampler)) throw Error("sweep: " + why_sampler);

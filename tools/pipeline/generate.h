@@ -29,6 +29,9 @@ struct GenerateOptions {
   // The part cache's folder (cad/part_cache.h; PartCache::DefaultDirectory() is the usual one);
   // none: every part is read and analysed afresh. Either way the output is the same.
   std::optional<std::filesystem::path> cache;
+  // A cadsynth executable to read CAD and mesh files in child processes (guarded_import.h), so
+  // a reader that crashes or hangs on a file ends in an error; empty: read in this process.
+  std::filesystem::path reader;
 };
 
 struct GenerateSummary {

@@ -1,5 +1,7 @@
 #include "tools/pipeline/inspect.h"
 
+#include "cad/error.h"
+
 #include <cstdio>
 #include <sstream>
 #include <vector>
@@ -37,15 +39,20 @@ std::vector<int> InstanceCounts(const Assembly& a) {
 
 namespace {
 
-Assembly Read(const std::filesystem::path& path, ImportOptions options) {
+Assembly Read(const std::filesystem::path& path, ImportOptions options,
+              const ReaderProcess* reader) {
   options.tessellation.measure_deviation = true;
-  return ImportCad(path, options);
+  std::vector<std::string> warnings;
+  Assembly assembly = ImportGuarded(path, options, reader, &warnings);
+  for (const std::string& warning : warnings) Warn(warning);
+  return assembly;
 }
 
 }  // namespace
 
-std::string InspectText(const std::filesystem::path& path, const ImportOptions& options) {
-  const Assembly a = Read(path, options);
+std::string InspectText(const std::filesystem::path& path, const ImportOptions& options,
+                        const ReaderProcess* reader) {
+  const Assembly a = Read(path, options, reader);
   const std::vector<int> counts = InstanceCounts(a);
   std::ostringstream out;
   out << path.string() << "\n  format " << a.format << ", unit "
@@ -100,9 +107,10 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
   return out.str();
 }
 
-std::string InspectJson(const std::filesystem::path& path, const ImportOptions& options) {
+std::string InspectJson(const std::filesystem::path& path, const ImportOptions& options,
+                        const ReaderProcess* reader) {
   using Json = nlohmann::ordered_json;
-  const Assembly a = Read(path, options);
+  const Assembly a = Read(path, options, reader);
   const std::vector<int> counts = InstanceCounts(a);
   const auto vec = [](const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); };
   Json parts = Json::array();

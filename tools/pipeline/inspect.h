@@ -5,12 +5,16 @@
 #include <string>
 
 #include "cad/import.h"
+#include "tools/pipeline/guarded_import.h"
 
 namespace cadsynth {
 
-// Reads `path` and describes it: format, declared unit, parts (instances, bounding box in mm,
-// triangles, colour, volume, watertight) and instances (name, part, pose). Throws Error.
-std::string InspectText(const std::filesystem::path& path, const ImportOptions& options);
-std::string InspectJson(const std::filesystem::path& path, const ImportOptions& options);
+// Reads `path` (in a child process with `reader`: guarded_import.h) and describes it: format,
+// declared unit, parts (instances, bounding box in mm, triangles, colour, volume, watertight) and
+// instances (name, part, pose). Warnings go to the warning sink. Throws Error.
+std::string InspectText(const std::filesystem::path& path, const ImportOptions& options,
+                        const ReaderProcess* reader = nullptr);
+std::string InspectJson(const std::filesystem::path& path, const ImportOptions& options,
+                        const ReaderProcess* reader = nullptr);
 
 }  // namespace cadsynth

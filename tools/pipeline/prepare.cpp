@@ -115,7 +115,7 @@ std::optional<CacheKey> ImportKey(const PartCache& cache, const ImportOptions& o
   return hasher.Key();
 }
 
-void Build(const RunSpec& spec, const PartCache* cache, Job* job) {
+void Build(const RunSpec& spec, const PartCache* cache, const ReaderProcess* reader, Job* job) {
   ImportOptions options;
   options.tessellation = spec.tessellation;
   options.crease_angle_rad = spec.crease_angle_rad;
@@ -146,12 +146,13 @@ void Build(const RunSpec& spec, const PartCache* cache, Job* job) {
     }
     if (!cached) {
       if (source.kind == PartSource::Kind::kFile) {
-        job->assembly = ImportCad(source.path, options);
+        job->assembly = ImportGuarded(source.path, options, reader, &job->warnings);
       } else {
         job->assembly =
             BuildVariant(*FindFamily(source.family), source.variants[job->variant], options);
       }
-      job->warnings = capture.Take();
+      std::vector<std::string> more = capture.Take();
+      job->warnings.insert(job->warnings.end(), more.begin(), more.end());
       if (key) cache->Store("import", *key, EncodeAssembly(job->assembly, job->warnings));
     }
     // The designer's up axis turned to +z (recipe `up:`), before fusing and arranging.
@@ -251,7 +252,7 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
 }
 
 PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info_sink,
-                    const PartCache* cache) {
+                    const PartCache* cache, const ReaderProcess* reader) {
   const auto info = [&](const std::string& line) {
     if (info_sink) info_sink(line);
   };
@@ -293,7 +294,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   std::atomic<size_t> built{0};
   std::mutex info_mutex;
   tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) {
-    Build(spec, cache, &jobs[j]);
+    Build(spec, cache, reader, &jobs[j]);
     const size_t n = ++built, total = jobs.size();
     if (total >= 20 && (n * 10 / total) != ((n - 1) * 10 / total)) {
       std::lock_guard<std::mutex> lock(info_mutex);

@@ -10,6 +10,7 @@
 #include "dataset/bop.h"
 #include "recipes/recipe.h"
 #include "render/scene.h"
+#include "tools/pipeline/guarded_import.h"
 
 namespace cadsynth {
 
@@ -28,8 +29,9 @@ struct PreparedRun {
 // cache, imported files, built variants, hulls and repeated-shape checks are read from it where
 // it has them, and stored where it has not (the result is the same bytes either way). Warnings
 // come in recipe order. Throws Error naming the recipe entry.
+// With `reader`, files are read in a child process (tools/pipeline/guarded_import.h).
 PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info = {},
-                    const PartCache* cache = nullptr);
+                    const PartCache* cache = nullptr, const ReaderProcess* reader = nullptr);
 
 // What a user should hear about a scene before rendering it: whether its objects fit the view at
 // the nearest camera radius, and whether the smallest is still a few pixels at the farthest.

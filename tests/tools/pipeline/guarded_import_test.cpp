@@ -111,5 +111,22 @@ TEST(GuardedImport, CrashingStepFileEndsCleanly) {
   EXPECT_FALSE(std::filesystem::exists(dir / ".out.partial"));
 }
 
+// Files that crashed assimp (a PLY face naming vertex 7 of 3: SIGSEGV; an OFF face list cut short:
+// an assert's abort) now end inspect and generate with an error naming the file.
+TEST(GuardedImport, MeshFilesThatCrashedAssimpEndCleanly) {
+  ScratchDir dir;
+  std::ofstream(dir / "index.ply")
+      << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+         "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
+  std::ofstream(dir / "cut.off") << "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1\n";
+  for (const char* name : {"index.ply", "cut.off"}) {
+    const testing::CliRun inspect = testing::Cadsynth(std::string("inspect ") + name, dir);
+    EXPECT_EQ(inspect.code, 1) << name << ": " << inspect.err;
+    EXPECT_EQ(inspect.err.rfind("error: " + std::string(name) + ": ", 0), 0u) << inspect.err;
+    EXPECT_EQ(std::count(inspect.err.begin(), inspect.err.end(), '\n'), 1) << inspect.err;
+  }
+}
+
 }  // namespace
 }  // namespace cadsynth

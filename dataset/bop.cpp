@@ -3,6 +3,7 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -50,8 +51,14 @@ bool BopOptions::Check(std::string* why) const {
     *why = "the visibility delta must be a length of 0 mm or more";
     return false;
   }
-  if (split.empty() || split.find('/') != std::string::npos || split == "." || split == "..") {
-    *why = "split must be a plain folder name";
+  // A folder name every tool can take, and JSON text as it is (not escapes of raw bytes).
+  const bool plain =
+      !split.empty() && split.size() <= 64 && split != "." && split != ".." &&
+      std::all_of(split.begin(), split.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+      });
+  if (!plain) {
+    *why = "split must be a plain folder name: up to 64 letters, digits, '_', '-' or '.'";
     return false;
   }
   return true;

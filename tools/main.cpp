@@ -92,6 +92,14 @@ struct UsageError {
   std::string what;
 };
 
+// One error line stays readable: a message that quotes a user's 5 MB name keeps its start and end.
+std::string Shortened(const std::string& message) {
+  constexpr size_t kMax = 2000;
+  if (message.size() <= kMax) return message;
+  return message.substr(0, kMax / 2) + " [... " + std::to_string(message.size() - kMax) +
+         " characters left out ...] " + message.substr(message.size() - kMax / 2);
+}
+
 // What a subcommand was given on the command line; filled by CLI11, read by Run*.
 struct Args {
   // generate
@@ -440,10 +448,14 @@ int main(int argc, char** argv) {
   } catch (const UsageError& e) {
     return usage_error(e.what, first);
   } catch (const cadsynth::Error& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << "error: " << Shortened(e.what()) << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "error: out of memory: the input asks for more than this machine has (a huge "
+                 "mesh, grid or image size?)\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "error: internal: " << e.what() << "\n";
+    std::cerr << "error: internal: " << Shortened(e.what()) << "\n";
     return 1;
   }
 }

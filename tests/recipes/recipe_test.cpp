@@ -406,6 +406,16 @@ TEST(Recipe, LimitsStopRunawayRecipes) {
             "r.yaml:1:9: limits: max_variants and max_count must be at least 1");
 }
 
+// A split name becomes a folder and JSON text: raw bytes (not UTF-8) ended in "internal:
+// json.exception"; now only plain names pass.
+TEST(Recipe, SplitNamesArePlainFolderNames) {
+  EXPECT_EQ(ErrorOf("output: {split: \"tr\xe9in\"}\n"),
+            "r.yaml:1:9: output: split must be a plain folder name: up to 64 letters, digits, "
+            "'_', '-' or '.'");
+  EXPECT_NE(ErrorOf("output: {split: \"a b\"}\n").find("plain folder name"), std::string::npos);
+  EXPECT_EQ(ParseRecipe("output: {split: train_pbr}\n", "r.yaml", ".").bop.split, "train_pbr");
+}
+
 TEST(Recipe, ShippedRecipesParse) {
   const bool have_data = std::filesystem::exists(testing::DataDir() / "step");
   int parsed = 0;

@@ -188,3 +188,18 @@ TEST(Cli, KilledRunsResumeToTheSameBytes) {
 }
 
 }  // namespace
+
+namespace {
+
+// A message quoting a 5 MB name was printed whole; the line keeps its start and end.
+TEST(Cli, HugeNamesInErrorsAreShortened) {
+  ScratchDir dir;
+  std::ofstream(dir / "r.yaml") << "parts: [{family: " << std::string(5 << 20, 'x') << "}]\n";
+  const CliRun run = Cadsynth("generate r.yaml -o out", dir);
+  EXPECT_EQ(run.code, 1);
+  EXPECT_LT(run.err.size(), 2200u);
+  EXPECT_EQ(run.err.rfind("error: r.yaml:1:", 0), 0u) << run.err.substr(0, 200);
+  EXPECT_NE(run.err.find("characters left out"), std::string::npos);
+}
+
+}  // namespace

@@ -422,12 +422,15 @@ void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
       const std::string name = it->first.as<std::string>();
       const std::string key = "classes.groups." + name;
       std::vector<std::string> patterns;
-      if (it->second.IsSequence()) {
-        for (const YAML::Node& p : it->second) patterns.push_back(r.Scalar(p, key));
+      // A copy: the iterator's value is a temporary, and a range-for over its member would read
+      // it after its end (AddressSanitizer: stack-use-after-scope).
+      const YAML::Node value = it->second;
+      if (value.IsSequence()) {
+        for (const YAML::Node& p : value) patterns.push_back(r.Scalar(p, key));
       } else {
-        patterns.push_back(r.Scalar(it->second, key));
+        patterns.push_back(r.Scalar(value, key));
       }
-      if (patterns.empty()) r.Fail(it->second, key, "give at least one name pattern");
+      if (patterns.empty()) r.Fail(value, key, "give at least one name pattern");
       spec->class_groups.emplace_back(name, patterns);
     }
   }

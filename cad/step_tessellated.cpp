@@ -90,6 +90,7 @@ class Parser {
     const size_t start = i_;
     while (i_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[i_]))) ++i_;
     if (start == i_) Fail("expected a number");
+    if (i_ - start > 18) Fail("a number too large");  // std::stol would throw out_of_range
     return std::stol(s_.substr(start, i_ - start));
   }
   std::string Keyword() {
@@ -130,6 +131,12 @@ class Parser {
     }
   }
   std::vector<Param> List(char close) {
+    // Lists nest by recursion: bounded, so a hostile file cannot exhaust the stack.
+    if (++depth_ > 1000) Fail("lists nested more than 1000 deep");
+    struct Leave {
+      int& depth;
+      ~Leave() { --depth; }
+    } leave{depth_};
     std::vector<Param> params;
     Skip();
     if (i_ < s_.size() && s_[i_] == close) {
@@ -193,6 +200,7 @@ class Parser {
   const std::string& s_;
   const std::string& file_;
   size_t i_ = 0;
+  int depth_ = 0;
 };
 
 struct Face {

@@ -233,6 +233,31 @@ END-ISO-10303-21;
   }
 }
 
+// Found by the libFuzzer harness (tools/fuzz/step_tessellated_fuzz.cpp): a 30-digit entity
+// number ended the process (std::stol threw out_of_range), and lists nested without end would
+// exhaust the stack. Both are one Error now.
+TEST(Import, TessellatedReaderRefusesHugeNumbersAndDeepLists) {
+  ScratchDir dir;
+  std::ofstream(dir / "big.stp") << "ISO-10303-21;\nDATA;\n#1=TESSELLATED_SOLID('x',(#"
+                                 << std::string(30, '9') << "),$);\nENDSEC;\n";
+  try {
+    internal::ReadStepTessellated(dir / "big.stp", 1.0);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("a number too large"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "deep.stp") << "ISO-10303-21;\nDATA;\n#1=COORDINATES_LIST('',"
+                                  << std::string(5000, '(') << std::string(5000, ')')
+                                  << ");\n#2=TESSELLATED_SOLID('x',(#1),$);\nENDSEC;\n";
+  try {
+    internal::ReadStepTessellated(dir / "deep.stp", 1.0);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("nested more than 1000 deep"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(ImportSharedData, ExternalReferencesResolveFromAnyFolder) {
   CADSYNTH_REQUIRE_DATA(file, "step/awkward/external_refs_s1-c5-214/s1-c5-214.stp");
   const Assembly a = ImportCad(std::filesystem::relative(file), Coarse());

@@ -18,7 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   }
   try {
-    cadsynth::ReadStepTessellated(path, 1.0);
+    cadsynth::internal::ReadStepTessellated(path, 1.0);
   } catch (const cadsynth::Error&) {
   }
   return 0;

@@ -164,9 +164,22 @@ Assembly ImportGuarded(const std::filesystem::path& path, const ImportOptions& o
       }
     }
   }
-  if (timed_out) ::kill(pid, SIGKILL);
+  // A child that closed its pipes may still not end: wait for it within the same time limit.
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  while (!timed_out) {
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    if (done == pid || (done < 0 && errno != EINTR)) break;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
+        reader->timeout_s) {
+      timed_out = true;
+      break;
+    }
+    ::usleep(2000);
+  }
+  if (timed_out) {
+    ::kill(pid, SIGKILL);
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
   }
   if (timed_out) {
     throw Error(file + ": the reader did not finish in " + Number(reader->timeout_s) +

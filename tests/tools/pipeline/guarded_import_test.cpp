@@ -51,6 +51,11 @@ TEST(GuardedImport, CrashHangAndErrorOfTheReaderAreErrors) {
             file.string() +
                 ": the reader did not finish in 0.5 s (a damaged file? limits.read_timeout sets "
                 "the time)");
+  // Its pipes closed, the reader still runs: the same time limit stops it.
+  EXPECT_EQ(MessageOf(file, {Script(dir, "quiet.sh", "exec >&- 2>&-; exec sleep 60"), 0.5}),
+            file.string() +
+                ": the reader did not finish in 0.5 s (a damaged file? limits.read_timeout sets "
+                "the time)");
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30);
   EXPECT_EQ(MessageOf(file, {Script(dir, "fail.sh", "echo 'part.ply: no faces' >&2; exit 3"), 60}),
             "part.ply: no faces");

@@ -26,7 +26,7 @@ bool Less(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 }  // namespace
 
-ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points) {
+ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points, bool diameter) {
   // Meshes repeat a vertex once per smoothing group (per flat face on faceted parts): hull each
   // position once.
   std::sort(points.begin(), points.end(), Less);
@@ -84,7 +84,7 @@ ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points) {
     out.triangles.push_back(c);
   }
   std::sort(out.triangles.begin(), out.triangles.end());
-  out.diameter = PointSetDiameter(out.vertices);
+  if (diameter) out.diameter = PointSetDiameter(out.vertices);
   return out;
 }
 

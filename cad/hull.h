@@ -26,7 +26,9 @@ struct ConvexHull {
 
 // The hull of `points`. Throws Error when the points span no volume (fewer than 4, or all in one
 // plane): a flat mesh has no hull to rest on.
-ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points);
+// `diameter`: false leaves ConvexHull::diameter 0 (its exact search can cost as much as the hull
+// on round parts; the stable poses of a group do not need it).
+ConvexHull ComputeConvexHull(std::vector<Eigen::Vector3d> points, bool diameter = true);
 // The hull of a mesh's vertex positions.
 ConvexHull ComputeConvexHull(const Mesh& mesh);
 

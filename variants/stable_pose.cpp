@@ -85,7 +85,7 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
                                     const Eigen::Vector3d& com) {
   if (std::vector<StablePose> flat = FlatPoses(points, com); !flat.empty()) return flat;
   try {
-    return StablePoses(ComputeConvexHull(points), com);
+    return StablePoses(ComputeConvexHull(points, /*diameter=*/false), com);
   } catch (const Error&) {
     std::vector<StablePose> flat = FlatPoses(points, com);
     if (flat.empty()) throw;

@@ -11,6 +11,7 @@
 #include "cad/error.h"
 #include "cad/import.h"
 #include "cad/mesh_analysis.h"
+#include "cad/mesh_formats.h"
 #include "cad/units.h"
 #include "cad/xde.h"
 
@@ -47,24 +48,21 @@ std::string UnitName(double metres) {
   return out.str();
 }
 
-}  // namespace
+// The whole file, for the checked readers.
+std::string ReadBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec) bytes.reserve(size);
+  bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (in.bad()) throw Error(path.string() + ": cannot read the file");
+  return bytes;
+}
 
-Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
-  const std::string file = path.string();
-  internal::RequireReadableFile(file);
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  // Formats that state their unit: COLLADA in its header (assimp 5.2 scales the numbers by it,
-  // into metres), glTF always metres (its specification). Both are turned into mm here.
-  double mm_per_unit = 1.0;
-  std::string declared_unit;
-  if (ext == ".dae") {
-    mm_per_unit = 1000.0;
-    declared_unit = UnitName(ColladaMetresPerUnit(path));
-  } else if (ext == ".gltf" || ext == ".glb") {
-    mm_per_unit = 1000.0;
-    declared_unit = "m";
-  }
+// The triangles assimp gives for `file`, with the material colour the file defines (if any).
+// assimp's output is checked, not trusted: every index against its mesh's vertex count.
+Mesh ReadWithAssimp(const std::string& file, std::optional<Eigen::Vector3f>* color) {
   Assimp::Importer importer;
   // The file's normals are dropped: ComputeCreaseNormals below makes them, so the crease angle
   // decides which edges stay sharp. (assimp's own smoothing, GenSmoothNormals, finds shared
@@ -85,7 +83,6 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
   }
 
   Mesh mesh;
-  std::optional<Eigen::Vector3f> color;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* in = scene->mMeshes[m];
     if ((in->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
@@ -97,21 +94,55 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
     for (unsigned f = 0; f < in->mNumFaces; ++f) {
       const aiFace& face = in->mFaces[f];
       if (face.mNumIndices != 3) continue;
+      for (int k = 0; k < 3; ++k) {
+        if (face.mIndices[k] >= in->mNumVertices) {
+          throw Error(file + ": a face refers to vertex " + std::to_string(face.mIndices[k]) +
+                      " of a mesh of " + std::to_string(in->mNumVertices));
+        }
+      }
       mesh.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1],
                                   base + face.mIndices[2]);
     }
     // A colour only from a material the file defines: assimp gives colourless formats (STL) a
     // default material of its own.
     aiColor4D diffuse;
-    if (!color && in->mMaterialIndex < scene->mNumMaterials) {
+    if (!*color && in->mMaterialIndex < scene->mNumMaterials) {
       const aiMaterial* material = scene->mMaterials[in->mMaterialIndex];
       aiString name;
       const bool own = material->Get(AI_MATKEY_NAME, name) != AI_SUCCESS ||
                        std::string(name.C_Str()) != AI_DEFAULT_MATERIAL_NAME;
       if (own && material->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) {
-        color = Eigen::Vector3f(diffuse.r, diffuse.g, diffuse.b);
+        *color = Eigen::Vector3f(diffuse.r, diffuse.g, diffuse.b);
       }
     }
+  }
+  return mesh;
+}
+
+}  // namespace
+
+Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
+  const std::string file = path.string();
+  internal::RequireReadableFile(file);
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  // Formats that state their unit: COLLADA in its header (assimp 5.2 scales the numbers by it,
+  // into metres), glTF always metres (its specification). Both are turned into mm here.
+  double mm_per_unit = 1.0;
+  std::string declared_unit;
+  if (ext == ".dae") {
+    mm_per_unit = 1000.0;
+    declared_unit = UnitName(ColladaMetresPerUnit(path));
+  } else if (ext == ".gltf" || ext == ".glb") {
+    mm_per_unit = 1000.0;
+    declared_unit = "m";
+  }
+  Mesh mesh;
+  std::optional<Eigen::Vector3f> color;
+  if (HasCheckedMeshReader(ext)) {
+    mesh = ParseMeshBytes(ReadBytes(path), ext, file);
+  } else {
+    mesh = ReadWithAssimp(file, &color);
   }
   if (mesh.empty()) throw Error(file + ": the mesh file holds no triangles");
   for (size_t v = 0; v < mesh.positions.size(); ++v) {

@@ -20,6 +20,7 @@
 #include "cad/error.h"
 #include "cad/random.h"
 #include "cad/util.h"
+#include "dataset/bop_read.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"
 #include "dataset/models.h"
@@ -148,6 +149,103 @@ bool VisibleMasks::operator()(size_t i, int u, int v) const {
   const int u1 = std::min(frame_.width(), roi[2]), v1 = std::min(frame_.height(), roi[3]);
   if (u < u0 || u >= u1 || v < v0 || v >= v1) return false;
   return masks_[i][static_cast<size_t>(v - v0) * (u1 - u0) + (u - u0)] != 0;
+}
+
+namespace {
+
+// A frame's fragment (.fragments/NNNNNN.json, written by WriteFrame): five lines of JSON, the
+// scene_camera, scene_gt and scene_gt_info entries, the COCO entry and the manifest. Every line's
+// shape is checked here, so Finish and CheckFrame never meet a value of the wrong type in a
+// damaged or hand-edited fragment.
+struct Fragment {
+  Json camera, gt, gt_info, coco;
+  std::vector<FileRecord> files;
+};
+
+Fragment ParseFragmentText(const std::string& text, const std::string& origin) {
+  std::vector<std::string> lines;
+  size_t start = 0;
+  while (start < text.size() && lines.size() < 5) {
+    const size_t end = text.find('\n', start);
+    if (end == std::string::npos) break;
+    lines.push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  if (lines.size() < 5)
+    throw Error(origin + ": incomplete fragment (" + std::to_string(lines.size()) + " of 5 lines)");
+  Json parsed[5];
+  for (int i = 0; i < 5; ++i) {
+    try {
+      parsed[i] = Json::parse(lines[i]);
+    } catch (const Json::exception&) {
+      throw Error(origin + ":" + std::to_string(i + 1) + ": not valid JSON");
+    }
+  }
+  const auto fail = [&](int line, const std::string& what) {
+    throw Error(origin + ":" + std::to_string(line) + ": " + what);
+  };
+  const auto is_id = [](const Json& v) {
+    return v.is_number_integer() && v.get<int64_t>() >= 0 && v.get<int64_t>() <= 2147483647;
+  };
+  Fragment f;
+  f.camera = std::move(parsed[0]);
+  if (!f.camera.is_object()) fail(1, "the camera entry is not an object");
+  f.gt = std::move(parsed[1]);
+  if (!f.gt.is_array()) fail(2, "the ground-truth entry is not a list");
+  for (const Json& g : f.gt) {
+    if (!g.is_object() || !g.contains("obj_id") || !is_id(g["obj_id"]))
+      fail(2, "an instance without an obj_id");
+  }
+  f.gt_info = std::move(parsed[2]);
+  if (!f.gt_info.is_array()) fail(3, "the visibility entry is not a list");
+  for (const Json& g : f.gt_info) {
+    if (!g.is_object() || !g.contains("visib_fract") || !g["visib_fract"].is_number())
+      fail(3, "an instance without a visib_fract number");
+  }
+  f.coco = std::move(parsed[3]);
+  if (!f.coco.is_object() || !f.coco.contains("width") || !is_id(f.coco["width"]) ||
+      !f.coco.contains("height") || !is_id(f.coco["height"]) || !f.coco.contains("annotations") ||
+      !f.coco["annotations"].is_array()) {
+    fail(4, "the COCO entry lacks width, height or annotations");
+  }
+  for (const Json& a : f.coco["annotations"]) {
+    if (!a.is_object()) fail(4, "an annotation is not an object");
+    for (const char* key : {"inst_id", "obj_id", "area"}) {
+      if (!a.contains(key) || !is_id(a[key])) fail(4, std::string("an annotation without ") + key);
+    }
+    if (!a.contains("bbox") || !a["bbox"].is_array() || !a.contains("ignore") ||
+        !a["ignore"].is_boolean() || !a.contains("counts") || !a["counts"].is_string()) {
+      fail(4, "an annotation without bbox, ignore or counts");
+    }
+  }
+  const Json& manifest = parsed[4];
+  if (!manifest.is_object() || !manifest.contains("files") || !manifest["files"].is_array())
+    fail(5, "the manifest has no file list");
+  for (const Json& file : manifest["files"]) {
+    if (!file.is_array() || file.size() != 3 || !file[0].is_string() ||
+        !file[1].is_number_unsigned() || !file[2].is_number_unsigned() ||
+        file[2].get<uint64_t>() > 0xffffffffu) {
+      fail(5, "a manifest record is not [path, size, crc32]");
+    }
+    const std::string path = file[0].get<std::string>();
+    if (path.empty() || path[0] == '/' || path.find("..") != std::string::npos)
+      fail(5, "a manifest path leaves the dataset: " + path.substr(0, 80));
+    f.files.push_back({path, file[1].get<uint64_t>(), file[2].get<uint32_t>()});
+  }
+  return f;
+}
+
+Fragment ReadFragment(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return ParseFragmentText(text, path.string());
+}
+
+}  // namespace
+
+void CheckFragmentText(const std::string& text, const std::string& origin) {
+  ParseFragmentText(text, origin);
 }
 
 namespace {
@@ -388,8 +486,8 @@ BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
   // Frames of an interrupted run: complete where the fragment (written last) exists.
   for (const auto& entry : std::filesystem::directory_iterator(scene_dir_ / ".fragments")) {
     const std::string name = entry.path().filename().string();
-    if (name.size() == 11 && name.substr(6) == ".json")
-      image_ids_.push_back(std::stoi(name.substr(0, 6)));
+    if (name.size() != 11 || name.substr(6) != ".json") continue;
+    if (const auto id = ParseBopId(name.substr(0, 6))) image_ids_.push_back(*id);
   }
 }
 
@@ -406,21 +504,14 @@ std::vector<int> BopSceneWriter::WrittenFrames() const {
 }
 
 std::string BopSceneWriter::CheckFrame(int image_id) const {
-  const std::filesystem::path fragment = scene_dir_ / ".fragments" / (Id6(image_id) + ".json");
-  std::ifstream in(fragment, std::ios::binary);
-  std::string line;
-  for (int n = 0; n < 5; ++n) {
-    if (!std::getline(in, line)) return fragment.string() + ": incomplete manifest entry";
-  }
-  Json entry;
+  const std::filesystem::path path = scene_dir_ / ".fragments" / (Id6(image_id) + ".json");
+  Fragment fragment;
   try {
-    entry = Json::parse(line);
-  } catch (const Json::exception&) {
-    return fragment.string() + ": unreadable manifest entry";
+    fragment = ReadFragment(path);
+  } catch (const Error& e) {
+    return e.what();
   }
-  for (const Json& file : entry.value("files", Json::array())) {
-    const FileRecord record{file.at(0).get<std::string>(), file.at(1).get<uint64_t>(),
-                            file.at(2).get<uint32_t>()};
+  for (const FileRecord& record : fragment.files) {
     const std::string problem = CheckFile(root_, record);
     if (!problem.empty()) return (root_ / record.path).string() + ": " + problem;
   }
@@ -629,29 +720,26 @@ SceneSplit BopSceneWriter::Finish() {
     coco << "{\n  \"annotations\": [";
   }
   for (size_t n = 0; n < image_ids_.size(); ++n) {
-    const std::filesystem::path fragment =
-        scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json");
-    std::ifstream in(fragment, std::ios::binary);
-    std::string line;
+    const Fragment fragment =
+        ReadFragment(scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json"));
     const bool test = options_.IsTest(static_cast<int>(n), static_cast<int>(image_ids_.size()));
     (test ? split.test : split.train).push_back(image_ids_[n]);
+    const Json* entries[3] = {&fragment.camera, &fragment.gt, &fragment.gt_info};
     for (int f = 0; f < 3; ++f) {
-      if (!std::getline(in, line)) throw Error(fragment.string() + ": incomplete fragment");
-      const Json entry = Json::parse(line);
-      out[f] << (n == 0 ? "\n  \"" : ",\n  \"") << image_ids_[n] << "\": " << indent(entry.dump(2));
-      if (test && f == 2) {  // gt_info: count the instances visible enough, per object
-        std::map<int, int> counts;
-        for (size_t i = 0; i < entry.size() && i < obj_ids_.size(); ++i) {
-          if (entry[i]["visib_fract"].get<double>() >= options_.target_min_visib_fract)
-            ++counts[obj_ids_[i]];
-        }
-        for (const auto& [obj, count] : counts)
-          split.targets.push_back({image_ids_[n], obj, count});
+      out[f] << (n == 0 ? "\n  \"" : ",\n  \"") << image_ids_[n]
+             << "\": " << indent(entries[f]->dump(2));
+    }
+    if (test) {  // gt_info: count the instances visible enough, per object
+      std::map<int, int> counts;
+      const Json& info = fragment.gt_info;
+      for (size_t i = 0; i < info.size() && i < obj_ids_.size(); ++i) {
+        if (info[i]["visib_fract"].get<double>() >= options_.target_min_visib_fract)
+          ++counts[obj_ids_[i]];
       }
+      for (const auto& [obj, count] : counts) split.targets.push_back({image_ids_[n], obj, count});
     }
     if (!options_.coco) continue;
-    if (!std::getline(in, line)) throw Error(fragment.string() + ": incomplete fragment");
-    const Json entry = Json::parse(line);
+    const Json& entry = fragment.coco;
     const int w = entry["width"], h = entry["height"];
     coco_images.push_back({{"id", image_ids_[n]},
                            {"file_name", "rgb/" + Id6(image_ids_[n]) + options_.RgbExtension()},

@@ -296,6 +296,11 @@ class BopSceneWriter {
   std::vector<CocoCategory> categories_;
 };
 
+// Throws Error (naming `origin` and the line) unless `text` is a frame fragment as
+// BopSceneWriter writes it (.fragments/NNNNNN.json): what Finish and merge read back is checked
+// first. For tests and the fuzz harness; the writer checks its own fragments the same way.
+void CheckFragmentText(const std::string& text, const std::string& origin);
+
 // Writes ROOT/coco/train.json and ROOT/coco/test.json: the scenes' scene_gt_coco.json merged by
 // the split, images numbered from 1 with file names relative to ROOT, and categories the object
 // classes: `classes[obj_id - 1]` (each annotation also keeps obj_id, scene_id, im_id, inst_id).

@@ -10,6 +10,7 @@
 
 #include "cad/error.h"
 #include "dataset/bop.h"
+#include "dataset/bop_read.h"
 #include "dataset/file_io.h"
 
 namespace cadsynth {
@@ -19,10 +20,11 @@ namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
 Json ReadJsonFile(const fs::path& path) {
+  const std::string text = ReadFileText(path);
   try {
-    return Json::parse(ReadFileText(path));
+    return Json::parse(text);
   } catch (const Json::exception& e) {
-    throw Error(path.string() + ": not valid JSON: " + e.what());
+    throw Error(JsonErrorMessage(path.string(), text, e));
   }
 }
 
@@ -73,8 +75,10 @@ std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k,
   return corners;
 }
 
-std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options,
-                          std::vector<std::pair<int, int>>* shown) {
+namespace {
+
+std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions& options,
+                                   std::vector<std::pair<int, int>>* shown) {
   if (options.panel_width < 32 || options.panel_width > 4096)
     throw Error("preview: panel width must be 32 to 4096");
   const fs::path split_dir =
@@ -91,11 +95,19 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
   std::sort(scene_dirs.begin(), scene_dirs.end());
   std::map<int, Json> cameras, gts;
   for (const fs::path& dir : scene_dirs) {
-    const int scene = std::stoi(dir.filename().string());
+    const auto id = ParseBopId(dir.filename().string());
+    if (!id) continue;  // not a scene folder
+    const int scene = *id;
     cameras[scene] = ReadJsonFile(dir / "scene_camera.json");
     gts[scene] = ReadJsonFile(dir / "scene_gt.json");
     std::vector<int> ims;
-    for (const auto& [key, value] : gts[scene].items()) ims.push_back(std::stoi(key));
+    for (const auto& [key, value] : gts[scene].items()) {
+      const auto im = ParseBopId(key);
+      if (!im)
+        throw Error((dir / "scene_gt.json").string() + ": image id '" + key.substr(0, 40) +
+                    "' is not a whole number");
+      ims.push_back(*im);
+    }
     std::sort(ims.begin(), ims.end());
     for (int im : ims) all.push_back({scene, im});
   }
@@ -180,6 +192,18 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
   std::vector<uchar> png;
   if (!cv::imencode(".png", sheet, png)) throw Error("preview: PNG encoding failed");
   return std::string(png.begin(), png.end());
+}
+
+}  // namespace
+
+std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options,
+                          std::vector<std::pair<int, int>>* shown) {
+  try {
+    return RenderPreviewUnchecked(dataset, options, shown);
+  } catch (const Json::exception& e) {
+    // A value of the wrong type in a scene's JSON files (the syntax was checked on reading).
+    throw Error(JsonErrorMessage(dataset.string() + ": damaged BOP files", "", e));
+  }
 }
 
 }  // namespace cadsynth

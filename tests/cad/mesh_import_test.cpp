@@ -13,6 +13,7 @@
 
 #include "cad/error.h"
 #include "cad/import.h"
+#include "cad/mesh_formats.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {
@@ -33,8 +34,9 @@ TEST(ReadMesh, EveryFormatAssimpWritesReadsBackAsTheSameCube) {
   ASSERT_NE(scene, nullptr) << importer.GetErrorString();
   Assimp::Exporter exporter;
   const std::pair<const char*, const char*> formats[] = {
-      {"stlb", "cube.stl"}, {"ply", "cube.ply"},     {"gltf2", "cube.gltf"}, {"glb2", "cube.glb"},
-      {"3mf", "cube.3mf"},  {"collada", "cube.dae"}, {"obj", "cube_out.obj"}};
+      {"stlb", "cube.stl"},        {"stl", "cube_ascii.stl"}, {"ply", "cube.ply"},
+      {"plyb", "cube_binary.ply"}, {"gltf2", "cube.gltf"},    {"glb2", "cube.glb"},
+      {"3mf", "cube.3mf"},         {"collada", "cube.dae"},   {"obj", "cube_out.obj"}};
   for (const auto& [id, name] : formats) {
     ASSERT_EQ(exporter.Export(scene, id, (dir / name).string()), AI_SUCCESS)
         << id << ": " << exporter.GetErrorString();
@@ -135,6 +137,40 @@ TEST(ReadMesh, NonFiniteVertexIsAnError) {
       EXPECT_EQ(std::string(e.what()).rfind(path.string(), 0), 0u) << e.what();
     }
   }
+}
+
+// The checked STL reader gives exactly the vertices and triangles assimp gives, on every real STL
+// of the shared data (binary ones, and one whose binary header begins with "solid").
+TEST(ReadMesh, CheckedStlReaderAgreesWithAssimpOnRealFiles) {
+  CADSYNTH_REQUIRE_DATA(folder, "mesh");
+  int files = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(folder)) {
+    std::string ext = entry.path().extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".stl") continue;
+    ++files;
+    Assimp::Importer importer;
+    const aiScene* scene = importer.ReadFile(
+        entry.path().string(), aiProcess_Triangulate | aiProcess_PreTransformVertices);
+    ASSERT_NE(scene, nullptr) << entry.path();
+    std::vector<Eigen::Vector3f> positions;
+    std::vector<Eigen::Matrix<uint32_t, 3, 1>> triangles;
+    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+      const aiMesh* in = scene->mMeshes[m];
+      const auto base = static_cast<uint32_t>(positions.size());
+      for (unsigned v = 0; v < in->mNumVertices; ++v)
+        positions.emplace_back(in->mVertices[v].x, in->mVertices[v].y, in->mVertices[v].z);
+      for (unsigned f = 0; f < in->mNumFaces; ++f) {
+        const aiFace& face = in->mFaces[f];
+        triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1],
+                               base + face.mIndices[2]);
+      }
+    }
+    const Mesh mine = ParseStl(testing::ReadFile(entry.path()), entry.path().string());
+    EXPECT_TRUE(mine.positions == positions) << entry.path();
+    EXPECT_TRUE(mine.triangles == triangles) << entry.path();
+  }
+  EXPECT_GE(files, 10);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include "cad/error.h"
 #include "dataset/bop.h"
+#include "dataset/bop_read.h"
 #include "dataset/file_io.h"
 #include "dataset/point_cloud.h"
 #include "dataset/pose_metrics.h"
@@ -25,30 +26,12 @@ using Json = nlohmann::json;
 
 constexpr double kAucMaxMm = 100.0;  // 0.1 m, as PoseCNN and PVN3D
 
-Json ReadJsonFile(const fs::path& path) {
-  try {
-    return Json::parse(ReadFileText(path));
-  } catch (const Json::exception& e) {
-    throw Error(path.string() + ": not valid JSON: " + e.what());
-  }
-}
-
 struct Model {
   std::string name;
   bool symmetric = false;
   double diameter = 0;
   std::vector<Eigen::Vector3f> points;
 };
-
-Eigen::Isometry3d Pose(const Json& r, const Json& t, const std::string& where) {
-  if (!r.is_array() || r.size() != 9 || !t.is_array() || t.size() != 3) {
-    throw Error(where + ": a pose needs 9 rotation and 3 translation numbers");
-  }
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  for (int i = 0; i < 9; ++i) pose.linear()(i / 3, i % 3) = r[i].get<double>();
-  for (int i = 0; i < 3; ++i) pose.translation()(i) = t[i].get<double>();
-  return pose;
-}
 
 struct Estimate {
   double score;
@@ -57,52 +40,11 @@ struct Estimate {
 
 using ImageKey = std::pair<int, int>;  // scene, image
 
-// BOP results: scene_id,im_id,obj_id,score,R,t,time with R and t space-separated.
+// The estimates of RESULTS grouped per (image, object).
 std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::path& path) {
-  std::istringstream in(ReadFileText(path));
   std::map<std::pair<ImageKey, int>, std::vector<Estimate>> out;
-  std::string line;
-  for (int line_no = 1; std::getline(in, line); ++line_no) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || (line_no == 1 && line.rfind("scene_id", 0) == 0)) continue;
-    const std::string where = path.string() + ":" + std::to_string(line_no);
-    std::vector<std::string> fields;
-    std::stringstream split(line);
-    for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
-    if (fields.size() < 6) {
-      throw Error(where + ": expected scene_id,im_id,obj_id,score,R,t[,time], got " +
-                  std::to_string(fields.size()) + " fields");
-    }
-    const auto numbers = [&](const std::string& text, size_t n, const char* what) {
-      std::istringstream s(text);
-      std::vector<double> v;
-      for (double x; s >> x;) v.push_back(x);
-      if (v.size() != n || !s.eof()) {
-        throw Error(where + ": " + what + " needs " + std::to_string(n) +
-                    " space-separated numbers, got '" + text + "'");
-      }
-      return v;
-    };
-    const auto ids = numbers(fields[0] + " " + fields[1] + " " + fields[2] + " " + fields[3], 4,
-                             "scene_id, im_id, obj_id and score");
-    for (int i = 0; i < 3; ++i) {
-      if (ids[i] != std::floor(ids[i]) || ids[i] < 0) {
-        throw Error(where + ": scene_id, im_id and obj_id must be whole numbers, got '" +
-                    fields[i] + "'");
-      }
-    }
-    const auto r = numbers(fields[4], 9, "R");
-    const auto t = numbers(fields[5], 3, "t");
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    for (int i = 0; i < 9; ++i) pose.linear()(i / 3, i % 3) = r[i];
-    for (int i = 0; i < 3; ++i) pose.translation()(i) = t[i];
-    const double det = pose.linear().determinant();
-    if (std::abs(det - 1.0) > 1e-3) {
-      throw Error(where + ": R is not a rotation (determinant " + std::to_string(det) + ")");
-    }
-    out[{{static_cast<int>(ids[0]), static_cast<int>(ids[1])}, static_cast<int>(ids[2])}].push_back(
-        {ids[3], pose});
-  }
+  for (const BopEstimate& e : ParseBopResults(ReadFileText(path), path.string()))
+    out[{{e.scene_id, e.im_id}, e.obj_id}].push_back({e.score, e.cam_from_model});
   return out;
 }
 
@@ -128,27 +70,37 @@ void Score(ObjectScores* s, const std::vector<double>& add_s, const std::vector<
 EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
   if (!fs::is_directory(dataset)) throw Error(dataset.string() + ": no such dataset folder");
   // Models.
-  const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
+  const fs::path info_file = dataset / "models" / "models_info.json";
   const fs::path cad_file = dataset / "models" / "models_cad.json";
-  const Json cad = fs::exists(cad_file) ? ReadJsonFile(cad_file) : Json::object();
+  Json cad = Json::object();
+  if (fs::exists(cad_file)) {
+    const std::string text = ReadFileText(cad_file);
+    try {
+      cad = Json::parse(text);
+    } catch (const Json::exception& e) {
+      throw Error(JsonErrorMessage(cad_file.string(), text, e));
+    }
+  }
   std::map<int, Model> models;
-  for (const auto& [key, entry] : info.items()) {
+  for (const BopModelInfo& info : ParseModelsInfo(ReadFileText(info_file), info_file.string())) {
     Model m;
-    m.diameter = entry.at("diameter").get<double>();
-    m.symmetric =
-        (entry.contains("symmetries_discrete") && !entry["symmetries_discrete"].empty()) ||
-        (entry.contains("symmetries_continuous") && !entry["symmetries_continuous"].empty());
-    m.name = cad.contains(key) && cad[key].contains("name") ? cad[key]["name"].get<std::string>()
-                                                            : "obj_" + key;
+    m.diameter = info.diameter;
+    m.symmetric = info.symmetric;
+    const std::string key = std::to_string(info.obj_id);
+    m.name = "obj_" + key;
+    if (cad.is_object() && cad.contains(key) && cad[key].is_object() && cad[key].contains("name") &&
+        cad[key]["name"].is_string()) {
+      m.name = cad[key]["name"].get<std::string>();
+    }
     std::ostringstream file;
-    file << "obj_" << std::setw(6) << std::setfill('0') << key << ".ply";
+    file << "obj_" << std::setw(6) << std::setfill('0') << info.obj_id << ".ply";
     const fs::path cloud = dataset / "models" / "points" / file.str();
     if (!fs::exists(cloud)) {
       throw Error(cloud.string() +
                   ": missing; eval needs the model clouds (generate with output.model_points > 0)");
     }
     m.points = DecodePointPly(ReadFileText(cloud), cloud.string());
-    models[std::stoi(key)] = std::move(m);
+    models[info.obj_id] = std::move(m);
   }
 
   const auto estimates = ReadResults(results);
@@ -182,17 +134,16 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
   for (const auto& scene_dir : fs::directory_iterator(root)) {
     const fs::path gt_file = scene_dir.path() / "scene_gt.json";
     if (!fs::exists(gt_file)) continue;
-    const int scene = std::stoi(scene_dir.path().filename().string());
-    const Json scene_gt = ReadJsonFile(gt_file);
-    for (const auto& [im, list] : scene_gt.items()) {
-      const ImageKey key{scene, std::stoi(im)};
+    const auto scene = ParseBopId(scene_dir.path().filename().string());
+    if (!scene) continue;  // not a scene folder (BOP names them 000000, 000001, ...)
+    for (const auto& [im, list] : ParseSceneGt(ReadFileText(gt_file), gt_file.string())) {
+      const ImageKey key{*scene, im};
       if (use_split && !test_images.count(key)) continue;
       images.insert(key);
-      for (const Json& gt : list) {
-        const int obj = gt.at("obj_id").get<int>();
-        if (!models.count(obj))
-          throw Error(gt_file.string() + ": obj_id " + std::to_string(obj) + " has no model");
-        truth.push_back({key, obj, Pose(gt.at("cam_R_m2c"), gt.at("cam_t_m2c"), gt_file.string())});
+      for (const BopGroundTruth& gt : list) {
+        if (!models.count(gt.obj_id))
+          throw Error(gt_file.string() + ": obj_id " + std::to_string(gt.obj_id) + " has no model");
+        truth.push_back({key, gt.obj_id, gt.cam_from_model});
       }
     }
   }

@@ -15,6 +15,7 @@
 #include <iostream>
 
 #include "cad/error.h"
+#include "cad/mesh_formats.h"
 #include "cad/part_cache.h"
 
 extern char** environ;
@@ -48,7 +49,7 @@ struct Fd {
 bool NeedsGuardedReader(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext != ".stl";
+  return !HasCheckedMeshReader(ext);
 }
 
 std::vector<std::string> ReadPartArguments(const std::filesystem::path& path,

@@ -20,8 +20,9 @@ struct ReaderProcess {
   double timeout_s = 600.0;          // a reader still running after this is stopped
 };
 
-// Whether a file's format is read in a child process: every format but STL, whose reader is
-// simple and whose files are the bulk of large meshes (a process start costs ~0.15 s).
+// Whether a file's format is read in a child process: every format but STL, PLY and OFF, which
+// our own checked readers read (cad/mesh_formats.h; fuzzed, and STL files are the bulk of large
+// meshes, where a process start and a copy through a pipe would cost).
 bool NeedsGuardedReader(const std::filesystem::path& path);
 
 // Imports `path` like ImportCad. With `reader`, and a format that needs it, in a child process:

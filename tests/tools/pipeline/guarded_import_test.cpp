@@ -40,8 +40,8 @@ std::filesystem::path Script(const ScratchDir& dir, const std::string& name,
 
 TEST(GuardedImport, CrashHangAndErrorOfTheReaderAreErrors) {
   ScratchDir dir;
-  std::ofstream(dir / "part.ply") << "ply\n";
-  const std::filesystem::path file = dir / "part.ply";
+  std::ofstream(dir / "part.obj") << "v 0 0 0\n";
+  const std::filesystem::path file = dir / "part.obj";
   EXPECT_EQ(MessageOf(file, {Script(dir, "crash.sh", "kill -SEGV $$"), 60}),
             file.string() + ": cannot read: the reader crashed on this file (Segmentation fault)");
   EXPECT_EQ(MessageOf(file, {Script(dir, "abort.sh", "kill -ABRT $$"), 60}),
@@ -57,14 +57,16 @@ TEST(GuardedImport, CrashHangAndErrorOfTheReaderAreErrors) {
                 ": the reader did not finish in 0.5 s (a damaged file? limits.read_timeout sets "
                 "the time)");
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30);
-  EXPECT_EQ(MessageOf(file, {Script(dir, "fail.sh", "echo 'part.ply: no faces' >&2; exit 3"), 60}),
-            "part.ply: no faces");
+  EXPECT_EQ(MessageOf(file, {Script(dir, "fail.sh", "echo 'part.obj: no faces' >&2; exit 3"), 60}),
+            "part.obj: no faces");
   EXPECT_EQ(MessageOf(file, {Script(dir, "garbage.sh", "echo not an assembly"), 60})
                 .find(file.string() + ": the reader's answer is damaged"),
             0u);
   EXPECT_NE(MessageOf(file, {dir / "missing-reader", 60}).find("cannot start a reader"),
             std::string::npos);
-  EXPECT_FALSE(NeedsGuardedReader("big.STL"));  // read in-process
+  EXPECT_FALSE(NeedsGuardedReader("big.STL"));  // read in-process by our checked readers
+  EXPECT_FALSE(NeedsGuardedReader("scan.ply"));
+  EXPECT_TRUE(NeedsGuardedReader("part.obj"));
   EXPECT_TRUE(NeedsGuardedReader("part.step"));
 }
 
@@ -117,7 +119,7 @@ TEST(GuardedImport, CrashingStepFileEndsCleanly) {
 }
 
 // Files that crashed assimp (a PLY face naming vertex 7 of 3: SIGSEGV; an OFF face list cut short:
-// an assert's abort) now end inspect and generate with an error naming the file.
+// an assert's abort) now end inspect with an error naming the file and line (our checked readers).
 TEST(GuardedImport, MeshFilesThatCrashedAssimpEndCleanly) {
   ScratchDir dir;
   std::ofstream(dir / "index.ply")
@@ -128,7 +130,7 @@ TEST(GuardedImport, MeshFilesThatCrashedAssimpEndCleanly) {
   for (const char* name : {"index.ply", "cut.off"}) {
     const testing::CliRun inspect = testing::Cadsynth(std::string("inspect ") + name, dir);
     EXPECT_EQ(inspect.code, 1) << name << ": " << inspect.err;
-    EXPECT_EQ(inspect.err.rfind("error: " + std::string(name) + ": ", 0), 0u) << inspect.err;
+    EXPECT_EQ(inspect.err.rfind("error: " + std::string(name) + ":", 0), 0u) << inspect.err;
     EXPECT_EQ(std::count(inspect.err.begin(), inspect.err.end(), '\n'), 1) << inspect.err;
   }
 }

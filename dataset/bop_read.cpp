@@ -1,0 +1,205 @@
+#include "dataset/bop_read.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "cad/error.h"
+
+namespace cadsynth {
+
+namespace {
+
+using Json = nlohmann::json;
+
+// The reason in nlohmann's wording "[json.exception.x.n] ...: REASON; last read: ...".
+std::string Reason(const std::string& what) {
+  std::string reason = what;
+  const size_t dash = reason.rfind(" - ");
+  if (dash != std::string::npos) reason = reason.substr(dash + 3);
+  const size_t bracket = reason.find("] ");
+  if (reason.rfind("[json.exception", 0) == 0 && bracket != std::string::npos)
+    reason = reason.substr(bracket + 2);
+  const size_t last = reason.find("; last read");
+  if (last != std::string::npos) reason = reason.substr(0, last);
+  if (reason.size() > 200) reason = reason.substr(0, 200) + "...";
+  return reason;
+}
+
+Json Parse(const std::string& text, const std::string& origin) {
+  try {
+    return Json::parse(text);
+  } catch (const Json::exception& e) {
+    throw Error(JsonErrorMessage(origin, text, e));
+  }
+}
+
+double Number(const Json& value, const std::string& where) {
+  if (!value.is_number())
+    throw Error(where + ": expected a number, got " + value.dump().substr(0, 40));
+  const double v = value.get<double>();
+  if (!std::isfinite(v)) throw Error(where + ": not a finite number");
+  return v;
+}
+
+// A pose from BOP's R (9 numbers, row-major) and t (3 numbers); R must be a rotation.
+Eigen::Isometry3d Pose(const std::vector<double>& r, const std::vector<double>& t,
+                       const std::string& where) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 9; ++i) pose.linear()(i / 3, i % 3) = r[i];
+  for (int i = 0; i < 3; ++i) pose.translation()(i) = t[i];
+  const double det = pose.linear().determinant();
+  if (!(std::abs(det - 1.0) <= 1e-3)) {
+    std::ostringstream text;
+    text << where << ": R is not a rotation (determinant " << det << ")";
+    throw Error(text.str());
+  }
+  return pose;
+}
+
+std::vector<double> Numbers(const Json& value, size_t n, const std::string& where) {
+  if (!value.is_array() || value.size() != n)
+    throw Error(where + ": expected " + std::to_string(n) + " numbers");
+  std::vector<double> out;
+  for (const Json& v : value) out.push_back(Number(v, where));
+  return out;
+}
+
+const Json& Member(const Json& object, const char* key, const std::string& where) {
+  if (!object.is_object()) throw Error(where + ": expected an object");
+  const auto found = object.find(key);
+  if (found == object.end()) throw Error(where + ": no '" + key + "'");
+  return *found;
+}
+
+}  // namespace
+
+std::string JsonErrorMessage(const std::string& origin, const std::string& text,
+                             const std::exception& error) {
+  if (const auto* parse = dynamic_cast<const Json::parse_error*>(&error)) {
+    // Its byte is 1-based, the one after the last read.
+    const size_t byte = std::min(parse->byte > 0 ? parse->byte - 1 : 0, text.size());
+    size_t line = 1, column = 1;
+    for (size_t i = 0; i < byte; ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        column = 1;
+      } else {
+        ++column;
+      }
+    }
+    return origin + ":" + std::to_string(line) + ":" + std::to_string(column) +
+           ": not valid JSON (" + Reason(error.what()) + ")";
+  }
+  return origin + ": " + Reason(error.what());
+}
+
+std::optional<int> ParseBopId(std::string_view text) {
+  int value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size() || text.empty() || value < 0)
+    return std::nullopt;
+  return value;
+}
+
+std::vector<BopEstimate> ParseBopResults(const std::string& text, const std::string& origin) {
+  std::istringstream in(text);
+  std::vector<BopEstimate> out;
+  std::string line;
+  for (int line_no = 1; std::getline(in, line); ++line_no) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || (line_no == 1 && line.rfind("scene_id", 0) == 0)) continue;
+    const std::string where = origin + ":" + std::to_string(line_no);
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    for (std::string f; std::getline(split, f, ',');) fields.push_back(f);
+    if (fields.size() < 6 || fields.size() > 7) {
+      throw Error(where + ": expected scene_id,im_id,obj_id,score,R,t[,time], got " +
+                  std::to_string(fields.size()) + " fields");
+    }
+    const auto numbers = [&](const std::string& field, size_t n, const char* what) {
+      std::istringstream s(field);
+      std::vector<double> v;
+      for (double x; v.size() <= n && s >> x;) v.push_back(x);
+      if (v.size() != n || !(s >> std::ws).eof()) {
+        throw Error(where + ": " + what + " needs " + std::to_string(n) +
+                    " space-separated numbers, got '" + field.substr(0, 80) +
+                    (field.size() > 80 ? "...'" : "'"));
+      }
+      for (double x : v) {
+        if (!std::isfinite(x)) throw Error(where + ": " + what + " is not a finite number");
+      }
+      return v;
+    };
+    BopEstimate e;
+    int* ids[3] = {&e.scene_id, &e.im_id, &e.obj_id};
+    for (int i = 0; i < 3; ++i) {
+      std::string field = fields[i];
+      field.erase(0, field.find_first_not_of(" \t"));
+      field.erase(field.find_last_not_of(" \t") + 1);
+      const auto id = ParseBopId(field);
+      if (!id) {
+        throw Error(where + ": scene_id, im_id and obj_id must be whole numbers, got '" +
+                    fields[i].substr(0, 40) + "'");
+      }
+      *ids[i] = *id;
+    }
+    e.score = numbers(fields[3], 1, "score")[0];
+    e.cam_from_model = Pose(numbers(fields[4], 9, "R"), numbers(fields[5], 3, "t"), where);
+    out.push_back(e);
+  }
+  return out;
+}
+
+BopSceneGt ParseSceneGt(const std::string& text, const std::string& origin) {
+  const Json gt = Parse(text, origin);
+  if (!gt.is_object()) throw Error(origin + ": expected an object of images");
+  BopSceneGt out;
+  for (const auto& [key, list] : gt.items()) {
+    const std::string where = origin + ": image '" + key.substr(0, 40) + "'";
+    const auto im = ParseBopId(key);
+    if (!im) throw Error(where + ": an image id must be a whole number");
+    if (!list.is_array()) throw Error(where + ": expected a list of instances");
+    out.push_back({*im, {}});
+    for (size_t i = 0; i < list.size(); ++i) {
+      const std::string at = where + " instance " + std::to_string(i);
+      const Json& id = Member(list[i], "obj_id", at);
+      if (!id.is_number_integer() || id.get<int64_t>() < 0 || id.get<int64_t>() > 2147483647)
+        throw Error(at + ": obj_id must be a whole number");
+      BopGroundTruth g;
+      g.obj_id = id.get<int>();
+      g.cam_from_model = Pose(Numbers(Member(list[i], "cam_R_m2c", at), 9, at + " cam_R_m2c"),
+                              Numbers(Member(list[i], "cam_t_m2c", at), 3, at + " cam_t_m2c"), at);
+      out.back().second.push_back(g);
+    }
+  }
+  return out;
+}
+
+std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::string& origin) {
+  const Json info = Parse(text, origin);
+  if (!info.is_object()) throw Error(origin + ": expected an object of models");
+  std::vector<BopModelInfo> out;
+  for (const auto& [key, entry] : info.items()) {
+    const std::string where = origin + ": model '" + key.substr(0, 40) + "'";
+    const auto id = ParseBopId(key);
+    if (!id) throw Error(where + ": an object id must be a whole number");
+    BopModelInfo m;
+    m.obj_id = *id;
+    m.diameter = Number(Member(entry, "diameter", where), where + " diameter");
+    if (!(m.diameter > 0)) throw Error(where + ": the diameter must be positive");
+    for (const char* key_name : {"symmetries_discrete", "symmetries_continuous"}) {
+      const auto found = entry.find(key_name);
+      if (found == entry.end()) continue;
+      if (!found->is_array()) throw Error(where + ": " + key_name + " must be a list");
+      m.symmetric = m.symmetric || !found->empty();
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace cadsynth

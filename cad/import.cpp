@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -111,7 +112,7 @@ Assembly ReadIges(const std::filesystem::path& path, const TessellationOptions& 
       }
       contents = internal::CollectDocument(document.doc, file);
     } catch (const Standard_Failure& failure) {
-      throw Error(file + ": OpenCASCADE failed while reading: " + failure.GetMessageString());
+      throw Error(file + ": cannot read: " + internal::PlainFailure(failure));
     }
   }
   Assembly assembly = internal::BuildAssembly(file, std::move(contents), options);
@@ -120,18 +121,58 @@ Assembly ReadIges(const std::filesystem::path& path, const TessellationOptions& 
   return assembly;
 }
 
+namespace {
+
+// An ASCII BREP file cut short inside its shape list made OpenCASCADE's reader loop for ever.
+// The list ("TShapes N") holds N records, each ending in its sub-shape list and a "*" line, and
+// the root shape's reference follows them: a file that lacks any of this is refused first.
+void CheckBrepComplete(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  long declared = -1, complete = 0;
+  bool root = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (declared < 0) {
+      if (line.rfind("TShapes ", 0) == 0) {
+        declared = std::strtol(line.c_str() + 8, nullptr, 10);
+        if (declared < 0) declared = 0;
+      }
+      continue;
+    }
+    const size_t last = line.find_last_not_of(' ');
+    if (complete < declared) {
+      if (last != std::string::npos && line[last] == '*') ++complete;
+    } else if (last != std::string::npos) {
+      root = true;
+      break;
+    }
+  }
+  if (declared < 0) return;  // binary, or no shape list: OpenCASCADE says what is wrong
+  if (complete < declared || !root) {
+    throw Error(path.string() + ": truncated: the file declares " + std::to_string(declared) +
+                " shapes and ends " +
+                (complete < declared ? "after " + std::to_string(complete) + " of them"
+                                     : "before naming its root shape"));
+  }
+}
+
+}  // namespace
+
 Assembly ReadBrep(const std::filesystem::path& path, const TessellationOptions& options) {
   const std::string file = path.string();
   internal::RequireReadableFile(file);
+  CheckBrepComplete(path);
   internal::InitOcct();
   TopoDS_Shape shape;
   try {
     BRep_Builder builder;
     if (!BRepTools::Read(shape, file.c_str(), builder) || shape.IsNull()) {
-      throw Error(file + ": not a readable OpenCASCADE BREP file");
+      throw Error(file + ": not a readable OpenCASCADE BREP file (damaged or cut short?)");
     }
   } catch (const Standard_Failure& failure) {
-    throw Error(file + ": not a readable OpenCASCADE BREP file: " + failure.GetMessageString());
+    throw Error(file +
+                ": not a readable OpenCASCADE BREP file: " + internal::PlainFailure(failure));
   }
   internal::CadContents contents;
   contents.name = path.stem().string();

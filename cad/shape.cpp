@@ -32,6 +32,7 @@
 #include "cad/error.h"
 #include "cad/mesh_analysis.h"
 #include "cad/occt_shape.h"
+#include "cad/xde.h"
 
 namespace cadsynth {
 
@@ -83,7 +84,7 @@ Shape Build(Builder&& builder, const char* what) {
     return WrapShape(builder.Shape());
   } catch (const Standard_Failure& failure) {
     throw Error(std::string("OpenCASCADE could not build ") + what + ": " +
-                failure.GetMessageString());
+                internal::PlainFailure(failure));
   }
 }
 
@@ -175,7 +176,7 @@ Mesh Tessellate(const Shape& shape, const TessellationOptions& options, double* 
     BRepMesh_IncrementalMesh mesher(s, options.linear_deflection_mm, /*isRelative=*/false,
                                     options.angular_deflection_rad, /*isInParallel=*/true);
   } catch (const Standard_Failure& failure) {
-    throw Error(std::string("tessellation failed: ") + failure.GetMessageString());
+    throw Error(std::string("tessellation failed: ") + internal::PlainFailure(failure));
   }
 
   Mesh mesh;
@@ -277,7 +278,7 @@ Shape Heal(const Shape& shape, bool* healed) {
     *healed = true;
     return WrapShape(fix->Shape());
   } catch (const Standard_Failure& failure) {
-    throw Error(std::string("shape healing failed: ") + failure.GetMessageString());
+    throw Error(std::string("shape healing failed: ") + internal::PlainFailure(failure));
   }
 }
 
@@ -290,7 +291,7 @@ double CommonVolume(const Shape& a, const Eigen::Isometry3d& a_pose, const Shape
     BRepGProp::VolumeProperties(common.Shape(), props);
     return std::max(0.0, props.Mass());
   } catch (const Standard_Failure& failure) {
-    throw Error(std::string("intersecting shapes failed: ") + failure.GetMessageString());
+    throw Error(std::string("intersecting shapes failed: ") + internal::PlainFailure(failure));
   }
 }
 

@@ -193,7 +193,7 @@ Assembly ReadStep(const std::filesystem::path& path, const TessellationOptions& 
       }
       contents = internal::CollectDocument(document.doc, file);
     } catch (const Standard_Failure& failure) {
-      throw Error(file + ": OpenCASCADE failed while reading: " + failure.GetMessageString());
+      throw Error(file + ": cannot read: " + internal::PlainFailure(failure));
     }
   }
   // Files that carry only triangles (AP242 tessellated geometry) have no B-rep faces for
@@ -259,7 +259,7 @@ void WriteStep(const std::filesystem::path& path, const std::string& assembly_na
     if (writer.Write(temporary.string().c_str()) != IFSelect_RetDone)
       fail("could not write the STEP file");
   } catch (const Standard_Failure& failure) {
-    fail(std::string("OpenCASCADE failed while writing: ") + failure.GetMessageString());
+    fail(std::string("OpenCASCADE failed while writing: ") + internal::PlainFailure(failure));
   }
   std::error_code ec;
   std::filesystem::rename(temporary, path, ec);

@@ -249,4 +249,31 @@ Assembly BuildAssembly(const std::string& file, CadContents contents,
   return assembly;
 }
 
+std::string PlainFailure(const Standard_Failure& failure) {
+  const std::string kind = failure.DynamicType()->Name();
+  std::string message = failure.GetMessageString() ? failure.GetMessageString() : "";
+  // A class or function name (NCollection_Sequence::Value, BRep_Tool::Curve) is no explanation.
+  const bool sentence =
+      message.find(' ') != std::string::npos && message.find("::") == std::string::npos;
+  if (sentence) return message.size() > 200 ? message.substr(0, 200) + "..." : message;
+  static const std::pair<const char*, const char*> kMeanings[] = {
+      {"Standard_OutOfRange", "a value out of range (a damaged index or count?)"},
+      {"Standard_RangeError", "a value out of range (a damaged index or count?)"},
+      {"Standard_NoSuchObject", "a reference to something the file does not hold"},
+      {"Standard_NullObject", "a reference to something the file does not hold"},
+      {"Standard_ConstructionError", "a curve or surface that cannot be built from its numbers"},
+      {"Standard_DomainError", "a curve or surface that cannot be built from its numbers"},
+      {"Standard_DivideByZero", "a division by zero on the file's numbers"},
+      {"Standard_NumericError", "a numeric error on the file's numbers"},
+      {"Standard_Overflow", "a numeric overflow on the file's numbers"},
+      {"Standard_OutOfMemory", "not enough memory"},
+      {"Storage_StreamFormatError", "data that do not follow the format (a cut or damaged file?)"},
+      {"Storage_StreamReadError", "data that do not follow the format (a cut or damaged file?)"},
+  };
+  for (const auto& [name, meaning] : kMeanings) {
+    if (kind == name) return meaning;
+  }
+  return "an internal failure of its reader (" + kind + ")";
+}
+
 }  // namespace cadsynth::internal

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <Standard_Failure.hxx>
 #include <TDocStd_Document.hxx>
 
 #include "cad/part.h"
@@ -16,6 +17,11 @@ namespace cadsynth::internal {
 
 // Silences OpenCASCADE's console chatter and sets the translators to millimetres. Idempotent.
 void InitOcct();
+
+// What an OpenCASCADE exception says about the file, in plain words: its own message when that is
+// a sentence, else what its kind means ("a value out of range (a damaged index?)" for
+// Standard_OutOfRange, whose message is only a class name such as "NCollection_Sequence::Value").
+std::string PlainFailure(const Standard_Failure& failure);
 
 // XDE documents come from a process-wide application object: create and read them one at a time.
 std::mutex& XdeMutex();

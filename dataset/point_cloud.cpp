@@ -1,6 +1,7 @@
 #include "dataset/point_cloud.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdlib>
 #include <limits>
 #include <sstream>
@@ -102,7 +103,14 @@ std::vector<Eigen::Vector3f> DecodePointPly(const std::string& text, const std::
   while (std::getline(in, line)) {
     ++line_no;
     if (line.rfind("format ", 0) == 0) ascii = line.rfind("format ascii", 0) == 0;
-    if (line.rfind("element vertex ", 0) == 0) count = std::atol(line.c_str() + 15);
+    if (line.rfind("element vertex ", 0) == 0) {
+      // A count that is not a number, or more than the text could hold, is refused below.
+      const char* first = line.c_str() + 15;
+      const char* last = line.c_str() + line.size() - (line.back() == '\r' ? 1 : 0);
+      long value = -1;
+      const auto [end, ec] = std::from_chars(first, last, value);
+      count = ec == std::errc() && end == last ? value : -1;
+    }
     if (line == "end_header" || line == "end_header\r") {
       header_done = true;
       break;
@@ -112,6 +120,11 @@ std::vector<Eigen::Vector3f> DecodePointPly(const std::string& text, const std::
     throw Error(
         origin +
         ": not an ASCII point PLY (needs 'format ascii', 'element vertex N' and 'end_header')");
+  }
+  // Each point takes at least 6 characters ("0 0 0\n"): a count above that is a damaged header.
+  if (static_cast<size_t>(count) > text.size() / 6 + 1) {
+    throw Error(origin + ": the header's " + std::to_string(count) +
+                " points cannot fit in a file of " + std::to_string(text.size()) + " bytes");
   }
   std::vector<Eigen::Vector3f> points;
   points.reserve(static_cast<size_t>(count));

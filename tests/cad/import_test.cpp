@@ -7,12 +7,16 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepTools.hxx>
 #include <IGESControl_Writer.hxx>
+#include <Standard_DomainError.hxx>
+#include <Standard_OutOfRange.hxx>
 
 #include "cad/error.h"
 #include "cad/occt_shape.h"
 #include "cad/step.h"
 #include "cad/step_tessellated.h"
+#include "cad/xde.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {
@@ -358,6 +362,43 @@ TEST(Import, ObjMeshWithUnitAndMassProperties) {
   EXPECT_TRUE(
       a.instances[0].world_from_model.translation().isApprox(Eigen::Vector3d(5, 5, 5), 1e-6));
   EXPECT_EQ(quiet.count(), 0);
+}
+
+// Library wording stays out of errors: OpenCASCADE's exceptions whose message is a class name, and
+// assimp's phrases, become what they mean for the file.
+TEST(Import, LibraryFailuresAreSaidInPlainWords) {
+  EXPECT_EQ(internal::PlainFailure(Standard_OutOfRange("NCollection_Sequence::Value")),
+            "a value out of range (a damaged index or count?)");
+  EXPECT_EQ(internal::PlainFailure(Standard_DomainError("BRep_Tool::Curve")),
+            "a curve or surface that cannot be built from its numbers");
+  EXPECT_EQ(internal::PlainFailure(Standard_DomainError("the surface is not closed")),
+            "the surface is not closed");
+  ScratchDir dir;
+  std::ofstream(dir / "lines.obj") << "v 0 0 0\nv 1 0 0\nl 1 2\n";
+  EXPECT_EQ(ErrorOf(dir / "lines.obj"),
+            (dir / "lines.obj").string() +
+                ": not a readable mesh: the file holds no triangles (only points or lines?)");
+  std::ofstream(dir / "noise.3mf") << std::string(3000, 'x');
+  EXPECT_EQ(ErrorOf(dir / "noise.3mf"),
+            (dir / "noise.3mf").string() +
+                ": not a 3MF file (3MF files are ZIP archives with files in them; this is none)");
+}
+
+// A BREP file cut inside its shape list made OpenCASCADE loop for ever; it is refused first, and
+// the whole file still reads.
+TEST(Import, BrepCutInsideItsShapeListIsTruncated) {
+  ScratchDir dir;
+  BRepTools::Write(OcctShape(MakeBox(30, 20, 10)), (dir / "box.brep").string().c_str());
+  const std::string text = testing::ReadFile(dir / "box.brep");
+  EXPECT_EQ(ImportCad(dir / "box.brep", Coarse()).parts.size(), 1u);
+  std::ofstream(dir / "cut.brep") << text.substr(0, text.rfind('*'));
+  EXPECT_NE(ErrorOf(dir / "cut.brep").find("cut.brep: truncated: the file declares"),
+            std::string::npos)
+      << ErrorOf(dir / "cut.brep");
+  std::ofstream(dir / "rootless.brep") << text.substr(0, text.rfind('*') + 2);
+  EXPECT_NE(ErrorOf(dir / "rootless.brep").find("ends before naming its root shape"),
+            std::string::npos)
+      << ErrorOf(dir / "rootless.brep");
 }
 
 TEST(Import, IgesWrittenByOpenCascadeReadsBackInMillimetres) {

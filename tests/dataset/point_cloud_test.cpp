@@ -92,6 +92,14 @@ TEST(PointPly, DecodeReadsWhatEncodeWrites) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("bad.ply:6"), std::string::npos) << e.what();
   }
+  // A damaged count (found by the fuzzer: reserve() of 5e30 points ended the process).
+  EXPECT_THROW(DecodePointPly("ply\nformat ascii 1.0\nelement vertex 5555555555555555555555\n"
+                              "end_header\n1 2 3\n",
+                              "c.ply"),
+               Error);
+  EXPECT_THROW(DecodePointPly(
+                   "ply\nformat ascii 1.0\nelement vertex 900000000\nend_header\n1 2 3\n", "c.ply"),
+               Error);
   EXPECT_THROW(DecodePointPly("ply\nformat binary_little_endian 1.0\nend_header\n", "b.ply"),
                Error);
 }

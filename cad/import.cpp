@@ -273,10 +273,13 @@ Assembly ImportCad(const std::filesystem::path& path, const ImportOptions& optio
     message.precision(4);
     const double in_file_units = largest / assumed_mm;
     const std::string likely = LikelyUnit(in_file_units);
-    message << file << ": largest part is " << largest
-            << " mm, implausible for a part; if the file's "
-            << "numbers are in " << likely << ", state `unit: " << likely << "` (it would then be "
-            << in_file_units * *LengthUnitMm(likely) << " mm)";
+    message << file << ": largest part is " << largest;
+    // Past a kilometre nothing renders sensibly (and ray tracing loses its precision): an error.
+    const bool refused = largest > kMaxPartSizeMm;
+    message << (refused ? " mm, more than the 1 km cadsynth takes" : " mm, implausible for a part")
+            << "; if the file's numbers are in " << likely << ", state `unit: " << likely
+            << "` (it would then be " << in_file_units * *LengthUnitMm(likely) << " mm)";
+    if (refused) throw Error(message.str());
     Warn(message.str());
   }
   return assembly;

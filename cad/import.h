@@ -9,6 +9,10 @@
 
 namespace cadsynth {
 
+// The largest part cadsynth takes, in mm (1 km): a larger one is an error (most likely a unit
+// mistake), as ray tracing loses its precision far beyond the scale of a work cell.
+inline constexpr double kMaxPartSizeMm = 1e6;
+
 struct ImportOptions {
   TessellationOptions tessellation;
   // The length unit the file's numbers are really in ("mm", "inch", "m", ...). For STEP and IGES

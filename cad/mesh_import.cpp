@@ -216,6 +216,11 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
   if (mm_per_unit != 1.0) {
     for (Eigen::Vector3f& p : mesh.positions) p *= static_cast<float>(mm_per_unit);
   }
+  // All triangles degenerate (every vertex in one point or on one line): nothing to see or place.
+  if (!(mesh.SurfaceArea() > 0)) {
+    throw Error(file + ": the mesh has no area (all its " + std::to_string(mesh.num_triangles()) +
+                " triangles are degenerate)");
+  }
   ComputeCreaseNormals(&mesh, crease_angle_rad);
 
   Part part;

@@ -374,7 +374,11 @@ std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
       weight += area;
     }
   }
-  if (weight <= 0) throw Error("stable poses: the body has no volume or area");
+  if (weight <= 0) {
+    throw Error("stable poses: '" +
+                (instances.empty() ? std::string() : parts[instances[0].part].name) +
+                "' has no volume or area");
+  }
   if (moved) return StablePoses(*moved, moment / weight);
   return StablePoses(points, moment / weight);
 }

@@ -93,6 +93,18 @@ std::vector<Hostile> MakeCorpus(const ScratchDir& dir) {
   corpus.push_back(
       {"cut.stl", BinaryStl(1000, {{0, 0, 0, 10, 0, 0, 0, 10, 0}}), 1, "truncated binary STL"});
   corpus.push_back({"zero.stl", BinaryStl(0, {}), 1, "holds no triangles"});
+  // A tetrahedron at absurd scales, and one whose corners all coincide.
+  corpus.push_back(
+      {"huge.stl",
+       BinaryStl(2, {{0, 0, 0, 1e30f, 0, 0, 0, 1e30f, 0}, {0, 0, 0, 0, 1e30f, 0, 0, 0, 1e30f}}), 1,
+       "more than the 1 km cadsynth takes"});
+  corpus.push_back(
+      {"tiny.stl",
+       BinaryStl(2, {{0, 0, 0, 1e-30f, 0, 0, 0, 1e-30f, 0}, {0, 0, 0, 0, 1e-30f, 0, 0, 0, 1e-30f}}),
+       -1, ""});
+  corpus.push_back({"point.stl",
+                    BinaryStl(2, {{1, 1, 1, 1, 1, 1, 1, 1, 1}, {1, 1, 1, 1, 1, 1, 1, 1, 1}}), 1,
+                    "the mesh has no area"});
   {
     // A flat octagon (crashed the stable poses): read, and rests on either side.
     std::ostringstream stl;

@@ -1,0 +1,233 @@
+#include "render/bsdf.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace cadsynth {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr float kMinAlpha = 1e-4f;  // roughness 0: a mirror to the eye, still a finite lobe
+
+float Luminance(const Eigen::Vector3f& c) {
+  return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
+
+float Pow5(float x) {
+  const float x2 = x * x;
+  return x2 * x2 * x;
+}
+
+// A microfacet normal seen from wo, distributed as D_wo(m) = G1(wo) max(0, wo.m) D(m) / wo.z
+// (Heitz 2018, "Sampling the GGX distribution of visible normals").
+Eigen::Vector3f SampleVisibleNormal(const Eigen::Vector3f& wo, float ax, float ay,
+                                    const Eigen::Vector2f& u) {
+  const Eigen::Vector3f vh = Eigen::Vector3f(ax * wo.x(), ay * wo.y(), wo.z()).normalized();
+  const float lensq = vh.x() * vh.x() + vh.y() * vh.y();
+  const Eigen::Vector3f t1 =
+      lensq > 0 ? Eigen::Vector3f(-vh.y(), vh.x(), 0) / std::sqrt(lensq) : Eigen::Vector3f(1, 0, 0);
+  const Eigen::Vector3f t2 = vh.cross(t1);
+  const float r = std::sqrt(u.x());
+  const float phi = 2 * kPi * u.y();
+  const float p1 = r * std::cos(phi);
+  float p2 = r * std::sin(phi);
+  const float s = 0.5f * (1 + vh.z());
+  p2 = (1 - s) * std::sqrt(std::max(0.0f, 1 - p1 * p1)) + s * p2;
+  const Eigen::Vector3f nh =
+      p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0f, 1 - p1 * p1 - p2 * p2)) * vh;
+  return Eigen::Vector3f(ax * nh.x(), ay * nh.y(), std::max(1e-7f, nh.z())).normalized();
+}
+
+Eigen::Vector3f Reflect(const Eigen::Vector3f& w, const Eigen::Vector3f& m) {
+  return 2 * w.dot(m) * m - w;
+}
+
+// The albedo table: E(mu, alpha; F0) = F0 A + B, over mu in [0, 1] and roughness sqrt(alpha) in
+// [0, 1], from 64 x 24 visible normals per cell, E = mean of G2/G1 * F(wo.m).
+constexpr int kTable = 32;
+struct AlbedoTable {
+  std::array<float, kTable * kTable> a{}, b{};
+  std::array<float, kTable> a_avg{}, b_avg{};  // 2 * integral of A(mu) mu over mu, per roughness
+};
+
+const AlbedoTable& Table() {
+  static const AlbedoTable table = [] {
+    AlbedoTable t;
+    constexpr int kStrataT = 64, kStrataV = 24;
+    for (int r = 0; r < kTable; ++r) {
+      const float roughness = static_cast<float>(r) / (kTable - 1);
+      const float alpha = std::max(kMinAlpha, roughness * roughness);
+      for (int j = 0; j < kTable; ++j) {
+        const float mu = std::max(1e-3f, static_cast<float>(j) / (kTable - 1));
+        const Eigen::Vector3f wo(std::sqrt(1 - mu * mu), 0, mu);
+        // Midpoints in (t, v) with u.x = 1 - (1 - t)^2: the samples crowd where u.x nears 1,
+        // the steep microfacets whose reflections graze the surface (the lossy tail).
+        double a = 0, b = 0;
+        for (int k = 0; k < kStrataT * kStrataV; ++k) {
+          const double tt = (k % kStrataT + 0.5) / kStrataT;
+          const double v = (static_cast<double>(k / kStrataT) + 0.5) / kStrataV;
+          const double jacobian = 2 * (1 - tt);
+          const Eigen::Vector2f u(static_cast<float>(1 - (1 - tt) * (1 - tt)),
+                                  static_cast<float>(v));
+          const Eigen::Vector3f m = SampleVisibleNormal(wo, alpha, alpha, u);
+          const Eigen::Vector3f wi = Reflect(wo, m);
+          if (wi.z() <= 0) continue;
+          const float lo = GgxLambda(wo, alpha, alpha), li = GgxLambda(wi, alpha, alpha);
+          const double weight = jacobian * (1 + lo) / (1 + lo + li);  // G2 / G1
+          const double c5 = Pow5(1 - std::clamp(wo.dot(m), 0.0f, 1.0f));
+          a += weight * (1 - c5);
+          b += weight * c5;
+        }
+        t.a[r * kTable + j] = static_cast<float>(a / (kStrataT * kStrataV));
+        t.b[r * kTable + j] = static_cast<float>(b / (kStrataT * kStrataV));
+      }
+      // Cosine-weighted averages by the trapezoid rule on the mu grid.
+      double a_avg = 0, b_avg = 0;
+      for (int j = 0; j + 1 < kTable; ++j) {
+        const double m0 = static_cast<double>(j) / (kTable - 1), m1 = (j + 1.0) / (kTable - 1);
+        a_avg += (t.a[r * kTable + j] * m0 + t.a[r * kTable + j + 1] * m1) * (m1 - m0);
+        b_avg += (t.b[r * kTable + j] * m0 + t.b[r * kTable + j + 1] * m1) * (m1 - m0);
+      }
+      t.a_avg[r] = static_cast<float>(a_avg);  // 2 * integral with the trapezoid's 1/2
+      t.b_avg[r] = static_cast<float>(b_avg);
+    }
+    return t;
+  }();
+  return table;
+}
+
+// Bilinear lookup of a table over (roughness, mu).
+float Lookup(const std::array<float, kTable * kTable>& table, float roughness, float mu) {
+  const float x = std::clamp(mu, 0.0f, 1.0f) * (kTable - 1);
+  const float y = std::clamp(roughness, 0.0f, 1.0f) * (kTable - 1);
+  const int x0 = std::min(static_cast<int>(x), kTable - 2),
+            y0 = std::min(static_cast<int>(y), kTable - 2);
+  const float fx = x - x0, fy = y - y0;
+  const auto at = [&](int yy, int xx) { return table[yy * kTable + xx]; };
+  return (1 - fy) * ((1 - fx) * at(y0, x0) + fx * at(y0, x0 + 1)) +
+         fy * ((1 - fx) * at(y0 + 1, x0) + fx * at(y0 + 1, x0 + 1));
+}
+
+float LookupAverage(const std::array<float, kTable>& table, float roughness) {
+  const float y = std::clamp(roughness, 0.0f, 1.0f) * (kTable - 1);
+  const int y0 = std::min(static_cast<int>(y), kTable - 2);
+  const float fy = y - y0;
+  return (1 - fy) * table[y0] + fy * table[y0 + 1];
+}
+
+}  // namespace
+
+float GgxD(const Eigen::Vector3f& m, float ax, float ay) {
+  if (m.z() <= 0) return 0;
+  const float e = m.x() * m.x() / (ax * ax) + m.y() * m.y() / (ay * ay) + m.z() * m.z();
+  return 1 / (kPi * ax * ay * e * e);
+}
+
+float GgxLambda(const Eigen::Vector3f& w, float ax, float ay) {
+  const float z2 = w.z() * w.z();
+  if (z2 <= 0) return 1e30f;
+  const float t = (ax * ax * w.x() * w.x() + ay * ay * w.y() * w.y()) / z2;
+  return 0.5f * (std::sqrt(1 + t) - 1);
+}
+
+float GgxAlbedo(float mu, float alpha, float f0) {
+  const float roughness = std::sqrt(std::max(alpha, 0.0f));
+  const AlbedoTable& t = Table();
+  return f0 * Lookup(t.a, roughness, mu) + Lookup(t.b, roughness, mu);
+}
+
+PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params) {
+  const float alpha = params.roughness * params.roughness;
+  const float aspect = std::sqrt(1 - 0.9f * std::clamp(params.anisotropic, 0.0f, 0.99f));
+  alpha_x_ = std::max(kMinAlpha, alpha / aspect);
+  alpha_y_ = std::max(kMinAlpha, alpha * aspect);
+  dielectric_f0_ = 0.08f * params.specular;
+  const AlbedoTable& t = Table();
+  const float r = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));  // isotropic equivalent
+  e_avg_ = dielectric_f0_ * LookupAverage(t.a_avg, r) + LookupAverage(t.b_avg, r);
+}
+
+Eigen::Vector3f PrincipledBsdf::Specular(const Eigen::Vector3f& wo,
+                                         const Eigen::Vector3f& wi) const {
+  if (params_.specular <= 0 && params_.metallic <= 0) return Eigen::Vector3f::Zero();
+  const Eigen::Vector3f h = (wo + wi).normalized();
+  const float d = GgxD(h, alpha_x_, alpha_y_);
+  const float g2 = 1 / (1 + GgxLambda(wo, alpha_x_, alpha_y_) + GgxLambda(wi, alpha_x_, alpha_y_));
+  const float c5 = Pow5(1 - std::clamp(wo.dot(h), 0.0f, 1.0f));
+  // Schlick's Fresnel of the metal and, when there is one, of the dielectric layer.
+  const float m = params_.metallic;
+  const Eigen::Vector3f metal =
+      params_.base_color + (Eigen::Vector3f::Ones() - params_.base_color) * c5;
+  const float dielectric = params_.specular > 0 ? dielectric_f0_ + (1 - dielectric_f0_) * c5 : 0;
+  const Eigen::Vector3f f = m * metal + Eigen::Vector3f::Constant((1 - m) * dielectric);
+  return f * (d * g2 / (4 * wo.z() * wi.z()));
+}
+
+float PrincipledBsdf::DiffuseScale(float mu_o, float mu_i) const {
+  if (params_.specular <= 0) return 1;  // no dielectric layer above the diffuse one
+  const float r = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));
+  const AlbedoTable& t = Table();
+  const auto e = [&](float mu) { return dielectric_f0_ * Lookup(t.a, r, mu) + Lookup(t.b, r, mu); };
+  return (1 - e(mu_o)) * (1 - e(mu_i)) / std::max(1e-6f, 1 - e_avg_);
+}
+
+Eigen::Vector3f PrincipledBsdf::Eval(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
+  if (wo.z() <= 0 || wi.z() <= 0) return Eigen::Vector3f::Zero();
+  Eigen::Vector3f f = Specular(wo, wi);
+  if (params_.metallic < 1) {
+    f += (1 - params_.metallic) * params_.base_color * (DiffuseScale(wo.z(), wi.z()) / kPi);
+  }
+  return f;
+}
+
+float PrincipledBsdf::SpecularProbability(float mu_o) const {
+  if (params_.specular <= 0 && params_.metallic <= 0) return 0;
+  if (params_.metallic >= 1) return 1;
+  const float r = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));
+  const AlbedoTable& t = Table();
+  const float a = Lookup(t.a, r, mu_o), b = Lookup(t.b, r, mu_o);
+  const float e_dielectric = params_.specular > 0 ? dielectric_f0_ * a + b : 0;
+  const float m = params_.metallic;
+  const float specular = m * (Luminance(params_.base_color) * a + b) + (1 - m) * e_dielectric;
+  const float diffuse = (1 - m) * Luminance(params_.base_color) * (1 - e_dielectric);
+  if (specular + diffuse <= 0) return 0.5f;
+  return std::clamp(specular / (specular + diffuse), 0.1f, 0.9f);
+}
+
+float PrincipledBsdf::SpecularPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
+  const Eigen::Vector3f h = (wo + wi).normalized();
+  const float o_h = wo.dot(h);
+  if (o_h <= 0) return 0;
+  const float g1 = 1 / (1 + GgxLambda(wo, alpha_x_, alpha_y_));
+  const float d_visible = g1 * o_h * GgxD(h, alpha_x_, alpha_y_) / wo.z();
+  return d_visible / (4 * o_h);
+}
+
+float PrincipledBsdf::Pdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
+  if (wo.z() <= 0 || wi.z() <= 0) return 0;
+  const float p = SpecularProbability(wo.z());
+  return p * SpecularPdf(wo, wi) + (1 - p) * wi.z() / kPi;
+}
+
+std::optional<PrincipledBsdf::Sampled> PrincipledBsdf::Sample(const Eigen::Vector3f& wo,
+                                                              float u_lobe,
+                                                              const Eigen::Vector2f& u) const {
+  if (wo.z() <= 0) return std::nullopt;
+  Sampled s;
+  if (u_lobe < SpecularProbability(wo.z())) {
+    s.wi = Reflect(wo, SampleVisibleNormal(wo, alpha_x_, alpha_y_, u));
+  } else {  // cosine-weighted
+    const float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
+    s.wi =
+        Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x())));
+  }
+  if (s.wi.z() <= 0) return std::nullopt;
+  s.pdf = Pdf(wo, s.wi);
+  if (!(s.pdf > 0)) return std::nullopt;
+  s.weight = Eval(wo, s.wi) * (s.wi.z() / s.pdf);
+  return s;
+}
+
+}  // namespace cadsynth

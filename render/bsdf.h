@@ -1,0 +1,75 @@
+// The surface model of the physically based mode (issue 15): the subset of Blender's Principled
+// BSDF that industrial parts need, base colour, metallic, roughness, specular and anisotropy.
+// Specular: anisotropic GGX (Trowbridge-Reitz) microfacets with height-correlated Smith masking
+// and Schlick's Fresnel, sampled by visible normals (Heitz 2018). Diffuse: Lambert, coupled to the
+// specular layer so that energy is conserved exactly (Kelemen and Szirmay-Kalos 2001): what the
+// specular layer does not reflect at either direction goes to the diffuse layer,
+//   f_d = (1 - metallic) base / pi * (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg),
+// where E(mu) is the dielectric specular layer's directional albedo. So a white dielectric
+// reflects all light at every angle and roughness (its white furnace test), a metal loses what
+// single-scattering GGX loses at high roughness, and nothing ever reflects more than it receives.
+//
+// Directions are unit vectors in the local shading frame: normal +z, tangent +x (the brushing
+// direction of anisotropic metal). All colours are linear RGB.
+#pragma once
+
+#include <optional>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace cadsynth {
+
+struct PrincipledParams {
+  Eigen::Vector3f base_color = Eigen::Vector3f::Constant(0.8f);  // linear RGB in [0, 1]
+  float metallic = 0.0f;                                         // [0, 1]
+  float roughness = 0.5f;    // [0, 1], perceptual: GGX alpha = roughness^2 (as Blender)
+  float specular = 0.5f;     // [0, 1]: dielectric F0 = 0.08 specular (0.5: IOR 1.5); 0: no layer
+  float anisotropic = 0.0f;  // [0, 1): longer highlights along the tangent (brushed metal)
+};
+
+class PrincipledBsdf {
+ public:
+  explicit PrincipledBsdf(const PrincipledParams& params);
+
+  // f(wo, wi) in 1/sr (no cosine); zero unless both directions are above the surface.
+  Eigen::Vector3f Eval(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
+  // The density (1/sr) with which Sample picks wi for wo.
+  float Pdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
+
+  struct Sampled {
+    Eigen::Vector3f wi;
+    Eigen::Vector3f weight;  // f(wo, wi) cos(wi) / pdf
+    float pdf = 0;
+  };
+  // A direction for wo from three uniform numbers in [0, 1): u_lobe chooses diffuse or specular
+  // (in proportion to their expected reflectance), u the direction. Nothing below the surface.
+  std::optional<Sampled> Sample(const Eigen::Vector3f& wo, float u_lobe,
+                                const Eigen::Vector2f& u) const;
+
+  float alpha_x() const { return alpha_x_; }
+  float alpha_y() const { return alpha_y_; }
+
+ private:
+  Eigen::Vector3f Specular(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
+  float SpecularPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
+  float DiffuseScale(float mu_o, float mu_i) const;
+  float SpecularProbability(float mu_o) const;
+
+  PrincipledParams params_;
+  float alpha_x_, alpha_y_;
+  float dielectric_f0_;  // 0.08 specular; specular 0: no dielectric layer at all (pure Lambert)
+  float e_avg_;          // cosine-weighted average of the dielectric layer's albedo E(mu)
+};
+
+// The GGX pieces, exposed for tests: the distribution of normals D(m) (1/sr), Smith's Lambda(w)
+// and the masking G1(w) = 1 / (1 + Lambda(w)).
+float GgxD(const Eigen::Vector3f& m, float alpha_x, float alpha_y);
+float GgxLambda(const Eigen::Vector3f& w, float alpha_x, float alpha_y);
+
+// Directional albedo of a GGX layer with Schlick Fresnel of reflectance F0 at normal incidence,
+// E(mu; alpha, F0) = F0 A(mu, alpha) + B(mu, alpha) (Schlick's Fresnel is linear in F0); A and B
+// come from a table integrated once (32 x 32, interpolated). Isotropic alpha.
+float GgxAlbedo(float mu, float alpha, float f0);
+
+}  // namespace cadsynth

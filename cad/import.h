@@ -50,4 +50,10 @@ Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad);
 // Multiplies every length of the assembly by `factor` (meshes, placements, mass properties).
 void ScaleAssembly(Assembly* assembly, double factor);
 
+namespace internal {
+// What assimp's error string `why` says about `file`, in plain words (ReadMesh's errors; here
+// for tests).
+std::string PlainAssimpError(std::string why, const std::string& file);
+}  // namespace internal
+
 }  // namespace cadsynth

@@ -61,29 +61,6 @@ std::string ReadBytes(const std::filesystem::path& path) {
   return bytes;
 }
 
-// What assimp's error says about the file, in plain words and short: its wording for the common
-// cases ("all meshes are orphaned", "No suitable reader found for the file format of file ...")
-// explains nothing to someone who did not write assimp.
-std::string PlainAssimpError(std::string why, const std::string& file) {
-  const auto has = [&](const char* text) { return why.find(text) != std::string::npos; };
-  if (why.empty()) return "the file holds no complete scene";
-  if (has("orphaned")) return "its meshes are not placed in its scene (no node uses them)";
-  if (has("No meshes remaining")) return "the file holds no triangles (only points or lines?)";
-  if (has("No suitable reader")) return "not a file of the format its extension names";
-  if (has("Unable to open")) return "cannot open the file";
-  if (has("too small") || has("nexpected end") || has("EOF") || has("end of file"))
-    return "the file ends too early (cut short?)";
-  // Otherwise assimp's own words, without its format prefix or the file's path.
-  for (size_t at = why.find(file); at != std::string::npos; at = why.find(file, at))
-    why.replace(at, file.size(), std::filesystem::path(file).filename().string());
-  const size_t colon = why.find(": ");
-  if (colon != std::string::npos && colon < 12 &&
-      why.substr(0, colon).find(' ') == std::string::npos)
-    why = why.substr(colon + 2);
-  if (why.size() > 200) why = why.substr(0, 200) + "...";
-  return why;
-}
-
 // Refuses a file whose first bytes (or, for 3MF, last bytes) do not have its format's signature:
 // assimp's 3MF reader ran for more than 10 minutes on 3 kB of noise, and the other readers are
 // spared bytes they cannot make sense of.
@@ -141,8 +118,8 @@ Mesh ReadWithAssimp(const std::string& file, std::optional<Eigen::Vector3f>* col
                          aiProcess_PreTransformVertices | aiProcess_SortByPType;
   const aiScene* scene = importer.ReadFile(file, flags);
   if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
-    throw Error(file +
-                ": not a readable mesh: " + PlainAssimpError(importer.GetErrorString(), file));
+    throw Error(file + ": not a readable mesh: " +
+                internal::PlainAssimpError(importer.GetErrorString(), file));
   }
 
   Mesh mesh;
@@ -183,6 +160,34 @@ Mesh ReadWithAssimp(const std::string& file, std::optional<Eigen::Vector3f>* col
 }
 
 }  // namespace
+
+namespace internal {
+
+// What assimp's error says about the file, in plain words and short: its wording for the common
+// cases ("all meshes are orphaned", "No suitable reader found for the file format of file ...")
+// explains nothing to someone who did not write assimp.
+std::string PlainAssimpError(std::string why, const std::string& file) {
+  const auto has = [&](const char* text) { return why.find(text) != std::string::npos; };
+  if (why.empty()) return "the file holds no complete scene";
+  if (has("orphaned")) return "its meshes are not placed in its scene (no node uses them)";
+  if (has("No meshes remaining")) return "the file holds no triangles (only points or lines?)";
+  if (has("No suitable reader")) return "not a file of the format its extension names";
+  if (has("Unable to open")) return "cannot open the file";
+  if (has("too small") || has("nexpected end") || has("EOF") || has("end of file"))
+    return "the file ends too early (cut short?)";
+  // Otherwise assimp's own words, without its format prefix or the file's path.
+  const std::string name = std::filesystem::path(file).filename().string();
+  for (size_t at = why.find(file); at != std::string::npos; at = why.find(file, at + name.size()))
+    why.replace(at, file.size(), name);
+  const size_t colon = why.find(": ");
+  if (colon != std::string::npos && colon < 12 &&
+      why.substr(0, colon).find(' ') == std::string::npos)
+    why = why.substr(colon + 2);
+  if (why.size() > 200) why = why.substr(0, 200) + "...";
+  return why;
+}
+
+}  // namespace internal
 
 Assembly ReadMesh(const std::filesystem::path& path, double crease_angle_rad) {
   const std::string file = path.string();

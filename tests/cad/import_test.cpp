@@ -373,6 +373,13 @@ TEST(Import, LibraryFailuresAreSaidInPlainWords) {
             "a curve or surface that cannot be built from its numbers");
   EXPECT_EQ(internal::PlainFailure(Standard_DomainError("the surface is not closed")),
             "the surface is not closed");
+  EXPECT_EQ(internal::PlainAssimpError("all meshes are orphaned", "a.dae"),
+            "its meshes are not placed in its scene (no node uses them)");
+  // The file's path is shortened to its name, also when the two are the same (it looped).
+  EXPECT_EQ(internal::PlainAssimpError("OBJ: bad face in part.obj, part.obj", "part.obj"),
+            "bad face in part.obj, part.obj");
+  EXPECT_EQ(internal::PlainAssimpError("XML: cannot parse /data/x/part.dae", "/data/x/part.dae"),
+            "cannot parse part.dae");
   ScratchDir dir;
   std::ofstream(dir / "lines.obj") << "v 0 0 0\nv 1 0 0\nl 1 2\n";
   EXPECT_EQ(ErrorOf(dir / "lines.obj"),

@@ -1,5 +1,5 @@
 // The committed fuzz corpus (tests/fuzz_corpus/TARGET/: seeds written by hand or by our own code,
-// and every input a fuzzer found a crash with) replayed through the fuzz targets of
+// and an input of each crash a fuzzer found) replayed through the fuzz targets of
 // tools/fuzz/targets.h in this build; a crash, a sanitizer report or an exception other than
 // cadsynth::Error fails the test. Inputs of third-party readers go through `cadsynth inspect`.
 #include <sys/wait.h>

@@ -587,6 +587,24 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     files.Write(normal_path, EncodePng(normals, normal_path));
   }
 
+  if (!frame.radiance.empty()) {  // pbr with hdr: linear radiance as 32-bit float EXR
+    CreateFolder(scene_dir_ / "rgb_hdr");
+    cv::Mat radiance(h, w, CV_32FC3);
+    for (int v = 0; v < h; ++v) {
+      auto* row = radiance.ptr<cv::Vec3f>(v);
+      for (int u = 0; u < w; ++u) {
+        const float* c = &frame.radiance[3 * (static_cast<size_t>(v) * w + u)];
+        row[u] = cv::Vec3f(c[2], c[1], c[0]);  // BGR
+      }
+    }
+    const std::filesystem::path hdr_path = scene_dir_ / "rgb_hdr" / (im + ".exr");
+    std::vector<uchar> bytes;
+    if (!cv::imencode(".exr", radiance, bytes, {cv::IMWRITE_EXR_TYPE, cv::IMWRITE_EXR_TYPE_FLOAT}))
+      throw Error(hdr_path.string() + ": EXR encoding failed");
+    files.Write(hdr_path,
+                std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  }
+
   Json camera_entry, gt_entry = Json::array(), gt_info_entry = Json::array();
   const Eigen::Isometry3d cam_from_world = frame.camera.world_from_cam.inverse();
   Json k = Json::array();

@@ -16,6 +16,7 @@
 #include "cad/units.h"
 #include "cad/util.h"
 #include "recipes/units.h"
+#include "render/image.h"
 #include "variants/families.h"
 
 namespace cadsynth {
@@ -658,6 +659,279 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.Check(spec->render, node, "render");
 }
 
+// A material: a preset and/or its parameters, and a texture.
+Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
+                      std::vector<std::string> other = {}) {
+  for (const char* k :
+       {"preset", "base_color", "metallic", "roughness", "specular", "anisotropic", "texture"}) {
+    other.emplace_back(k);
+  }
+  r.ExpectMap(node, key, other);
+  Material m;
+  if (node["preset"]) {
+    const std::string name = r.Scalar(node["preset"], key + ".preset");
+    if (!MaterialPreset(name, &m)) {
+      std::string known;
+      for (const std::string& n : MaterialPresetNames()) known += (known.empty() ? "" : ", ") + n;
+      const std::string best = NearestName(name, MaterialPresetNames());
+      r.Fail(node["preset"], key + ".preset",
+             "unknown material '" + name + "'" +
+                 (best.empty() ? "" : " (did you mean '" + best + "'?)") + "; known: " + known);
+    }
+  }
+  if (const YAML::Node c = node["base_color"]) {
+    if (c.IsScalar() && c.Scalar() == "cad") {
+      m.base_from_part = true;
+    } else {
+      // Recipe colours are what a colour picker shows (sRGB), as Blender's are.
+      const Eigen::Vector3f srgb = r.Color(c, key + ".base_color");
+      for (int i = 0; i < 3; ++i) m.surface.base_color[i] = SrgbToLinear(srgb[i]);
+      m.base_from_part = false;
+    }
+  }
+  const auto unit = [&](const char* k, float* value, bool open_top = false) {
+    if (!node[k]) return;
+    const double v = r.Number(node[k], key + "." + k);
+    if (v < 0 || v > 1 || (open_top && v >= 1)) {
+      r.Fail(
+          node[k], key + "." + k,
+          std::string("must lie in [0, 1") + (open_top ? ")" : "]") + ", got " + node[k].Scalar());
+    }
+    *value = static_cast<float>(v);
+  };
+  unit("metallic", &m.surface.metallic);
+  unit("roughness", &m.surface.roughness);
+  unit("specular", &m.surface.specular);
+  unit("anisotropic", &m.surface.anisotropic, true);
+  if (const YAML::Node t = node["texture"]) {
+    const std::string tkey = key + ".texture";
+    if (t.IsScalar() && t.Scalar() == "none") {
+      m.texture = Texture{};
+    } else {
+      r.ExpectMap(t, tkey,
+                  {"type", "scale", "amount", "roughness", "bump", "color", "seed", "file"});
+      if (!t["type"]) r.Fail(t, tkey, "a texture needs a 'type'");
+      static const std::vector<std::pair<std::string, Texture::Kind>> kinds = {
+          {"noise", Texture::Kind::kNoise},       {"brushed", Texture::Kind::kBrushed},
+          {"turned", Texture::Kind::kTurned},     {"checker", Texture::Kind::kChecker},
+          {"concrete", Texture::Kind::kConcrete}, {"wood", Texture::Kind::kWood},
+          {"rust", Texture::Kind::kRust},         {"image", Texture::Kind::kImage},
+          {"none", Texture::Kind::kNone}};
+      const std::string type = r.Scalar(t["type"], tkey + ".type");
+      const auto it =
+          std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == type; });
+      if (it == kinds.end()) {
+        r.Fail(t["type"], tkey + ".type",
+               "unknown texture '" + type +
+                   "' (known: noise, brushed, turned, checker, concrete, wood, rust, image, none)");
+      }
+      // A new type starts from that type's defaults, not the preset's texture.
+      if (it->second != m.texture.kind) m.texture = Texture{};
+      m.texture.kind = it->second;
+      if (t["scale"]) {
+        m.texture.scale_mm = r.Length(t["scale"], tkey + ".scale");
+        if (!(m.texture.scale_mm > 0)) r.Fail(t["scale"], tkey + ".scale", "must be positive");
+      }
+      const auto tunit = [&](const char* k, float* value) {
+        if (!t[k]) return;
+        const double v = r.Number(t[k], tkey + "." + k);
+        if (v < 0 || v > 1)
+          r.Fail(t[k], tkey + "." + k, "must lie in [0, 1], got " + t[k].Scalar());
+        *value = static_cast<float>(v);
+      };
+      tunit("amount", &m.texture.amount);
+      tunit("roughness", &m.texture.roughness_amount);
+      tunit("bump", &m.texture.bump);
+      if (t["color"]) {
+        const Eigen::Vector3f srgb = r.Color(t["color"], tkey + ".color");
+        for (int i = 0; i < 3; ++i) m.texture.color[i] = SrgbToLinear(srgb[i]);
+      }
+      if (t["seed"]) m.texture.seed = static_cast<uint64_t>(r.Integer(t["seed"], tkey + ".seed"));
+      if (m.texture.kind == Texture::Kind::kImage) {
+        if (!t["file"]) r.Fail(t, tkey, "an image texture needs a 'file'");
+        m.texture.image = r.ResolvePath(t["file"], tkey + ".file");
+        try {
+          m.texture.pixels = LoadLinearImage(m.texture.image);
+        } catch (const Error& e) {
+          r.Fail(t["file"], tkey + ".file", e.what());
+        }
+      } else if (t["file"]) {
+        r.Fail(t["file"], tkey + ".file", "only an image texture reads a file");
+      }
+    }
+  }
+  std::string why;
+  if (!m.Check(&why)) r.Fail(node, key, why);
+  return m;
+}
+
+void ReadMaterials(const Reader& r, const YAML::Node& node, RunSpec* spec) {
+  r.ExpectMap(node, "materials", {"floor", "default", "assign"});
+  if (node["floor"]) spec->look.floor_material = ReadMaterial(r, node["floor"], "materials.floor");
+  if (node["default"])
+    spec->default_material = ReadMaterial(r, node["default"], "materials.default");
+  if (const YAML::Node assign = node["assign"]) {
+    if (!assign.IsSequence())
+      r.Fail(assign, "materials.assign",
+             "expected a list of {name|family|file: pattern, preset: ..., ...}");
+    for (size_t i = 0; i < assign.size(); ++i) {
+      const std::string key = "materials.assign[" + std::to_string(i) + "]";
+      const YAML::Node item = assign[i];
+      if (!item.IsMap()) r.ExpectMap(item, key, {});
+      MaterialRule rule;
+      rule.material = ReadMaterial(r, item, key, {"name", "family", "file"});
+      if (item["name"]) rule.name = r.Scalar(item["name"], key + ".name");
+      if (item["family"]) {
+        rule.family = r.Scalar(item["family"], key + ".family");
+        if (FindFamily(rule.family) == nullptr &&
+            rule.family.find_first_of("*?[") == std::string::npos) {
+          std::string known;
+          for (const FamilyInfo& f : Families()) known += (known.empty() ? "" : ", ") + f.name;
+          r.Fail(item["family"], key + ".family",
+                 "unknown family '" + rule.family + "' (known: " + known + ")");
+        }
+      }
+      if (item["file"]) rule.file = r.Scalar(item["file"], key + ".file");
+      if (rule.name.empty() && rule.family.empty() && rule.file.empty())
+        r.Fail(item, key, "say which parts: 'name', 'family' or 'file' (a pattern)");
+      spec->material_rules.push_back(std::move(rule));
+    }
+  }
+}
+
+// A direction as [x, y, z], or towards a `target` point from `position`.
+Eigen::Vector3d ReadAim(const Reader& r, const YAML::Node& node, const std::string& key,
+                        const Eigen::Vector3d& position, const Eigen::Vector3d& fallback) {
+  if (node["direction"] && node["target"])
+    r.Fail(node["target"], key + ".target", "give 'direction' or 'target', not both");
+  if (node["direction"]) {
+    const Eigen::Vector3d d = Triple(r, node["direction"], key + ".direction", false);
+    if (d.norm() == 0) r.Fail(node["direction"], key + ".direction", "must not be zero");
+    return d;
+  }
+  if (node["target"]) {
+    const Eigen::Vector3d d = Triple(r, node["target"], key + ".target", true) - position;
+    if (d.norm() == 0) r.Fail(node["target"], key + ".target", "is the light's own position");
+    return d;
+  }
+  return fallback;
+}
+
+LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::string& key) {
+  if (!node.IsMap()) r.ExpectMap(node, key, {});
+  if (!node["type"]) r.Fail(node, key, "a light needs a 'type': point, spot, rect, disc or sun");
+  const std::string type = r.Scalar(node["type"], key + ".type");
+  LightSource l;
+  using K = LightSource::Kind;
+  std::vector<std::string> keys = {"type", "color"};
+  if (type == "point" || type == "spot") {
+    l.kind = type == "point" ? K::kPoint : K::kSpot;
+    keys.insert(keys.end(), {"position", "power", "radius"});
+    if (l.kind == K::kSpot)
+      keys.insert(keys.end(), {"direction", "target", "spot_size", "spot_blend"});
+  } else if (type == "rect" || type == "disc") {
+    l.kind = type == "rect" ? K::kRect : K::kDisc;
+    keys.insert(keys.end(), {"position", "power", "direction", "target"});
+    if (l.kind == K::kRect) {
+      keys.insert(keys.end(), {"size", "x_axis"});
+    } else {
+      keys.emplace_back("radius");
+    }
+  } else if (type == "sun") {
+    l.kind = K::kSun;
+    keys.insert(keys.end(), {"strength", "direction", "angle"});
+  } else {
+    r.Fail(node["type"], key + ".type",
+           "unknown light '" + type + "' (known: point, spot, rect, disc, sun)");
+  }
+  r.ExpectMap(node, key, keys);
+  if (node["color"]) l.color = r.Color(node["color"], key + ".color");
+  if (node["position"]) l.position = Triple(r, node["position"], key + ".position", true);
+  if (l.kind != K::kPoint) l.direction = ReadAim(r, node, key, l.position, l.direction);
+  const char* amount = l.kind == K::kSun ? "strength" : "power";
+  if (!node[amount]) {
+    r.Fail(node, key,
+           l.kind == K::kSun ? "a sun needs a 'strength' (irradiance, W/m2, as Blender's)"
+                             : "a light needs a 'power' (W, as Blender's)");
+  }
+  l.power = r.Number(node[amount], key + "." + amount);
+  if (l.power < 0) r.Fail(node[amount], key + "." + amount, "must not be negative");
+  if (node["radius"]) {
+    l.radius_mm = r.Length(node["radius"], key + ".radius");
+    if (l.radius_mm < 0) r.Fail(node["radius"], key + ".radius", "must not be negative");
+  } else if (l.kind == K::kDisc) {
+    r.Fail(node, key, "a disc light needs a 'radius'");
+  }
+  if (const YAML::Node size = node["size"]) {
+    if (size.IsScalar()) {
+      l.size_x_mm = l.size_y_mm = r.Length(size, key + ".size");
+    } else if (size.IsSequence() && size.size() == 2) {
+      l.size_x_mm = r.Length(size[0], key + ".size");
+      l.size_y_mm = r.Length(size[1], key + ".size");
+    } else {
+      r.Fail(size, key + ".size", "expected a length or [x, y]");
+    }
+  }
+  if (node["x_axis"]) l.x_axis = Triple(r, node["x_axis"], key + ".x_axis", false);
+  if (node["spot_size"]) l.spot_size_rad = r.Angle(node["spot_size"], key + ".spot_size");
+  if (node["spot_blend"]) l.spot_blend = r.Number(node["spot_blend"], key + ".spot_blend");
+  if (node["angle"]) l.angle_rad = r.Angle(node["angle"], key + ".angle");
+  r.Check(l, node, key);
+  return l;
+}
+
+void ReadLighting(const Reader& r, const YAML::Node& node, RunSpec* spec) {
+  r.ExpectMap(node, "lighting", {"lights", "environment"});
+  if (const YAML::Node lights = node["lights"]) {
+    if (!lights.IsSequence())
+      r.Fail(lights, "lighting.lights", "expected a list of {type: point|spot|rect|disc|sun, ...}");
+    spec->look.light_sources.clear();
+    for (size_t i = 0; i < lights.size(); ++i) {
+      spec->look.light_sources.push_back(
+          ReadLightSource(r, lights[i], "lighting.lights[" + std::to_string(i) + "]"));
+    }
+  }
+  if (const YAML::Node env = node["environment"]) {
+    const std::string key = "lighting.environment";
+    Environment& e = spec->look.environment;
+    if (!env.IsMap()) r.ExpectMap(env, key, {});
+    const std::string type = env["type"] ? r.Scalar(env["type"], key + ".type") : "uniform";
+    if (type == "uniform") {
+      e.kind = Environment::Kind::kUniform;
+      r.ExpectMap(env, key, {"type", "color", "strength"});
+    } else if (type == "sky") {
+      e.kind = Environment::Kind::kSky;
+      r.ExpectMap(env, key, {"type", "zenith", "horizon", "ground", "strength"});
+    } else if (type == "image") {
+      e.kind = Environment::Kind::kImage;
+      r.ExpectMap(env, key, {"type", "file", "strength", "rotation"});
+      if (!env["file"]) r.Fail(env, key, "an image environment needs a 'file' (HDR, EXR, ...)");
+    } else {
+      r.Fail(env["type"], key + ".type",
+             "unknown environment '" + type + "' (known: uniform, sky, image)");
+    }
+    // Environment colours are linear radiance multipliers (Blender's world colour).
+    if (env["color"]) e.color = r.Color(env["color"], key + ".color");
+    if (env["zenith"]) e.zenith = r.Color(env["zenith"], key + ".zenith");
+    if (env["horizon"]) e.horizon = r.Color(env["horizon"], key + ".horizon");
+    if (env["ground"]) e.ground = r.Color(env["ground"], key + ".ground");
+    if (env["strength"]) {
+      e.strength = static_cast<float>(r.Number(env["strength"], key + ".strength"));
+      if (e.strength < 0) r.Fail(env["strength"], key + ".strength", "must not be negative");
+    }
+    if (env["rotation"]) e.rotation_rad = r.Angle(env["rotation"], key + ".rotation");
+    if (env["file"]) {
+      e.image = r.ResolvePath(env["file"], key + ".file");
+      try {
+        e.pixels = LoadLinearImage(e.image);
+      } catch (const Error& err) {
+        r.Fail(env["file"], key + ".file", err.what());
+      }
+    }
+    r.Check(e, env, key);
+  }
+}
+
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   ReadFields(r, node, "output", &spec->bop, {"dir", "formats", "rgb"});
   // Keys that depend on others.
@@ -796,7 +1070,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   try {
     r.ExpectMap(root, "",
                 {"parts", "scene", "scenes", "classes", "tessellation", "camera", "sweep", "render",
-                 "output", "limits"});
+                 "materials", "lighting", "output", "limits"});
     if (root["scenes"] && (root["parts"] || root["scene"])) {
       r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
     }
@@ -830,6 +1104,10 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
     if (root["camera"]) ReadCamera(r, root["camera"], &spec);
     if (root["sweep"]) ReadSweep(r, root["sweep"], &spec);
     if (root["render"]) ReadRender(r, root["render"], &spec);
+    // The default floor material follows the floor colour unless the recipe gives one.
+    spec.look.floor_material = Scene::DefaultFloorMaterial(spec.look.floor_color);
+    if (root["materials"]) ReadMaterials(r, root["materials"], &spec);
+    if (root["lighting"]) ReadLighting(r, root["lighting"], &spec);
     if (root["output"]) ReadOutput(r, root["output"], &spec);
     if (root["limits"]) {
       ReadFields(r, root["limits"], "limits", &spec.limits, {});

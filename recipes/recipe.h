@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,14 @@ struct RunLimits {
   }
 };
 
+// The physically based mode's material for the parts a rule matches: by part name, by the family
+// that built them or by the file they came from (shell globs, case-insensitive; an empty pattern
+// matches anything). A part takes the material of the first rule that matches all given patterns.
+struct MaterialRule {
+  std::string name, family, file;
+  Material material;
+};
+
 // Everything one run needs, each module's options filled in.
 struct RunSpec {
   std::filesystem::path recipe;  // empty for the built-in default job
@@ -86,8 +95,13 @@ struct RunSpec {
   SweepOptions sweep;
   ViewSampler sampler;         // kGrid: the sweep as listed
   int min_visible_pixels = 0;  // skip views where fewer object pixels are visible (0: keep all)
-  Scene look;                  // floor, colours and lights (its instances are filled in by the run)
-  bool cad_colors = true;      // colours from the CAD files where they have them, else the palette
+  // Floor, colours and lights of both modes, floor material, light sources and environment of the
+  // pbr mode (its instances are filled in by the run).
+  Scene look;
+  std::vector<MaterialRule> material_rules;  // pbr: materials of parts, first match wins
+  // pbr: parts no rule matches; unset: a dielectric of the part's colour (Scene::DefaultMaterial).
+  std::optional<Material> default_material;
+  bool cad_colors = true;  // colours from the CAD files where they have them, else the palette
   RenderOptions render;
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides

@@ -20,6 +20,9 @@ struct Frame {
   std::vector<float> depth;        // z in the camera frame, mm; 0 = no return
   std::vector<uint16_t> instance;  // visible instance: index in Scene::instances + 1; 0 = none
   std::vector<Eigen::Vector3f> normals;  // RenderOptions::normals: unit, camera frame; 0 = none
+  // RenderOptions::hdr: 3 floats per pixel; pbr mode: linear radiance, W/(m^2 sr), before
+  // exposure; fast mode: the colour before rounding. Empty otherwise.
+  std::vector<float> radiance;
 
   struct InstanceTruth {
     Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();

@@ -10,6 +10,8 @@
 #include <tbb/parallel_for.h>
 
 #include "cad/error.h"
+#include "render/image.h"
+#include "render/path_tracer.h"
 
 namespace cadsynth {
 
@@ -51,6 +53,14 @@ bool RenderOptions::Check(std::string* why) const {
   } else if (std::find(std::begin(kIsas), std::end(kIsas), isa) == std::end(kIsas) &&
              isa != "auto") {
     *why = "isa must be auto, sse2, sse4.2, avx, avx2 or avx512, got '" + isa + "'";
+  } else if (samples < 1 || samples > 65536) {
+    *why = "samples must be 1 to 65536 paths per pixel";
+  } else if (bounces < 0 || bounces > 64) {
+    *why = "bounces must be 0 to 64";
+  } else if (!(exposure >= -20 && exposure <= 20)) {
+    *why = "exposure must lie between -20 and 20 stops";
+  } else if (mode == Mode::kPbr && supersampling != 1) {
+    *why = "supersampling is for the fast mode; pbr samples each pixel `samples` times";
   } else {
     return true;
   }
@@ -102,6 +112,7 @@ struct Renderer::Impl {
   // Colours and normals of a traced packet's lanes: ambient plus every light it sees.
   void ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const;
   unsigned floor_id = kInvalid;
+  std::unique_ptr<PathTracer> tracer;  // RenderOptions::Mode::kPbr
 
   ~Impl() {
     for (RTCScene s : solo) rtcReleaseScene(s);
@@ -237,6 +248,47 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     im.solo.push_back(alone);
   }
   im.ThrowIfFailed("building the scene");
+
+  if (options.mode == RenderOptions::Mode::kPbr) {
+    PathTracerScene pts;
+    pts.world = im.world;
+    pts.floor_id = im.floor_id;
+    pts.bounces = options.bounces;
+    pts.near_mm = static_cast<float>(options.near_mm);
+    pts.far_mm = static_cast<float>(options.far_mm);
+    pts.floor = scene.floor_material;
+    pts.lights = scene.light_sources;
+    pts.environment = scene.environment;
+    for (size_t i = 0; i < scene.instances.size(); ++i) {
+      const Instance& instance = scene.instances[i];
+      const PartBuffers& buffers = im.parts[static_cast<size_t>(instance.part)];
+      TracedInstance ti;
+      ti.indices = buffers.indices.data();
+      ti.normals = buffers.normals.data();
+      ti.rotation = im.instance_rotation[i];
+      ti.translation = instance.world_from_model.translation().cast<float>();
+      const int m = i < scene.instance_material.size() ? scene.instance_material[i] : -1;
+      if (m >= static_cast<int>(scene.materials.size()))
+        throw Error("renderer: instance '" + instance.name + "' refers to a missing material");
+      // Part colours are sRGB (CAD files and the palette); materials take linear colours.
+      ti.material = m < 0 ? Scene::DefaultMaterial(im.albedo_of[i]) : scene.materials[m];
+      if (ti.material.base_from_part) {
+        for (int c = 0; c < 3; ++c)
+          ti.material.surface.base_color[c] = SrgbToLinear(im.albedo_of[i][c]);
+      }
+      pts.instances.push_back(std::move(ti));
+    }
+    std::string why;
+    for (const Material& m : scene.materials) {
+      if (!m.Check(&why)) throw Error("renderer: material: " + why);
+    }
+    if (!scene.floor_material.Check(&why)) throw Error("renderer: floor material: " + why);
+    for (const LightSource& l : scene.light_sources) {
+      if (!l.Check(&why)) throw Error("renderer: light: " + why);
+    }
+    if (!scene.environment.Check(&why)) throw Error("renderer: environment: " + why);
+    im.tracer = std::make_unique<PathTracer>(std::move(pts));
+  }
 }
 
 Renderer::~Renderer() = default;
@@ -465,7 +517,7 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
   }
 }
 
-Frame Renderer::Render(const Camera& camera) const {
+Frame Renderer::Render(const Camera& camera, uint64_t view) const {
   const Impl& im = *impl_;
   const Intrinsics& k = camera.intrinsics;
   std::string why;
@@ -480,6 +532,11 @@ Frame Renderer::Render(const Camera& camera) const {
   frame.depth.assign(num_pixels, 0.0f);
   frame.instance.assign(num_pixels, 0);
   if (o.normals) frame.normals.assign(num_pixels, Eigen::Vector3f::Zero());
+  const bool pbr = im.tracer != nullptr;
+  if (o.hdr) frame.radiance.assign(3 * num_pixels, 0.0f);
+  const uint64_t frame_seed = FrameSeed(o.seed, view);
+  const float exposure_scale = static_cast<float>(std::exp2(o.exposure));
+  const bool filmic = o.view == RenderOptions::View::kFilmic;
 
   const RayGen gen(camera.world_from_cam.linear().cast<float>(),
                    camera.world_from_cam.translation().cast<float>(), &k);
@@ -545,7 +602,7 @@ Frame Renderer::Render(const Camera& camera) const {
           // views, also with robust scenes.
           trace(tile, &context, valid, &rh);
           Eigen::Vector3f color[16];
-          if (o.shade && (ss == 1 || o.normals)) im.ShadePacket(rh, valid, shaded);
+          if (o.shade && ((ss == 1 && !pbr) || o.normals)) im.ShadePacket(rh, valid, shaded);
           for (int j = 0; j < 16; ++j) {
             if (!valid[j]) continue;
             const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
@@ -555,7 +612,20 @@ Frame Renderer::Render(const Camera& camera) const {
               if (inst != kInvalid) frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
               if (o.normals) frame.normals[pixel] = cam_from_world_rotation * shaded[j].normal;
             }
-            color[j] = (ss == 1 && o.shade) ? shaded[j].color : Eigen::Vector3f::Zero();
+            color[j] = (ss == 1 && o.shade && !pbr) ? shaded[j].color : Eigen::Vector3f::Zero();
+          }
+          if (pbr && o.shade) {
+            Eigen::Vector3f radiance[16];
+            im.tracer->TraceTile(camera, u0, v0, o.samples, frame_seed, radiance);
+            for (int j = 0; j < 16; ++j) {
+              if (!valid[j]) continue;
+              const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+              if (o.hdr) {
+                for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[j][c];
+              }
+              for (int c = 0; c < 3; ++c)
+                color[j][c] = DisplayValue(exposure_scale * radiance[j][c], filmic);
+            }
           }
           // Supersampled colour: a regular grid of samples in each pixel.
           for (int sy = 0; o.shade && ss > 1 && sy < ss; ++sy) {
@@ -571,6 +641,9 @@ Frame Renderer::Render(const Camera& camera) const {
             if (!valid[j]) continue;
             const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
             for (int c = 0; c < 3; ++c) frame.rgb[3 * pixel + c] = ToByte(color[j][c]);
+            if (o.hdr && !pbr) {
+              for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = color[j][c];
+            }
           }
         }
       });

@@ -33,6 +33,22 @@ struct RenderOptions {
   // machines that must write the same bytes (the shards of one farm run) must use the same ones.
   std::string isa = "auto";
 
+  // Shading of the colour image: kFast is Lambert with hard shadows (Scene's colours and lights);
+  // kPbr path-traces Scene's materials, light sources and environment (render/path_tracer.h).
+  enum class Mode { kFast, kPbr };
+  Mode mode = Mode::kFast;
+  int samples = 16;       // pbr: paths per pixel
+  int bounces = 3;        // pbr: surface interactions after the first (Blender's max bounces)
+  double exposure = 0.0;  // pbr: stops; the linear value is scaled by 2^exposure
+  // pbr: display transform of the exposed linear value: kStandard clips and encodes sRGB;
+  // kFilmic compresses highlights first (a filmic curve, see path_tracer.h), then encodes sRGB.
+  enum class View { kStandard, kFilmic };
+  View view = View::kFilmic;
+  int seed = 0;  // pbr: the sampler's stream; pixels' samples depend on (seed, view, pixel)
+  // Also keep the colour as floats (Frame::radiance, written as EXR): pbr, the linear radiance
+  // before exposure; fast, the Lambert colour before it is rounded to bytes.
+  bool hdr = false;
+
   bool Check(std::string* why) const;
 
   // Every field, once (cad/schema.h): the recipe's `render:` section, the run key, the shard file.
@@ -48,6 +64,17 @@ struct RenderOptions {
     visit(o.isa,
           Field{"isa", "text",
                 "Embree kernels: auto, sse2, sse4.2, avx, avx2 or avx512 (pin for mixed farms)"});
+    visit(o.mode, Field{"mode",
+                        "choice",
+                        "colour image: fast (Lambert, hard shadows) or pbr (path traced)",
+                        {"fast", "pbr"}});
+    visit(o.samples, Field{"samples", "integer", "pbr: paths per pixel (1-65536)"});
+    visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
+    visit(o.exposure, Field{"exposure", "number", "pbr: exposure in stops (-20 to 20)"});
+    visit(o.view, Field{"view", "choice", "pbr: display transform", {"standard", "filmic"}});
+    visit(o.seed, Field{"seed", "integer", "pbr: sampler seed"});
+    visit(o.hdr,
+          Field{"hdr", "bool", "also write the colour as float EXR (rgb_hdr/; pbr: radiance)"});
     visit(o.shade, Field{"", "bool", "profiling: shade the colour image", {}, true, "shade"});
     visit(o.amodal_masks,
           Field{"", "bool", "profiling: trace the full silhouettes", {}, true, "amodal_masks"});
@@ -72,7 +99,9 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  Frame Render(const Camera& camera) const;
+  // `view` numbers the frame for the path tracer's sampler (the view index of the run), so that
+  // every frame has its own noise and the same view renders the same bytes anywhere.
+  Frame Render(const Camera& camera, uint64_t view = 0) const;
 
  private:
   struct Impl;

@@ -2,7 +2,36 @@
 
 #include <cmath>
 
+#include "render/image.h"
+
 namespace cadsynth {
+
+Material Scene::DefaultMaterial(const Eigen::Vector3f& srgb) {
+  Material m;
+  for (int c = 0; c < 3; ++c) m.surface.base_color[c] = SrgbToLinear(srgb[c]);
+  m.surface.metallic = 0.0f;
+  m.surface.roughness = 0.45f;
+  m.surface.specular = 0.5f;
+  m.base_from_part = true;
+  return m;
+}
+
+Material Scene::DefaultFloorMaterial(const Eigen::Vector3f& srgb) {
+  Material m = DefaultMaterial(srgb);
+  m.surface.roughness = 0.8f;
+  m.base_from_part = false;
+  return m;
+}
+
+std::vector<LightSource> Scene::DefaultLightSources() {
+  LightSource ceiling;
+  ceiling.kind = LightSource::Kind::kRect;
+  ceiling.position = {0.0, 0.0, 2000.0};
+  ceiling.direction = {0.0, 0.0, -1.0};
+  ceiling.size_x_mm = ceiling.size_y_mm = 1000.0;
+  ceiling.power = 150.0;
+  return {ceiling};
+}
 
 Eigen::Vector3f PaletteColor(int index) {
   // Hues spread by the golden angle, fairly saturated, never grey (the floor is grey).

@@ -6,6 +6,8 @@
 #include <Eigen/Core>
 
 #include "cad/part.h"
+#include "render/lights.h"
+#include "render/material.h"
 
 namespace cadsynth {
 
@@ -31,6 +33,23 @@ struct Scene {
   std::vector<Light> lights = {Light{}};
   float ambient = 0.3f;
   bool shadows = true;  // hard shadows: an occlusion ray from every lit point to every light
+
+  // The physically based mode (RenderOptions::mode pbr) shades with these instead of the colours,
+  // lights, ambient and background above. Depth and every label are the same in both modes.
+  // Per instance, an index into `materials`; empty, or -1 for an instance: a plastic-like
+  // dielectric of the instance's colour (DefaultMaterial).
+  std::vector<int> instance_material;
+  std::vector<Material> materials;
+  Material floor_material = DefaultFloorMaterial(floor_color);
+  std::vector<LightSource> light_sources = DefaultLightSources();
+  Environment environment;
+
+  // A dielectric of base colour `srgb` (CAD colours are sRGB), roughness 0.45, specular 0.5.
+  static Material DefaultMaterial(const Eigen::Vector3f& srgb);
+  static Material DefaultFloorMaterial(const Eigen::Vector3f& srgb);
+  // A work cell's ceiling light: a 1 m x 1 m rect light 2 m above the origin facing down, 150 W
+  // (the floor under it receives 150 / (pi 2^2) = 11.9 W/m2).
+  static std::vector<LightSource> DefaultLightSources();
 };
 
 // A palette of well-separated colours for parts without a colour of their own.

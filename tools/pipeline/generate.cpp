@@ -194,7 +194,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                           [&](size_t i) {
                             const Camera camera{spec.intrinsics, views[i].world_from_cam};
                             return std::make_pair(
-                                i, std::make_shared<const Frame>(renderer.Render(camera)));
+                                i, std::make_shared<const Frame>(renderer.Render(camera, i)));
                           }) &
                       tbb::make_filter<std::pair<size_t, FramePtr>, void>(
                           tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {

@@ -1,5 +1,7 @@
 #include "tools/pipeline/prepare.h"
 
+#include <fnmatch.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -404,6 +406,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     std::vector<int> obj_ids;
   };
   std::vector<SceneRun> runs(spec.scenes.size());
+  std::vector<bool> used_rules(spec.material_rules.size(), false);
   for (size_t s = 0; s < spec.scenes.size(); ++s) {
     std::vector<Instance> instances;
     std::vector<int> groups;
@@ -414,10 +417,44 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     }
     SceneRun& run = runs[s];
     run.scene = spec.look;
+    Arrangement arranged;
     try {
-      run.scene.instances = Arrange(parts, instances, spec.scenes[s].arrangement, groups).instances;
+      arranged = Arrange(parts, instances, spec.scenes[s].arrangement, groups);
     } catch (const Error& e) {
       throw Error("scene '" + spec.scenes[s].name + "': " + e.what());
+    }
+    run.scene.instances = arranged.instances;
+    // The pbr mode's materials: the first rule matching the part's name, family and file.
+    run.scene.materials.clear();
+    run.scene.instance_material.assign(run.scene.instances.size(), -1);
+    for (const MaterialRule& rule : spec.material_rules)
+      run.scene.materials.push_back(rule.material);
+    if (spec.default_material) run.scene.materials.push_back(*spec.default_material);
+    for (size_t i = 0; i < run.scene.instances.size(); ++i) {
+      const PartSource& source = *jobs[arranged.group[i]].source;
+      const std::string& name = parts[run.scene.instances[i].part].name;
+      const bool from_file = source.kind == PartSource::Kind::kFile;
+      const std::string family = from_file ? "" : source.family;
+      const std::string file = from_file ? source.path.string() : "";
+      const auto matches = [](const std::string& pattern, const std::string& text) {
+        if (pattern.empty()) return true;
+        if (text.empty()) return false;
+        // File patterns without a '/' match the file's name wherever it lies.
+        const std::string subject = pattern.find('/') == std::string::npos
+                                        ? std::filesystem::path(text).filename().string()
+                                        : text;
+        return fnmatch(pattern.c_str(), subject.c_str(), FNM_CASEFOLD) == 0;
+      };
+      for (size_t r = 0; r < spec.material_rules.size(); ++r) {
+        const MaterialRule& rule = spec.material_rules[r];
+        if (matches(rule.name, name) && matches(rule.family, family) && matches(rule.file, file)) {
+          run.scene.instance_material[i] = static_cast<int>(r);
+          used_rules[r] = true;
+          break;
+        }
+      }
+      if (run.scene.instance_material[i] < 0 && spec.default_material)
+        run.scene.instance_material[i] = static_cast<int>(spec.material_rules.size());
     }
     run.scene.part_colors.clear();
     for (size_t i = 0; i < parts.size(); ++i) {
@@ -428,6 +465,9 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       for (Instance& instance : run.scene.instances) instance.color.reset();
     }
     for (const Instance& instance : run.scene.instances) run.obj_ids.push_back(instance.part + 1);
+  }
+  for (size_t r = 0; r < used_rules.size(); ++r) {
+    if (!used_rules[r]) Warn("materials.assign[" + std::to_string(r) + "] matches no part");
   }
   // variants.json: what each file or variant is, and which objects it became.
   Json variants = Json::array();

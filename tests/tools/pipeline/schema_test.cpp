@@ -73,7 +73,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
             17);
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
-            8);
+            15);
   EXPECT_EQ(
       ForEachChange<ArrangementOptions>(
           spec, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; }, check),

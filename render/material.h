@@ -1,0 +1,86 @@
+// Materials of the physically based mode: a Principled surface (render/bsdf.h), named presets for
+// industrial parts, and textures that need no downloads (procedural) or come from image files.
+//
+// Procedural textures are solid: they are functions of the 3D point (the part's model frame, so
+// they stick to the part; the world for the floor), which needs no UVs and leaves no seams. Image
+// textures are projected triplanarly (three axis-aligned projections blended by the normal), as
+// CAD meshes have no UVs. Textures modulate the base colour, the roughness and the normal (bump).
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "render/bsdf.h"
+#include "render/image.h"
+
+namespace cadsynth {
+
+struct Texture {
+  enum class Kind {
+    kNone,
+    kNoise,     // fractal value noise: mottled colour and roughness
+    kBrushed,   // fine streaks along the model x axis (brushed or ground metal)
+    kTurned,    // fine rings about the model z axis (lathe-turned faces)
+    kChecker,   // a 3D checkerboard of `color` and the base colour, cells of `scale`
+    kConcrete,  // speckled, blotchy grey: noise at several scales and pits
+    kWood,      // growth rings about the y axis, distorted by noise
+    kRust,      // `color` (rust by default) blended in where a noise mask exceeds 1 - `amount`
+    kImage,     // an image file (PNG, JPEG, EXR), triplanar with tiles of `scale`
+  };
+  Kind kind = Kind::kNone;
+  double scale_mm = 20.0;  // feature size: noise cell, streak length, checker cell, image tile
+  float amount = 0.3f;     // [0, 1]: how strongly the colour is changed (rust: covered fraction)
+  float roughness_amount = 0.2f;               // [0, 1]: roughness varies by up to this much
+  float bump = 0.0f;                           // [0, 1]: normal perturbation (0: flat)
+  Eigen::Vector3f color{0.35f, 0.12f, 0.04f};  // second colour (checker, rust, wood), linear
+  uint64_t seed = 0;                           // pattern variant
+  std::filesystem::path image;                 // kImage
+  std::shared_ptr<const LinearImage> pixels;   // kImage: the file's pixels, once read
+};
+
+struct Material {
+  PrincipledParams surface;
+  Texture texture;
+  // The base colour comes from the part's CAD colour (or the palette) rather than `surface`:
+  // presets of paints and plastics do, metals do not (their colour is the metal's).
+  bool base_from_part = false;
+
+  bool Check(std::string* why) const;
+};
+
+// The presets, linear base colours from measured reflectances of the metals (F0) and typical
+// roughness of machined or moulded surfaces: steel, stainless (brushed), aluminium, brass,
+// cast_iron, black_oxide, painted, abs, nylon, rubber, and for floors and tables: concrete, wood,
+// plastic_sheet, rubber_mat. False for an unknown name.
+bool MaterialPreset(const std::string& name, Material* material);
+std::vector<std::string> MaterialPresetNames();
+
+// What a texture does at one point: multiply the base colour, add to the roughness, tilt the
+// normal (a vector in the tangent plane to add to the unit normal before normalising).
+struct TextureSample {
+  Eigen::Vector3f color_scale = Eigen::Vector3f::Ones();
+  Eigen::Vector3f color_mix = Eigen::Vector3f::Zero();  // blended in by `mix`
+  float mix = 0.0f;
+  float roughness_offset = 0.0f;
+  Eigen::Vector3f normal_offset = Eigen::Vector3f::Zero();
+};
+
+// Evaluates `texture` at point `p` (mm) with unit normal `n`, both in the texture's frame.
+// `image` is the loaded image for kImage (else ignored).
+TextureSample EvalTexture(const Texture& texture, const Eigen::Vector3f& p,
+                          const Eigen::Vector3f& n, const LinearImage* image);
+
+// Applies a texture sample to a surface: the modulated parameters, clamped to their ranges.
+PrincipledParams ApplyTexture(const PrincipledParams& surface, const TextureSample& sample);
+
+// 3D value noise in [0, 1], smooth (C1), period-free; `seed` picks the pattern.
+float ValueNoise(const Eigen::Vector3f& p, uint64_t seed);
+// Fractal sum of `octaves` value noises, each twice the frequency and half the amplitude, in [0,
+// 1].
+float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed);
+
+}  // namespace cadsynth

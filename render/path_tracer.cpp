@@ -1,0 +1,704 @@
+#include "render/path_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "cad/error.h"
+#include "render/bsdf.h"
+#include "render/sampling.h"
+
+namespace cadsynth {
+
+namespace {
+
+constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+// Powers meet lengths here: a light's numbers are per m^2, the scene's lengths are mm.
+constexpr float kMm2PerM2 = 1e6f;
+
+float Luminance(const Eigen::Vector3f& c) {
+  return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
+
+// 1 - cos(theta) for sin^2(theta) = s2, without cancellation for small angles.
+float OneMinusCos(float s2) { return s2 / (1 + std::sqrt(std::max(0.0f, 1 - s2))); }
+
+float SmoothStep01(float t) {
+  t = std::clamp(t, 0.0f, 1.0f);
+  return t * t * (3 - 2 * t);
+}
+
+// A light ready for sampling from points of the scene (mm, float).
+struct PreparedLight {
+  LightSource::Kind kind;
+  bool delta = false;
+  Eigen::Vector3f position, normal;  // normal: the side it shines to (rect, disc); spot axis
+  Eigen::Vector3f axis_u, axis_v;    // rect: half sides; disc: unit axes of its plane
+  float radius = 0, area = 0;        // sphere or disc radius; rect or disc area (mm^2)
+  Eigen::Vector3f radiance = Eigen::Vector3f::Zero();  // W/(m^2 sr), for area-like lights
+  // Delta lights: point and spot intensity times 1e6 (irradiance = intensity / d_mm^2); the
+  // parallel sun's irradiance.
+  Eigen::Vector3f intensity = Eigen::Vector3f::Zero();
+  float cos_half_spot = -1, spot_smooth = 0;  // spot mask
+  Eigen::Vector3f to_sun;                     // sun: unit, towards it
+  float sun_cos_max = 1, sun_one_minus_cos = 0;
+
+  // The spot's mask for light leaving its centre along unit direction `out`.
+  float Spot(const Eigen::Vector3f& out) const {
+    if (kind != LightSource::Kind::kSpot) return 1.0f;
+    const float c = out.dot(normal);
+    if (c <= cos_half_spot) return 0.0f;
+    return spot_smooth > 0 ? SmoothStep01((c - cos_half_spot) / spot_smooth) : 1.0f;
+  }
+};
+
+PreparedLight Prepare(const LightSource& s) {
+  PreparedLight l;
+  l.kind = s.kind;
+  l.position = s.position.cast<float>();
+  const Eigen::Vector3f color = s.color;
+  const float power = static_cast<float>(s.power);
+  l.normal = s.direction.normalized().cast<float>();
+  using K = LightSource::Kind;
+  switch (s.kind) {
+    case K::kPoint:
+    case K::kSpot: {
+      l.radius = static_cast<float>(s.radius_mm);
+      if (l.radius > 0) {
+        // A sphere of radiance P / (4 pi^2 r^2): its intensity seen from afar is P / (4 pi).
+        l.radiance = color * power * kMm2PerM2 / (4 * kPiF * kPiF * l.radius * l.radius);
+      } else {
+        l.delta = true;
+        l.intensity = color * power * kMm2PerM2 / (4 * kPiF);
+      }
+      const double half = 0.5 * s.spot_size_rad;
+      l.cos_half_spot = static_cast<float>(std::cos(half));
+      l.spot_smooth = static_cast<float>((1 - std::cos(half)) * s.spot_blend);
+      break;
+    }
+    case K::kRect:
+    case K::kDisc: {
+      Eigen::Vector3f x = s.x_axis.cast<float>();
+      x -= x.dot(l.normal) * l.normal;
+      if (x.norm() < 1e-3f) {
+        x = Eigen::Vector3f::UnitY() - l.normal.y() * l.normal;
+        if (x.norm() < 1e-3f) x = Eigen::Vector3f::UnitX() - l.normal.x() * l.normal;
+      }
+      x.normalize();
+      const Eigen::Vector3f y = l.normal.cross(x);
+      if (s.kind == K::kRect) {
+        l.axis_u = x * static_cast<float>(0.5 * s.size_x_mm);
+        l.axis_v = y * static_cast<float>(0.5 * s.size_y_mm);
+        l.area = static_cast<float>(s.size_x_mm * s.size_y_mm);
+      } else {
+        l.axis_u = x;
+        l.axis_v = y;
+        l.radius = static_cast<float>(s.radius_mm);
+        l.area = kPiF * l.radius * l.radius;
+      }
+      // A one-sided Lambertian emitter of power P: L = P / (pi A).
+      l.radiance = color * power * kMm2PerM2 / (kPiF * l.area);
+      break;
+    }
+    case K::kSun: {
+      l.to_sun = -l.normal;
+      const double half = 0.5 * s.angle_rad;
+      if (half > 0) {
+        const double sin_half = std::sin(half);
+        l.sun_cos_max = static_cast<float>(std::cos(half));
+        l.sun_one_minus_cos = static_cast<float>(1 - std::cos(half));
+        if (l.sun_one_minus_cos <= 0) l.sun_one_minus_cos = static_cast<float>(0.5 * half * half);
+        // A disc of uniform radiance L and angular radius a gives E = pi L sin^2(a) facing it.
+        l.radiance = color * static_cast<float>(s.power / (M_PI * sin_half * sin_half));
+      } else {
+        l.delta = true;
+        l.intensity = color * power;
+      }
+      break;
+    }
+  }
+  return l;
+}
+
+struct LightSample {
+  Eigen::Vector3f wi;
+  float distance = kInf;  // to the emitting point (shadow ray length)
+  Eigen::Vector3f value;  // radiance, or for delta lights the irradiance normal to wi
+  float pdf = 1;          // solid angle density (1 for delta lights)
+};
+
+// Samples a direction towards `l` from point p. False when the light cannot reach p.
+bool SampleLight(const PreparedLight& l, const Eigen::Vector3f& p, const Eigen::Vector2f& u,
+                 LightSample* out) {
+  using K = LightSource::Kind;
+  switch (l.kind) {
+    case K::kPoint:
+    case K::kSpot: {
+      const Eigen::Vector3f d = l.position - p;
+      const float d2 = d.squaredNorm();
+      const float dist = std::sqrt(d2);
+      if (!(dist > 0)) return false;
+      const Eigen::Vector3f to_light = d / dist;
+      const float spot = l.Spot(-to_light);
+      if (spot <= 0) return false;
+      if (l.delta) {
+        out->wi = to_light;
+        out->distance = dist;
+        out->value = l.intensity * (spot / d2);
+        out->pdf = 1;
+        return true;
+      }
+      const float s2 = l.radius * l.radius / d2;
+      if (s2 >= 1) return false;  // inside the sphere
+      const float one_minus_cos = OneMinusCos(s2);
+      Eigen::Vector3f t, b;
+      OrthonormalBasis(to_light, &t, &b);
+      const Eigen::Vector3f local = UniformCone(u, 1 - one_minus_cos);
+      out->wi = (local.x() * t + local.y() * b + local.z() * to_light).normalized();
+      // Distance to the sphere's near side along wi.
+      const float proj = out->wi.dot(d);
+      const float disc = proj * proj - (d2 - l.radius * l.radius);
+      out->distance = proj - std::sqrt(std::max(0.0f, disc));
+      out->value = l.radiance * spot;
+      out->pdf = 1 / (2 * kPiF * one_minus_cos);
+      return true;
+    }
+    case K::kRect:
+    case K::kDisc: {
+      Eigen::Vector3f q;
+      if (l.kind == K::kRect) {
+        q = l.position + (2 * u.x() - 1) * l.axis_u + (2 * u.y() - 1) * l.axis_v;
+      } else {
+        const Eigen::Vector2f d = ConcentricDisc(u) * l.radius;
+        q = l.position + d.x() * l.axis_u + d.y() * l.axis_v;
+      }
+      const Eigen::Vector3f d = q - p;
+      const float d2 = d.squaredNorm();
+      const float dist = std::sqrt(d2);
+      if (!(dist > 0)) return false;
+      out->wi = d / dist;
+      const float cos_light = -out->wi.dot(l.normal);
+      if (cos_light <= 0) return false;  // behind the light
+      out->distance = dist;
+      out->value = l.radiance;
+      out->pdf = d2 / (l.area * cos_light);
+      return true;
+    }
+    case K::kSun: {
+      out->distance = kInf;
+      if (l.delta) {
+        out->wi = l.to_sun;
+        out->value = l.intensity;
+        out->pdf = 1;
+        return true;
+      }
+      Eigen::Vector3f t, b;
+      OrthonormalBasis(l.to_sun, &t, &b);
+      const Eigen::Vector3f local = UniformCone(u, l.sun_cos_max);
+      out->wi = (local.x() * t + local.y() * b + local.z() * l.to_sun).normalized();
+      out->value = l.radiance;
+      out->pdf = 1 / (2 * kPiF * l.sun_one_minus_cos);
+      return true;
+    }
+  }
+  return false;
+}
+
+// Where a ray (unit direction) meets an area-like light before tmax: distance, radiance and the
+// solid-angle density SampleLight would have picked that direction with. Delta lights are never
+// hit; the sun only by rays that escape (tmax infinite).
+bool HitLight(const PreparedLight& l, const Eigen::Vector3f& o, const Eigen::Vector3f& dir,
+              float tmax, Eigen::Vector3f* radiance, float* pdf) {
+  if (l.delta) return false;
+  using K = LightSource::Kind;
+  switch (l.kind) {
+    case K::kPoint:
+    case K::kSpot: {
+      const Eigen::Vector3f d = l.position - o;
+      const float d2 = d.squaredNorm();
+      const float r2 = l.radius * l.radius;
+      if (d2 <= r2) return false;
+      const float proj = dir.dot(d);
+      if (proj <= 0) return false;
+      const float disc = proj * proj - (d2 - r2);
+      if (disc < 0) return false;
+      const float t = proj - std::sqrt(disc);
+      if (!(t > 0 && t < tmax)) return false;
+      const float spot = l.Spot(-(d / std::sqrt(d2)));
+      if (spot <= 0) return false;
+      *radiance = l.radiance * spot;
+      *pdf = 1 / (2 * kPiF * OneMinusCos(r2 / d2));
+      return true;
+    }
+    case K::kRect:
+    case K::kDisc: {
+      const float denom = dir.dot(l.normal);
+      if (denom >= 0) return false;  // the back or the edge: area lights shine one way
+      const float t = (l.position - o).dot(l.normal) / denom;
+      if (!(t > 0 && t < tmax)) return false;
+      const Eigen::Vector3f q = o + t * dir - l.position;
+      if (l.kind == K::kRect) {
+        if (std::abs(q.dot(l.axis_u)) > l.axis_u.squaredNorm() ||
+            std::abs(q.dot(l.axis_v)) > l.axis_v.squaredNorm()) {
+          return false;
+        }
+      } else if (q.squaredNorm() > l.radius * l.radius) {
+        return false;
+      }
+      *radiance = l.radiance;
+      *pdf = t * t / (l.area * -denom);
+      return true;
+    }
+    case K::kSun: {
+      if (tmax < kInf || dir.dot(l.to_sun) < l.sun_cos_max) return false;
+      *radiance = l.radiance;
+      *pdf = 1 / (2 * kPiF * l.sun_one_minus_cos);
+      return true;
+    }
+  }
+  return false;
+}
+
+// The environment: evaluation, and sampling in proportion to what a surface receives from it.
+class PreparedEnvironment {
+ public:
+  explicit PreparedEnvironment(const Environment& e) : env_(e) {
+    if (e.kind == Environment::Kind::kImage) {
+      image_ = e.pixels;
+      if (!image_) image_ = LoadLinearImage(e.image);
+      BuildDistribution();
+    }
+    black_ = e.strength <= 0 ||
+             (e.kind == Environment::Kind::kUniform && e.color.maxCoeff() <= 0) ||
+             (e.kind == Environment::Kind::kSky && e.zenith.maxCoeff() <= 0 &&
+              e.horizon.maxCoeff() <= 0 && e.ground.maxCoeff() <= 0) ||
+             (e.kind == Environment::Kind::kImage && total_ <= 0);
+  }
+  bool black() const { return black_; }
+
+  Eigen::Vector3f Eval(const Eigen::Vector3f& d) const {
+    switch (env_.kind) {
+      case Environment::Kind::kUniform:
+        return env_.color * env_.strength;
+      case Environment::Kind::kSky: {
+        if (d.z() < 0) return env_.ground * env_.strength;
+        const float t = std::sqrt(std::min(1.0f, d.z()));
+        return ((1 - t) * env_.horizon + t * env_.zenith) * env_.strength;
+      }
+      case Environment::Kind::kImage: {
+        const auto [x, y] = Pixel(d);
+        const float* c = image_->at(x, y);
+        return Eigen::Vector3f(c[0], c[1], c[2]) * env_.strength;
+      }
+    }
+    return Eigen::Vector3f::Zero();
+  }
+
+  // Uniform and sky: cosine-weighted about the surface normal n (exact for a uniform sky on a
+  // Lambertian surface); image: in proportion to the pixels' luminance times their solid angle.
+  Eigen::Vector3f Sample(const Eigen::Vector2f& u, const Eigen::Vector3f& n, float* pdf) const {
+    if (env_.kind != Environment::Kind::kImage) {
+      Eigen::Vector3f t, b;
+      OrthonormalBasis(n, &t, &b);
+      const Eigen::Vector3f local = CosineHemisphere(u);
+      *pdf = local.z() / kPiF;
+      return (local.x() * t + local.y() * b + local.z() * n).normalized();
+    }
+    const int w = image_->width, h = image_->height;
+    // Row by the marginal distribution, then the column within it.
+    const int y = static_cast<int>(std::min<size_t>(
+        std::upper_bound(row_cdf_.begin(), row_cdf_.end(), u.y() * total_) - row_cdf_.begin(),
+        static_cast<size_t>(h - 1)));
+    const float* cdf = &col_cdf_[static_cast<size_t>(y) * w];
+    const float row_total = cdf[w - 1];
+    const int x = static_cast<int>(
+        std::min<ptrdiff_t>(std::upper_bound(cdf, cdf + w, u.x() * row_total) - cdf, w - 1));
+    // A point inside the pixel: reuse what is left of the numbers.
+    const float row_lo = y > 0 ? row_cdf_[y - 1] : 0.0f;
+    const float col_lo = x > 0 ? cdf[x - 1] : 0.0f;
+    const float fy = std::clamp((u.y() * total_ - row_lo) / (row_cdf_[y] - row_lo), 0.0f, 1.0f);
+    const float fx = std::clamp((u.x() * row_total - col_lo) / (cdf[x] - col_lo), 0.0f, 1.0f);
+    const float theta = kPiF * (y + fy) / h;
+    const float uu = (x + fx) / w;
+    const float phi = 2 * kPiF * (0.5f - uu) + static_cast<float>(env_.rotation_rad);
+    const Eigen::Vector3f d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                            std::cos(theta));
+    *pdf = Pdf(d, n);
+    return d;
+  }
+
+  float Pdf(const Eigen::Vector3f& d, const Eigen::Vector3f& n) const {
+    if (env_.kind != Environment::Kind::kImage) return std::max(0.0f, d.dot(n)) / kPiF;
+    const auto [x, y] = Pixel(d);
+    const float sin_theta = std::sqrt(std::max(0.0f, 1 - d.z() * d.z()));
+    if (sin_theta <= 0 || total_ <= 0) return 0.0f;
+    // Density on the unit square is weight * w * h / total; dOmega = 2 pi^2 sin(theta) du dv.
+    const float p_uv = weight_[static_cast<size_t>(y) * image_->width + x] * image_->width *
+                       image_->height / total_;
+    return p_uv / (2 * kPiF * kPiF * sin_theta);
+  }
+
+ private:
+  std::pair<int, int> Pixel(const Eigen::Vector3f& d) const {
+    const float phi = std::atan2(d.y(), d.x()) - static_cast<float>(env_.rotation_rad);
+    float u = 0.5f - phi / (2 * kPiF);
+    u -= std::floor(u);
+    const float v = std::acos(std::clamp(d.z(), -1.0f, 1.0f)) / kPiF;
+    const int x = std::clamp(static_cast<int>(u * image_->width), 0, image_->width - 1);
+    const int y = std::clamp(static_cast<int>(v * image_->height), 0, image_->height - 1);
+    return {x, y};
+  }
+
+  void BuildDistribution() {
+    const int w = image_->width, h = image_->height;
+    weight_.resize(static_cast<size_t>(w) * h);
+    col_cdf_.resize(weight_.size());
+    row_cdf_.resize(h);
+    double total = 0;
+    for (int y = 0; y < h; ++y) {
+      const float sin_theta = std::sin(kPiF * (y + 0.5f) / h);
+      double row = 0;
+      for (int x = 0; x < w; ++x) {
+        const float* c = image_->at(x, y);
+        const float lum = std::max(0.0f, Luminance(Eigen::Vector3f(c[0], c[1], c[2])));
+        const size_t i = static_cast<size_t>(y) * w + x;
+        weight_[i] = lum * sin_theta;
+        row += weight_[i];
+        col_cdf_[i] = static_cast<float>(row);
+      }
+      total += row;
+      row_cdf_[y] = static_cast<float>(total);
+    }
+    total_ = static_cast<float>(total);
+    // Recompute the weights' sum as the CDF will see it, so densities integrate to 1.
+  }
+
+  Environment env_;
+  std::shared_ptr<const LinearImage> image_;
+  std::vector<float> weight_, col_cdf_, row_cdf_;
+  float total_ = 0;
+  bool black_ = false;
+};
+
+void SetRay(RTCRay16* r, int j, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tnear,
+            float tfar) {
+  r->org_x[j] = o.x();
+  r->org_y[j] = o.y();
+  r->org_z[j] = o.z();
+  r->dir_x[j] = d.x();
+  r->dir_y[j] = d.y();
+  r->dir_z[j] = d.z();
+  r->tnear[j] = tnear;
+  r->tfar[j] = tfar;
+  r->time[j] = 0.0f;
+  r->mask[j] = 0xFFFFFFFFu;
+  r->id[j] = static_cast<unsigned>(j);
+  r->flags[j] = 0;
+}
+
+}  // namespace
+
+uint64_t FrameSeed(int seed, uint64_t view) {
+  return Hash(Hash(0x6361647379746831ull, static_cast<uint64_t>(seed)), view);
+}
+
+float FilmicCurve(float x) {
+  x = std::max(0.0f, x);
+  return std::min(1.0f, x * (2.51f * x + 0.03f) / (x * (2.43f * x + 0.59f) + 0.14f));
+}
+
+float DisplayValue(float linear, bool filmic) {
+  return LinearToSrgb(filmic ? FilmicCurve(linear) : linear);
+}
+
+struct PathTracer::Impl {
+  PathTracerScene scene;
+  std::vector<PreparedLight> lights;
+  std::optional<PreparedEnvironment> environment;  // absent when black
+  int num_strategies = 0;                          // lights + environment, chosen uniformly
+  std::vector<std::shared_ptr<const LinearImage>> instance_images;
+  std::shared_ptr<const LinearImage> floor_image;
+
+  struct Surface {
+    Eigen::Vector3f p, ng, ns, tangent;
+    PrincipledParams params;
+  };
+  // The surface a ray hit: its point, normals facing the ray, and textured material.
+  Surface Hit(const RTCRayHit16& rh, int j, const Eigen::Vector3f& dir) const;
+};
+
+PathTracer::PathTracer(PathTracerScene scene) : impl_(std::make_unique<Impl>()) {
+  Impl& im = *impl_;
+  im.scene = std::move(scene);
+  for (const LightSource& s : im.scene.lights) {
+    if (s.power > 0 && s.color.maxCoeff() > 0) im.lights.push_back(Prepare(s));
+  }
+  const PreparedEnvironment env(im.scene.environment);
+  if (!env.black()) im.environment.emplace(env);
+  im.num_strategies = static_cast<int>(im.lights.size()) + (im.environment ? 1 : 0);
+  const auto image_of = [](const Material& m) -> std::shared_ptr<const LinearImage> {
+    if (m.texture.kind != Texture::Kind::kImage) return nullptr;
+    return m.texture.pixels ? m.texture.pixels : LoadLinearImage(m.texture.image);
+  };
+  for (const TracedInstance& instance : im.scene.instances)
+    im.instance_images.push_back(image_of(instance.material));
+  im.floor_image = image_of(im.scene.floor);
+}
+
+PathTracer::~PathTracer() = default;
+
+PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
+                                                const Eigen::Vector3f& dir) const {
+  Surface s;
+  // The packet's own direction: camera rays are not unit length (their t is depth).
+  s.p = Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) +
+        rh.ray.tfar[j] * Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
+  const unsigned inst = rh.hit.instID[0][j];
+  const Material* material;
+  const LinearImage* image;
+  Eigen::Vector3f tex_p, tex_n;
+  if (inst != kInvalid) {
+    const TracedInstance& ti = scene.instances[inst];
+    const uint32_t* tri = &ti.indices[3 * rh.hit.primID[j]];
+    const float b1 = rh.hit.u[j], b2 = rh.hit.v[j], b0 = 1.0f - b1 - b2;
+    // Embree gives an instance's geometric normal in its object frame.
+    s.ng = (ti.rotation * Eigen::Vector3f(rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]))
+               .normalized();
+    s.ns = (ti.rotation *
+            (b0 * ti.normals[tri[0]] + b1 * ti.normals[tri[1]] + b2 * ti.normals[tri[2]]))
+               .normalized();
+    s.tangent = ti.rotation.col(0);  // brushing runs along the model's x axis
+    material = &ti.material;
+    image = instance_images[inst].get();
+    tex_p = ti.rotation.transpose() * (s.p - ti.translation);
+    tex_n = ti.rotation.transpose() * s.ns;
+  } else {
+    s.ng = s.ns = Eigen::Vector3f::UnitZ();
+    s.tangent = Eigen::Vector3f::UnitX();
+    material = &scene.floor;
+    image = floor_image.get();
+    tex_p = s.p;
+    tex_n = s.ns;
+  }
+  if (!s.ns.allFinite()) s.ns = s.ng;
+  if (!s.ng.allFinite()) s.ng = s.ns;
+  if (s.ng.dot(dir) > 0) s.ng = -s.ng;  // two-sided: face the incoming ray
+  if (s.ns.dot(s.ng) < 0) s.ns = -s.ns, tex_n = -tex_n;
+  s.params = material->surface;
+  if (material->texture.kind != Texture::Kind::kNone) {
+    const TextureSample t = EvalTexture(material->texture, tex_p, tex_n, image);
+    s.params = ApplyTexture(material->surface, t);
+    if (t.normal_offset.squaredNorm() > 0) {
+      // Back to the world frame: instances rotate their texture frame.
+      const Eigen::Vector3f offset =
+          inst != kInvalid ? Eigen::Vector3f(scene.instances[inst].rotation * t.normal_offset)
+                           : t.normal_offset;
+      const Eigen::Vector3f bumped = (s.ns + offset).normalized();
+      if (bumped.allFinite() && bumped.dot(-dir) > 0 && bumped.dot(s.ng) > 0) s.ns = bumped;
+    }
+  }
+  // A smooth normal turned away from the viewer (silhouettes of coarse meshes): shade flat.
+  if (s.ns.dot(-dir) <= 0) s.ns = s.ng;
+  return s;
+}
+
+void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, uint64_t frame_seed,
+                           Eigen::Vector3f out[16]) const {
+  const Impl& im = *impl_;
+  const Intrinsics& k = camera.intrinsics;
+  const Eigen::Matrix3f rotation = camera.world_from_cam.linear().cast<float>();
+  const Eigen::Vector3f origin = camera.world_from_cam.translation().cast<float>();
+  const int bounces = im.scene.bounces;
+  const float select_pdf = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
+
+  Eigen::Vector3f sum[16];
+  uint64_t pixel_seed[16];
+  alignas(64) int in_image[16];
+  for (int j = 0; j < 16; ++j) {
+    sum[j].setZero();
+    const int u = u0 + j % 4, v = v0 + j / 4;
+    in_image[j] = (u < k.width && v < k.height) ? -1 : 0;
+    pixel_seed[j] = Hash(frame_seed, static_cast<uint64_t>(v) * 65536u + static_cast<uint64_t>(u));
+  }
+
+  RTCIntersectContext context;
+  RTCRayHit16 rh;
+  RTCRay16 shadow;
+  alignas(64) int active[16];
+  alignas(64) int shadow_valid[16];
+  Eigen::Vector3f throughput[16], dir[16], shadow_value[16], prev_normal[16];
+  float prev_pdf[16];
+
+  for (int s = 0; s < samples; ++s) {
+    // Camera rays through a point of each pixel: directions with camera z = 1, so that the clip
+    // range is in depth like the labels'.
+    for (int j = 0; j < 16; ++j) {
+      const int u = u0 + j % 4, v = v0 + j / 4;
+      active[j] = in_image[j];
+      throughput[j].setOnes();
+      prev_pdf[j] = 0;
+      const Eigen::Vector2f jitter = PixelSampler(pixel_seed[j], s).Get2D(0);
+      const Eigen::Vector3f d_cam(static_cast<float>((u + jitter.x() - k.cx) / k.fx),
+                                  static_cast<float>((v + jitter.y() - k.cy) / k.fy), 1.0f);
+      const Eigen::Vector3f d = rotation * d_cam;
+      dir[j] = d.normalized();
+      SetRay(&rh.ray, j, origin, d, im.scene.near_mm, im.scene.far_mm);
+      rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
+    }
+    rtcInitIntersectContext(&context);
+    rtcIntersect16(active, im.scene.world, &context, &rh);
+
+    for (int depth = 0;; ++depth) {
+      const bool shade = depth <= bounces;
+      bool any = false;
+      for (int j = 0; j < 16; ++j) {
+        if (!active[j]) continue;
+        const bool hit = rh.hit.geomID[j] != kInvalid;
+        // Light reaching the previous vertex (or the camera) along this segment: area lights in
+        // front of the surface, and the sky if the ray escaped.
+        const Eigen::Vector3f o(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]);
+        // Camera rays are not unit length: their t is depth; compare along the unit direction.
+        const float seg =
+            hit ? rh.ray.tfar[j] * (depth == 0 ? Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j],
+                                                                 rh.ray.dir_z[j])
+                                                     .norm()
+                                               : 1.0f)
+                : kInf;
+        for (const PreparedLight& l : im.lights) {
+          Eigen::Vector3f le;
+          float pdf;
+          if (!HitLight(l, o, dir[j], seg, &le, &pdf)) continue;
+          const float w = depth == 0 ? 1.0f : PowerHeuristic(prev_pdf[j], select_pdf * pdf);
+          sum[j] += throughput[j].cwiseProduct(le) * w;
+        }
+        if (!hit) {
+          if (im.environment) {
+            const Eigen::Vector3f le = im.environment->Eval(dir[j]);
+            const float w =
+                depth == 0 ? 1.0f
+                           : PowerHeuristic(prev_pdf[j], select_pdf * im.environment->Pdf(
+                                                                          dir[j], prev_normal[j]));
+            sum[j] += throughput[j].cwiseProduct(le) * w;
+          }
+          active[j] = 0;
+          continue;
+        }
+        if (!shade) {
+          active[j] = 0;
+          continue;
+        }
+        any = true;
+      }
+      if (!any) break;
+
+      // Shade: one light sample (shadow ray) and one BSDF sample (the next segment) per lane.
+      for (int j = 0; j < 16; ++j) {
+        shadow_valid[j] = 0;
+        if (!active[j]) {
+          SetRay(&shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
+          continue;
+        }
+        const Impl::Surface surf = im.Hit(rh, j, dir[j]);
+        Eigen::Vector3f t = surf.tangent - surf.tangent.dot(surf.ns) * surf.ns, b;
+        if (surf.params.anisotropic > 0 && t.squaredNorm() > 1e-6f) {
+          t.normalize();
+          b = surf.ns.cross(t);
+        } else {
+          OrthonormalBasis(surf.ns, &t, &b);
+        }
+        const auto to_local = [&](const Eigen::Vector3f& w) {
+          return Eigen::Vector3f(w.dot(t), w.dot(b), w.dot(surf.ns));
+        };
+        const Eigen::Vector3f wo = to_local(-dir[j]);
+        const PrincipledBsdf bsdf(surf.params);
+        const PixelSampler sampler(pixel_seed[j], s);
+        const uint32_t dim = 1 + 3 * static_cast<uint32_t>(depth);
+        const Eigen::Vector2f u_choice = sampler.Get2D(dim);
+        // A little off the surface along its geometric normal, scaled with the coordinates
+        // (float spacing at 10 m is 1e-3 mm).
+        const float eps = 0.01f + 2e-6f * surf.p.cwiseAbs().maxCoeff();
+        const Eigen::Vector3f p_off = surf.p + eps * surf.ng;
+
+        // Next-event estimation.
+        SetRay(&shadow, j, p_off, Eigen::Vector3f::UnitZ(), 0, 0);
+        if (im.num_strategies > 0) {
+          const int pick =
+              std::min(static_cast<int>(u_choice.x() * im.num_strategies), im.num_strategies - 1);
+          const Eigen::Vector2f u_light = sampler.Get2D(dim + 1);
+          LightSample ls;
+          bool ok = false, delta = false;
+          if (pick < static_cast<int>(im.lights.size())) {
+            ok = SampleLight(im.lights[pick], surf.p, u_light, &ls);
+            delta = im.lights[pick].delta;
+          } else {
+            ls.wi = im.environment->Sample(u_light, surf.ns, &ls.pdf);
+            ls.distance = kInf;
+            ls.value = im.environment->Eval(ls.wi);
+            ok = ls.pdf > 0;
+          }
+          if (ok && ls.wi.dot(surf.ng) > 0) {
+            const Eigen::Vector3f wi = to_local(ls.wi);
+            if (wi.z() > 0) {
+              const Eigen::Vector3f f = bsdf.Eval(wo, wi);
+              const float light_pdf = select_pdf * ls.pdf;
+              const float w = delta ? 1.0f : PowerHeuristic(light_pdf, bsdf.Pdf(wo, wi));
+              const Eigen::Vector3f c =
+                  throughput[j].cwiseProduct(f).cwiseProduct(ls.value) * (wi.z() * w / light_pdf);
+              if (c.allFinite() && c.maxCoeff() > 0) {
+                shadow_value[j] = c;
+                shadow_valid[j] = -1;
+                const float tfar = std::isinf(ls.distance) ? kInf : ls.distance * (1 - 1e-4f) - eps;
+                SetRay(&shadow, j, p_off, ls.wi, 0, std::max(0.0f, tfar));
+              }
+            }
+          }
+        }
+
+        // The BSDF's sample continues the path.
+        active[j] = 0;
+        const auto sampled = bsdf.Sample(wo, u_choice.y(), sampler.Get2D(dim + 2));
+        if (!sampled) continue;
+        const Eigen::Vector3f wi =
+            (sampled->wi.x() * t + sampled->wi.y() * b + sampled->wi.z() * surf.ns).normalized();
+        if (wi.dot(surf.ng) <= 0 || !sampled->weight.allFinite()) continue;
+        Eigen::Vector3f next = throughput[j].cwiseProduct(sampled->weight);
+        // Russian roulette from the third interaction on: continue with probability q.
+        if (depth >= 2) {
+          const float q = std::min(0.95f, next.maxCoeff());
+          const float r = UnitFloat(static_cast<uint32_t>(
+              Hash(pixel_seed[j], (static_cast<uint64_t>(s) << 8) | static_cast<uint64_t>(depth))));
+          if (!(r < q)) continue;
+          next /= q;
+        }
+        if (!(next.maxCoeff() > 0)) continue;
+        throughput[j] = next;
+        prev_pdf[j] = sampled->pdf;
+        prev_normal[j] = surf.ns;
+        dir[j] = wi;
+        active[j] = -1;
+        SetRay(&rh.ray, j, p_off, wi, 0, kInf);
+        rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
+      }
+      bool any_shadow = false;
+      for (int j = 0; j < 16; ++j) any_shadow |= shadow_valid[j] != 0;
+      if (any_shadow) {
+        rtcInitIntersectContext(&context);
+        rtcOccluded16(shadow_valid, im.scene.world, &context, &shadow);
+        for (int j = 0; j < 16; ++j) {
+          if (shadow_valid[j] && shadow.tfar[j] >= 0) sum[j] += shadow_value[j];
+        }
+      }
+      bool any_active = false;
+      for (int j = 0; j < 16; ++j) any_active |= active[j] != 0;
+      if (!any_active) break;
+      rtcInitIntersectContext(&context);
+      rtcIntersect16(active, im.scene.world, &context, &rh);
+    }
+  }
+  for (int j = 0; j < 16; ++j)
+    out[j] = in_image[j] ? Eigen::Vector3f(sum[j] / samples) : Eigen::Vector3f::Zero();
+}
+
+}  // namespace cadsynth

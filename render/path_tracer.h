@@ -1,0 +1,73 @@
+// The physically based mode's light transport (internal to render/: the Renderer owns the Embree
+// scene and calls it per 4 x 4 tile of pixels).
+//
+// A unidirectional path tracer: at every surface it samples one light (next-event estimation)
+// and the BSDF, and weights both by Veach's power heuristic so that small bright lights and
+// sharp reflections are both sampled well; the environment and area lights are also found by
+// BSDF rays. `bounces` surface interactions follow the first (Blender's max bounces: 0 is direct
+// light only); Russian roulette ends dim paths from the third interaction on. Every random number
+// comes from the pixel's own Owen-scrambled Sobol sequence seeded by (seed, view, pixel), so the
+// image is the same for any thread count, tile order or shard.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <embree3/rtcore.h>
+#include <Eigen/Core>
+
+#include "render/camera.h"
+#include "render/lights.h"
+#include "render/material.h"
+
+namespace cadsynth {
+
+// What a hit needs from the renderer's geometry.
+struct TracedInstance {
+  const uint32_t* indices = nullptr;                       // 3 per triangle, of the part's mesh
+  const Eigen::Vector3f* normals = nullptr;                // per vertex, model frame
+  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();  // world_from_model
+  Eigen::Vector3f translation = Eigen::Vector3f::Zero();
+  Material material;  // base colour already resolved
+};
+
+struct PathTracerScene {
+  RTCScene world = nullptr;  // instance i is instID i; the floor is geomID floor_id at top level
+  unsigned floor_id = RTC_INVALID_GEOMETRY_ID;
+  std::vector<TracedInstance> instances;
+  Material floor;
+  std::vector<LightSource> lights;
+  Environment environment;
+  int bounces = 3;
+  float near_mm = 1.0f, far_mm = 1e7f;  // camera rays' clip (depth along the optical axis)
+};
+
+class PathTracer {
+ public:
+  // Loads the environment's and textures' images that are not loaded yet; throws Error naming the
+  // file when one cannot be read.
+  explicit PathTracer(PathTracerScene scene);
+  ~PathTracer();
+
+  // Mean linear radiance over `samples` paths through each pixel of the 4 x 4 tile whose top-left
+  // pixel is (u0, v0) (pixel u0 + j % 4, v0 + j / 4 in out[j]; lanes outside the image are 0).
+  void TraceTile(const Camera& camera, int u0, int v0, int samples, uint64_t frame_seed,
+                 Eigen::Vector3f out[16]) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The seed of frame `view` of stream `seed`.
+uint64_t FrameSeed(int seed, uint64_t view);
+
+// Display transforms (RenderOptions::View) of an exposed linear value, to an sRGB-encoded value
+// in [0, 1]. Filmic: Narkowicz's fit of the ACES filmic tone curve,
+// f(x) = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), per channel, then sRGB; middle grey 0.18
+// shows as 0.55, and highlights roll off instead of clipping (f reaches 1 at x = 7.24).
+float FilmicCurve(float x);
+float DisplayValue(float linear, bool filmic);
+
+}  // namespace cadsynth

@@ -1,0 +1,94 @@
+#include "render/sampling.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cadsynth {
+
+namespace {
+
+uint32_t ReverseBits(uint32_t x) {
+  x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+  x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+  x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+  x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+  return (x >> 16) | (x << 16);
+}
+
+// A hash that only ever carries information from lower bits to higher ones (Laine and Karras
+// 2011), so applied to bit-reversed numbers it is a nested uniform (Owen) scramble.
+uint32_t LaineKarras(uint32_t x, uint32_t seed) {
+  x += seed;
+  x ^= x * 0x6c50b47cu;
+  x ^= x * 0xb82f1e52u;
+  x ^= x * 0xc7afe638u;
+  x ^= x * 0x8d22f6e6u;
+  return x;
+}
+
+uint32_t OwenScramble(uint32_t x, uint32_t seed) {
+  return ReverseBits(LaineKarras(ReverseBits(x), seed));
+}
+
+// The second Sobol dimension, generator matrix built by v_{k+1} = v_k ^ (v_k >> 1), v_0 = 2^31.
+uint32_t SobolDim1(uint32_t index) {
+  uint32_t result = 0;
+  for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1) {
+    if (index & 1u) result ^= v;
+  }
+  return result;
+}
+
+}  // namespace
+
+Eigen::Vector2f SobolOwen2D(uint32_t index, uint64_t seed) {
+  const uint64_t h = Mix64(seed);
+  // Shuffle the order of the points (an Owen scramble of the index), then scramble each axis.
+  const uint32_t i = OwenScramble(index, static_cast<uint32_t>(h));
+  const uint32_t x = OwenScramble(ReverseBits(i), static_cast<uint32_t>(h >> 32));
+  const uint32_t y = OwenScramble(SobolDim1(i), static_cast<uint32_t>(Mix64(h)));
+  return {UnitFloat(x), UnitFloat(y)};
+}
+
+Eigen::Vector2f ConcentricDisc(const Eigen::Vector2f& u) {
+  const float a = 2 * u.x() - 1, b = 2 * u.y() - 1;
+  if (a == 0 && b == 0) return {0, 0};
+  float r, phi;
+  if (std::abs(a) > std::abs(b)) {
+    r = a;
+    phi = (kPiF / 4) * (b / a);
+  } else {
+    r = b;
+    phi = kPiF / 2 - (kPiF / 4) * (a / b);
+  }
+  return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+Eigen::Vector3f CosineHemisphere(const Eigen::Vector2f& u) {
+  const Eigen::Vector2f d = ConcentricDisc(u);
+  return {d.x(), d.y(), std::sqrt(std::max(0.0f, 1 - d.squaredNorm()))};
+}
+
+Eigen::Vector3f UniformCone(const Eigen::Vector2f& u, float cos_max) {
+  const float cos_theta = 1 - u.x() * (1 - cos_max);
+  const float sin_theta = std::sqrt(std::max(0.0f, 1 - cos_theta * cos_theta));
+  const float phi = 2 * kPiF * u.y();
+  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+}
+
+Eigen::Vector3f UniformSphere(const Eigen::Vector2f& u) {
+  const float z = 1 - 2 * u.x();
+  const float r = std::sqrt(std::max(0.0f, 1 - z * z));
+  const float phi = 2 * kPiF * u.y();
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+void OrthonormalBasis(const Eigen::Vector3f& n, Eigen::Vector3f* t, Eigen::Vector3f* b) {
+  const float sign = std::copysign(1.0f, n.z());
+  const float a = -1.0f / (sign + n.z());
+  const float c = n.x() * n.y() * a;
+  *t = Eigen::Vector3f(1 + sign * n.x() * n.x() * a, sign * c, -sign * n.x());
+  *b = Eigen::Vector3f(c, sign + n.y() * n.y() * a, -n.y());
+}
+
+}  // namespace cadsynth

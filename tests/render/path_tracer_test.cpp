@@ -1,0 +1,377 @@
+// The physically based mode against answers worked out by hand: furnaces, a point light's inverse
+// square law, the irradiance under a disc light, a mirror, the single-scattering energy loss of
+// rough metal, and the convergence rate of the stratified sampler.
+#include "render/path_tracer.h"
+
+#include <cmath>
+
+#include <tbb/global_control.h>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "cad/shape.h"
+#include "render/image.h"
+#include "render/renderer.h"
+#include "render/sampling.h"
+
+namespace cadsynth {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A camera at `eye` looking straight down (-z), image x along world +x, image y along world -y.
+Eigen::Isometry3d LookingDown(const Eigen::Vector3d& eye) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  T.translation() = eye;
+  return T;
+}
+
+Material Lambert(float albedo) {
+  Material m;
+  m.surface.base_color = Eigen::Vector3f::Constant(albedo);
+  m.surface.metallic = 0;
+  m.surface.specular = 0;  // no dielectric layer: pure Lambert
+  m.surface.roughness = 1;
+  return m;
+}
+
+Material Metal(float roughness) {
+  Material m;
+  m.surface.base_color = Eigen::Vector3f::Ones();
+  m.surface.metallic = 1;
+  m.surface.roughness = roughness;
+  return m;
+}
+
+RenderOptions Pbr(int samples, int bounces) {
+  RenderOptions o;
+  o.mode = RenderOptions::Mode::kPbr;
+  o.samples = samples;
+  o.bounces = bounces;
+  o.hdr = true;
+  o.view = RenderOptions::View::kStandard;
+  o.amodal_masks = false;
+  return o;
+}
+
+Scene Dark() {
+  Scene scene;
+  scene.light_sources.clear();
+  scene.environment.color.setZero();
+  return scene;
+}
+
+// Radiance (red channel) of pixel (u, v).
+float At(const Frame& frame, int u, int v) {
+  return frame.radiance[3 * (static_cast<size_t>(v) * frame.width() + u)];
+}
+
+// A sphere of radius 50 mm at the origin (no floor), seen from above.
+struct SphereView {
+  std::vector<Part> parts = {MakePart("ball", MakeSphere(50.0), TessellationOptions{0.02, 0.05})};
+  Scene scene = Dark();
+  Camera camera;
+  SphereView(const Material& material, float sky) {
+    scene.floor = false;
+    scene.instances = {Instance{0, "ball", Eigen::Isometry3d::Identity()}};
+    scene.materials = {material};
+    scene.instance_material = {0};
+    scene.environment.color = Eigen::Vector3f::Constant(sky);
+    camera.intrinsics = Intrinsics::FromFov(64, 64, 0.5);
+    camera.world_from_cam = LookingDown({0, 0, 300});
+  }
+};
+
+TEST(PathTracer, WhiteLambertSphereInAUniformSkyIsInvisible) {
+  // The white furnace: a closed convex surface of albedo 1 under radiance L everywhere reflects
+  // exactly L at every point. Cosine-weighted sky sampling makes this exact sample by sample;
+  // the facets of the tessellated sphere (smooth normals) leave well under 1 %.
+  SphereView view(Lambert(1.0f), 0.5f);
+  const Renderer renderer(view.parts, view.scene, Pbr(4, 2));
+  const Frame frame = renderer.Render(view.camera);
+  int on_sphere = 0;
+  for (int v = 0; v < 64; ++v) {
+    for (int u = 0; u < 64; ++u) {
+      EXPECT_NEAR(At(frame, u, v), 0.5f, 0.005f) << u << "," << v;
+      on_sphere += frame.instance[v * 64 + u] != 0;
+    }
+  }
+  EXPECT_GT(on_sphere, 1000);
+}
+
+TEST(PathTracer, WhiteRoughDielectricSphereInAUniformSkyIsInvisible) {
+  // The same furnace with a specular layer on top (specular 0.5, roughness 0.5): the layered
+  // model conserves energy exactly, so the sphere still returns L, up to sampling noise.
+  Material m = Lambert(1.0f);
+  m.surface.specular = 0.5f;
+  m.surface.roughness = 0.5f;
+  SphereView view(m, 0.5f);
+  const Renderer renderer(view.parts, view.scene, Pbr(64, 3));
+  const Frame frame = renderer.Render(view.camera);
+  double sum = 0;
+  int n = 0;
+  for (int v = 0; v < 64; ++v) {
+    for (int u = 0; u < 64; ++u) {
+      if (frame.instance[v * 64 + u] == 0) continue;
+      EXPECT_NEAR(At(frame, u, v), 0.5f, 0.1f) << u << "," << v;
+      sum += At(frame, u, v);
+      ++n;
+    }
+  }
+  EXPECT_NEAR(sum / n, 0.5, 0.005);
+}
+
+TEST(PathTracer, RoughWhiteMetalLosesWhatSingleScatteringGgxLoses) {
+  // White metal at roughness 1 seen straight on reflects 1 - ln 2 of a uniform sky (worked out by
+  // hand in bsdf_test.cpp): single-scattering GGX loses the light that would bounce between
+  // microfacets. The centre of the sphere faces the camera.
+  SphereView view(Metal(1.0f), 1.0f);
+  view.camera.intrinsics = Intrinsics::FromFov(8, 8, 0.02);  // 2 mm of the sphere's top
+  const Renderer renderer(view.parts, view.scene, Pbr(1024, 0));
+  const Frame frame = renderer.Render(view.camera);
+  double sum = 0;
+  for (int v = 0; v < 8; ++v) {
+    for (int u = 0; u < 8; ++u) sum += At(frame, u, v);
+  }
+  EXPECT_NEAR(sum / 64, 1 - std::log(2.0), 0.01);
+}
+
+TEST(PathTracer, LambertPlaneUnderAPointLightFollowsTheInverseSquareLaw) {
+  // L = rho / pi * I cos(theta) / r^2 with I = P / (4 pi) (Blender's point light of power P),
+  // r in metres. No sampling noise: the light is a point and nothing else lights the floor.
+  const float rho = 0.8f;
+  const double power = 100.0, height = 1000.0;  // W, mm
+  Scene scene = Dark();
+  scene.floor_material = Lambert(rho);
+  LightSource light;
+  light.kind = LightSource::Kind::kPoint;
+  light.power = power;
+  light.position = {100.0, -50.0, height};
+  scene.light_sources = {light};
+  Camera camera;
+  camera.intrinsics = Intrinsics::FromFov(160, 120, 1.2);
+  camera.world_from_cam = LookingDown({0, 0, 1500});
+  const Renderer renderer({}, scene, Pbr(4, 1));
+  const Frame frame = renderer.Render(camera);
+  int checked = 0;
+  for (int v = 0; v < 120; v += 7) {
+    for (int u = 0; u < 160; u += 7) {
+      const Eigen::Vector3d d =
+          camera.world_from_cam.linear() *
+          Eigen::Vector3d((u + 0.5 - camera.intrinsics.cx) / camera.intrinsics.fx,
+                          (v + 0.5 - camera.intrinsics.cy) / camera.intrinsics.fy, 1);
+      const Eigen::Vector3d p = camera.world_from_cam.translation() + 1500.0 / -d.z() * d;
+      const Eigen::Vector3d to_light = light.position - p;
+      const double r_m = to_light.norm() / 1000.0;
+      const double cos_theta = to_light.z() / to_light.norm();
+      const double expected = rho / kPi * (power / (4 * kPi)) * cos_theta / (r_m * r_m);
+      EXPECT_NEAR(At(frame, u, v), expected, 0.003 * expected) << u << "," << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 300);
+}
+
+// A white Lambert floor under a disc light of radius R at height h facing down, seen through a
+// tiny patch of floor straight under its centre: the irradiance there is pi L sin^2(alpha), with
+// L = P / (pi A) and sin^2(alpha) = R^2 / (R^2 + h^2); the floor's radiance is E / pi.
+struct DiscLightView {
+  double radius = 200.0, height = 300.0, power = 50.0;
+  Scene scene = Dark();
+  Camera camera;
+  DiscLightView() {
+    scene.floor_material = Lambert(1.0f);
+    LightSource disc;
+    disc.kind = LightSource::Kind::kDisc;
+    disc.radius_mm = radius;
+    disc.position = {0, 0, height};
+    disc.direction = {0, 0, -1};
+    disc.power = power;
+    scene.light_sources = {disc};
+    camera.intrinsics = Intrinsics::FromFov(4, 4, 0.0004);  // 0.4 mm of floor
+    camera.world_from_cam = LookingDown({0, 0, 1000});
+  }
+  double Expected() const {
+    const double area_m2 = kPi * radius * radius * 1e-6;
+    const double l = power / (kPi * area_m2);
+    const double sin2 = radius * radius / (radius * radius + height * height);
+    return kPi * l * sin2 / kPi;
+  }
+};
+
+TEST(PathTracer, IrradianceUnderADiscLightIsPiLSinSquared) {
+  const DiscLightView view;
+  const Renderer renderer({}, view.scene, Pbr(4096, 0));
+  const Frame frame = renderer.Render(view.camera);
+  double sum = 0;
+  for (int i = 0; i < 16; ++i) sum += At(frame, i % 4, i / 4);
+  EXPECT_NEAR(sum / 16, view.Expected(), 0.002 * view.Expected());
+}
+
+TEST(PathTracer, StratifiedSamplesConvergeFasterThanRandomOnes) {
+  // The RMS error of the disc light's estimate over 16 pixels x 8 seeds: independent random
+  // samples would fall as N^-1/2 (a factor 4 from 16 to 256 samples); Owen-scrambled Sobol points
+  // with the light's edge in the integrand fall as about N^-3/4 (a factor 8). Require 6.
+  const DiscLightView view;
+  const double expected = view.Expected();
+  double rms[2];
+  for (int k = 0; k < 2; ++k) {
+    double sq = 0;
+    int n = 0;
+    for (int seed = 0; seed < 8; ++seed) {
+      RenderOptions o = Pbr(k == 0 ? 16 : 256, 0);
+      o.seed = seed;
+      const Renderer renderer({}, view.scene, o);
+      const Frame frame = renderer.Render(view.camera);
+      for (int i = 0; i < 16; ++i) {
+        const double e = At(frame, i % 4, i / 4) - expected;
+        sq += e * e;
+        ++n;
+      }
+    }
+    rms[k] = std::sqrt(sq / n);
+  }
+  EXPECT_GT(rms[0] / rms[1], 6.0) << rms[0] << " " << rms[1];
+}
+
+TEST(PathTracer, SobolPointsAreStratifiedAndUniform) {
+  // Every power-of-two prefix of 2^k points holds one point in each of the 2^k elementary
+  // intervals of every shape (the (0, 2)-sequence property survives Owen scrambling).
+  for (uint64_t seed : {0u, 7u, 12345u}) {
+    for (int k = 2; k <= 8; k += 2) {
+      const int n = 1 << k;
+      for (int log_w = 0; log_w <= k; ++log_w) {
+        const int cols = 1 << log_w, rows = n / cols;
+        std::vector<int> count(n, 0);
+        for (int i = 0; i < n; ++i) {
+          const Eigen::Vector2f p = SobolOwen2D(static_cast<uint32_t>(i), seed);
+          ASSERT_GE(p.minCoeff(), 0.0f);
+          ASSERT_LT(p.maxCoeff(), 1.0f);
+          ++count[static_cast<int>(p.y() * rows) * cols + static_cast<int>(p.x() * cols)];
+        }
+        for (int c : count) ASSERT_EQ(c, 1) << "seed " << seed << " n " << n << " cols " << cols;
+      }
+    }
+  }
+}
+
+TEST(PathTracer, PolishedMetalMirrorsTheSky) {
+  // A white metal floor at roughness 0 reflects the sky exactly (Fresnel of a white metal is 1):
+  // each pixel shows the sky along the mirrored view direction.
+  Scene scene = Dark();
+  scene.floor_material = Metal(0.0f);
+  scene.environment.kind = Environment::Kind::kSky;
+  scene.environment.strength = 2.0f;
+  Camera camera;
+  camera.intrinsics = Intrinsics::FromFov(64, 48, 1.0);
+  camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.3, 50.0 * kPi / 180.0, 800.0);
+  // Enough samples that the rare visible normal drawn far from the mirror direction (about one
+  // sample in 3,000 at roughness 0) cannot move a pixel by 1 %.
+  const Renderer renderer({}, scene, Pbr(256, 1));
+  const Frame frame = renderer.Render(camera);
+  const Intrinsics& k = camera.intrinsics;
+  int checked = 0;
+  for (int v = 0; v < k.height; v += 3) {
+    for (int u = 0; u < k.width; u += 3) {
+      if (frame.depth[v * k.width + u] == 0) continue;
+      const Eigen::Vector3d d =
+          (camera.world_from_cam.linear() *
+           Eigen::Vector3d((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy, 1))
+              .normalized();
+      const Eigen::Vector3d r(d.x(), d.y(), -d.z());
+      // Near the horizon the sky changes too fast for the pixel's centre to stand for it.
+      if (r.z() < 0.3) continue;
+      const double t = std::sqrt(r.z());
+      const Eigen::Vector3f sky = (1 - t) * scene.environment.horizon.cast<float>() +
+                                  t * scene.environment.zenith.cast<float>();
+      const float expected = 2.0f * static_cast<float>(sky[0]);
+      EXPECT_NEAR(At(frame, u, v), expected, 0.01f * expected) << u << "," << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 200);
+}
+
+TEST(PathTracer, SameBytesForAnyThreadCountAndTileOrder) {
+  SphereView view(Metal(0.3f), 0.4f);
+  view.scene.floor = true;
+  view.scene.light_sources = Scene::DefaultLightSources();
+  view.camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.4, 0.7, 500.0);
+  const Renderer renderer(view.parts, view.scene, Pbr(8, 3));
+  Frame one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = renderer.Render(view.camera, 5);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = renderer.Render(view.camera, 5);
+  }
+  EXPECT_EQ(one.rgb, two.rgb);
+  EXPECT_EQ(one.radiance, two.radiance);
+  // Another view number is another noise pattern; the labels stay the same.
+  const Frame other = renderer.Render(view.camera, 6);
+  EXPECT_NE(one.rgb, other.rgb);
+  EXPECT_EQ(one.depth, other.depth);
+  EXPECT_EQ(one.instance, other.instance);
+}
+
+TEST(PathTracer, PbrChangesOnlyTheColourImage) {
+  SphereView view(Metal(0.3f), 0.4f);
+  view.scene.floor = true;
+  view.camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.4, 0.7, 500.0);
+  RenderOptions fast;
+  fast.amodal_masks = true;
+  RenderOptions pbr = Pbr(2, 1);
+  pbr.amodal_masks = true;
+  const Frame a = Renderer(view.parts, view.scene, fast).Render(view.camera);
+  const Frame b = Renderer(view.parts, view.scene, pbr).Render(view.camera);
+  EXPECT_EQ(a.depth, b.depth);
+  EXPECT_EQ(a.instance, b.instance);
+  ASSERT_EQ(a.instances.size(), b.instances.size());
+  EXPECT_EQ(a.instances[0].amodal_mask, b.instances[0].amodal_mask);
+  EXPECT_NE(a.rgb, b.rgb);
+}
+
+TEST(PathTracer, DisplayTransforms) {
+  // Standard: sRGB's encoding of the clipped value; filmic: the curve, then sRGB.
+  EXPECT_FLOAT_EQ(DisplayValue(0.0f, false), 0.0f);
+  EXPECT_FLOAT_EQ(DisplayValue(1.0f, false), 1.0f);
+  EXPECT_FLOAT_EQ(DisplayValue(4.0f, false), 1.0f);
+  EXPECT_NEAR(DisplayValue(0.18f, false), 0.4614f, 1e-4);
+  EXPECT_NEAR(FilmicCurve(0.18f),
+              0.18f * (2.51f * 0.18f + 0.03f) / (0.18f * (2.43f * 0.18f + 0.59f) + 0.14f), 1e-6);
+  EXPECT_LT(FilmicCurve(4.0f), 1.0f);
+  EXPECT_FLOAT_EQ(FilmicCurve(7.3f), 1.0f);
+  for (float x = 0; x < 10; x += 0.01f) EXPECT_LE(FilmicCurve(x), FilmicCurve(x + 0.01f));
+  EXPECT_NEAR(SrgbToLinear(LinearToSrgb(0.3f)), 0.3f, 1e-6);
+}
+
+TEST(PathTracer, BadScenesAreRefused) {
+  Scene scene = Dark();
+  LightSource light;
+  light.power = -1;
+  scene.light_sources = {light};
+  EXPECT_THROW(Renderer({}, scene, Pbr(1, 0)), Error);
+  scene = Dark();
+  scene.floor_material.surface.roughness = 1.5f;
+  EXPECT_THROW(Renderer({}, scene, Pbr(1, 0)), Error);
+  scene = Dark();
+  scene.environment.kind = Environment::Kind::kImage;
+  scene.environment.image = "/nonexistent/sky.hdr";
+  try {
+    Renderer({}, scene, Pbr(1, 0));
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/sky.hdr"), std::string::npos) << e.what();
+  }
+  RenderOptions o = Pbr(1, 0);
+  o.supersampling = 2;
+  std::string why;
+  EXPECT_FALSE(o.Check(&why));
+}
+
+}  // namespace
+}  // namespace cadsynth

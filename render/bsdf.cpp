@@ -145,70 +145,79 @@ PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params)
   alpha_y_ = std::max(kMinAlpha, alpha * aspect);
   dielectric_f0_ = 0.08f * params.specular;
   const AlbedoTable& t = Table();
-  const float r = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));  // isotropic equivalent
-  e_avg_ = dielectric_f0_ * LookupAverage(t.a_avg, r) + LookupAverage(t.b_avg, r);
+  r_ = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));  // isotropic equivalent
+  e_avg_ = dielectric_f0_ * LookupAverage(t.a_avg, r_) + LookupAverage(t.b_avg, r_);
 }
 
-Eigen::Vector3f PrincipledBsdf::Specular(const Eigen::Vector3f& wo,
-                                         const Eigen::Vector3f& wi) const {
-  if (params_.specular <= 0 && params_.metallic <= 0) return Eigen::Vector3f::Zero();
-  const Eigen::Vector3f h = (wo + wi).normalized();
-  const float d = GgxD(h, alpha_x_, alpha_y_);
-  const float g2 = 1 / (1 + GgxLambda(wo, alpha_x_, alpha_y_) + GgxLambda(wi, alpha_x_, alpha_y_));
-  const float c5 = Pow5(1 - std::clamp(wo.dot(h), 0.0f, 1.0f));
-  // Schlick's Fresnel of the metal and, when there is one, of the dielectric layer.
-  const float m = params_.metallic;
-  const Eigen::Vector3f metal =
-      params_.base_color + (Eigen::Vector3f::Ones() - params_.base_color) * c5;
-  const float dielectric = params_.specular > 0 ? dielectric_f0_ + (1 - dielectric_f0_) * c5 : 0;
-  const Eigen::Vector3f f = m * metal + Eigen::Vector3f::Constant((1 - m) * dielectric);
-  return f * (d * g2 / (4 * wo.z() * wi.z()));
-}
-
-float PrincipledBsdf::DiffuseScale(float mu_o, float mu_i) const {
-  if (params_.specular <= 0) return 1;  // no dielectric layer above the diffuse one
-  const float r = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));
+const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo) const {
+  if (wo == view_.wo) return view_;
+  view_.wo = wo;
+  const float mu_o = wo.z();
+  view_.lambda_o = GgxLambda(wo, alpha_x_, alpha_y_);
   const AlbedoTable& t = Table();
-  const auto e = [&](float mu) { return dielectric_f0_ * Lookup(t.a, r, mu) + Lookup(t.b, r, mu); };
-  return (1 - e(mu_o)) * (1 - e(mu_i)) / std::max(1e-6f, 1 - e_avg_);
+  const float a = Lookup(t.a, r_, mu_o), b = Lookup(t.b, r_, mu_o);
+  const float e_dielectric = params_.specular > 0 ? dielectric_f0_ * a + b : 0;
+  view_.e_dielectric = e_dielectric;
+  if (params_.specular <= 0 && params_.metallic <= 0) {
+    view_.p_specular = 0;
+  } else if (params_.metallic >= 1) {
+    view_.p_specular = 1;
+  } else {
+    const float m = params_.metallic;
+    const float specular = m * (Luminance(params_.base_color) * a + b) + (1 - m) * e_dielectric;
+    const float diffuse = (1 - m) * Luminance(params_.base_color) * (1 - e_dielectric);
+    view_.p_specular =
+        specular + diffuse <= 0 ? 0.5f : std::clamp(specular / (specular + diffuse), 0.1f, 0.9f);
+  }
+  return view_;
 }
 
-Eigen::Vector3f PrincipledBsdf::Eval(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
+float PrincipledBsdf::DiffuseScale(const ViewTerms& view, float mu_i) const {
+  if (params_.specular <= 0) return 1;  // no dielectric layer above the diffuse one
+  const AlbedoTable& t = Table();
+  const float e_i = dielectric_f0_ * Lookup(t.a, r_, mu_i) + Lookup(t.b, r_, mu_i);
+  return (1 - view.e_dielectric) * (1 - e_i) / std::max(1e-6f, 1 - e_avg_);
+}
+
+Eigen::Vector3f PrincipledBsdf::EvalWithPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi,
+                                            float* pdf) const {
+  *pdf = 0;
   if (wo.z() <= 0 || wi.z() <= 0) return Eigen::Vector3f::Zero();
-  Eigen::Vector3f f = Specular(wo, wi);
-  if (params_.metallic < 1) {
-    f += (1 - params_.metallic) * params_.base_color * (DiffuseScale(wo.z(), wi.z()) / kPi);
+  const ViewTerms& view = View(wo);
+  Eigen::Vector3f f = Eigen::Vector3f::Zero();
+  float specular_pdf = 0;
+  if (view.p_specular > 0) {
+    const Eigen::Vector3f h = (wo + wi).normalized();
+    const float d = GgxD(h, alpha_x_, alpha_y_);
+    const float o_h = wo.dot(h);
+    const float g2 = 1 / (1 + view.lambda_o + GgxLambda(wi, alpha_x_, alpha_y_));
+    const float c5 = Pow5(1 - std::clamp(o_h, 0.0f, 1.0f));
+    // Schlick's Fresnel of the metal and, when there is one, of the dielectric layer.
+    const float m = params_.metallic;
+    const Eigen::Vector3f metal =
+        params_.base_color + (Eigen::Vector3f::Ones() - params_.base_color) * c5;
+    const float dielectric = params_.specular > 0 ? dielectric_f0_ + (1 - dielectric_f0_) * c5 : 0;
+    f = (m * metal + Eigen::Vector3f::Constant((1 - m) * dielectric)) *
+        (d * g2 / (4 * wo.z() * wi.z()));
+    // Visible normals, D_wo(h) = G1(wo) (wo.h) D(h) / wo.z, reflected: / (4 wo.h).
+    if (o_h > 0) specular_pdf = d / ((1 + view.lambda_o) * 4 * wo.z());
   }
+  if (params_.metallic < 1) {
+    f += (1 - params_.metallic) * params_.base_color * (DiffuseScale(view, wi.z()) / kPi);
+  }
+  *pdf = view.p_specular * specular_pdf + (1 - view.p_specular) * wi.z() / kPi;
   return f;
 }
 
-float PrincipledBsdf::SpecularProbability(float mu_o) const {
-  if (params_.specular <= 0 && params_.metallic <= 0) return 0;
-  if (params_.metallic >= 1) return 1;
-  const float r = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));
-  const AlbedoTable& t = Table();
-  const float a = Lookup(t.a, r, mu_o), b = Lookup(t.b, r, mu_o);
-  const float e_dielectric = params_.specular > 0 ? dielectric_f0_ * a + b : 0;
-  const float m = params_.metallic;
-  const float specular = m * (Luminance(params_.base_color) * a + b) + (1 - m) * e_dielectric;
-  const float diffuse = (1 - m) * Luminance(params_.base_color) * (1 - e_dielectric);
-  if (specular + diffuse <= 0) return 0.5f;
-  return std::clamp(specular / (specular + diffuse), 0.1f, 0.9f);
-}
-
-float PrincipledBsdf::SpecularPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
-  const Eigen::Vector3f h = (wo + wi).normalized();
-  const float o_h = wo.dot(h);
-  if (o_h <= 0) return 0;
-  const float g1 = 1 / (1 + GgxLambda(wo, alpha_x_, alpha_y_));
-  const float d_visible = g1 * o_h * GgxD(h, alpha_x_, alpha_y_) / wo.z();
-  return d_visible / (4 * o_h);
+Eigen::Vector3f PrincipledBsdf::Eval(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
+  float pdf;
+  return EvalWithPdf(wo, wi, &pdf);
 }
 
 float PrincipledBsdf::Pdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
-  if (wo.z() <= 0 || wi.z() <= 0) return 0;
-  const float p = SpecularProbability(wo.z());
-  return p * SpecularPdf(wo, wi) + (1 - p) * wi.z() / kPi;
+  float pdf;
+  EvalWithPdf(wo, wi, &pdf);
+  return pdf;
 }
 
 std::optional<PrincipledBsdf::Sampled> PrincipledBsdf::Sample(const Eigen::Vector3f& wo,
@@ -216,7 +225,7 @@ std::optional<PrincipledBsdf::Sampled> PrincipledBsdf::Sample(const Eigen::Vecto
                                                               const Eigen::Vector2f& u) const {
   if (wo.z() <= 0) return std::nullopt;
   Sampled s;
-  if (u_lobe < SpecularProbability(wo.z())) {
+  if (u_lobe < View(wo).p_specular) {
     s.wi = Reflect(wo, SampleVisibleNormal(wo, alpha_x_, alpha_y_, u));
   } else {  // cosine-weighted
     const float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
@@ -224,9 +233,9 @@ std::optional<PrincipledBsdf::Sampled> PrincipledBsdf::Sample(const Eigen::Vecto
         Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x())));
   }
   if (s.wi.z() <= 0) return std::nullopt;
-  s.pdf = Pdf(wo, s.wi);
+  const Eigen::Vector3f f = EvalWithPdf(wo, s.wi, &s.pdf);
   if (!(s.pdf > 0)) return std::nullopt;
-  s.weight = Eval(wo, s.wi) * (s.wi.z() / s.pdf);
+  s.weight = f * (s.wi.z() / s.pdf);
   return s;
 }
 

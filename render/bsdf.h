@@ -36,6 +36,9 @@ class PrincipledBsdf {
   Eigen::Vector3f Eval(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
   // The density (1/sr) with which Sample picks wi for wo.
   float Pdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
+  // Both at once (they share the half vector and the microfacet terms).
+  Eigen::Vector3f EvalWithPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi,
+                              float* pdf) const;
 
   struct Sampled {
     Eigen::Vector3f wi;
@@ -51,13 +54,22 @@ class PrincipledBsdf {
   float alpha_y() const { return alpha_y_; }
 
  private:
-  Eigen::Vector3f Specular(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
-  float SpecularPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;
-  float DiffuseScale(float mu_o, float mu_i) const;
-  float SpecularProbability(float mu_o) const;
+  // What depends only on the outgoing direction, computed once per direction (a shading point
+  // asks for it several times: sampling, evaluation and density).
+  struct ViewTerms {
+    Eigen::Vector3f wo = Eigen::Vector3f::Zero();
+    float lambda_o = 0;      // Smith's Lambda(wo)
+    float e_dielectric = 0;  // the dielectric layer's directional albedo E(mu_o)
+    float p_specular = 0;    // probability of sampling the specular lobe
+  };
+  const ViewTerms& View(const Eigen::Vector3f& wo) const;
+  // The diffuse layer's share: (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg), 1 without a layer.
+  float DiffuseScale(const ViewTerms& view, float mu_i) const;
 
   PrincipledParams params_;
   float alpha_x_, alpha_y_;
+  float r_;  // the isotropic roughness equivalent, (alpha_x alpha_y)^(1/4)
+  mutable ViewTerms view_;
   float dielectric_f0_;  // 0.08 specular; specular 0: no dielectric layer at all (pure Lambert)
   float e_avg_;          // cosine-weighted average of the dielectric layer's albedo E(mu)
 };

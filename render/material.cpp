@@ -91,9 +91,9 @@ const std::map<std::string, Material>& Presets() {
     // Floors and tables.
     p["concrete"] = Make({0.42f, 0.41f, 0.39f}, 0.0f, 0.85f, 0.4f);
     p["concrete"].texture = Tex(K::kConcrete, 60.0, 0.35f, 0.10f, 0.2f);
-    p["wood"] = Make({0.40f, 0.22f, 0.09f}, 0.0f, 0.55f, 0.5f);
-    p["wood"].texture = Tex(K::kWood, 25.0, 0.6f, 0.10f);
-    p["wood"].texture.color = {0.16f, 0.07f, 0.025f};
+    p["wood"] = Make({0.30f, 0.17f, 0.08f}, 0.0f, 0.55f, 0.5f);
+    p["wood"].texture = Tex(K::kWood, 12.0, 0.6f, 0.10f);
+    p["wood"].texture.color = {0.09f, 0.04f, 0.018f};
     p["plastic_sheet"] = Make({0.30f, 0.32f, 0.35f}, 0.0f, 0.45f, 0.5f);
     p["plastic_sheet"].texture = Tex(K::kNoise, 40.0, 0.05f, 0.05f);
     p["rubber_mat"] = Make({0.03f, 0.03f, 0.03f}, 0.0f, 0.80f, 0.3f);
@@ -105,10 +105,17 @@ const std::map<std::string, Material>& Presets() {
 
 float Smooth(float t) { return t * t * t * (t * (t * 6 - 15) + 10); }  // quintic fade, C2
 
-float Lattice(int x, int y, int z, uint64_t seed) {
-  const uint64_t h = Hash(Hash(Hash(seed, static_cast<uint32_t>(x)), static_cast<uint32_t>(y)),
-                          static_cast<uint32_t>(z));
-  return UnitFloat(static_cast<uint32_t>(h >> 32));
+// A value in [0, 1) per lattice point: the coordinates folded into one word by odd multipliers,
+// then a 32-bit finaliser with good avalanche (Wellons' lowbias32), cheap enough for the eight
+// corners of every noise evaluation.
+float Lattice(uint32_t x, uint32_t y, uint32_t z, uint32_t seed) {
+  uint32_t h = seed ^ (x * 0x8DA6B343u) ^ (y * 0xD8163841u) ^ (z * 0xCB1AB31Fu);
+  h ^= h >> 16;
+  h *= 0x7FEB352Du;
+  h ^= h >> 15;
+  h *= 0x846CA68Bu;
+  h ^= h >> 16;
+  return UnitFloat(h);
 }
 
 float SmoothStep(float a, float b, float x) {
@@ -117,19 +124,24 @@ float SmoothStep(float a, float b, float x) {
 }
 
 // The scalar pattern of a procedural texture at p (mm), in [0, 1].
-float Pattern(const Texture& t, const Eigen::Vector3f& p) {
+float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
   const float s = static_cast<float>(t.scale_mm);
+  // Octaves finer than the footprint average out over it: FractalNoise replaces them by their
+  // mean. `cell` is the size (mm) of a call's first octave along its finest axis.
+  const auto fractal = [&](const Eigen::Vector3f& q, int octaves, uint64_t seed, float cell) {
+    return FractalNoise(q, octaves, seed, footprint_mm / cell);
+  };
   switch (t.kind) {
     case Texture::Kind::kNoise:
-      return FractalNoise(p / s, 4, t.seed);
+      return fractal(p / s, 4, t.seed, s);
     case Texture::Kind::kBrushed:
       // Long along x, fine across: streaks `scale` long and a fiftieth of that wide.
-      return FractalNoise(Eigen::Vector3f(p.x() / (4 * s), p.y() * 50 / s, p.z() * 50 / s), 3,
-                          t.seed);
+      return fractal(Eigen::Vector3f(p.x() / (4 * s), p.y() * 50 / s, p.z() * 50 / s), 3, t.seed,
+                     s / 50);
     case Texture::Kind::kTurned: {
       const float r = std::hypot(p.x(), p.y());
-      return FractalNoise(Eigen::Vector3f(r * 50 / s, p.z() / s, std::atan2(p.y(), p.x()) * 0.5f),
-                          3, t.seed);
+      return fractal(Eigen::Vector3f(r * 50 / s, p.z() / s, std::atan2(p.y(), p.x()) * 0.5f), 3,
+                     t.seed, s / 50);
     }
     case Texture::Kind::kChecker: {
       const int parity =
@@ -137,18 +149,28 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p) {
       return static_cast<float>(parity & 1);
     }
     case Texture::Kind::kConcrete: {
-      const float blotch = FractalNoise(p / s, 5, t.seed);
-      const float speckle = ValueNoise(p * (12 / s), Hash(t.seed, 1));
+      const float blotch = fractal(p / s, 5, t.seed, s);
+      const float speckle = fractal(p * (12 / s), 1, Hash(t.seed, 1), s / 12);
       const float pit = SmoothStep(0.80f, 0.90f, speckle);
       return std::clamp(0.75f * blotch + 0.25f * speckle - 0.35f * pit, 0.0f, 1.0f);
     }
     case Texture::Kind::kWood: {
-      const float r = std::hypot(p.x(), p.z()) / s + 2.0f * FractalNoise(p / (4 * s), 3, t.seed);
-      const float ring = r - std::floor(r);
-      return SmoothStep(0.0f, 0.25f, ring) * (1 - SmoothStep(0.55f, 1.0f, ring));
+      // Boards 8 `scale` wide along y, each its own tone and grain: long thin streaks along y,
+      // faint growth rings, and a dark seam between boards.
+      const float board = std::floor(p.x() / (8 * s));
+      const uint64_t seed = Hash(t.seed, static_cast<uint64_t>(static_cast<int64_t>(board)));
+      const float tone = UnitFloat(static_cast<uint32_t>(seed >> 32));
+      const float grain = fractal(Eigen::Vector3f(p.x() * 20 / s, p.y() / (4 * s), p.z() * 20 / s),
+                                  4, seed, s / 20);
+      const float w = p.x() / (1.5f * s) + 2.0f * fractal(p / (10 * s), 3, Hash(seed, 1), 10 * s);
+      const float ring = w - std::floor(w);
+      const float band = SmoothStep(0.0f, 0.3f, ring) * (1 - SmoothStep(0.5f, 1.0f, ring));
+      const float across = p.x() / (8 * s) - board;
+      const float seam = 1 - SmoothStep(0.0f, 0.004f, std::min(across, 1 - across));
+      return std::clamp(0.45f * grain + 0.2f * band + 0.35f * tone + seam, 0.0f, 1.0f);
     }
     case Texture::Kind::kRust: {
-      const float m = FractalNoise(p / s, 5, t.seed);
+      const float m = fractal(p / s, 5, t.seed, s);
       // Noise sums concentrate near 0.5: map `amount` to a threshold that covers about it.
       const float threshold = 0.5f + 0.35f * (1 - 2 * t.amount);
       return SmoothStep(threshold - 0.04f, threshold + 0.04f, m);
@@ -193,15 +215,17 @@ std::vector<std::string> MaterialPresetNames() {
 
 float ValueNoise(const Eigen::Vector3f& p, uint64_t seed) {
   const float fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
-  // Lattice coordinates wrap at 2^31; points farther than that from the origin repeat.
-  const int x = static_cast<int>(std::fmod(fx, 2147483648.0f)),
-            y = static_cast<int>(std::fmod(fy, 2147483648.0f)),
-            z = static_cast<int>(std::fmod(fz, 2147483648.0f));
+  // Lattice coordinates (points beyond 2^30 cells from the origin share the last cell's values).
+  const auto wrap = [](float f) {
+    return static_cast<uint32_t>(static_cast<int32_t>(std::clamp(f, -1.0e9f, 1.0e9f)));
+  };
+  const uint32_t x = wrap(fx), y = wrap(fy), z = wrap(fz);
+  const uint32_t s = static_cast<uint32_t>(seed ^ (seed >> 32));
   const float tx = Smooth(p.x() - fx), ty = Smooth(p.y() - fy), tz = Smooth(p.z() - fz);
   float c[2][2];
-  for (int dz = 0; dz < 2; ++dz) {
-    for (int dy = 0; dy < 2; ++dy) {
-      const float a = Lattice(x, y + dy, z + dz, seed), b = Lattice(x + 1, y + dy, z + dz, seed);
+  for (uint32_t dz = 0; dz < 2; ++dz) {
+    for (uint32_t dy = 0; dy < 2; ++dy) {
+      const float a = Lattice(x, y + dy, z + dz, s), b = Lattice(x + 1, y + dy, z + dz, s);
       c[dz][dy] = a + tx * (b - a);
     }
   }
@@ -210,13 +234,16 @@ float ValueNoise(const Eigen::Vector3f& p, uint64_t seed) {
   return near + tz * (far - near);
 }
 
-float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed) {
-  float sum = 0, amplitude = 0.5f, total = 0;
+float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed, float footprint) {
+  float sum = 0, amplitude = 0.5f, total = 0, cell = 1;
   Eigen::Vector3f q = p;
   for (int o = 0; o < octaves; ++o) {
-    sum += amplitude * ValueNoise(q, Hash(seed, static_cast<uint64_t>(o)));
+    // An octave whose cells are smaller than the footprint (all but the first) counts as its mean.
+    sum += amplitude *
+           (o > 0 && cell < footprint ? 0.5f : ValueNoise(q, Hash(seed, static_cast<uint64_t>(o))));
     total += amplitude;
     amplitude *= 0.5f;
+    cell *= 0.5f;
     // Rotate a little between octaves so that lattice axes do not line up.
     q = Eigen::Vector3f(1.6f * q.x() + 1.2f * q.y(), -1.2f * q.x() + 1.6f * q.y(), 2.0f * q.z());
   }
@@ -224,7 +251,7 @@ float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed) {
 }
 
 TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eigen::Vector3f& n,
-                          const LinearImage* image) {
+                          const LinearImage* image, float footprint_mm) {
   TextureSample out;
   if (t.kind == Texture::Kind::kNone) return out;
   if (t.kind == Texture::Kind::kImage) {
@@ -241,7 +268,7 @@ TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eige
     out.mix = 1.0f;
     return out;
   }
-  const float v = Pattern(t, p);
+  const float v = Pattern(t, p, footprint_mm);
   switch (t.kind) {
     case Texture::Kind::kChecker:
     case Texture::Kind::kWood:
@@ -266,7 +293,7 @@ TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eige
     for (int a = 0; a < 3; ++a) {
       Eigen::Vector3f d = Eigen::Vector3f::Zero();
       d[a] = h;
-      grad[a] = (Pattern(t, p + d) - Pattern(t, p - d)) / (2 * h);
+      grad[a] = (Pattern(t, p + d, footprint_mm) - Pattern(t, p - d, footprint_mm)) / (2 * h);
     }
     const Eigen::Vector3f tangential = grad - grad.dot(n) * n;
     // Dimensionless slope: a unit change of the pattern over the feature size tilts by `bump`.

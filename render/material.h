@@ -70,17 +70,22 @@ struct TextureSample {
 };
 
 // Evaluates `texture` at point `p` (mm) with unit normal `n`, both in the texture's frame.
-// `image` is the loaded image for kImage (else ignored).
+// `image` is the loaded image for kImage (else ignored). `footprint_mm` is the size of the patch
+// of surface the sample stands for (a pixel's, or a wider one after rough bounces): noise octaves
+// finer than it are replaced by their mean, which is what they average to over the patch (a
+// filtered texture, cheaper too); 0 evaluates every octave.
 TextureSample EvalTexture(const Texture& texture, const Eigen::Vector3f& p,
-                          const Eigen::Vector3f& n, const LinearImage* image);
+                          const Eigen::Vector3f& n, const LinearImage* image,
+                          float footprint_mm = 0.0f);
 
 // Applies a texture sample to a surface: the modulated parameters, clamped to their ranges.
 PrincipledParams ApplyTexture(const PrincipledParams& surface, const TextureSample& sample);
 
 // 3D value noise in [0, 1], smooth (C1), period-free; `seed` picks the pattern.
 float ValueNoise(const Eigen::Vector3f& p, uint64_t seed);
-// Fractal sum of `octaves` value noises, each twice the frequency and half the amplitude, in [0,
-// 1].
-float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed);
+// Fractal sum of `octaves` value noises, each twice the frequency and half the amplitude, in
+// [0, 1]. Octaves after the first whose cells (1, 1/2, 1/4, ... in p's units) are smaller than
+// `footprint` (same units) count as their mean, 1/2.
+float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed, float footprint = 0.0f);
 
 }  // namespace cadsynth

@@ -424,9 +424,13 @@ struct PathTracer::Impl {
   struct Surface {
     Eigen::Vector3f p, ng, ns, tangent;
     PrincipledParams params;
+    float cone_width = 0;  // mm: the width of the ray cone at p
   };
-  // The surface a ray hit: its point, normals facing the ray, and textured material.
-  Surface Hit(const RTCRayHit16& rh, int j, const Eigen::Vector3f& dir) const;
+  // The surface a ray hit: its point, normals facing the ray, and textured material. The ray
+  // stands for a cone (Amanatides 1984) of width `width` mm at its origin widening by `spread`
+  // per mm; textures are filtered over its footprint on the surface.
+  Surface Hit(const RTCRayHit16& rh, int j, const Eigen::Vector3f& dir, float width,
+              float spread) const;
 };
 
 PathTracer::PathTracer(PathTracerScene scene) : impl_(std::make_unique<Impl>()) {
@@ -450,7 +454,8 @@ PathTracer::PathTracer(PathTracerScene scene) : impl_(std::make_unique<Impl>()) 
 PathTracer::~PathTracer() = default;
 
 PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
-                                                const Eigen::Vector3f& dir) const {
+                                                const Eigen::Vector3f& dir, float width,
+                                                float spread) const {
   Surface s;
   // The packet's own direction: camera rays are not unit length (their t is depth).
   s.p = Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) +
@@ -487,8 +492,12 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
   if (s.ng.dot(dir) > 0) s.ng = -s.ng;  // two-sided: face the incoming ray
   if (s.ns.dot(s.ng) < 0) s.ns = -s.ns, tex_n = -tex_n;
   s.params = material->surface;
+  const Eigen::Vector3f origin(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]);
+  s.cone_width = width + spread * (s.p - origin).norm();
   if (material->texture.kind != Texture::Kind::kNone) {
-    const TextureSample t = EvalTexture(material->texture, tex_p, tex_n, image);
+    // The cone's footprint stretches where it meets the surface at a grazing angle.
+    const float footprint = s.cone_width / std::max(0.2f, std::abs(dir.dot(s.ng)));
+    const TextureSample t = EvalTexture(material->texture, tex_p, tex_n, image, footprint);
     s.params = ApplyTexture(material->surface, t);
     if (t.normal_offset.squaredNorm() > 0) {
       // Back to the world frame: instances rotate their texture frame.
@@ -529,7 +538,9 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
   alignas(64) int active[16];
   alignas(64) int shadow_valid[16];
   Eigen::Vector3f throughput[16], dir[16], shadow_value[16], prev_normal[16];
-  float prev_pdf[16];
+  float prev_pdf[16], cone_width[16], cone_spread[16];
+  // A pixel's angular size: the camera rays' cone.
+  const float pixel_spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
 
   for (int s = 0; s < samples; ++s) {
     // Camera rays through a point of each pixel: directions with camera z = 1, so that the clip
@@ -539,6 +550,8 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
       active[j] = in_image[j];
       throughput[j].setOnes();
       prev_pdf[j] = 0;
+      cone_width[j] = 0;
+      cone_spread[j] = pixel_spread;
       const Eigen::Vector2f jitter = PixelSampler(pixel_seed[j], s).Get2D(0);
       const Eigen::Vector3f d_cam(static_cast<float>((u + jitter.x() - k.cx) / k.fx),
                                   static_cast<float>((v + jitter.y() - k.cy) / k.fy), 1.0f);
@@ -600,7 +613,7 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
           SetRay(&shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
           continue;
         }
-        const Impl::Surface surf = im.Hit(rh, j, dir[j]);
+        const Impl::Surface surf = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
         Eigen::Vector3f t = surf.tangent - surf.tangent.dot(surf.ns) * surf.ns, b;
         if (surf.params.anisotropic > 0 && t.squaredNorm() > 1e-6f) {
           t.normalize();
@@ -641,9 +654,10 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
           if (ok && ls.wi.dot(surf.ng) > 0) {
             const Eigen::Vector3f wi = to_local(ls.wi);
             if (wi.z() > 0) {
-              const Eigen::Vector3f f = bsdf.Eval(wo, wi);
+              float bsdf_pdf;
+              const Eigen::Vector3f f = bsdf.EvalWithPdf(wo, wi, &bsdf_pdf);
               const float light_pdf = select_pdf * ls.pdf;
-              const float w = delta ? 1.0f : PowerHeuristic(light_pdf, bsdf.Pdf(wo, wi));
+              const float w = delta ? 1.0f : PowerHeuristic(light_pdf, bsdf_pdf);
               const Eigen::Vector3f c =
                   throughput[j].cwiseProduct(f).cwiseProduct(ls.value) * (wi.z() * w / light_pdf);
               if (c.allFinite() && c.maxCoeff() > 0) {
@@ -675,6 +689,10 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
         if (!(next.maxCoeff() > 0)) continue;
         throughput[j] = next;
         prev_pdf[j] = sampled->pdf;
+        // The cone widens by the lobe it was drawn from: about alpha for a glossy reflection,
+        // a radian for a diffuse one.
+        cone_width[j] = surf.cone_width;
+        cone_spread[j] += sampled->pdf > 1 ? std::sqrt(bsdf.alpha_x() * bsdf.alpha_y()) : 1.0f;
         prev_normal[j] = surf.ns;
         dir[j] = wi;
         active[j] = -1;

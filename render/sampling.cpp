@@ -30,13 +30,30 @@ uint32_t OwenScramble(uint32_t x, uint32_t seed) {
   return ReverseBits(LaineKarras(ReverseBits(x), seed));
 }
 
-// The second Sobol dimension, generator matrix built by v_{k+1} = v_k ^ (v_k >> 1), v_0 = 2^31.
-uint32_t SobolDim1(uint32_t index) {
-  uint32_t result = 0;
-  for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1) {
-    if (index & 1u) result ^= v;
+// The second Sobol dimension, generator matrix built by v_{k+1} = v_k ^ (v_k >> 1), v_0 = 2^31:
+// the XOR of the columns of the index's set bits, eight bits at a time from tables.
+struct SobolTables {
+  uint32_t t[4][256];
+  SobolTables() {
+    uint32_t column[32];
+    uint32_t v = 1u << 31;
+    for (int k = 0; k < 32; ++k, v ^= v >> 1) column[k] = v;
+    for (int byte = 0; byte < 4; ++byte) {
+      for (int x = 0; x < 256; ++x) {
+        uint32_t r = 0;
+        for (int b = 0; b < 8; ++b) {
+          if (x & (1 << b)) r ^= column[8 * byte + b];
+        }
+        t[byte][x] = r;
+      }
+    }
   }
-  return result;
+};
+
+uint32_t SobolDim1(uint32_t index) {
+  static const SobolTables tables;
+  return tables.t[0][index & 255] ^ tables.t[1][(index >> 8) & 255] ^
+         tables.t[2][(index >> 16) & 255] ^ tables.t[3][index >> 24];
 }
 
 }  // namespace

@@ -33,11 +33,13 @@ Eigen::Vector2f SobolOwen2D(uint32_t index, uint64_t seed);
 
 // The per-pixel sampler of one path: sample `index` of the pixel's sequence, dimension pair `dim`
 // (0: the position in the pixel, then three pairs per bounce). Pairs with different `dim` are
-// scrambled and shuffled independently, so they do not correlate.
+// scrambled and shuffled with seeds SobolOwen2D hashes apart, so they do not correlate.
 class PixelSampler {
  public:
   PixelSampler(uint64_t pixel_seed, uint32_t index) : seed_(pixel_seed), index_(index) {}
-  Eigen::Vector2f Get2D(uint32_t dim) const { return SobolOwen2D(index_, Hash(seed_, dim)); }
+  Eigen::Vector2f Get2D(uint32_t dim) const {
+    return SobolOwen2D(index_, seed_ + 0x9E3779B97F4A7C15ull * (dim + 1));
+  }
 
  private:
   uint64_t seed_;

@@ -844,6 +844,10 @@ LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::
     r.Fail(node["type"], key + ".type",
            "unknown light '" + type + "' (known: point, spot, rect, disc, sun)");
   }
+  if (l.kind == K::kSun && node["power"])
+    r.Fail(node["power"], key + ".power", "a sun's is 'strength' (irradiance, W/m2, as Blender's)");
+  if (l.kind != K::kSun && node["strength"])
+    r.Fail(node["strength"], key + ".strength", "this light's is 'power' (W, as Blender's)");
   r.ExpectMap(node, key, keys);
   if (node["color"]) l.color = r.Color(node["color"], key + ".color");
   if (node["position"]) l.position = Triple(r, node["position"], key + ".position", true);

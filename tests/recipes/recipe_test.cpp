@@ -416,6 +416,82 @@ TEST(Recipe, SplitNamesArePlainFolderNames) {
   EXPECT_EQ(ParseRecipe("output: {split: train_pbr}\n", "r.yaml", ".").bop.split, "train_pbr");
 }
 
+TEST(Recipe, PhysicallyBasedMaterialsAndLights) {
+  const RunSpec spec = ParseRecipe(
+      "render: {mode: pbr, samples: 32, bounces: 2, exposure: -1, view: standard}\n"
+      "materials:\n"
+      "  floor: {preset: concrete, roughness: 0.9}\n"
+      "  default: {preset: abs}\n"
+      "  assign:\n"
+      "    - {family: planetary, preset: steel, roughness: 0.2}\n"
+      "    - {name: 'hex*', preset: black_oxide, texture: none}\n"
+      "    - {file: '*.stl', base_color: [1, 0, 0], metallic: 0, texture: {type: checker, scale: 5 "
+      "mm}}\n"
+      "lighting:\n"
+      "  lights:\n"
+      "    - {type: rect, position: [0, 0, 2 m], target: [0, 0, 0], size: [1 m, 0.5 m], power: "
+      "40}\n"
+      "    - {type: spot, position: [1 m, 0, 1 m], target: [0, 0, 0], power: 100, spot_size: 30}\n"
+      "    - {type: sun, direction: [0, 0, -1], strength: 2, angle: 1}\n"
+      "  environment: {type: sky, strength: 0.5}\n",
+      "r.yaml", ".");
+  EXPECT_EQ(spec.render.mode, RenderOptions::Mode::kPbr);
+  EXPECT_EQ(spec.render.samples, 32);
+  EXPECT_EQ(spec.render.view, RenderOptions::View::kStandard);
+  EXPECT_FLOAT_EQ(spec.look.floor_material.surface.roughness, 0.9f);
+  ASSERT_TRUE(spec.default_material.has_value());
+  EXPECT_TRUE(spec.default_material->base_from_part);  // plastics take the part's colour
+  ASSERT_EQ(spec.material_rules.size(), 3u);
+  EXPECT_EQ(spec.material_rules[0].family, "planetary");
+  EXPECT_FLOAT_EQ(spec.material_rules[0].material.surface.metallic, 1.0f);
+  EXPECT_FLOAT_EQ(spec.material_rules[0].material.surface.roughness, 0.2f);
+  EXPECT_EQ(spec.material_rules[1].material.texture.kind, Texture::Kind::kNone);
+  EXPECT_EQ(spec.material_rules[2].file, "*.stl");
+  EXPECT_FLOAT_EQ(spec.material_rules[2].material.surface.base_color[0], 1.0f);  // sRGB 1 = 1
+  EXPECT_EQ(spec.material_rules[2].material.texture.kind, Texture::Kind::kChecker);
+  EXPECT_DOUBLE_EQ(spec.material_rules[2].material.texture.scale_mm, 5.0);
+  ASSERT_EQ(spec.look.light_sources.size(), 3u);
+  EXPECT_EQ(spec.look.light_sources[0].kind, LightSource::Kind::kRect);
+  EXPECT_DOUBLE_EQ(spec.look.light_sources[0].size_y_mm, 500.0);
+  EXPECT_NEAR(spec.look.light_sources[0].direction.normalized().z(), -1.0, 1e-12);  // at target
+  EXPECT_NEAR(spec.look.light_sources[1].spot_size_rad, 30 * M_PI / 180, 1e-12);
+  EXPECT_DOUBLE_EQ(spec.look.light_sources[2].power, 2.0);  // the sun's W/m2
+  EXPECT_EQ(spec.look.environment.kind, Environment::Kind::kSky);
+}
+
+TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
+  EXPECT_EQ(ErrorOf("materials: {assign: [{name: '*', preset: steal}]}\n").substr(0, 89),
+            "r.yaml:1:42: materials.assign[0].preset: unknown material 'steal' (did you mean "
+            "'steel'?)");
+  EXPECT_EQ(ErrorOf("materials:\n  floor: {roughness: 1.5}\n"),
+            "r.yaml:2:22: materials.floor.roughness: must lie in [0, 1], got 1.5");
+  EXPECT_EQ(ErrorOf("materials:\n  floor: {texture: {type: image, file: no_such.png}}\n"),
+            "r.yaml:2:40: materials.floor.texture.file: no_such.png: no such file");
+  EXPECT_EQ(ErrorOf("lighting:\n  lights: [{type: point, position: [0, 0, 1 m], power: -5}]\n"),
+            "r.yaml:2:56: lighting.lights[0].power: must not be negative");
+  EXPECT_EQ(ErrorOf("lighting:\n  lights: [{type: sun, power: 3}]\n"),
+            "r.yaml:2:31: lighting.lights[0].power: a sun's is 'strength' (irradiance, W/m2, as "
+            "Blender's)");
+  EXPECT_EQ(ErrorOf("lighting:\n  lights: [{type: laser}]\n"),
+            "r.yaml:2:19: lighting.lights[0].type: unknown light 'laser' (known: point, spot, "
+            "rect, disc, sun)");
+  EXPECT_EQ(ErrorOf("lighting:\n  lights: [{type: disc, power: 5}]\n"),
+            "r.yaml:2:12: lighting.lights[0]: a disc light needs a 'radius'");
+  EXPECT_EQ(ErrorOf("render: {mode: photoreal}\n").substr(0, 38),
+            "r.yaml:1:16: render.mode: expected 'fa");
+  EXPECT_EQ(ErrorOf("render: {samples: 0}\n"),
+            "r.yaml:1:9: render: samples must be 1 to 65536 paths per pixel");
+
+  // An environment image that is not one: a named file, line and column.
+  testing::ScratchDir dir;
+  std::ofstream(dir / "sky.hdr") << "#?RADIANCE\nnot really\n";
+  const std::string error =
+      ErrorOf("lighting:\n  environment: {type: image, file: sky.hdr}\n", dir.path());
+  EXPECT_EQ(error.rfind("r.yaml:2:36: lighting.environment.file: ", 0), 0u) << error;
+  EXPECT_NE(error.find("sky.hdr"), std::string::npos) << error;
+  EXPECT_NE(error.find("not an image"), std::string::npos) << error;
+}
+
 TEST(Recipe, ShippedRecipesParse) {
   const bool have_data = std::filesystem::exists(testing::DataDir() / "step");
   int parsed = 0;

@@ -129,6 +129,26 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
     fs::path rgb_path = dir / "rgb" / (name + ".png");
     if (!fs::exists(rgb_path)) rgb_path = dir / "rgb" / (name + ".jpg");
     cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
+    if (!options.versus.empty()) {
+      // Colour against colour: the same image of the other dataset, labelled with the folders.
+      const fs::path other_dir = options.versus / split_dir.filename() / Id6(scene) / "rgb";
+      fs::path other_path = other_dir / (name + ".png");
+      if (!fs::exists(other_path)) other_path = other_dir / (name + ".jpg");
+      std::vector<cv::Mat> panels = {rgb, ReadImage(other_path, cv::IMREAD_COLOR)};
+      const double scale = static_cast<double>(options.panel_width) / rgb.cols;
+      const cv::Size size(options.panel_width, std::max(1, cvRound(rgb.rows * scale)));
+      const std::string labels[2] = {dataset.filename().string(),
+                                     options.versus.filename().string()};
+      for (int p = 0; p < 2; ++p) {
+        cv::resize(panels[p], panels[p], size, 0, 0, cv::INTER_AREA);
+        cv::putText(panels[p], labels[p] + ", " + where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX,
+                    0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+      }
+      cv::Mat row;
+      cv::hconcat(panels, row);
+      rows.push_back(row);
+      continue;
+    }
     const cv::Mat depth = ReadImage(dir / "depth" / (name + ".png"), cv::IMREAD_UNCHANGED);
     const Json& gt = gts[scene][std::to_string(im)];
     const Eigen::Matrix3d k = Matrix3(cameras[scene].at(std::to_string(im)).at("cam_K"));

@@ -16,6 +16,9 @@ struct PreviewOptions {
   std::vector<std::pair<int, int>> frames;  // (scene_id, im_id) to show, in order
   int panel_width = 320;  // each of the three panels per frame is scaled to this width
   std::string split;      // the folder of scenes; empty: the dataset's only one (train/ by default)
+  // Another dataset of the same views (e.g. the same recipe with render.mode: pbr): each row then
+  // shows the two colour images side by side, without overlays, instead of the three panels.
+  std::filesystem::path versus;
 };
 
 // The 8 corners of `box` (model frame, mm) projected with `k` at pose `cam_from_model`, in pixel
@@ -25,6 +28,7 @@ std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k,
                                         const Eigen::AlignedBox3d& box);
 
 // Reads DATASET (BOP layout) and returns the contact sheet as PNG bytes: one row per frame.
+// With `versus`, that dataset must have the same scene folder and images.
 // Sets *shown to the frames it shows. Throws Error naming the file on missing or bad input.
 std::string RenderPreview(const std::filesystem::path& dataset, const PreviewOptions& options,
                           std::vector<std::pair<int, int>>* shown = nullptr);

@@ -68,11 +68,11 @@ const std::map<std::string, Material>& Presets() {
     using K = Texture::Kind;
     std::map<std::string, Material> p;
     p["steel"] = Make({0.56f, 0.57f, 0.58f}, 1.0f, 0.35f);
-    p["steel"].texture = Tex(K::kNoise, 8.0, 0.08f, 0.12f);
+    p["steel"].texture = Tex(K::kNoise, 6.0, 0.05f, 0.08f);
     p["stainless"] = Make({0.67f, 0.64f, 0.60f}, 1.0f, 0.30f, 0.5f, 0.6f);
     p["stainless"].texture = Tex(K::kBrushed, 4.0, 0.06f, 0.10f, 0.05f);
-    p["aluminium"] = Make({0.91f, 0.92f, 0.92f}, 1.0f, 0.30f);
-    p["aluminium"].texture = Tex(K::kNoise, 6.0, 0.05f, 0.10f);
+    p["aluminium"] = Make({0.91f, 0.92f, 0.92f}, 1.0f, 0.32f, 0.5f, 0.4f);
+    p["aluminium"].texture = Tex(K::kBrushed, 6.0, 0.04f, 0.06f);
     p["brass"] = Make({0.91f, 0.78f, 0.42f}, 1.0f, 0.28f);
     p["brass"].texture = Tex(K::kNoise, 8.0, 0.08f, 0.10f);
     p["cast_iron"] = Make({0.42f, 0.41f, 0.40f}, 1.0f, 0.62f);
@@ -118,6 +118,16 @@ float Lattice(uint32_t x, uint32_t y, uint32_t z, uint32_t seed) {
   return UnitFloat(h);
 }
 
+// floor() for the textures' inner loops (a library call on the baseline x86-64 instruction set):
+// truncation, corrected below zero; arguments beyond +-1e9 are clamped (texture coordinates
+// never reach them meaningfully), NaN gives -1e9.
+float FastFloor(float f) {
+  if (!(f >= -1.0e9f)) f = -1.0e9f;
+  if (f > 1.0e9f) f = 1.0e9f;
+  const float t = static_cast<float>(static_cast<int32_t>(f));
+  return t > f ? t - 1 : t;
+}
+
 float SmoothStep(float a, float b, float x) {
   const float t = std::clamp((x - a) / (b - a), 0.0f, 1.0f);
   return t * t * (3 - 2 * t);
@@ -145,7 +155,7 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
     }
     case Texture::Kind::kChecker: {
       const int parity =
-          static_cast<int>(std::floor(p.x() / s) + std::floor(p.y() / s) + std::floor(p.z() / s));
+          static_cast<int>(FastFloor(p.x() / s) + FastFloor(p.y() / s) + FastFloor(p.z() / s));
       return static_cast<float>(parity & 1);
     }
     case Texture::Kind::kConcrete: {
@@ -157,13 +167,13 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
     case Texture::Kind::kWood: {
       // Boards 8 `scale` wide along y, each its own tone and grain: long thin streaks along y,
       // faint growth rings, and a dark seam between boards.
-      const float board = std::floor(p.x() / (8 * s));
+      const float board = FastFloor(p.x() / (8 * s));
       const uint64_t seed = Hash(t.seed, static_cast<uint64_t>(static_cast<int64_t>(board)));
       const float tone = UnitFloat(static_cast<uint32_t>(seed >> 32));
       const float grain = fractal(Eigen::Vector3f(p.x() * 20 / s, p.y() / (4 * s), p.z() * 20 / s),
                                   4, seed, s / 20);
       const float w = p.x() / (1.5f * s) + 2.0f * fractal(p / (10 * s), 3, Hash(seed, 1), 10 * s);
-      const float ring = w - std::floor(w);
+      const float ring = w - FastFloor(w);
       const float band = SmoothStep(0.0f, 0.3f, ring) * (1 - SmoothStep(0.5f, 1.0f, ring));
       const float across = p.x() / (8 * s) - board;
       const float seam = 1 - SmoothStep(0.0f, 0.004f, std::min(across, 1 - across));
@@ -214,12 +224,11 @@ std::vector<std::string> MaterialPresetNames() {
 }
 
 float ValueNoise(const Eigen::Vector3f& p, uint64_t seed) {
-  const float fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
-  // Lattice coordinates (points beyond 2^30 cells from the origin share the last cell's values).
-  const auto wrap = [](float f) {
-    return static_cast<uint32_t>(static_cast<int32_t>(std::clamp(f, -1.0e9f, 1.0e9f)));
-  };
-  const uint32_t x = wrap(fx), y = wrap(fy), z = wrap(fz);
+  // The lattice cell (points beyond 1e9 cells from the origin share the last cell's values).
+  const float fx = FastFloor(p.x()), fy = FastFloor(p.y()), fz = FastFloor(p.z());
+  const uint32_t x = static_cast<uint32_t>(static_cast<int32_t>(fx)),
+                 y = static_cast<uint32_t>(static_cast<int32_t>(fy)),
+                 z = static_cast<uint32_t>(static_cast<int32_t>(fz));
   const uint32_t s = static_cast<uint32_t>(seed ^ (seed >> 32));
   const float tx = Smooth(p.x() - fx), ty = Smooth(p.y() - fy), tz = Smooth(p.z() - fz);
   float c[2][2];
@@ -238,9 +247,9 @@ float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed, float f
   float sum = 0, amplitude = 0.5f, total = 0, cell = 1;
   Eigen::Vector3f q = p;
   for (int o = 0; o < octaves; ++o) {
-    // An octave whose cells are smaller than the footprint (all but the first) counts as its mean.
-    sum += amplitude *
-           (o > 0 && cell < footprint ? 0.5f : ValueNoise(q, Hash(seed, static_cast<uint64_t>(o))));
+    // An octave whose cells are smaller than the footprint counts as its mean.
+    sum +=
+        amplitude * (cell < footprint ? 0.5f : ValueNoise(q, Hash(seed, static_cast<uint64_t>(o))));
     total += amplitude;
     amplitude *= 0.5f;
     cell *= 0.5f;

@@ -84,8 +84,8 @@ PrincipledParams ApplyTexture(const PrincipledParams& surface, const TextureSamp
 // 3D value noise in [0, 1], smooth (C1), period-free; `seed` picks the pattern.
 float ValueNoise(const Eigen::Vector3f& p, uint64_t seed);
 // Fractal sum of `octaves` value noises, each twice the frequency and half the amplitude, in
-// [0, 1]. Octaves after the first whose cells (1, 1/2, 1/4, ... in p's units) are smaller than
-// `footprint` (same units) count as their mean, 1/2.
+// [0, 1]. Octaves whose cells (1, 1/2, 1/4, ... in p's units) are smaller than `footprint` (same
+// units) count as their mean, 1/2.
 float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed, float footprint = 0.0f);
 
 }  // namespace cadsynth

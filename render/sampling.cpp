@@ -1,18 +1,28 @@
 #include "render/sampling.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace cadsynth {
 
 namespace {
 
-uint32_t ReverseBits(uint32_t x) {
-  x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-  x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-  x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-  x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-  return (x >> 16) | (x << 16);
+// Bit reversal, a byte at a time from a table built at compile time.
+constexpr std::array<uint8_t, 256> kReversedByte = [] {
+  std::array<uint8_t, 256> t{};
+  for (int x = 0; x < 256; ++x) {
+    int r = 0;
+    for (int b = 0; b < 8; ++b) r |= ((x >> b) & 1) << (7 - b);
+    t[x] = static_cast<uint8_t>(r);
+  }
+  return t;
+}();
+
+inline uint32_t ReverseBits(uint32_t x) {
+  return (static_cast<uint32_t>(kReversedByte[x & 255]) << 24) |
+         (static_cast<uint32_t>(kReversedByte[(x >> 8) & 255]) << 16) |
+         (static_cast<uint32_t>(kReversedByte[(x >> 16) & 255]) << 8) | kReversedByte[x >> 24];
 }
 
 // A hash that only ever carries information from lower bits to higher ones (Laine and Karras
@@ -31,29 +41,28 @@ uint32_t OwenScramble(uint32_t x, uint32_t seed) {
 }
 
 // The second Sobol dimension, generator matrix built by v_{k+1} = v_k ^ (v_k >> 1), v_0 = 2^31:
-// the XOR of the columns of the index's set bits, eight bits at a time from tables.
-struct SobolTables {
-  uint32_t t[4][256];
-  SobolTables() {
-    uint32_t column[32];
-    uint32_t v = 1u << 31;
-    for (int k = 0; k < 32; ++k, v ^= v >> 1) column[k] = v;
-    for (int byte = 0; byte < 4; ++byte) {
-      for (int x = 0; x < 256; ++x) {
-        uint32_t r = 0;
-        for (int b = 0; b < 8; ++b) {
-          if (x & (1 << b)) r ^= column[8 * byte + b];
-        }
-        t[byte][x] = r;
+// the XOR of the columns of the index's set bits, eight bits at a time from tables built at
+// compile time.
+constexpr std::array<std::array<uint32_t, 256>, 4> kSobolDim1 = [] {
+  std::array<uint32_t, 32> column{};
+  uint32_t v = 1u << 31;
+  for (int k = 0; k < 32; ++k, v ^= v >> 1) column[k] = v;
+  std::array<std::array<uint32_t, 256>, 4> t{};
+  for (int byte = 0; byte < 4; ++byte) {
+    for (int x = 0; x < 256; ++x) {
+      uint32_t r = 0;
+      for (int b = 0; b < 8; ++b) {
+        if (x & (1 << b)) r ^= column[8 * byte + b];
       }
+      t[byte][x] = r;
     }
   }
-};
+  return t;
+}();
 
-uint32_t SobolDim1(uint32_t index) {
-  static const SobolTables tables;
-  return tables.t[0][index & 255] ^ tables.t[1][(index >> 8) & 255] ^
-         tables.t[2][(index >> 16) & 255] ^ tables.t[3][index >> 24];
+inline uint32_t SobolDim1(uint32_t index) {
+  return kSobolDim1[0][index & 255] ^ kSobolDim1[1][(index >> 8) & 255] ^
+         kSobolDim1[2][(index >> 16) & 255] ^ kSobolDim1[3][index >> 24];
 }
 
 }  // namespace

@@ -47,8 +47,8 @@ struct Scene {
   // A dielectric of base colour `srgb` (CAD colours are sRGB), roughness 0.45, specular 0.5.
   static Material DefaultMaterial(const Eigen::Vector3f& srgb);
   static Material DefaultFloorMaterial(const Eigen::Vector3f& srgb);
-  // A work cell's ceiling light: a 1 m x 1 m rect light 2 m above the origin facing down, 150 W
-  // (the floor under it receives 150 / (pi 2^2) = 11.9 W/m2).
+  // A work cell's ceiling light: a 1 m x 1 m rect light 2 m above the origin facing down, 40 W
+  // (the floor under it receives about 40 / (pi 2^2) = 3.2 W/m2).
   static std::vector<LightSource> DefaultLightSources();
 };
 

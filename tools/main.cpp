@@ -41,6 +41,7 @@ usage:
   cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
   cadsynth eval DATASET RESULTS.csv [--json FILE]
   cadsynth preview DATASET [-o FILE.png] [--count N | --frames S/I,...] [--width PX]
+                   [--versus DATASET2]
   cadsynth --help | --version
   cadsynth COMMAND --help       every option of one command
 
@@ -86,6 +87,8 @@ preview    Writes a contact sheet PNG: per frame the colour image with every obj
   --count N      frames spread evenly over the dataset (default 4)
   --frames LIST  exactly these frames, as scene/image pairs: 0/0,2/17
   --width PX     width of each of the three panels (default 320)
+  --versus DATASET2  another dataset of the same views (e.g. the same recipe with
+                 render.mode: pbr): each row shows the two colour images side by side
 )";
 
 struct UsageError {
@@ -117,7 +120,7 @@ struct Args {
   // eval
   std::string results, json_file;
   // preview
-  std::string frames;
+  std::string frames, versus;
   int count = 4, width = 320;
 };
 
@@ -250,6 +253,7 @@ int RunPreview(const Args& a) {
   cadsynth::PreviewOptions options;
   options.count = a.count;
   options.panel_width = a.width;
+  options.versus = a.versus;
   std::stringstream list(a.frames);
   for (std::string item; std::getline(list, item, ',');) {
     const size_t slash = item.find('/');
@@ -392,6 +396,11 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   preview->add_option("--frames", a.frames, "exactly these frames, as scene/image pairs: 0/0,2/17")
       ->type_name("LIST")
       ->excludes(count);
+  preview
+      ->add_option("--versus", a.versus,
+                   "another dataset of the same views (e.g. render.mode: pbr): show the two "
+                   "colour images side by side")
+      ->type_name("DATASET2");
   preview->add_option("--width", a.width, "width of each of the three panels in pixels")
       ->check(CLI::Range(32, 4096))
       ->type_name("PX")

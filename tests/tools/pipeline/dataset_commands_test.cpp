@@ -182,6 +182,17 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   const cv::Mat sheet = cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR);
   EXPECT_EQ(sheet.cols, 300);
   EXPECT_EQ(sheet.rows, 3 * 75);  // 160 x 120 images at 100 px wide
+  // Against another dataset of the same views: two colour panels per row.
+  {
+    PreviewOptions versus = options;
+    versus.versus = dataset;
+    const std::string two = RenderPreview(dataset, versus);
+    const cv::Mat pair = cv::imdecode(std::vector<uchar>(two.begin(), two.end()), cv::IMREAD_COLOR);
+    EXPECT_EQ(pair.cols, 200);
+    EXPECT_EQ(pair.rows, 3 * 75);
+    versus.versus = dir / "nowhere";
+    EXPECT_THROW(RenderPreview(dataset, versus), Error);
+  }
   options.frames = {{1, 7}};
   EXPECT_THROW(RenderPreview(dataset, options), Error);  // no such image
   // The folder of scenes is found whatever its name (output.split).

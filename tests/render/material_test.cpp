@@ -1,0 +1,135 @@
+// Materials, textures and images of the physically based mode.
+#include "render/material.h"
+
+#include <cmath>
+#include <fstream>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "render/image.h"
+#include "tests/test_support.h"
+
+namespace cadsynth {
+namespace {
+
+TEST(Material, EveryPresetIsValidAndMetalsKeepTheirColour) {
+  const std::vector<std::string> names = MaterialPresetNames();
+  EXPECT_GE(names.size(), 14u);
+  for (const std::string& name : names) {
+    Material m;
+    ASSERT_TRUE(MaterialPreset(name, &m)) << name;
+    std::string why;
+    EXPECT_TRUE(m.Check(&why)) << name << ": " << why;
+    // A metal's colour is the metal's; paints and plastics take the part's.
+    if (m.surface.metallic >= 1) EXPECT_FALSE(m.base_from_part) << name;
+  }
+  Material m;
+  EXPECT_FALSE(MaterialPreset("unobtainium", &m));
+  ASSERT_TRUE(MaterialPreset("aluminium", &m));
+  EXPECT_NEAR(m.surface.base_color[0], 0.91f, 1e-6);  // aluminium's reflectance at normal incidence
+  EXPECT_GT(m.surface.anisotropic, 0.0f);             // brushed
+}
+
+TEST(Material, ValueNoiseIsSmoothBoundedAndSeeded) {
+  float lo = 1, hi = 0, largest_step = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Eigen::Vector3f p(0.013f * i - 100, 0.007f * i, -0.011f * i);
+    const float v = ValueNoise(p, 3);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+    largest_step =
+        std::max(largest_step, std::abs(ValueNoise(p + Eigen::Vector3f(1e-3f, 0, 0), 3) - v));
+  }
+  EXPECT_GE(lo, 0.0f);
+  EXPECT_LT(hi, 1.0f);
+  EXPECT_GT(hi - lo, 0.5f);  // it does vary
+  // Continuous: the quintic fade's slope is at most 15/8 per lattice cell per corner difference.
+  EXPECT_LT(largest_step, 2e-3f);
+  EXPECT_NE(ValueNoise({0.5f, 0.5f, 0.5f}, 1), ValueNoise({0.5f, 0.5f, 0.5f}, 2));
+}
+
+TEST(Material, NoiseFinerThanTheFootprintAveragesToItsMean) {
+  const Eigen::Vector3f p(1.3f, -2.7f, 0.4f);
+  // Every octave finer than the footprint: the mean, exactly.
+  EXPECT_FLOAT_EQ(FractalNoise(p, 4, 9, 2.0f), 0.5f);
+  // No footprint: every octave counts; a footprint of a quarter cell drops the last two of four.
+  const float full = FractalNoise(p, 4, 9, 0.0f);
+  const float filtered = FractalNoise(p, 4, 9, 0.3f);
+  EXPECT_NE(full, filtered);
+  EXPECT_NEAR(filtered, full, (0.125f + 0.0625f) / (0.5f + 0.25f + 0.125f + 0.0625f));
+  // Averaging the unfiltered noise over a large patch gives the filtered value.
+  double sum = 0;
+  const int n = 200;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j)
+      sum += FractalNoise(Eigen::Vector3f(0.37f * i, 0.53f * j, 0.29f * (i + j)), 3, 4);
+  }
+  EXPECT_NEAR(sum / (n * n), 0.5, 0.01);
+}
+
+TEST(Material, CheckerAndRustBlendAndRustIsNotMetal) {
+  Texture checker;
+  checker.kind = Texture::Kind::kChecker;
+  checker.scale_mm = 10;
+  checker.color = {0.1f, 0.2f, 0.3f};
+  const Eigen::Vector3f n = Eigen::Vector3f::UnitZ();
+  EXPECT_EQ(EvalTexture(checker, {5, 5, 5}, n, nullptr).mix, 0.0f);   // cell (0, 0, 0)
+  EXPECT_EQ(EvalTexture(checker, {15, 5, 5}, n, nullptr).mix, 1.0f);  // cell (1, 0, 0)
+  PrincipledParams steel;
+  steel.metallic = 1;
+  steel.base_color = Eigen::Vector3f::Constant(0.56f);
+  const PrincipledParams painted =
+      ApplyTexture(steel, EvalTexture(checker, {15, 5, 5}, n, nullptr));
+  EXPECT_EQ(painted.base_color, checker.color);
+  EXPECT_EQ(painted.metallic, 0.0f);
+  // Rust covers about `amount` of the surface.
+  Texture rust;
+  rust.kind = Texture::Kind::kRust;
+  rust.scale_mm = 5;
+  for (const float amount : {0.2f, 0.5f, 0.8f}) {
+    rust.amount = amount;
+    double covered = 0;
+    for (int i = 0; i < 4000; ++i) {
+      const Eigen::Vector3f p(1.7f * (i % 63), 2.3f * (i / 63), 0.0f);
+      covered += EvalTexture(rust, p, n, nullptr).mix;
+    }
+    EXPECT_NEAR(covered / 4000, amount, 0.2) << amount;
+  }
+}
+
+TEST(Material, ImagesAreLinearAndBadOnesAreNamed) {
+  testing::ScratchDir dir;
+  // sRGB 128 is linear ((128/255 + 0.055) / 1.055)^2.4 = 0.2158.
+  cv::imwrite((dir / "grey.png").string(), cv::Mat(4, 8, CV_8UC3, cv::Scalar(128, 128, 128)));
+  const auto image = LoadLinearImage(dir / "grey.png");
+  EXPECT_EQ(image->width, 8);
+  EXPECT_EQ(image->height, 4);
+  EXPECT_NEAR(image->at(3, 2)[1], 0.2158f, 1e-4);
+  // Float images are taken as they are (EXR: linear radiance).
+  cv::imwrite((dir / "sky.exr").string(), cv::Mat(2, 4, CV_32FC3, cv::Scalar(0.5, 2.0, 7.5)));
+  const auto hdr = LoadLinearImage(dir / "sky.exr");
+  EXPECT_FLOAT_EQ(hdr->at(1, 1)[0], 7.5f);  // R (OpenCV writes BGR)
+  EXPECT_FLOAT_EQ(hdr->at(1, 1)[2], 0.5f);
+  std::ofstream(dir / "fake.hdr") << "#?RADIANCE\nnonsense";
+  for (const char* name : {"fake.hdr", "missing.png"}) {
+    try {
+      LoadLinearImage(dir / name);
+      FAIL() << name;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+  // Image textures project triplanarly: on a face looking along z, the image's (x, -y).
+  Texture t;
+  t.kind = Texture::Kind::kImage;
+  t.scale_mm = 8;
+  const TextureSample s = EvalTexture(t, {1, -1, 0}, Eigen::Vector3f::UnitZ(), image.get());
+  EXPECT_EQ(s.mix, 1.0f);
+  EXPECT_NEAR(s.color_mix[0], 0.2158f, 1e-4);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -662,8 +662,8 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 // A material: a preset and/or its parameters, and a texture.
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
                       std::vector<std::string> other = {}) {
-  for (const char* k :
-       {"preset", "base_color", "metallic", "roughness", "specular", "anisotropic", "texture"}) {
+  for (const char* k : {"preset", "base_color", "metallic", "roughness", "specular", "anisotropic",
+                        "clearcoat", "clearcoat_roughness", "texture"}) {
     other.emplace_back(k);
   }
   r.ExpectMap(node, key, other);
@@ -703,6 +703,8 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
   unit("roughness", &m.surface.roughness);
   unit("specular", &m.surface.specular);
   unit("anisotropic", &m.surface.anisotropic, true);
+  unit("clearcoat", &m.surface.clearcoat);
+  unit("clearcoat_roughness", &m.surface.clearcoat_roughness);
   if (const YAML::Node t = node["texture"]) {
     const std::string tkey = key + ".texture";
     if (t.IsScalar() && t.Scalar() == "none") {

@@ -62,7 +62,11 @@ std::string RecipeReference() {
                                "how B-rep surfaces become triangles; also crease_angle (meshes)");
   Section<RenderOptions>(
       out, "render",
-      "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors");
+      "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors (the "
+      "fast mode's look); mode: pbr reads the materials: {floor, default, assign: [{name|family|"
+      "file, preset, base_color, metallic, roughness, specular, anisotropic, texture}]} and "
+      "lighting: {lights: [{type: point|spot|rect|disc|sun, ...}], environment: {type: "
+      "uniform|sky|image, ...}} sections (README, \"Physically based mode\")");
   Section<RunLimits>(out, "limits",
                      "how much work a recipe may ask for (raise them if you mean it)");
   return out.str();

@@ -10,6 +10,7 @@ namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
 constexpr float kMinAlpha = 1e-4f;  // roughness 0: a mirror to the eye, still a finite lobe
+constexpr float kCoatF0 = 0.04f;    // the clear coat: a dielectric of IOR 1.5
 
 float Luminance(const Eigen::Vector3f& c) {
   return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
@@ -147,6 +148,14 @@ PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params)
   const AlbedoTable& t = Table();
   r_ = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));  // isotropic equivalent
   e_avg_ = dielectric_f0_ * LookupAverage(t.a_avg, r_) + LookupAverage(t.b_avg, r_);
+  coat_ = std::clamp(params.clearcoat, 0.0f, 1.0f);
+  coat_r_ = std::clamp(params.clearcoat_roughness, 0.0f, 1.0f);
+  coat_alpha_ = std::max(kMinAlpha, coat_r_ * coat_r_);
+}
+
+float PrincipledBsdf::CoatAlbedo(float mu) const {
+  const AlbedoTable& t = Table();
+  return kCoatF0 * Lookup(t.a, coat_r_, mu) + Lookup(t.b, coat_r_, mu);
 }
 
 const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo) const {
@@ -168,6 +177,18 @@ const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo)
     const float diffuse = (1 - m) * Luminance(params_.base_color) * (1 - e_dielectric);
     view_.p_specular =
         specular + diffuse <= 0 ? 0.5f : std::clamp(specular / (specular + diffuse), 0.1f, 0.9f);
+  }
+  view_.p_coat = 0;
+  if (coat_ > 0) {
+    view_.lambda_coat_o = GgxLambda(wo, coat_alpha_, coat_alpha_);
+    view_.e_coat = coat_ * CoatAlbedo(mu_o);
+    // The coat's share of what is reflected, against an estimate of what the base reflects.
+    const float m = params_.metallic;
+    const float base =
+        m * (Luminance(params_.base_color) * a + b) +
+        (1 - m) * (e_dielectric + Luminance(params_.base_color) * (1 - e_dielectric));
+    const float under = (1 - view_.e_coat) * base;
+    view_.p_coat = std::clamp(view_.e_coat / std::max(1e-6f, view_.e_coat + under), 0.05f, 0.95f);
   }
   return view_;
 }
@@ -206,6 +227,20 @@ Eigen::Vector3f PrincipledBsdf::EvalWithPdf(const Eigen::Vector3f& wo, const Eig
     f += (1 - params_.metallic) * params_.base_color * (DiffuseScale(view, wi.z()) / kPi);
   }
   *pdf = view.p_specular * specular_pdf + (1 - view.p_specular) * wi.z() / kPi;
+  if (coat_ > 0) {
+    // The clear coat on top: a GGX dielectric layer of F0 0.04 (IOR 1.5) and weight c; what it
+    // does not reflect at either direction reaches the base, so the sum never exceeds the base's
+    // energy: c E_c(mu_o) + (1 - c E_c(mu_o)) * (at most 1).
+    const float e_coat_i = coat_ * CoatAlbedo(wi.z());
+    f *= (1 - view.e_coat) * (1 - e_coat_i);
+    const Eigen::Vector3f h = (wo + wi).normalized();
+    const float d = GgxD(h, coat_alpha_, coat_alpha_);
+    const float g2 = 1 / (1 + view.lambda_coat_o + GgxLambda(wi, coat_alpha_, coat_alpha_));
+    const float fresnel = kCoatF0 + (1 - kCoatF0) * Pow5(1 - std::clamp(wo.dot(h), 0.0f, 1.0f));
+    f += Eigen::Vector3f::Constant(coat_ * fresnel * d * g2 / (4 * wo.z() * wi.z()));
+    const float coat_pdf = wo.dot(h) > 0 ? d / ((1 + view.lambda_coat_o) * 4 * wo.z()) : 0;
+    *pdf = view.p_coat * coat_pdf + (1 - view.p_coat) * *pdf;
+  }
   return f;
 }
 
@@ -225,7 +260,10 @@ std::optional<PrincipledBsdf::Sampled> PrincipledBsdf::Sample(const Eigen::Vecto
                                                               const Eigen::Vector2f& u) const {
   if (wo.z() <= 0) return std::nullopt;
   Sampled s;
-  if (u_lobe < View(wo).p_specular) {
+  const ViewTerms& view = View(wo);
+  if (u_lobe < view.p_coat) {
+    s.wi = Reflect(wo, SampleVisibleNormal(wo, coat_alpha_, coat_alpha_, u));
+  } else if ((u_lobe - view.p_coat) / (1 - view.p_coat) < view.p_specular) {
     s.wi = Reflect(wo, SampleVisibleNormal(wo, alpha_x_, alpha_y_, u));
   } else {  // cosine-weighted
     const float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();

@@ -26,6 +26,10 @@ struct PrincipledParams {
   float roughness = 0.5f;    // [0, 1], perceptual: GGX alpha = roughness^2 (as Blender)
   float specular = 0.5f;     // [0, 1]: dielectric F0 = 0.08 specular (0.5: IOR 1.5); 0: no layer
   float anisotropic = 0.0f;  // [0, 1): longer highlights along the tangent (brushed metal)
+  // A clear coat over everything (paint, lacquer): weight [0, 1] and its own roughness, a GGX
+  // dielectric of IOR 1.5 (Blender's Coat Weight and Coat Roughness, default 0.03).
+  float clearcoat = 0.0f;
+  float clearcoat_roughness = 0.03f;
 };
 
 class PrincipledBsdf {
@@ -58,9 +62,12 @@ class PrincipledBsdf {
   // asks for it several times: sampling, evaluation and density).
   struct ViewTerms {
     Eigen::Vector3f wo = Eigen::Vector3f::Zero();
-    float lambda_o = 0;      // Smith's Lambda(wo)
-    float e_dielectric = 0;  // the dielectric layer's directional albedo E(mu_o)
-    float p_specular = 0;    // probability of sampling the specular lobe
+    float lambda_o = 0;       // Smith's Lambda(wo)
+    float e_dielectric = 0;   // the dielectric layer's directional albedo E(mu_o)
+    float p_specular = 0;     // probability of sampling the specular lobe (of the base)
+    float lambda_coat_o = 0;  // the coat's Lambda(wo)
+    float e_coat = 0;         // the coat's weight times its directional albedo at wo
+    float p_coat = 0;         // probability of sampling the coat
   };
   const ViewTerms& View(const Eigen::Vector3f& wo) const;
   // The diffuse layer's share: (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg), 1 without a layer.
@@ -72,6 +79,8 @@ class PrincipledBsdf {
   mutable ViewTerms view_;
   float dielectric_f0_;  // 0.08 specular; specular 0: no dielectric layer at all (pure Lambert)
   float e_avg_;          // cosine-weighted average of the dielectric layer's albedo E(mu)
+  float coat_ = 0, coat_r_ = 0, coat_alpha_ = 1;  // clear coat weight, roughness and alpha
+  float CoatAlbedo(float mu) const;               // the coat's directional albedo (F0 0.04)
 };
 
 // The GGX pieces, exposed for tests: the distribution of normals D(m) (1/sr), Smith's Lambda(w)

@@ -22,6 +22,8 @@ bool Material::Check(std::string* why) const {
     *why = "specular must lie in [0, 1]";
   } else if (!(s.anisotropic >= 0.0f && s.anisotropic < 1.0f)) {
     *why = "anisotropic must lie in [0, 1)";
+  } else if (!unit(s.clearcoat) || !unit(s.clearcoat_roughness)) {
+    *why = "clearcoat and clearcoat_roughness must lie in [0, 1]";
   } else if (!(texture.scale_mm > 0) || !std::isfinite(texture.scale_mm)) {
     *why = "texture scale must be a positive length";
   } else if (!unit(texture.amount) || !unit(texture.roughness_amount) || !unit(texture.bump)) {
@@ -81,6 +83,8 @@ const std::map<std::string, Material>& Presets() {
     p["black_oxide"].texture = Tex(K::kNoise, 5.0, 0.15f, 0.10f);
     p["painted"] = Make({0.60f, 0.08f, 0.05f}, 0.0f, 0.30f, 0.5f);
     p["painted"].base_from_part = true;
+    p["painted"].surface.clearcoat = 0.5f;
+    p["painted"].surface.clearcoat_roughness = 0.1f;
     p["painted"].texture = Tex(K::kNoise, 10.0, 0.04f, 0.06f);
     p["abs"] = Make({0.80f, 0.80f, 0.80f}, 0.0f, 0.40f, 0.5f);
     p["abs"].base_from_part = true;

@@ -1,5 +1,6 @@
-// Materials of the physically based mode: a Principled surface (render/bsdf.h), named presets for
-// industrial parts, and textures that need no downloads (procedural) or come from image files.
+// Materials of the physically based mode: a Principled surface (render/bsdf.h, with an optional
+// clear coat), named presets for industrial parts, and textures that need no downloads
+// (procedural) or come from image files.
 //
 // Procedural textures are solid: they are functions of the 3D point (the part's model frame, so
 // they stick to the part; the world for the floor), which needs no UVs and leaves no seams. Image

@@ -125,6 +125,31 @@ TEST(PrincipledBsdf, PolishedMetalIsAMirrorWithSchlickFresnel) {
   }
 }
 
+TEST(PrincipledBsdf, PolishedClearCoatOnBlackIsADielectricMirror) {
+  // A black base under a clear coat of roughness 0 reflects only at the coat: a mirror with
+  // Schlick's Fresnel of IOR 1.5, F = 0.04 + 0.96 (1 - mu)^5 (4 % straight on).
+  PrincipledParams p = Params(0, 0, 0.5f, /*specular=*/0);
+  p.clearcoat = 1;
+  p.clearcoat_roughness = 0;
+  const PrincipledBsdf bsdf(p);
+  for (const float mu : {1.0f, 0.5f, 0.2f}) {
+    const Eigen::Vector3f wo = Direction(mu, 0.3);
+    const double fresnel = 0.04 + 0.96 * std::pow(1.0 - mu, 5.0);
+    EXPECT_NEAR(SampledAlbedo(bsdf, wo)[0], fresnel, 2e-3 + 0.01 * fresnel) << mu;
+  }
+  // Over a white base the coat takes its share and the base the rest: nothing is created, and
+  // little is lost (only what the coat's and the base's single scattering lose).
+  PrincipledParams white = Params(1, 0, 0.5f);
+  white.clearcoat = 1;
+  white.clearcoat_roughness = 0.2f;
+  const PrincipledBsdf coated(white);
+  for (const float mu : {1.0f, 0.5f, 0.2f}) {
+    const double albedo = SampledAlbedo(coated, Direction(mu, 0.3))[0];
+    EXPECT_LE(albedo, 1.005) << mu;
+    EXPECT_GT(albedo, 0.9) << mu;
+  }
+}
+
 TEST(PrincipledBsdf, RoughMetalLosesWhatSingleScatteringLoses) {
   // A white metal (F = 1) reflects all light when smooth; single-scattering GGX loses the light
   // that bounces more than once between microfacets, more the rougher and the more grazing.
@@ -152,6 +177,8 @@ TEST(PrincipledBsdf, NothingReflectsMoreThanItReceives) {
       for (const float specular : {0.0f, 0.5f, 1.0f}) {
         PrincipledParams p = Params(1, metallic, roughness, specular);
         p.anisotropic = 0.5f;
+        p.clearcoat = specular;  // with and without a coat
+        p.clearcoat_roughness = roughness;
         const PrincipledBsdf bsdf(p);
         for (const float mu : {0.1f, 0.5f, 1.0f}) {
           const double albedo = SampledAlbedo(bsdf, Direction(mu, 0.7), 64)[0];
@@ -168,6 +195,10 @@ TEST(PrincipledBsdf, ReciprocalAndItsDensityIsTheOneItSamplesWith) {
   for (int trial = 0; trial < 200; ++trial) {
     PrincipledParams p = Params(uniform(random), uniform(random), uniform(random), uniform(random));
     p.anisotropic = 0.8f * uniform(random);
+    if (trial % 2 == 1) {
+      p.clearcoat = uniform(random);
+      p.clearcoat_roughness = uniform(random);
+    }
     const PrincipledBsdf bsdf(p);
     const Eigen::Vector3f wo = Direction(0.05 + 0.95 * uniform(random), 6.28 * uniform(random));
     const Eigen::Vector3f wi = Direction(0.05 + 0.95 * uniform(random), 6.28 * uniform(random));

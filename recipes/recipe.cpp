@@ -714,18 +714,20 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
                   {"type", "scale", "amount", "roughness", "bump", "color", "seed", "file"});
       if (!t["type"]) r.Fail(t, tkey, "a texture needs a 'type'");
       static const std::vector<std::pair<std::string, Texture::Kind>> kinds = {
-          {"noise", Texture::Kind::kNoise},       {"brushed", Texture::Kind::kBrushed},
-          {"turned", Texture::Kind::kTurned},     {"checker", Texture::Kind::kChecker},
-          {"concrete", Texture::Kind::kConcrete}, {"wood", Texture::Kind::kWood},
-          {"rust", Texture::Kind::kRust},         {"image", Texture::Kind::kImage},
-          {"none", Texture::Kind::kNone}};
+          {"noise", Texture::Kind::kNoise},         {"brushed", Texture::Kind::kBrushed},
+          {"turned", Texture::Kind::kTurned},       {"checker", Texture::Kind::kChecker},
+          {"concrete", Texture::Kind::kConcrete},   {"wood", Texture::Kind::kWood},
+          {"rust", Texture::Kind::kRust},           {"image", Texture::Kind::kImage},
+          {"scratches", Texture::Kind::kScratches}, {"none", Texture::Kind::kNone}};
       const std::string type = r.Scalar(t["type"], tkey + ".type");
       const auto it =
           std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == type; });
       if (it == kinds.end()) {
         r.Fail(t["type"], tkey + ".type",
                "unknown texture '" + type +
-                   "' (known: noise, brushed, turned, checker, concrete, wood, rust, image, none)");
+                   "' (known: noise, brushed, turned, checker, concrete, wood, rust, scratches, "
+                   "image, "
+                   "none)");
       }
       // A new type starts from that type's defaults, not the preset's texture.
       if (it->second != m.texture.kind) m.texture = Texture{};

@@ -189,6 +189,40 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
       const float threshold = 0.5f + 0.35f * (1 - 2 * t.amount);
       return SmoothStep(threshold - 0.04f, threshold + 0.04f, m);
     }
+    case Texture::Kind::kScratches: {
+      // Segments of random direction and length up to a cell, up to three per cell (each
+      // present with probability `amount`), centred in cells of `scale`; a segment reaches only
+      // the 2 x 2 x 2 block of cells nearest p. 1 on a scratch, fading over its width.
+      const float width = 0.03f * s;
+      if (footprint_mm > 4 * width) {
+        // Finer than the footprint: what a scratch covers of it, on average (a faint sheen).
+        return std::min(1.0f, width / footprint_mm) * t.amount;
+      }
+      const Eigen::Vector3f q = p / s;
+      const int bx = static_cast<int>(FastFloor(q.x() - 0.5f)),
+                by = static_cast<int>(FastFloor(q.y() - 0.5f)),
+                bz = static_cast<int>(FastFloor(q.z() - 0.5f));
+      float best = 1e9f;
+      for (int c = 0; c < 8; ++c) {
+        const int cx = bx + (c & 1), cy = by + ((c >> 1) & 1), cz = bz + (c >> 2);
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t seed = static_cast<uint32_t>(Hash(t.seed, k));
+          if (Lattice(cx, cy, cz, seed) >= t.amount) continue;
+          const Eigen::Vector3f centre(cx + Lattice(cx, cy, cz, seed + 1),
+                                       cy + Lattice(cx, cy, cz, seed + 2),
+                                       cz + Lattice(cx, cy, cz, seed + 3));
+          const float phi = 6.2831853f * Lattice(cx, cy, cz, seed + 4);
+          const float cos_t = 2 * Lattice(cx, cy, cz, seed + 5) - 1;
+          const float sin_t = std::sqrt(std::max(0.0f, 1 - cos_t * cos_t));
+          const Eigen::Vector3f dir(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t);
+          const float half = 0.5f * Lattice(cx, cy, cz, seed + 6);
+          const float along = std::clamp((q - centre).dot(dir), -half, half);
+          best = std::min(best, (q - centre - along * dir).squaredNorm());
+        }
+      }
+      const float distance_mm = std::sqrt(best) * s;
+      return 1 - SmoothStep(0.3f * width, width, distance_mm);
+    }
     case Texture::Kind::kNone:
     case Texture::Kind::kImage:
       break;
@@ -292,6 +326,11 @@ TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eige
                     : (t.kind == Texture::Kind::kWood ? t.amount * v : v);
       out.roughness_offset =
           t.roughness_amount * (t.kind == Texture::Kind::kRust ? 2 * v : v - 0.5f);
+      break;
+    case Texture::Kind::kScratches:
+      // Burnished: a little brighter and smoother along a scratch.
+      out.color_scale = Eigen::Vector3f::Constant(1 + 0.6f * v);
+      out.roughness_offset = -t.roughness_amount * v;
       break;
     default:
       out.color_scale = Eigen::Vector3f::Constant(1 + 2 * t.amount * (v - 0.5f));

@@ -23,14 +23,16 @@ namespace cadsynth {
 struct Texture {
   enum class Kind {
     kNone,
-    kNoise,     // fractal value noise: mottled colour and roughness
-    kBrushed,   // fine streaks along the model x axis (brushed or ground metal)
-    kTurned,    // fine rings about the model z axis (lathe-turned faces)
-    kChecker,   // a 3D checkerboard of `color` and the base colour, cells of `scale`
-    kConcrete,  // speckled, blotchy grey: noise at several scales and pits
-    kWood,      // growth rings about the y axis, distorted by noise
-    kRust,      // `color` (rust by default) blended in where a noise mask exceeds 1 - `amount`
-    kImage,     // an image file (PNG, JPEG, EXR), triplanar with tiles of `scale`
+    kNoise,      // fractal value noise: mottled colour and roughness
+    kBrushed,    // fine streaks along the model x axis (brushed or ground metal)
+    kTurned,     // fine rings about the model z axis (lathe-turned faces)
+    kChecker,    // a 3D checkerboard of `color` and the base colour, cells of `scale`
+    kConcrete,   // speckled, blotchy grey: noise at several scales and pits
+    kWood,       // growth rings about the y axis, distorted by noise
+    kRust,       // `color` (rust by default) blended in where a noise mask exceeds 1 - `amount`
+    kScratches,  // thin straight scratches, about `amount` of them per cell of `scale`: brighter
+                 // and smoother along them (handling marks on machined metal)
+    kImage,      // an image file (PNG, JPEG, EXR), triplanar with tiles of `scale`
   };
   Kind kind = Kind::kNone;
   double scale_mm = 20.0;  // feature size: noise cell, streak length, checker cell, image tile

@@ -100,6 +100,32 @@ TEST(Material, CheckerAndRustBlendAndRustIsNotMetal) {
   }
 }
 
+TEST(Material, ScratchesAreThinLinesWhoseNumberFollowsTheAmount) {
+  Texture t;
+  t.kind = Texture::Kind::kScratches;
+  t.scale_mm = 20;
+  const Eigen::Vector3f n = Eigen::Vector3f::UnitZ();
+  double previous = -1;
+  for (const float amount : {0.0f, 0.3f, 1.0f}) {
+    t.amount = amount;
+    int on = 0;
+    for (int i = 0; i < 40000; ++i) {
+      const Eigen::Vector3f p(0.37f * (i % 200), 0.41f * (i / 200), 3.0f);
+      const TextureSample s = EvalTexture(t, p, n, nullptr, 0.01f);
+      ASSERT_GE(s.roughness_offset, -t.roughness_amount);
+      ASSERT_LE(s.roughness_offset, 0.0f);  // smoother on a scratch, never rougher
+      on += s.roughness_offset < -0.5f * t.roughness_amount;
+    }
+    const double fraction = on / 40000.0;
+    if (amount == 0) EXPECT_EQ(on, 0);
+    EXPECT_GT(fraction, previous);
+    EXPECT_LT(fraction, 0.2);  // thin lines, not patches
+    previous = fraction;
+  }
+  // Seen from afar (a footprint of many scratch widths), only a faint average remains.
+  EXPECT_NEAR(EvalTexture(t, {1, 2, 3}, n, nullptr, 30.0f).roughness_offset, -0.2f * 0.02f, 1e-4);
+}
+
 TEST(Material, ImagesAreLinearAndBadOnesAreNamed) {
   testing::ScratchDir dir;
   // sRGB 128 is linear ((128/255 + 0.055) / 1.055)^2.4 = 0.2158.

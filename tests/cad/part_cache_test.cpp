@@ -81,7 +81,9 @@ TEST(PartCache, AssemblyRoundTripsExactly) {
     EXPECT_EQ(y.watertight, x.watertight);
     EXPECT_EQ(y.max_deviation_mm, x.max_deviation_mm);
     EXPECT_EQ(y.color.has_value(), x.color.has_value());
-    if (x.color) EXPECT_EQ(*y.color, *x.color);
+    if (x.color) {
+      EXPECT_EQ(*y.color, *x.color);
+    }
     ASSERT_EQ(y.symmetries.discrete.size(), x.symmetries.discrete.size());
     for (size_t k = 0; k < x.symmetries.discrete.size(); ++k)
       EXPECT_EQ(y.symmetries.discrete[k].matrix(), x.symmetries.discrete[k].matrix());
@@ -201,9 +203,10 @@ TEST(PartCache, DefaultDirectoryFollowsTheEnvironment) {
   setenv("XDG_CACHE_HOME", "/xdg", 1);
   EXPECT_EQ(PartCache::DefaultDirectory().value_or(""), "/xdg/cadsynth");
   unsetenv("XDG_CACHE_HOME");
-  if (const char* home = std::getenv("HOME"); home && *home == '/')
+  if (const char* home = std::getenv("HOME"); home && *home == '/') {
     EXPECT_EQ(PartCache::DefaultDirectory().value_or(""),
               std::filesystem::path(home) / ".cache" / "cadsynth");
+  }
   if (old) setenv("CADSYNTH_CACHE", saved.c_str(), 1);
 }
 

@@ -24,7 +24,9 @@ TEST(Material, EveryPresetIsValidAndMetalsKeepTheirColour) {
     std::string why;
     EXPECT_TRUE(m.Check(&why)) << name << ": " << why;
     // A metal's colour is the metal's; paints and plastics take the part's.
-    if (m.surface.metallic >= 1) EXPECT_FALSE(m.base_from_part) << name;
+    if (m.surface.metallic >= 1) {
+      EXPECT_FALSE(m.base_from_part) << name;
+    }
   }
   Material m;
   EXPECT_FALSE(MaterialPreset("unobtainium", &m));
@@ -117,7 +119,9 @@ TEST(Material, ScratchesAreThinLinesWhoseNumberFollowsTheAmount) {
       on += s.roughness_offset < -0.5f * t.roughness_amount;
     }
     const double fraction = on / 40000.0;
-    if (amount == 0) EXPECT_EQ(on, 0);
+    if (amount == 0) {
+      EXPECT_EQ(on, 0);
+    }
     EXPECT_GT(fraction, previous);
     EXPECT_LT(fraction, 0.2);  // thin lines, not patches
     previous = fraction;

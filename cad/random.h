@@ -71,15 +71,26 @@ inline constexpr RandomStream kPointU{"points.u",
                                       "a model point's first barycentric draw; index = point"};
 inline constexpr RandomStream kPointV{"points.v",
                                       "a model point's second barycentric draw; index = point"};
+// recipes: render.seed (render.mode: pbr)
+inline constexpr RandomStream kRenderPixel{
+    "render.pixel",
+    "a frame's path-tracing sampler: index = view; each pixel's Owen-scrambled Sobol sequence "
+    "hashes its (v * 65536 + u) onto that"};
+// recipes: a material's texture.seed
+inline constexpr RandomStream kTexturePattern{
+    "texture.pattern",
+    "a procedural texture's noise lattice, boards and scratches; the texture's seed picks the "
+    "pattern, the lattice cell indexes it"};
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
-    streams::kFamilyParam,  streams::kAssembledPose, streams::kCopyPose,
-    streams::kCopyYaw,      streams::kClutterRadius, streams::kClutterAngle,
-    streams::kViewYaw,      streams::kViewPitch,     streams::kViewRadius,
-    streams::kTargetHeight, streams::kTargetAzimuth, streams::kTargetRadius,
-    streams::kViewRoll,     streams::kTestImage,     streams::kPointTriangle,
-    streams::kPointU,       streams::kPointV,
+    streams::kFamilyParam,    streams::kAssembledPose, streams::kCopyPose,
+    streams::kCopyYaw,        streams::kClutterRadius, streams::kClutterAngle,
+    streams::kViewYaw,        streams::kViewPitch,     streams::kViewRadius,
+    streams::kTargetHeight,   streams::kTargetAzimuth, streams::kTargetRadius,
+    streams::kViewRoll,       streams::kTestImage,     streams::kPointTriangle,
+    streams::kPointU,         streams::kPointV,        streams::kRenderPixel,
+    streams::kTexturePattern,
 };
 
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "cad/error.h"
+#include "cad/random.h"
 #include "render/sampling.h"
 
 namespace cadsynth {
@@ -138,7 +139,8 @@ float SmoothStep(float a, float b, float x) {
 }
 
 // The scalar pattern of a procedural texture at p (mm), in [0, 1].
-float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
+// `seed` is the texture's seed on the texture.pattern stream.
+float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm, uint64_t seed) {
   const float s = static_cast<float>(t.scale_mm);
   // Octaves finer than the footprint average out over it: FractalNoise replaces them by their
   // mean. `cell` is the size (mm) of a call's first octave along its finest axis.
@@ -147,15 +149,15 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
   };
   switch (t.kind) {
     case Texture::Kind::kNoise:
-      return fractal(p / s, 4, t.seed, s);
+      return fractal(p / s, 4, seed, s);
     case Texture::Kind::kBrushed:
       // Long along x, fine across: streaks `scale` long and a fiftieth of that wide.
-      return fractal(Eigen::Vector3f(p.x() / (4 * s), p.y() * 50 / s, p.z() * 50 / s), 3, t.seed,
+      return fractal(Eigen::Vector3f(p.x() / (4 * s), p.y() * 50 / s, p.z() * 50 / s), 3, seed,
                      s / 50);
     case Texture::Kind::kTurned: {
       const float r = std::hypot(p.x(), p.y());
       return fractal(Eigen::Vector3f(r * 50 / s, p.z() / s, std::atan2(p.y(), p.x()) * 0.5f), 3,
-                     t.seed, s / 50);
+                     seed, s / 50);
     }
     case Texture::Kind::kChecker: {
       const int parity =
@@ -163,8 +165,8 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
       return static_cast<float>(parity & 1);
     }
     case Texture::Kind::kConcrete: {
-      const float blotch = fractal(p / s, 5, t.seed, s);
-      const float speckle = fractal(p * (12 / s), 1, Hash(t.seed, 1), s / 12);
+      const float blotch = fractal(p / s, 5, seed, s);
+      const float speckle = fractal(p * (12 / s), 1, Hash(seed, 1), s / 12);
       const float pit = SmoothStep(0.80f, 0.90f, speckle);
       return std::clamp(0.75f * blotch + 0.25f * speckle - 0.35f * pit, 0.0f, 1.0f);
     }
@@ -172,11 +174,12 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
       // Boards 8 `scale` wide along y, each its own tone and grain: long thin streaks along y,
       // faint growth rings, and a dark seam between boards.
       const float board = FastFloor(p.x() / (8 * s));
-      const uint64_t seed = Hash(t.seed, static_cast<uint64_t>(static_cast<int64_t>(board)));
-      const float tone = UnitFloat(static_cast<uint32_t>(seed >> 32));
+      const uint64_t board_seed = Hash(seed, static_cast<uint64_t>(static_cast<int64_t>(board)));
+      const float tone = UnitFloat(static_cast<uint32_t>(board_seed >> 32));
       const float grain = fractal(Eigen::Vector3f(p.x() * 20 / s, p.y() / (4 * s), p.z() * 20 / s),
-                                  4, seed, s / 20);
-      const float w = p.x() / (1.5f * s) + 2.0f * fractal(p / (10 * s), 3, Hash(seed, 1), 10 * s);
+                                  4, board_seed, s / 20);
+      const float w =
+          p.x() / (1.5f * s) + 2.0f * fractal(p / (10 * s), 3, Hash(board_seed, 1), 10 * s);
       const float ring = w - FastFloor(w);
       const float band = SmoothStep(0.0f, 0.3f, ring) * (1 - SmoothStep(0.5f, 1.0f, ring));
       const float across = p.x() / (8 * s) - board;
@@ -184,7 +187,7 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
       return std::clamp(0.45f * grain + 0.2f * band + 0.35f * tone + seam, 0.0f, 1.0f);
     }
     case Texture::Kind::kRust: {
-      const float m = fractal(p / s, 5, t.seed, s);
+      const float m = fractal(p / s, 5, seed, s);
       // Noise sums concentrate near 0.5: map `amount` to a threshold that covers about it.
       const float threshold = 0.5f + 0.35f * (1 - 2 * t.amount);
       return SmoothStep(threshold - 0.04f, threshold + 0.04f, m);
@@ -206,16 +209,16 @@ float Pattern(const Texture& t, const Eigen::Vector3f& p, float footprint_mm) {
       for (int c = 0; c < 8; ++c) {
         const int cx = bx + (c & 1), cy = by + ((c >> 1) & 1), cz = bz + (c >> 2);
         for (uint32_t k = 0; k < 3; ++k) {
-          const uint32_t seed = static_cast<uint32_t>(Hash(t.seed, k));
-          if (Lattice(cx, cy, cz, seed) >= t.amount) continue;
-          const Eigen::Vector3f centre(cx + Lattice(cx, cy, cz, seed + 1),
-                                       cy + Lattice(cx, cy, cz, seed + 2),
-                                       cz + Lattice(cx, cy, cz, seed + 3));
-          const float phi = 6.2831853f * Lattice(cx, cy, cz, seed + 4);
-          const float cos_t = 2 * Lattice(cx, cy, cz, seed + 5) - 1;
+          const uint32_t line = static_cast<uint32_t>(Hash(seed, k));
+          if (Lattice(cx, cy, cz, line) >= t.amount) continue;
+          const Eigen::Vector3f centre(cx + Lattice(cx, cy, cz, line + 1),
+                                       cy + Lattice(cx, cy, cz, line + 2),
+                                       cz + Lattice(cx, cy, cz, line + 3));
+          const float phi = 6.2831853f * Lattice(cx, cy, cz, line + 4);
+          const float cos_t = 2 * Lattice(cx, cy, cz, line + 5) - 1;
           const float sin_t = std::sqrt(std::max(0.0f, 1 - cos_t * cos_t));
           const Eigen::Vector3f dir(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t);
-          const float half = 0.5f * Lattice(cx, cy, cz, seed + 6);
+          const float half = 0.5f * Lattice(cx, cy, cz, line + 6);
           const float along = std::clamp((q - centre).dot(dir), -half, half);
           best = std::min(best, (q - centre - along * dir).squaredNorm());
         }
@@ -315,7 +318,8 @@ TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eige
     out.mix = 1.0f;
     return out;
   }
-  const float v = Pattern(t, p, footprint_mm);
+  const uint64_t seed = Hash(streams::kTexturePattern.id(), t.seed);
+  const float v = Pattern(t, p, footprint_mm, seed);
   switch (t.kind) {
     case Texture::Kind::kChecker:
     case Texture::Kind::kWood:
@@ -345,7 +349,8 @@ TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eige
     for (int a = 0; a < 3; ++a) {
       Eigen::Vector3f d = Eigen::Vector3f::Zero();
       d[a] = h;
-      grad[a] = (Pattern(t, p + d, footprint_mm) - Pattern(t, p - d, footprint_mm)) / (2 * h);
+      grad[a] =
+          (Pattern(t, p + d, footprint_mm, seed) - Pattern(t, p - d, footprint_mm, seed)) / (2 * h);
     }
     const Eigen::Vector3f tangential = grad - grad.dot(n) * n;
     // Dimensionless slope: a unit change of the pattern over the feature size tilts by `bump`.

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "cad/error.h"
+#include "cad/random.h"
 #include "render/bsdf.h"
 #include "render/sampling.h"
 
@@ -401,7 +402,7 @@ void SetRay(RTCRay16* r, int j, const Eigen::Vector3f& o, const Eigen::Vector3f&
 }  // namespace
 
 uint64_t FrameSeed(int seed, uint64_t view) {
-  return Hash(Hash(0x6361647379746831ull, static_cast<uint64_t>(seed)), view);
+  return Hash(Hash(streams::kRenderPixel.id(), static_cast<uint64_t>(seed)), view);
 }
 
 float FilmicCurve(float x) {

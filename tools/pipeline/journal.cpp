@@ -87,6 +87,42 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     key << "light " << static_cast<int>(light.kind) << " " << light.direction.transpose() << " "
         << light.position.transpose() << " " << light.intensity << "\n";
   }
+  // The physically based mode's look (render.mode: pbr): materials, light sources, environment,
+  // and the bytes of every image they read (like the CAD files: an image edited between a kill
+  // and the rerun would otherwise mix frames of two looks).
+  std::set<std::filesystem::path> images;
+  const auto material = [&](const char* what, const Material& m) {
+    const PrincipledParams& p = m.surface;
+    const Texture& t = m.texture;
+    key << what << " " << p.base_color.transpose() << " " << p.metallic << " " << p.roughness << " "
+        << p.specular << " " << p.anisotropic << " " << p.clearcoat << " " << p.clearcoat_roughness
+        << " " << m.base_from_part << " texture " << static_cast<int>(t.kind) << " " << t.scale_mm
+        << " " << t.amount << " " << t.roughness_amount << " " << t.bump << " "
+        << t.color.transpose() << " " << t.seed << " " << t.image.string() << "\n";
+    if (!t.image.empty()) images.insert(t.image);
+  };
+  material("floor_material", look.floor_material);
+  if (spec.default_material) material("default_material", *spec.default_material);
+  for (const MaterialRule& rule : spec.material_rules) {
+    key << "rule " << rule.name << " | " << rule.family << " | " << rule.file << "\n";
+    material("material", rule.material);
+  }
+  for (const LightSource& l : look.light_sources) {
+    key << "light_source " << static_cast<int>(l.kind) << " " << l.color.transpose() << " "
+        << l.power << " " << l.position.transpose() << " " << l.direction.transpose() << " "
+        << l.radius_mm << " " << l.size_x_mm << " " << l.size_y_mm << " " << l.x_axis.transpose()
+        << " " << l.spot_size_rad << " " << l.spot_blend << " " << l.angle_rad << "\n";
+  }
+  const Environment& env = look.environment;
+  key << "environment " << static_cast<int>(env.kind) << " " << env.strength << " "
+      << env.color.transpose() << " " << env.zenith.transpose() << " " << env.horizon.transpose()
+      << " " << env.ground.transpose() << " " << env.image.string() << " " << env.rotation_rad
+      << "\n";
+  if (!env.image.empty()) images.insert(env.image);
+  for (const std::filesystem::path& image : images) {
+    const std::string bytes = ReadFileText(image);
+    key << "image " << image.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
+  }
   // What prepare made of the recipe, whatever option decided it (a RunSpec built in code can
   // change a scene's arrangement or a part without changing the recipe text): every object's
   // geometry and colour, and every instance's pose.

@@ -74,6 +74,26 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
             15);
+  // The physically based look, read by hand from materials: and lighting:.
+  {
+    RunSpec changed = spec;
+    changed.look.light_sources[0].power += 1;
+    check(changed, "a light source's power");
+    changed = spec;
+    changed.look.environment.strength = 2;
+    check(changed, "the environment");
+    changed = spec;
+    changed.look.floor_material.surface.roughness = 0.1f;
+    check(changed, "the floor material");
+    changed = spec;
+    changed.look.floor_material.texture.seed = 5;
+    check(changed, "a texture seed");
+    changed = spec;
+    changed.material_rules.push_back({"*", "", "", Material{}});
+    check(changed, "a material rule");
+    changed.material_rules.back().material.surface.clearcoat = 0.5f;
+    check(changed, "a rule's clear coat");
+  }
   EXPECT_EQ(
       ForEachChange<ArrangementOptions>(
           spec, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; }, check),

@@ -102,13 +102,6 @@ Eigen::Vector3f UniformCone(const Eigen::Vector2f& u, float cos_max) {
   return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
 }
 
-Eigen::Vector3f UniformSphere(const Eigen::Vector2f& u) {
-  const float z = 1 - 2 * u.x();
-  const float r = std::sqrt(std::max(0.0f, 1 - z * z));
-  const float phi = 2 * kPiF * u.y();
-  return {r * std::cos(phi), r * std::sin(phi), z};
-}
-
 void OrthonormalBasis(const Eigen::Vector3f& n, Eigen::Vector3f* t, Eigen::Vector3f* b) {
   const float sign = std::copysign(1.0f, n.z());
   const float a = -1.0f / (sign + n.z());

@@ -54,8 +54,6 @@ Eigen::Vector3f CosineHemisphere(const Eigen::Vector2f& u);
 // Uniform direction in the cone about +z of half-angle acos(cos_max): density
 // 1 / (2 pi (1 - cos_max)).
 Eigen::Vector3f UniformCone(const Eigen::Vector2f& u, float cos_max);
-// Uniform direction on the sphere: density 1 / (4 pi).
-Eigen::Vector3f UniformSphere(const Eigen::Vector2f& u);
 
 // An orthonormal basis (t, b, n) with n given (Duff et al. 2017, no branch on a threshold).
 void OrthonormalBasis(const Eigen::Vector3f& n, Eigen::Vector3f* t, Eigen::Vector3f* b);

@@ -333,6 +333,15 @@ TEST(PathTracer, PbrChangesOnlyTheColourImage) {
   ASSERT_EQ(a.instances.size(), b.instances.size());
   EXPECT_EQ(a.instances[0].amodal_mask, b.instances[0].amodal_mask);
   EXPECT_NE(a.rgb, b.rgb);
+  // hdr in the fast mode keeps the colour before it is rounded to bytes.
+  fast.hdr = true;
+  const Frame c = Renderer(view.parts, view.scene, fast).Render(view.camera);
+  EXPECT_EQ(c.rgb, a.rgb);
+  ASSERT_EQ(c.radiance.size(), c.rgb.size());
+  for (size_t i = 0; i < c.rgb.size(); i += 97) {
+    EXPECT_EQ(static_cast<int>(std::lround(std::clamp(c.radiance[i], 0.0f, 1.0f) * 255.0f)),
+              static_cast<int>(c.rgb[i]));
+  }
 }
 
 TEST(PathTracer, DisplayTransforms) {

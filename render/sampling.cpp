@@ -8,21 +8,12 @@ namespace cadsynth {
 
 namespace {
 
-// Bit reversal, a byte at a time from a table built at compile time.
-constexpr std::array<uint8_t, 256> kReversedByte = [] {
-  std::array<uint8_t, 256> t{};
-  for (int x = 0; x < 256; ++x) {
-    int r = 0;
-    for (int b = 0; b < 8; ++b) r |= ((x >> b) & 1) << (7 - b);
-    t[x] = static_cast<uint8_t>(r);
-  }
-  return t;
-}();
-
+// Bit reversal: the bytes swapped, then nibbles, bit pairs and bits within each byte.
 inline uint32_t ReverseBits(uint32_t x) {
-  return (static_cast<uint32_t>(kReversedByte[x & 255]) << 24) |
-         (static_cast<uint32_t>(kReversedByte[(x >> 8) & 255]) << 16) |
-         (static_cast<uint32_t>(kReversedByte[(x >> 16) & 255]) << 8) | kReversedByte[x >> 24];
+  x = __builtin_bswap32(x);
+  x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+  x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+  return ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
 }
 
 // A hash that only ever carries information from lower bits to higher ones (Laine and Karras
@@ -71,7 +62,9 @@ Eigen::Vector2f SobolOwen2D(uint32_t index, uint64_t seed) {
   const uint64_t h = Mix64(seed);
   // Shuffle the order of the points (an Owen scramble of the index), then scramble each axis.
   const uint32_t i = OwenScramble(index, static_cast<uint32_t>(h));
-  const uint32_t x = OwenScramble(ReverseBits(i), static_cast<uint32_t>(h >> 32));
+  // The first dimension is the bit-reversed index, so its scramble needs no reversal at all:
+  // OwenScramble(ReverseBits(i), s) = ReverseBits(LaineKarras(i, s)).
+  const uint32_t x = ReverseBits(LaineKarras(i, static_cast<uint32_t>(h >> 32)));
   const uint32_t y = OwenScramble(SobolDim1(i), static_cast<uint32_t>(Mix64(h)));
   return {UnitFloat(x), UnitFloat(y)};
 }

@@ -19,6 +19,7 @@ void Mesh::Transform(const Eigen::Isometry3d& transform) {
 
 void Mesh::Append(const Mesh& other) {
   const bool keep_face_ids = (empty() || !face_ids.empty()) && !other.face_ids.empty();
+  const bool keep_uvs = (positions.empty() || has_uvs()) && other.has_uvs();
   const auto offset = static_cast<uint32_t>(positions.size());
   positions.insert(positions.end(), other.positions.begin(), other.positions.end());
   normals.insert(normals.end(), other.normals.begin(), other.normals.end());
@@ -28,13 +29,21 @@ void Mesh::Append(const Mesh& other) {
   } else {
     face_ids.clear();
   }
+  if (keep_uvs) {
+    uvs.insert(uvs.end(), other.uvs.begin(), other.uvs.end());
+  } else {
+    uvs.clear();
+  }
 }
 
 void Mesh::MakeFaceted() {
   std::vector<Eigen::Vector3f> positions, normals;
+  std::vector<Eigen::Vector2f> uvs;
   positions.reserve(3 * triangles.size());
   normals.reserve(3 * triangles.size());
+  const bool with_uvs = has_uvs();
   for (auto& t : triangles) {
+    if (with_uvs) uvs.insert(uvs.end(), {this->uvs[t[0]], this->uvs[t[1]], this->uvs[t[2]]});
     const Eigen::Vector3f a = this->positions[t[0]], b = this->positions[t[1]],
                           c = this->positions[t[2]];
     Eigen::Vector3f n = (b - a).cross(c - a);
@@ -46,6 +55,7 @@ void Mesh::MakeFaceted() {
   }
   this->positions = std::move(positions);
   this->normals = std::move(normals);
+  this->uvs = std::move(uvs);
 }
 
 double Mesh::SurfaceArea() const {

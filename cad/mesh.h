@@ -18,6 +18,11 @@ struct Mesh {
   std::vector<Eigen::Matrix<uint32_t, 3, 1>> triangles;
   // Optional: for each triangle, the index of the B-rep face it came from (empty when unknown).
   std::vector<uint32_t> face_ids;
+  // Optional: texture coordinates, one per vertex (empty when the file has none). OpenGL's
+  // convention, as assimp gives them: (0, 0) is the image's bottom-left corner, v grows upwards.
+  std::vector<Eigen::Vector2f> uvs;
+
+  bool has_uvs() const { return !uvs.empty() && uvs.size() == positions.size(); }
 
   bool empty() const { return triangles.empty(); }
   size_t num_vertices() const { return positions.size(); }
@@ -31,7 +36,8 @@ struct Mesh {
   // Moves every vertex (and rotates every normal) by `transform`.
   void Transform(const Eigen::Isometry3d& transform);
 
-  // Appends `other` (indices are offset). Face ids are kept only when both meshes have them.
+  // Appends `other` (indices are offset). Face ids and texture coordinates are kept only when
+  // both meshes have them.
   void Append(const Mesh& other);
 
   // Sum of triangle areas in mm^2.

@@ -155,6 +155,8 @@ void ComputeCreaseNormals(Mesh* mesh, double crease_angle_rad) {
   }
   // Each vertex takes the normal of its first corner; corners that need another get a copy.
   std::vector<char> assigned(n_vertices, 0);
+  const bool with_uvs = mesh->has_uvs();
+  if (!with_uvs) mesh->uvs.clear();
   mesh->normals.assign(n_vertices, Eigen::Vector3f::UnitZ());
   std::map<std::pair<uint32_t, std::array<float, 3>>, uint32_t> copies;
   for (size_t t = 0; t < n_triangles; ++t) {
@@ -176,6 +178,7 @@ void ComputeCreaseNormals(Mesh* mesh, double crease_angle_rad) {
       const auto copy = static_cast<uint32_t>(mesh->positions.size());
       mesh->positions.push_back(mesh->positions[v]);
       mesh->normals.push_back(n);
+      if (with_uvs) mesh->uvs.push_back(mesh->uvs[v]);
       copies.emplace(key, copy);
       v = copy;
     }

@@ -123,13 +123,20 @@ Mesh ReadWithAssimp(const std::string& file, std::optional<Eigen::Vector3f>* col
   }
 
   Mesh mesh;
+  // Texture coordinates (the first set) only when every mesh of the file has them.
+  bool uvs = true;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* in = scene->mMeshes[m];
     if ((in->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
     const auto base = static_cast<uint32_t>(mesh.positions.size());
+    uvs = uvs && in->HasTextureCoords(0);
     for (unsigned v = 0; v < in->mNumVertices; ++v) {
       const aiVector3D& p = in->mVertices[v];
       mesh.positions.emplace_back(p.x, p.y, p.z);
+      if (uvs) {
+        const aiVector3D& t = in->mTextureCoords[0][v];
+        mesh.uvs.emplace_back(t.x, t.y);
+      }
     }
     for (unsigned f = 0; f < in->mNumFaces; ++f) {
       const aiFace& face = in->mFaces[f];
@@ -155,6 +162,10 @@ Mesh ReadWithAssimp(const std::string& file, std::optional<Eigen::Vector3f>* col
         *color = Eigen::Vector3f(diffuse.r, diffuse.g, diffuse.b);
       }
     }
+  }
+  if (!uvs || !mesh.has_uvs()) mesh.uvs.clear();
+  for (const Eigen::Vector2f& t : mesh.uvs) {
+    if (!t.allFinite()) throw Error(file + ": a texture coordinate is not a finite number");
   }
   return mesh;
 }

@@ -69,6 +69,7 @@ void PutMesh(ByteWriter* out, const Mesh& mesh) {
   out->PutArray(mesh.normals);
   out->PutArray(mesh.triangles);
   out->PutArray(mesh.face_ids);
+  out->PutArray(mesh.uvs);
 }
 
 Mesh GetMesh(ByteReader* in) {
@@ -77,6 +78,9 @@ Mesh GetMesh(ByteReader* in) {
   mesh.normals = in->GetArray<Eigen::Vector3f>();
   mesh.triangles = in->GetArray<Eigen::Matrix<uint32_t, 3, 1>>();
   mesh.face_ids = in->GetArray<uint32_t>();
+  mesh.uvs = in->GetArray<Eigen::Vector2f>();
+  if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
+    throw Error("part cache: texture coordinates do not match the vertices");
   for (const auto& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
       if (t[k] >= mesh.positions.size())
@@ -149,6 +153,7 @@ KeyHasher& KeyHasher::Geometry(const Mesh& mesh) {
   array(mesh.normals);
   array(mesh.triangles);
   array(mesh.face_ids);
+  if (!mesh.uvs.empty()) array(mesh.uvs);  // keys of meshes without them stay as they were
   return *this;
 }
 

@@ -710,8 +710,9 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
     if (t.IsScalar() && t.Scalar() == "none") {
       m.texture = Texture{};
     } else {
-      r.ExpectMap(t, tkey,
-                  {"type", "scale", "amount", "roughness", "bump", "color", "seed", "file"});
+      r.ExpectMap(
+          t, tkey,
+          {"type", "scale", "amount", "roughness", "bump", "color", "seed", "file", "projection"});
       if (!t["type"]) r.Fail(t, tkey, "a texture needs a 'type'");
       static const std::vector<std::pair<std::string, Texture::Kind>> kinds = {
           {"noise", Texture::Kind::kNoise},         {"brushed", Texture::Kind::kBrushed},
@@ -759,8 +760,24 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
         } catch (const Error& e) {
           r.Fail(t["file"], tkey + ".file", e.what());
         }
+        if (const YAML::Node p = t["projection"]) {
+          const std::string text = r.Scalar(p, tkey + ".projection");
+          if (text == "auto") {
+            m.texture.projection = Texture::Projection::kAuto;
+          } else if (text == "triplanar") {
+            m.texture.projection = Texture::Projection::kTriplanar;
+          } else if (text == "uv") {
+            m.texture.projection = Texture::Projection::kUv;
+          } else {
+            r.Fail(p, tkey + ".projection",
+                   "unknown projection '" + text + "' (known: auto, triplanar, uv)");
+          }
+        }
       } else if (t["file"]) {
         r.Fail(t["file"], tkey + ".file", "only an image texture reads a file");
+      } else if (t["projection"]) {
+        r.Fail(t["projection"], tkey + ".projection",
+               "only an image texture is projected (procedural ones are solid)");
       }
     }
   }
@@ -771,7 +788,12 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
 
 void ReadMaterials(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectMap(node, "materials", {"floor", "default", "assign"});
-  if (node["floor"]) spec->look.floor_material = ReadMaterial(r, node["floor"], "materials.floor");
+  if (node["floor"]) {
+    spec->look.floor_material = ReadMaterial(r, node["floor"], "materials.floor");
+    if (spec->look.floor_material.texture.projection == Texture::Projection::kUv)
+      r.Fail(node["floor"], "materials.floor",
+             "the floor has no texture coordinates: use projection 'triplanar' (or 'auto')");
+  }
   if (node["default"])
     spec->default_material = ReadMaterial(r, node["default"], "materials.default");
   if (const YAML::Node assign = node["assign"]) {
@@ -783,6 +805,7 @@ void ReadMaterials(const Reader& r, const YAML::Node& node, RunSpec* spec) {
       const YAML::Node item = assign[i];
       if (!item.IsMap()) r.ExpectMap(item, key, {});
       MaterialRule rule;
+      rule.where = r.Where(item);
       rule.material = ReadMaterial(r, item, key, {"name", "family", "file"});
       if (item["name"]) rule.name = r.Scalar(item["name"], key + ".name");
       if (item["family"]) {

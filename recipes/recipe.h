@@ -75,6 +75,7 @@ struct RunLimits {
 struct MaterialRule {
   std::string name, family, file;
   Material material;
+  std::string where;  // "recipe.yaml:12:7" (empty when built in)
 };
 
 // Everything one run needs, each module's options filled in.

@@ -301,11 +301,17 @@ float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed, float f
 }
 
 TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eigen::Vector3f& n,
-                          const LinearImage* image, float footprint_mm) {
+                          const LinearImage* image, float footprint_mm, const Eigen::Vector2f* uv) {
   TextureSample out;
   if (t.kind == Texture::Kind::kNone) return out;
   if (t.kind == Texture::Kind::kImage) {
     if (image == nullptr || image->width == 0) return out;
+    if (uv != nullptr && t.projection != Texture::Projection::kTriplanar) {
+      // Image rows run downwards, v upwards.
+      out.color_mix = ImageAt(*image, uv->x(), 1.0f - uv->y());
+      out.mix = 1.0f;
+      return out;
+    }
     // Triplanar: three projections along the axes, weighted by the normal's components^4.
     const Eigen::Vector3f w = n.cwiseAbs().array().pow(4.0f).matrix();
     const float sum = std::max(w.sum(), 1e-8f);

@@ -4,8 +4,10 @@
 //
 // Procedural textures are solid: they are functions of the 3D point (the part's model frame, so
 // they stick to the part; the world for the floor), which needs no UVs and leaves no seams. Image
-// textures are projected triplanarly (three axis-aligned projections blended by the normal), as
-// CAD meshes have no UVs. Textures modulate the base colour, the roughness and the normal (bump).
+// textures follow a mesh's own texture coordinates where it has them (OBJ, glTF and other files
+// assimp reads) and are projected triplanarly otherwise (three axis-aligned projections blended by
+// the normal), as CAD meshes have no UVs. Textures modulate the base colour, the roughness and the
+// normal (bump).
 #pragma once
 
 #include <filesystem>
@@ -32,9 +34,13 @@ struct Texture {
     kRust,       // `color` (rust by default) blended in where a noise mask exceeds 1 - `amount`
     kScratches,  // thin straight scratches, about `amount` of them per cell of `scale`: brighter
                  // and smoother along them (handling marks on machined metal)
-    kImage,      // an image file (PNG, JPEG, EXR), triplanar with tiles of `scale`
+    kImage,  // an image file (PNG, JPEG, EXR): by the mesh's UVs, or triplanar in tiles of `scale`
   };
+  // How an image texture meets the surface. kAuto: the mesh's texture coordinates where it has
+  // them, triplanar otherwise; kTriplanar always; kUv only on meshes with texture coordinates.
+  enum class Projection { kAuto, kTriplanar, kUv };
   Kind kind = Kind::kNone;
+  Projection projection = Projection::kAuto;
   double scale_mm = 20.0;  // feature size: noise cell, streak length, checker cell, image tile
   float amount = 0.3f;     // [0, 1]: how strongly the colour is changed (rust: covered fraction)
   float roughness_amount = 0.2f;               // [0, 1]: roughness varies by up to this much
@@ -76,10 +82,12 @@ struct TextureSample {
 // `image` is the loaded image for kImage (else ignored). `footprint_mm` is the size of the patch
 // of surface the sample stands for (a pixel's, or a wider one after rough bounces): noise octaves
 // finer than it are replaced by their mean, which is what they average to over the patch (a
-// filtered texture, cheaper too); 0 evaluates every octave.
+// filtered texture, cheaper too); 0 evaluates every octave. `uv`, when given, is the surface's
+// texture coordinate (OpenGL convention: v up from the image's bottom row): an image texture
+// whose projection allows it then reads the image there instead of projecting it.
 TextureSample EvalTexture(const Texture& texture, const Eigen::Vector3f& p,
                           const Eigen::Vector3f& n, const LinearImage* image,
-                          float footprint_mm = 0.0f);
+                          float footprint_mm = 0.0f, const Eigen::Vector2f* uv = nullptr);
 
 // Applies a texture sample to a surface: the modulated parameters, clamped to their ranges.
 PrincipledParams ApplyTexture(const PrincipledParams& surface, const TextureSample& sample);

@@ -465,6 +465,8 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
   const Material* material;
   const LinearImage* image;
   Eigen::Vector3f tex_p, tex_n;
+  Eigen::Vector2f uv;
+  bool has_uv = false;
   if (inst != kInvalid) {
     const TracedInstance& ti = scene.instances[inst];
     const uint32_t* tri = &ti.indices[3 * rh.hit.primID[j]];
@@ -480,6 +482,10 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
     image = instance_images[inst].get();
     tex_p = ti.rotation.transpose() * (s.p - ti.translation);
     tex_n = ti.rotation.transpose() * s.ns;
+    if (ti.uvs != nullptr) {
+      uv = b0 * ti.uvs[tri[0]] + b1 * ti.uvs[tri[1]] + b2 * ti.uvs[tri[2]];
+      has_uv = true;
+    }
   } else {
     s.ng = s.ns = Eigen::Vector3f::UnitZ();
     s.tangent = Eigen::Vector3f::UnitX();
@@ -498,7 +504,8 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
   if (material->texture.kind != Texture::Kind::kNone) {
     // The cone's footprint stretches where it meets the surface at a grazing angle.
     const float footprint = s.cone_width / std::max(0.2f, std::abs(dir.dot(s.ng)));
-    const TextureSample t = EvalTexture(material->texture, tex_p, tex_n, image, footprint);
+    const TextureSample t =
+        EvalTexture(material->texture, tex_p, tex_n, image, footprint, has_uv ? &uv : nullptr);
     s.params = ApplyTexture(material->surface, t);
     if (t.normal_offset.squaredNorm() > 0) {
       // Back to the world frame: instances rotate their texture frame.

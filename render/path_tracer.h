@@ -27,6 +27,7 @@ namespace cadsynth {
 struct TracedInstance {
   const uint32_t* indices = nullptr;                       // 3 per triangle, of the part's mesh
   const Eigen::Vector3f* normals = nullptr;                // per vertex, model frame
+  const Eigen::Vector2f* uvs = nullptr;                    // per vertex, or none
   Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();  // world_from_model
   Eigen::Vector3f translation = Eigen::Vector3f::Zero();
   Material material;  // base colour already resolved

@@ -88,6 +88,7 @@ struct PartBuffers {
   std::vector<float> positions;  // xyz per vertex, plus 1 float of padding at the end for SSE loads
   std::vector<uint32_t> indices;  // 3 per triangle
   std::vector<Eigen::Vector3f> normals;
+  std::vector<Eigen::Vector2f> uvs;  // per vertex, or empty
 };
 
 constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
@@ -173,6 +174,7 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
       buffers.indices.insert(buffers.indices.end(), {t[0], t[1], t[2]});
     }
     buffers.normals = part.mesh.normals;
+    if (part.mesh.has_uvs()) buffers.uvs = part.mesh.uvs;
     im.parts.push_back(std::move(buffers));
     im.model_bounds.push_back(part.mesh.Bounds());
   }
@@ -265,6 +267,7 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
       TracedInstance ti;
       ti.indices = buffers.indices.data();
       ti.normals = buffers.normals.data();
+      ti.uvs = buffers.uvs.empty() ? nullptr : buffers.uvs.data();
       ti.rotation = im.instance_rotation[i];
       ti.translation = instance.world_from_model.translation().cast<float>();
       const int m = i < scene.instance_material.size() ? scene.instance_material[i] : -1;

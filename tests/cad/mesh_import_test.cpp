@@ -8,6 +8,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 
 #include <gtest/gtest.h>
 
@@ -82,6 +83,65 @@ TEST(ReadMesh, CreaseAngleDecidesSmoothOrSharp) {
   ImportOptions faceted;
   faceted.crease_angle_rad = 0.0;
   EXPECT_EQ(ImportCad(cube, faceted).parts[0].mesh.num_vertices(), 36u);
+}
+
+// Texture coordinates survive the import: vertices split at creases keep theirs, and glTF's
+// (v down from the image's top) come out in OpenGL's convention like OBJ's (v up).
+TEST(ReadMesh, TextureCoordinatesAreKept) {
+  testing::ScratchDir dir;
+  // A cube whose every face maps the whole image, u along the face's first edge.
+  std::ofstream(dir / "uv_cube.obj")
+      << "v 0 0 0\nv 20 0 0\nv 20 20 0\nv 0 20 0\nv 0 0 20\nv 20 0 20\nv 20 20 20\n"
+         "v 0 20 20\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+         "f 1/1 4/2 3/3 2/4\nf 5/1 6/2 7/3 8/4\nf 1/1 2/2 6/3 5/4\nf 2/1 3/2 7/3 6/4\n"
+         "f 3/1 4/2 8/3 7/4\nf 4/1 1/2 5/3 8/4\n";
+  const Mesh cube = ImportCad(dir / "uv_cube.obj", ImportOptions{}).parts[0].mesh;
+  ASSERT_TRUE(cube.has_uvs());
+  EXPECT_EQ(cube.num_triangles(), 12u);
+  // Every corner of the top face (z = +10 after centring) has the uv its OBJ line gives it.
+  const std::map<std::pair<int, int>, Eigen::Vector2f> top = {
+      {{-10, -10}, {0, 0}}, {{10, -10}, {1, 0}}, {{10, 10}, {1, 1}}, {{-10, 10}, {0, 1}}};
+  int checked = 0;
+  for (const auto& t : cube.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3f& p = cube.positions[t[k]];
+      if (p.z() != 10.0f || cube.normals[t[k]].z() < 0.99f) continue;
+      const auto it = top.find({static_cast<int>(p.x()), static_cast<int>(p.y())});
+      ASSERT_NE(it, top.end());
+      EXPECT_EQ(cube.uvs[t[k]], it->second) << p.transpose();
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 6);
+  // A glTF triangle with (u, v) = (0.1, 0.2), (0.9, 0.2), (0.1, 0.7) in glTF's convention.
+  const float data[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1f, 0.2f, 0.9f, 0.2f, 0.1f, 0.7f};
+  static_assert(sizeof(data) % 3 == 0, "base64 without padding");
+  const auto* bytes = reinterpret_cast<const uint8_t*>(data);
+  static const char* kBase64 = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string encoded;
+  for (size_t i = 0; i < sizeof(data); i += 3) {
+    const uint32_t n = (uint32_t{bytes[i]} << 16) | (uint32_t{bytes[i + 1]} << 8) | bytes[i + 2];
+    for (int k = 0; k < 4; ++k) encoded += kBase64[(n >> (18 - 6 * k)) & 63];
+  }
+  std::ofstream(dir / "tri.gltf")
+      << R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
+      << R"("meshes":[{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1}}]}],)"
+      << R"("buffers":[{"byteLength":60,"uri":"data:application/octet-stream;base64,)" << encoded
+      << R"("}],"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},)"
+      << R"({"buffer":0,"byteOffset":36,"byteLength":24}],"accessors":[)"
+      << R"({"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],)"
+      << R"("max":[1,1,0]},{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}]})";
+  ImportOptions mm;
+  mm.unit = "mm";
+  const Mesh tri = ImportCad(dir / "tri.gltf", mm).parts[0].mesh;
+  ASSERT_TRUE(tri.has_uvs());
+  ASSERT_EQ(tri.num_triangles(), 1u);
+  const Eigen::Vector2f expected[] = {{0.1f, 0.8f}, {0.9f, 0.8f}, {0.1f, 0.3f}};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3f p = tri.positions[tri.triangles[0][k]];
+    const int corner = p.x() > 0 ? 1 : (p.y() > 0 ? 2 : 0);
+    EXPECT_TRUE(tri.uvs[tri.triangles[0][k]].isApprox(expected[corner], 1e-6f)) << k;
+  }
 }
 
 // COLLADA's <unit meter="..."> is honoured: the same cube declared in millimetres is 20 mm.

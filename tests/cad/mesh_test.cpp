@@ -46,6 +46,28 @@ TEST(Mesh, FacetedGivesEachTriangleItsOwnVerticesAndNormal) {
   EXPECT_DOUBLE_EQ(m.SurfaceArea(), 1.0);
 }
 
+TEST(Mesh, TextureCoordinatesFollowFacetingAndAppending) {
+  Mesh m = UnitSquare();
+  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  Mesh faceted = m;
+  faceted.MakeFaceted();
+  ASSERT_TRUE(faceted.has_uvs());
+  // The second triangle (0, 2, 3) now has vertices 3, 4, 5.
+  EXPECT_EQ(faceted.uvs[4], Eigen::Vector2f(1, 1));
+  EXPECT_EQ(faceted.uvs[5], Eigen::Vector2f(0, 1));
+  Mesh both = m;
+  both.Append(m);
+  ASSERT_TRUE(both.has_uvs());
+  EXPECT_EQ(both.uvs[6], Eigen::Vector2f(1, 1));
+  // A mesh without them makes the whole mesh have none (half a mapping is no mapping).
+  both.Append(UnitSquare());
+  EXPECT_FALSE(both.has_uvs());
+  EXPECT_TRUE(both.uvs.empty());
+  Mesh empty;
+  empty.Append(m);
+  EXPECT_TRUE(empty.has_uvs());
+}
+
 TEST(Mesh, AppendOffsetsIndices) {
   Mesh m = UnitSquare();
   m.Append(UnitSquare());

@@ -32,6 +32,7 @@ Assembly SampleAssembly() {
   plate.name = "plate";
   plate.mesh = MakePart("p", MakeBox(30, 20, 4), options).mesh;
   plate.mesh.face_ids.clear();
+  for (const Eigen::Vector3f& p : plate.mesh.positions) plate.mesh.uvs.emplace_back(p.x(), p.y());
   plate.symmetries = Symmetries::Cyclic(2, true);
   a.parts.push_back(plate);
   Instance i;
@@ -53,6 +54,8 @@ void ExpectSameMesh(const Mesh& a, const Mesh& b) {
   ASSERT_EQ(a.triangles.size(), b.triangles.size());
   for (size_t k = 0; k < a.triangles.size(); ++k) EXPECT_EQ(a.triangles[k], b.triangles[k]);
   EXPECT_EQ(a.face_ids, b.face_ids);
+  ASSERT_EQ(a.uvs.size(), b.uvs.size());
+  for (size_t k = 0; k < a.uvs.size(); ++k) EXPECT_EQ(a.uvs[k], b.uvs[k]);
 }
 
 // Everything the importer returns comes back bit for bit; the B-rep comes back such that

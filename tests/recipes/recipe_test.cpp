@@ -490,6 +490,30 @@ TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
   EXPECT_EQ(error.rfind("r.yaml:2:36: lighting.environment.file: ", 0), 0u) << error;
   EXPECT_NE(error.find("sky.hdr"), std::string::npos) << error;
   EXPECT_NE(error.find("not an image"), std::string::npos) << error;
+
+  // Projections: only image textures have one, the floor has no texture coordinates.
+  std::ofstream(dir / "tile.png", std::ios::binary)  // a binary PPM (OpenCV reads it by content)
+      << "P6\n2 2\n255\n"
+      << std::string(12, '\x80');
+  EXPECT_EQ(ErrorOf("materials:\n  floor: {texture: {type: image, file: tile.png, projection: "
+                    "uv}}\n",
+                    dir.path()),
+            "r.yaml:2:10: materials.floor: the floor has no texture coordinates: use projection "
+            "'triplanar' (or 'auto')");
+  EXPECT_EQ(ErrorOf("materials:\n  default: {texture: {type: image, file: tile.png, projection: "
+                    "cylinder}}\n",
+                    dir.path()),
+            "r.yaml:2:64: materials.default.texture.projection: unknown projection 'cylinder' "
+            "(known: auto, triplanar, uv)");
+  EXPECT_EQ(ErrorOf("materials:\n  default: {texture: {type: noise, projection: uv}}\n"),
+            "r.yaml:2:48: materials.default.texture.projection: only an image texture is projected "
+            "(procedural ones are solid)");
+  const RunSpec uv = ParseRecipe(
+      "materials:\n  assign: [{file: '*.obj', texture: {type: image, file: tile.png, projection: "
+      "uv}}]\n",
+      "r.yaml", dir.path());
+  EXPECT_EQ(uv.material_rules[0].material.texture.projection, Texture::Projection::kUv);
+  EXPECT_EQ(uv.material_rules[0].where, "r.yaml:2:12");
 }
 
 TEST(Recipe, ShippedRecipesParse) {

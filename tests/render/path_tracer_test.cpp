@@ -294,6 +294,74 @@ TEST(PathTracer, PolishedMetalMirrorsTheSky) {
   EXPECT_GT(checked, 200);
 }
 
+// An image texture on a mesh with texture coordinates: a 100 mm square facing a uniform sky of
+// radiance L is a Lambertian plane that sees the whole sky, so each pixel is exactly texel * L.
+// Texels: red top-left, green top-right, blue bottom-left, white bottom-right; the square maps the
+// whole image with v up (OpenGL), and the camera looks down with image x = world x, image y =
+// world -y, so the render shows the image upright. The triplanar projection of the same image
+// (tiles of 100 mm from the world origin) puts other texels there.
+TEST(PathTracer, ImageTextureFollowsTheMeshTextureCoordinates) {
+  Part square;
+  square.name = "square";
+  square.mesh.positions = {{-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}};
+  square.mesh.normals.assign(4, Eigen::Vector3f::UnitZ());
+  square.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  square.mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  auto image = std::make_shared<LinearImage>();
+  image->width = image->height = 8;
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 8; ++x) {
+      const Eigen::Vector3f c = y < 4
+                                    ? (x < 4 ? Eigen::Vector3f(1, 0, 0) : Eigen::Vector3f(0, 1, 0))
+                                    : (x < 4 ? Eigen::Vector3f(0, 0, 1) : Eigen::Vector3f(1, 1, 1));
+      image->rgb.insert(image->rgb.end(), {c.x(), c.y(), c.z()});
+    }
+  }
+  Material m = Lambert(0.5f);
+  m.texture.kind = Texture::Kind::kImage;
+  m.texture.image = "quadrants.png";
+  m.texture.pixels = image;
+  m.texture.scale_mm = 100;
+  const float sky = 0.5f;
+  Scene scene = Dark();
+  scene.floor = false;
+  scene.instances = {Instance{0, "square", Eigen::Isometry3d::Identity()}};
+  scene.instance_material = {0};
+  scene.environment.color = Eigen::Vector3f::Constant(sky);
+  Camera camera;
+  camera.intrinsics = Intrinsics::FromFov(64, 64, 0.5);
+  camera.world_from_cam = LookingDown({0, 0, 150});
+  const auto rgb = [](const Frame& f, int u, int v) {
+    const float* c = &f.radiance[3 * (static_cast<size_t>(v) * f.width() + u)];
+    return Eigen::Vector3f(c[0], c[1], c[2]);
+  };
+  // Pixels at the quadrants' centres (world x, y = -+25 mm); 64 px span 2 * 150 tan(0.25) mm.
+  const double px_per_mm = 32.0 / (150.0 * std::tan(0.25));
+  const int lo = static_cast<int>(32 - 25 * px_per_mm), hi = static_cast<int>(32 + 25 * px_per_mm);
+  for (const Texture::Projection projection :
+       {Texture::Projection::kAuto, Texture::Projection::kUv, Texture::Projection::kTriplanar}) {
+    m.texture.projection = projection;
+    scene.materials = {m};
+    const Frame frame = Renderer({square}, scene, Pbr(4, 1)).Render(camera);
+    const Eigen::Vector3f top_left = rgb(frame, lo, lo), top_right = rgb(frame, hi, lo);
+    const Eigen::Vector3f bottom_left = rgb(frame, lo, hi), bottom_right = rgb(frame, hi, hi);
+    if (projection != Texture::Projection::kTriplanar) {
+      EXPECT_TRUE(top_left.isApprox(Eigen::Vector3f(sky, 0, 0), 1e-4f)) << top_left.transpose();
+      EXPECT_TRUE(top_right.isApprox(Eigen::Vector3f(0, sky, 0), 1e-4f)) << top_right.transpose();
+      EXPECT_TRUE(bottom_left.isApprox(Eigen::Vector3f(0, 0, sky), 1e-4f))
+          << bottom_left.transpose();
+      EXPECT_TRUE(bottom_right.isApprox(Eigen::Vector3f::Constant(sky), 1e-4f))
+          << bottom_right.transpose();
+    } else {
+      // Top view: u = x / 100, image row v = -y / 100, wrapped: world (-25, 25) reads texel
+      // (0.75, 0.75), the white quadrant.
+      EXPECT_TRUE(top_left.isApprox(Eigen::Vector3f::Constant(sky), 1e-4f)) << top_left.transpose();
+      EXPECT_TRUE(bottom_right.isApprox(Eigen::Vector3f(sky, 0, 0), 1e-4f))
+          << bottom_right.transpose();
+    }
+  }
+}
+
 TEST(PathTracer, SameBytesForAnyThreadCountAndTileOrder) {
   SphereView view(Metal(0.3f), 0.4f);
   view.scene.floor = true;

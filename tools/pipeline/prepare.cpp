@@ -90,7 +90,7 @@ bool SelfContained(const std::filesystem::path& path) {
 std::optional<CacheKey> ImportKey(const PartCache& cache, const ImportOptions& options,
                                   const PartSource& source, size_t variant) {
   KeyHasher hasher;
-  cache.Start(&hasher, "import 1");
+  cache.Start(&hasher, "import 2");  // 2: meshes keep their texture coordinates
   HashOptions(&hasher, options);
   const auto hash_file = [&](const std::filesystem::path& path) {
     hasher.Text(path.string()).Text(ReadFileText(path));  // the path: warnings name it
@@ -455,6 +455,20 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       }
       if (run.scene.instance_material[i] < 0 && spec.default_material)
         run.scene.instance_material[i] = static_cast<int>(spec.material_rules.size());
+      const int m = run.scene.instance_material[i];
+      if (m >= 0 && run.scene.materials[m].texture.projection == Texture::Projection::kUv &&
+          !parts[run.scene.instances[i].part].mesh.has_uvs()) {
+        const size_t r = static_cast<size_t>(m);
+        const std::string at =
+            r < spec.material_rules.size()
+                ? (spec.material_rules[r].where.empty() ? ""
+                                                        : spec.material_rules[r].where + ": ") +
+                      "materials.assign[" + std::to_string(r) + "]"
+                : "materials.default";
+        throw Error(at + ": texture projection 'uv', but part '" + name +
+                    "' has no texture coordinates (only meshes such as OBJ or glTF files carry "
+                    "them): use 'auto' or 'triplanar'");
+      }
     }
     run.scene.part_colors.clear();
     for (size_t i = 0; i < parts.size(); ++i) {

@@ -218,5 +218,37 @@ TEST(Prepare, SameNamesMadeUniqueAndFlatSheetsLieFlat) {
     EXPECT_NEAR((sheet.world_from_model * p.cast<double>()).z(), 0.0, 1e-4);
 }
 
+// Image textures by texture coordinates: a part from an OBJ with them takes the rule, a part
+// without them is refused with the rule's place in the recipe.
+TEST(Prepare, UvProjectionNeedsTextureCoordinates) {
+  testing::ScratchDir dir;
+  std::ofstream(dir / "tile.ppm", std::ios::binary) << "P6\n2 2\n255\n" << std::string(12, '\x80');
+  std::ofstream(dir / "label.obj") << "v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nv 0 0 4\n"
+                                      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\n"
+                                      "f 1/1 4/4 3/3 2/2\nf 1/1 2/2 5/5\nf 2/2 3/3 5/5\n"
+                                      "f 3/3 4/4 5/5\nf 4/4 1/1 5/5\n";
+  const std::string recipe =
+      "scenes:\n  - name: s\n    parts: [{file: label.obj}, {family: hex_nut}]\n"
+      "render: {mode: pbr}\nmaterials:\n"
+      "  assign:\n    - {name: '*', texture: {type: image, file: tile.ppm, projection: uv}}\n";
+  const RunSpec spec = ParseRecipe(recipe, (dir / "r.yaml").string(), dir.path());
+  try {
+    Prepare(spec);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("r.yaml:7:7: materials.assign[0]: texture projection 'uv', but part "),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("has no texture coordinates"), std::string::npos) << what;
+  }
+  RunSpec only_obj = ParseRecipe(recipe, (dir / "r.yaml").string(), dir.path());
+  only_obj.scenes[0].sources.resize(1);
+  const PreparedRun run = Prepare(only_obj);
+  ASSERT_EQ(run.parts.size(), 1u);
+  EXPECT_TRUE(run.parts[0].mesh.has_uvs());
+  EXPECT_EQ(run.scenes[0].instance_material, (std::vector<int>{0}));
+}
+
 }  // namespace
 }  // namespace cadsynth

@@ -81,6 +81,13 @@ inline constexpr RandomStream kTexturePattern{
     "texture.pattern",
     "a procedural texture's noise lattice, boards and scratches; the texture's seed picks the "
     "pattern, the lattice cell indexes it"};
+// recipes: scene.seed (layout: pile)
+inline constexpr RandomStream kDropRotation{
+    "pile.rotation",
+    "a dropped body's orientation (uniform on SO(3), three draws); index = (body << 2) + draw"};
+inline constexpr RandomStream kDropPosition{
+    "pile.position",
+    "a dropped body's start above the drop region; index = (body << 8) + (attempt << 1) + axis"};
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
@@ -90,7 +97,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kTargetHeight,   streams::kTargetAzimuth, streams::kTargetRadius,
     streams::kViewRoll,       streams::kTestImage,     streams::kPointTriangle,
     streams::kPointU,         streams::kPointV,        streams::kRenderPixel,
-    streams::kTexturePattern,
+    streams::kTexturePattern, streams::kDropRotation,  streams::kDropPosition,
 };
 
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every

@@ -1,0 +1,271 @@
+// Piles against checks that do not trust the physics engine: an exact mesh test of overlaps
+// (CGAL's AABB tree on the parts' own triangles), the tote's inner outline, a settled pile left
+// alone for another second, a fair die, and the same bytes from the same seed.
+#include "variants/physics/pile.h"
+
+#include <cmath>
+#include <map>
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <tbb/parallel_for.h>
+
+#include <gtest/gtest.h>
+
+#include "cad/error.h"
+#include "cad/import.h"
+#include "cad/shape.h"
+#include "variants/families.h"
+
+namespace cadsynth {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Triangles = std::vector<K::Triangle_3>;
+using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+Part FamilyPart(const std::string& family, const ParamValues& values = {}) {
+  const FamilyInfo& f = *FindFamily(family);
+  Assembly a = BuildVariant(f, CompleteParams(f, values), ImportOptions{});
+  return a.parts[0];
+}
+
+// A part's triangles in the world, with a tree for distance and inside queries.
+struct Placed {
+  Triangles triangles;
+  std::unique_ptr<Tree> tree;
+  std::vector<K::Point_3> samples;  // vertices and triangle centroids
+  Eigen::AlignedBox3d box;
+};
+
+Placed Place(const Part& part, const Eigen::Isometry3d& pose) {
+  Placed p;
+  const auto world = [&](uint32_t v) {
+    const Eigen::Vector3d q = pose * part.mesh.positions[v].cast<double>();
+    p.box.extend(q);
+    return K::Point_3(q.x(), q.y(), q.z());
+  };
+  for (const auto& t : part.mesh.triangles) {
+    const K::Point_3 a = world(t[0]), b = world(t[1]), c = world(t[2]);
+    p.triangles.emplace_back(a, b, c);
+    p.samples.push_back(a);
+    p.samples.push_back(CGAL::centroid(a, b, c));
+  }
+  p.tree = std::make_unique<Tree>(p.triangles.begin(), p.triangles.end());
+  p.tree->accelerate_distance_queries();
+  return p;
+}
+
+// How deep (mm) the points of `a` reach inside the closed surface `b`: the largest distance to
+// b's surface of a sample of a that lies inside b (ray parity, three rays must agree).
+double Penetration(const Placed& a, const Placed& b) {
+  if (!a.box.intersects(b.box)) return 0;
+  double deepest = 0;
+  const K::Vector_3 dirs[3] = {
+      {0.5377, 0.8325, 0.1332}, {-0.7213, 0.1892, 0.6662}, {0.1211, -0.4519, -0.8838}};
+  for (const K::Point_3& s : a.samples) {
+    if (!b.box.contains(Eigen::Vector3d(s.x(), s.y(), s.z()))) continue;
+    const double d = std::sqrt(b.tree->squared_distance(s));
+    if (d <= deepest) continue;
+    int inside = 0;
+    for (const K::Vector_3& dir : dirs)
+      inside += b.tree->number_of_intersected_primitives(K::Ray_3(s, dir)) % 2;
+    if (inside >= 2) deepest = d;
+  }
+  return deepest;
+}
+
+PileOptions ToteOptions(std::vector<int> bodies, uint64_t seed) {
+  PileOptions o;
+  o.bodies = std::move(bodies);
+  o.container.kind = Container::Kind::kTote;
+  o.container.inner_mm = {200, 150};
+  o.container.height_mm = 80;
+  o.seed = seed;
+  return o;
+}
+
+TEST(Collision, ConvexPartsAreTheirHullConcaveOnesArePieces) {
+  const Part box = MakePart("box", MakeBox(30, 20, 10), TessellationOptions{});
+  const CollisionShape b = MakeCollisionShape(box);
+  EXPECT_FALSE(b.decomposed);
+  ASSERT_EQ(b.pieces.size(), 1u);
+  EXPECT_NEAR(b.volume_ratio, 1.0, 1e-9);
+  // A ring gear (a hole of most of its volume): pieces whose hulls together hold about the part,
+  // far less than its hull (which fills the hole).
+  const Part ring = FamilyPart("ring_gear");
+  const CollisionShape r = MakeCollisionShape(ring);
+  EXPECT_TRUE(r.decomposed);
+  EXPECT_GE(r.pieces.size(), 4u);
+  EXPECT_GT(r.volume_ratio, 0.9);
+  EXPECT_LT(r.volume_ratio, 1.6);
+  const CollisionShape back = DecodeCollisionShape(EncodeCollisionShape(r));
+  ASSERT_EQ(back.pieces.size(), r.pieces.size());
+  EXPECT_EQ(back.pieces[1], r.pieces[1]);
+  EXPECT_THROW(DecodeCollisionShape(EncodeCollisionShape(r).substr(0, 40)), Error);
+  CollisionOptions bad;
+  bad.concavity = 0;
+  EXPECT_THROW(MakeCollisionShape(ring, bad), Error);
+}
+
+// A fair die: a cube dropped at a uniform random orientation lands on each face with probability
+// 1/6. Chi-square over 1,000 drops with 5 degrees of freedom: below 20.5 (p = 0.001). (Rolling
+// friction, which stands in for the sharp edges the collision margin rounds, can hold a cube
+// balanced on an edge within 0.05 mm: allowed in 3 drops of 1,000 at most.)
+TEST(Pile, DroppedCubeIsAFairDie) {
+  const std::vector<Part> parts = {MakePart("cube", MakeBox(20, 20, 20), TessellationOptions{})};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
+  constexpr int kDrops = 1000;
+  std::vector<int> face(kDrops);
+  tbb::parallel_for(0, kDrops, [&](int k) {
+    PileOptions o;
+    o.bodies = {0};
+    o.drop_height_mm = 60;
+    o.seed = static_cast<uint64_t>(k);
+    const PileResult r = DropPile(parts, shapes, o);
+    EXPECT_TRUE(r.restless.empty());
+    // The model axis pointing most nearly down names the face it rests on.
+    const Eigen::Matrix3d rot = r.world_from_model[0].linear();
+    const Eigen::Vector3d down_in_model = rot.transpose() * Eigen::Vector3d(0, 0, -1);
+    int axis;
+    const double m = down_in_model.cwiseAbs().maxCoeff(&axis);
+    face[k] = m > 0.999 ? 2 * axis + (down_in_model[axis] > 0 ? 0 : 1) : -1;
+    // On a face: its centre 10 mm above the floor (the collision margin is inside the cube).
+    if (face[k] >= 0) {
+      EXPECT_NEAR(r.world_from_model[0].translation().z(), 10.0, 0.05);
+    }
+  });
+  int counts[6] = {0, 0, 0, 0, 0, 0}, edges = 0;
+  for (int f : face) f >= 0 ? ++counts[f] : ++edges;
+  EXPECT_LE(edges, 3);
+  const double n = kDrops - edges;
+  double chi2 = 0;
+  for (int c : counts) chi2 += (c - n / 6.0) * (c - n / 6.0) / (n / 6.0);
+  EXPECT_LT(chi2, 20.5) << counts[0] << " " << counts[1] << " " << counts[2] << " " << counts[3]
+                        << " " << counts[4] << " " << counts[5];
+}
+
+// A pile of nuts and ring gears in a tote: no two parts overlap by more than 0.5 mm (exact mesh
+// test), every part lies inside the tote, and the same seed gives the same poses bit for bit.
+TEST(Pile, PileInAToteRestsInsideWithoutOverlaps) {
+  const std::vector<Part> parts = {FamilyPart("hex_nut", {{"size", std::string("M12")}}),
+                                   FamilyPart("ring_gear", {{"teeth", 40.0}, {"module", 1.5}})};
+  std::vector<CollisionShape> shapes;
+  for (const Part& p : parts) shapes.push_back(MakeCollisionShape(p));
+  std::vector<int> bodies;
+  for (int i = 0; i < 24; ++i) bodies.push_back(i % 4 == 3 ? 1 : 0);
+  const PileOptions o = ToteOptions(bodies, 7);
+  const PileResult r = DropPile(parts, shapes, o);
+  EXPECT_TRUE(r.restless.empty()) << r.restless.size() << " still moving";
+  EXPECT_TRUE(r.escaped.empty());
+  ASSERT_EQ(r.world_from_model.size(), bodies.size());
+
+  std::vector<Placed> placed;
+  for (size_t i = 0; i < bodies.size(); ++i)
+    placed.push_back(Place(parts[bodies[i]], r.world_from_model[i]));
+  double worst = 0;
+  for (size_t i = 0; i < placed.size(); ++i) {
+    for (size_t j = 0; j < placed.size(); ++j) {
+      if (i != j) worst = std::max(worst, Penetration(placed[i], placed[j]));
+    }
+  }
+  EXPECT_LT(worst, 0.5) << "mm";
+  // Inside the tote's inner outline (its rounded corners included) and above its inner floor.
+  const Container& c = o.container;
+  const double a = 0.5 * c.inner_mm.x(), b = 0.5 * c.inner_mm.y(), rad = c.corner_radius_mm;
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    for (const Eigen::Vector3f& v : parts[bodies[i]].mesh.positions) {
+      const Eigen::Vector3d p = r.world_from_model[i] * v.cast<double>();
+      EXPECT_GT(p.z(), c.floor_mm - 0.5);
+      const Eigen::Vector2d q(std::max(0.0, std::abs(p.x()) - (a - rad)),
+                              std::max(0.0, std::abs(p.y()) - (b - rad)));
+      ASSERT_LT(q.norm(), rad + 0.5) << "body " << i << " outside the tote at " << p.transpose();
+    }
+  }
+  // Same seed, same bytes; another seed, another pile.
+  const PileResult again = DropPile(parts, shapes, o);
+  for (size_t i = 0; i < bodies.size(); ++i)
+    EXPECT_EQ(again.world_from_model[i].matrix(), r.world_from_model[i].matrix());
+  const PileResult other = DropPile(parts, shapes, ToteOptions(bodies, 8));
+  EXPECT_NE(other.world_from_model[0].matrix(), r.world_from_model[0].matrix());
+}
+
+// Bin picking's usual pile, 40 copies of one part: settled, it is an equilibrium. A new world
+// with every body awake at its settled pose and nothing holding it but its contacts, simulated
+// for one more second, moves no point of any part by more than 0.5 mm.
+TEST(Pile, SettledPileStaysPutWhenSimulatedAgain) {
+  const std::vector<Part> parts = {FamilyPart("hex_nut", {{"size", std::string("M12")}})};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
+  PileOptions o = ToteOptions(std::vector<int>(40, 0), 3);
+  o.container.inner_mm = {130, 100};
+  const PileResult r = DropPile(parts, shapes, o);
+  ASSERT_TRUE(r.restless.empty());
+  EXPECT_LT(r.seconds, 5.0);
+  // A pile, not a layer: some nuts rest on others (their lowest point above the tote's floor).
+  int above = 0;
+  for (const Eigen::Isometry3d& pose : r.world_from_model) {
+    double lowest = 1e9;
+    for (const Eigen::Vector3f& v : parts[0].mesh.positions)
+      lowest = std::min(lowest, (pose * v.cast<double>()).z());
+    above += lowest > o.container.floor_mm + 1;
+  }
+  EXPECT_GT(above, 3);
+  const PileResult later = ContinuePile(parts, shapes, o, r.world_from_model, 1.0);
+  EXPECT_LT(later.drift_mm, 0.5);
+}
+
+TEST(Pile, ImpossibleOptionsAndRestlessPilesAreReported) {
+  const std::vector<Part> parts = {MakePart("cube", MakeBox(20, 20, 20), TessellationOptions{})};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
+  PileOptions o;
+  EXPECT_THROW(DropPile(parts, shapes, o), Error);  // no bodies
+  o.bodies = {0, 3};
+  EXPECT_THROW(DropPile(parts, shapes, o), Error);
+  o.bodies = {0};
+  o.container.kind = Container::Kind::kTote;
+  o.container.corner_radius_mm = 500;
+  try {
+    DropPile(parts, shapes, o);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("corner radius"), std::string::npos) << e.what();
+  }
+  // Too little time to land: the body is reported, not silently placed in the air.
+  PileOptions quick;
+  quick.bodies = {0};
+  quick.drop_height_mm = 500;
+  quick.max_seconds = 0.05;
+  EXPECT_EQ(DropPile(parts, shapes, quick).restless, std::vector<int>{0});
+}
+
+TEST(Pile, ToteMeshIsClosedAndMatchesItsSize) {
+  Container c;
+  c.kind = Container::Kind::kTote;
+  const Mesh m = MakeContainerMesh(c);
+  ASSERT_FALSE(m.empty());
+  const Eigen::AlignedBox3d box = m.Bounds();
+  EXPECT_NEAR(box.sizes().x(), c.inner_mm.x() + 2 * c.wall_mm, 1e-3);
+  EXPECT_NEAR(box.sizes().y(), c.inner_mm.y() + 2 * c.wall_mm, 1e-3);
+  EXPECT_NEAR(box.sizes().z(), c.floor_mm + c.height_mm, 1e-3);
+  // Closed and outward: the signed volume is the walls' and floor's (rounded corners included).
+  double volume = 0;
+  for (const auto& t : m.triangles) {
+    volume += m.positions[t[0]].cast<double>().dot(
+                  m.positions[t[1]].cast<double>().cross(m.positions[t[2]].cast<double>())) /
+              6;
+  }
+  const auto rounded_area = [](double x, double y, double r) { return x * y - (4 - M_PI) * r * r; };
+  const double r = c.corner_radius_mm, w = c.wall_mm;
+  const double expected = rounded_area(c.inner_mm.x() + 2 * w, c.inner_mm.y() + 2 * w, r + w) *
+                              (c.floor_mm + c.height_mm) -
+                          rounded_area(c.inner_mm.x(), c.inner_mm.y(), r) * c.height_mm;
+  EXPECT_NEAR(volume, expected, 0.01 * expected);  // the corners are polygons of 8 segments
+  Container floor_only;
+  EXPECT_TRUE(MakeContainerMesh(floor_only).empty());
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -1,0 +1,566 @@
+#include "variants/physics/pile.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <mutex>
+
+#include <LinearMath/btConvexHullComputer.h>
+#include <btBulletDynamicsCommon.h>
+#include <Eigen/Eigenvalues>
+
+#include "cad/error.h"
+#include "cad/mesh_analysis.h"
+#include "cad/random.h"
+
+namespace cadsynth {
+
+namespace {
+
+// Bullet works in centimetres here: parts of 5-200 mm are 0.5-20 units, the range its tolerances
+// are made for (collision margins, contact thresholds, sleeping speeds are absolute lengths).
+constexpr double kUnitsPerMm = 0.1;
+constexpr double kGravity = 9810.0 * kUnitsPerMm;  // 9.81 m/s^2
+constexpr double kMargin = 0.1 * kUnitsPerMm;      // 0.1 mm: the tote's corner prisms
+constexpr double kMaxMarginMm = 0.5;               // parts: up to 0.5 mm
+constexpr int kCornerSegments = 8;
+constexpr double kSleepAfter = 2.0;  // s (Bullet's default; 0.5 s froze cubes tipping over an edge)
+constexpr double kSpinningFrictionMm = 0.5;
+constexpr double kRollingFrictionMm = 0.05;
+
+btVector3 ToBt(const Eigen::Vector3d& p) { return btVector3(p.x(), p.y(), p.z()); }
+
+// The inner outline of a tote (or the outer one, with `grow`): a rounded rectangle, counter-
+// clockwise from the +x+y corner, kCornerSegments per corner (one point when the radius is 0).
+std::vector<Eigen::Vector2d> Outline(const Container& c, double grow) {
+  const double a = 0.5 * c.inner_mm.x() + grow, b = 0.5 * c.inner_mm.y() + grow;
+  const double r = c.corner_radius_mm > 0 ? c.corner_radius_mm + grow : 0.0;
+  std::vector<Eigen::Vector2d> points;
+  const double sx[4] = {1, -1, -1, 1}, sy[4] = {1, 1, -1, -1};
+  for (int corner = 0; corner < 4; ++corner) {
+    const Eigen::Vector2d centre(sx[corner] * (a - r), sy[corner] * (b - r));
+    const int n = r > 0 ? kCornerSegments : 0;
+    for (int k = 0; k <= n; ++k) {
+      const double angle = M_PI / 2 * (corner + (n > 0 ? static_cast<double>(k) / n : 0.5));
+      points.push_back(centre + r * Eigen::Vector2d(std::cos(angle), std::sin(angle)));
+    }
+  }
+  return points;
+}
+
+struct World {
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  std::vector<std::unique_ptr<btMotionState>> states;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;  // statics first, then the dropped bodies
+
+  ~World() {
+    for (auto& body : bodies) world.removeRigidBody(body.get());
+  }
+
+  btRigidBody* AddStatic(std::unique_ptr<btCollisionShape> shape, const PhysicsMaterial& m) {
+    btRigidBody::btRigidBodyConstructionInfo info(0.0, nullptr, shape.get());
+    info.m_friction = m.friction;
+    info.m_restitution = m.restitution;
+    // Bullet combines rolling (and spinning) friction as r0 f1 + f0 r1 (each body's rolling
+    // friction times the other's friction): the parts' own decide, the container adds none.
+    info.m_spinningFriction = 0.0;
+    info.m_rollingFriction = 0.0;
+    auto body = std::make_unique<btRigidBody>(info);
+    world.addRigidBody(body.get());
+    shapes.push_back(std::move(shape));
+    bodies.push_back(std::move(body));
+    return bodies.back().get();
+  }
+};
+
+void AddContainer(const Container& c, World* w) {
+  // The floor everywhere (parts that bounce out land on it).
+  // (A large thin box rather than btStaticPlaneShape: Bullet's convex-plane contacts keep one
+  // point per step and let a part lying flat sink and spin.)
+  {
+    auto floor = std::make_unique<btBoxShape>(btVector3(1e4, 1e4, 10.0) * kUnitsPerMm);
+    btRigidBody* body = w->AddStatic(std::move(floor), c.material);
+    btTransform at = btTransform::getIdentity();
+    at.setOrigin(btVector3(0, 0, -10.0 * kUnitsPerMm));
+    body->setWorldTransform(at);
+  }
+  if (c.kind != Container::Kind::kTote) return;
+  auto compound = std::make_unique<btCompoundShape>();
+  std::vector<std::unique_ptr<btCollisionShape>> children;
+  const double a = 0.5 * c.inner_mm.x(), b = 0.5 * c.inner_mm.y(), t = c.wall_mm;
+  const double top = c.floor_mm + c.height_mm;
+  const auto box = [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+    auto shape = std::make_unique<btBoxShape>(ToBt(0.5 * (hi - lo) * kUnitsPerMm));
+    btTransform at = btTransform::getIdentity();
+    at.setOrigin(ToBt(0.5 * (hi + lo) * kUnitsPerMm));
+    compound->addChildShape(at, shape.get());
+    children.push_back(std::move(shape));
+  };
+  box({-a, -b, 0}, {a, b, c.floor_mm});        // floor
+  box({-a - t, b, 0}, {a + t, b + t, top});    // +y wall
+  box({-a - t, -b - t, 0}, {a + t, -b, top});  // -y wall
+  box({a, -b, 0}, {a + t, b, top});            // +x wall
+  box({-a - t, -b, 0}, {-a, b, top});          // -x wall
+  // Rounded inner corners: the space between each square corner and the arc, as a fan of prisms
+  // from the corner (the same polygon as the tote's mesh).
+  if (c.corner_radius_mm > 0) {
+    const std::vector<Eigen::Vector2d> inner = Outline(c, 0.0);
+    const double sx[4] = {1, -1, -1, 1}, sy[4] = {1, 1, -1, -1};
+    for (int corner = 0; corner < 4; ++corner) {
+      const Eigen::Vector2d square(sx[corner] * a, sy[corner] * b);
+      for (int k = 0; k < kCornerSegments; ++k) {
+        const Eigen::Vector2d p = inner[corner * (kCornerSegments + 1) + k];
+        const Eigen::Vector2d q = inner[corner * (kCornerSegments + 1) + k + 1];
+        auto prism = std::make_unique<btConvexHullShape>();
+        for (const Eigen::Vector2d& xy : {square, p, q}) {
+          for (double z : {c.floor_mm, top})
+            prism->addPoint(ToBt(Eigen::Vector3d(xy.x(), xy.y(), z) * kUnitsPerMm), false);
+        }
+        prism->recalcLocalAabb();
+        prism->setMargin(kMargin);
+        compound->addChildShape(btTransform::getIdentity(), prism.get());
+        children.push_back(std::move(prism));
+      }
+    }
+  }
+  w->AddStatic(std::move(compound), c.material);
+  for (auto& child : children) w->shapes.push_back(std::move(child));
+}
+
+// A part as a rigid body: its frame at the centre of mass along the principal axes of inertia.
+struct BodyModel {
+  std::shared_ptr<btCollisionShape> shape;
+  std::vector<std::unique_ptr<btCollisionShape>> children;
+  Eigen::Isometry3d model_from_body = Eigen::Isometry3d::Identity();
+  double mass_kg = 0;
+  Eigen::Vector3d inertia = Eigen::Vector3d::Zero();  // principal moments, kg * unit^2
+  double radius_mm = 0;                               // bounding sphere about the centre of mass
+  double thickness_mm = 0;  // the smallest extent along a principal axis (for CCD)
+  double margin_mm = 0;     // Bullet's collision margin (the pieces are shrunk by it)
+  std::vector<Eigen::Vector3d> corners_in_model;  // every piece's corners (drift checks)
+};
+
+BodyModel MakeBodyModel(const Part& part, const CollisionShape& collision,
+                        const PhysicsMaterial& material) {
+  BodyModel m;
+  MassProperties mass = part.mass;
+  if (!part.watertight || !(mass.volume_mm3 > 0)) {
+    // An open mesh: the hull's mass properties stand in.
+    Mesh hull_mesh;
+    const ConvexHull hull = part.hull ? *part.hull : ComputeConvexHull(part.mesh);
+    for (const Eigen::Vector3d& v : hull.vertices) hull_mesh.positions.push_back(v.cast<float>());
+    for (const auto& t : hull.triangles) hull_mesh.triangles.emplace_back(t[0], t[1], t[2]);
+    mass = ComputeMeshMassProperties(hull_mesh);
+  }
+  if (!(mass.volume_mm3 > 0)) throw Error("part '" + part.name + "' has no volume to drop");
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(mass.inertia);
+  Eigen::Matrix3d axes = eigen.eigenvectors();
+  if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+  m.model_from_body.linear() = axes;
+  m.model_from_body.translation() = mass.center_of_mass;
+  const double density_kg_mm3 = material.density_kg_m3 * 1e-9;
+  m.mass_kg = density_kg_mm3 * mass.volume_mm3;
+  m.inertia = eigen.eigenvalues().cwiseMax(0.0) * density_kg_mm3 * kUnitsPerMm * kUnitsPerMm;
+
+  const Eigen::Isometry3d body_from_model = m.model_from_body.inverse();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  // Each piece shrunk by the collision margin, which Bullet adds back around it: the piece's own
+  // shape with edges rounded by the margin. A margin that is not thin keeps contacts in GJK's
+  // robust shallow regime when parts land fast (with 0.1 mm, a cube landing on a corner at 1 m/s
+  // sank 4 mm into the floor and spun there).
+  std::vector<Eigen::Vector3d> all;
+  for (const auto& piece : collision.pieces) {
+    for (const Eigen::Vector3d& p : piece) {
+      all.push_back(body_from_model * p);
+      m.corners_in_model.push_back(p);
+    }
+  }
+  for (const Eigen::Vector3d& q : all) {
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+    m.radius_mm = std::max(m.radius_mm, q.norm());
+  }
+  m.thickness_mm = (hi - lo).minCoeff();
+  m.margin_mm = std::min(kMaxMarginMm, 0.1 * m.thickness_mm);
+  const auto piece_shape = [&](const std::vector<Eigen::Vector3d>& corners) {
+    std::vector<double> coords;
+    for (const Eigen::Vector3d& p : corners) {
+      const Eigen::Vector3d q = body_from_model * p * kUnitsPerMm;
+      coords.insert(coords.end(), {q.x(), q.y(), q.z()});
+    }
+    btConvexHullComputer computer;
+    // Thin pieces shrink less (at most a quarter of their inner radius) and keep a smaller margin.
+    const btScalar shrunk =
+        computer.compute(coords.data(), 3 * sizeof(double), static_cast<int>(corners.size()),
+                         m.margin_mm * kUnitsPerMm, 0.25);
+    auto hull = std::make_unique<btConvexHullShape>();
+    for (int v = 0; v < computer.vertices.size(); ++v) hull->addPoint(computer.vertices[v], false);
+    hull->recalcLocalAabb();
+    hull->setMargin(shrunk > 0 ? shrunk : kMargin);
+    return hull;
+  };
+  if (collision.pieces.size() == 1) {
+    m.shape = piece_shape(collision.pieces[0]);
+  } else {
+    auto compound = std::make_shared<btCompoundShape>();
+    for (const auto& piece : collision.pieces) {
+      m.children.push_back(piece_shape(piece));
+      compound->addChildShape(btTransform::getIdentity(), m.children.back().get());
+    }
+    m.shape = compound;
+  }
+  return m;
+}
+
+btTransform ToBtTransform(const Eigen::Isometry3d& world_from_body) {
+  const Eigen::Quaterniond q(world_from_body.linear());
+  btTransform t;
+  t.setRotation(btQuaternion(q.x(), q.y(), q.z(), q.w()));
+  t.setOrigin(ToBt(world_from_body.translation() * kUnitsPerMm));
+  return t;
+}
+
+Eigen::Isometry3d FromBtTransform(const btTransform& t) {
+  const btQuaternion r = t.getRotation();
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::Quaterniond(r.w(), r.x(), r.y(), r.z()).normalized().toRotationMatrix();
+  const btVector3& o = t.getOrigin();
+  out.translation() = Eigen::Vector3d(o.x(), o.y(), o.z()) / kUnitsPerMm;
+  return out;
+}
+
+// A world with the container and a body per entry of options.bodies at `world_from_model`.
+struct Simulation {
+  std::vector<BodyModel> models;  // per part (declared first: the world goes before its shapes)
+  World world;
+  std::vector<btRigidBody*> bodies;
+  std::vector<int> part_of;
+
+  Simulation(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+             const PileOptions& o) {
+    // Bullet's time to sleep is one process-wide number; every pile sets the same value.
+    static std::once_flag once;
+    std::call_once(once, [] { gDeactivationTime = kSleepAfter; });
+    world.world.setGravity(btVector3(0, 0, -kGravity));
+    btContactSolverInfo& info = world.world.getSolverInfo();
+    info.m_numIterations = o.solver_iterations;
+    info.m_splitImpulse = 1;
+    // Two friction directions per contact, cached between steps: without them parts resting on
+    // several convex pieces creep a few mm/s.
+    info.m_solverMode |=
+        SOLVER_USE_2_FRICTION_DIRECTIONS | SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
+    AddContainer(o.container, &world);
+    models.resize(parts.size());
+    std::vector<bool> made(parts.size(), false);
+    for (int p : o.bodies) {
+      if (made[p]) continue;
+      const PhysicsMaterial m = o.materials.empty() ? PhysicsMaterial{} : o.materials[p];
+      models[p] = MakeBodyModel(parts[p], shapes[p], m);
+      made[p] = true;
+    }
+  }
+
+  void AddBody(int part, const Eigen::Isometry3d& world_from_model, const PileOptions& o) {
+    const BodyModel& m = models[part];
+    const PhysicsMaterial mat = o.materials.empty() ? PhysicsMaterial{} : o.materials[part];
+    world.states.push_back(std::make_unique<btDefaultMotionState>(
+        ToBtTransform(world_from_model * m.model_from_body)));
+    btRigidBody::btRigidBodyConstructionInfo info(m.mass_kg, world.states.back().get(),
+                                                  m.shape.get(), ToBt(m.inertia));
+    info.m_friction = mat.friction;
+    info.m_restitution = mat.restitution;
+    // Air drag of a sort (Bullet's damping: a fraction of the speed lost per second), enough to
+    // take the last energy out of a pile in a second or two, far too little to change a fall.
+    info.m_linearDamping = 0.1;
+    info.m_angularDamping = 0.3;
+    // Torsional and rolling resistance at contacts (a torque of this length times the normal
+    // force): the solver's friction at a patch's few contact points lets a part lying flat
+    // turn and drift slowly for seconds without it.
+    info.m_spinningFriction = kSpinningFrictionMm * kUnitsPerMm;
+    info.m_rollingFriction = kRollingFrictionMm * kUnitsPerMm;
+    auto body = std::make_unique<btRigidBody>(info);
+    // Continuous collision detection for fast thin parts: a swept sphere inside the part.
+    body->setCcdMotionThreshold(0.05 * m.thickness_mm * kUnitsPerMm);
+    body->setCcdSweptSphereRadius(0.2 * m.thickness_mm * kUnitsPerMm);
+    // Asleep (frozen until touched) once its whole group of touching bodies stayed below 5 mm/s
+    // and 0.05 rad/s for kSleepAfter: contact jitter stays below that, real motion does not.
+    body->setSleepingThresholds(5.0 * kUnitsPerMm, 0.05);
+    world.world.addRigidBody(body.get());
+    bodies.push_back(body.get());
+    part_of.push_back(part);
+    world.bodies.push_back(std::move(body));
+  }
+
+  // Bodies whose mean speed over the last window (since `before`) exceeded the thresholds: a
+  // window's displacement rather than the instant's velocity, so that the solver's contact
+  // jitter (velocities that flip every step around a fixed pose) does not count as motion.
+  std::vector<int> Moving(const PileOptions& o, const std::vector<btTransform>& before,
+                          double window_s) const {
+    std::vector<int> moving;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+      if (!bodies[i]->isActive()) continue;  // asleep: at rest by Bullet's own test
+      const btTransform& now = bodies[i]->getWorldTransform();
+      const double moved_mm = (now.getOrigin() - before[i].getOrigin()).length() / kUnitsPerMm;
+      const btQuaternion turn = now.getRotation() * before[i].getRotation().inverse();
+      const double turned =
+          2 * std::atan2(btVector3(turn.x(), turn.y(), turn.z()).length(), std::abs(turn.w()));
+      // The fastest point: the centre's move plus the turn at the bounding sphere.
+      const double point_mm = moved_mm + turned * models[part_of[i]].radius_mm;
+      if (point_mm > o.rest_speed_mm_s * window_s || turned > o.rest_angular_rad_s * window_s)
+        moving.push_back(static_cast<int>(i));
+    }
+    return moving;
+  }
+
+  Eigen::Isometry3d Pose(size_t i) const {
+    return FromBtTransform(bodies[i]->getWorldTransform()) *
+           models[part_of[i]].model_from_body.inverse();
+  }
+
+  // Steps until rest or max_seconds.
+  void Run(const PileOptions& o, PileResult* out) {
+    const int window = std::max(1, static_cast<int>(std::lround(o.rest_seconds / o.time_step_s)));
+    const int max_steps = static_cast<int>(std::ceil(o.max_seconds / o.time_step_s));
+    std::vector<btTransform> before;
+    for (const btRigidBody* b : bodies) before.push_back(b->getWorldTransform());
+    std::vector<int> moving;
+    bool rest = false;
+    int step = 0;
+    while (step < max_steps && !rest) {
+      world.world.stepSimulation(o.time_step_s, 1, o.time_step_s);
+      ++step;
+      if (step % window != 0) continue;
+      moving = Moving(o, before, window * o.time_step_s);
+      rest = moving.empty();
+      for (size_t i = 0; i < bodies.size(); ++i) before[i] = bodies[i]->getWorldTransform();
+    }
+    out->steps = step;
+    out->seconds = step * o.time_step_s;
+    if (!rest) {
+      out->restless = moving;
+      // The time ran out inside a window: judge the part of it that passed.
+      const int partial = step % window;
+      if (moving.empty() && partial > 0) out->restless = Moving(o, before, partial * o.time_step_s);
+    }
+    out->world_from_model.clear();
+    for (size_t i = 0; i < bodies.size(); ++i) out->world_from_model.push_back(Pose(i));
+    if (rest && o.check_seconds > 0) {
+      const int extra = static_cast<int>(std::ceil(o.check_seconds / o.time_step_s));
+      for (int k = 0; k < extra; ++k) world.world.stepSimulation(o.time_step_s, 1, o.time_step_s);
+      for (size_t i = 0; i < bodies.size(); ++i) {
+        const Eigen::Isometry3d now = Pose(i), then = out->world_from_model[i];
+        for (const Eigen::Vector3d& corner : models[part_of[i]].corners_in_model)
+          out->drift_mm = std::max(out->drift_mm, (now * corner - then * corner).norm());
+      }
+    }
+    if (o.container.kind == Container::Kind::kTote) {
+      const double a = 0.5 * o.container.inner_mm.x(), b = 0.5 * o.container.inner_mm.y();
+      for (size_t i = 0; i < bodies.size(); ++i) {
+        const Eigen::Vector3d c = FromBtTransform(bodies[i]->getWorldTransform()).translation();
+        if (std::abs(c.x()) > a || std::abs(c.y()) > b || c.z() < o.container.floor_mm - 1)
+          out->escaped.push_back(static_cast<int>(i));
+      }
+    }
+  }
+};
+
+void CheckInputs(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+                 const PileOptions& o) {
+  std::string why;
+  if (!o.Check(&why)) throw Error("pile: " + why);
+  if (shapes.size() != parts.size()) throw Error("pile: one collision shape per part needed");
+  if (!o.materials.empty() && o.materials.size() != parts.size())
+    throw Error("pile: one physics material per part needed");
+  for (int b : o.bodies) {
+    if (b < 0 || static_cast<size_t>(b) >= parts.size())
+      throw Error("pile: a body refers to part " + std::to_string(b) + ", which does not exist");
+    if (shapes[b].pieces.empty()) throw Error("pile: part '" + parts[b].name + "' has no shape");
+  }
+}
+
+}  // namespace
+
+bool PhysicsMaterial::Check(std::string* why) const {
+  if (!(density_kg_m3 > 0) || !std::isfinite(density_kg_m3)) {
+    *why = "density must be positive (kg/m3)";
+  } else if (!(friction >= 0 && friction <= 10)) {
+    *why = "friction must lie in [0, 10]";
+  } else if (!(restitution >= 0 && restitution <= 1)) {
+    *why = "restitution must lie in [0, 1]";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+bool Container::Check(std::string* why) const {
+  if (kind == Kind::kFloor) return material.Check(why);
+  if (!(inner_mm.minCoeff() > 0) || !inner_mm.allFinite()) {
+    *why = "a tote's inner size must be positive";
+  } else if (!(height_mm > 0) || !(wall_mm > 0) || !(floor_mm > 0)) {
+    *why = "a tote's height, wall and floor must be positive";
+  } else if (!(corner_radius_mm >= 0) || 2 * corner_radius_mm > inner_mm.minCoeff()) {
+    *why = "a tote's corner radius must lie between 0 and half its inner width";
+  } else {
+    return material.Check(why);
+  }
+  return false;
+}
+
+bool PileOptions::Check(std::string* why) const {
+  if (bodies.empty()) {
+    *why = "a pile needs at least one body";
+  } else if (bodies.size() > 1000) {
+    *why = "at most 1000 bodies per pile";
+  } else if (!container.Check(why)) {
+    return false;
+  } else if (!(drop_size_mm.minCoeff() >= 0)) {
+    *why = "the drop region's size must not be negative";
+  } else if (!(drop_height_mm >= 0)) {
+    *why = "the drop height must not be negative";
+  } else if (!(time_step_s > 0 && time_step_s <= 0.02)) {
+    *why = "the time step must lie in (0, 0.02] s";
+  } else if (solver_iterations < 1 || solver_iterations > 1000) {
+    *why = "solver iterations must be 1 to 1000";
+  } else if (!(max_seconds > 0 && max_seconds <= 600)) {
+    *why = "the simulated time limit must lie in (0, 600] s";
+  } else if (!(check_seconds >= 0 && check_seconds <= 60)) {
+    *why = "the check after rest must last 0 to 60 s";
+  } else if (!(rest_speed_mm_s > 0) || !(rest_angular_rad_s > 0) || !(rest_seconds > 0)) {
+    *why = "rest thresholds must be positive";
+  } else {
+    for (const PhysicsMaterial& m : materials) {
+      if (!m.Check(why)) return false;
+    }
+    return true;
+  }
+  return false;
+}
+
+Eigen::Quaterniond UniformRotation(double u1, double u2, double u3) {
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+  const double t1 = 2 * M_PI * u2, t2 = 2 * M_PI * u3;
+  return Eigen::Quaterniond(b * std::cos(t2), a * std::sin(t1), a * std::cos(t1), b * std::sin(t2));
+}
+
+Mesh MakeContainerMesh(const Container& c) {
+  Mesh mesh;
+  if (c.kind != Container::Kind::kTote) return mesh;
+  const std::vector<Eigen::Vector2d> inner = Outline(c, 0.0), outer = Outline(c, c.wall_mm);
+  const size_t n = inner.size();
+  const double top = c.floor_mm + c.height_mm;
+  const auto ring = [&](const std::vector<Eigen::Vector2d>& outline, double z) {
+    const auto base = static_cast<uint32_t>(mesh.positions.size());
+    for (const Eigen::Vector2d& p : outline)
+      mesh.positions.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                  static_cast<float>(z));
+    return base;
+  };
+  const uint32_t outer_bottom = ring(outer, 0.0), outer_top = ring(outer, top);
+  const uint32_t inner_top = ring(inner, top), inner_bottom = ring(inner, c.floor_mm);
+  const auto quad = [&](uint32_t a, uint32_t b, uint32_t cc, uint32_t d) {  // counter-clockwise
+    mesh.triangles.emplace_back(a, b, cc);
+    mesh.triangles.emplace_back(a, cc, d);
+  };
+  for (size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<uint32_t>(k), j = static_cast<uint32_t>((k + 1) % n);
+    quad(outer_bottom + i, outer_bottom + j, outer_top + j, outer_top + i);  // outside, facing out
+    quad(outer_top + i, outer_top + j, inner_top + j, inner_top + i);        // rim, facing up
+    quad(inner_top + i, inner_top + j, inner_bottom + j, inner_bottom + i);  // inside, facing in
+  }
+  for (uint32_t k = 1; k + 1 < n; ++k) {
+    mesh.triangles.emplace_back(inner_bottom, inner_bottom + k, inner_bottom + k + 1);  // up
+    mesh.triangles.emplace_back(outer_bottom, outer_bottom + k + 1, outer_bottom + k);  // down
+  }
+  // Flat faces stay flat; the rounded corners' facets (11.25 degrees apart) are smoothed.
+  ComputeCreaseNormals(&mesh, 30.0 * M_PI / 180.0);
+  return mesh;
+}
+
+PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+                    const PileOptions& o) {
+  CheckInputs(parts, shapes, o);
+  Simulation sim(parts, shapes, o);
+  Eigen::Vector2d region = o.drop_size_mm;
+  if (!(region.minCoeff() > 0)) {
+    region = o.container.kind == Container::Kind::kTote
+                 ? Eigen::Vector2d(o.container.inner_mm - Eigen::Vector2d::Constant(20.0))
+                 : Eigen::Vector2d(300.0, 300.0);
+  }
+  // Start positions: for each body in turn, a few random spots in the region; the one where its
+  // bounding sphere clears every earlier body's at the lowest height wins.
+  const double base = o.container.RimZ() + o.drop_height_mm;
+  struct Sphere {
+    Eigen::Vector3d centre;
+    double radius;
+  };
+  std::vector<Sphere> placed;
+  const double gap = 2.0;
+  for (size_t i = 0; i < o.bodies.size(); ++i) {
+    const int part = o.bodies[i];
+    const BodyModel& m = sim.models[part];
+    const auto draw = [&](const RandomStream& s, uint64_t index) {
+      return UniformDraw(o.seed, s, (static_cast<uint64_t>(i) << 8) + index);
+    };
+    const Eigen::Quaterniond q =
+        UniformRotation(UniformDraw(o.seed, streams::kDropRotation, (uint64_t{i} << 2) + 0),
+                        UniformDraw(o.seed, streams::kDropRotation, (uint64_t{i} << 2) + 1),
+                        UniformDraw(o.seed, streams::kDropRotation, (uint64_t{i} << 2) + 2));
+    const double r = m.radius_mm;
+    const Eigen::Vector2d half = (0.5 * region - Eigen::Vector2d::Constant(r)).cwiseMax(0.0);
+    Eigen::Vector3d best(0, 0, 1e300);
+    for (uint64_t attempt = 0; attempt < 8; ++attempt) {
+      const Eigen::Vector2d xy(
+          (2 * draw(streams::kDropPosition, attempt << 1) - 1) * half.x(),
+          (2 * draw(streams::kDropPosition, (attempt << 1) + 1) - 1) * half.y());
+      double z = base + r;
+      for (const Sphere& s : placed) {
+        const double reach = r + s.radius + gap;
+        const double d2 = (xy - s.centre.head<2>()).squaredNorm();
+        if (d2 < reach * reach) z = std::max(z, s.centre.z() + std::sqrt(reach * reach - d2));
+      }
+      if (z < best.z()) best = Eigen::Vector3d(xy.x(), xy.y(), z);
+    }
+    placed.push_back({best, r});
+    // The body's centre of mass at the sphere's centre, turned by q.
+    Eigen::Isometry3d world_from_body = Eigen::Isometry3d::Identity();
+    world_from_body.linear() = q.toRotationMatrix();
+    world_from_body.translation() = best;
+    sim.AddBody(part, world_from_body * m.model_from_body.inverse(), o);
+  }
+  PileResult result;
+  sim.Run(o, &result);
+  return result;
+}
+
+PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+                        const PileOptions& o, const std::vector<Eigen::Isometry3d>& poses,
+                        double seconds) {
+  CheckInputs(parts, shapes, o);
+  if (poses.size() != o.bodies.size()) throw Error("pile: one pose per body needed");
+  if (!(seconds > 0 && seconds <= 600)) throw Error("pile: simulate 0 to 600 s");
+  Simulation sim(parts, shapes, o);
+  for (size_t i = 0; i < poses.size(); ++i) {
+    sim.AddBody(o.bodies[i], poses[i], o);
+    sim.bodies.back()->setActivationState(DISABLE_DEACTIVATION);
+  }
+  const int steps = static_cast<int>(std::ceil(seconds / o.time_step_s));
+  for (int k = 0; k < steps; ++k) sim.world.world.stepSimulation(o.time_step_s, 1, o.time_step_s);
+  PileResult result;
+  result.steps = steps;
+  result.seconds = steps * o.time_step_s;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    result.world_from_model.push_back(sim.Pose(i));
+    for (const Eigen::Vector3d& corner : sim.models[sim.part_of[i]].corners_in_model)
+      result.drift_mm =
+          std::max(result.drift_mm, (sim.Pose(i) * corner - poses[i] * corner).norm());
+  }
+  return result;
+}
+
+}  // namespace cadsynth

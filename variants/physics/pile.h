@@ -1,0 +1,107 @@
+// Physically dropped piles of parts (issue 16): copies of parts fall at random orientations into a
+// tote or onto the floor and come to rest, simulated by Bullet (rigid bodies, Debian's
+// libbullet-dev, double precision). One world per pile, built from scratch from the seed, bodies
+// added in a fixed order, one fixed time step, stepped on one thread: the same options give the
+// same poses bit for bit on any machine thread count and in any shard.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "cad/mesh.h"
+#include "cad/part.h"
+#include "variants/physics/collision.h"
+
+namespace cadsynth {
+
+// How a part's material behaves in contact. Friction is Coulomb's coefficient (Bullet combines
+// two bodies' by multiplying them), restitution the fraction of the normal speed kept in a bounce.
+struct PhysicsMaterial {
+  double density_kg_m3 = 7850.0;  // steel; aluminium 2700, ABS 1050, nylon 1150, brass 8500
+  double friction = 0.7;
+  double restitution = 0.1;
+
+  bool Check(std::string* why) const;
+};
+
+// What the parts fall into. A tote stands on the floor centred on the origin: its inner floor is
+// at z = floor_mm, its rim at floor_mm + height_mm; inner corners are rounded with
+// corner_radius_mm (as a polygon of 8 segments per corner, the same for the collision and the
+// images), outer corners with corner_radius_mm + wall_mm.
+struct Container {
+  enum class Kind { kFloor, kTote };
+  Kind kind = Kind::kFloor;
+  Eigen::Vector2d inner_mm{355.0, 265.0};  // inner length (x) and width (y)
+  double height_mm = 150.0;                // inner depth: from the inner floor to the rim
+  double wall_mm = 6.0;
+  double floor_mm = 6.0;
+  double corner_radius_mm = 15.0;
+  PhysicsMaterial material{1050.0, 0.8, 0.1};  // a plastic tote (the floor's too)
+
+  bool Check(std::string* why) const;
+  // The z of the surface parts land on (the inner floor or the floor).
+  double BottomZ() const { return kind == Kind::kTote ? floor_mm : 0.0; }
+  double RimZ() const { return kind == Kind::kTote ? floor_mm + height_mm : 0.0; }
+};
+
+// The tote as a closed triangle mesh in its own frame (= the world's), outward normals, for the
+// images and the depth. Empty for Kind::kFloor.
+Mesh MakeContainerMesh(const Container& container);
+
+struct PileOptions {
+  std::vector<int> bodies;                 // the part of each dropped copy, in drop order
+  std::vector<PhysicsMaterial> materials;  // per part; empty: PhysicsMaterial{} for all
+  Container container;
+  // The drop region: a rectangle centred over the origin (0: the tote's inner size less 10 mm
+  // each side, or 300 x 300 mm on the floor), and the height of the lowest body's lowest point
+  // above the rim (the floor). Bodies start apart (their bounding spheres do not meet), stacked
+  // as low as the region lets them.
+  Eigen::Vector2d drop_size_mm = Eigen::Vector2d::Zero();
+  double drop_height_mm = 30.0;
+  double time_step_s = 1.0 / 480.0;  // 240 Hz let compound parts creep mm after rest
+  int solver_iterations = 50;        // 20 left stacked parts creeping 0.5 mm/s
+  double max_seconds = 10.0;         // simulated; bodies still moving then are reported
+  // At rest: over the last rest_seconds, no point of any body moved faster than rest_speed on
+  // average, nor did a body turn faster than rest_angular (a window's displacement, not the
+  // instant's velocity, which contact jitter flips every step); or every body is asleep (Bullet's
+  // deactivation: its whole group of touching bodies below 5 mm/s and 0.05 rad/s for 2 s).
+  double rest_speed_mm_s = 0.5;
+  double rest_angular_rad_s = 0.05;
+  double rest_seconds = 0.5;
+  // After rest, simulate this much longer and report how far any point of any part moved
+  // (PileResult::drift_mm): a check that the rest is one (0: no check).
+  double check_seconds = 0.0;
+  uint64_t seed = 0;
+
+  bool Check(std::string* why) const;
+};
+
+struct PileResult {
+  std::vector<Eigen::Isometry3d> world_from_model;  // per body
+  std::vector<int> restless;                        // bodies still moving when max_seconds ran out
+  std::vector<int> escaped;  // bodies that ended outside the tote (bounced out)
+  double seconds = 0;        // simulated time until rest (or max_seconds)
+  int steps = 0;
+  double drift_mm = 0;  // check_seconds > 0: the largest displacement of a part's point after rest
+};
+
+// Drops options.bodies (parts[b] with collision shapes shapes[b]) and simulates until rest or
+// max_seconds. Throws Error for impossible options (naming the option) or a part without volume.
+PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+                    const PileOptions& options);
+
+// A new world with the bodies in `poses`, at rest and awake (never put to sleep), simulated for
+// `seconds`: how far a settled pile moves when nothing holds it still but its contacts, which is
+// what a pile at rest must survive (PileResult::drift_mm says the largest move of a point).
+PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+                        const PileOptions& options, const std::vector<Eigen::Isometry3d>& poses,
+                        double seconds);
+
+// A rotation drawn uniformly on SO(3) from three uniform numbers in [0, 1) (Shoemake 1992).
+Eigen::Quaterniond UniformRotation(double u1, double u2, double u3);
+
+}  // namespace cadsynth

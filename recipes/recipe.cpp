@@ -490,18 +490,79 @@ void ReadFields(const Reader& r, const YAML::Node& node, const std::string& sect
   });
 }
 
-// A scene's arrangement keys (ArrangementOptions::Fields) besides `other` keys read elsewhere.
-void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
-                ArrangementOptions* arrangement, std::vector<std::string> other) {
-  ReadFields(r, node, key, arrangement, std::move(other));
-  r.Check(*arrangement, node, key);
+Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
+                      std::vector<std::string> other = {});
+
+// How a part or a container behaves in contact: density (kg/m3), friction, restitution.
+void ReadPhysicsMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
+                         PhysicsMaterial* m, std::vector<std::string> allowed) {
+  for (const char* k : {"density", "friction", "restitution"}) allowed.push_back(k);
+  r.ExpectMap(node, key, allowed);
+  if (node["density"]) m->density_kg_m3 = r.Number(node["density"], key + ".density");
+  if (node["friction"]) m->friction = r.Number(node["friction"], key + ".friction");
+  if (node["restitution"]) m->restitution = r.Number(node["restitution"], key + ".restitution");
+  std::string why;
+  if (!m->Check(&why)) r.Fail(node, key, why);
+}
+
+// A pile's container: {type: tote | floor, inner: [x, y], height, wall, floor, corner_radius,
+// color, material, friction, restitution}.
+void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& key,
+                   SceneSpec* scene) {
+  Container& c = scene->arrangement.container;
+  ReadPhysicsMaterial(
+      r, node, key, &c.material,
+      {"type", "inner", "height", "wall", "floor", "corner_radius", "color", "material"});
+  if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote or floor");
+  const std::string type = r.Scalar(node["type"], key + ".type");
+  if (type == "tote") {
+    c.kind = Container::Kind::kTote;
+  } else if (type == "floor") {
+    c.kind = Container::Kind::kFloor;
+  } else {
+    r.Fail(node["type"], key + ".type", "unknown container '" + type + "' (known: tote, floor)");
+  }
+  if (const YAML::Node inner = node["inner"]) {
+    if (!inner.IsSequence() || inner.size() != 2)
+      r.Fail(inner, key + ".inner", "expected [length, width], e.g. [355 mm, 265 mm]");
+    c.inner_mm = {r.Length(inner[0], key + ".inner"), r.Length(inner[1], key + ".inner")};
+  }
+  const auto length = [&](const char* k, double* value) {
+    if (node[k]) *value = r.Length(node[k], key + "." + k);
+  };
+  length("height", &c.height_mm);
+  length("wall", &c.wall_mm);
+  length("floor", &c.floor_mm);
+  length("corner_radius", &c.corner_radius_mm);
+  if (node["color"]) scene->container_color = r.Color(node["color"], key + ".color");
+  if (node["material"])
+    scene->container_material = ReadMaterial(r, node["material"], key + ".material");
+  std::string why;
+  if (!c.Check(&why)) r.Fail(node, key, why);
+}
+
+// A scene's arrangement keys (ArrangementOptions::Fields) besides `other` keys read elsewhere,
+// and a pile's `container` and `physics`.
+void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, SceneSpec* scene,
+                std::vector<std::string> other) {
+  other.push_back("container");
+  other.push_back("physics");
+  ReadFields(r, node, key, &scene->arrangement, std::move(other));
+  const bool pile = scene->arrangement.layout == Layout::kPile;
+  for (const char* k : {"container", "physics"}) {
+    if (node[k] && !pile) r.Fail(node[k], key + "." + k, "only a pile (layout: pile) has one");
+  }
+  if (node["container"]) ReadContainer(r, node["container"], key + ".container", scene);
+  if (node["physics"])
+    ReadPhysicsMaterial(r, node["physics"], key + ".physics", &scene->arrangement.physics, {});
+  r.Check(scene->arrangement, node, key);
 }
 
 SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::string& key) {
   if (!node.IsMap()) r.ExpectMap(node, key, {"name", "parts"});
   if (!node["parts"]) r.Fail(node, key, "a scene needs 'parts'");
   SceneSpec scene;
-  ReadLayout(r, node, key, &scene.arrangement, {"name", "parts"});
+  ReadLayout(r, node, key, &scene, {"name", "parts"});
   scene.name = node["name"] ? r.Scalar(node["name"], key + ".name") : key;
   scene.sources = ReadParts(r, node["parts"], key + ".parts");
   return scene;
@@ -661,7 +722,7 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 // A material: a preset and/or its parameters, and a texture.
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
-                      std::vector<std::string> other = {}) {
+                      std::vector<std::string> other) {
   for (const char* k : {"preset", "base_color", "metallic", "roughness", "specular", "anisotropic",
                         "clearcoat", "clearcoat_roughness", "texture"}) {
     other.emplace_back(k);
@@ -1110,7 +1171,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
       scene.name = "scene";
       scene.sources = ReadParts(r, root["parts"], "parts");
       if (root["scene"]) {
-        ReadLayout(r, root["scene"], "scene", &scene.arrangement, {});
+        ReadLayout(r, root["scene"], "scene", &scene, {});
       }
       spec.scenes = {scene};
     } else if (root["scene"]) {

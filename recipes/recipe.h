@@ -43,6 +43,9 @@ struct SceneSpec {
   std::string name;
   std::vector<PartSource> sources;
   ArrangementOptions arrangement;
+  // A pile's tote as the images show it: its colour (sRGB, the fast mode) and material (pbr).
+  Eigen::Vector3f container_color{0.16f, 0.30f, 0.55f};
+  std::optional<Material> container_material;
 };
 
 // Bounds on how much work a recipe may ask for, so a typo (5,000 teeth, a grid of 100,000

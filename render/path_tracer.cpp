@@ -421,6 +421,7 @@ struct PathTracer::Impl {
   int num_strategies = 0;                          // lights + environment, chosen uniformly
   std::vector<std::shared_ptr<const LinearImage>> instance_images;
   std::shared_ptr<const LinearImage> floor_image;
+  std::vector<std::shared_ptr<const LinearImage>> fixture_images;
 
   struct Surface {
     Eigen::Vector3f p, ng, ns, tangent;
@@ -450,6 +451,8 @@ PathTracer::PathTracer(PathTracerScene scene) : impl_(std::make_unique<Impl>()) 
   for (const TracedInstance& instance : im.scene.instances)
     im.instance_images.push_back(image_of(instance.material));
   im.floor_image = image_of(im.scene.floor);
+  for (const TracedFixture& f : im.scene.fixtures)
+    im.fixture_images.push_back(image_of(f.material));
 }
 
 PathTracer::~PathTracer() = default;
@@ -486,6 +489,21 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
       uv = b0 * ti.uvs[tri[0]] + b1 * ti.uvs[tri[1]] + b2 * ti.uvs[tri[2]];
       has_uv = true;
     }
+  } else if (const unsigned geom = rh.hit.geomID[j];
+             scene.first_fixture_id != kInvalid && geom >= scene.first_fixture_id &&
+             geom - scene.first_fixture_id < scene.fixtures.size()) {
+    const size_t f = geom - scene.first_fixture_id;
+    const TracedFixture& tf = scene.fixtures[f];
+    const uint32_t* tri = &tf.indices[3 * rh.hit.primID[j]];
+    const float b1 = rh.hit.u[j], b2 = rh.hit.v[j], b0 = 1.0f - b1 - b2;
+    s.ng = Eigen::Vector3f(rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]).normalized();
+    s.ns =
+        (b0 * tf.normals[tri[0]] + b1 * tf.normals[tri[1]] + b2 * tf.normals[tri[2]]).normalized();
+    s.tangent = Eigen::Vector3f::UnitX();
+    material = &tf.material;
+    image = fixture_images[f].get();
+    tex_p = s.p;
+    tex_n = s.ns;
   } else {
     s.ng = s.ns = Eigen::Vector3f::UnitZ();
     s.tangent = Eigen::Vector3f::UnitX();

@@ -33,11 +33,20 @@ struct TracedInstance {
   Material material;  // base colour already resolved
 };
 
+// A fixture (Scene::Fixture): triangles in the world frame.
+struct TracedFixture {
+  const uint32_t* indices = nullptr;
+  const Eigen::Vector3f* normals = nullptr;  // per vertex, world frame
+  Material material;
+};
+
 struct PathTracerScene {
   RTCScene world = nullptr;  // instance i is instID i; the floor is geomID floor_id at top level
   unsigned floor_id = RTC_INVALID_GEOMETRY_ID;
   std::vector<TracedInstance> instances;
   Material floor;
+  unsigned first_fixture_id = RTC_INVALID_GEOMETRY_ID;  // fixture f is geomID first + f
+  std::vector<TracedFixture> fixtures;
   std::vector<LightSource> lights;
   Environment environment;
   int bounces = 3;

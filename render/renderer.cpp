@@ -113,6 +113,17 @@ struct Renderer::Impl {
   // Colours and normals of a traced packet's lanes: ambient plus every light it sees.
   void ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const;
   unsigned floor_id = kInvalid;
+  // Fixtures: top-level geometry ids first_fixture_id + f, their triangles and normals (world).
+  unsigned first_fixture_id = kInvalid;
+  std::vector<PartBuffers> fixtures;
+  std::vector<Eigen::Vector3f> fixture_albedo;
+  // The fixture a hit is on, or -1.
+  int FixtureOf(unsigned geom_id) const {
+    if (first_fixture_id == kInvalid || geom_id == kInvalid || geom_id < first_fixture_id)
+      return -1;
+    const unsigned f = geom_id - first_fixture_id;
+    return f < fixtures.size() ? static_cast<int>(f) : -1;
+  }
   std::unique_ptr<PathTracer> tracer;  // RenderOptions::Mode::kPbr
 
   ~Impl() {
@@ -233,6 +244,32 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     rtcAttachGeometryByID(im.world, floor, im.floor_id);
     rtcReleaseGeometry(floor);
   }
+  im.first_fixture_id = static_cast<unsigned>(scene.instances.size()) + 1;
+  for (size_t f = 0; f < scene.fixtures.size(); ++f) {
+    const Mesh& mesh = scene.fixtures[f].mesh;
+    if (mesh.empty()) throw Error("renderer: fixture '" + scene.fixtures[f].name + "' is empty");
+    PartBuffers buffers;
+    for (const Eigen::Vector3f& p : mesh.positions)
+      buffers.positions.insert(buffers.positions.end(), {p.x(), p.y(), p.z()});
+    buffers.positions.push_back(0.0f);
+    for (const auto& t : mesh.triangles)
+      buffers.indices.insert(buffers.indices.end(), {t[0], t[1], t[2]});
+    buffers.normals = mesh.normals;
+    if (buffers.normals.size() != mesh.positions.size()) {
+      throw Error("renderer: fixture '" + scene.fixtures[f].name + "' needs one normal per vertex");
+    }
+    im.fixtures.push_back(std::move(buffers));
+    const PartBuffers& b = im.fixtures.back();
+    RTCGeometry geometry = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                               b.positions.data(), 0, 3 * sizeof(float), mesh.positions.size());
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                               b.indices.data(), 0, 3 * sizeof(uint32_t), mesh.triangles.size());
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometryByID(im.world, geometry, im.first_fixture_id + static_cast<unsigned>(f));
+    rtcReleaseGeometry(geometry);
+    im.fixture_albedo.push_back(scene.fixtures[f].color);
+  }
   rtcCommitScene(im.world);
   for (const Scene::Light& light : scene.lights) {
     if (light.kind == Scene::Light::Kind::kDirectional && light.direction.norm() == 0) {
@@ -259,6 +296,14 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     pts.near_mm = static_cast<float>(options.near_mm);
     pts.far_mm = static_cast<float>(options.far_mm);
     pts.floor = scene.floor_material;
+    pts.first_fixture_id = im.first_fixture_id;
+    for (size_t f = 0; f < im.fixtures.size(); ++f) {
+      TracedFixture tf;
+      tf.indices = im.fixtures[f].indices.data();
+      tf.normals = im.fixtures[f].normals.data();
+      tf.material = scene.fixtures[f].material;
+      pts.fixtures.push_back(std::move(tf));
+    }
     pts.lights = scene.light_sources;
     pts.environment = scene.environment;
     for (size_t i = 0; i < scene.instances.size(); ++i) {
@@ -286,6 +331,9 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
       if (!m.Check(&why)) throw Error("renderer: material: " + why);
     }
     if (!scene.floor_material.Check(&why)) throw Error("renderer: floor material: " + why);
+    for (const Scene::Fixture& f : scene.fixtures) {
+      if (!f.material.Check(&why)) throw Error("renderer: fixture '" + f.name + "': " + why);
+    }
     for (const LightSource& l : scene.light_sources) {
       if (!l.Check(&why)) throw Error("renderer: light: " + why);
     }
@@ -455,6 +503,13 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
           instance_rotation[inst] * (b0 * buffers.normals[tri[0]] + b1 * buffers.normals[tri[1]] +
                                      b2 * buffers.normals[tri[2]]);
       albedo[j] = albedo_of[inst];
+    } else if (const int f = FixtureOf(rh.hit.geomID[j]); f >= 0) {
+      const PartBuffers& buffers = fixtures[static_cast<size_t>(f)];
+      const uint32_t* tri = &buffers.indices[3 * rh.hit.primID[j]];
+      const float b1 = rh.hit.u[j], b2 = rh.hit.v[j], b0 = 1.0f - b1 - b2;
+      normal = b0 * buffers.normals[tri[0]] + b1 * buffers.normals[tri[1]] +
+               b2 * buffers.normals[tri[2]];
+      albedo[j] = fixture_albedo[static_cast<size_t>(f)];
     } else {
       normal = Eigen::Vector3f::UnitZ();
       albedo[j] = scene.floor_color;
@@ -573,6 +628,14 @@ Frame Renderer::Render(const Camera& camera, uint64_t view) const {
   for (size_t i = 0; i < im.scene.instances.size(); ++i) {
     const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part],
                                       frame.instances[i].cam_from_model, k, PixelRect{0, 0, w, h});
+    for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
+      for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
+        reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
+    }
+  }
+  for (const Scene::Fixture& fixture : im.scene.fixtures) {
+    const PixelRect r =
+        ProjectedRect(fixture.mesh.Bounds(), cam_from_world, k, PixelRect{0, 0, w, h});
     for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
       for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
         reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;

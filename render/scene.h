@@ -1,6 +1,7 @@
 // What the renderer draws: placed instances of parts, a floor, lights and a background.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -16,6 +17,17 @@ struct Scene {
   // world_from_model of each placed part; an instance's own colour, if any, wins over its part's.
   std::vector<Instance> instances;
   std::vector<Eigen::Vector3f> part_colors;  // one per part; parts without one are light grey
+
+  // Geometry that is seen but is not an object (a tote, a table, a jig): it shows in the colour
+  // and depth images and hides what lies behind it, but has no instance id, pose or mask (its
+  // pixels are 0 in the instance image, like the floor's).
+  struct Fixture {
+    std::string name;
+    Mesh mesh;                                   // in the world frame, mm
+    Eigen::Vector3f color{0.3f, 0.4f, 0.55f};    // sRGB, the fast mode's albedo
+    Material material = DefaultMaterial(color);  // the pbr mode's
+  };
+  std::vector<Fixture> fixtures;
 
   bool floor = true;  // the plane z = 0, a square centred on the origin
   double floor_half_size_mm = 10000.0;

@@ -21,6 +21,14 @@ bool ArrangementOptions::Check(std::string* why) const {
     *why = "clutter radius must be positive";
   } else if (layout == Layout::kAssembled && (copies != 1 || pose == PoseMode::kAll)) {
     *why = "an assembled layout is one body: no copies, and one pose";
+  } else if (!(drop_height_mm >= 0.0)) {
+    *why = "drop_height must not be negative";
+  } else if (!(settle_time_s > 0.0 && settle_time_s <= 600.0)) {
+    *why = "settle_time must lie in (0, 600] s";
+  } else if (!(time_step_s > 0.0 && time_step_s <= 0.02)) {
+    *why = "time_step must lie in (0, 0.02] s";
+  } else if (!container.Check(why) || !physics.Check(why)) {
+    return false;
   } else {
     return true;
   }
@@ -122,7 +130,8 @@ void Rest(const std::vector<Part>& parts, const ArrangementOptions& o,
 }  // namespace
 
 Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                    const ArrangementOptions& options, const std::vector<int>& group) {
+                    const ArrangementOptions& options, const std::vector<int>& group,
+                    const std::vector<CollisionShape>* shapes) {
   ArrangementOptions o = options;
   if (o.pose == PoseMode::kAuto)
     o.pose = o.layout == Layout::kAssembled ? PoseMode::kUpright : PoseMode::kStable;
@@ -146,6 +155,53 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
     auto [it, inserted] = index_of.emplace(g, groups.size());
     if (inserted) groups.push_back(Body{g, {}});
     groups[it->second].instances.push_back(instances[i]);
+  }
+  if (o.layout == Layout::kPile) {
+    PileOptions pile;
+    pile.container = o.container;
+    pile.materials.assign(parts.size(), o.physics);
+    pile.drop_height_mm = o.drop_height_mm;
+    pile.max_seconds = o.settle_time_s;
+    pile.time_step_s = o.time_step_s;
+    pile.seed = o.seed;
+    if (o.container.kind == Container::Kind::kFloor) {
+      const double side = std::sqrt(M_PI) * o.clutter_radius_mm;  // the clutter disc's area
+      pile.drop_size_mm = Eigen::Vector2d(side, side);
+    }
+    for (const Body& g : groups) {
+      if (g.instances.size() != 1) {
+        throw Error("arrangement: a pile drops single parts, but one group is an assembly of " +
+                    std::to_string(g.instances.size()) +
+                    " parts (give its parts as separate entries, or use another layout)");
+      }
+    }
+    std::vector<Instance> copies;
+    for (const Body& g : groups) {
+      for (int c = 0; c < o.copies; ++c) {
+        pile.bodies.push_back(g.instances[0].part);
+        copies.push_back(g.instances[0]);
+        out.group.push_back(g.group);
+      }
+    }
+    std::vector<CollisionShape> own;
+    if (shapes == nullptr) {
+      std::vector<bool> needed(parts.size(), false);
+      for (int b : pile.bodies) needed[static_cast<size_t>(b)] = true;
+      own.resize(parts.size());
+      for (size_t p = 0; p < parts.size(); ++p) {
+        if (needed[p]) own[p] = MakeCollisionShape(parts[p]);
+      }
+      shapes = &own;
+    }
+    const PileResult r = DropPile(parts, *shapes, pile);
+    for (size_t i = 0; i < copies.size(); ++i) {
+      copies[i].world_from_model = r.world_from_model[i];
+    }
+    out.instances = std::move(copies);
+    out.restless = r.restless;
+    out.escaped = r.escaped;
+    out.settle_seconds = r.seconds;
+    return out;
   }
   if (o.layout == Layout::kSingle && groups.size() != 1) {
     throw Error("arrangement: the single layout takes one part or assembly (got " +

@@ -7,6 +7,7 @@
 
 #include "cad/part.h"
 #include "cad/schema.h"
+#include "variants/physics/pile.h"
 
 namespace cadsynth {
 
@@ -18,6 +19,8 @@ enum class Layout {
   kRow,        // each group resting on its own, side by side along +x
   kGrid,       // each group resting on its own, in rows of about sqrt(N)
   kClutter,    // each group dropped at a random yaw and position in a disc, none overlapping
+  kPile,       // every copy dropped at a random orientation into a tote or onto the floor, and
+               // simulated until it rests (variants/physics/pile.h): touching, stacked
 };
 
 // Which way up a group rests (see StablePoses).
@@ -37,6 +40,14 @@ struct ArrangementOptions {
   int copies = 1;                    // each group placed this many times (not with kAssembled)
   double clutter_radius_mm = 150.0;  // clutter: the disc the groups land in
   uint64_t seed = 0;                 // random poses, yaws and clutter positions
+  // Pile: what the parts fall into, how they behave (one material for all parts), from how high,
+  // and the simulation's limits. The drop region is the container's inner size (or the clutter
+  // disc's square on the floor).
+  Container container;
+  PhysicsMaterial physics;
+  double drop_height_mm = 30.0;
+  double settle_time_s = 10.0;  // simulated; parts still moving then are reported
+  double time_step_s = PileOptions{}.time_step_s;
 
   bool Check(std::string* why) const;
 
@@ -47,7 +58,7 @@ struct ArrangementOptions {
                           "choice",
                           "how the part groups lie: together as designed, one group alone, side "
                           "by side, on a grid, or dropped apart in a disc",
-                          {"assembled", "single", "row", "grid", "clutter"}});
+                          {"assembled", "single", "row", "grid", "clutter", "pile"}});
     visit(o.pose, Field{"pose",
                         "choice",
                         "which way up a group rests: most probable stable face, a face drawn by "
@@ -59,18 +70,31 @@ struct ArrangementOptions {
     visit(o.copies,
           Field{"copies", "integer", "each group placed this many times (not with assembled)"});
     visit(o.clutter_radius_mm, Field{"radius", "length", "clutter: the disc the groups land in"});
-    visit(o.seed, Field{"seed", "integer", "random poses, yaws and clutter positions"});
+    visit(o.seed, Field{"seed", "integer", "random poses, yaws, clutter positions and piles"});
+    visit(o.drop_height_mm, Field{"drop_height", "length",
+                                  "pile: the lowest part's start above the container's rim"});
+    visit(o.settle_time_s, Field{"settle_time", "number",
+                                 "pile: simulated seconds before parts still moving are "
+                                 "reported"});
+    visit(o.time_step_s, Field{"time_step", "number", "pile: the physics step in seconds"});
   }
 };
 
 struct Arrangement {
   std::vector<Instance> instances;  // world poses: resting on z = 0, centred on the z axis
   std::vector<int> group;           // the input group of each instance (copies share it)
+  // Pile: instances still moving when settle_time ran out, or outside the tote; the simulated
+  // time it took.
+  std::vector<int> restless, escaped;
+  double settle_seconds = 0;
 };
 
 // Arranges `instances` (`group[i]` is the group of instance i; empty: one group per instance).
-// Throws Error when a clutter does not fit, saying how many groups did.
+// Throws Error when a clutter does not fit, saying how many groups did. A pile drops single parts
+// (a group of several instances is an error) and needs each part's collision shape: `shapes`
+// (per part), or computed here when null.
 Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                    const ArrangementOptions& options, const std::vector<int>& group = {});
+                    const ArrangementOptions& options, const std::vector<int>& group = {},
+                    const std::vector<CollisionShape>* shapes = nullptr);
 
 }  // namespace cadsynth

@@ -459,6 +459,51 @@ TEST(Recipe, PhysicallyBasedMaterialsAndLights) {
   EXPECT_EQ(spec.look.environment.kind, Environment::Kind::kSky);
 }
 
+TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {
+  const RunSpec spec = ParseRecipe(
+      "scenes:\n"
+      "  - name: bin\n"
+      "    parts: [{family: hex_nut}]\n"
+      "    layout: pile\n"
+      "    copies: 40\n"
+      "    seed: 3\n"
+      "    drop_height: 5 cm\n"
+      "    settle_time: 12\n"
+      "    container: {type: tote, inner: [300 mm, 200 mm], height: 0.1 m, corner_radius: 0,\n"
+      "                color: [0.8, 0.1, 0.1], friction: 0.4, material: {preset: plastic_sheet}}\n"
+      "    physics: {density: 2700, friction: 0.3, restitution: 0.2}\n",
+      "r.yaml", ".");
+  ASSERT_EQ(spec.scenes.size(), 1u);
+  const SceneSpec& s = spec.scenes[0];
+  EXPECT_EQ(s.arrangement.layout, Layout::kPile);
+  EXPECT_EQ(s.arrangement.copies, 40);
+  EXPECT_DOUBLE_EQ(s.arrangement.drop_height_mm, 50.0);
+  EXPECT_DOUBLE_EQ(s.arrangement.settle_time_s, 12.0);
+  EXPECT_EQ(s.arrangement.container.kind, Container::Kind::kTote);
+  EXPECT_EQ(s.arrangement.container.inner_mm, Eigen::Vector2d(300, 200));
+  EXPECT_DOUBLE_EQ(s.arrangement.container.height_mm, 100.0);
+  EXPECT_DOUBLE_EQ(s.arrangement.container.corner_radius_mm, 0.0);
+  EXPECT_DOUBLE_EQ(s.arrangement.container.material.friction, 0.4);
+  EXPECT_FLOAT_EQ(s.container_color.x(), 0.8f);
+  ASSERT_TRUE(s.container_material.has_value());
+  EXPECT_DOUBLE_EQ(s.arrangement.physics.density_kg_m3, 2700.0);
+  EXPECT_DOUBLE_EQ(s.arrangement.physics.restitution, 0.2);
+
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], container: {type: tote}}\n"),
+            "r.yaml:2:45: scenes[0].container: only a pile (layout: pile) has one");
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: "
+                    "bucket}}\n"),
+            "r.yaml:2:66: scenes[0].container.type: unknown container 'bucket' (known: tote, "
+            "floor)");
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, physics: {friction: "
+                    "-1}}\n"),
+            "r.yaml:2:57: scenes[0].physics: friction must lie in [0, 10]");
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: "
+                    "tote, inner: [100 mm, 50 mm], corner_radius: 40 mm}}\n"),
+            "r.yaml:2:59: scenes[0].container: a tote's corner radius must lie between 0 and half "
+            "its inner width");
+}
+
 TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
   EXPECT_EQ(ErrorOf("materials: {assign: [{name: '*', preset: steal}]}\n").substr(0, 89),
             "r.yaml:1:42: materials.assign[0].preset: unknown material 'steal' (did you mean "

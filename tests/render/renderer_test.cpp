@@ -146,6 +146,43 @@ TEST(Renderer, FrontObjectOwnsThePixelAndTheHiddenOneKeepsItsFullMask) {
   EXPECT_GT(frame.instances[1].px_count_visib, 0);
 }
 
+// A fixture (a tote's wall, here a slab above the box) hides the box where it lies in front and
+// shows in the depth, but has no instance id: the box's visible mask loses those pixels, its
+// amodal mask keeps them. The same in both shading modes.
+TEST(Renderer, FixturesOccludeButAreNotObjects) {
+  const std::vector<Part> parts = {MakePart("box", MakeBox(100, 100, 20), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.instances = {Place(0, parts[0], {0, 0, 10})};
+  Scene::Fixture slab;
+  slab.name = "slab";
+  slab.mesh = MakePart("slab", MakeBox(40, 200, 10), TessellationOptions{}).mesh;
+  slab.mesh.Transform(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 100)));  // x in [-20, 20]
+  scene.fixtures = {slab};
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 600});
+  const int centre = 240 * 640 + 320;
+  const int side = 240 * 640 + 320 + 40;  // world x = 40 * 580 / 525 = 44 mm: the box only
+  for (const auto mode : {RenderOptions::Mode::kFast, RenderOptions::Mode::kPbr}) {
+    RenderOptions o;
+    o.mode = mode;
+    o.samples = 1;
+    const Frame frame = Renderer(parts, scene, o).Render(camera);
+    EXPECT_EQ(frame.instance[centre], 0);
+    EXPECT_NEAR(frame.depth[centre], 600.0 - 105.0, 1e-3);  // the slab's top
+    EXPECT_EQ(frame.instance[side], 1);
+    EXPECT_NEAR(frame.depth[side], 600.0 - 20.0, 1e-3);
+    EXPECT_EQ(frame.instances[0].amodal_mask[centre], 1);
+    EXPECT_LT(frame.instances[0].px_count_visib, frame.instances[0].px_count_all);
+    // The slab is drawn (lit), not the background.
+    const uint8_t* c = &frame.rgb[3 * centre];
+    EXPECT_GT(c[0] + c[1] + c[2], 30) << int(mode);
+  }
+  Scene empty = scene;
+  empty.fixtures[0].mesh = Mesh();
+  EXPECT_THROW(Renderer(parts, empty), Error);
+}
+
 TEST(Renderer, PosesComposeFromCameraAndInstance) {
   const std::vector<Part> parts = {MakePart("box", MakeBox(30, 20, 10), TessellationOptions{})};
   Scene scene;

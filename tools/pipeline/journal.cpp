@@ -67,7 +67,19 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   fields("output", spec.bop);
   fields("render", spec.render);
   fields("tessellation", spec.tessellation);
-  for (const SceneSpec& scene : spec.scenes) fields("scene", scene.arrangement);
+  for (const SceneSpec& scene : spec.scenes) {
+    fields("scene", scene.arrangement);
+    if (scene.arrangement.layout == Layout::kPile) {  // the pile's container and physics
+      const Container& c = scene.arrangement.container;
+      const PhysicsMaterial& p = scene.arrangement.physics;
+      key << "pile " << static_cast<int>(c.kind) << " " << c.inner_mm.transpose() << " "
+          << c.height_mm << " " << c.wall_mm << " " << c.floor_mm << " " << c.corner_radius_mm
+          << " " << c.material.density_kg_m3 << " " << c.material.friction << " "
+          << c.material.restitution << " " << p.density_kg_m3 << " " << p.friction << " "
+          << p.restitution << " " << scene.container_color.transpose() << " "
+          << scene.container_material.has_value() << "\n";
+    }
+  }
   fields("limits", spec.limits);
   key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
   // The rest of the spec that changes parts, classes or pixels without changing the recipe text

@@ -203,6 +203,36 @@ std::shared_ptr<const ConvexHull> PartHull(const Mesh& mesh, const PartCache* ca
   return hull;
 }
 
+// A part's collision shape for piles, read from the cache or computed (and stored): a concave
+// part's decomposition takes up to a second, once per part for a whole farm.
+CollisionShape PartCollisionShape(const Part& part, const PartCache* cache) {
+  const CollisionOptions options;
+  std::optional<CacheKey> key;
+  if (cache) {
+    KeyHasher hasher;
+    cache->Start(&hasher, "collision 1");
+    hasher.Geometry(part.mesh)
+        .Value(part.watertight)
+        .Value(part.mass.volume_mm3)
+        .Value(options.convex_fraction)
+        .Value(options.concavity)
+        .Value(options.max_pieces)
+        .Value(options.max_triangles)
+        .Value(options.max_corners)
+        .Value(options.tolerance_mm);
+    key = hasher.Key();
+    if (const std::optional<std::string> bytes = cache->Load("collision", *key)) {
+      try {
+        return DecodeCollisionShape(*bytes);
+      } catch (const Error&) {  // damaged: computed again below
+      }
+    }
+  }
+  CollisionShape shape = MakeCollisionShape(part, options);
+  if (key) cache->Store("collision", *key, EncodeCollisionShape(shape));
+  return shape;
+}
+
 }  // namespace
 
 std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
@@ -417,11 +447,56 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     }
     SceneRun& run = runs[s];
     run.scene = spec.look;
+    const SceneSpec& scene_spec = spec.scenes[s];
     Arrangement arranged;
     try {
-      arranged = Arrange(parts, instances, spec.scenes[s].arrangement, groups);
+      if (scene_spec.arrangement.layout == Layout::kPile) {
+        // Collision shapes of the parts this pile drops, from the cache where it can.
+        std::vector<CollisionShape> shapes(parts.size());
+        std::vector<size_t> used;
+        for (const Instance& instance : instances)
+          used.push_back(static_cast<size_t>(instance.part));
+        std::sort(used.begin(), used.end());
+        used.erase(std::unique(used.begin(), used.end()), used.end());
+        tbb::parallel_for(size_t{0}, used.size(), [&](size_t k) {
+          shapes[used[k]] = PartCollisionShape(parts[used[k]], cache);
+        });
+        arranged = Arrange(parts, instances, scene_spec.arrangement, groups, &shapes);
+        std::ostringstream m;
+        m << "scene '" << scene_spec.name << "': " << arranged.instances.size()
+          << " parts dropped; ";
+        if (arranged.restless.empty()) {
+          m << "at rest after " << arranged.settle_seconds << " s (simulated)";
+          info(m.str());
+        } else {
+          m << arranged.restless.size() << " still moving after settle_time ("
+            << scene_spec.arrangement.settle_time_s
+            << " s, simulated): raise settle_time, or drop fewer parts";
+          Warn(m.str());
+        }
+        if (!arranged.escaped.empty()) {
+          Warn("scene '" + scene_spec.name + "': " + std::to_string(arranged.escaped.size()) +
+               " parts bounced out of the tote (they are kept where they landed)");
+        }
+        const Mesh tote = MakeContainerMesh(scene_spec.arrangement.container);
+        if (!tote.empty()) {
+          Scene::Fixture fixture;
+          fixture.name = "tote";
+          fixture.mesh = tote;
+          fixture.color = scene_spec.container_color;
+          Eigen::Vector3f linear;
+          for (int c = 0; c < 3; ++c) linear[c] = SrgbToLinear(fixture.color[c]);
+          fixture.material = scene_spec.container_material
+                                 ? *scene_spec.container_material
+                                 : Scene::DefaultMaterial(scene_spec.container_color);
+          if (fixture.material.base_from_part) fixture.material.surface.base_color = linear;
+          run.scene.fixtures.push_back(std::move(fixture));
+        }
+      } else {
+        arranged = Arrange(parts, instances, scene_spec.arrangement, groups);
+      }
     } catch (const Error& e) {
-      throw Error("scene '" + spec.scenes[s].name + "': " + e.what());
+      throw Error("scene '" + scene_spec.name + "': " + e.what());
     }
     run.scene.instances = arranged.instances;
     // The pbr mode's materials: the first rule matching the part's name, family and file.

@@ -24,6 +24,8 @@ constexpr double kGravity = 9810.0 * kUnitsPerMm;  // 9.81 m/s^2
 constexpr double kMargin = 0.1 * kUnitsPerMm;      // 0.1 mm: the tote's corner prisms
 constexpr double kMaxMarginMm = 0.5;               // parts: up to 0.5 mm
 constexpr int kCornerSegments = 8;
+constexpr double kLinearDamping = 0.1, kAngularDamping = 0.3;  // fractions of speed lost per s
+constexpr double kCalmDamping = 0.9, kCalmRampS = 1.0;
 constexpr double kSleepAfter = 2.0;  // s (Bullet's default; 0.5 s froze cubes tipping over an edge)
 constexpr double kSpinningFrictionMm = 0.5;
 constexpr double kRollingFrictionMm = 0.05;
@@ -276,8 +278,8 @@ struct Simulation {
     info.m_restitution = mat.restitution;
     // Air drag of a sort (Bullet's damping: a fraction of the speed lost per second), enough to
     // take the last energy out of a pile in a second or two, far too little to change a fall.
-    info.m_linearDamping = 0.1;
-    info.m_angularDamping = 0.3;
+    info.m_linearDamping = kLinearDamping;
+    info.m_angularDamping = kAngularDamping;
     // Torsional and rolling resistance at contacts (a torque of this length times the normal
     // force): the solver's friction at a patch's few contact points lets a part lying flat
     // turn and drift slowly for seconds without it.
@@ -331,9 +333,20 @@ struct Simulation {
     std::vector<int> moving;
     bool rest = false;
     int step = 0;
+    const int calm_from = static_cast<int>(std::lround(o.calm_after_s / o.time_step_s));
+    const int calm_steps = std::max(1, static_cast<int>(std::lround(kCalmRampS / o.time_step_s)));
     while (step < max_steps && !rest) {
       world.world.stepSimulation(o.time_step_s, 1, o.time_step_s);
       ++step;
+      if (step > calm_from && step <= calm_from + calm_steps) {
+        // Calming: damping rises to kCalmDamping over kCalmRampS, which ends the slow rolling and
+        // creeping of the last few parts without adding any force (a pile at rest feels none).
+        const double f = static_cast<double>(step - calm_from) / calm_steps;
+        for (btRigidBody* b : bodies) {
+          b->setDamping(kLinearDamping + f * (kCalmDamping - kLinearDamping),
+                        kAngularDamping + f * (kCalmDamping - kAngularDamping));
+        }
+      }
       if (step % window != 0) continue;
       moving = Moving(o, before, window * o.time_step_s);
       rest = moving.empty();
@@ -429,6 +442,8 @@ bool PileOptions::Check(std::string* why) const {
     *why = "solver iterations must be 1 to 1000";
   } else if (!(max_seconds > 0 && max_seconds <= 600)) {
     *why = "the simulated time limit must lie in (0, 600] s";
+  } else if (!(calm_after_s >= 0)) {
+    *why = "calm_after must not be negative";
   } else if (!(check_seconds >= 0 && check_seconds <= 60)) {
     *why = "the check after rest must last 0 to 60 s";
   } else if (!(rest_speed_mm_s > 0) || !(rest_angular_rad_s > 0) || !(rest_seconds > 0)) {

@@ -65,11 +65,15 @@ struct PileOptions {
   double time_step_s = 1.0 / 480.0;  // 240 Hz let compound parts creep mm after rest
   int solver_iterations = 50;        // 20 left stacked parts creeping 0.5 mm/s
   double max_seconds = 10.0;         // simulated; bodies still moving then are reported
+  // From this simulated time on, damping rises over a second to 0.9 (Bullet's fraction of speed
+  // lost per second) so that the last rolling or creeping parts stop; a rest it finds is still an
+  // equilibrium (damping adds no force to a part at rest; ContinuePile checks that).
+  double calm_after_s = 2.0;
   // At rest: over the last rest_seconds, no point of any body moved faster than rest_speed on
   // average, nor did a body turn faster than rest_angular (a window's displacement, not the
   // instant's velocity, which contact jitter flips every step); or every body is asleep (Bullet's
   // deactivation: its whole group of touching bodies below 5 mm/s and 0.05 rad/s for 2 s).
-  double rest_speed_mm_s = 0.5;
+  double rest_speed_mm_s = 2.0;
   double rest_angular_rad_s = 0.05;
   double rest_seconds = 0.5;
   // After rest, simulate this much longer and report how far any point of any part moved

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "cad/error.h"
+#include "cad/part_cache.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {
@@ -248,6 +249,39 @@ TEST(Prepare, UvProjectionNeedsTextureCoordinates) {
   ASSERT_EQ(run.parts.size(), 1u);
   EXPECT_TRUE(run.parts[0].mesh.has_uvs());
   EXPECT_EQ(run.scenes[0].instance_material, (std::vector<int>{0}));
+}
+
+// A pile scene: its copies rest inside the tote, which comes with the scene as a fixture (seen,
+// not annotated); the collision shapes come from the part cache the second time, with the same
+// poses.
+TEST(Prepare, PileSceneDropsCopiesIntoItsTote) {
+  testing::ScratchDir dir;
+  const std::string recipe =
+      "scenes:\n  - name: bin\n    parts: [{family: hex_nut}]\n    layout: pile\n"
+      "    copies: 12\n    seed: 4\n"
+      "    container: {type: tote, inner: [120 mm, 90 mm], height: 60 mm}\n";
+  const RunSpec spec = ParseRecipe(recipe, "r.yaml", dir.path());
+  PartCache cache(dir / "cache", "test");
+  const PreparedRun cold = Prepare(spec, {}, &cache);
+  ASSERT_EQ(cold.scenes.size(), 1u);
+  const Scene& scene = cold.scenes[0];
+  ASSERT_EQ(scene.instances.size(), 12u);
+  ASSERT_EQ(scene.fixtures.size(), 1u);
+  EXPECT_EQ(scene.fixtures[0].name, "tote");
+  EXPECT_NEAR(scene.fixtures[0].mesh.Bounds().sizes().x(), 120 + 2 * 6.0, 1e-3);
+  for (const Instance& instance : scene.instances) {
+    for (const Eigen::Vector3f& v : cold.parts[instance.part].mesh.positions) {
+      const Eigen::Vector3d p = instance.world_from_model * v.cast<double>();
+      EXPECT_GT(p.z(), 6.0 - 0.5);
+      EXPECT_LT(std::abs(p.x()), 60.5);
+      EXPECT_LT(std::abs(p.y()), 45.5);
+    }
+  }
+  const PreparedRun warm = Prepare(spec, {}, &cache);
+  for (size_t i = 0; i < 12; ++i) {
+    EXPECT_EQ(warm.scenes[0].instances[i].world_from_model.matrix(),
+              scene.instances[i].world_from_model.matrix());
+  }
 }
 
 }  // namespace

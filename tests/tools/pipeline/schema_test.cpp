@@ -97,7 +97,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   EXPECT_EQ(
       ForEachChange<ArrangementOptions>(
           spec, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; }, check),
-      6);
+      9);
 }
 
 // The scene keys, read from a recipe with parts (a scene section needs them).
@@ -126,7 +126,7 @@ TEST(Schema, EverySceneKeyIsRead) {
         all(changed.scenes[0].arrangement, &want);
         EXPECT_EQ(got, want) << name;
       });
-  EXPECT_EQ(n, 6);
+  EXPECT_EQ(n, 9);  // layout, pose, gap, copies, radius, seed, drop_height, settle_time, time_step
 }
 
 TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {

@@ -2,7 +2,7 @@
 // tote or onto the floor and come to rest, simulated by Bullet (rigid bodies, Debian's
 // libbullet-dev, double precision). One world per pile, built from scratch from the seed, bodies
 // added in a fixed order, one fixed time step, stepped on one thread: the same options give the
-// same poses bit for bit on any machine thread count and in any shard.
+// same poses bit for bit for any thread count, on any machine and in any shard.
 #pragma once
 
 #include <cstdint>
@@ -76,9 +76,6 @@ struct PileOptions {
   double rest_speed_mm_s = 2.0;
   double rest_angular_rad_s = 0.05;
   double rest_seconds = 0.5;
-  // After rest, simulate this much longer and report how far any point of any part moved
-  // (PileResult::drift_mm): a check that the rest is one (0: no check).
-  double check_seconds = 0.0;
   uint64_t seed = 0;
 
   bool Check(std::string* why) const;
@@ -90,7 +87,7 @@ struct PileResult {
   std::vector<int> escaped;  // bodies that ended outside the tote (bounced out)
   double seconds = 0;        // simulated time until rest (or max_seconds)
   int steps = 0;
-  double drift_mm = 0;  // check_seconds > 0: the largest displacement of a part's point after rest
+  double drift_mm = 0;  // ContinuePile: the largest displacement of a point of a part
 };
 
 // Drops options.bodies (parts[b] with collision shapes shapes[b]) and simulates until rest or

@@ -93,6 +93,23 @@ struct PartBuffers {
 
 constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
 
+// A mesh's arrays as Embree shares them (parts in their model frame, fixtures in the world).
+PartBuffers MakeBuffers(const Mesh& mesh) {
+  PartBuffers buffers;
+  buffers.positions.reserve(3 * mesh.num_vertices() + 1);
+  for (const Eigen::Vector3f& p : mesh.positions) {
+    buffers.positions.insert(buffers.positions.end(), {p.x(), p.y(), p.z()});
+  }
+  buffers.positions.push_back(0.0f);
+  buffers.indices.reserve(3 * mesh.num_triangles());
+  for (const auto& t : mesh.triangles) {
+    buffers.indices.insert(buffers.indices.end(), {t[0], t[1], t[2]});
+  }
+  buffers.normals = mesh.normals;
+  if (mesh.has_uvs()) buffers.uvs = mesh.uvs;
+  return buffers;
+}
+
 }  // namespace
 
 struct Renderer::Impl {
@@ -174,19 +191,7 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
 
   // One bottom-level scene per part, in the part's model frame.
   for (const Part& part : parts) {
-    PartBuffers buffers;
-    buffers.positions.reserve(3 * part.mesh.num_vertices() + 1);
-    for (const Eigen::Vector3f& p : part.mesh.positions) {
-      buffers.positions.insert(buffers.positions.end(), {p.x(), p.y(), p.z()});
-    }
-    buffers.positions.push_back(0.0f);
-    buffers.indices.reserve(3 * part.mesh.num_triangles());
-    for (const auto& t : part.mesh.triangles) {
-      buffers.indices.insert(buffers.indices.end(), {t[0], t[1], t[2]});
-    }
-    buffers.normals = part.mesh.normals;
-    if (part.mesh.has_uvs()) buffers.uvs = part.mesh.uvs;
-    im.parts.push_back(std::move(buffers));
+    im.parts.push_back(MakeBuffers(part.mesh));
     im.model_bounds.push_back(part.mesh.Bounds());
   }
   for (PartBuffers& buffers : im.parts) {
@@ -248,13 +253,7 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
   for (size_t f = 0; f < scene.fixtures.size(); ++f) {
     const Mesh& mesh = scene.fixtures[f].mesh;
     if (mesh.empty()) throw Error("renderer: fixture '" + scene.fixtures[f].name + "' is empty");
-    PartBuffers buffers;
-    for (const Eigen::Vector3f& p : mesh.positions)
-      buffers.positions.insert(buffers.positions.end(), {p.x(), p.y(), p.z()});
-    buffers.positions.push_back(0.0f);
-    for (const auto& t : mesh.triangles)
-      buffers.indices.insert(buffers.indices.end(), {t[0], t[1], t[2]});
-    buffers.normals = mesh.normals;
+    PartBuffers buffers = MakeBuffers(mesh);
     if (buffers.normals.size() != mesh.positions.size()) {
       throw Error("renderer: fixture '" + scene.fixtures[f].name + "' needs one normal per vertex");
     }

@@ -49,6 +49,14 @@ inline constexpr RandomStream kClutterRadius{
     "a clutter placement's distance from the centre; index = (body << 20) + attempt"};
 inline constexpr RandomStream kClutterAngle{
     "arrange.clutter_angle", "a clutter placement's direction; index as arrange.clutter_radius"};
+inline constexpr RandomStream kPilePhysics{
+    "pile.physics",
+    "a part's density, friction or restitution drawn from its range (layout: pile, pose: "
+    "dropped); index = (part << 2) + which"};
+inline constexpr RandomStream kDropSeed{
+    "arrange.drop_seed",
+    "the seed of one copy's fall onto the floor (pose: dropped), for its pile.rotation and "
+    "pile.position draws; index as arrange.copy_pose"};
 // recipes: sweep.seed (random view samplers)
 inline constexpr RandomStream kViewYaw{"view.yaw", "a random view's yaw; index = view"};
 inline constexpr RandomStream kViewPitch{"view.pitch",
@@ -98,6 +106,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kViewRoll,       streams::kTestImage,     streams::kPointTriangle,
     streams::kPointU,         streams::kPointV,        streams::kRenderPixel,
     streams::kTexturePattern, streams::kDropRotation,  streams::kDropPosition,
+    streams::kDropSeed,       streams::kPilePhysics,
 };
 
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every

@@ -493,16 +493,51 @@ void ReadFields(const Reader& r, const YAML::Node& node, const std::string& sect
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
                       std::vector<std::string> other = {});
 
-// How a part or a container behaves in contact: density (kg/m3), friction, restitution.
-void ReadPhysicsMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
-                         PhysicsMaterial* m, std::vector<std::string> allowed) {
+// Which parts a rule is for (MaterialRule, PhysicsRule): `name`, `family` and `file` patterns, at
+// least one given; a family without glob characters must exist.
+template <typename Rule>
+void ReadPartPatterns(const Reader& r, const YAML::Node& item, const std::string& key, Rule* rule) {
+  if (item["name"]) rule->name = r.Scalar(item["name"], key + ".name");
+  if (item["family"]) {
+    rule->family = r.Scalar(item["family"], key + ".family");
+    if (FindFamily(rule->family) == nullptr &&
+        rule->family.find_first_of("*?[") == std::string::npos) {
+      std::string known;
+      for (const FamilyInfo& f : Families()) known += (known.empty() ? "" : ", ") + f.name;
+      r.Fail(item["family"], key + ".family",
+             "unknown family '" + rule->family + "' (known: " + known + ")");
+    }
+  }
+  if (item["file"]) rule->file = r.Scalar(item["file"], key + ".file");
+  if (rule->name.empty() && rule->family.empty() && rule->file.empty())
+    r.Fail(item, key, "say which parts: 'name', 'family' or 'file' (a pattern)");
+}
+
+// How a part or a container behaves in contact: density (kg/m3), friction, restitution; each a
+// number or, where `ranges`, [low, high] drawn per scene.
+void ReadPhysics(const Reader& r, const YAML::Node& node, const std::string& key, PhysicsDraw* d,
+                 std::vector<std::string> allowed, bool ranges) {
   for (const char* k : {"density", "friction", "restitution"}) allowed.push_back(k);
   r.ExpectMap(node, key, allowed);
-  if (node["density"]) m->density_kg_m3 = r.Number(node["density"], key + ".density");
-  if (node["friction"]) m->friction = r.Number(node["friction"], key + ".friction");
-  if (node["restitution"]) m->restitution = r.Number(node["restitution"], key + ".restitution");
+  const auto value = [&](const char* k, double PhysicsMaterial::*field) {
+    const YAML::Node v = node[k];
+    if (!v) return;
+    const std::string at = key + "." + k;
+    if (v.IsSequence()) {
+      if (!ranges) r.Fail(v, at, "expected a number (a container's is not drawn)");
+      if (v.size() != 2) r.Fail(v, at, "expected a number or a range [low, high]");
+      d->low.*field = r.Number(v[0], at);
+      d->high.*field = r.Number(v[1], at);
+      if (d->low.*field > d->high.*field) r.Fail(v, at, "the range's low end exceeds its high end");
+    } else {
+      d->low.*field = d->high.*field = r.Number(v, at);
+    }
+  };
+  value("density", &PhysicsMaterial::density_kg_m3);
+  value("friction", &PhysicsMaterial::friction);
+  value("restitution", &PhysicsMaterial::restitution);
   std::string why;
-  if (!m->Check(&why)) r.Fail(node, key, why);
+  if (!d->Check(&why)) r.Fail(node, key, why);
 }
 
 // A pile's container: {type: tote | floor, inner: [x, y], height, wall, floor, corner_radius,
@@ -510,9 +545,11 @@ void ReadPhysicsMaterial(const Reader& r, const YAML::Node& node, const std::str
 void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& key,
                    SceneSpec* scene) {
   Container& c = scene->arrangement.container;
-  ReadPhysicsMaterial(
-      r, node, key, &c.material,
-      {"type", "inner", "height", "wall", "floor", "corner_radius", "color", "material"});
+  PhysicsDraw material(c.material);
+  ReadPhysics(r, node, key, &material,
+              {"type", "inner", "height", "wall", "floor", "corner_radius", "color", "material"},
+              false);
+  c.material = material.low;
   if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote or floor");
   const std::string type = r.Scalar(node["type"], key + ".type");
   if (type == "tote") {
@@ -549,12 +586,28 @@ void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
   other.push_back("physics");
   ReadFields(r, node, key, &scene->arrangement, std::move(other));
   const bool pile = scene->arrangement.layout == Layout::kPile;
-  for (const char* k : {"container", "physics"}) {
-    if (node[k] && !pile) r.Fail(node[k], key + "." + k, "only a pile (layout: pile) has one");
+  const bool dropped = pile || scene->arrangement.pose == PoseMode::kDropped;
+  if (node["container"] && !pile)
+    r.Fail(node["container"], key + ".container", "only a pile (layout: pile) has one");
+  if (node["physics"] && !dropped) {
+    r.Fail(node["physics"], key + ".physics",
+           "only a pile (layout: pile) or dropped parts (pose: dropped) have physics");
   }
   if (node["container"]) ReadContainer(r, node["container"], key + ".container", scene);
-  if (node["physics"])
-    ReadPhysicsMaterial(r, node["physics"], key + ".physics", &scene->arrangement.physics, {});
+  if (const YAML::Node physics = node["physics"]; physics && physics.IsSequence()) {
+    // Rules: the first whose patterns match a part gives its physics.
+    for (size_t i = 0; i < physics.size(); ++i) {
+      const std::string at = key + ".physics[" + std::to_string(i) + "]";
+      PhysicsRule rule;
+      rule.where = r.Where(physics[i]);
+      rule.physics = scene->arrangement.physics;
+      ReadPhysics(r, physics[i], at, &rule.physics, {"name", "family", "file"}, true);
+      ReadPartPatterns(r, physics[i], at, &rule);
+      scene->physics_rules.push_back(std::move(rule));
+    }
+  } else if (physics) {
+    ReadPhysics(r, physics, key + ".physics", &scene->arrangement.physics, {}, true);
+  }
   r.Check(scene->arrangement, node, key);
 }
 
@@ -868,20 +921,7 @@ void ReadMaterials(const Reader& r, const YAML::Node& node, RunSpec* spec) {
       MaterialRule rule;
       rule.where = r.Where(item);
       rule.material = ReadMaterial(r, item, key, {"name", "family", "file"});
-      if (item["name"]) rule.name = r.Scalar(item["name"], key + ".name");
-      if (item["family"]) {
-        rule.family = r.Scalar(item["family"], key + ".family");
-        if (FindFamily(rule.family) == nullptr &&
-            rule.family.find_first_of("*?[") == std::string::npos) {
-          std::string known;
-          for (const FamilyInfo& f : Families()) known += (known.empty() ? "" : ", ") + f.name;
-          r.Fail(item["family"], key + ".family",
-                 "unknown family '" + rule.family + "' (known: " + known + ")");
-        }
-      }
-      if (item["file"]) rule.file = r.Scalar(item["file"], key + ".file");
-      if (rule.name.empty() && rule.family.empty() && rule.file.empty())
-        r.Fail(item, key, "say which parts: 'name', 'family' or 'file' (a pattern)");
+      ReadPartPatterns(r, item, key, &rule);
       spec->material_rules.push_back(std::move(rule));
     }
   }

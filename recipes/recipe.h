@@ -38,6 +38,13 @@ struct PartSource {
   std::string where;  // "recipe.yaml:3:5" (empty when built in)
 };
 
+// A pile's (or dropped parts') physics for the parts a rule matches: patterns as MaterialRule's.
+struct PhysicsRule {
+  std::string name, family, file;
+  PhysicsDraw physics;  // keys the rule leaves out keep the defaults (PhysicsMaterial)
+  std::string where;    // "recipe.yaml:12:7"
+};
+
 // One BOP scene: what lies on the floor together, and how.
 struct SceneSpec {
   std::string name;
@@ -46,6 +53,9 @@ struct SceneSpec {
   // A pile's tote as the images show it: its colour (sRGB, the fast mode) and material (pbr).
   Eigen::Vector3f container_color{0.16f, 0.30f, 0.55f};
   std::optional<Material> container_material;
+  // Physics per part: the first rule matching a part; parts matching none (or no rules, when
+  // `physics` is one map) take arrangement.physics.
+  std::vector<PhysicsRule> physics_rules;
 };
 
 // Bounds on how much work a recipe may ask for, so a typo (5,000 teeth, a grid of 100,000

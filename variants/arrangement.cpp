@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "cad/error.h"
+#include "cad/mesh_analysis.h"
 #include "cad/random.h"
 #include "variants/families.h"
 #include "variants/stable_pose.h"
@@ -30,9 +31,34 @@ bool ArrangementOptions::Check(std::string* why) const {
   } else if (!container.Check(why) || !physics.Check(why)) {
     return false;
   } else {
+    for (const PhysicsDraw& p : part_physics) {
+      if (!p.Check(why)) return false;
+    }
     return true;
   }
   return false;
+}
+
+bool PhysicsDraw::Check(std::string* why) const {
+  if (!low.Check(why) || !high.Check(why)) return false;
+  if (low.density_kg_m3 > high.density_kg_m3 || low.friction > high.friction ||
+      low.restitution > high.restitution) {
+    *why = "a range's low end must not exceed its high end";
+    return false;
+  }
+  return true;
+}
+
+PhysicsMaterial PhysicsDraw::Draw(uint64_t seed, uint64_t part) const {
+  const auto draw = [&](double lo, double hi, uint64_t k) {
+    return lo == hi ? lo
+                    : lo + (hi - lo) * UniformDraw(seed, streams::kPilePhysics, (part << 2) + k);
+  };
+  PhysicsMaterial m;
+  m.density_kg_m3 = draw(low.density_kg_m3, high.density_kg_m3, 0);
+  m.friction = draw(low.friction, high.friction, 1);
+  m.restitution = draw(low.restitution, high.restitution, 2);
+  return m;
 }
 
 namespace {
@@ -92,6 +118,7 @@ double Area(const Polygon& p) {
 struct Body {
   int group = 0;
   std::vector<Instance> instances;
+  bool restless = false;  // pose: dropped, still moving at settle_time
 };
 
 Eigen::AlignedBox3d Bounds(const std::vector<Part>& parts, const Body& body) {
@@ -117,14 +144,87 @@ size_t UprightPose(const std::vector<StablePose>& poses) {
   return best;
 }
 
-void Rest(const std::vector<Part>& parts, const ArrangementOptions& o,
-          const std::vector<StablePose>& poses, size_t pose_index, double yaw, Body* body) {
-  if (o.pose != PoseMode::kAsDesigned) Apply(poses[pose_index].floor_from_body, body);
-  Apply(Eigen::Isometry3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())), body);
+// Centres a body over the origin and lowers it onto the floor.
+void Lower(const std::vector<Part>& parts, Body* body) {
   const Eigen::AlignedBox3d box = Bounds(parts, *body);
   Apply(
       Eigen::Isometry3d(Eigen::Translation3d(-box.center().x(), -box.center().y(), -box.min().z())),
       body);
+}
+
+void Rest(const std::vector<Part>& parts, const ArrangementOptions& o,
+          const std::vector<StablePose>& poses, size_t pose_index, double yaw, Body* body) {
+  if (o.pose != PoseMode::kAsDesigned) Apply(poses[pose_index].floor_from_body, body);
+  Apply(Eigen::Isometry3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())), body);
+  Lower(parts, body);
+}
+
+// pose: dropped. Drops `body` alone onto the floor at a random orientation (its own pile of one,
+// seeded from the scene's seed and `index`) and rests it where it came to rest: on the stable
+// pose whose face physics put down, exactly flat (the simulation leaves it within a fraction of
+// a degree, its collision margin), at the yaw it landed with. A body of several parts falls as
+// one rigid body (their meshes, mass and collision pieces together). Returns false when it was
+// still moving at settle_time.
+bool Drop(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+          const ArrangementOptions& o, uint64_t index, const std::vector<StablePose>& poses,
+          Body* body) {
+  PileOptions pile;
+  pile.container.kind = Container::Kind::kFloor;
+  pile.container.material = o.container.material;
+  pile.drop_height_mm = o.drop_height_mm;
+  pile.max_seconds = o.settle_time_s;
+  pile.time_step_s = o.time_step_s;
+  pile.seed = static_cast<uint64_t>(UniformDraw(o.seed, streams::kDropSeed, index) * 0x1p53);
+  pile.bodies = {0};
+  // A group's parts fall with its first part's material.
+  const int first = body->instances[0].part;
+  pile.materials = {(o.part_physics.empty() ? o.physics : o.part_physics[first])
+                        .Draw(o.seed, static_cast<uint64_t>(first))};
+  std::vector<Part> one(1);
+  std::vector<CollisionShape> shape(1);
+  Eigen::Isometry3d model_from_design = Eigen::Isometry3d::Identity();
+  if (body->instances.size() == 1) {
+    const Instance& i = body->instances[0];
+    one[0] = parts[i.part];
+    shape[0] = shapes[i.part];
+    model_from_design = i.world_from_model.inverse();
+  } else {
+    // The group in its design frame as one part (mass from the meshes together).
+    Part& all = one[0];
+    all.name = "a group of " + std::to_string(body->instances.size()) + " parts";
+    all.watertight = true;
+    for (const Instance& i : body->instances) {
+      Mesh mesh = parts[i.part].mesh;
+      mesh.Transform(i.world_from_model);
+      all.mesh.Append(mesh);
+      all.watertight = all.watertight && parts[i.part].watertight;
+      for (const auto& piece : shapes[i.part].pieces) {
+        shape[0].pieces.emplace_back();
+        for (const Eigen::Vector3d& p : piece)
+          shape[0].pieces.back().push_back(i.world_from_model * p);
+      }
+    }
+    if (all.watertight) all.mass = ComputeMeshMassProperties(all.mesh);
+  }
+  const PileResult r = DropPile(one, shape, pile);
+  const Eigen::Isometry3d landed = r.world_from_model[0] * model_from_design;  // world_from_design
+  // The stable pose whose resting face points most nearly down.
+  const Eigen::Vector3d down = landed.linear().transpose() * -Eigen::Vector3d::UnitZ();
+  size_t pick = 0;
+  for (size_t p = 1; p < poses.size(); ++p) {
+    if (poses[p].normal.dot(down) > poses[pick].normal.dot(down)) pick = p;
+  }
+  if (!poses.empty() && poses[pick].normal.dot(down) > std::cos(5.0 * M_PI / 180.0)) {
+    const Eigen::Matrix3d turn = landed.linear() * poses[pick].floor_from_body.linear().transpose();
+    Apply(poses[pick].floor_from_body, body);
+    Apply(Eigen::Isometry3d(
+              Eigen::AngleAxisd(std::atan2(turn(1, 0), turn(0, 0)), Eigen::Vector3d::UnitZ())),
+          body);
+  } else {
+    Apply(landed, body);  // not on a face of its hull: leaning on nothing can't, but keep physics
+  }
+  Lower(parts, body);
+  return r.restless.empty();
 }
 
 }  // namespace
@@ -139,6 +239,8 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
   if (!o.Check(&why)) throw Error("arrangement: " + why);
   if (!group.empty() && group.size() != instances.size())
     throw Error("arrangement: one group per instance");
+  if (!o.part_physics.empty() && o.part_physics.size() != parts.size())
+    throw Error("arrangement: one physics material per part");
   for (const Instance& instance : instances) {
     if (instance.part < 0 || static_cast<size_t>(instance.part) >= parts.size()) {
       throw Error("arrangement: instance '" + instance.name + "' refers to a missing part");
@@ -159,7 +261,9 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
   if (o.layout == Layout::kPile) {
     PileOptions pile;
     pile.container = o.container;
-    pile.materials.assign(parts.size(), o.physics);
+    for (size_t p = 0; p < parts.size(); ++p)
+      pile.materials.push_back(
+          (o.part_physics.empty() ? o.physics : o.part_physics[p]).Draw(o.seed, p));
     pile.drop_height_mm = o.drop_height_mm;
     pile.max_seconds = o.settle_time_s;
     pile.time_step_s = o.time_step_s;
@@ -231,8 +335,19 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
     return out;
   }
 
-  // Copies of each group, each resting on its own: on the chosen face, at yaw 0 (or random).
+  // Copies of each group, each resting on its own: on the chosen face, at yaw 0 (or random), or
+  // where it fell.
   const bool clutter = o.layout == Layout::kClutter;
+  std::vector<CollisionShape> own;
+  if (o.pose == PoseMode::kDropped && shapes == nullptr) {
+    std::vector<bool> needed(parts.size(), false);
+    for (const Instance& i : instances) needed[static_cast<size_t>(i.part)] = true;
+    own.resize(parts.size());
+    for (size_t p = 0; p < parts.size(); ++p) {
+      if (needed[p]) own[p] = MakeCollisionShape(parts[p]);
+    }
+    shapes = &own;
+  }
   for (size_t g = 0; g < groups.size(); ++g) {
     const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned
                                               ? std::vector<StablePose>{}
@@ -242,6 +357,12 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
       for (size_t f = 0; f < faces; ++f) {
         const uint64_t index =
             (static_cast<uint64_t>(g) << 32) + static_cast<uint64_t>(c) * faces + f;
+        if (o.pose == PoseMode::kDropped) {
+          Body body = groups[g];
+          body.restless = !Drop(parts, *shapes, o, index, poses, &body);
+          bodies.push_back(std::move(body));
+          continue;
+        }
         size_t pick = o.pose == PoseMode::kAll ? f : 0;
         if (o.pose == PoseMode::kUpright) pick = UprightPose(poses);
         if (o.pose == PoseMode::kRandom) {
@@ -339,6 +460,7 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
 
   for (const Body& body : bodies) {
     for (const Instance& i : body.instances) {
+      if (body.restless) out.restless.push_back(static_cast<int>(out.instances.size()));
       out.instances.push_back(i);
       out.group.push_back(body.group);
     }

@@ -31,6 +31,20 @@ enum class PoseMode {
   kAsDesigned,  // as the CAD has it, lowered onto the floor
   kUpright,     // on the stable face nearest the design's down (-z): the way it was drawn standing
   kAuto,        // upright for an assembled layout, stable for the others
+  kDropped,     // dropped alone onto the floor at a random orientation and simulated until it
+                // rests (variants/physics/pile.h): the face physics picks, at the yaw it lands
+};
+
+// A part's physics material for a pile or a drop, each value drawn per scene uniformly from
+// [low, high] (stream pile.physics; equal bounds: that value, no draw).
+struct PhysicsDraw {
+  PhysicsMaterial low, high;
+
+  PhysicsDraw() = default;
+  PhysicsDraw(const PhysicsMaterial& m) : low(m), high(m) {}  // NOLINT: a fixed material is one
+  bool Check(std::string* why) const;
+  // The values for `seed` and `part` (the part's index in the scene).
+  PhysicsMaterial Draw(uint64_t seed, uint64_t part) const;
 };
 
 struct ArrangementOptions {
@@ -40,11 +54,12 @@ struct ArrangementOptions {
   int copies = 1;                    // each group placed this many times (not with kAssembled)
   double clutter_radius_mm = 150.0;  // clutter: the disc the groups land in
   uint64_t seed = 0;                 // random poses, yaws and clutter positions
-  // Pile: what the parts fall into, how they behave (one material for all parts), from how high,
-  // and the simulation's limits. The drop region is the container's inner size (or the clutter
-  // disc's square on the floor).
+  // Pile (and pose: dropped, which falls onto the floor): what the parts fall into, how they
+  // behave (one material for all parts), from how high, and the simulation's limits. The drop
+  // region is the container's inner size (or the clutter disc's square on the floor).
   Container container;
-  PhysicsMaterial physics;
+  PhysicsDraw physics;
+  std::vector<PhysicsDraw> part_physics;  // per part where parts differ; empty: `physics` for all
   double drop_height_mm = 30.0;
   double settle_time_s = 10.0;  // simulated; parts still moving then are reported
   double time_step_s = PileOptions{}.time_step_s;
@@ -63,9 +78,9 @@ struct ArrangementOptions {
                         "choice",
                         "which way up a group rests: most probable stable face, a face drawn by "
                         "probability at a random yaw, one copy on every face, as designed, on the "
-                        "stable face nearest the design's down, or auto (upright when assembled, "
-                        "else stable)",
-                        {"stable", "random", "all", "as_designed", "upright", "auto"}});
+                        "stable face nearest the design's down, auto (upright when assembled, "
+                        "else stable), or dropped (simulated fall onto the floor)",
+                        {"stable", "random", "all", "as_designed", "upright", "auto", "dropped"}});
     visit(o.gap_mm, Field{"gap", "length", "least free space between groups (row, grid, clutter)"});
     visit(o.copies,
           Field{"copies", "integer", "each group placed this many times (not with assembled)"});
@@ -84,15 +99,15 @@ struct Arrangement {
   std::vector<Instance> instances;  // world poses: resting on z = 0, centred on the z axis
   std::vector<int> group;           // the input group of each instance (copies share it)
   // Pile: instances still moving when settle_time ran out, or outside the tote; the simulated
-  // time it took.
+  // time it took (pose: dropped: instances of bodies still moving, the longest fall).
   std::vector<int> restless, escaped;
   double settle_seconds = 0;
 };
 
 // Arranges `instances` (`group[i]` is the group of instance i; empty: one group per instance).
 // Throws Error when a clutter does not fit, saying how many groups did. A pile drops single parts
-// (a group of several instances is an error) and needs each part's collision shape: `shapes`
-// (per part), or computed here when null.
+// (a group of several instances is an error); pose: dropped drops each group alone as one rigid
+// body. Both need each part's collision shape: `shapes` (per part), or computed here when null.
 Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
                     const ArrangementOptions& options, const std::vector<int>& group = {},
                     const std::vector<CollisionShape>* shapes = nullptr);

@@ -486,8 +486,10 @@ TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {
   EXPECT_DOUBLE_EQ(s.arrangement.container.material.friction, 0.4);
   EXPECT_FLOAT_EQ(s.container_color.x(), 0.8f);
   ASSERT_TRUE(s.container_material.has_value());
-  EXPECT_DOUBLE_EQ(s.arrangement.physics.density_kg_m3, 2700.0);
-  EXPECT_DOUBLE_EQ(s.arrangement.physics.restitution, 0.2);
+  EXPECT_DOUBLE_EQ(s.arrangement.physics.low.density_kg_m3, 2700.0);
+  EXPECT_DOUBLE_EQ(s.arrangement.physics.high.density_kg_m3, 2700.0);
+  EXPECT_DOUBLE_EQ(s.arrangement.physics.low.restitution, 0.2);
+  EXPECT_TRUE(s.physics_rules.empty());
 
   EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], container: {type: tote}}\n"),
             "r.yaml:2:45: scenes[0].container: only a pile (layout: pile) has one");
@@ -502,6 +504,60 @@ TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {
                     "tote, inner: [100 mm, 50 mm], corner_radius: 40 mm}}\n"),
             "r.yaml:2:59: scenes[0].container: a tote's corner radius must lie between 0 and half "
             "its inner width");
+}
+
+// Physics per part (rules matched like material rules) with values drawn from ranges, and
+// pose: dropped for the other layouts, which may give physics but no container.
+TEST(Recipe, PhysicsRulesRangesAndDroppedPoses) {
+  const RunSpec spec = ParseRecipe(
+      "scenes:\n"
+      "  - name: mixed\n"
+      "    parts: [{family: hex_nut}, {family: spur_gear}]\n"
+      "    layout: pile\n"
+      "    physics:\n"
+      "      - {family: hex_nut, friction: [0.3, 0.9], density: 7850}\n"
+      "      - {name: '*gear*', density: [1000, 1200], restitution: 0.3}\n"
+      "  - name: fallen\n"
+      "    parts: [{family: hex_nut}]\n"
+      "    layout: grid\n"
+      "    pose: dropped\n"
+      "    copies: 5\n"
+      "    physics: {friction: [0.2, 0.4]}\n",
+      "r.yaml", ".");
+  ASSERT_EQ(spec.scenes.size(), 2u);
+  const std::vector<PhysicsRule>& rules = spec.scenes[0].physics_rules;
+  ASSERT_EQ(rules.size(), 2u);
+  EXPECT_EQ(rules[0].family, "hex_nut");
+  EXPECT_DOUBLE_EQ(rules[0].physics.low.friction, 0.3);
+  EXPECT_DOUBLE_EQ(rules[0].physics.high.friction, 0.9);
+  EXPECT_DOUBLE_EQ(rules[0].physics.high.density_kg_m3, 7850.0);
+  EXPECT_EQ(rules[1].name, "*gear*");
+  EXPECT_DOUBLE_EQ(rules[1].physics.low.density_kg_m3, 1000.0);
+  EXPECT_DOUBLE_EQ(rules[1].physics.high.restitution, 0.3);
+  EXPECT_DOUBLE_EQ(rules[1].physics.low.friction, PhysicsMaterial{}.friction);  // left out
+  EXPECT_EQ(rules[1].where, "r.yaml:7:9");
+  const SceneSpec& fallen = spec.scenes[1];
+  EXPECT_EQ(fallen.arrangement.pose, PoseMode::kDropped);
+  EXPECT_DOUBLE_EQ(fallen.arrangement.physics.low.friction, 0.2);
+  EXPECT_DOUBLE_EQ(fallen.arrangement.physics.high.friction, 0.4);
+
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], physics: {friction: 0.5}}\n"),
+            "r.yaml:2:43: scenes[0].physics: only a pile (layout: pile) or dropped parts (pose: "
+            "dropped) have physics");
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], pose: dropped, container: {type: "
+                    "tote}}\n"),
+            "r.yaml:2:60: scenes[0].container: only a pile (layout: pile) has one");
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, physics: {friction: "
+                    "[0.9, 0.3]}}\n"),
+            "r.yaml:2:68: scenes[0].physics.friction: the range's low end exceeds its high end");
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, physics: [{friction: "
+                    "0.3}]}\n"),
+            "r.yaml:2:58: scenes[0].physics[0]: say which parts: 'name', 'family' or 'file' (a "
+            "pattern)");
+  EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: "
+                    "tote, friction: [0.2, 0.5]}}\n"),
+            "r.yaml:2:82: scenes[0].container.friction: expected a number (a container's is not "
+            "drawn)");
 }
 
 TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {

@@ -217,5 +217,127 @@ TEST(Arrange, AssembledStandsAsDrawnUnlessAskedForTheLikeliestFace) {
   EXPECT_NEAR(post.sizes().z(), 10.0, 1e-6);
 }
 
+// pose: dropped. A 20 x 40 x 60 mm block dropped 40 times rests exactly flat on one of its faces
+// (the physics leaves it within its collision margin of flat; the arrangement puts it on the
+// stable pose of that face), touching the floor, at the yaw it landed with; it lies on its largest
+// face far more often than it stands on its smallest (the physics, not the quasi-static
+// solid-angle estimate, decides which); the same seed gives the same poses, another seed others.
+TEST(Arrange, DroppedBlocksRestFlatOnTheFaceTheyFellOn) {
+  Fixture f;
+  f.parts.push_back(MakePart("block", MakeBox(20, 40, 60), TessellationOptions{}));
+  f.instances.push_back({0, "block", f.parts[0].cad_from_model});
+  f.group.push_back(0);
+  ArrangementOptions o;
+  o.layout = Layout::kGrid;
+  o.pose = PoseMode::kDropped;
+  o.copies = 40;
+  o.seed = 5;
+  const Arrangement a = Arrange(f.parts, f.instances, o, f.group);
+  ASSERT_EQ(a.instances.size(), 40u);
+  EXPECT_TRUE(a.restless.empty());
+  ExpectResting(f, a);
+  int flat = 0, side = 0, end = 0, yawed = 0;
+  for (const Instance& i : a.instances) {
+    const Eigen::AlignedBox3d box = f.parts[0].mesh.Bounds(i.world_from_model);
+    EXPECT_NEAR(box.min().z(), 0.0, 1e-9);
+    // Exactly one model axis is vertical.
+    const Eigen::Matrix3d r = i.world_from_model.linear() * f.parts[0].cad_from_model.linear();
+    const double up = r.row(2).cwiseAbs().maxCoeff();
+    EXPECT_NEAR(up, 1.0, 1e-9);
+    const double height = box.sizes().z();
+    flat += std::abs(height - 20) < 1e-6;
+    side += std::abs(height - 40) < 1e-6;
+    end += std::abs(height - 60) < 1e-6;
+    // Not every copy at the same yaw (they land as they land).
+    yawed += std::abs(r(0, 0)) < 0.99 && std::abs(r(0, 1)) < 0.99 && std::abs(r(0, 2)) < 0.99;
+  }
+  EXPECT_EQ(flat + side + end, 40);
+  EXPECT_GT(flat, 2 * end);
+  EXPECT_GT(flat, 10);
+  EXPECT_GT(yawed, 10);
+  const Arrangement again = Arrange(f.parts, f.instances, o, f.group);
+  for (size_t i = 0; i < a.instances.size(); ++i) {
+    EXPECT_TRUE(a.instances[i].world_from_model.isApprox(again.instances[i].world_from_model, 0.0));
+  }
+  o.seed = 6;
+  const Arrangement other = Arrange(f.parts, f.instances, o, f.group);
+  int differ = 0;
+  for (size_t i = 0; i < a.instances.size(); ++i)
+    differ += !a.instances[i].world_from_model.isApprox(other.instances[i].world_from_model, 1e-6);
+  EXPECT_GT(differ, 30);
+}
+
+// A group of several parts falls as one rigid body: ten copies of the "T" of post and plate keep
+// their shape, touch the floor and rest with their joint centre of mass over the points they
+// stand on.
+TEST(Arrange, DroppedAssemblyFallsAsOneBody) {
+  std::vector<Part> parts;
+  parts.push_back(MakePart("post", MakeBox(10, 10, 100), TessellationOptions{}));
+  parts.push_back(MakePart("plate", MakeBox(100, 100, 5), TessellationOptions{}));
+  const std::vector<Instance> instances = {
+      {0, "post", Eigen::Translation3d(-5, -5, 0) * parts[0].cad_from_model},
+      {1, "plate", Eigen::Translation3d(-50, -50, 100) * parts[1].cad_from_model}};
+  ArrangementOptions o;
+  o.layout = Layout::kRow;
+  o.pose = PoseMode::kDropped;
+  o.copies = 10;
+  o.seed = 2;
+  const Arrangement a = Arrange(parts, instances, o, {0, 0});
+  ASSERT_EQ(a.instances.size(), 20u);
+  EXPECT_TRUE(a.restless.empty());
+  for (size_t c = 0; c < 10; ++c) {
+    const Instance& post = a.instances[2 * c];
+    const Instance& plate = a.instances[2 * c + 1];
+    const Eigen::Isometry3d moved = post.world_from_model * instances[0].world_from_model.inverse();
+    EXPECT_TRUE((moved * instances[1].world_from_model).isApprox(plate.world_from_model, 1e-9));
+    Eigen::AlignedBox3d all;
+    Eigen::AlignedBox2d contact;
+    Eigen::Vector3d com = Eigen::Vector3d::Zero();
+    double mass = 0;
+    for (const Instance* i : {&post, &plate}) {
+      const Part& part = parts[i->part];
+      all.extend(part.mesh.Bounds(i->world_from_model));
+      com += part.mass.volume_mm3 * (i->world_from_model * part.mass.center_of_mass);
+      mass += part.mass.volume_mm3;
+    }
+    for (const Instance* i : {&post, &plate}) {
+      for (const auto& p : parts[i->part].mesh.positions) {
+        const Eigen::Vector3d q = i->world_from_model * p.cast<double>();
+        if (q.z() < 0.01) contact.extend(q.head<2>());
+      }
+    }
+    EXPECT_NEAR(all.min().z(), 0.0, 1e-9) << c;
+    EXPECT_LT(contact.exteriorDistance((com / mass).head<2>()), 0.05) << c;
+  }
+}
+
+// A fixed physics material is used as it is; a range is drawn uniformly within its bounds, per
+// seed and part.
+TEST(Arrange, PhysicsRangesAreDrawnPerSeedAndPart) {
+  PhysicsMaterial fixed{2700, 0.45, 0.2};
+  const PhysicsMaterial same = PhysicsDraw(fixed).Draw(9, 3);
+  EXPECT_EQ(same.density_kg_m3, 2700.0);
+  EXPECT_EQ(same.friction, 0.45);
+  EXPECT_EQ(same.restitution, 0.2);
+  PhysicsDraw range(fixed);
+  range.low.friction = 0.2;
+  range.high.friction = 0.6;
+  double sum = 0;
+  for (uint64_t part = 0; part < 4000; ++part) {
+    const PhysicsMaterial m = range.Draw(1, part);
+    ASSERT_GE(m.friction, 0.2);
+    ASSERT_LE(m.friction, 0.6);
+    EXPECT_EQ(m.density_kg_m3, 2700.0);
+    sum += m.friction;
+  }
+  EXPECT_NEAR(sum / 4000, 0.4, 0.01);  // the uniform's mean; its standard error is 0.0018
+  EXPECT_EQ(range.Draw(1, 5).friction, range.Draw(1, 5).friction);
+  EXPECT_NE(range.Draw(1, 5).friction, range.Draw(2, 5).friction);
+  std::string why;
+  std::swap(range.low.friction, range.high.friction);
+  EXPECT_FALSE(range.Check(&why));
+  EXPECT_EQ(why, "a range's low end must not exceed its high end");
+}
+
 }  // namespace
 }  // namespace cadsynth

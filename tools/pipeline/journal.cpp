@@ -69,15 +69,33 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   fields("tessellation", spec.tessellation);
   for (const SceneSpec& scene : spec.scenes) {
     fields("scene", scene.arrangement);
-    if (scene.arrangement.layout == Layout::kPile) {  // the pile's container and physics
+    if (scene.arrangement.layout == Layout::kPile ||
+        scene.arrangement.pose == PoseMode::kDropped) {  // the container and physics
       const Container& c = scene.arrangement.container;
-      const PhysicsMaterial& p = scene.arrangement.physics;
+      const PhysicsMaterial& p = scene.arrangement.physics.low;
       key << "pile " << static_cast<int>(c.kind) << " " << c.inner_mm.transpose() << " "
           << c.height_mm << " " << c.wall_mm << " " << c.floor_mm << " " << c.corner_radius_mm
           << " " << c.material.density_kg_m3 << " " << c.material.friction << " "
           << c.material.restitution << " " << p.density_kg_m3 << " " << p.friction << " "
           << p.restitution << " " << scene.container_color.transpose() << " "
           << scene.container_material.has_value() << "\n";
+      // Ranges and rules (recipes without them keep their earlier run keys).
+      const auto physics = [&key](const PhysicsDraw& d) {
+        for (const PhysicsMaterial* m : {&d.low, &d.high})
+          key << " " << m->density_kg_m3 << " " << m->friction << " " << m->restitution;
+      };
+      const PhysicsDraw& all = scene.arrangement.physics;
+      if (all.high.density_kg_m3 != p.density_kg_m3 || all.high.friction != p.friction ||
+          all.high.restitution != p.restitution) {
+        key << "physics range";
+        physics(all);
+        key << "\n";
+      }
+      for (const PhysicsRule& rule : scene.physics_rules) {
+        key << "physics rule '" << rule.name << "' '" << rule.family << "' '" << rule.file << "'";
+        physics(rule.physics);
+        key << "\n";
+      }
     }
   }
   fields("limits", spec.limits);

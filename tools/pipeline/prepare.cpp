@@ -233,6 +233,25 @@ CollisionShape PartCollisionShape(const Part& part, const PartCache* cache) {
   return shape;
 }
 
+// Whether a rule's name, family and file patterns (shell globs, case-insensitive; empty matches
+// anything) all match a part of `source` called `name`. File patterns without a '/' match the
+// file's name wherever it lies.
+template <typename Rule>
+bool RuleMatches(const Rule& rule, const std::string& name, const PartSource& source) {
+  const bool from_file = source.kind == PartSource::Kind::kFile;
+  const std::string family = from_file ? "" : source.family;
+  const std::string file = from_file ? source.path.string() : "";
+  const auto matches = [](const std::string& pattern, const std::string& text) {
+    if (pattern.empty()) return true;
+    if (text.empty()) return false;
+    const std::string subject = pattern.find('/') == std::string::npos
+                                    ? std::filesystem::path(text).filename().string()
+                                    : text;
+    return fnmatch(pattern.c_str(), subject.c_str(), FNM_CASEFOLD) == 0;
+  };
+  return matches(rule.name, name) && matches(rule.family, family) && matches(rule.file, file);
+}
+
 }  // namespace
 
 std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
@@ -450,9 +469,12 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     const SceneSpec& scene_spec = spec.scenes[s];
     Arrangement arranged;
     try {
-      if (scene_spec.arrangement.layout == Layout::kPile) {
-        // Collision shapes of the parts this pile drops, from the cache where it can.
-        std::vector<CollisionShape> shapes(parts.size());
+      const bool pile = scene_spec.arrangement.layout == Layout::kPile;
+      const bool dropped = !pile && scene_spec.arrangement.pose == PoseMode::kDropped;
+      std::vector<CollisionShape> shapes;
+      if (pile || dropped) {
+        // Collision shapes of the parts that fall, from the cache where it can.
+        shapes.resize(parts.size());
         std::vector<size_t> used;
         for (const Instance& instance : instances)
           used.push_back(static_cast<size_t>(instance.part));
@@ -461,7 +483,36 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         tbb::parallel_for(size_t{0}, used.size(), [&](size_t k) {
           shapes[used[k]] = PartCollisionShape(parts[used[k]], cache);
         });
-        arranged = Arrange(parts, instances, scene_spec.arrangement, groups, &shapes);
+      }
+      ArrangementOptions arrangement = scene_spec.arrangement;
+      if (!scene_spec.physics_rules.empty()) {
+        // Each part's physics: the first rule matching it (by the source of its first instance).
+        arrangement.part_physics.assign(parts.size(), arrangement.physics);
+        std::vector<bool> done(parts.size(), false);
+        for (size_t i = 0; i < instances.size(); ++i) {
+          const auto p = static_cast<size_t>(instances[i].part);
+          if (done[p]) continue;
+          done[p] = true;
+          for (const PhysicsRule& rule : scene_spec.physics_rules) {
+            if (RuleMatches(rule, parts[p].name, *jobs[groups[i]].source)) {
+              arrangement.part_physics[p] = rule.physics;
+              break;
+            }
+          }
+        }
+      }
+      if (dropped) {
+        arranged = Arrange(parts, instances, arrangement, groups, &shapes);
+        if (!arranged.restless.empty()) {
+          std::ostringstream m;
+          m << "scene '" << scene_spec.name << "': " << arranged.restless.size()
+            << " dropped parts still moving after settle_time ("
+            << scene_spec.arrangement.settle_time_s
+            << " s, simulated): raise settle_time; they are kept where they were then";
+          Warn(m.str());
+        }
+      } else if (pile) {
+        arranged = Arrange(parts, instances, arrangement, groups, &shapes);
         std::ostringstream m;
         m << "scene '" << scene_spec.name << "': " << arranged.instances.size()
           << " parts dropped; ";
@@ -508,21 +559,9 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     for (size_t i = 0; i < run.scene.instances.size(); ++i) {
       const PartSource& source = *jobs[arranged.group[i]].source;
       const std::string& name = parts[run.scene.instances[i].part].name;
-      const bool from_file = source.kind == PartSource::Kind::kFile;
-      const std::string family = from_file ? "" : source.family;
-      const std::string file = from_file ? source.path.string() : "";
-      const auto matches = [](const std::string& pattern, const std::string& text) {
-        if (pattern.empty()) return true;
-        if (text.empty()) return false;
-        // File patterns without a '/' match the file's name wherever it lies.
-        const std::string subject = pattern.find('/') == std::string::npos
-                                        ? std::filesystem::path(text).filename().string()
-                                        : text;
-        return fnmatch(pattern.c_str(), subject.c_str(), FNM_CASEFOLD) == 0;
-      };
       for (size_t r = 0; r < spec.material_rules.size(); ++r) {
         const MaterialRule& rule = spec.material_rules[r];
-        if (matches(rule.name, name) && matches(rule.family, family) && matches(rule.file, file)) {
+        if (RuleMatches(rule, name, source)) {
           run.scene.instance_material[i] = static_cast<int>(r);
           used_rules[r] = true;
           break;

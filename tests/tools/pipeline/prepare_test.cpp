@@ -284,5 +284,34 @@ TEST(Prepare, PileSceneDropsCopiesIntoItsTote) {
   }
 }
 
+// Physics rules reach the parts they match: a rule for another family leaves the pile as it was;
+// a rule for the nuts changes it; a dropped scene puts every copy flat on the floor.
+TEST(Prepare, PhysicsRulesMatchTheirPartsAndDroppedPartsLieOnTheFloor) {
+  testing::ScratchDir dir;
+  const auto poses = [&](const std::string& physics) {
+    const std::string recipe =
+        "scenes:\n  - name: bin\n    parts: [{family: hex_nut}]\n    layout: pile\n"
+        "    copies: 6\n    seed: 2\n" +
+        physics;
+    const PreparedRun run = Prepare(ParseRecipe(recipe, "r.yaml", dir.path()));
+    std::vector<Eigen::Matrix4d> out;
+    for (const Instance& i : run.scenes[0].instances) out.push_back(i.world_from_model.matrix());
+    return out;
+  };
+  const auto plain = poses("");
+  EXPECT_EQ(poses("    physics: [{family: spur_gear, friction: 0.05}]\n"), plain);
+  EXPECT_NE(poses("    physics: [{family: hex_nut, friction: 0.05}]\n"), plain);
+  EXPECT_NE(poses("    physics: [{name: '*', friction: [0.1, 0.2]}]\n"), plain);
+
+  const std::string recipe =
+      "scenes:\n  - name: fallen\n    parts: [{family: hex_nut}]\n    layout: row\n"
+      "    pose: dropped\n    copies: 8\n    seed: 1\n";
+  const PreparedRun run = Prepare(ParseRecipe(recipe, "r.yaml", dir.path()));
+  ASSERT_EQ(run.scenes[0].instances.size(), 8u);
+  EXPECT_TRUE(run.scenes[0].fixtures.empty());
+  for (const Instance& i : run.scenes[0].instances)
+    EXPECT_NEAR(run.parts[i.part].mesh.Bounds(i.world_from_model).min().z(), 0.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace cadsynth

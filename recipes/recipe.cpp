@@ -342,6 +342,48 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
   }
 }
 
+// `up`: the axis a file's designer drew as up (x, y, z, -x, -y, -z), turned to +z.
+void ReadUp(const Reader& r, const YAML::Node& item, const std::string& key, PartSource* source) {
+  if (!item["up"]) return;
+  const std::string up = r.Scalar(item["up"], key + ".up");
+  const double quarter = M_PI / 2;
+  const std::map<std::string, Eigen::Matrix3d> turns = {
+      {"z", Eigen::Matrix3d::Identity()},
+      {"-z", Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix()},
+      {"y", Eigen::AngleAxisd(quarter, Eigen::Vector3d::UnitX()).toRotationMatrix()},
+      {"-y", Eigen::AngleAxisd(-quarter, Eigen::Vector3d::UnitX()).toRotationMatrix()},
+      {"x", Eigen::AngleAxisd(-quarter, Eigen::Vector3d::UnitY()).toRotationMatrix()},
+      {"-x", Eigen::AngleAxisd(quarter, Eigen::Vector3d::UnitY()).toRotationMatrix()}};
+  const auto it = turns.find(up);
+  if (it == turns.end())
+    r.Fail(item["up"], key + ".up", "expected x, y, z, -x, -y or -z, got '" + up + "'");
+  source->z_from_up = it->second;
+}
+
+// A file source's `file` (which must exist and have a known format), `unit` and `encoding`.
+void ReadFileSource(const Reader& r, const YAML::Node& item, const std::string& key,
+                    PartSource* source) {
+  source->kind = PartSource::Kind::kFile;
+  source->path = r.ResolvePath(item["file"], key + ".file");
+  source->where = r.Where(item["file"]);
+  if (item["unit"]) {
+    source->unit = r.Scalar(item["unit"], key + ".unit");
+    if (!LengthUnitMm(source->unit)) {
+      r.Fail(item["unit"], key + ".unit",
+             "unknown length unit '" + source->unit + "' (use um, mm, cm, m, in or ft)");
+    }
+  }
+  if (item["encoding"]) {
+    source->encoding = r.Scalar(item["encoding"], key + ".encoding");
+    if (StepCodePage(source->encoding).empty()) {
+      r.Fail(
+          item["encoding"], key + ".encoding",
+          "unknown encoding '" + source->encoding + "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312)");
+    }
+  }
+  DetectFormatOrFail(r, item["file"], key + ".file", source->path);
+}
+
 std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
                                   const std::string& where) {
   if (!node.IsSequence() || node.size() == 0) {
@@ -356,44 +398,12 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
     if (!item["file"] == !item["family"])
       r.Fail(item, key, "give exactly one of 'file' or 'family'");
     PartSource source;
-    if (item["up"]) {
-      const std::string up = r.Scalar(item["up"], key + ".up");
-      const double quarter = M_PI / 2;
-      const std::map<std::string, Eigen::Matrix3d> turns = {
-          {"z", Eigen::Matrix3d::Identity()},
-          {"-z", Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix()},
-          {"y", Eigen::AngleAxisd(quarter, Eigen::Vector3d::UnitX()).toRotationMatrix()},
-          {"-y", Eigen::AngleAxisd(-quarter, Eigen::Vector3d::UnitX()).toRotationMatrix()},
-          {"x", Eigen::AngleAxisd(-quarter, Eigen::Vector3d::UnitY()).toRotationMatrix()},
-          {"-x", Eigen::AngleAxisd(quarter, Eigen::Vector3d::UnitY()).toRotationMatrix()}};
-      const auto it = turns.find(up);
-      if (it == turns.end())
-        r.Fail(item["up"], key + ".up", "expected x, y, z, -x, -y or -z, got '" + up + "'");
-      source.z_from_up = it->second;
-    }
+    ReadUp(r, item, key, &source);
     if (item["file"]) {
       for (const char* k : {"params", "grid", "random", "class"}) {
         if (item[k]) r.Fail(item[k], key + "." + k, "goes with 'family', not 'file'");
       }
-      source.kind = PartSource::Kind::kFile;
-      source.path = r.ResolvePath(item["file"], key + ".file");
-      source.where = r.Where(item["file"]);
-      if (item["unit"]) {
-        source.unit = r.Scalar(item["unit"], key + ".unit");
-        if (!LengthUnitMm(source.unit)) {
-          r.Fail(item["unit"], key + ".unit",
-                 "unknown length unit '" + source.unit + "' (use um, mm, cm, m, in or ft)");
-        }
-      }
-      if (item["encoding"]) {
-        source.encoding = r.Scalar(item["encoding"], key + ".encoding");
-        if (StepCodePage(source.encoding).empty()) {
-          r.Fail(item["encoding"], key + ".encoding",
-                 "unknown encoding '" + source.encoding +
-                     "' (e.g. utf-8, cp1251, cp1252, sjis, gb2312)");
-        }
-      }
-      DetectFormatOrFail(r, item["file"], key + ".file", source.path);
+      ReadFileSource(r, item, key, &source);
     } else {
       if (item["unit"] || item["encoding"])
         r.Fail(item, key, "'unit' and 'encoding' go with 'file' (the scaled family has its own)");
@@ -540,24 +550,45 @@ void ReadPhysics(const Reader& r, const YAML::Node& node, const std::string& key
   if (!d->Check(&why)) r.Fail(node, key, why);
 }
 
-// A pile's container: {type: tote | floor, inner: [x, y], height, wall, floor, corner_radius,
-// color, material, friction, restitution}.
+// A pile's container: {type: tote | floor | file, inner: [x, y], height, wall, floor,
+// corner_radius (tote), file, unit, encoding, up (file), color, material, friction, restitution}.
 void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& key,
                    SceneSpec* scene) {
   Container& c = scene->arrangement.container;
   PhysicsDraw material(c.material);
   ReadPhysics(r, node, key, &material,
-              {"type", "inner", "height", "wall", "floor", "corner_radius", "color", "material"},
+              {"type", "inner", "height", "wall", "floor", "corner_radius", "file", "unit",
+               "encoding", "up", "color", "material"},
               false);
   c.material = material.low;
-  if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote or floor");
+  if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote, floor or file");
   const std::string type = r.Scalar(node["type"], key + ".type");
   if (type == "tote") {
     c.kind = Container::Kind::kTote;
   } else if (type == "floor") {
     c.kind = Container::Kind::kFloor;
+  } else if (type == "file") {
+    c.kind = Container::Kind::kMesh;  // its mesh is read with the parts (prepare)
   } else {
-    r.Fail(node["type"], key + ".type", "unknown container '" + type + "' (known: tote, floor)");
+    r.Fail(node["type"], key + ".type",
+           "unknown container '" + type + "' (known: tote, floor, file)");
+  }
+  for (const char* k : {"inner", "height", "wall", "floor", "corner_radius"}) {
+    if (node[k] && c.kind != Container::Kind::kTote)
+      r.Fail(node[k], key + "." + k, "goes with type: tote");
+  }
+  for (const char* k : {"unit", "encoding", "up"}) {
+    if (node[k] && c.kind != Container::Kind::kMesh)
+      r.Fail(node[k], key + "." + k, "goes with type: file");
+  }
+  if (c.kind == Container::Kind::kMesh) {
+    if (!node["file"]) r.Fail(node, key, "a container of type file needs a 'file' (CAD or mesh)");
+    PartSource source;
+    ReadUp(r, node, key, &source);
+    ReadFileSource(r, node, key, &source);
+    scene->container_file = std::move(source);
+  } else if (node["file"]) {
+    r.Fail(node["file"], key + ".file", "goes with type: file");
   }
   if (const YAML::Node inner = node["inner"]) {
     if (!inner.IsSequence() || inner.size() != 2)
@@ -575,7 +606,8 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
   if (node["material"])
     scene->container_material = ReadMaterial(r, node["material"], key + ".material");
   std::string why;
-  if (!c.Check(&why)) r.Fail(node, key, why);
+  if (!(c.kind == Container::Kind::kMesh ? c.material.Check(&why) : c.Check(&why)))
+    r.Fail(node, key, why);
 }
 
 // A scene's arrangement keys (ArrangementOptions::Fields) besides `other` keys read elsewhere,

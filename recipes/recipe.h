@@ -53,6 +53,9 @@ struct SceneSpec {
   // A pile's tote as the images show it: its colour (sRGB, the fast mode) and material (pbr).
   Eigen::Vector3f container_color{0.16f, 0.30f, 0.55f};
   std::optional<Material> container_material;
+  // A pile's container from a CAD or mesh file (container type: file): read like a part file,
+  // all its instances as one fixture, centred over the origin and standing on the floor.
+  std::optional<PartSource> container_file;
   // Physics per part: the first rule matching a part; parts matching none (or no rules, when
   // `physics` is one map) take arrangement.physics.
   std::vector<PhysicsRule> physics_rules;

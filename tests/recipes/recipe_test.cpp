@@ -496,7 +496,7 @@ TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {
   EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: "
                     "bucket}}\n"),
             "r.yaml:2:66: scenes[0].container.type: unknown container 'bucket' (known: tote, "
-            "floor)");
+            "floor, file)");
   EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, physics: {friction: "
                     "-1}}\n"),
             "r.yaml:2:57: scenes[0].physics: friction must lie in [0, 10]");

@@ -47,6 +47,7 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     for (const PartSource& source : scene.sources) {
       if (source.kind == PartSource::Kind::kFile) files.insert(source.path);
     }
+    if (scene.container_file) files.insert(scene.container_file->path);
   }
   for (const std::filesystem::path& file : files) {
     const std::string bytes = ReadFileText(file);

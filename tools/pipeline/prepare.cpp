@@ -356,6 +356,41 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     for (const std::string& warning : job.warnings) Warn(warning);
     if (!job.error.empty()) throw Error(job.error);
   }
+  // Containers from files (container type: file): read like part files (and cached alike), all
+  // their instances one mesh, centred over the origin and standing on the floor.
+  std::vector<Mesh> container_mesh(spec.scenes.size());
+  {
+    std::vector<Job> containers;
+    for (size_t s = 0; s < spec.scenes.size(); ++s) {
+      if (const auto& file = spec.scenes[s].container_file) {
+        containers.push_back({static_cast<int>(s), &*file, 0, file->path.string(), {}, {}, {}});
+      }
+    }
+    tbb::parallel_for(size_t{0}, containers.size(),
+                      [&](size_t j) { Build(spec, cache, reader, &containers[j]); });
+    for (Job& job : containers) {
+      for (const std::string& warning : job.warnings) Warn(warning);
+      if (!job.error.empty()) throw Error(job.error);
+      Mesh& mesh = container_mesh[job.scene];
+      for (const Instance& instance : job.assembly.instances) {
+        Mesh placed = job.assembly.parts[instance.part].mesh;
+        placed.Transform(instance.world_from_model);
+        mesh.Append(placed);
+      }
+      if (mesh.empty()) {
+        throw Error(job.source->where + ": " + job.source->path.string() +
+                    ": the container file has no surfaces");
+      }
+      const Eigen::AlignedBox3d box = mesh.Bounds();
+      mesh.Transform(Eigen::Isometry3d(
+          Eigen::Translation3d(-box.center().x(), -box.center().y(), -box.min().z())));
+      std::ostringstream line;
+      line << "read container " << job.source->path.string() << ": " << mesh.triangles.size()
+           << " triangles, " << box.sizes().x() << " x " << box.sizes().y() << " x "
+           << box.sizes().z() << " mm";
+      info(line.str());
+    }
+  }
 
   // One list of parts; instances remember their job (a rigid group) and scene.
   Assembly all;
@@ -485,6 +520,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         });
       }
       ArrangementOptions arrangement = scene_spec.arrangement;
+      if (scene_spec.container_file) arrangement.container.mesh = container_mesh[s];
       if (!scene_spec.physics_rules.empty()) {
         // Each part's physics: the first rule matching it (by the source of its first instance).
         arrangement.part_physics.assign(parts.size(), arrangement.physics);
@@ -529,10 +565,12 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
           Warn("scene '" + scene_spec.name + "': " + std::to_string(arranged.escaped.size()) +
                " parts bounced out of the tote (they are kept where they landed)");
         }
-        const Mesh tote = MakeContainerMesh(scene_spec.arrangement.container);
+        const Mesh tote = MakeContainerMesh(arrangement.container);
         if (!tote.empty()) {
           Scene::Fixture fixture;
-          fixture.name = "tote";
+          fixture.name = scene_spec.container_file
+                             ? scene_spec.container_file->path.filename().string()
+                             : "tote";
           fixture.mesh = tote;
           fixture.color = scene_spec.container_color;
           Eigen::Vector3f linear;

@@ -56,7 +56,8 @@ struct World {
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<btMotionState>> states;
-  std::vector<std::unique_ptr<btRigidBody>> bodies;  // statics first, then the dropped bodies
+  std::vector<std::unique_ptr<btRigidBody>> bodies;     // statics first, then the dropped bodies
+  std::vector<std::unique_ptr<btTriangleMesh>> meshes;  // the triangles of mesh shapes
 
   ~World() {
     for (auto& body : bodies) world.removeRigidBody(body.get());
@@ -88,6 +89,22 @@ void AddContainer(const Container& c, World* w) {
     btTransform at = btTransform::getIdentity();
     at.setOrigin(btVector3(0, 0, -10.0 * kUnitsPerMm));
     body->setWorldTransform(at);
+  }
+  if (c.kind == Container::Kind::kMesh) {
+    // Bullet's static concave mesh (a bounding-volume tree of the triangles); it keeps pointers
+    // into the triangle store, which the world owns with the shape.
+    auto triangles = std::make_unique<btTriangleMesh>(/*use32bitIndices=*/true,
+                                                      /*use4componentVertices=*/false);
+    for (const auto& t : c.mesh.triangles) {
+      btVector3 v[3];
+      for (int k = 0; k < 3; ++k) v[k] = ToBt(c.mesh.positions[t[k]].cast<double>() * kUnitsPerMm);
+      triangles->addTriangle(v[0], v[1], v[2], /*removeDuplicateVertices=*/false);
+    }
+    auto shape = std::make_unique<btBvhTriangleMeshShape>(triangles.get(), true);
+    shape->setMargin(kMargin);
+    w->AddStatic(std::move(shape), c.material);
+    w->meshes.push_back(std::move(triangles));
+    return;
   }
   if (c.kind != Container::Kind::kTote) return;
   auto compound = std::make_unique<btCompoundShape>();
@@ -365,6 +382,14 @@ struct Simulation {
         if (std::abs(c.x()) > a || std::abs(c.y()) > b || c.z() < o.container.floor_mm - 1)
           out->escaped.push_back(static_cast<int>(i));
       }
+    } else if (o.container.kind == Container::Kind::kMesh) {
+      const Eigen::AlignedBox3d box = o.container.mesh.Bounds();
+      for (size_t i = 0; i < bodies.size(); ++i) {
+        const Eigen::Vector3d c = FromBtTransform(bodies[i]->getWorldTransform()).translation();
+        if (c.x() < box.min().x() || c.x() > box.max().x() || c.y() < box.min().y() ||
+            c.y() > box.max().y())
+          out->escaped.push_back(static_cast<int>(i));
+      }
     }
   }
 };
@@ -398,8 +423,25 @@ bool PhysicsMaterial::Check(std::string* why) const {
   return false;
 }
 
+double Container::RimZ() const {
+  if (kind == Kind::kTote) return floor_mm + height_mm;
+  if (kind == Kind::kMesh && !mesh.empty()) return mesh.Bounds().max().z();
+  return 0.0;
+}
+
 bool Container::Check(std::string* why) const {
   if (kind == Kind::kFloor) return material.Check(why);
+  if (kind == Kind::kMesh) {
+    // (Empty until the file it comes from is read; PileOptions::Check wants triangles.)
+    const Eigen::AlignedBox3d box =
+        mesh.empty() ? Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones())
+                     : mesh.Bounds();
+    if (!box.sizes().allFinite() || !(box.sizes().head<2>().minCoeff() > 0)) {
+      *why = "a mesh container must have a floor plan (its x and y extents must be positive)";
+      return false;
+    }
+    return material.Check(why);
+  }
   if (!(inner_mm.minCoeff() > 0) || !inner_mm.allFinite()) {
     *why = "a tote's inner size must be positive";
   } else if (!(height_mm > 0) || !(wall_mm > 0) || !(floor_mm > 0)) {
@@ -419,6 +461,8 @@ bool PileOptions::Check(std::string* why) const {
     *why = "at most 1000 bodies per pile";
   } else if (!container.Check(why)) {
     return false;
+  } else if (container.kind == Container::Kind::kMesh && container.mesh.empty()) {
+    *why = "a mesh container needs triangles";
   } else if (!(drop_size_mm.minCoeff() >= 0)) {
     *why = "the drop region's size must not be negative";
   } else if (!(drop_height_mm >= 0)) {
@@ -449,6 +493,7 @@ Eigen::Quaterniond UniformRotation(double u1, double u2, double u3) {
 }
 
 Mesh MakeContainerMesh(const Container& c) {
+  if (c.kind == Container::Kind::kMesh) return c.mesh;
   Mesh mesh;
   if (c.kind != Container::Kind::kTote) return mesh;
   const std::vector<Eigen::Vector2d> inner = Outline(c, 0.0), outer = Outline(c, c.wall_mm);
@@ -488,10 +533,19 @@ PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionS
   Simulation sim(parts, shapes, o);
   Eigen::Vector2d region = o.drop_size_mm;
   if (!(region.minCoeff() > 0)) {
-    region = o.container.kind == Container::Kind::kTote
-                 ? Eigen::Vector2d(o.container.inner_mm - Eigen::Vector2d::Constant(20.0))
-                 : Eigen::Vector2d(300.0, 300.0);
+    if (o.container.kind == Container::Kind::kTote) {
+      region = o.container.inner_mm - Eigen::Vector2d::Constant(20.0);
+    } else if (o.container.kind == Container::Kind::kMesh) {
+      region = (o.container.mesh.Bounds().sizes().head<2>() - Eigen::Vector2d::Constant(20.0))
+                   .cwiseMax(1.0);
+    } else {
+      region = Eigen::Vector2d(300.0, 300.0);
+    }
   }
+  // Over the middle of a mesh container's floor plan, else over the origin.
+  const Eigen::Vector2d centre = o.container.kind == Container::Kind::kMesh
+                                     ? Eigen::Vector2d(o.container.mesh.Bounds().center().head<2>())
+                                     : Eigen::Vector2d::Zero();
   // Start positions: for each body in turn, a few random spots in the region; the one where its
   // bounding sphere clears every earlier body's at the lowest height wins.
   const double base = o.container.RimZ() + o.drop_height_mm;
@@ -515,9 +569,10 @@ PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionS
     const Eigen::Vector2d half = (0.5 * region - Eigen::Vector2d::Constant(r)).cwiseMax(0.0);
     Eigen::Vector3d best(0, 0, 1e300);
     for (uint64_t attempt = 0; attempt < 8; ++attempt) {
-      const Eigen::Vector2d xy(
-          (2 * draw(streams::kDropPosition, attempt << 1) - 1) * half.x(),
-          (2 * draw(streams::kDropPosition, (attempt << 1) + 1) - 1) * half.y());
+      const Eigen::Vector2d xy =
+          centre +
+          Eigen::Vector2d((2 * draw(streams::kDropPosition, attempt << 1) - 1) * half.x(),
+                          (2 * draw(streams::kDropPosition, (attempt << 1) + 1) - 1) * half.y());
       double z = base + r;
       for (const Sphere& s : placed) {
         const double reach = r + s.radius + gap;

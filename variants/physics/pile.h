@@ -31,10 +31,14 @@ struct PhysicsMaterial {
 // What the parts fall into. A tote stands on the floor centred on the origin: its inner floor is
 // at z = floor_mm, its rim at floor_mm + height_mm; inner corners are rounded with
 // corner_radius_mm (as a polygon of 8 segments per corner, the same for the collision and the
-// images), outer corners with corner_radius_mm + wall_mm.
+// images), outer corners with corner_radius_mm + wall_mm. A mesh container (a bin, a tray, a
+// fixture from a CAD or mesh file) is its triangles in the world frame, exactly as they are for
+// the collision (Bullet's static triangle mesh: no convexity needed, no thickness either, so thin
+// walls rely on the parts' continuous collision detection).
 struct Container {
-  enum class Kind { kFloor, kTote };
+  enum class Kind { kFloor, kTote, kMesh };
   Kind kind = Kind::kFloor;
+  Mesh mesh;  // kMesh: in the world frame (mm), standing on the floor z = 0
   Eigen::Vector2d inner_mm{355.0, 265.0};  // inner length (x) and width (y)
   double height_mm = 150.0;                // inner depth: from the inner floor to the rim
   double wall_mm = 6.0;
@@ -45,21 +49,24 @@ struct Container {
   bool Check(std::string* why) const;
   // The z of the surface parts land on (the inner floor or the floor).
   double BottomZ() const { return kind == Kind::kTote ? floor_mm : 0.0; }
-  double RimZ() const { return kind == Kind::kTote ? floor_mm + height_mm : 0.0; }
+  // The tote's rim, the mesh's top, or the floor.
+  double RimZ() const;
 };
 
-// The tote as a closed triangle mesh in its own frame (= the world's), outward normals, for the
-// images and the depth. Empty for Kind::kFloor.
+// The container as a triangle mesh in its own frame (= the world's), outward normals, for the
+// images and the depth: the tote as a closed mesh, a mesh container as it is, nothing for the
+// floor.
 Mesh MakeContainerMesh(const Container& container);
 
 struct PileOptions {
   std::vector<int> bodies;                 // the part of each dropped copy, in drop order
   std::vector<PhysicsMaterial> materials;  // per part; empty: PhysicsMaterial{} for all
   Container container;
-  // The drop region: a rectangle centred over the origin (0: the tote's inner size less 10 mm
-  // each side, or 300 x 300 mm on the floor), and the height of the lowest body's lowest point
-  // above the rim (the floor). Bodies start apart (their bounding spheres do not meet), stacked
-  // as low as the region lets them.
+  // The drop region: a rectangle centred over the origin, or over the middle of a mesh
+  // container's bounding box (size 0: the tote's inner size, or the mesh's bounding box, less 10 mm
+  // each side; 300 x 300 mm on the floor); and the height of the lowest body's lowest point above
+  // the rim (the mesh's top, the floor). Bodies start apart (their bounding spheres do not meet),
+  // stacked as low as the region lets them.
   Eigen::Vector2d drop_size_mm = Eigen::Vector2d::Zero();
   double drop_height_mm = 30.0;
   double time_step_s = 1.0 / 480.0;  // 240 Hz let compound parts creep mm after rest
@@ -84,7 +91,8 @@ struct PileOptions {
 struct PileResult {
   std::vector<Eigen::Isometry3d> world_from_model;  // per body
   std::vector<int> restless;                        // bodies still moving when max_seconds ran out
-  std::vector<int> escaped;  // bodies that ended outside the tote (bounced out)
+  std::vector<int> escaped;  // bodies that ended outside the tote (bounced out; for a mesh
+                             // container: beside its bounding box)
   double seconds = 0;        // simulated time until rest (or max_seconds)
   int steps = 0;
   double drift_mm = 0;  // ContinuePile: the largest displacement of a point of a part

@@ -313,5 +313,76 @@ TEST(Prepare, PhysicsRulesMatchTheirPartsAndDroppedPartsLieOnTheFloor) {
     EXPECT_NEAR(run.parts[i.part].mesh.Bounds(i.world_from_model).min().z(), 0.0, 1e-9);
 }
 
+// A container from a mesh file (container type: file): a tray written as an OBJ, drawn off the
+// origin and Y-up; it stands centred on the floor as the scene's fixture, and the nuts lie in it.
+TEST(Prepare, ContainerFromAFileHoldsThePile) {
+  testing::ScratchDir dir;
+  Container tray;
+  tray.kind = Container::Kind::kTote;
+  tray.inner_mm = {120, 90};
+  tray.height_mm = 25;
+  tray.corner_radius_mm = 0;
+  const Mesh mesh = MakeContainerMesh(tray);
+  {
+    std::ofstream obj(dir / "tray.obj");
+    // Y-up and moved: (x, y, z) -> (x + 500, z, -y).
+    for (const Eigen::Vector3f& p : mesh.positions)
+      obj << "v " << p.x() + 500 << " " << p.z() << " " << -p.y() << "\n";
+    for (const auto& t : mesh.triangles)
+      obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+  }
+  const std::string recipe =
+      "scenes:\n  - name: tray\n    parts: [{family: hex_nut}]\n    layout: pile\n"
+      "    copies: 10\n    seed: 3\n"
+      "    container: {type: file, file: tray.obj, up: y, friction: 0.6}\n";
+  const RunSpec spec = ParseRecipe(recipe, (dir / "r.yaml").string(), dir.path());
+  ASSERT_TRUE(spec.scenes[0].container_file.has_value());
+  const PreparedRun run = Prepare(spec);
+  const Scene& scene = run.scenes[0];
+  ASSERT_EQ(scene.fixtures.size(), 1u);
+  EXPECT_EQ(scene.fixtures[0].name, "tray.obj");
+  const Eigen::AlignedBox3d box = scene.fixtures[0].mesh.Bounds();
+  EXPECT_NEAR(box.min().z(), 0.0, 1e-4);
+  EXPECT_NEAR(box.max().z(), 31.0, 1e-4);  // floor 6 + height 25: up: y stood it up again
+  EXPECT_NEAR(box.center().x(), 0.0, 1e-4);
+  EXPECT_NEAR(box.sizes().x(), 132.0, 1e-4);
+  ASSERT_EQ(scene.instances.size(), 10u);
+  for (const Instance& instance : scene.instances) {
+    for (const Eigen::Vector3f& v : run.parts[instance.part].mesh.positions) {
+      const Eigen::Vector3d p = instance.world_from_model * v.cast<double>();
+      EXPECT_GT(p.z(), 6.0 - 0.5);
+      EXPECT_LT(std::abs(p.x()), 60.5);
+      EXPECT_LT(std::abs(p.y()), 45.5);
+    }
+  }
+  EXPECT_THROW(
+      {
+        try {
+          ParseRecipe(
+              "scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: file}}\n",
+              "r.yaml", dir.path());
+        } catch (const Error& e) {
+          EXPECT_STREQ(e.what(),
+                       "r.yaml:2:59: scenes[0].container: a container of type file needs a "
+                       "'file' (CAD or mesh)");
+          throw;
+        }
+      },
+      Error);
+  EXPECT_THROW(
+      {
+        try {
+          ParseRecipe(
+              "scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: "
+              "file, file: tray.obj, wall: 3 mm}}\n",
+              "r.yaml", dir.path());
+        } catch (const Error& e) {
+          EXPECT_STREQ(e.what(), "r.yaml:2:94: scenes[0].container.wall: goes with type: tote");
+          throw;
+        }
+      },
+      Error);
+}
+
 }  // namespace
 }  // namespace cadsynth

@@ -193,6 +193,54 @@ TEST(Pile, PileInAToteRestsInsideWithoutOverlaps) {
   EXPECT_NE(other.world_from_model[0].matrix(), r.world_from_model[0].matrix());
 }
 
+// Any mesh as the container (a CAD or mesh file in recipes): here a tray, as triangles only, off
+// the origin. Nuts dropped over it land in it: no part reaches more than 0.5 mm into the tray's
+// walls or floor or into another part (exact mesh test), all lie within its inner outline.
+TEST(Pile, MeshContainerHoldsItsPileLikeAnyTote) {
+  const std::vector<Part> parts = {FamilyPart("hex_nut", {{"size", std::string("M12")}})};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
+  Container tray;
+  tray.kind = Container::Kind::kTote;
+  tray.inner_mm = {140, 100};
+  tray.height_mm = 30;
+  tray.corner_radius_mm = 0;
+  const Eigen::Isometry3d shift(Eigen::Translation3d(200, -50, 0));
+  PileOptions o;
+  o.container.kind = Container::Kind::kMesh;
+  o.container.mesh = MakeContainerMesh(tray);
+  o.container.mesh.Transform(shift);
+  o.bodies.assign(16, 0);
+  o.seed = 4;
+  EXPECT_DOUBLE_EQ(o.container.RimZ(), 36.0);
+  const PileResult r = DropPile(parts, shapes, o);
+  EXPECT_TRUE(r.restless.empty());
+  EXPECT_TRUE(r.escaped.empty());
+  Part tray_part;
+  tray_part.mesh = o.container.mesh;
+  const Placed walls = Place(tray_part, Eigen::Isometry3d::Identity());
+  std::vector<Placed> placed;
+  double worst = 0;
+  for (size_t i = 0; i < o.bodies.size(); ++i) {
+    placed.push_back(Place(parts[0], r.world_from_model[i]));
+    worst = std::max(worst, Penetration(placed.back(), walls));
+    for (const Eigen::Vector3f& v : parts[0].mesh.positions) {
+      const Eigen::Vector3d p = shift.inverse() * (r.world_from_model[i] * v.cast<double>());
+      EXPECT_GT(p.z(), tray.floor_mm - 0.5);
+      EXPECT_LT(std::abs(p.x()), 70.5);
+      EXPECT_LT(std::abs(p.y()), 50.5);
+    }
+  }
+  for (size_t i = 0; i < placed.size(); ++i) {
+    for (size_t j = 0; j < placed.size(); ++j) {
+      if (i != j) worst = std::max(worst, Penetration(placed[i], placed[j]));
+    }
+  }
+  EXPECT_LT(worst, 0.5) << "mm";
+  // A mesh container needs triangles and a floor plan.
+  o.container.mesh = Mesh{};
+  EXPECT_THROW(DropPile(parts, shapes, o), Error);
+}
+
 // Bin picking's usual pile, 40 copies of one part: settled, it is an equilibrium. A new world
 // with every body awake at its settled pose and nothing holding it but its contacts, simulated
 // for one more second, moves no point of any part by more than 0.5 mm.

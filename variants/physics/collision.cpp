@@ -164,7 +164,12 @@ std::vector<Eigen::Vector3d> SimplifiedCorners(const std::vector<Eigen::Vector3d
 CollisionShape MakeCollisionShape(const Part& part, const CollisionOptions& options) {
   std::string why;
   if (!options.Check(&why)) throw Error("collision options: " + why);
-  const ConvexHull hull = part.hull ? *part.hull : ComputeConvexHull(part.mesh);
+  ConvexHull hull;
+  try {
+    hull = part.hull ? *part.hull : ComputeConvexHull(part.mesh);
+  } catch (const Error& e) {
+    throw Error("part '" + part.name + "': no collision shape: " + e.what());
+  }
   const double hull_volume = HullVolume(hull);
   if (!(hull_volume > 0)) throw Error("part '" + part.name + "': no volume to collide with");
   CollisionShape shape;

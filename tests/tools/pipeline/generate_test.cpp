@@ -386,5 +386,38 @@ TEST(Generate, As1RecipeShowsEveryPart) {
   for (const auto& [obj, px] : best) EXPECT_GT(px, 20) << "obj_id " << obj;
 }
 
+// BOP's industrial evaluation allows 200 instances per image: all 200 are annotated (pose, box,
+// visible pixels, a mask and a visible mask each), their visible masks never overlap.
+TEST(Generate, TwoHundredInstancesInOneImageAreAllAnnotated) {
+  ScratchDir dir;
+  RunSpec spec = ParseRecipe(R"(
+parts: [{family: round_peg, params: {diameter: 8 mm, length: 25 mm}}]
+scene:
+  layout: grid
+  copies: 200
+  gap: 5 mm
+camera: {width: 320, height: 240, fx: 300, fy: 300, cx: 159.5, cy: 119.5}
+sweep: {yaw: [0], pitch: [89], radius: [1 m]}
+)",
+                             "r.yaml", ".");
+  GenerateOptions options;
+  options.output = dir / "out";
+  Generate(spec, options);
+  const json gt = json::parse(ReadFileText(dir / "out/train/000000/scene_gt.json"))["0"];
+  const json info = json::parse(ReadFileText(dir / "out/train/000000/scene_gt_info.json"))["0"];
+  ASSERT_EQ(gt.size(), 200u);
+  ASSERT_EQ(info.size(), 200u);
+  int visible = 0, pixels = 0;
+  for (size_t i = 0; i < 200; ++i) {
+    EXPECT_EQ(gt[i]["obj_id"], 1);
+    visible += info[i]["px_count_visib"].get<int>() > 0;
+    pixels += info[i]["px_count_visib"].get<int>();
+  }
+  EXPECT_EQ(visible, 200);
+  EXPECT_LE(pixels, 320 * 240);
+  EXPECT_EQ(EntriesIn(dir / "out/train/000000/mask"), 200u);
+  EXPECT_EQ(EntriesIn(dir / "out/train/000000/mask_visib"), 200u);
+}
+
 }  // namespace
 }  // namespace cadsynth

@@ -221,7 +221,9 @@ bool Drop(const std::vector<Part>& parts, const std::vector<CollisionShape>& sha
               Eigen::AngleAxisd(std::atan2(turn(1, 0), turn(0, 0)), Eigen::Vector3d::UnitZ())),
           body);
   } else {
-    Apply(landed, body);  // not on a face of its hull: leaning on nothing can't, but keep physics
+    // More than 5 degrees from every stable face: only a body still moving at settle_time (one
+    // at rest on a flat floor stands on a face of its hull); kept as the simulation left it.
+    Apply(landed, body);
   }
   Lower(parts, body);
   return r.restless.empty();

@@ -185,17 +185,24 @@ TEST(Arrange, RejectsBadInput) {
   EXPECT_TRUE(Arrange(f.parts, {}, ArrangementOptions{}).instances.empty());
 }
 
-// A "T" drawn standing: a 10 x 10 x 100 post with a 100 x 100 x 5 plate on top. Dropped at
+// A "T" drawn standing, as one assembly: a 10 x 10 x 100 post with a 100 x 100 x 5 plate on top.
+Fixture StandingT() {
+  Fixture f;
+  f.parts.push_back(MakePart("post", MakeBox(10, 10, 100), TessellationOptions{}));
+  f.parts.push_back(MakePart("plate", MakeBox(100, 100, 5), TessellationOptions{}));
+  f.instances = {{0, "post", Eigen::Translation3d(-5, -5, 0) * f.parts[0].cad_from_model},
+                 {1, "plate", Eigen::Translation3d(-50, -50, 100) * f.parts[1].cad_from_model}};
+  return f;
+}
+
+// The standing T: a 10 x 10 x 100 post with a 100 x 100 x 5 plate on top. Dropped at
 // random it most often lands with the plate down (its wide face or its edge); assembled, it stands
 // on its post as it
 // was drawn (pose auto = upright), which is stable: the centre of mass is above the foot.
 TEST(Arrange, AssembledStandsAsDrawnUnlessAskedForTheLikeliestFace) {
-  std::vector<Part> parts;
-  parts.push_back(MakePart("post", MakeBox(10, 10, 100), TessellationOptions{}));
-  parts.push_back(MakePart("plate", MakeBox(100, 100, 5), TessellationOptions{}));
-  const std::vector<Instance> instances = {
-      {0, "post", Eigen::Translation3d(-5, -5, 0) * parts[0].cad_from_model},
-      {1, "plate", Eigen::Translation3d(-50, -50, 100) * parts[1].cad_from_model}};
+  const Fixture t = StandingT();
+  const std::vector<Part>& parts = t.parts;
+  const std::vector<Instance>& instances = t.instances;
   const auto lowest = [&](const Arrangement& a, int i) {
     double z = 1e300;
     for (const Eigen::Vector3f& p : parts[i].mesh.positions)
@@ -265,18 +272,22 @@ TEST(Arrange, DroppedBlocksRestFlatOnTheFaceTheyFellOn) {
   for (size_t i = 0; i < a.instances.size(); ++i)
     differ += !a.instances[i].world_from_model.isApprox(other.instances[i].world_from_model, 1e-6);
   EXPECT_GT(differ, 30);
+  // Stopped in mid-air (0.05 s simulated), every block is reported as still moving, and still
+  // put down on the floor.
+  o.settle_time_s = 0.05;
+  const Arrangement early = Arrange(f.parts, f.instances, o, f.group);
+  EXPECT_EQ(early.restless.size(), 40u);
+  for (const Instance& i : early.instances)
+    EXPECT_NEAR(f.parts[0].mesh.Bounds(i.world_from_model).min().z(), 0.0, 1e-9);
 }
 
 // A group of several parts falls as one rigid body: ten copies of the "T" of post and plate keep
 // their shape, touch the floor and rest with their joint centre of mass over the points they
 // stand on.
 TEST(Arrange, DroppedAssemblyFallsAsOneBody) {
-  std::vector<Part> parts;
-  parts.push_back(MakePart("post", MakeBox(10, 10, 100), TessellationOptions{}));
-  parts.push_back(MakePart("plate", MakeBox(100, 100, 5), TessellationOptions{}));
-  const std::vector<Instance> instances = {
-      {0, "post", Eigen::Translation3d(-5, -5, 0) * parts[0].cad_from_model},
-      {1, "plate", Eigen::Translation3d(-50, -50, 100) * parts[1].cad_from_model}};
+  const Fixture t = StandingT();
+  const std::vector<Part>& parts = t.parts;
+  const std::vector<Instance>& instances = t.instances;
   ArrangementOptions o;
   o.layout = Layout::kRow;
   o.pose = PoseMode::kDropped;

@@ -544,7 +544,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
           m << "scene '" << scene_spec.name << "': " << arranged.restless.size()
             << " dropped parts still moving after settle_time ("
             << scene_spec.arrangement.settle_time_s
-            << " s, simulated): raise settle_time; they are kept where they were then";
+            << " s, simulated): raise settle_time; each is put on the stable face nearest its "
+               "last pose (or left as it was, tilted more than 5 degrees from any)";
           Warn(m.str());
         }
       } else if (pile) {

@@ -159,7 +159,11 @@ ShardSpec ParseShard(const std::string& text) {
 ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& run_key)
     : dir_(dir), shard_(shard) {
   std::error_code ec;
-  if (fs::exists(dir, ec) && !fs::exists(Meta(dir), ec) && !fs::is_empty(dir, ec)) {
+  // Emptiness before the shard folder: shards starting together create the folder and then its
+  // .shards, never anything else first, so a folder seen non-empty and then without .shards
+  // holds something else. (The other order raced: .shards missing, then a sibling shard made it,
+  // then the folder looked non-empty, and a shard of a new run refused its own folder.)
+  if (fs::exists(dir, ec) && !fs::is_empty(dir, ec) && !fs::exists(Meta(dir), ec)) {
     throw Error(dir.string() +
                 ": exists and is not a shard folder (a finished dataset?): shards need a new or "
                 "empty folder, or the folder their run started");

@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -23,6 +24,7 @@
 #include "dataset/bop_read.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"
+#include "dataset/mask_png.h"
 #include "dataset/models.h"
 #include "dataset/point_cloud.h"
 
@@ -619,7 +621,9 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
 
   const VisibleMasks visible(frame, options_);
   const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_, visible);
-  cv::Mat mask(h, w, CV_8UC1);
+  // Each instance's masks are written into the rows they cover and cleared after: the rest of
+  // the image stays zero, and only the band of rows that may not be is compressed.
+  cv::Mat mask = cv::Mat::zeros(h, w, CV_8UC1);
   Json coco_entry = Json::array();
   for (size_t i = 0; i < frame.instances.size(); ++i) {
     const Frame::InstanceTruth& truth = frame.instances[i];
@@ -642,7 +646,6 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     const int r0 = std::max(0, truth.roi[0]), r1 = std::max(0, truth.roi[1]);
     const int r2 = std::min(w, truth.roi[2]), r3 = std::min(h, truth.roi[3]);
     int full[4] = {w, h, -1, -1};
-    mask.setTo(0);
     for (int v = r1; v < r3 && !truth.amodal_mask.empty(); ++v) {
       auto* out = mask.ptr<uint8_t>(v);
       const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v) * w];
@@ -653,15 +656,17 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         full[2] = std::max(full[2], u), full[3] = std::max(full[3], v);
       }
     }
-    files.Write(scene_dir_ / "mask" / name, EncodePng(mask, scene_dir_ / "mask" / name));
-    mask.setTo(0);
+    files.Write(scene_dir_ / "mask" / name, EncodeMaskPng(mask.data, mask.step, w, h, r1, r3));
     const int* b = info.bbox_visib;  // inclusive: [b0, b0 + b2] x [b1, b1 + b3]
-    for (int v = b[1]; info.px_count_visib > 0 && v <= b[1] + b[3]; ++v) {
+    const int visib_end = info.px_count_visib > 0 ? b[1] + b[3] + 1 : b[1];
+    for (int v = r1; v < r3; ++v) std::memset(mask.ptr<uint8_t>(v), 0, w);
+    for (int v = b[1]; v < visib_end; ++v) {
       auto* out = mask.ptr<uint8_t>(v);
       for (int u = b[0]; u <= b[0] + b[2]; ++u) out[u] = visible(i, u, v) ? 255 : 0;
     }
     files.Write(scene_dir_ / "mask_visib" / name,
-                EncodePng(mask, scene_dir_ / "mask_visib" / name));
+                EncodeMaskPng(mask.data, mask.step, w, h, b[1], visib_end));
+    for (int v = b[1]; v < visib_end; ++v) std::memset(mask.ptr<uint8_t>(v), 0, w);
 
     // COCO, as bop_toolkit's calc_gt_coco.py: every instance with a visible pixel, its visible
     // mask as compressed RLE, the amodal (or modal) box with COCO's width max - min + 1, and

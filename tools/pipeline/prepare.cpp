@@ -210,7 +210,7 @@ CollisionShape PartCollisionShape(const Part& part, const PartCache* cache) {
   std::optional<CacheKey> key;
   if (cache) {
     KeyHasher hasher;
-    cache->Start(&hasher, "collision 2");
+    cache->Start(&hasher, "collision 3");
     hasher.Geometry(part.mesh)
         .Value(part.watertight)
         .Value(part.mass.volume_mm3)

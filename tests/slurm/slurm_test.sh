@@ -83,7 +83,7 @@ JobAcctGatherType=jobacct_gather/none
 AccountingStorageType=accounting_storage/none
 MpiDefault=none
 SchedulerType=sched/backfill
-SchedulerParameters=kill_invalid_depend
+DependencyParameters=kill_invalid_depend
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core
 ReturnToService=2
@@ -116,6 +116,12 @@ echo "submitted shards as array job $jobid"
 if ! sbatch --wait --dependency=afterok:"$jobid" --output="$work/merge.log" "$src/tools/slurm/merge.sbatch" farm; then
   echo "FAIL: the merge job failed"
   cat "$work"/shard-*.log "$work/merge.log" 2> /dev/null || true
+  exit 1
+fi
+# A job cancelled before it started (a shard failed: kill_invalid_depend) leaves sbatch's status 0.
+if [[ ! -f $work/merge.log ]]; then
+  echo "FAIL: the merge job never ran (a shard failed, so Slurm cancelled it)"
+  cat "$work"/shard-*.log 2> /dev/null || true
   exit 1
 fi
 cat "$work/merge.log"

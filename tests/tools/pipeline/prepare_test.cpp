@@ -254,6 +254,19 @@ TEST(Prepare, UvProjectionNeedsTextureCoordinates) {
 // A pile scene: its copies rest inside the tote, which comes with the scene as a fixture (seen,
 // not annotated); the collision shapes come from the part cache the second time, with the same
 // poses.
+// Every vertex of every part of `scene` lies inside a 120 x 90 mm container with a 6 mm floor
+// (0.5 mm of collision margin allowed).
+void ExpectInside120x90Tote(const PreparedRun& run, const Scene& scene) {
+  for (const Instance& instance : scene.instances) {
+    for (const Eigen::Vector3f& v : run.parts[instance.part].mesh.positions) {
+      const Eigen::Vector3d p = instance.world_from_model * v.cast<double>();
+      EXPECT_GT(p.z(), 6.0 - 0.5);
+      EXPECT_LT(std::abs(p.x()), 60.5);
+      EXPECT_LT(std::abs(p.y()), 45.5);
+    }
+  }
+}
+
 TEST(Prepare, PileSceneDropsCopiesIntoItsTote) {
   testing::ScratchDir dir;
   const std::string recipe =
@@ -269,14 +282,7 @@ TEST(Prepare, PileSceneDropsCopiesIntoItsTote) {
   ASSERT_EQ(scene.fixtures.size(), 1u);
   EXPECT_EQ(scene.fixtures[0].name, "tote");
   EXPECT_NEAR(scene.fixtures[0].mesh.Bounds().sizes().x(), 120 + 2 * 6.0, 1e-3);
-  for (const Instance& instance : scene.instances) {
-    for (const Eigen::Vector3f& v : cold.parts[instance.part].mesh.positions) {
-      const Eigen::Vector3d p = instance.world_from_model * v.cast<double>();
-      EXPECT_GT(p.z(), 6.0 - 0.5);
-      EXPECT_LT(std::abs(p.x()), 60.5);
-      EXPECT_LT(std::abs(p.y()), 45.5);
-    }
-  }
+  ExpectInside120x90Tote(cold, scene);
   const PreparedRun warm = Prepare(spec, {}, &cache);
   for (size_t i = 0; i < 12; ++i) {
     EXPECT_EQ(warm.scenes[0].instances[i].world_from_model.matrix(),
@@ -347,14 +353,7 @@ TEST(Prepare, ContainerFromAFileHoldsThePile) {
   EXPECT_NEAR(box.center().x(), 0.0, 1e-4);
   EXPECT_NEAR(box.sizes().x(), 132.0, 1e-4);
   ASSERT_EQ(scene.instances.size(), 10u);
-  for (const Instance& instance : scene.instances) {
-    for (const Eigen::Vector3f& v : run.parts[instance.part].mesh.positions) {
-      const Eigen::Vector3d p = instance.world_from_model * v.cast<double>();
-      EXPECT_GT(p.z(), 6.0 - 0.5);
-      EXPECT_LT(std::abs(p.x()), 60.5);
-      EXPECT_LT(std::abs(p.y()), 45.5);
-    }
-  }
+  ExpectInside120x90Tote(run, scene);
   EXPECT_THROW(
       {
         try {

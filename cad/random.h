@@ -96,6 +96,14 @@ inline constexpr RandomStream kDropRotation{
 inline constexpr RandomStream kDropPosition{
     "pile.position",
     "a dropped body's start above the drop region; index = (body << 8) + (attempt << 1) + axis"};
+// recipes: camera.depth.seed (depth sensor models, render/sensor.h)
+inline constexpr RandomStream kSensorFrame{"sensor.frame",
+                                           "the seed of one frame's depth noise; index = view"};
+inline constexpr RandomStream kSensorLateral{
+    "sensor.lateral",
+    "a pixel's lateral shift, seeded by sensor.frame; index = (pixel << 2) + (axis << 1) + draw"};
+inline constexpr RandomStream kSensorAxial{
+    "sensor.axial", "a pixel's depth noise, seeded by sensor.frame; index = (pixel << 1) + draw"};
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
@@ -106,7 +114,8 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kViewRoll,       streams::kTestImage,     streams::kPointTriangle,
     streams::kPointU,         streams::kPointV,        streams::kRenderPixel,
     streams::kTexturePattern, streams::kDropRotation,  streams::kDropPosition,
-    streams::kDropSeed,       streams::kPilePhysics,
+    streams::kDropSeed,       streams::kPilePhysics,   streams::kSensorFrame,
+    streams::kSensorLateral,  streams::kSensorAxial,
 };
 
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every

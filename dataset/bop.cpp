@@ -41,6 +41,14 @@ bool BopOptions::Check(std::string* why) const {
     *why = "jpeg_quality must be 1 to 100 (0: PNG)";
     return false;
   }
+  if (gray_bits != 0 && gray_bits != 8 && gray_bits != 16) {
+    *why = "gray_bits must be 0 (colour), 8 or 16";
+    return false;
+  }
+  if (gray_bits == 16 && jpeg_quality > 0) {
+    *why = "16-bit grey images cannot be JPEG (rgb: png)";
+    return false;
+  }
   if (model_points < 0 || model_points > 10000000) {
     *why = "model_points must be 0 to 10,000,000";
     return false;
@@ -301,7 +309,9 @@ std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options
           const size_t p = static_cast<size_t>(v) * w + u;
           if (truth.amodal_mask[p] == 0) continue;
           ++info.px_count_all;
-          if (EncodeDepth(frame.depth[p], options.depth_scale) != 0) ++info.px_count_valid;
+          // Valid: the written depth (the sensor's, where it has a model) has a value.
+          const float written = frame.sensor_depth.empty() ? frame.depth[p] : frame.sensor_depth[p];
+          if (EncodeDepth(written, options.depth_scale) != 0) ++info.px_count_valid;
           a0 = std::min(a0, u);
           a1 = std::max(a1, u);
           b0 = std::min(b0, v);
@@ -483,7 +493,8 @@ BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
       obj_ids_(std::move(obj_id_of_instance)) {
   std::string why;
   if (!options.Check(&why)) throw Error("bop: " + why);
-  for (const char* sub : {"rgb", "depth", "mask", "mask_visib", ".fragments"})
+  for (const std::string& sub : {options.ImageFolder(), std::string("depth"), std::string("mask"),
+                                 std::string("mask_visib"), std::string(".fragments")})
     CreateFolder(scene_dir_ / sub);
   // Frames of an interrupted run: complete where the fragment (written last) exists.
   for (const auto& entry : std::filesystem::directory_iterator(scene_dir_ / ".fragments")) {
@@ -545,30 +556,62 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
   const std::string im = Id6(image_id);
   FileLog files(root_);
 
-  cv::Mat rgb(h, w, CV_8UC3, const_cast<uint8_t*>(frame.rgb.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  const std::filesystem::path rgb_path = scene_dir_ / "rgb" / (im + options_.RgbExtension());
+  // The camera's image: colour, or grey (8 or 16 bits) for a grey camera.
+  cv::Mat image;
+  if (options_.gray_bits > 0) {
+    if (frame.gray.size() != static_cast<size_t>(w) * h)
+      throw Error("bop: a grey camera's frame has no grey image");
+    const bool deep = options_.gray_bits == 16;
+    const float scale = deep ? 65535.0f : 255.0f;
+    image.create(h, w, deep ? CV_16UC1 : CV_8UC1);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const float g = std::clamp(frame.gray[static_cast<size_t>(v) * w + u], 0.0f, 1.0f);
+        const float value = g * scale + 0.5f;  // round half up
+        if (deep) {
+          image.at<uint16_t>(v, u) = static_cast<uint16_t>(value);
+        } else {
+          image.at<uint8_t>(v, u) = static_cast<uint8_t>(value);
+        }
+      }
+    }
+  } else {
+    cv::Mat rgb(h, w, CV_8UC3, const_cast<uint8_t*>(frame.rgb.data()));
+    cv::cvtColor(rgb, image, cv::COLOR_RGB2BGR);
+  }
+  const std::filesystem::path rgb_path =
+      scene_dir_ / options_.ImageFolder() / (im + options_.RgbExtension());
   if (options_.jpeg_quality > 0) {
     std::vector<uchar> bytes;
-    if (!cv::imencode(".jpg", bgr, bytes, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
+    if (!cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
       throw Error(rgb_path.string() + ": JPEG encoding failed");
     }
     files.Write(rgb_path,
                 std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
   } else {
-    files.Write(rgb_path, EncodePng(bgr, rgb_path));
+    files.Write(rgb_path, EncodePng(image, rgb_path));
   }
 
-  cv::Mat depth(h, w, CV_16UC1);
-  for (int v = 0; v < h; ++v) {
-    auto* row = depth.ptr<uint16_t>(v);
-    for (int u = 0; u < w; ++u) {
-      row[u] = EncodeDepth(frame.depth[static_cast<size_t>(v) * w + u], options_.depth_scale);
+  // depth/: what the sensor returns; with a depth model other than ideal, depth_gt/ holds the
+  // exact depth every label comes from.
+  const auto write_depth = [&](const std::vector<float>& values, const char* folder) {
+    cv::Mat depth(h, w, CV_16UC1);
+    for (int v = 0; v < h; ++v) {
+      auto* row = depth.ptr<uint16_t>(v);
+      for (int u = 0; u < w; ++u) {
+        row[u] = EncodeDepth(values[static_cast<size_t>(v) * w + u], options_.depth_scale);
+      }
     }
+    const std::filesystem::path depth_path = scene_dir_ / folder / (im + ".png");
+    files.Write(depth_path, EncodePng(depth, depth_path));
+  };
+  if (frame.sensor_depth.empty()) {
+    write_depth(frame.depth, "depth");
+  } else {
+    CreateFolder(scene_dir_ / "depth_gt");
+    write_depth(frame.sensor_depth, "depth");
+    write_depth(frame.depth, "depth_gt");
   }
-  const std::filesystem::path depth_path = scene_dir_ / "depth" / (im + ".png");
-  files.Write(depth_path, EncodePng(depth, depth_path));
 
   if (!frame.normals
            .empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
@@ -764,10 +807,11 @@ SceneSplit BopSceneWriter::Finish() {
     if (!options_.coco) continue;
     const Json& entry = fragment.coco;
     const int w = entry["width"], h = entry["height"];
-    coco_images.push_back({{"id", image_ids_[n]},
-                           {"file_name", "rgb/" + Id6(image_ids_[n]) + options_.RgbExtension()},
-                           {"width", w},
-                           {"height", h}});
+    coco_images.push_back(
+        {{"id", image_ids_[n]},
+         {"file_name", options_.ImageFolder() + "/" + Id6(image_ids_[n]) + options_.RgbExtension()},
+         {"width", w},
+         {"height", h}});
     for (const Json& a : entry["annotations"]) {
       const Json annotation = {{"id", ++annotation_id},
                                {"image_id", image_ids_[n]},

@@ -50,8 +50,8 @@ struct BopOptions {
   // visib_fract, bbox_visib), COCO and the test targets.
   //   kExact: where the instance is the front-most surface (the default);
   //   kBop19: bop_toolkit's rule (calc_gt_masks.py, calc_gt_info.py, visib_mode "bop19"): where
-  //     the instance rendered alone lies at most `visib_delta_mm` behind the written depth
-  //     (compared as distances from the camera centre), or the written depth has no value. Two
+  //     the instance rendered alone lies at most `visib_delta_mm` behind the exact depth
+  //     (compared as distances from the camera centre), or the exact depth has no value. Two
   //     touching instances can then both be visible in one pixel.
   enum class Visibility { kExact, kBop19 };
   Visibility visibility = Visibility::kExact;
@@ -70,6 +70,10 @@ struct BopOptions {
   // Colour images as lossless PNG (default) or as JPEG of this quality (1-100; 0: PNG).
   int jpeg_quality = 0;
   std::string RgbExtension() const { return jpeg_quality > 0 ? ".jpg" : ".png"; }
+  // A grey camera (recipes' camera.image): 8 or 16 bits per pixel in gray/ instead of rgb/ (as
+  // BOP's ITODD); 0: colour.
+  int gray_bits = 0;
+  std::string ImageFolder() const { return gray_bits > 0 ? "gray" : "rgb"; }
   // Formats derived from the same frames (dataset/paper_layout.h): the reference paper's layout
   // under paper/, PVN3D's YCB-style -meta.mat files beside it, grasp-detector point arrays.
   bool paper_layout = false;
@@ -127,6 +131,7 @@ struct BopOptions {
         o.jpeg_quality,
         Field{
             "jpeg_quality", "integer", "with rgb: jpg, the JPEG quality 1-100 (0: PNG)", {}, true});
+    visit(o.gray_bits, Field{"", "integer", "set by camera.image", {}, true, "gray_bits"});
     visit(o.visibility,
           Field{"visibility",
                 "choice",

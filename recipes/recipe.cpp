@@ -666,7 +666,8 @@ void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "camera", {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov"});
+  r.ExpectMap(node, "camera",
+              {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image", "depth"});
   Intrinsics& k = spec->intrinsics;
   if (node["preset"]) {
     const std::string preset = r.Scalar(node["preset"], "camera.preset");
@@ -697,6 +698,34 @@ void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (node["cx"]) k.cx = r.Number(node["cx"], "camera.cx");
   if (node["cy"]) k.cy = r.Number(node["cy"], "camera.cy");
   r.Check(k, node, "camera");
+  if (node["image"]) {
+    const std::string image = r.Scalar(node["image"], "camera.image");
+    if (image == "rgb") {
+      spec->sensor.image = SensorOptions::Image::kRgb;
+    } else if (image == "gray") {
+      spec->sensor.image = SensorOptions::Image::kGray;
+    } else if (image == "gray16") {
+      spec->sensor.image = SensorOptions::Image::kGray16;
+    } else {
+      r.Fail(node["image"], "camera.image", "expected rgb, gray or gray16, got '" + image + "'");
+    }
+  }
+  // depth: a model's name, or {model: NAME, KEY: VALUE...} overriding the model's defaults.
+  if (const YAML::Node depth = node["depth"]) {
+    const YAML::Node model = depth.IsMap() ? depth["model"] : depth;
+    if (!model) r.Fail(depth, "camera.depth", "give the sensor's 'model'");
+    const std::string key = depth.IsMap() ? "camera.depth.model" : "camera.depth";
+    DepthModel m;
+    DepthModel::Fields(m, [&](auto& value, const Field& field) {
+      if constexpr (std::is_enum_v<std::decay_t<decltype(value)>>) {
+        if (field.key == "model") ReadField(r, model, key, field, &value);
+      }
+    });
+    m = DepthModel::Defaults(m.kind);
+    if (depth.IsMap()) ReadFields(r, depth, "camera.depth", &m, {});
+    r.Check(m, depth, "camera.depth");
+    spec->sensor.depth = m;
+  }
 }
 
 void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
@@ -1273,6 +1302,18 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
     if (root["materials"]) ReadMaterials(r, root["materials"], &spec);
     if (root["lighting"]) ReadLighting(r, root["lighting"], &spec);
     if (root["output"]) ReadOutput(r, root["output"], &spec);
+    if (spec.sensor.image != SensorOptions::Image::kRgb &&
+        (spec.bop.paper_layout || spec.bop.pvn3d_meta)) {
+      r.Fail(root["camera"]["image"], "camera.image",
+             "the paper and pvn3d formats need colour images (image: rgb)");
+    }
+    spec.bop.gray_bits = spec.sensor.image == SensorOptions::Image::kRgb      ? 0
+                         : spec.sensor.image == SensorOptions::Image::kGray16 ? 16
+                                                                              : 8;
+    if (spec.bop.gray_bits == 16 && spec.bop.jpeg_quality > 0) {
+      r.Fail(root["camera"]["image"], "camera.image",
+             "16-bit grey images cannot be JPEG (rgb: png)");
+    }
     if (root["limits"]) {
       ReadFields(r, root["limits"], "limits", &spec.limits, {});
       r.Check(spec.limits, root["limits"], "limits");

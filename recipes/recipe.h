@@ -15,6 +15,7 @@
 #include "render/camera.h"
 #include "render/renderer.h"
 #include "render/scene.h"
+#include "render/sensor.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
 
@@ -109,6 +110,7 @@ struct RunSpec {
   // parts matching none keep a class of their own.
   std::vector<std::pair<std::string, std::vector<std::string>>> class_groups;
   Intrinsics intrinsics;
+  SensorOptions sensor;  // camera.image and camera.depth: grey images, depth sensor models
   SweepOptions sweep;
   ViewSampler sampler;         // kGrid: the sweep as listed
   int min_visible_pixels = 0;  // skip views where fewer object pixels are visible (0: keep all)

@@ -9,6 +9,7 @@
 #include "dataset/bop.h"
 #include "recipes/recipe.h"
 #include "render/renderer.h"
+#include "render/sensor.h"
 #include "variants/arrangement.h"
 
 namespace cadsynth {
@@ -67,6 +68,10 @@ std::string RecipeReference() {
       "file, preset, base_color, metallic, roughness, specular, anisotropic, texture}]} and "
       "lighting: {lights: [{type: point|spot|rect|disc|sun, ...}], environment: {type: "
       "uniform|sky|image, ...}} sections (README, \"Physically based mode\")");
+  Section<DepthModel>(
+      out, "camera.depth",
+      "the depth sensor model (a name, or a map); the model's published defaults fill the keys "
+      "not given (README, \"Depth sensors\"); camera also takes image: rgb | gray | gray16");
   Section<RunLimits>(out, "limits",
                      "how much work a recipe may ask for (raise them if you mean it)");
   return out.str();

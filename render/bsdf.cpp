@@ -1,4 +1,5 @@
 #include "render/bsdf.h"
+#include "render/image.h"
 
 #include <algorithm>
 #include <array>
@@ -11,10 +12,6 @@ namespace {
 constexpr float kPi = 3.14159265358979323846f;
 constexpr float kMinAlpha = 1e-4f;  // roughness 0: a mirror to the eye, still a finite lobe
 constexpr float kCoatF0 = 0.04f;    // the clear coat: a dielectric of IOR 1.5
-
-float Luminance(const Eigen::Vector3f& c) {
-  return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
-}
 
 float Pow5(float x) {
   const float x2 = x * x;

@@ -23,6 +23,13 @@ struct Frame {
   // RenderOptions::hdr: 3 floats per pixel; pbr mode: linear radiance, W/(m^2 sr), before
   // exposure; fast mode: the colour before rounding. Empty otherwise.
   std::vector<float> radiance;
+  // SensorOptions::image gray or gray16: the grey camera's image, the display value of the
+  // luminance (0.2126 R + 0.7152 G + 0.0722 B of the linear colour) in [0, 1]. Empty for colour
+  // cameras.
+  std::vector<float> gray;
+  // A depth model other than ideal (render/sensor.h): what the sensor returns (mm, 0 = none).
+  // `depth` stays exact, and every label comes from it. Empty for the ideal model.
+  std::vector<float> sensor_depth;
 
   struct InstanceTruth {
     Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();

@@ -6,6 +6,8 @@
 #include <memory>
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace cadsynth {
 
 // width x height linear RGB floats, row-major, row 0 at the top.
@@ -22,6 +24,10 @@ std::shared_ptr<const LinearImage> LoadLinearImage(const std::filesystem::path& 
 
 // Linear value of an sRGB-encoded component in [0, 1] (IEC 61966-2-1), and back (clamped).
 float SrgbToLinear(float c);
+// Luminance of linear RGB (Rec. 709 / sRGB primaries): 0.2126 R + 0.7152 G + 0.0722 B.
+inline float Luminance(const Eigen::Vector3f& c) {
+  return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
 float LinearToSrgb(float c);
 
 }  // namespace cadsynth

@@ -8,6 +8,7 @@
 #include "cad/error.h"
 #include "cad/random.h"
 #include "render/bsdf.h"
+#include "render/image.h"
 #include "render/sampling.h"
 
 namespace cadsynth {
@@ -18,10 +19,6 @@ constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 // Powers meet lengths here: a light's numbers are per m^2, the scene's lengths are mm.
 constexpr float kMm2PerM2 = 1e6f;
-
-float Luminance(const Eigen::Vector3f& c) {
-  return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
-}
 
 // 1 - cos(theta) for sin^2(theta) = s2, without cancellation for small angles.
 float OneMinusCos(float s2) { return s2 / (1 + std::sqrt(std::max(0.0f, 1 - s2))); }
@@ -537,6 +534,35 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
   // A smooth normal turned away from the viewer (silhouettes of coarse meshes): shade flat.
   if (s.ns.dot(-dir) <= 0) s.ns = s.ng;
   return s;
+}
+
+void PathTracer::ProjectorSignal(const RTCRayHit16& rh, const int valid[16],
+                                 const Eigen::Vector3f& projector, float spread,
+                                 float out[16]) const {
+  const Impl& im = *impl_;
+  for (int j = 0; j < 16; ++j) {
+    out[j] = 0.0f;
+    if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
+    const Eigen::Vector3f dir =
+        Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]).normalized();
+    const Impl::Surface surf = im.Hit(rh, j, dir, 0.0f, spread);
+    const Eigen::Vector3f to_projector = (projector - surf.p).normalized();
+    if (!(to_projector.dot(surf.ng) > 0.0f) || !(to_projector.dot(surf.ns) > 0.0f)) continue;
+    Eigen::Vector3f t = surf.tangent - surf.tangent.dot(surf.ns) * surf.ns, b;
+    if (surf.params.anisotropic > 0 && t.squaredNorm() > 1e-6f) {
+      t.normalize();
+      b = surf.ns.cross(t);
+    } else {
+      OrthonormalBasis(surf.ns, &t, &b);
+    }
+    const auto to_local = [&](const Eigen::Vector3f& w) {
+      return Eigen::Vector3f(w.dot(t), w.dot(b), w.dot(surf.ns));
+    };
+    const Eigen::Vector3f wi = to_local(to_projector);
+    const Eigen::Vector3f f = PrincipledBsdf(surf.params).Eval(to_local(-dir), wi);
+    const float signal = static_cast<float>(M_PI) * Luminance(f) * wi.z();
+    out[j] = std::isfinite(signal) ? signal : 0.0f;
+  }
 }
 
 void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, uint64_t frame_seed,

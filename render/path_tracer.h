@@ -65,6 +65,14 @@ class PathTracer {
   void TraceTile(const Camera& camera, int u0, int v0, int samples, uint64_t frame_seed,
                  Eigen::Vector3f out[16]) const;
 
+  // A depth sensor's projector return at the hits of a packet of camera rays traced in
+  // scene.world (render/sensor.h): pi * luminance(f(wo, wi)) * cos(wi) with the hit's textured
+  // material, wi towards `projector` (world, mm) and wo back along the ray; 0 for lanes that are
+  // off or hit nothing, and where the projector is behind the surface. `spread` is the rays'
+  // angular width (1 / f) for texture filtering. Occlusion is not tested here.
+  void ProjectorSignal(const RTCRayHit16& rh, const int valid[16], const Eigen::Vector3f& projector,
+                       float spread, float out[16]) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

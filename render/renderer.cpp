@@ -12,6 +12,7 @@
 #include "cad/error.h"
 #include "render/image.h"
 #include "render/path_tracer.h"
+#include "render/sensor.h"
 
 namespace cadsynth {
 
@@ -129,6 +130,12 @@ struct Renderer::Impl {
   struct Shaded;
   // Colours and normals of a traced packet's lanes: ambient plus every light it sees.
   void ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const;
+  // A depth sensor's projector at `projector` (world): for the hits of a packet of camera rays,
+  // whether it sees them (a shadow ray) and how much of its light they return to the camera
+  // (render/sensor.h), written to pixel (u0 + j % 4, v0 + j / 4) of the w-wide images.
+  void ProjectorPacket(RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
+                       const Eigen::Vector3f& projector, float spread, int u0, int v0, int w,
+                       uint8_t* seen, float* signal) const;
   unsigned floor_id = kInvalid;
   // Fixtures: top-level geometry ids first_fixture_id + f, their triangles and normals (world).
   unsigned first_fixture_id = kInvalid;
@@ -479,6 +486,7 @@ void IntersectFloor(const int valid[16], float half, unsigned floor_id, RTCRayHi
 struct Renderer::Impl::Shaded {
   Eigen::Vector3f color;
   Eigen::Vector3f normal;  // world, facing the camera (zero when nothing was hit)
+  Eigen::Vector3f albedo;  // the Lambert colour (zero when nothing was hit)
 };
 
 void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const {
@@ -490,6 +498,7 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
     hit[j] = valid[j] != 0 && rh.hit.geomID[j] != kInvalid;
     out[j].color = background;
     out[j].normal.setZero();
+    out[j].albedo.setZero();
     if (!hit[j]) continue;
     const Eigen::Vector3f dir(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
     const unsigned inst = rh.hit.instID[0][j];
@@ -516,6 +525,7 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
     normal.normalize();
     if (normal.dot(dir) > 0.0f) normal = -normal;  // shade the side the camera sees
     out[j].normal = normal;
+    out[j].albedo = albedo[j];
     point[j] =
         Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) + rh.ray.tfar[j] * dir;
     out[j].color = albedo[j] * scene.ambient;
@@ -574,11 +584,66 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
   }
 }
 
-Frame Renderer::Render(const Camera& camera, uint64_t view) const {
+void Renderer::Impl::ProjectorPacket(RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
+                                     const Eigen::Vector3f& projector, float spread, int u0, int v0,
+                                     int w, uint8_t* seen, float* signal) const {
+  float value[16];
+  if (tracer) {
+    tracer->ProjectorSignal(rh, valid, projector, spread, value);
+  } else {
+    for (int j = 0; j < 16; ++j) {
+      value[j] = 0.0f;
+      if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
+      const Eigen::Vector3f p =
+          Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) +
+          rh.ray.tfar[j] * Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
+      const float cosine = shaded[j].normal.dot((projector - p).normalized());
+      value[j] = cosine > 0.0f ? Luminance(shaded[j].albedo) * cosine : 0.0f;
+    }
+  }
+  // Shadow rays from each hit to the projector.
+  RTCRay16 ray;
+  alignas(64) int lit[16];
+  for (int j = 0; j < 16; ++j) {
+    lit[j] = valid[j] && rh.hit.geomID[j] != kInvalid && value[j] > 0.0f ? -1 : 0;
+    Eigen::Vector3f p = Eigen::Vector3f::Zero(), d = Eigen::Vector3f::UnitZ();
+    float distance = 0.0f;
+    if (lit[j]) {
+      p = Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) +
+          rh.ray.tfar[j] * Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
+      d = projector - p;
+      distance = d.norm();
+      d /= std::max(distance, 1e-6f);
+    }
+    ray.org_x[j] = p.x(), ray.org_y[j] = p.y(), ray.org_z[j] = p.z();
+    ray.dir_x[j] = d.x(), ray.dir_y[j] = d.y(), ray.dir_z[j] = d.z();
+    // Off the surface as the lights' shadow rays start; the projector itself is not geometry.
+    ray.tnear[j] = 0.05f;
+    ray.tfar[j] = lit[j] ? distance * (1.0f - 1e-5f) : 0.0f;
+    ray.time[j] = 0.0f;
+    ray.mask[j] = 0xFFFFFFFFu;
+    ray.id[j] = static_cast<unsigned>(j);
+    ray.flags[j] = 0;
+  }
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded16(lit, world, &context, &ray);
+  for (int j = 0; j < 16; ++j) {
+    const int u = u0 + j % kTile, v = v0 + j / kTile;
+    if (!valid[j]) continue;
+    const size_t pixel = static_cast<size_t>(v) * w + u;
+    const bool visible = lit[j] && !(ray.tfar[j] < 0.0f);
+    seen[pixel] = visible ? 1 : 0;
+    signal[pixel] = value[j];
+  }
+}
+
+Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions& sensor) const {
   const Impl& im = *impl_;
   const Intrinsics& k = camera.intrinsics;
   std::string why;
   if (!k.Check(&why)) throw Error("camera: " + why);
+  if (!sensor.Check(&why)) throw Error("camera.depth: " + why);
   const int w = k.width, h = k.height;
   const size_t num_pixels = static_cast<size_t>(w) * h;
   const RenderOptions& o = im.options;
@@ -588,7 +653,21 @@ Frame Renderer::Render(const Camera& camera, uint64_t view) const {
   frame.rgb.assign(3 * num_pixels, 0);
   frame.depth.assign(num_pixels, 0.0f);
   frame.instance.assign(num_pixels, 0);
-  if (o.normals) frame.normals.assign(num_pixels, Eigen::Vector3f::Zero());
+  const DepthModel& depth_model = sensor.depth;
+  const bool noisy_depth = depth_model.kind != DepthModel::Kind::kIdeal;
+  const bool projector = depth_model.needs_projector();
+  // Normals also for the depth model (incidence angles), kept in the frame only when asked for.
+  const bool need_normals = o.normals || noisy_depth;
+  std::vector<Eigen::Vector3f> normals;
+  if (need_normals) normals.assign(num_pixels, Eigen::Vector3f::Zero());
+  std::vector<uint8_t> projector_seen;
+  std::vector<float> signal;
+  if (projector) projector_seen.assign(num_pixels, 0), signal.assign(num_pixels, 0.0f);
+  const Eigen::Vector3f projector_world =
+      (camera.world_from_cam * Eigen::Vector3d(depth_model.baseline_mm, 0.0, 0.0)).cast<float>();
+  const float pixel_spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
+  const bool gray = sensor.image != SensorOptions::Image::kRgb;
+  if (gray) frame.gray.assign(num_pixels, 0.0f);
   const bool pbr = im.tracer != nullptr;
   if (o.hdr) frame.radiance.assign(3 * num_pixels, 0.0f);
   const uint64_t frame_seed = FrameSeed(o.seed, view);
@@ -667,7 +746,8 @@ Frame Renderer::Render(const Camera& camera, uint64_t view) const {
           // views, also with robust scenes.
           trace(tile, &context, valid, &rh);
           Eigen::Vector3f color[16];
-          if (o.shade && ((ss == 1 && !pbr) || o.normals)) im.ShadePacket(rh, valid, shaded);
+          if ((o.shade && ss == 1 && !pbr) || need_normals || (projector && !pbr))
+            im.ShadePacket(rh, valid, shaded);
           for (int j = 0; j < 16; ++j) {
             if (!valid[j]) continue;
             const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
@@ -675,12 +755,16 @@ Frame Renderer::Render(const Camera& camera, uint64_t view) const {
               frame.depth[pixel] = rh.ray.tfar[j];
               const unsigned inst = rh.hit.instID[0][j];
               if (inst != kInvalid) frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
-              if (o.normals) frame.normals[pixel] = cam_from_world_rotation * shaded[j].normal;
+              if (need_normals) normals[pixel] = cam_from_world_rotation * shaded[j].normal;
             }
             color[j] = (ss == 1 && o.shade && !pbr) ? shaded[j].color : Eigen::Vector3f::Zero();
           }
+          if (projector) {
+            im.ProjectorPacket(rh, valid, shaded, projector_world, pixel_spread, u0, v0, w,
+                               projector_seen.data(), signal.data());
+          }
+          Eigen::Vector3f radiance[16];
           if (pbr && o.shade) {
-            Eigen::Vector3f radiance[16];
             im.tracer->TraceTile(camera, u0, v0, o.samples, frame_seed, radiance);
             for (int j = 0; j < 16; ++j) {
               if (!valid[j]) continue;
@@ -709,6 +793,13 @@ Frame Renderer::Render(const Camera& camera, uint64_t view) const {
             if (o.hdr && !pbr) {
               for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = color[j][c];
             }
+            // A grey camera sees the luminance: of the radiance before the display transform
+            // (pbr), of the Lambert colour (fast).
+            if (gray) {
+              frame.gray[pixel] =
+                  pbr && o.shade ? DisplayValue(exposure_scale * Luminance(radiance[j]), filmic)
+                                 : std::clamp(Luminance(color[j]), 0.0f, 1.0f);
+            }
           }
         }
       });
@@ -716,6 +807,17 @@ Frame Renderer::Render(const Camera& camera, uint64_t view) const {
   for (size_t p = 0; p < num_pixels; ++p) {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }
+  if (noisy_depth) {
+    DepthSensorInput input;
+    input.intrinsics = k;
+    input.depth = frame.depth.data();
+    input.normals = normals.data();
+    input.projector_seen = projector ? projector_seen.data() : nullptr;
+    input.signal = projector ? signal.data() : nullptr;
+    input.rgb = frame.rgb.data();
+    frame.sensor_depth = SimulateDepth(depth_model, input, view);
+  }
+  if (o.normals) frame.normals = std::move(normals);
   if (!o.amodal_masks) return frame;
   // The silhouette is traced on bop_toolkit's canvas of three times the image size, [-w, 2w) x
   // [-h, 2h), so that counts and boxes of truncated instances include their parts outside the

@@ -10,6 +10,7 @@
 #include "render/camera.h"
 #include "render/frame.h"
 #include "render/scene.h"
+#include "render/sensor.h"
 
 namespace cadsynth {
 
@@ -99,9 +100,10 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  // `view` numbers the frame for the path tracer's sampler (the view index of the run), so that
-  // every frame has its own noise and the same view renders the same bytes anywhere.
-  Frame Render(const Camera& camera, uint64_t view = 0) const;
+  // `view` numbers the frame for the path tracer's sampler and the sensor's noise (the view index
+  // of the run), so that every frame has its own noise and the same view renders the same bytes
+  // anywhere. `sensor` adds a grey image and the depth a real sensor returns (render/sensor.h).
+  Frame Render(const Camera& camera, uint64_t view = 0, const SensorOptions& sensor = {}) const;
 
  private:
   struct Impl;

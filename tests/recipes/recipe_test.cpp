@@ -129,6 +129,47 @@ sweep:
       std::string::npos);
 }
 
+TEST(Recipe, CameraSensor) {
+  const RunSpec spec = ParseRecipe(R"(
+camera:
+  preset: kinect_v1
+  image: gray16
+  depth: {model: structured_light, baseline: 12 cm, noise: 0.05 mm, max_incidence: 70}
+)",
+                                   "r.yaml", ".");
+  EXPECT_EQ(spec.sensor.image, SensorOptions::Image::kGray16);
+  EXPECT_EQ(spec.bop.gray_bits, 16);
+  const DepthModel& d = spec.sensor.depth;
+  EXPECT_EQ(d.kind, DepthModel::Kind::kStructuredLight);
+  EXPECT_EQ(d.baseline_mm, 120);
+  EXPECT_EQ(d.noise_mm, 0.05);
+  EXPECT_NEAR(d.max_incidence_rad, 70 * M_PI / 180, 1e-12);
+  // Keys not given keep the model's defaults.
+  EXPECT_EQ(d.min_signal, DepthModel::Defaults(DepthModel::Kind::kStructuredLight).min_signal);
+  // A bare name is the model with its defaults.
+  const RunSpec kinect = ParseRecipe("camera: {depth: kinect_v1}\n", "r", ".");
+  EXPECT_EQ(kinect.sensor.depth.baseline_mm, 75);
+  EXPECT_EQ(kinect.sensor.depth.disparity_step_px, 0.125);
+  EXPECT_EQ(kinect.bop.gray_bits, 0);
+  EXPECT_EQ(ErrorOf("camera: {depth: kinect_v2}\n"),
+            "r.yaml:1:17: camera.depth: expected 'ideal', 'kinect_v1', 'azure_kinect' or "
+            "'structured_light', got 'kinect_v2'");
+  EXPECT_EQ(ErrorOf("camera:\n  depth: {model: kinect_v1, baseline: 0}\n"),
+            "r.yaml:2:10: camera.depth: baseline must not be 0 for kinect_v1 (its disparity is f "
+            "B / z)");
+  EXPECT_EQ(ErrorOf("camera:\n  depth: {baseline: 5 cm}\n"),
+            "r.yaml:2:10: camera.depth: give the sensor's 'model'");
+  EXPECT_EQ(ErrorOf("camera:\n  depth: {model: azure_kinect, basline: 5 cm}\n"),
+            "r.yaml:2:32: unknown key 'camera.depth.basline' (did you mean 'baseline'?)");
+  EXPECT_EQ(ErrorOf("camera: {image: color}\n"),
+            "r.yaml:1:17: camera.image: expected rgb, gray or gray16, got 'color'");
+  EXPECT_EQ(ErrorOf("camera: {image: gray16}\noutput: {rgb: jpg}\n"),
+            "r.yaml:1:17: camera.image: 16-bit grey images cannot be JPEG (rgb: png)");
+  EXPECT_EQ(ErrorOf("camera: {image: gray}\noutput: {formats: [bop, paper]}\n"),
+            "r.yaml:1:17: camera.image: the paper and pvn3d formats need colour images (image: "
+            "rgb)");
+}
+
 TEST(Recipe, Classes) {
   const RunSpec spec = ParseRecipe(R"(
 classes:

@@ -176,40 +176,40 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
       using FramePtr = std::shared_ptr<const Frame>;
       tbb::parallel_pipeline(
-          tokens, tbb::make_filter<void, size_t>(
-                      tbb::filter_mode::serial_in_order,
-                      [&](tbb::flow_control& control) -> size_t {
-                        while (next < views.size() &&
-                               (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
-                          ++next;
-                        }
-                        if (next >= views.size()) {
-                          control.stop();
-                          return 0;
-                        }
-                        return next++;
-                      }) &
-                      tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
-                          tbb::filter_mode::parallel,
-                          [&](size_t i) {
-                            const Camera camera{spec.intrinsics, views[i].world_from_cam};
-                            return std::make_pair(
-                                i, std::make_shared<const Frame>(renderer.Render(camera, i)));
-                          }) &
-                      tbb::make_filter<std::pair<size_t, FramePtr>, void>(
-                          tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                            int visible = 0;
-                            for (const Frame::InstanceTruth& t : item.second->instances)
-                              visible += t.px_count_visib;
-                            if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
-                              ++(visible == 0 ? empty_views : sparse_views);
-                            } else {
-                              writer.WriteFrame(static_cast<int>(item.first), *item.second,
-                                                {&paper});
-                            }
-                            const size_t n = ++done;
-                            if (options.progress) options.progress(n, to_render);
-                          }));
+          tokens,
+          tbb::make_filter<void, size_t>(
+              tbb::filter_mode::serial_in_order,
+              [&](tbb::flow_control& control) -> size_t {
+                while (next < views.size() &&
+                       (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+                  ++next;
+                }
+                if (next >= views.size()) {
+                  control.stop();
+                  return 0;
+                }
+                return next++;
+              }) &
+              tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
+                  tbb::filter_mode::parallel,
+                  [&](size_t i) {
+                    const Camera camera{spec.intrinsics, views[i].world_from_cam};
+                    return std::make_pair(
+                        i, std::make_shared<const Frame>(renderer.Render(camera, i, spec.sensor)));
+                  }) &
+              tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                  tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
+                    int visible = 0;
+                    for (const Frame::InstanceTruth& t : item.second->instances)
+                      visible += t.px_count_visib;
+                    if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
+                      ++(visible == 0 ? empty_views : sparse_views);
+                    } else {
+                      writer.WriteFrame(static_cast<int>(item.first), *item.second, {&paper});
+                    }
+                    const size_t n = ++done;
+                    if (options.progress) options.progress(n, to_render);
+                  }));
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
     }
     if (!shard) FinishDataset(root, spec.bop, writers, prepared.classes);

@@ -65,6 +65,12 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     });
     key << "\n";
   };
+  // The sensor (recipes without camera.image and camera.depth keep their earlier run keys).
+  if (spec.sensor.image != SensorOptions::Image::kRgb ||
+      spec.sensor.depth.kind != DepthModel::Kind::kIdeal) {
+    key << "image " << static_cast<int>(spec.sensor.image) << "\n";
+    fields("depth", spec.sensor.depth);
+  }
   fields("output", spec.bop);
   fields("render", spec.render);
   fields("tessellation", spec.tessellation);

@@ -6,6 +6,7 @@
 
 #include <tbb/global_control.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <gtest/gtest.h>
 
@@ -244,6 +245,55 @@ TEST(Generate, SameSpecGivesTheSameBytesWhateverTheThreadCount) {
   const auto one = run("one", 1), two = run("two", 2);
   ASSERT_EQ(one.size(), two.size());
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
+}
+
+TEST(Generate, GreyCameraAndDepthSensorWriteGrayDepthAndDepthGt) {
+  // A grey camera with a Kinect v1 depth model: gray/ instead of rgb/, depth/ from the sensor,
+  // depth_gt/ exact; labels from the exact depth, px_count_valid from the sensor's; the same
+  // bytes on 1 and 2 threads.
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes.resize(1);
+  spec.sensor.image = SensorOptions::Image::kGray16;
+  spec.bop.gray_bits = 16;
+  spec.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
+  const auto run = [&](const std::string& name, size_t threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    GenerateOptions options;
+    options.output = dir / name;
+    Generate(spec, options);
+    return ReadTree(dir / name);
+  };
+  const auto one = run("one", 1), two = run("two", 2);
+  ASSERT_EQ(one.size(), two.size());
+  for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
+  const std::filesystem::path scene = dir / "one" / "train" / "000000";
+  EXPECT_FALSE(std::filesystem::exists(scene / "rgb"));
+  const cv::Mat gray = cv::imread((scene / "gray" / "000000.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(gray.empty());
+  EXPECT_EQ(gray.type(), CV_16UC1);
+  const cv::Mat depth = cv::imread((scene / "depth" / "000000.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat exact =
+      cv::imread((scene / "depth_gt" / "000000.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(depth.type(), CV_16UC1);
+  ASSERT_EQ(exact.type(), CV_16UC1);
+  int differ = 0, holes = 0;
+  for (int v = 0; v < depth.rows; ++v) {
+    for (int u = 0; u < depth.cols; ++u) {
+      differ += depth.at<uint16_t>(v, u) != exact.at<uint16_t>(v, u);
+      holes += depth.at<uint16_t>(v, u) == 0 && exact.at<uint16_t>(v, u) != 0;
+    }
+  }
+  EXPECT_GT(differ, depth.rows * depth.cols / 2);  // noise almost everywhere
+  EXPECT_GT(holes, 0);                             // shadows, edges
+  const json info = ReadJson(scene / "scene_gt_info.json");
+  int valid = 0, all = 0;
+  for (const json& entry : info["0"]) {
+    valid += entry["px_count_valid"].get<int>();
+    all += entry["px_count_all"].get<int>();
+  }
+  EXPECT_LT(valid, all);  // the sensor's holes on the objects
+  EXPECT_EQ(ReadJson(scene / "scene_gt_coco.json")["images"][0]["file_name"], "gray/000000.png");
 }
 
 TEST(Generate, BadInputLeavesNoDatasetBehind) {

@@ -70,10 +70,28 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   };
   EXPECT_EQ(ForEachChange<BopOptions>(
                 spec, [](RunSpec& s) -> BopOptions& { return s.bop; }, check),
-            17);
+            18);
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
             15);
+  // The camera's sensor: its image and, with a model other than ideal, every depth field.
+  {
+    RunSpec changed = spec;
+    changed.sensor.image = SensorOptions::Image::kGray;
+    check(changed, "camera.image");
+    RunSpec kinect = spec;
+    kinect.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
+    check(kinect, "camera.depth.model");
+    const std::string kinect_key = RunKey(kinect, prepared, views);
+    EXPECT_EQ(ForEachChange<DepthModel>(
+                  kinect, [](RunSpec& s) -> DepthModel& { return s.sensor.depth; },
+                  [&](const RunSpec& c, const std::string& name) {
+                    const std::string key = RunKey(c, prepared, views);
+                    EXPECT_NE(key, kinect_key) << name << " is not in the run key";
+                    EXPECT_TRUE(keys.insert(key).second) << name;
+                  }),
+              12);
+  }
   // The physically based look, read by hand from materials: and lighting:.
   {
     RunSpec changed = spec;
@@ -211,6 +229,40 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
                              [&](const auto&, const Field& f) { expect_key("scene", f); });
   const RunLimits limits;
   RunLimits::Fields(limits, [&](const auto&, const Field& f) { expect_key("limits", f); });
+  const DepthModel depth;
+  DepthModel::Fields(depth, [&](const auto&, const Field& f) { expect_key("camera.depth", f); });
+}
+
+// Each camera.depth key is read over the model's defaults.
+TEST(Schema, EveryDepthKeyIsRead) {
+  RunSpec base;
+  base.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
+  base.sensor.depth.max_incidence_rad = 0.5;  // changed: halved (adding 1 rad passes 90 degrees)
+  const int n = ForEachChange<DepthModel>(
+      base, [](RunSpec& s) -> DepthModel& { return s.sensor.depth; },
+      [&](const RunSpec& changed, const std::string& name) {
+        const DepthModel& want = changed.sensor.depth;
+        std::string text = "camera:\n  depth:\n";
+        DepthModel::Fields(want, [&](const auto& value, const Field& field) {
+          text += "    " + std::string(field.key) + ": " + FieldText(value, field) +
+                  (field.kind == "length"  ? " mm"
+                   : field.kind == "angle" ? " rad"
+                                           : "") +
+                  "\n";
+        });
+        if (want.kind != DepthModel::Kind::kKinectV1) return;  // another model's keys differ
+        const RunSpec parsed = ParseRecipe(text, "r.yaml", ".");
+        std::string got, expected;
+        const auto all = [](const DepthModel& m, std::string* out) {
+          DepthModel::Fields(m, [&](const auto& value, const Field& field) {
+            *out += std::string(field.key) + "=" + FieldText(value, field) + ";";
+          });
+        };
+        all(parsed.sensor.depth, &got);
+        all(want, &expected);
+        EXPECT_EQ(got, expected) << name;
+      });
+  EXPECT_EQ(n, 12);
 }
 
 }  // namespace

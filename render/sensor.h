@@ -1,0 +1,133 @@
+// What a camera measures, as opposed to the exact images the renderer traces: grey or colour
+// images, and depth as a real sensor returns it (noise, quantisation, holes).
+//
+// The depth models work on the exact depth and on what the renderer knows per pixel (the surface
+// normal, whether the sensor's projector sees the point, how much of the projector's light the
+// surface sends back to the camera, the colour image). Each is a published model:
+//
+//   ideal             the exact depth.
+//   kinect_v1         Kinect v1 / PrimeSense (Nguyen, Izadi, Lovell 2012, "Modeling Kinect Sensor
+//                     Noise for Improved 3D Reconstruction and Tracking"; Khoshelham and Elberink
+//                     2012 for the disparity): each pixel reads the depth of a pixel shifted by
+//                     lateral noise of sigma_L = lateral + 0.035 theta / (pi/2 - theta) px (theta:
+//                     the angle between the surface normal and the camera ray); axial noise
+//                     sigma_z = 1.2 mm + 1.9 mm (z - 0.4 m)^2 / m^2 in total, of which the
+//                     disparity quantisation supplies q^2 / 12 (q: the depth step below); then the
+//                     disparity d = f B / z is rounded to `disparity_step` px (1/8) and z = f B /
+//                     d, with f = `focal` (580 px) and B = `baseline` (75 mm). Holes where the
+//                     projector is shadowed (a ray from the point to the projector at (baseline, 0,
+//                     0) in the camera frame hits something), on grazing surfaces (theta >
+//                     `max_incidence`), at depth jumps (the 3 x 3 neighbourhood spans more than
+//                     `jump`) and where the surface returns too little of the pattern
+//                     (`min_signal`).
+//   azure_kinect      time of flight, BlenderProc's add_kinect_azure_noise (after Tölgyessy et
+//                     al. 2021): the depth resampled (bilinearly) at positions shifted by
+//                     N(0, `lateral` = 0.25 px) in u and v, plus N(0, 0.5 mm + 1 mm per metre
+//                     beyond 0.5 m); holes where the 3 x 3 neighbourhood of the noisy depth spans
+//                     more than `jump` (800 mm) and where the colour image's grey value (OpenCV's
+//                     0.299 R + 0.587 G + 0.114 B) is below `dark_gray` (15).
+//   structured_light  Photoneo, Zivid, the XYZ sensor of XYZ-IBD: the exact depth where both the
+//                     camera and the projector at (baseline, 0, 0) see the point, plus N(0,
+//                     noise (z / 1 m)^2) (triangulation error grows with the square of the
+//                     range); holes where the projector is shadowed, on grazing surfaces, and
+//                     where the surface sends back too little of the pattern (dark, or a polished
+//                     metal reflecting it away: `min_signal`) or so much that the camera saturates
+//                     (a specular glint: `max_signal`).
+//
+// The signal is the projector's light the surface reflects towards the camera, relative to a
+// white Lambertian surface facing the projector: pi f(camera, projector) cos(theta_projector), with
+// f the surface's BSDF (the material in render.mode: pbr, the Lambert colour in fast mode),
+// luminance-weighted. Every draw is seeded by (seed, view, pixel): the same bytes on any thread
+// count and shard.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cad/schema.h"
+#include "render/camera.h"
+
+namespace cadsynth {
+
+struct DepthModel {
+  enum class Kind { kIdeal, kKinectV1, kAzureKinect, kStructuredLight };
+  Kind kind = Kind::kIdeal;
+  // The projector's position on the camera's x axis, mm (kinect_v1, structured_light; positive:
+  // to the image's right, as a Kinect v1's emitter seen from its camera, so shadows fall left).
+  double baseline_mm = 0.0;
+  double focal_px = 580.0;         // kinect_v1: the IR camera's focal length in the disparity
+  double disparity_step_px = 0.0;  // kinect_v1: disparity quantum (1/8 px)
+  double noise_mm = 0.0;           // structured_light: sigma at 1 m, growing with z^2
+  double lateral_px = 0.0;         // kinect_v1, azure_kinect: lateral sigma (px)
+  double max_incidence_rad = 0.0;  // holes where the camera ray meets the surface more obliquely
+  double jump_mm = 0.0;            // holes where a 3 x 3 neighbourhood spans more (0: none)
+  double min_signal = 0.0;         // holes where the surface returns less of the projector
+  double max_signal = 0.0;         // holes where it returns more (saturation; 0: none)
+  int dark_gray = 0;               // azure_kinect: holes where the colour image is darker
+  uint64_t seed = 0;
+
+  // The published defaults of `kind` (the table in README's "Depth sensors").
+  static DepthModel Defaults(Kind kind);
+  bool Check(std::string* why) const;
+  bool needs_projector() const { return kind == Kind::kKinectV1 || kind == Kind::kStructuredLight; }
+
+  // Every field, once (cad/schema.h): the recipe's `camera.depth` section, the run key.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.kind, Field{"model",
+                        "choice",
+                        "depth sensor model (its defaults fill the other keys)",
+                        {"ideal", "kinect_v1", "azure_kinect", "structured_light"},
+                        true});
+    visit(o.baseline_mm,
+          Field{"baseline", "length", "projector's x in the camera frame (kinect_v1: 75 mm)"});
+    visit(o.focal_px, Field{"focal", "number", "kinect_v1: focal length of the disparity (px)"});
+    visit(o.disparity_step_px,
+          Field{"disparity_step", "number", "kinect_v1: disparity quantum (px; 0.125)"});
+    visit(o.noise_mm, Field{"noise", "length", "structured_light: sigma at 1 m (grows with z^2)"});
+    visit(o.lateral_px, Field{"lateral", "number", "lateral noise sigma (px)"});
+    visit(o.max_incidence_rad,
+          Field{"max_incidence", "angle", "holes on surfaces seen more obliquely (0-90 degrees)"});
+    visit(o.jump_mm, Field{"jump", "length", "holes where 3 x 3 pixels span more depth (0: none)"});
+    visit(o.min_signal,
+          Field{"min_signal", "number", "holes where the projector's return is weaker (0-1)"});
+    visit(o.max_signal,
+          Field{"max_signal", "number", "holes where it is stronger: specular glints (0: none)"});
+    visit(o.dark_gray,
+          Field{"dark_gray", "integer", "azure_kinect: holes where the colour is darker (0-255)"});
+    visit(o.seed, Field{"seed", "integer", "seed of the noise"});
+  }
+};
+
+// What one camera measures: its image (colour, or grey as industrial and IR cameras give) and its
+// depth model.
+struct SensorOptions {
+  enum class Image { kRgb, kGray, kGray16 };
+  Image image = Image::kRgb;
+  DepthModel depth;
+  bool Check(std::string* why) const { return depth.Check(why); }
+};
+
+// Per pixel, what the renderer knows for a depth model (row-major, width x height).
+struct DepthSensorInput {
+  Intrinsics intrinsics;
+  const float* depth = nullptr;              // exact camera z, mm; 0 = nothing
+  const Eigen::Vector3f* normals = nullptr;  // camera frame, facing the camera; null: facing it
+  const uint8_t* projector_seen = nullptr;   // 1 where the projector sees the point; null: all
+  const float* signal = nullptr;             // the projector's return (see above); null: 1
+  const uint8_t* rgb = nullptr;              // the colour image (azure_kinect's dark pixels)
+};
+
+// The depth `model` returns for `input` in frame `view` (mm, 0 = no return). kIdeal copies it.
+std::vector<float> SimulateDepth(const DepthModel& model, const DepthSensorInput& input,
+                                 uint64_t view);
+
+// Kinect v1's axial noise sigma (mm) at depth z (mm): 1.2 + 1.9 (z / 1000 - 0.4)^2.
+double KinectV1AxialSigma(double z_mm);
+// BlenderProc's Azure Kinect noise sigma (mm): 0.5 + max(z - 500, 0) / 1000.
+double AzureKinectSigma(double z_mm);
+
+}  // namespace cadsynth

@@ -101,7 +101,8 @@ inline constexpr RandomStream kSensorFrame{"sensor.frame",
                                            "the seed of one frame's depth noise; index = view"};
 inline constexpr RandomStream kSensorLateral{
     "sensor.lateral",
-    "a pixel's lateral shift, seeded by sensor.frame; index = (pixel << 2) + (axis << 1) + draw"};
+    "a pixel's lateral shift, seeded by sensor.frame; index = (pixel << 1) + draw (Box-Muller: "
+    "both axes from one pair)"};
 inline constexpr RandomStream kSensorAxial{
     "sensor.axial", "a pixel's depth noise, seeded by sensor.frame; index = (pixel << 1) + draw"};
 }  // namespace streams

@@ -43,9 +43,11 @@ cv::Scalar InstanceColour(size_t i) {
 }
 
 // Depth (uint16) to a colour map, near = warm; no depth = black.
-cv::Mat ColourDepth(const cv::Mat& depth) {
+// Depth in the turbo colour map over the range of `range` (default: its own), holes black.
+cv::Mat ColourDepth(const cv::Mat& depth, const cv::Mat& range = {}) {
   double lo = 0, hi = 0;
-  cv::minMaxLoc(depth, &lo, &hi, nullptr, nullptr, depth > 0);
+  const cv::Mat& r = range.empty() ? depth : range;
+  cv::minMaxLoc(r, &lo, &hi, nullptr, nullptr, r > 0);
   cv::Mat scaled;
   depth.convertTo(scaled, CV_8U, hi > lo ? -255.0 / (hi - lo) : 0.0,
                   hi > lo ? 255.0 * hi / (hi - lo) : 128.0);
@@ -126,8 +128,10 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       throw Error("preview: no " + where + " in " + split_dir.string());
     const fs::path dir = split_dir / Id6(scene);
     const std::string name = Id6(im);
-    fs::path rgb_path = dir / "rgb" / (name + ".png");
-    if (!fs::exists(rgb_path)) rgb_path = dir / "rgb" / (name + ".jpg");
+    // The camera's image: rgb/, or gray/ for a grey camera.
+    const fs::path image_dir = fs::exists(dir / "rgb") ? dir / "rgb" : dir / "gray";
+    fs::path rgb_path = image_dir / (name + ".png");
+    if (!fs::exists(rgb_path)) rgb_path = image_dir / (name + ".jpg");
     cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
     if (!options.versus.empty()) {
       // Colour against colour: the same image of the other dataset, labelled with the folders.
@@ -195,7 +199,16 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
                  thickness, cv::LINE_AA);
       }
     }
-    std::vector<cv::Mat> panels = {rgb, ColourDepth(depth), masks};
+    // With a depth sensor model: the exact depth, then the sensor's, coloured over the same range.
+    std::vector<cv::Mat> panels = {rgb};
+    if (fs::exists(dir / "depth_gt")) {
+      const cv::Mat exact = ReadImage(dir / "depth_gt" / (name + ".png"), cv::IMREAD_UNCHANGED);
+      panels.push_back(ColourDepth(exact));
+      panels.push_back(ColourDepth(depth, exact));
+    } else {
+      panels.push_back(ColourDepth(depth));
+    }
+    panels.push_back(masks);
     const double scale = static_cast<double>(options.panel_width) / rgb.cols;
     for (cv::Mat& p : panels) {
       cv::resize(p, p, cv::Size(options.panel_width, std::max(1, cvRound(rgb.rows * scale))), 0, 0,
@@ -207,7 +220,7 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
     cv::hconcat(panels, row);
     rows.push_back(row);
   }
-  cv::Mat sheet;  // rows share the width (3 panels), heights may differ
+  cv::Mat sheet;  // rows share the width (3 or 4 panels), heights may differ
   cv::vconcat(rows, sheet);
   std::vector<uchar> png;
   if (!cv::imencode(".png", sheet, png)) throw Error("preview: PNG encoding failed");

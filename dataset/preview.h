@@ -1,5 +1,6 @@
 // A contact sheet of dataset frames for checking a dataset by eye: colour with each object's
-// projected 3D bounding box and axes, coloured depth, coloured visible masks.
+// projected 3D bounding box and axes, coloured depth (exact and sensor's when the dataset has
+// depth_gt/), coloured visible masks.
 #pragma once
 
 #include <filesystem>

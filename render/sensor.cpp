@@ -91,6 +91,14 @@ double Gaussian(uint64_t seed, const RandomStream& stream, uint64_t index) {
   return std::sqrt(-2.0 * std::log(1.0 - u1)) * std::cos(2.0 * M_PI * u2);
 }
 
+// Two independent standard normal numbers from the same two draws (both of Box-Muller's).
+Eigen::Vector2d GaussianPair(uint64_t seed, const RandomStream& stream, uint64_t index) {
+  const double u1 = UniformDraw(seed, stream, 2 * index);
+  const double u2 = UniformDraw(seed, stream, 2 * index + 1);
+  const double r = std::sqrt(-2.0 * std::log(1.0 - u1));
+  return Eigen::Vector2d(r * std::cos(2.0 * M_PI * u2), r * std::sin(2.0 * M_PI * u2));
+}
+
 // cos of the angle between the surface and the camera ray of pixel (u, v).
 float CosIncidence(const DepthSensorInput& in, int u, int v, size_t p) {
   if (in.normals == nullptr) return 1.0f;
@@ -150,8 +158,9 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
           const double cos_t = std::clamp<double>(CosIncidence(in, u, v, p), 0.0, 1.0);
           const double theta = std::min(std::acos(cos_t), 89.0 * M_PI / 180.0);
           const double sigma = m.lateral_px + 0.035 * theta / (0.5 * M_PI - theta);
-          const double du = sigma * Gaussian(frame_seed, streams::kSensorLateral, 2 * p);
-          const double dv = sigma * Gaussian(frame_seed, streams::kSensorLateral, 2 * p + 1);
+          const Eigen::Vector2d shift =
+              sigma * GaussianPair(frame_seed, streams::kSensorLateral, p);
+          const double du = shift.x(), dv = shift.y();
           su = std::clamp(u + static_cast<int>(std::lround(std::clamp(du, -8.0, 8.0))), 0, w - 1);
           sv = std::clamp(v + static_cast<int>(std::lround(std::clamp(dv, -8.0, 8.0))), 0, h - 1);
         }
@@ -181,8 +190,9 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
         const size_t p = static_cast<size_t>(v) * w + u;
         double x = u, y = v;
         if (m.lateral_px > 0.0) {
-          x += m.lateral_px * Gaussian(frame_seed, streams::kSensorLateral, 2 * p);
-          y += m.lateral_px * Gaussian(frame_seed, streams::kSensorLateral, 2 * p + 1);
+          const Eigen::Vector2d shift =
+              m.lateral_px * GaussianPair(frame_seed, streams::kSensorLateral, p);
+          x += shift.x(), y += shift.y();
         }
         x = std::clamp(x, 0.0, w - 1.0), y = std::clamp(y, 0.0, h - 1.0);
         const int x0 = std::min(static_cast<int>(x), w - 1),

@@ -430,6 +430,24 @@ struct PathTracer::Impl {
   // per mm; textures are filtered over its footprint on the surface.
   Surface Hit(const RTCRayHit16& rh, int j, const Eigen::Vector3f& dir, float width,
               float spread) const;
+
+  // The BSDF's frame at a surface: the shading normal, and a tangent along the brushing
+  // direction for anisotropic materials (any tangent otherwise).
+  struct ShadingFrame {
+    Eigen::Vector3f t, b, n;
+    explicit ShadingFrame(const Surface& surf) : n(surf.ns) {
+      t = surf.tangent - surf.tangent.dot(n) * n;
+      if (surf.params.anisotropic > 0 && t.squaredNorm() > 1e-6f) {
+        t.normalize();
+        b = n.cross(t);
+      } else {
+        OrthonormalBasis(n, &t, &b);
+      }
+    }
+    Eigen::Vector3f ToLocal(const Eigen::Vector3f& w) const {
+      return Eigen::Vector3f(w.dot(t), w.dot(b), w.dot(n));
+    }
+  };
 };
 
 PathTracer::PathTracer(PathTracerScene scene) : impl_(std::make_unique<Impl>()) {
@@ -548,18 +566,9 @@ void PathTracer::ProjectorSignal(const RTCRayHit16& rh, const int valid[16],
     const Impl::Surface surf = im.Hit(rh, j, dir, 0.0f, spread);
     const Eigen::Vector3f to_projector = (projector - surf.p).normalized();
     if (!(to_projector.dot(surf.ng) > 0.0f) || !(to_projector.dot(surf.ns) > 0.0f)) continue;
-    Eigen::Vector3f t = surf.tangent - surf.tangent.dot(surf.ns) * surf.ns, b;
-    if (surf.params.anisotropic > 0 && t.squaredNorm() > 1e-6f) {
-      t.normalize();
-      b = surf.ns.cross(t);
-    } else {
-      OrthonormalBasis(surf.ns, &t, &b);
-    }
-    const auto to_local = [&](const Eigen::Vector3f& w) {
-      return Eigen::Vector3f(w.dot(t), w.dot(b), w.dot(surf.ns));
-    };
-    const Eigen::Vector3f wi = to_local(to_projector);
-    const Eigen::Vector3f f = PrincipledBsdf(surf.params).Eval(to_local(-dir), wi);
+    const Impl::ShadingFrame local(surf);
+    const Eigen::Vector3f wi = local.ToLocal(to_projector);
+    const Eigen::Vector3f f = PrincipledBsdf(surf.params).Eval(local.ToLocal(-dir), wi);
     const float signal = static_cast<float>(M_PI) * Luminance(f) * wi.z();
     out[j] = std::isfinite(signal) ? signal : 0.0f;
   }
@@ -666,16 +675,9 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
           continue;
         }
         const Impl::Surface surf = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
-        Eigen::Vector3f t = surf.tangent - surf.tangent.dot(surf.ns) * surf.ns, b;
-        if (surf.params.anisotropic > 0 && t.squaredNorm() > 1e-6f) {
-          t.normalize();
-          b = surf.ns.cross(t);
-        } else {
-          OrthonormalBasis(surf.ns, &t, &b);
-        }
-        const auto to_local = [&](const Eigen::Vector3f& w) {
-          return Eigen::Vector3f(w.dot(t), w.dot(b), w.dot(surf.ns));
-        };
+        const Impl::ShadingFrame local(surf);
+        const Eigen::Vector3f &t = local.t, &b = local.b;
+        const auto to_local = [&](const Eigen::Vector3f& w) { return local.ToLocal(w); };
         const Eigen::Vector3f wo = to_local(-dir[j]);
         const PrincipledBsdf bsdf(surf.params);
         const PixelSampler sampler(pixel_seed[j], s);

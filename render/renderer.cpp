@@ -128,12 +128,14 @@ struct Renderer::Impl {
   std::vector<Eigen::Vector3f> light_dirs;         // directional lights: unit travel direction
 
   struct Shaded;
-  // Colours and normals of a traced packet's lanes: ambient plus every light it sees.
-  void ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const;
+  // Colours and normals of a traced packet's lanes: ambient plus every light it sees (without
+  // `lights`, only the ambient term: for the normals, albedo and points alone).
+  void ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16],
+                   bool lights = true) const;
   // A depth sensor's projector at `projector` (world): for the hits of a packet of camera rays,
   // whether it sees them (a shadow ray) and how much of its light they return to the camera
   // (render/sensor.h), written to pixel (u0 + j % 4, v0 + j / 4) of the w-wide images.
-  void ProjectorPacket(RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
+  void ProjectorPacket(const RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
                        const Eigen::Vector3f& projector, float spread, int u0, int v0, int w,
                        uint8_t* seen, float* signal) const;
   unsigned floor_id = kInvalid;
@@ -416,6 +418,24 @@ struct RayGen {
   }
 };
 
+// Sets lane j of a shadow packet: from surface point `p` along unit `d` up to `tfar`, starting a
+// little off the surface (float error at a metre is ~1e-4 mm).
+void SetShadowLane(RTCRay16* ray, int j, const Eigen::Vector3f& p, const Eigen::Vector3f& d,
+                   float tfar) {
+  ray->org_x[j] = p.x();
+  ray->org_y[j] = p.y();
+  ray->org_z[j] = p.z();
+  ray->dir_x[j] = d.x();
+  ray->dir_y[j] = d.y();
+  ray->dir_z[j] = d.z();
+  ray->tnear[j] = 0.05f;
+  ray->tfar[j] = tfar;
+  ray->time[j] = 0.0f;
+  ray->mask[j] = 0xFFFFFFFFu;
+  ray->id[j] = static_cast<unsigned>(j);
+  ray->flags[j] = 0;
+}
+
 // Sets lane j of a packet to the camera ray along world direction `d`, with no hit yet.
 void SetLane(RTCRayHit16* rh, int j, const Eigen::Vector3f& origin, const Eigen::Vector3f& d,
              float tnear, float tfar) {
@@ -487,9 +507,11 @@ struct Renderer::Impl::Shaded {
   Eigen::Vector3f color;
   Eigen::Vector3f normal;  // world, facing the camera (zero when nothing was hit)
   Eigen::Vector3f albedo;  // the Lambert colour (zero when nothing was hit)
+  Eigen::Vector3f point;   // world (when something was hit)
 };
 
-void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16]) const {
+void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Shaded out[16],
+                                 bool lights) const {
   const Eigen::Vector3f background = scene.background_color;
   Eigen::Vector3f albedo[16];
   Eigen::Vector3f point[16];
@@ -528,8 +550,10 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
     out[j].albedo = albedo[j];
     point[j] =
         Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) + rh.ray.tfar[j] * dir;
+    out[j].point = point[j];
     out[j].color = albedo[j] * scene.ambient;
   }
+  if (!lights) return;
   for (size_t l = 0; l < scene.lights.size(); ++l) {
     const Scene::Light& light = scene.lights[l];
     Eigen::Vector3f to_light[16];
@@ -555,21 +579,11 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
     if (scene.shadows) {
       RTCRay16 shadow;
       for (int j = 0; j < 16; ++j) {
-        const Eigen::Vector3f& p = lit[j] ? point[j] : Eigen::Vector3f::Zero().eval();
-        const Eigen::Vector3f& d = lit[j] ? to_light[j] : Eigen::Vector3f::UnitZ().eval();
-        shadow.org_x[j] = p.x();
-        shadow.org_y[j] = p.y();
-        shadow.org_z[j] = p.z();
-        shadow.dir_x[j] = d.x();
-        shadow.dir_y[j] = d.y();
-        shadow.dir_z[j] = d.z();
-        // Start a little off the surface (float error at a metre is ~1e-4 mm).
-        shadow.tnear[j] = 0.05f;
-        shadow.tfar[j] = lit[j] ? distance[j] : 0.0f;
-        shadow.time[j] = 0.0f;
-        shadow.mask[j] = 0xFFFFFFFFu;
-        shadow.id[j] = static_cast<unsigned>(j);
-        shadow.flags[j] = 0;
+        if (lit[j]) {
+          SetShadowLane(&shadow, j, point[j], to_light[j], distance[j]);
+        } else {
+          SetShadowLane(&shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0.0f);
+        }
       }
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
@@ -584,9 +598,10 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
   }
 }
 
-void Renderer::Impl::ProjectorPacket(RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
-                                     const Eigen::Vector3f& projector, float spread, int u0, int v0,
-                                     int w, uint8_t* seen, float* signal) const {
+void Renderer::Impl::ProjectorPacket(const RTCRayHit16& rh, const int valid[16],
+                                     const Shaded shaded[16], const Eigen::Vector3f& projector,
+                                     float spread, int u0, int v0, int w, uint8_t* seen,
+                                     float* signal) const {
   float value[16];
   if (tracer) {
     tracer->ProjectorSignal(rh, valid, projector, spread, value);
@@ -594,36 +609,23 @@ void Renderer::Impl::ProjectorPacket(RTCRayHit16& rh, const int valid[16], const
     for (int j = 0; j < 16; ++j) {
       value[j] = 0.0f;
       if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
-      const Eigen::Vector3f p =
-          Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) +
-          rh.ray.tfar[j] * Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
-      const float cosine = shaded[j].normal.dot((projector - p).normalized());
+      const float cosine = shaded[j].normal.dot((projector - shaded[j].point).normalized());
       value[j] = cosine > 0.0f ? Luminance(shaded[j].albedo) * cosine : 0.0f;
     }
   }
-  // Shadow rays from each hit to the projector.
+  // Shadow rays from each hit to the projector (which is not geometry: they stop short of it).
   RTCRay16 ray;
   alignas(64) int lit[16];
   for (int j = 0; j < 16; ++j) {
     lit[j] = valid[j] && rh.hit.geomID[j] != kInvalid && value[j] > 0.0f ? -1 : 0;
-    Eigen::Vector3f p = Eigen::Vector3f::Zero(), d = Eigen::Vector3f::UnitZ();
-    float distance = 0.0f;
-    if (lit[j]) {
-      p = Eigen::Vector3f(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]) +
-          rh.ray.tfar[j] * Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]);
-      d = projector - p;
-      distance = d.norm();
-      d /= std::max(distance, 1e-6f);
+    if (!lit[j]) {
+      SetShadowLane(&ray, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0.0f);
+      continue;
     }
-    ray.org_x[j] = p.x(), ray.org_y[j] = p.y(), ray.org_z[j] = p.z();
-    ray.dir_x[j] = d.x(), ray.dir_y[j] = d.y(), ray.dir_z[j] = d.z();
-    // Off the surface as the lights' shadow rays start; the projector itself is not geometry.
-    ray.tnear[j] = 0.05f;
-    ray.tfar[j] = lit[j] ? distance * (1.0f - 1e-5f) : 0.0f;
-    ray.time[j] = 0.0f;
-    ray.mask[j] = 0xFFFFFFFFu;
-    ray.id[j] = static_cast<unsigned>(j);
-    ray.flags[j] = 0;
+    const Eigen::Vector3f d = projector - shaded[j].point;
+    const float distance = d.norm();
+    SetShadowLane(&ray, j, shaded[j].point, d / std::max(distance, 1e-6f),
+                  distance * (1.0f - 1e-5f));
   }
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -746,8 +748,10 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
           // views, also with robust scenes.
           trace(tile, &context, valid, &rh);
           Eigen::Vector3f color[16];
-          if ((o.shade && ss == 1 && !pbr) || need_normals || (projector && !pbr))
-            im.ShadePacket(rh, valid, shaded);
+          // The fast mode's colour needs the lights; normals, albedo and points (for the sensor)
+          // do not.
+          const bool fast_colour = o.shade && ss == 1 && !pbr;
+          if (fast_colour || need_normals) im.ShadePacket(rh, valid, shaded, fast_colour);
           for (int j = 0; j < 16; ++j) {
             if (!valid[j]) continue;
             const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);

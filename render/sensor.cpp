@@ -84,19 +84,17 @@ double AzureKinectSigma(double z_mm) { return 0.5 + std::max(z_mm - 500.0, 0.0) 
 
 namespace {
 
-// A standard normal number from two uniform draws (Box-Muller).
-double Gaussian(uint64_t seed, const RandomStream& stream, uint64_t index) {
-  const double u1 = UniformDraw(seed, stream, 2 * index);
-  const double u2 = UniformDraw(seed, stream, 2 * index + 1);
-  return std::sqrt(-2.0 * std::log(1.0 - u1)) * std::cos(2.0 * M_PI * u2);
-}
-
-// Two independent standard normal numbers from the same two draws (both of Box-Muller's).
+// Two independent standard normal numbers from two uniform draws (Box-Muller).
 Eigen::Vector2d GaussianPair(uint64_t seed, const RandomStream& stream, uint64_t index) {
   const double u1 = UniformDraw(seed, stream, 2 * index);
   const double u2 = UniformDraw(seed, stream, 2 * index + 1);
   const double r = std::sqrt(-2.0 * std::log(1.0 - u1));
   return Eigen::Vector2d(r * std::cos(2.0 * M_PI * u2), r * std::sin(2.0 * M_PI * u2));
+}
+
+// One standard normal number: the first of the pair.
+double Gaussian(uint64_t seed, const RandomStream& stream, uint64_t index) {
+  return GaussianPair(seed, stream, index).x();
 }
 
 // cos of the angle between the surface and the camera ray of pixel (u, v).

@@ -13,6 +13,7 @@
 #include "cad/error.h"
 #include "cad/shape.h"
 #include "cad/step.h"
+#include "dataset/preview.h"
 #include "tests/json_support.h"
 #include "tests/test_support.h"
 #include "tools/pipeline/journal.h"
@@ -294,6 +295,23 @@ TEST(Generate, GreyCameraAndDepthSensorWriteGrayDepthAndDepthGt) {
   }
   EXPECT_LT(valid, all);  // the sensor's holes on the objects
   EXPECT_EQ(ReadJson(scene / "scene_gt_coco.json")["images"][0]["file_name"], "gray/000000.png");
+  // The preview reads gray/ and shows four panels: image, exact depth, sensor depth (its holes
+  // black), masks.
+  PreviewOptions preview;
+  preview.count = 1;
+  preview.panel_width = 160;
+  const std::string png = RenderPreview(dir / "one", preview);
+  const cv::Mat sheet = cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR);
+  ASSERT_EQ(sheet.cols, 4 * 160);
+  const auto black = [&](int panel) {
+    const cv::Mat p = sheet(cv::Rect(panel * 160, 0, 160, sheet.rows));
+    int n = 0;
+    for (int v = 0; v < p.rows; ++v) {
+      for (int u = 0; u < p.cols; ++u) n += p.at<cv::Vec3b>(v, u) == cv::Vec3b(0, 0, 0);
+    }
+    return n;
+  };
+  EXPECT_GT(black(2), black(1));
 }
 
 TEST(Generate, BadInputLeavesNoDatasetBehind) {

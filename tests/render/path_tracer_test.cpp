@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/render/render_support.h"
+
 #include "cad/error.h"
 #include "cad/shape.h"
 #include "render/image.h"
@@ -20,13 +22,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// A camera at `eye` looking straight down (-z), image x along world +x, image y along world -y.
-Eigen::Isometry3d LookingDown(const Eigen::Vector3d& eye) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
-  T.translation() = eye;
-  return T;
-}
+using testing::LookingDown;
 
 Material Lambert(float albedo) {
   Material m;

@@ -4,19 +4,15 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/render/render_support.h"
+
 #include "cad/error.h"
 #include "cad/shape.h"
 
 namespace cadsynth {
 namespace {
 
-// A camera at `eye` looking straight down (-z), image x along world +x, image y along world -y.
-Eigen::Isometry3d LookingDown(const Eigen::Vector3d& eye) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
-  T.translation() = eye;
-  return T;
-}
+using testing::LookingDown;
 
 // An instance whose model frame (its bounding-box centre) sits at `where`.
 Instance Place(int part, const Part&, const Eigen::Vector3d& where) {

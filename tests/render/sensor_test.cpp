@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/render/render_support.h"
+
 #include "cad/shape.h"
 #include "render/path_tracer.h"
 #include "render/renderer.h"
@@ -15,13 +17,7 @@
 namespace cadsynth {
 namespace {
 
-// A camera at `eye` looking straight down (-z), image x along world +x, image y along world -y.
-Eigen::Isometry3d LookingDown(const Eigen::Vector3d& eye) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
-  T.translation() = eye;
-  return T;
-}
+using testing::LookingDown;
 
 struct Stats {
   double mean = 0, sd = 0;

@@ -26,7 +26,7 @@ constexpr uint64_t Fnv1a64(std::string_view text) {
 struct RandomStream {
   std::string_view name;  // dotted: module.what
   std::string_view what;  // what one draw decides, and what its index counts
-  uint64_t id() const { return Fnv1a64(name); }
+  constexpr uint64_t id() const { return Fnv1a64(name); }
 };
 
 // The streams, by the seed they use. Indices that combine several counters are written as
@@ -105,6 +105,15 @@ inline constexpr RandomStream kSensorLateral{
     "both axes from one pair)"};
 inline constexpr RandomStream kSensorAxial{
     "sensor.axial", "a pixel's depth noise, seeded by sensor.frame; index = (pixel << 1) + draw"};
+inline constexpr RandomStream kSensorInfrared{
+    "sensor.infrared",
+    "active_stereo: an IR pixel's read noise, seeded by sensor.frame; index = (((pixel << 1) + "
+    "camera) << 1) + draw"};
+inline constexpr RandomStream kSensorDots{
+    "sensor.dots",
+    "active_stereo: the projector's dot pattern, seeded by camera.depth.seed; index = (cell << 2) "
+    "+ "
+    "draw (present, x, y), cell = ((i + 2^20) << 21) + j + 2^20 for grid cell (i, j)"};
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
@@ -116,12 +125,32 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kPointU,         streams::kPointV,        streams::kRenderPixel,
     streams::kTexturePattern, streams::kDropRotation,  streams::kDropPosition,
     streams::kDropSeed,       streams::kPilePhysics,   streams::kSensorFrame,
-    streams::kSensorLateral,  streams::kSensorAxial,
+    streams::kSensorLateral,  streams::kSensorAxial,   streams::kSensorInfrared,
+    streams::kSensorDots,
 };
 
+namespace random_detail {
+// Two SplitMix64 rounds over (seed, stream id, index).
+inline double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
+  uint64_t x = seed * 0x9E3779B97F4A7C15ull ^
+               (stream + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
+               (index + 0x85EBCA77C2B2AE63ull) * 0x94D049BB133111EBull;
+  for (int round = 0; round < 2; ++round) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    x ^= x >> 31;
+  }
+  return static_cast<double>(x >> 11) * 0x1.0p-53;
+}
+}  // namespace random_detail
+
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every
-// machine and compiler (std:: distributions are not).
-double UniformDraw(uint64_t seed, const RandomStream& stream, uint64_t index);
+// machine and compiler (std:: distributions are not). Inline, so that the stream's id (a hash of
+// its name) folds to a constant in per-pixel loops.
+inline double UniformDraw(uint64_t seed, const RandomStream& stream, uint64_t index) {
+  return random_detail::Draw(seed, stream.id(), index);
+}
 // The same for a stream named at run time ("family.param.teeth").
 double UniformDraw(uint64_t seed, std::string_view stream_name, uint64_t index);
 

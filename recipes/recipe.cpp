@@ -671,17 +671,16 @@ void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   Intrinsics& k = spec->intrinsics;
   if (node["preset"]) {
     const std::string preset = r.Scalar(node["preset"], "camera.preset");
-    if (preset == "kinect_v1") {
-      k = Intrinsics::KinectV1();
-    } else if (preset == "realsense_d435") {
-      k = Intrinsics::RealSenseD435(1280);
-    } else if (preset == "realsense_d435_640") {
-      k = Intrinsics::RealSenseD435(640);
-    } else {
-      r.Fail(
-          node["preset"], "camera.preset",
-          "unknown preset '" + preset + "' (known: kinect_v1, realsense_d435, realsense_d435_640)");
+    const CameraPreset* found = FindCameraPreset(preset);
+    if (found == nullptr) {
+      std::string known;
+      for (const CameraPreset& p : CameraPresets())
+        known += (known.empty() ? "" : ", ") + std::string(p.name);
+      r.Fail(node["preset"], "camera.preset",
+             "unknown preset '" + preset + "' (known: " + known + ")");
     }
+    k = found->intrinsics;
+    if (found->gray) spec->sensor.image = SensorOptions::Image::kGray;
   }
   if (node["width"]) k.width = r.Integer(node["width"], "camera.width");
   if (node["height"]) k.height = r.Integer(node["height"], "camera.height");

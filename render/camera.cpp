@@ -19,6 +19,48 @@ Intrinsics Intrinsics::FromFov(int width, int height, double hfov_rad) {
   return Intrinsics{width, height, f, f, 0.5 * width - 0.5, 0.5 * height - 0.5};
 }
 
+const std::vector<CameraPreset>& CameraPresets() {
+  const auto fov = [](int w, int h, double hfov_deg) {
+    return Intrinsics::FromFov(w, h, hfov_deg * M_PI / 180.0);
+  };
+  static const std::vector<CameraPreset> presets = {
+      {"kinect_v1", "Kinect v1 of the reference paper: 640 x 480, f = 525", Intrinsics::KinectV1()},
+      {"realsense_d435", "RealSense D435 colour camera, 1280 x 720, 69 degrees across",
+       Intrinsics::RealSenseD435(1280)},
+      {"realsense_d435_640", "RealSense D435 colour camera, 640 x 480, 55 degrees across",
+       Intrinsics::RealSenseD435(640)},
+      {"realsense_d435_depth",
+       "RealSense D435 depth (left IR) camera, 848 x 480, 87 degrees across", fov(848, 480, 87.0)},
+      {"realsense_l515", "RealSense L515 depth camera, 1024 x 768, 70 degrees across",
+       fov(1024, 768, 70.0)},
+      {"azure_kinect_nfov",
+       "Azure Kinect depth, narrow field of view unbinned, 640 x 576, 75 degrees",
+       fov(640, 576, 75.0)},
+      {"xyz_ibd",
+       "XYZ-IBD's XYZ structured-light sensor, grey 1440 x 1080 (BOP's size); f = 1800 is "
+       "our assumption (44 degrees across)",
+       Intrinsics{1440, 1080, 1800.0, 1800.0, 719.5, 539.5}, true},
+      {"photoneo_phoxi_m",
+       "Photoneo PhoXi 3D Scanner M, grey 2064 x 1544; 590 mm across at 650 mm "
+       "(48.8 degrees)",
+       Intrinsics{2064, 1544, 2275.0, 2275.0, 1031.5, 771.5}, true},
+      {"itodd",
+       "MVTec ITODD's 3D sensor, grey 1280 x 960, K as we recall BOP's itodd camera.json (not "
+       "checked here; 24 degrees across)",
+       Intrinsics{1280, 960, 2992.6, 2997.4, 633.9, 489.8}, true},
+      {"zivid2_m70", "Zivid 2 M70, 1944 x 1200 colour, 770 mm across at 700 mm (57.6 degrees)",
+       fov(1944, 1200, 57.6)},
+  };
+  return presets;
+}
+
+const CameraPreset* FindCameraPreset(const std::string& name) {
+  for (const CameraPreset& p : CameraPresets()) {
+    if (name == p.name) return &p;
+  }
+  return nullptr;
+}
+
 Eigen::Matrix3d Intrinsics::K() const {
   Eigen::Matrix3d k;
   k << fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0;

@@ -37,6 +37,19 @@ struct Intrinsics {
   bool Check(std::string* why) const;
 };
 
+// Named cameras (the recipe's camera.preset). Nominal: square pixels and a centred principal point
+// from the maker's field of view unless said otherwise; a real unit differs by a few percent, so
+// give the calibrated K when training for a real camera.
+struct CameraPreset {
+  const char* name;
+  const char* what;  // the sensor, and where its numbers come from
+  Intrinsics intrinsics;
+  bool gray = false;  // an industrial grey camera (the recipe's camera.image defaults to gray)
+};
+const std::vector<CameraPreset>& CameraPresets();
+// The preset called `name`, or null.
+const CameraPreset* FindCameraPreset(const std::string& name);
+
 struct Camera {
   Intrinsics intrinsics;
   Eigen::Isometry3d world_from_cam = Eigen::Isometry3d::Identity();

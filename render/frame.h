@@ -30,6 +30,8 @@ struct Frame {
   // A depth model other than ideal (render/sensor.h): what the sensor returns (mm, 0 = none).
   // `depth` stays exact, and every label comes from it. Empty for the ideal model.
   std::vector<float> sensor_depth;
+  // active_stereo: the left IR image the matcher read (8 bit, the dots and the ambient light).
+  std::vector<uint8_t> infrared;
 
   struct InstanceTruth {
     Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();

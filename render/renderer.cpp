@@ -138,6 +138,11 @@ struct Renderer::Impl {
   void ProjectorPacket(const RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
                        const Eigen::Vector3f& projector, float spread, int u0, int v0, int w,
                        uint8_t* seen, float* signal) const;
+  // active_stereo: the noiseless IR image `camera` sees (render/sensor.h): the dots of the
+  // projector at `projector` (world; its axes are the camera's) where it lights the point, plus
+  // the ambient share of the Lambert shading.
+  std::vector<float> InfraredPass(const Camera& camera, const DepthModel& model,
+                                  const Eigen::Vector3f& projector) const;
   unsigned floor_id = kInvalid;
   // Fixtures: top-level geometry ids first_fixture_id + f, their triangles and normals (world).
   unsigned first_fixture_id = kInvalid;
@@ -640,6 +645,57 @@ void Renderer::Impl::ProjectorPacket(const RTCRayHit16& rh, const int valid[16],
   }
 }
 
+std::vector<float> Renderer::Impl::InfraredPass(const Camera& camera, const DepthModel& m,
+                                                const Eigen::Vector3f& projector) const {
+  const Intrinsics& k = camera.intrinsics;
+  const int w = k.width, h = k.height;
+  const size_t num_pixels = static_cast<size_t>(w) * h;
+  std::vector<float> out(num_pixels, 0.0f);
+  std::vector<uint8_t> seen(num_pixels, 0);
+  std::vector<float> signal(num_pixels, 0.0f);
+  const RayGen gen(camera.world_from_cam.linear().cast<float>(),
+                   camera.world_from_cam.translation().cast<float>(), &k);
+  std::vector<float> xs, ys;
+  gen.Tabulate(0.5, 0.5, &xs, &ys);
+  const Eigen::Matrix3f projector_from_world = gen.rotation.transpose();
+  const float tnear = static_cast<float>(options.near_mm),
+              tfar = static_cast<float>(options.far_mm);
+  const float spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
+        RTCIntersectContext context;
+        RTCRayHit16 rh;
+        alignas(64) int valid[16];
+        Shaded shaded[16];
+        for (int tile = range.begin(); tile < range.end(); ++tile) {
+          const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
+          InitPacket(gen, u0, v0, w, h, xs, ys, tnear, tfar, &rh, valid);
+          rtcInitIntersectContext(&context);
+          rtcIntersect16(valid, world, &context, &rh);
+          ShadePacket(rh, valid, shaded, m.ambient > 0.0);
+          ProjectorPacket(rh, valid, shaded, projector, spread, u0, v0, w, seen.data(),
+                          signal.data());
+          for (int j = 0; j < 16; ++j) {
+            if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
+            const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+            float value = static_cast<float>(m.ambient) * Luminance(shaded[j].color);
+            if (seen[pixel]) {
+              const Eigen::Vector3f q = projector_from_world * (shaded[j].point - projector);
+              const float distance_m = q.norm() / 1000.0f;
+              if (q.z() > 0.0f && distance_m > 0.0f) {
+                const float dots = DotPattern(m, k.fx, q.x() / q.z(), q.y() / q.z());
+                value += static_cast<float>(m.dot_power) * signal[pixel] * dots /
+                         (distance_m * distance_m);
+              }
+            }
+            out[pixel] = value;
+          }
+        }
+      });
+  return out;
+}
+
 Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions& sensor) const {
   const Impl& im = *impl_;
   const Intrinsics& k = camera.intrinsics;
@@ -819,7 +875,25 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
     input.projector_seen = projector ? projector_seen.data() : nullptr;
     input.signal = projector ? signal.data() : nullptr;
     input.rgb = frame.rgb.data();
+    std::vector<uint8_t> ir_left, ir_right;
+    if (depth_model.kind == DepthModel::Kind::kActiveStereo) {
+      // The left IR camera is the camera; the right one and the projector sit on its x axis.
+      Camera right = camera;
+      right.world_from_cam =
+          camera.world_from_cam * Eigen::Translation3d(depth_model.baseline_mm, 0, 0);
+      const Eigen::Vector3f dots =
+          (camera.world_from_cam * Eigen::Vector3d(0.5 * depth_model.baseline_mm, 0.0, 0.0))
+              .cast<float>();
+      const std::vector<float> left = im.InfraredPass(camera, depth_model, dots);
+      const double gain = InfraredGain(left);
+      ir_left = InfraredImage(depth_model, view, 0, left, gain);
+      ir_right =
+          InfraredImage(depth_model, view, 1, im.InfraredPass(right, depth_model, dots), gain);
+      input.ir_left = ir_left.data();
+      input.ir_right = ir_right.data();
+    }
     frame.sensor_depth = SimulateDepth(depth_model, input, view);
+    frame.infrared = std::move(ir_left);
   }
   if (o.normals) frame.normals = std::move(normals);
   if (!o.amodal_masks) return frame;

@@ -4,8 +4,12 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include <tbb/parallel_for.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "cad/random.h"
 
@@ -30,6 +34,17 @@ DepthModel DepthModel::Defaults(Kind kind) {
       m.lateral_px = 0.25;
       m.jump_mm = 800.0;
       m.dark_gray = 15;
+      break;
+    case Kind::kActiveStereo:
+      // RealSense D435: 50 mm between the IR imagers, min-Z about 280 mm at 848 x 480.
+      m.baseline_mm = 50.0;
+      m.dot_spacing_px = 3.0;
+      m.dot_power = 1.0;
+      m.ambient = 0.15;
+      m.ir_noise = 0.01;
+      m.min_depth_mm = 280.0;
+      m.block = 5;
+      m.min_texture = 4.0;
       break;
     case Kind::kStructuredLight:
       m.baseline_mm = 200.0;
@@ -68,6 +83,22 @@ bool DepthModel::Check(std::string* why) const {
     out << "max_signal must be 0 (none) or larger than min_signal";
   } else if (dark_gray < 0 || dark_gray > 255) {
     out << "dark_gray must lie between 0 and 255";
+  } else if (kind == Kind::kActiveStereo && !(baseline_mm > 0.0)) {
+    out << "baseline must be positive for active_stereo (the right camera's x)";
+  } else if (kind == Kind::kActiveStereo && !(dot_spacing_px >= 1.0 && dot_spacing_px <= 100.0)) {
+    out << "dot_spacing must lie between 1 and 100 px";
+  } else if (!finite_nonneg(dot_power) || dot_power > 100.0) {
+    out << "dot_power must lie between 0 and 100";
+  } else if (!finite_nonneg(ambient) || ambient > 10.0) {
+    out << "ambient must lie between 0 and 10";
+  } else if (!finite_nonneg(ir_noise) || ir_noise > 1.0) {
+    out << "ir_noise must lie between 0 and 1";
+  } else if (kind == Kind::kActiveStereo && !(min_depth_mm >= 10.0 && min_depth_mm <= 1e6)) {
+    out << "min_depth must lie between 10 mm and 1 km";
+  } else if (kind == Kind::kActiveStereo && (block < 3 || block > 11 || block % 2 == 0)) {
+    out << "block must be odd, between 3 and 11";
+  } else if (!finite_nonneg(min_texture) || min_texture > 255.0) {
+    out << "min_texture must lie between 0 and 255";
   } else {
     return true;
   }
@@ -133,12 +164,136 @@ bool Returns(const DepthModel& m, const DepthSensorInput& in, int u, int v, size
   return true;
 }
 
+// The rows a matcher strip computes around the rows it keeps: the 5-path SGBM aggregates costs
+// from the rows above, so a strip starts this far above its first kept row.
+constexpr int kStripRows = 64;
+constexpr int kStripMarginAbove = 48;
+
+// active_stereo: OpenCV's StereoSGBM on the left and right IR images, then z = f B / d. The image
+// is cut into strips of kStripRows rows matched in parallel, each with kStripMarginAbove rows
+// above it (and the window's half below) so that its paths start well before its first kept row:
+// a fixed cut, the same on any thread count.
+std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) {
+  const Intrinsics& k = in.intrinsics;
+  const int w = k.width, h = k.height;
+  std::vector<float> out(static_cast<size_t>(w) * h, 0.0f);
+  const int disparities = StereoDisparities(m, k);
+  const int strips = (h + kStripRows - 1) / kStripRows;
+  const double fb = k.fx * m.baseline_mm;
+  // The texture test: the grey standard deviation of each pixel's window in the left image.
+  cv::Mat texture;
+  if (m.min_texture > 0.0) {
+    cv::Mat image(h, w, CV_8U, const_cast<uint8_t*>(in.ir_left)), grey, mean, mean2;
+    image.convertTo(grey, CV_32F);
+    const cv::Size window(m.block, m.block);
+    cv::boxFilter(grey, mean, CV_32F, window, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+    cv::boxFilter(grey.mul(grey), mean2, CV_32F, window, cv::Point(-1, -1), true,
+                  cv::BORDER_REFLECT);
+    texture = mean2 - mean.mul(mean);  // the variance
+  }
+  const auto min_variance = static_cast<float>(m.min_texture * m.min_texture);
+  tbb::parallel_for(0, strips, [&](int s) {
+    const int keep0 = s * kStripRows, keep1 = std::min(h, keep0 + kStripRows);
+    const int row0 = std::max(0, keep0 - kStripMarginAbove);
+    const int row1 = std::min(h, keep1 + m.block / 2 + 1);
+    // OpenCV reads the strips in place; it writes only `disparity`.
+    const cv::Mat left(row1 - row0, w, CV_8U, const_cast<uint8_t*>(in.ir_left) + size_t(row0) * w);
+    const cv::Mat right(row1 - row0, w, CV_8U,
+                        const_cast<uint8_t*>(in.ir_right) + size_t(row0) * w);
+    const int area = m.block * m.block;
+    cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
+        0, disparities, m.block, 8 * area, 32 * area, /*disp12MaxDiff=*/1,
+        /*preFilterCap=*/63, /*uniquenessRatio=*/10,
+        /*speckleWindowSize=*/100, /*speckleRange=*/2, cv::StereoSGBM::MODE_SGBM);
+    cv::Mat disparity;
+    sgbm->compute(left, right, disparity);  // CV_16S, 1/16 px; invalid: (0 - 1) * 16
+    for (int v = keep0; v < keep1; ++v) {
+      const int16_t* row = disparity.ptr<int16_t>(v - row0);
+      for (int u = 0; u < w; ++u) {
+        if (row[u] <= 0) continue;
+        if (!texture.empty() && texture.at<float>(v, u) < min_variance) continue;
+        out[static_cast<size_t>(v) * w + u] = static_cast<float>(fb * 16.0 / row[u]);
+      }
+    }
+  });
+  return out;
+}
+
 }  // namespace
+
+int StereoDisparities(const DepthModel& m, const Intrinsics& k) {
+  const double largest = k.fx * m.baseline_mm / m.min_depth_mm;
+  const int n = 16 * static_cast<int>(std::ceil(largest / 16.0));
+  return std::clamp(n, 16, 16 * ((k.width - 1) / 16));
+}
+
+float DotPattern(const DepthModel& m, double fx, double x, double y) {
+  const double pitch = m.dot_spacing_px / fx;
+  const double gx = x / pitch, gy = y / pitch;
+  const double fi = std::floor(gx), fj = std::floor(gy);
+  if (!(std::abs(fi) < 1 << 20) || !(std::abs(fj) < 1 << 20)) return 0.0f;
+  const int i0 = static_cast<int>(fi), j0 = static_cast<int>(fj);
+  // A dot is a Gaussian of sigma 0.35 cell; a pixel sees it integrated over its footprint (1 /
+  // dot_spacing cells across), which widens the Gaussian by the box's variance and keeps its mass.
+  constexpr double kSigma2 = 0.35 * 0.35;
+  const double footprint = 1.0 / m.dot_spacing_px;
+  const double sigma2 = kSigma2 + footprint * footprint / 12.0;
+  const double peak = kSigma2 / sigma2;
+  constexpr uint64_t kDots = streams::kSensorDots.id();  // hashed at compile time
+  const auto draw = [&](uint64_t index) { return random_detail::Draw(m.seed, kDots, index); };
+  double sum = 0.0;
+  for (int j = j0 - 1; j <= j0 + 1; ++j) {
+    for (int i = i0 - 1; i <= i0 + 1; ++i) {
+      // Dots end at 3 sigma: cells farther from the point than that are skipped undrawn.
+      const double ex = std::max({i - gx, gx - (i + 1), 0.0});
+      const double ey = std::max({j - gy, gy - (j + 1), 0.0});
+      if (ex * ex + ey * ey > 9.0 * sigma2) continue;
+      const uint64_t cell =
+          ((static_cast<uint64_t>(i + (1 << 20))) << 21) + static_cast<uint64_t>(j + (1 << 20));
+      if (draw(cell << 2) >= 0.5) continue;
+      const double cx = i + draw((cell << 2) + 1);
+      const double cy = j + draw((cell << 2) + 2);
+      const double r2 = (gx - cx) * (gx - cx) + (gy - cy) * (gy - cy);
+      if (r2 > 9.0 * sigma2) continue;
+      sum += peak * std::exp(-r2 / (2.0 * sigma2));
+    }
+  }
+  return static_cast<float>(std::min(sum, 1.0));
+}
+
+double InfraredGain(const std::vector<float>& linear) {
+  if (linear.empty()) return 1.0;
+  std::vector<float> sorted = linear;
+  const size_t at = sorted.size() * 99 / 100;
+  std::nth_element(sorted.begin(), sorted.begin() + at, sorted.end());
+  const double top = sorted[at];
+  return top > 0.0 ? std::clamp(0.8 / top, 0.25, 64.0) : 1.0;
+}
+
+std::vector<uint8_t> InfraredImage(const DepthModel& m, uint64_t view, int camera,
+                                   const std::vector<float>& linear, double gain) {
+  const auto frame_seed =
+      static_cast<uint64_t>(UniformDraw(m.seed, streams::kSensorFrame, view) * 9007199254740992.0);
+  std::vector<uint8_t> out(linear.size());
+  tbb::parallel_for(size_t{0}, linear.size(), [&](size_t p) {
+    double value = gain * linear[p];
+    if (m.ir_noise > 0.0) {
+      value += m.ir_noise * Gaussian(frame_seed, streams::kSensorInfrared, (p << 1) + camera);
+    }
+    out[p] = static_cast<uint8_t>(std::clamp(std::lround(255.0 * value), 0l, 255l));
+  });
+  return out;
+}
 
 std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in, uint64_t view) {
   const int w = in.intrinsics.width, h = in.intrinsics.height;
   const size_t n = static_cast<size_t>(w) * h;
   if (m.kind == DepthModel::Kind::kIdeal) return std::vector<float>(in.depth, in.depth + n);
+  if (m.kind == DepthModel::Kind::kActiveStereo) {
+    if (in.ir_left == nullptr || in.ir_right == nullptr)
+      throw std::invalid_argument("active_stereo needs the two IR images");
+    return StereoDepth(m, in);
+  }
   std::vector<float> out(n, 0.0f);
   // One seed per frame: draws are indexed by pixel (and axis), never by thread or order.
   const auto frame_seed =

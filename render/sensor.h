@@ -33,6 +33,23 @@
 //                     where the surface sends back too little of the pattern (dark, or a polished
 //                     metal reflecting it away: `min_signal`) or so much that the camera saturates
 //                     (a specular glint: `max_signal`).
+//   active_stereo     RealSense D4xx style: two IR cameras `baseline` apart (the left one is the
+//                     camera, the right one at (baseline, 0, 0)) and a dot projector between them
+//                     at (baseline / 2, 0, 0). The renderer traces both IR images: each pixel sees
+//                     `dot_power` signal dots (1 m / distance)^2 of the projector's random-dot
+//                     pattern where the projector lights the point, plus `ambient` times the
+//                     Lambert shading of the scene's lights, plus N(0, `ir_noise`) read noise,
+//                     rounded to 8 bits. OpenCV's StereoSGBM (5 paths, `block` x `block`
+//                     windows, P1 = 8 block^2, P2 = 32 block^2, uniqueness 10 %, left-right check
+//                     1 px, speckle filter of 100 px within 2 px) matches them with disparities
+//                     up to f B / `min_depth`, and z = f B / d (d in 1/16 px); like the
+//                     texture threshold of RealSense's and OpenCV's block matchers, pixels whose
+//                     `block` x `block` window in the left image has a grey standard deviation
+//                     under `min_texture` are holes (SGBM alone would match the noise there).
+//                     Edge fattening,
+//                     holes where the pattern is occluded or too faint (dark, shiny, far), the
+//                     invalid band at the left edge and the 1/16 px disparity steps all come from
+//                     the matcher, as on the real sensor.
 //
 // The signal is the projector's light the surface reflects towards the camera, relative to a
 // white Lambertian surface facing the projector: pi f(camera, projector) cos(theta_projector), with
@@ -53,7 +70,7 @@
 namespace cadsynth {
 
 struct DepthModel {
-  enum class Kind { kIdeal, kKinectV1, kAzureKinect, kStructuredLight };
+  enum class Kind { kIdeal, kKinectV1, kAzureKinect, kStructuredLight, kActiveStereo };
   Kind kind = Kind::kIdeal;
   // The projector's position on the camera's x axis, mm (kinect_v1, structured_light; positive:
   // to the image's right, as a Kinect v1's emitter seen from its camera, so shadows fall left).
@@ -67,6 +84,14 @@ struct DepthModel {
   double min_signal = 0.0;         // holes where the surface returns less of the projector
   double max_signal = 0.0;         // holes where it returns more (saturation; 0: none)
   int dark_gray = 0;               // azure_kinect: holes where the colour image is darker
+  // active_stereo: the projected pattern, the IR images and the matcher.
+  double dot_spacing_px = 0.0;  // pitch of the dot grid, in the camera's pixels
+  double dot_power = 0.0;       // dots on a white Lambert surface facing the projector at 1 m
+  double ambient = 0.0;         // IR image of a white surface under the scene's lights
+  double ir_noise = 0.0;        // read noise sigma of the IR images (fraction of full scale)
+  double min_depth_mm = 0.0;    // nearest depth matched: disparities up to f B / min_depth
+  int block = 0;                // SGBM window (odd, 3-11)
+  double min_texture = 0.0;     // holes where the left window's grey sd is lower (0-255)
   uint64_t seed = 0;
 
   // The published defaults of `kind` (the table in README's "Depth sensors").
@@ -80,10 +105,11 @@ struct DepthModel {
     visit(o.kind, Field{"model",
                         "choice",
                         "depth sensor model (its defaults fill the other keys)",
-                        {"ideal", "kinect_v1", "azure_kinect", "structured_light"},
+                        {"ideal", "kinect_v1", "azure_kinect", "structured_light", "active_stereo"},
                         true});
     visit(o.baseline_mm,
-          Field{"baseline", "length", "projector's x in the camera frame (kinect_v1: 75 mm)"});
+          Field{"baseline", "length",
+                "projector's x in the camera frame (active_stereo: the right IR camera's)"});
     visit(o.focal_px, Field{"focal", "number", "kinect_v1: focal length of the disparity (px)"});
     visit(o.disparity_step_px,
           Field{"disparity_step", "number", "kinect_v1: disparity quantum (px; 0.125)"});
@@ -98,6 +124,19 @@ struct DepthModel {
           Field{"max_signal", "number", "holes where it is stronger: specular glints (0: none)"});
     visit(o.dark_gray,
           Field{"dark_gray", "integer", "azure_kinect: holes where the colour is darker (0-255)"});
+    visit(o.dot_spacing_px,
+          Field{"dot_spacing", "number", "active_stereo: pitch of the projected dots (px)"});
+    visit(o.dot_power,
+          Field{"dot_power", "number", "active_stereo: dot brightness on white at 1 m (0-100)"});
+    visit(o.ambient,
+          Field{"ambient", "number", "active_stereo: IR image of the scene's own light (0-10)"});
+    visit(o.ir_noise,
+          Field{"ir_noise", "number", "active_stereo: IR read noise sigma (0-1 of full scale)"});
+    visit(o.min_depth_mm,
+          Field{"min_depth", "length", "active_stereo: nearest depth the matcher searches"});
+    visit(o.block, Field{"block", "integer", "active_stereo: SGBM window (odd, 3-11)"});
+    visit(o.min_texture, Field{"min_texture", "number",
+                               "active_stereo: holes where the window's grey sd is lower (0-255)"});
     visit(o.seed, Field{"seed", "integer", "seed of the noise"});
   }
 };
@@ -119,11 +158,29 @@ struct DepthSensorInput {
   const uint8_t* projector_seen = nullptr;   // 1 where the projector sees the point; null: all
   const float* signal = nullptr;             // the projector's return (see above); null: 1
   const uint8_t* rgb = nullptr;              // the colour image (azure_kinect's dark pixels)
+  const uint8_t* ir_left = nullptr;          // active_stereo: the IR images (8 bit)
+  const uint8_t* ir_right = nullptr;
 };
 
 // The depth `model` returns for `input` in frame `view` (mm, 0 = no return). kIdeal copies it.
 std::vector<float> SimulateDepth(const DepthModel& model, const DepthSensorInput& input,
                                  uint64_t view);
+
+// active_stereo: the projector's dot pattern at direction (x, y, 1) of the projector's frame (axes
+// parallel to the camera's): 0 between dots, up to 1 at a dot's centre. A jittered grid of pitch
+// dot_spacing / fx radians; each cell holds a dot with probability 1/2 at a random place, a
+// Gaussian of sigma = 0.35 pitch cut at 3 sigma. Fixed per sensor (seeded by `seed` only), like a
+// real DOE.
+float DotPattern(const DepthModel& model, double fx, double x, double y);
+// active_stereo: the sensor's auto exposure, one gain for both IR images: the one that brings the
+// 99th percentile of `linear` (the left image) to 0.8 of full scale, within [1/4, 64].
+double InfraredGain(const std::vector<float>& linear);
+// active_stereo: IR image `camera` (0 left, 1 right) of frame `view` from its noiseless linear
+// values: times `gain`, plus read noise N(0, ir_noise), rounded to 8 bits.
+std::vector<uint8_t> InfraredImage(const DepthModel& model, uint64_t view, int camera,
+                                   const std::vector<float>& linear, double gain);
+// active_stereo: the number of disparities the matcher searches (a multiple of 16).
+int StereoDisparities(const DepthModel& model, const Intrinsics& intrinsics);
 
 // Kinect v1's axial noise sigma (mm) at depth z (mm): 1.2 + 1.9 (z / 1000 - 0.4)^2.
 double KinectV1AxialSigma(double z_mm);

@@ -120,7 +120,19 @@ sweep:
             "r.yaml:1:18: sweep.sampler: expected grid, fibonacci or random, got 'spiral'");
   EXPECT_EQ(ErrorOf("camera: {preset: kinect_v2}\n"),
             "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, "
-            "realsense_d435, realsense_d435_640)");
+            "realsense_d435, realsense_d435_640, realsense_d435_depth, realsense_l515, "
+            "azure_kinect_nfov, xyz_ibd, photoneo_phoxi_m, itodd, zivid2_m70)");
+  // Industrial presets are grey cameras unless the recipe says otherwise; sizes as BOP's.
+  const RunSpec phoxi = ParseRecipe("camera: {preset: photoneo_phoxi_m}\n", "r", ".");
+  EXPECT_EQ(phoxi.intrinsics.width, 2064);
+  EXPECT_EQ(phoxi.intrinsics.height, 1544);
+  EXPECT_EQ(phoxi.sensor.image, SensorOptions::Image::kGray);
+  EXPECT_EQ(ParseRecipe("camera: {preset: xyz_ibd, image: rgb}\n", "r", ".").sensor.image,
+            SensorOptions::Image::kRgb);
+  // The D435's depth camera: 87 degrees across 848 px, f = 424 / tan(43.5 deg).
+  const RunSpec d435 = ParseRecipe("camera: {preset: realsense_d435_depth}\n", "r", ".");
+  EXPECT_NEAR(d435.intrinsics.fx, 424.0 / std::tan(43.5 * M_PI / 180), 1e-9);
+  EXPECT_EQ(d435.sensor.image, SensorOptions::Image::kRgb);
   EXPECT_EQ(ErrorOf("camera: {hfov: 200}\n"),
             "r.yaml:1:16: camera.hfov: must lie between 0 and 180 degrees");
   EXPECT_EQ(ParseRecipe("render: {isa: avx2}\n", "r", ".").render.isa, "avx2");
@@ -152,8 +164,16 @@ camera:
   EXPECT_EQ(kinect.sensor.depth.disparity_step_px, 0.125);
   EXPECT_EQ(kinect.bop.gray_bits, 0);
   EXPECT_EQ(ErrorOf("camera: {depth: kinect_v2}\n"),
-            "r.yaml:1:17: camera.depth: expected 'ideal', 'kinect_v1', 'azure_kinect' or "
-            "'structured_light', got 'kinect_v2'");
+            "r.yaml:1:17: camera.depth: expected 'ideal', 'kinect_v1', 'azure_kinect', "
+            "'structured_light' or 'active_stereo', got 'kinect_v2'");
+  const RunSpec stereo =
+      ParseRecipe("camera: {depth: {model: active_stereo, baseline: 95 mm, block: 7}}\n", "r", ".");
+  EXPECT_EQ(stereo.sensor.depth.kind, DepthModel::Kind::kActiveStereo);
+  EXPECT_EQ(stereo.sensor.depth.baseline_mm, 95);
+  EXPECT_EQ(stereo.sensor.depth.block, 7);
+  EXPECT_EQ(stereo.sensor.depth.dot_spacing_px, 3.0);  // the model's default
+  EXPECT_EQ(ErrorOf("camera:\n  depth: {model: active_stereo, block: 4}\n"),
+            "r.yaml:2:10: camera.depth: block must be odd, between 3 and 11");
   EXPECT_EQ(ErrorOf("camera:\n  depth: {model: kinect_v1, baseline: 0}\n"),
             "r.yaml:2:10: camera.depth: baseline must not be 0 for kinect_v1 (its disparity is f "
             "B / z)");

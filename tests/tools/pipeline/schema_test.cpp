@@ -90,7 +90,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
                     EXPECT_NE(key, kinect_key) << name << " is not in the run key";
                     EXPECT_TRUE(keys.insert(key).second) << name;
                   }),
-              12);
+              19);
   }
   // The physically based look, read by hand from materials: and lighting:.
   {
@@ -262,7 +262,7 @@ TEST(Schema, EveryDepthKeyIsRead) {
         all(want, &expected);
         EXPECT_EQ(got, expected) << name;
       });
-  EXPECT_EQ(n, 12);
+  EXPECT_EQ(n, 19);
 }
 
 }  // namespace

@@ -114,6 +114,13 @@ inline constexpr RandomStream kSensorDots{
     "active_stereo: the projector's dot pattern, seeded by camera.depth.seed; index = (cell << 2) "
     "+ "
     "draw (present, x, y), cell = ((i + 2^20) << 21) + j + 2^20 for grid cell (i, j)"};
+// recipes: camera.imager.seed (image sensor noise, render/sensor.h)
+inline constexpr RandomStream kImageFrame{"sensor.image_frame",
+                                          "the seed of one frame's image noise; index = view"};
+inline constexpr RandomStream kImageNoise{
+    "sensor.image",
+    "a pixel's image noise, seeded by sensor.image_frame; index = (((pixel << 1) + pair) << 1) + "
+    "draw (Box-Muller pairs: R and G, then B and the grey image)"};
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
@@ -126,7 +133,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kTexturePattern, streams::kDropRotation,  streams::kDropPosition,
     streams::kDropSeed,       streams::kPilePhysics,   streams::kSensorFrame,
     streams::kSensorLateral,  streams::kSensorAxial,   streams::kSensorInfrared,
-    streams::kSensorDots,
+    streams::kSensorDots,     streams::kImageFrame,    streams::kImageNoise,
 };
 
 namespace random_detail {

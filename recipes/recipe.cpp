@@ -666,8 +666,9 @@ void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "camera",
-              {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image", "depth"});
+  r.ExpectMap(
+      node, "camera",
+      {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image", "imager", "depth"});
   Intrinsics& k = spec->intrinsics;
   if (node["preset"]) {
     const std::string preset = r.Scalar(node["preset"], "camera.preset");
@@ -708,6 +709,10 @@ void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     } else {
       r.Fail(node["image"], "camera.image", "expected rgb, gray or gray16, got '" + image + "'");
     }
+  }
+  if (const YAML::Node imager = node["imager"]) {
+    ReadFields(r, imager, "camera.imager", &spec->sensor.imager, {});
+    r.Check(spec->sensor.imager, imager, "camera.imager");
   }
   // depth: a model's name, or {model: NAME, KEY: VALUE...} overriding the model's defaults.
   if (const YAML::Node depth = node["depth"]) {

@@ -72,6 +72,10 @@ std::string RecipeReference() {
       out, "camera.depth",
       "the depth sensor model (a name, or a map); the model's published defaults fill the keys "
       "not given (README, \"Depth sensors\"); camera also takes image: rgb | gray | gray16");
+  Section<ImageSensor>(
+      out, "camera.imager",
+      "the image sensor and lens of the colour or grey camera: shot and read noise "
+      "(Poisson-Gaussian) and cos^4 vignetting (README, \"Image sensor\")");
   Section<RunLimits>(out, "limits",
                      "how much work a recipe may ask for (raise them if you mean it)");
   return out.str();

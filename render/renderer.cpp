@@ -725,6 +725,8 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
       (camera.world_from_cam * Eigen::Vector3d(depth_model.baseline_mm, 0.0, 0.0)).cast<float>();
   const float pixel_spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
   const bool gray = sensor.image != SensorOptions::Image::kRgb;
+  const ImageSensor& imager = sensor.imager;
+  const uint64_t noise_seed = ImageNoiseSeed(imager, view);
   if (gray) frame.gray.assign(num_pixels, 0.0f);
   const bool pbr = im.tracer != nullptr;
   if (o.hdr) frame.radiance.assign(3 * num_pixels, 0.0f);
@@ -832,8 +834,6 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
               if (o.hdr) {
                 for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[j][c];
               }
-              for (int c = 0; c < 3; ++c)
-                color[j][c] = DisplayValue(exposure_scale * radiance[j][c], filmic);
             }
           }
           // Supersampled colour: a regular grid of samples in each pixel.
@@ -848,17 +848,42 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
           }
           for (int j = 0; j < 16; ++j) {
             if (!valid[j]) continue;
-            const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
-            for (int c = 0; c < 3; ++c) frame.rgb[3 * pixel + c] = ToByte(color[j][c]);
+            const int u = u0 + j % kTile, v = v0 + j / kTile;
+            const size_t pixel = static_cast<size_t>(v) * w + u;
+            const bool pbr_colour = pbr && o.shade;
+            // The linear value the image sensor reads (pbr: the exposed radiance; fast: the
+            // Lambert colour), then the display transform (pbr) and 8 bits.
+            const double vignette = imager.active() ? imager.Vignette(xs[u], ys[v]) : 1.0;
+            // Noise draws: R, G, B and grey; a grey camera's colour image is not written, and
+            // gets no noise.
+            double normal[4] = {0.0, 0.0, 0.0, 0.0};
+            if (imager.full_well > 0.0) {
+              if (!gray) {
+                const Eigen::Vector2d rg = ImageNoisePair(noise_seed, pixel, 0);
+                normal[0] = rg.x(), normal[1] = rg.y();
+              }
+              const Eigen::Vector2d bk = ImageNoisePair(noise_seed, pixel, 1);
+              normal[2] = gray ? 0.0 : bk.x(), normal[3] = bk.y();
+            }
+            const auto read = [&](float linear, int channel) {
+              if (!imager.active()) return linear;
+              return static_cast<float>(imager.Read(linear, vignette, normal[channel]));
+            };
+            const Eigen::Vector3f linear =
+                pbr_colour ? Eigen::Vector3f(exposure_scale * radiance[j]) : color[j];
+            for (int c = 0; c < 3; ++c) {
+              const float value = read(linear[c], c);
+              color[j][c] = pbr_colour ? DisplayValue(value, filmic) : value;
+              frame.rgb[3 * pixel + c] = ToByte(color[j][c]);
+            }
             if (o.hdr && !pbr) {
               for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = color[j][c];
             }
-            // A grey camera sees the luminance: of the radiance before the display transform
-            // (pbr), of the Lambert colour (fast).
+            // A grey camera sees the luminance of the same linear value, with its own noise.
             if (gray) {
+              const float value = read(Luminance(linear), 3);
               frame.gray[pixel] =
-                  pbr && o.shade ? DisplayValue(exposure_scale * Luminance(radiance[j]), filmic)
-                                 : std::clamp(Luminance(color[j]), 0.0f, 1.0f);
+                  pbr_colour ? DisplayValue(value, filmic) : std::clamp(value, 0.0f, 1.0f);
             }
           }
         }

@@ -106,6 +106,23 @@ bool DepthModel::Check(std::string* why) const {
   return false;
 }
 
+bool ImageSensor::Check(std::string* why) const {
+  std::ostringstream out;
+  if (!std::isfinite(full_well) || full_well < 0.0 || full_well > 1e9) {
+    out << "full_well must lie between 0 (no noise) and 1e9 electrons";
+  } else if (!std::isfinite(read_noise) || read_noise < 0.0 || read_noise > 1e6) {
+    out << "read_noise must lie between 0 and 1e6 electrons";
+  } else if (read_noise > 0.0 && full_well == 0.0) {
+    out << "read_noise needs full_well (the electrons at full scale)";
+  } else if (!std::isfinite(vignetting) || vignetting < 0.0 || vignetting > 1.0) {
+    out << "vignetting must lie between 0 and 1";
+  } else {
+    return true;
+  }
+  *why = out.str();
+  return false;
+}
+
 double KinectV1AxialSigma(double z_mm) {
   const double d = z_mm / 1000.0 - 0.4;
   return 1.2 + 1.9 * d * d;
@@ -225,6 +242,15 @@ int StereoDisparities(const DepthModel& m, const Intrinsics& k) {
   const double largest = k.fx * m.baseline_mm / m.min_depth_mm;
   const int n = 16 * static_cast<int>(std::ceil(largest / 16.0));
   return std::clamp(n, 16, 16 * ((k.width - 1) / 16));
+}
+
+uint64_t ImageNoiseSeed(const ImageSensor& sensor, uint64_t view) {
+  return static_cast<uint64_t>(UniformDraw(sensor.seed, streams::kImageFrame, view) *
+                               9007199254740992.0);
+}
+
+Eigen::Vector2d ImageNoisePair(uint64_t frame_seed, uint64_t pixel, int pair) {
+  return GaussianPair(frame_seed, streams::kImageNoise, (pixel << 1) + static_cast<uint64_t>(pair));
 }
 
 float DotPattern(const DepthModel& m, double fx, double x, double y) {

@@ -58,6 +58,8 @@
 // count and shard.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -141,13 +143,62 @@ struct DepthModel {
   }
 };
 
-// What one camera measures: its image (colour, or grey as industrial and IR cameras give) and its
-// depth model.
+// The image sensor and lens of a colour or grey camera: photon shot noise and read noise (the
+// Poisson-Gaussian model of Foi et al. 2008, in its Gaussian form: a pixel of linear value x, 1 =
+// full scale, reads x + N(0, x / full_well + (read_noise / full_well)^2)), and natural
+// vignetting: the image falls off by (1 - vignetting) + vignetting cos^4(theta), theta the angle
+// between the pixel's ray and the optical axis. Applied to the linear value before the display
+// transform (pbr: the exposed radiance; fast: the Lambert colour), per channel, and separately to
+// the grey image; labels and depth are untouched.
+struct ImageSensor {
+  double full_well = 0.0;   // electrons at full scale (0: no shot noise)
+  double read_noise = 0.0;  // electrons (sigma)
+  double vignetting = 0.0;  // 0: none, 1: the full cos^4 fall-off
+  uint64_t seed = 0;
+
+  bool Check(std::string* why) const;
+  bool active() const { return full_well > 0.0 || vignetting > 0.0; }
+  // The pixel's vignetting factor for a ray through (x, y, 1) in the camera frame.
+  double Vignette(double x, double y) const {
+    const double cos2 = 1.0 / (1.0 + x * x + y * y);
+    return (1.0 - vignetting) + vignetting * cos2 * cos2;
+  }
+  // Linear value `x` as the sensor reads it: vignetted by `vignette`, plus noise of standard
+  // normal draw `normal`.
+  double Read(double x, double vignette, double normal) const {
+    x *= vignette;
+    if (full_well > 0.0) {
+      const double r = read_noise / full_well;
+      x += std::sqrt(std::max(x, 0.0) / full_well + r * r) * normal;
+    }
+    return x;
+  }
+
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.full_well,
+          Field{"full_well", "number", "electrons at full scale: shot noise (0: no noise)"});
+    visit(o.read_noise, Field{"read_noise", "number", "read noise sigma (electrons)"});
+    visit(o.vignetting,
+          Field{"vignetting", "number", "share of the cos^4 fall-off towards the corners (0-1)"});
+    visit(o.seed, Field{"seed", "integer", "seed of the image noise"});
+  }
+};
+
+// The image sensor's noise in frame `view` (streams sensor.image_frame, sensor.image): the frame's
+// seed, then per pixel two Box-Muller pairs of standard normal draws, {R, G} (pair 0) and {B,
+// grey} (pair 1).
+uint64_t ImageNoiseSeed(const ImageSensor& sensor, uint64_t view);
+Eigen::Vector2d ImageNoisePair(uint64_t frame_seed, uint64_t pixel, int pair);
+
+// What one camera measures: its image (colour, or grey as industrial and IR cameras give), the
+// image sensor's noise and vignetting, and its depth model.
 struct SensorOptions {
   enum class Image { kRgb, kGray, kGray16 };
   Image image = Image::kRgb;
+  ImageSensor imager;
   DepthModel depth;
-  bool Check(std::string* why) const { return depth.Check(why); }
+  bool Check(std::string* why) const { return imager.Check(why) && depth.Check(why); }
 };
 
 // Per pixel, what the renderer knows for a depth model (row-major, width x height).

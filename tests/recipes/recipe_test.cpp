@@ -166,6 +166,14 @@ camera:
   EXPECT_EQ(ErrorOf("camera: {depth: kinect_v2}\n"),
             "r.yaml:1:17: camera.depth: expected 'ideal', 'kinect_v1', 'azure_kinect', "
             "'structured_light' or 'active_stereo', got 'kinect_v2'");
+  const RunSpec imager = ParseRecipe(
+      "camera: {imager: {full_well: 6000, read_noise: 4, vignetting: 0.3, seed: 2}}\n", "r", ".");
+  EXPECT_EQ(imager.sensor.imager.full_well, 6000);
+  EXPECT_EQ(imager.sensor.imager.read_noise, 4);
+  EXPECT_EQ(imager.sensor.imager.vignetting, 0.3);
+  EXPECT_EQ(imager.sensor.imager.seed, 2u);
+  EXPECT_EQ(ErrorOf("camera:\n  imager: {vignetting: 2}\n"),
+            "r.yaml:2:11: camera.imager: vignetting must lie between 0 and 1");
   const RunSpec stereo =
       ParseRecipe("camera: {depth: {model: active_stereo, baseline: 95 mm, block: 7}}\n", "r", ".");
   EXPECT_EQ(stereo.sensor.depth.kind, DepthModel::Kind::kActiveStereo);

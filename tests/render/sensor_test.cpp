@@ -331,5 +331,90 @@ TEST(GrayCamera, IsTheLuminanceOfTheColourRender) {
   EXPECT_TRUE(colour.sensor_depth.empty());
 }
 
+// A floor filling the view, lit by the ambient term alone: the fast mode's colour is exactly the
+// floor's albedo at every pixel (before the image sensor).
+struct FlatField {
+  Scene scene;
+  RenderOptions options;
+  explicit FlatField(float level) {
+    scene.lights.clear();
+    scene.ambient = 1.0f;
+    scene.floor_color.setConstant(level);
+    options.hdr = true;  // fast mode: the colour before rounding, after the image sensor
+    options.amodal_masks = false;
+  }
+};
+
+TEST(ImageSensor, VignettingFollowsTheCosineFourthLaw) {
+  const FlatField flat(0.5f);
+  const Renderer renderer(std::vector<Part>{}, flat.scene, flat.options);
+  SensorOptions sensor;
+  sensor.imager.vignetting = 0.6;
+  const Camera camera{Intrinsics{}, LookingDown({0, 0, 1000})};
+  const Frame frame = renderer.Render(camera, 0, sensor);
+  const Intrinsics& k = camera.intrinsics;
+  for (const auto& [u, v] : {std::pair{320, 240}, {0, 0}, {639, 479}, {100, 400}}) {
+    const double x = (u + 0.5 - k.cx) / k.fx, y = (v + 0.5 - k.cy) / k.fy;
+    const double cos2 = 1.0 / (1.0 + x * x + y * y);  // cos^2 of the ray's angle to the axis
+    const double expected = 0.5 * (0.4 + 0.6 * cos2 * cos2);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(frame.radiance[3 * (size_t(v) * 640 + u) + c], expected, 1e-6) << u << "," << v;
+  }
+  // The corner of a 640 x 480, f = 525 image is 37.3 degrees off axis: cos^4 = 0.40.
+  EXPECT_NEAR(frame.radiance[0] / frame.radiance[3 * (240 * 640 + 320)], 0.4 + 0.6 * 0.401, 0.01);
+}
+
+TEST(ImageSensor, NoiseHasThePoissonGaussianVariance) {
+  // A pixel of linear value x reads x + N(0, x / full_well + (read / full_well)^2): with 2,000
+  // electrons at full scale and 20 electrons of read noise, sigma = 0.0071 at x = 0.1, 0.0145 at
+  // 0.4 and 0.0201 at 0.8.
+  SensorOptions colour;
+  colour.imager.full_well = 2000;
+  colour.imager.read_noise = 20;
+  SensorOptions grey = colour;
+  grey.image = SensorOptions::Image::kGray;
+  const Camera camera{Intrinsics{}, LookingDown({0, 0, 1000})};
+  for (float x : {0.1f, 0.4f, 0.8f}) {
+    const FlatField flat(x);
+    const Renderer renderer(std::vector<Part>{}, flat.scene, flat.options);
+    const Frame rgb = renderer.Render(camera, 1, colour);
+    const Frame gray = renderer.Render(camera, 1, grey);
+    double sum = 0, sum2 = 0, green2 = 0, cross = 0, gray_sum = 0, gray_sum2 = 0;
+    const size_t n = gray.gray.size();
+    for (size_t p = 0; p < n; ++p) {
+      const double r = rgb.radiance[3 * p] - x, g = rgb.radiance[3 * p + 1] - x;
+      const double k = gray.gray[p] - x;
+      sum += r, sum2 += r * r, green2 += g * g, cross += r * g;
+      gray_sum += k, gray_sum2 += k * k;
+    }
+    const double variance = x / 2000.0 + (20.0 / 2000) * (20.0 / 2000);
+    SCOPED_TRACE(x);
+    EXPECT_NEAR(sum / n, 0.0, 5 * std::sqrt(variance / n));  // unbiased
+    EXPECT_NEAR(sum2 / n / variance, 1.0, 0.02);             // 307,200 samples: 0.26% sd
+    EXPECT_NEAR(green2 / n / variance, 1.0, 0.02);
+    EXPECT_NEAR(cross / n / variance, 0.0, 0.02);  // channels draw independently
+    EXPECT_NEAR(gray_sum / n, 0.0, 5 * std::sqrt(variance / n));
+    EXPECT_NEAR(gray_sum2 / n / variance, 1.0, 0.02);  // a grey camera's pixels alike
+  }
+  // Another view, another draw; the same view, the same bytes.
+  const FlatField flat(0.4f);
+  const Renderer renderer(std::vector<Part>{}, flat.scene, flat.options);
+  EXPECT_EQ(renderer.Render(camera, 5, colour).rgb, renderer.Render(camera, 5, colour).rgb);
+  EXPECT_NE(renderer.Render(camera, 5, colour).rgb, renderer.Render(camera, 6, colour).rgb);
+}
+
+TEST(ImageSensor, ChecksItsParameters) {
+  std::string why;
+  ImageSensor s;
+  EXPECT_TRUE(s.Check(&why));
+  s.vignetting = 1.5;
+  EXPECT_FALSE(s.Check(&why));
+  EXPECT_EQ(why, "vignetting must lie between 0 and 1");
+  s.vignetting = 0;
+  s.read_noise = 3;
+  EXPECT_FALSE(s.Check(&why));
+  EXPECT_EQ(why, "read_noise needs full_well (the electrons at full scale)");
+}
+
 }  // namespace
 }  // namespace cadsynth

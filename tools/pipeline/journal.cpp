@@ -71,6 +71,7 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     key << "image " << static_cast<int>(spec.sensor.image) << "\n";
     fields("depth", spec.sensor.depth);
   }
+  if (spec.sensor.imager.active()) fields("imager", spec.sensor.imager);
   fields("output", spec.bop);
   fields("render", spec.render);
   fields("tessellation", spec.tessellation);

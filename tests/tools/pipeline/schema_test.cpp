@@ -74,23 +74,34 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
             15);
-  // The camera's sensor: its image and, with a model other than ideal, every depth field.
+  // The camera's sensor: its image and, with a model other than ideal (an active image sensor),
+  // every depth (image sensor) field; inactive, they leave earlier run keys alone.
   {
     RunSpec changed = spec;
     changed.sensor.image = SensorOptions::Image::kGray;
     check(changed, "camera.image");
+    // Each field of `Options` in `base` changes base's key to one of its own.
+    const auto each_field = [&](auto options, const RunSpec& base, auto select) {
+      const std::string base_key = RunKey(base, prepared, views);
+      return ForEachChange<decltype(options)>(
+          base, select, [&](const RunSpec& c, const std::string& name) {
+            const std::string key = RunKey(c, prepared, views);
+            EXPECT_NE(key, base_key) << name << " is not in the run key";
+            EXPECT_TRUE(keys.insert(key).second) << name;
+          });
+    };
     RunSpec kinect = spec;
     kinect.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
     check(kinect, "camera.depth.model");
-    const std::string kinect_key = RunKey(kinect, prepared, views);
-    EXPECT_EQ(ForEachChange<DepthModel>(
-                  kinect, [](RunSpec& s) -> DepthModel& { return s.sensor.depth; },
-                  [&](const RunSpec& c, const std::string& name) {
-                    const std::string key = RunKey(c, prepared, views);
-                    EXPECT_NE(key, kinect_key) << name << " is not in the run key";
-                    EXPECT_TRUE(keys.insert(key).second) << name;
-                  }),
-              19);
+    EXPECT_EQ(
+        each_field(DepthModel{}, kinect, [](RunSpec& s) -> DepthModel& { return s.sensor.depth; }),
+        19);
+    RunSpec noisy = spec;
+    noisy.sensor.imager.full_well = 5000;
+    check(noisy, "camera.imager");
+    EXPECT_EQ(each_field(ImageSensor{}, noisy,
+                         [](RunSpec& s) -> ImageSensor& { return s.sensor.imager; }),
+              4);
   }
   // The physically based look, read by hand from materials: and lighting:.
   {
@@ -231,6 +242,8 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
   RunLimits::Fields(limits, [&](const auto&, const Field& f) { expect_key("limits", f); });
   const DepthModel depth;
   DepthModel::Fields(depth, [&](const auto&, const Field& f) { expect_key("camera.depth", f); });
+  const ImageSensor imager;
+  ImageSensor::Fields(imager, [&](const auto&, const Field& f) { expect_key("camera.imager", f); });
 }
 
 // Each camera.depth key is read over the model's defaults.

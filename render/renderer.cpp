@@ -881,7 +881,9 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
             }
             // A grey camera sees the luminance of the same linear value, with its own noise.
             if (gray) {
-              const float value = read(Luminance(linear), 3);
+              // (pbr: exposure times luminance, in the order earlier versions computed it.)
+              const float value =
+                  read(pbr_colour ? exposure_scale * Luminance(radiance[j]) : Luminance(linear), 3);
               frame.gray[pixel] =
                   pbr_colour ? DisplayValue(value, filmic) : std::clamp(value, 0.0f, 1.0f);
             }

@@ -9,6 +9,7 @@
 #include "cad/random.h"
 #include "render/bsdf.h"
 #include "render/image.h"
+#include "render/ray_packet.h"
 #include "render/sampling.h"
 
 namespace cadsynth {
@@ -380,22 +381,6 @@ class PreparedEnvironment {
   bool black_ = false;
 };
 
-void SetRay(RTCRay16* r, int j, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tnear,
-            float tfar) {
-  r->org_x[j] = o.x();
-  r->org_y[j] = o.y();
-  r->org_z[j] = o.z();
-  r->dir_x[j] = d.x();
-  r->dir_y[j] = d.y();
-  r->dir_z[j] = d.z();
-  r->tnear[j] = tnear;
-  r->tfar[j] = tfar;
-  r->time[j] = 0.0f;
-  r->mask[j] = 0xFFFFFFFFu;
-  r->id[j] = static_cast<unsigned>(j);
-  r->flags[j] = 0;
-}
-
 }  // namespace
 
 uint64_t FrameSeed(int seed, uint64_t view) {
@@ -618,7 +603,7 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
                                   static_cast<float>((v + jitter.y() - k.cy) / k.fy), 1.0f);
       const Eigen::Vector3f d = rotation * d_cam;
       dir[j] = d.normalized();
-      SetRay(&rh.ray, j, origin, d, im.scene.near_mm, im.scene.far_mm);
+      SetRayLane(&rh.ray, j, origin, d, im.scene.near_mm, im.scene.far_mm);
       rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
     }
     rtcInitIntersectContext(&context);
@@ -671,7 +656,7 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
       for (int j = 0; j < 16; ++j) {
         shadow_valid[j] = 0;
         if (!active[j]) {
-          SetRay(&shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
+          SetRayLane(&shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
           continue;
         }
         const Impl::Surface surf = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
@@ -689,7 +674,7 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
         const Eigen::Vector3f p_off = surf.p + eps * surf.ng;
 
         // Next-event estimation.
-        SetRay(&shadow, j, p_off, Eigen::Vector3f::UnitZ(), 0, 0);
+        SetRayLane(&shadow, j, p_off, Eigen::Vector3f::UnitZ(), 0, 0);
         if (im.num_strategies > 0) {
           const int pick =
               std::min(static_cast<int>(u_choice.x() * im.num_strategies), im.num_strategies - 1);
@@ -718,7 +703,7 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
                 shadow_value[j] = c;
                 shadow_valid[j] = -1;
                 const float tfar = std::isinf(ls.distance) ? kInf : ls.distance * (1 - 1e-4f) - eps;
-                SetRay(&shadow, j, p_off, ls.wi, 0, std::max(0.0f, tfar));
+                SetRayLane(&shadow, j, p_off, ls.wi, 0, std::max(0.0f, tfar));
               }
             }
           }
@@ -750,7 +735,7 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
         prev_normal[j] = surf.ns;
         dir[j] = wi;
         active[j] = -1;
-        SetRay(&rh.ray, j, p_off, wi, 0, kInf);
+        SetRayLane(&rh.ray, j, p_off, wi, 0, kInf);
         rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
       }
       bool any_shadow = false;

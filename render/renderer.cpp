@@ -12,6 +12,7 @@
 #include "cad/error.h"
 #include "render/image.h"
 #include "render/path_tracer.h"
+#include "render/ray_packet.h"
 #include "render/sensor.h"
 
 namespace cadsynth {
@@ -427,35 +428,13 @@ struct RayGen {
 // little off the surface (float error at a metre is ~1e-4 mm).
 void SetShadowLane(RTCRay16* ray, int j, const Eigen::Vector3f& p, const Eigen::Vector3f& d,
                    float tfar) {
-  ray->org_x[j] = p.x();
-  ray->org_y[j] = p.y();
-  ray->org_z[j] = p.z();
-  ray->dir_x[j] = d.x();
-  ray->dir_y[j] = d.y();
-  ray->dir_z[j] = d.z();
-  ray->tnear[j] = 0.05f;
-  ray->tfar[j] = tfar;
-  ray->time[j] = 0.0f;
-  ray->mask[j] = 0xFFFFFFFFu;
-  ray->id[j] = static_cast<unsigned>(j);
-  ray->flags[j] = 0;
+  SetRayLane(ray, j, p, d, 0.05f, tfar);
 }
 
 // Sets lane j of a packet to the camera ray along world direction `d`, with no hit yet.
 void SetLane(RTCRayHit16* rh, int j, const Eigen::Vector3f& origin, const Eigen::Vector3f& d,
              float tnear, float tfar) {
-  rh->ray.org_x[j] = origin.x();
-  rh->ray.org_y[j] = origin.y();
-  rh->ray.org_z[j] = origin.z();
-  rh->ray.dir_x[j] = d.x();
-  rh->ray.dir_y[j] = d.y();
-  rh->ray.dir_z[j] = d.z();
-  rh->ray.tnear[j] = tnear;
-  rh->ray.tfar[j] = tfar;
-  rh->ray.time[j] = 0.0f;
-  rh->ray.mask[j] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: set every bit
-  rh->ray.id[j] = static_cast<unsigned>(j);
-  rh->ray.flags[j] = 0;
+  SetRayLane(&rh->ray, j, origin, d, tnear, tfar);
   rh->hit.geomID[j] = kInvalid;
   rh->hit.primID[j] = kInvalid;
   rh->hit.instID[0][j] = kInvalid;

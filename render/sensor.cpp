@@ -241,7 +241,9 @@ std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) 
 int StereoDisparities(const DepthModel& m, const Intrinsics& k) {
   const double largest = k.fx * m.baseline_mm / m.min_depth_mm;
   const int n = 16 * static_cast<int>(std::ceil(largest / 16.0));
-  return std::clamp(n, 16, 16 * ((k.width - 1) / 16));
+  // At most the image's width less one, rounded down to 16 (OpenCV's SGBM needs a multiple of 16;
+  // at least 16 even for images narrower than 17 px, which then have no depth).
+  return std::max(16, std::min(n, 16 * ((k.width - 1) / 16)));
 }
 
 uint64_t ImageNoiseSeed(const ImageSensor& sensor, uint64_t view) {

@@ -112,6 +112,24 @@ TEST(ActiveStereo, HolesWhereThePatternIsOccluded) {
   EXPECT_LT(row_sd(290, 370), 5.0);
 }
 
+TEST(ActiveStereo, SearchesAtMostTheImageWidth) {
+  DepthModel m = DepthModel::Defaults(DepthModel::Kind::kActiveStereo);
+  // f B / min_depth = 337.2 * 50 / 280 = 60.2 px: 64 disparities.
+  EXPECT_EQ(StereoDisparities(m, DepthCamera()), 64);
+  m.min_depth_mm = 20;  // 843 px, more than the image is wide: 640 - 1 rounded down to 16
+  EXPECT_EQ(StereoDisparities(m, DepthCamera()), 624);
+  // An image narrower than the matcher's smallest search renders without depth.
+  const Intrinsics tiny{12, 8, 10.0, 10.0, 5.5, 3.5};
+  EXPECT_EQ(StereoDisparities(m, tiny), 16);
+  Scene scene;
+  SensorOptions sensor;
+  sensor.depth = m;
+  const Frame frame = Renderer(std::vector<Part>{}, scene)
+                          .Render(Camera{tiny, LookingDown({0, 0, 1000})}, 0, sensor);
+  ASSERT_EQ(frame.sensor_depth.size(), 96u);
+  for (float z : frame.sensor_depth) EXPECT_EQ(z, 0.0f);
+}
+
 TEST(ActiveStereo, TheSameBytesOnAnyThreadCount) {
   Scene scene;
   scene.floor_color.setConstant(0.6f);

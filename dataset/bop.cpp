@@ -8,8 +8,10 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
+#include <set>
 #include <system_error>
 
 #include <tbb/parallel_for.h>
@@ -474,38 +476,46 @@ void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>
 }
 
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,
-                    const BopOptions& options) {
+                    const BopOptions& options, const std::string& sensor) {
   CreateFolder(root);
-  WriteJson(root / "camera.json", Json{{"cx", k.cx},
-                                       {"cy", k.cy},
-                                       {"depth_scale", options.depth_scale},
-                                       {"fx", k.fx},
-                                       {"fy", k.fy},
-                                       {"height", k.height},
-                                       {"width", k.width}});
+  const std::string name = sensor.empty() ? "camera.json" : "camera_" + sensor + ".json";
+  WriteJson(root / name, Json{{"cx", k.cx},
+                              {"cy", k.cy},
+                              {"depth_scale", options.depth_scale},
+                              {"fx", k.fx},
+                              {"fy", k.fy},
+                              {"height", k.height},
+                              {"width", k.width}});
 }
 
 BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
-                               const BopOptions& options, std::vector<int> obj_id_of_instance)
+                               const BopOptions& options, std::vector<int> obj_id_of_instance,
+                               const BopSensor& sensor)
     : root_(root),
       scene_dir_(root / options.split / Id6(scene_id)),
       options_(options),
+      sensor_(sensor),
       obj_ids_(std::move(obj_id_of_instance)) {
+  if (!sensor.name.empty()) options_.gray_bits = sensor.gray_bits;
   std::string why;
-  if (!options.Check(&why)) throw Error("bop: " + why);
-  for (const std::string& sub : {options.ImageFolder(), std::string("depth"), std::string("mask"),
+  if (!options_.Check(&why)) throw Error("bop: " + why);
+  for (const std::string& sub : {options_.ImageFolder(), std::string("depth"), std::string("mask"),
                                  std::string("mask_visib"), std::string(".fragments")})
-    CreateFolder(scene_dir_ / sub);
+    CreateFolder(Folder(sub));
   // Frames of an interrupted run: complete where the fragment (written last) exists.
-  for (const auto& entry : std::filesystem::directory_iterator(scene_dir_ / ".fragments")) {
+  for (const auto& entry : std::filesystem::directory_iterator(Folder(".fragments"))) {
     const std::string name = entry.path().filename().string();
     if (name.size() != 11 || name.substr(6) != ".json") continue;
     if (const auto id = ParseBopId(name.substr(0, 6))) image_ids_.push_back(*id);
   }
 }
 
+std::filesystem::path BopSceneWriter::FragmentPath(int image_id) const {
+  return Folder(".fragments") / (Id6(image_id) + ".json");
+}
+
 bool BopSceneWriter::HasFrame(int image_id) const {
-  return std::filesystem::exists(scene_dir_ / ".fragments" / (Id6(image_id) + ".json"));
+  return std::filesystem::exists(FragmentPath(image_id));
 }
 
 std::vector<int> BopSceneWriter::WrittenFrames() const {
@@ -517,7 +527,7 @@ std::vector<int> BopSceneWriter::WrittenFrames() const {
 }
 
 std::string BopSceneWriter::CheckFrame(int image_id) const {
-  const std::filesystem::path path = scene_dir_ / ".fragments" / (Id6(image_id) + ".json");
+  const std::filesystem::path path = FragmentPath(image_id);
   Fragment fragment;
   try {
     fragment = ReadFragment(path);
@@ -533,9 +543,9 @@ std::string BopSceneWriter::CheckFrame(int image_id) const {
 
 void BopSceneWriter::ForgetFrame(int image_id) {
   std::error_code ec;
-  std::filesystem::remove(scene_dir_ / ".fragments" / (Id6(image_id) + ".json"), ec);
+  std::filesystem::remove(FragmentPath(image_id), ec);
   if (ec)
-    throw Error((scene_dir_ / ".fragments").string() + ": cannot remove the record of image " +
+    throw Error(Folder(".fragments").string() + ": cannot remove the record of image " +
                 std::to_string(image_id) + ": " + ec.message());
   std::lock_guard<std::mutex> lock(mutex_);
   image_ids_.erase(std::remove(image_ids_.begin(), image_ids_.end(), image_id), image_ids_.end());
@@ -543,7 +553,7 @@ void BopSceneWriter::ForgetFrame(int image_id) {
 
 void BopSceneWriter::RemoveFragments() {
   std::error_code ec;
-  std::filesystem::remove_all(scene_dir_ / ".fragments", ec);
+  std::filesystem::remove_all(Folder(".fragments"), ec);
 }
 
 void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
@@ -580,7 +590,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     cv::cvtColor(rgb, image, cv::COLOR_RGB2BGR);
   }
   const std::filesystem::path rgb_path =
-      scene_dir_ / options_.ImageFolder() / (im + options_.RgbExtension());
+      Folder(options_.ImageFolder()) / (im + options_.RgbExtension());
   if (options_.jpeg_quality > 0) {
     std::vector<uchar> bytes;
     if (!cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
@@ -602,20 +612,20 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         row[u] = EncodeDepth(values[static_cast<size_t>(v) * w + u], options_.depth_scale);
       }
     }
-    const std::filesystem::path depth_path = scene_dir_ / folder / (im + ".png");
+    const std::filesystem::path depth_path = Folder(folder) / (im + ".png");
     files.Write(depth_path, EncodePng(depth, depth_path));
   };
   if (frame.sensor_depth.empty()) {
     write_depth(frame.depth, "depth");
   } else {
-    CreateFolder(scene_dir_ / "depth_gt");
+    CreateFolder(Folder("depth_gt"));
     write_depth(frame.sensor_depth, "depth");
     write_depth(frame.depth, "depth_gt");
   }
 
   if (!frame.normals
            .empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
-    CreateFolder(scene_dir_ / "normal");
+    CreateFolder(Folder("normal"));
     cv::Mat normals(h, w, CV_8UC3, cv::Scalar(0, 0, 0));
     for (int v = 0; v < h; ++v) {
       auto* row = normals.ptr<cv::Vec3b>(v);
@@ -628,12 +638,12 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         }
       }
     }
-    const std::filesystem::path normal_path = scene_dir_ / "normal" / (im + ".png");
+    const std::filesystem::path normal_path = Folder("normal") / (im + ".png");
     files.Write(normal_path, EncodePng(normals, normal_path));
   }
 
   if (!frame.radiance.empty()) {  // pbr with hdr: linear radiance as 32-bit float EXR
-    CreateFolder(scene_dir_ / "rgb_hdr");
+    CreateFolder(Folder("rgb_hdr"));
     cv::Mat radiance(h, w, CV_32FC3);
     for (int v = 0; v < h; ++v) {
       auto* row = radiance.ptr<cv::Vec3f>(v);
@@ -642,7 +652,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         row[u] = cv::Vec3f(c[2], c[1], c[0]);  // BGR
       }
     }
-    const std::filesystem::path hdr_path = scene_dir_ / "rgb_hdr" / (im + ".exr");
+    const std::filesystem::path hdr_path = Folder("rgb_hdr") / (im + ".exr");
     std::vector<uchar> bytes;
     if (!cv::imencode(".exr", radiance, bytes, {cv::IMWRITE_EXR_TYPE, cv::IMWRITE_EXR_TYPE_FLOAT}))
       throw Error(hdr_path.string() + ": EXR encoding failed");
@@ -699,7 +709,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         full[2] = std::max(full[2], u), full[3] = std::max(full[3], v);
       }
     }
-    files.Write(scene_dir_ / "mask" / name, EncodeMaskPng(mask.data, mask.step, w, h, r1, r3));
+    files.Write(Folder("mask") / name, EncodeMaskPng(mask.data, mask.step, w, h, r1, r3));
     const int* b = info.bbox_visib;  // inclusive: [b0, b0 + b2] x [b1, b1 + b3]
     const int visib_end = info.px_count_visib > 0 ? b[1] + b[3] + 1 : b[1];
     for (int v = r1; v < r3; ++v) std::memset(mask.ptr<uint8_t>(v), 0, w);
@@ -707,7 +717,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
       auto* out = mask.ptr<uint8_t>(v);
       for (int u = b[0]; u <= b[0] + b[2]; ++u) out[u] = visible(i, u, v) ? 255 : 0;
     }
-    files.Write(scene_dir_ / "mask_visib" / name,
+    files.Write(Folder("mask_visib") / name,
                 EncodeMaskPng(mask.data, mask.step, w, h, b[1], visib_end));
     for (int v = b[1]; v < visib_end; ++v) std::memset(mask.ptr<uint8_t>(v), 0, w);
 
@@ -733,7 +743,7 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
   // Finish(), and the frame's manifest entry: every file it wrote with size and CRC-32.
   Json manifest = Json::array();
   for (const FileRecord& r : files.records()) manifest.push_back({r.path, r.size, r.crc32});
-  WriteFileAtomic(scene_dir_ / ".fragments" / (im + ".json"),
+  WriteFileAtomic(FragmentPath(image_id),
                   camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() +
                       "\n" + Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() +
                       "\n" + Json{{"files", manifest}}.dump() + "\n");
@@ -760,10 +770,12 @@ SceneSplit BopSceneWriter::Finish() {
   std::sort(image_ids_.begin(), image_ids_.end());
   image_ids_.erase(std::unique(image_ids_.begin(), image_ids_.end()), image_ids_.end());
   // Stream the three files: {"id": entry, ...}, each entry indented as json.dump(2) would.
-  const char* names[3] = {"scene_camera.json", "scene_gt.json", "scene_gt_info.json"};
+  const std::string sfx = sensor_.Suffix();
+  const std::string names[3] = {"scene_camera" + sfx + ".json", "scene_gt" + sfx + ".json",
+                                "scene_gt_info" + sfx + ".json"};
   std::ofstream out[3];
   for (int f = 0; f < 3; ++f) {
-    out[f].open(scene_dir_ / (std::string(names[f]) + ".tmp"), std::ios::binary);
+    out[f].open(scene_dir_ / (names[f] + ".tmp"), std::ios::binary);
     if (!out[f]) throw Error((scene_dir_ / names[f]).string() + ": cannot create file");
     out[f] << "{";
   }
@@ -776,7 +788,7 @@ SceneSplit BopSceneWriter::Finish() {
     return result;
   };
   // scene_gt_coco.json: annotations streamed, the (small) image list kept for the end.
-  const std::filesystem::path coco_path = scene_dir_ / "scene_gt_coco.json";
+  const std::filesystem::path coco_path = scene_dir_ / ("scene_gt_coco" + sfx + ".json");
   std::ofstream coco;
   Json coco_images = Json::array();
   int annotation_id = 0;
@@ -786,8 +798,7 @@ SceneSplit BopSceneWriter::Finish() {
     coco << "{\n  \"annotations\": [";
   }
   for (size_t n = 0; n < image_ids_.size(); ++n) {
-    const Fragment fragment =
-        ReadFragment(scene_dir_ / ".fragments" / (Id6(image_ids_[n]) + ".json"));
+    const Fragment fragment = ReadFragment(FragmentPath(image_ids_[n]));
     const bool test = options_.IsTest(static_cast<int>(n), static_cast<int>(image_ids_.size()));
     (test ? split.test : split.train).push_back(image_ids_[n]);
     const Json* entries[3] = {&fragment.camera, &fragment.gt, &fragment.gt_info};
@@ -807,11 +818,11 @@ SceneSplit BopSceneWriter::Finish() {
     if (!options_.coco) continue;
     const Json& entry = fragment.coco;
     const int w = entry["width"], h = entry["height"];
-    coco_images.push_back(
-        {{"id", image_ids_[n]},
-         {"file_name", options_.ImageFolder() + "/" + Id6(image_ids_[n]) + options_.RgbExtension()},
-         {"width", w},
-         {"height", h}});
+    coco_images.push_back({{"id", image_ids_[n]},
+                           {"file_name", options_.ImageFolder() + sfx + "/" + Id6(image_ids_[n]) +
+                                             options_.RgbExtension()},
+                           {"width", w},
+                           {"height", h}});
     for (const Json& a : entry["annotations"]) {
       const Json annotation = {{"id", ++annotation_id},
                                {"image_id", image_ids_[n]},
@@ -855,8 +866,7 @@ SceneSplit BopSceneWriter::Finish() {
     out[f].close();
     if (!out[f]) throw Error((scene_dir_ / names[f]).string() + ": cannot write file (disk full?)");
     std::error_code ec;
-    std::filesystem::rename(scene_dir_ / (std::string(names[f]) + ".tmp"), scene_dir_ / names[f],
-                            ec);
+    std::filesystem::rename(scene_dir_ / (names[f] + ".tmp"), scene_dir_ / names[f], ec);
     if (ec)
       throw Error((scene_dir_ / names[f]).string() +
                   ": cannot move file into place: " + ec.message());
@@ -884,9 +894,10 @@ void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit
 }
 
 void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& options,
-                     const std::vector<SceneSplit>& scenes,
-                     const std::vector<ObjectClass>& classes) {
+                     const std::vector<SceneSplit>& scenes, const std::vector<ObjectClass>& classes,
+                     const BopSensor& sensor) {
   if (!options.coco) return;
+  const std::string sfx = sensor.Suffix();
   CreateFolder(root / "coco");
   Json categories = Json::array();
   std::map<int, std::string> class_names;
@@ -898,7 +909,7 @@ void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& option
   // a first pass over the scenes and images in a second. Images are numbered from 1 in scene
   // order, then image order; an image's number is its rank in its scene's (sorted) split list.
   const auto scene_file = [&](size_t s) {
-    return root / options.split / Id6(static_cast<int>(s)) / "scene_gt_coco.json";
+    return root / options.split / Id6(static_cast<int>(s)) / ("scene_gt_coco" + sfx + ".json");
   };
   const auto strip = [](std::string line) {  // "    {...}," -> "{...}"
     const size_t begin = line.find_first_not_of(' ');
@@ -906,7 +917,8 @@ void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& option
     return begin == std::string::npos ? std::string() : line.substr(begin);
   };
   for (const bool test : {false, true}) {
-    const std::filesystem::path path = root / "coco" / (test ? "test.json" : "train.json");
+    const std::filesystem::path path =
+        root / "coco" / (std::string(test ? "test" : "train") + sfx + ".json");
     const std::string temporary = path.string() + ".tmp";
     std::ofstream out(temporary, std::ios::binary);
     if (!out) throw Error(path.string() + ": cannot create file");
@@ -994,21 +1006,135 @@ void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& option
   }
 }
 
-std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset) {
+RigSceneWriter::RigSceneWriter(const std::filesystem::path& root, int scene_id,
+                               const BopOptions& options,
+                               const std::vector<int>& obj_id_of_instance,
+                               const std::vector<BopSensor>& sensors) {
+  if (sensors.empty()) throw Error("bop: a rig needs at least one sensor");
+  for (const BopSensor& sensor : sensors) {
+    if (sensors.size() > 1 && sensor.name.empty()) throw Error("bop: a rig's sensors need names");
+    sensors_.push_back(
+        std::make_unique<BopSceneWriter>(root, scene_id, options, obj_id_of_instance, sensor));
+  }
+}
+
+void RigSceneWriter::WriteFrame(int image_id, const std::vector<const Frame*>& frames,
+                                const std::vector<const FrameWriter*>& formats) {
+  if (frames.size() != sensors_.size()) {
+    throw Error("bop: " + std::to_string(frames.size()) + " frames for a rig of " +
+                std::to_string(sensors_.size()) + " sensors");
+  }
+  for (size_t k = 0; k < sensors_.size(); ++k) {
+    sensors_[k]->WriteFrame(image_id, *frames[k],
+                            k == 0 ? formats : std::vector<const FrameWriter*>{});
+  }
+}
+
+bool RigSceneWriter::HasFrame(int image_id) const {
+  for (const auto& sensor : sensors_) {
+    if (!sensor->HasFrame(image_id)) return false;
+  }
+  return true;
+}
+
+std::vector<int> RigSceneWriter::WrittenFrames() const {
+  std::vector<int> ids = sensors_[0]->WrittenFrames();
+  for (size_t k = 1; k < sensors_.size(); ++k) {
+    const std::vector<int> other = sensors_[k]->WrittenFrames();
+    std::vector<int> both;
+    std::set_intersection(ids.begin(), ids.end(), other.begin(), other.end(),
+                          std::back_inserter(both));
+    ids = std::move(both);
+  }
+  return ids;
+}
+
+std::string RigSceneWriter::CheckFrame(int image_id) const {
+  for (const auto& sensor : sensors_) {
+    std::string problem = sensor->CheckFrame(image_id);
+    if (!problem.empty()) return problem;
+  }
+  return {};
+}
+
+void RigSceneWriter::ForgetFrame(int image_id) {
+  for (const auto& sensor : sensors_) sensor->ForgetFrame(image_id);
+}
+
+std::vector<SceneSplit> RigSceneWriter::Finish() {
+  // A frame one sensor wrote and another did not (a run stopped between them) is not complete:
+  // it is rendered again before any finish, so here every sensor holds the same frames.
+  const std::vector<int> complete = WrittenFrames();
+  std::vector<SceneSplit> splits;
+  for (const auto& sensor : sensors_) {
+    if (sensor->WrittenFrames() != complete) {
+      throw Error(sensor->scene_dir().string() + ": sensor '" + sensor->sensor().name +
+                  "' holds frames the rig's other sensors lack");
+    }
+    splits.push_back(sensor->Finish());
+  }
+  return splits;
+}
+
+void RigSceneWriter::RemoveFragments() {
+  for (const auto& sensor : sensors_) sensor->RemoveFragments();
+}
+
+void RigSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
+  sensors_[0]->WriteWorldPoses(instances);
+}
+
+void RigSceneWriter::SetCocoCategories(
+    const std::vector<BopSceneWriter::CocoCategory>& categories) {
+  for (const auto& sensor : sensors_) sensor->SetCocoCategories(categories);
+}
+
+void WriteMultiviewTargets(const std::filesystem::path& root, const std::vector<SceneSplit>& scenes,
+                           const std::vector<BopSensor>& sensors) {
+  Json targets = Json::array();
+  for (size_t s = 0; s < scenes.size(); ++s) {
+    for (int im : scenes[s].test) {
+      Json views = Json::array();
+      for (const BopSensor& sensor : sensors) views.push_back(Json::array({sensor.name, im}));
+      targets.push_back({{"scene_id", s}, {"im_id", views}});
+    }
+  }
+  WriteFileAtomic(root / "test_targets_multiview_bop25.json", targets.dump(2) + "\n");
+}
+
+std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset,
+                                      const std::string& sensor) {
   if (!std::filesystem::is_directory(dataset))
     throw Error(dataset.string() + ": no such dataset folder");
+  const std::string wanted = "scene_gt" + BopSensor{sensor}.Suffix() + ".json";
   std::vector<std::filesystem::path> roots;
+  std::set<std::string> sensors;  // of a multi-sensor dataset: scene_gt_NAME.json
   for (const auto& entry : std::filesystem::directory_iterator(dataset)) {
     if (!entry.is_directory()) continue;
     for (const auto& scene : std::filesystem::directory_iterator(entry.path())) {
-      if (std::filesystem::exists(scene.path() / "scene_gt.json")) {
+      if (std::filesystem::exists(scene.path() / wanted)) {
         roots.push_back(entry.path());
         break;
+      }
+      if (!scene.is_directory() || !ParseBopId(scene.path().filename().string())) continue;
+      for (const auto& file : std::filesystem::directory_iterator(scene.path())) {
+        const std::string name = file.path().filename().string();
+        if (name.rfind("scene_gt_", 0) == 0 && name.size() > 14 &&
+            name.compare(name.size() - 5, 5, ".json") == 0 && name.rfind("scene_gt_info", 0) != 0 &&
+            name.rfind("scene_gt_coco", 0) != 0 && name.rfind("scene_gt_world", 0) != 0)
+          sensors.insert(name.substr(9, name.size() - 14));
       }
     }
   }
   if (roots.size() != 1) {
-    throw Error(dataset.string() + ": expected one folder of scenes with scene_gt.json, found " +
+    std::string names;
+    for (const std::string& name : sensors) names += (names.empty() ? "" : ", ") + name;
+    if (roots.empty() && !sensors.empty()) {
+      throw Error(dataset.string() + ": " +
+                  (sensor.empty() ? "a multi-sensor dataset" : "has no sensor '" + sensor + "'") +
+                  " (sensors: " + names + "): choose one with --sensor NAME");
+    }
+    throw Error(dataset.string() + ": expected one folder of scenes with " + wanted + ", found " +
                 std::to_string(roots.size()));
   }
   return roots[0];

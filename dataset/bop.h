@@ -12,6 +12,17 @@
 //   ROOT/SPLIT/SCENEID/scene_gt.json         cam_R_m2c, cam_t_m2c, obj_id per instance
 //   ROOT/SPLIT/SCENEID/scene_gt_info.json    bboxes, pixel counts, visib_fract per instance
 //
+// A camera rig (several sensors moved together) writes BOP's multi-sensor layout instead: every
+// folder and scene file of a sensor NAME carries its name (bop_toolkit's dataset_params.py,
+// BOP 2025's industrial datasets), and the sensors share image ids, one per rig pose:
+//
+//   ROOT/camera_NAME.json                    per sensor (camera.json: the first sensor's)
+//   ROOT/SPLIT/SCENEID/rgb_NAME/IMID.png     or gray_NAME/; depth_NAME/, mask_NAME/,
+//                                            mask_visib_NAME/ (and depth_gt_NAME/, ...)
+//   ROOT/SPLIT/SCENEID/scene_camera_NAME.json, scene_gt_NAME.json, scene_gt_info_NAME.json,
+//                      scene_gt_coco_NAME.json
+//   ROOT/test_targets_multiview_bop25.json   per test image: scene_id and [[NAME, im_id], ...]
+//
 // All ids are written with 6 digits. Rotations are row-major; translations in mm.
 // cam_R_m2c / cam_t_m2c is cam_from_model; cam_R_w2c / cam_t_w2c is cam_from_world (the
 // inverse of the camera pose world_from_cam), so world_from_model = inverse(w2c) * m2c.
@@ -163,8 +174,10 @@ struct SceneSplit {
 };
 
 // The folder of DATASET holding the scene folders (e.g. DATASET/train): the one whose
-// subfolders have scene_gt.json. Throws Error when there is none or more than one.
-std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset);
+// subfolders have scene_gt.json (a multi-sensor dataset's sensor: scene_gt_SENSOR.json). Throws
+// Error when there is none (naming the sensors of a multi-sensor dataset) or more than one.
+std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset,
+                                      const std::string& sensor = "");
 
 // Writes ROOT/splits/{train,test}.txt ("scene_id image_id" per line) and
 // ROOT/test_targets_bop19.json for the given scenes' splits.
@@ -199,9 +212,18 @@ void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& 
 void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts,
                       const BopOptions& options);
 
-// Writes ROOT/camera.json.
+// Writes ROOT/camera.json, or ROOT/camera_SENSOR.json for a rig's sensor.
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& intrinsics,
-                    const BopOptions& options);
+                    const BopOptions& options, const std::string& sensor = "");
+
+// A rig's sensor as the writers see it: BOP's CAMTYPE name (empty: a single-camera dataset, with
+// rgb/ and scene_gt.json) and its image (BopOptions::gray_bits).
+struct BopSensor {
+  std::string name;
+  int gray_bits = 0;
+  // "_NAME", or nothing for the unnamed sensor: what BOP appends to folder and file names.
+  std::string Suffix() const { return name.empty() ? std::string() : "_" + name; }
+};
 
 // Ground-truth statistics of one instance in one frame, as scene_gt_info.json holds them, computed
 // as bop_toolkit's calc_gt_info.py computes them. Boxes are x, y, width, height with width =
@@ -248,9 +270,11 @@ uint16_t EncodeDepth(float depth_mm, double depth_scale);
 // Writes the images of one scene as frames arrive (from any thread) and its JSON files at the end.
 class BopSceneWriter {
  public:
-  // obj_id_of_instance[i] is the BOP obj_id of Scene::instances[i].
+  // obj_id_of_instance[i] is the BOP obj_id of Scene::instances[i]. A named `sensor` writes its
+  // folders and scene files with its suffix (rgb_NAME/, scene_gt_NAME.json) and keeps its frame
+  // fragments apart (.fragments_NAME/); its gray_bits replaces options.gray_bits.
   BopSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
-                 std::vector<int> obj_id_of_instance);
+                 std::vector<int> obj_id_of_instance, const BopSensor& sensor = {});
 
   // Encodes and writes rgb, depth, mask and mask_visib of `frame` as image `image_id`, then each
   // of `formats` (the other formats of the same frame, dataset/frame_writer.h), and last the
@@ -291,15 +315,58 @@ class BopSceneWriter {
   }
 
   const std::filesystem::path& scene_dir() const { return scene_dir_; }
+  const BopSensor& sensor() const { return sensor_; }
 
  private:
+  std::filesystem::path Folder(const std::string& name) const {
+    return scene_dir_ / (name + sensor_.Suffix());
+  }
+  std::filesystem::path FragmentPath(int image_id) const;
+
   std::filesystem::path root_, scene_dir_;
   BopOptions options_;
+  BopSensor sensor_;
   std::vector<int> obj_ids_;
   mutable std::mutex mutex_;
   std::vector<int> image_ids_;  // written so far
   std::vector<CocoCategory> categories_;
 };
+
+// One scene's writers, one per sensor of a rig (one unnamed sensor without a rig): the sensors
+// share image ids, and a frame is written when every sensor's frame is (each sensor's fragment
+// is written last for that sensor, the sensors in order).
+class RigSceneWriter {
+ public:
+  RigSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
+                 const std::vector<int>& obj_id_of_instance, const std::vector<BopSensor>& sensors);
+
+  // frames[k] is sensor k's frame of the rig pose `image_id`; `formats` (the paper layout, ...)
+  // are written for the first sensor only.
+  void WriteFrame(int image_id, const std::vector<const Frame*>& frames,
+                  const std::vector<const FrameWriter*>& formats = {});
+  bool HasFrame(int image_id) const;
+  std::vector<int> WrittenFrames() const;  // written by every sensor, sorted
+  std::string CheckFrame(int image_id) const;
+  void ForgetFrame(int image_id);
+  // Each sensor's split (the same image ids for all; test targets counted per sensor).
+  std::vector<SceneSplit> Finish();
+  void RemoveFragments();
+  void WriteWorldPoses(const std::vector<Instance>& instances);
+  void SetCocoCategories(const std::vector<BopSceneWriter::CocoCategory>& categories);
+
+  size_t size() const { return sensors_.size(); }
+  BopSceneWriter& sensor(size_t k) { return *sensors_[k]; }
+  const BopSceneWriter& sensor(size_t k) const { return *sensors_[k]; }
+
+ private:
+  std::vector<std::unique_ptr<BopSceneWriter>> sensors_;
+};
+
+// Writes ROOT/test_targets_multiview_bop25.json: per scene (in order) and test image, one target
+// {"scene_id", "im_id": [[SENSOR, im_id] for every sensor]}: the images of one rig pose taken
+// together, as BOP 2025's multi-view task groups them.
+void WriteMultiviewTargets(const std::filesystem::path& root, const std::vector<SceneSplit>& scenes,
+                           const std::vector<BopSensor>& sensors);
 
 // Throws Error (naming `origin` and the line) unless `text` is a frame fragment as
 // BopSceneWriter writes it (.fragments/NNNNNN.json): what Finish and merge read back is checked
@@ -309,8 +376,9 @@ void CheckFragmentText(const std::string& text, const std::string& origin);
 // Writes ROOT/coco/train.json and ROOT/coco/test.json: the scenes' scene_gt_coco.json merged by
 // the split, images numbered from 1 with file names relative to ROOT, and categories the object
 // classes: `classes[obj_id - 1]` (each annotation also keeps obj_id, scene_id, im_id, inst_id).
+// A rig's sensor (named) merges its scene_gt_coco_NAME.json files into coco/{train,test}_NAME.json.
 void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& options,
-                     const std::vector<SceneSplit>& scenes,
-                     const std::vector<ObjectClass>& classes);
+                     const std::vector<SceneSplit>& scenes, const std::vector<ObjectClass>& classes,
+                     const BopSensor& sensor = {});
 
 }  // namespace cadsynth

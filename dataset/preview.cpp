@@ -84,7 +84,8 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
   if (options.panel_width < 32 || options.panel_width > 4096)
     throw Error("preview: panel width must be 32 to 4096");
   const fs::path split_dir =
-      options.split.empty() ? FindSceneFolder(dataset) : dataset / options.split;
+      options.split.empty() ? FindSceneFolder(dataset, options.sensor) : dataset / options.split;
+  const std::string sfx = options.sensor.empty() ? "" : "_" + options.sensor;
   if (!fs::is_directory(split_dir)) throw Error(split_dir.string() + ": no such folder");
   const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
 
@@ -92,7 +93,7 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
   std::vector<std::pair<int, int>> all;
   std::vector<fs::path> scene_dirs;
   for (const auto& e : fs::directory_iterator(split_dir)) {
-    if (fs::exists(e.path() / "scene_gt.json")) scene_dirs.push_back(e.path());
+    if (fs::exists(e.path() / ("scene_gt" + sfx + ".json"))) scene_dirs.push_back(e.path());
   }
   std::sort(scene_dirs.begin(), scene_dirs.end());
   std::map<int, Json> cameras, gts;
@@ -100,14 +101,14 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
     const auto id = ParseBopId(dir.filename().string());
     if (!id) continue;  // not a scene folder
     const int scene = *id;
-    cameras[scene] = ReadJsonFile(dir / "scene_camera.json");
-    gts[scene] = ReadJsonFile(dir / "scene_gt.json");
+    cameras[scene] = ReadJsonFile(dir / ("scene_camera" + sfx + ".json"));
+    gts[scene] = ReadJsonFile(dir / ("scene_gt" + sfx + ".json"));
     std::vector<int> ims;
     for (const auto& [key, value] : gts[scene].items()) {
       const auto im = ParseBopId(key);
       if (!im)
-        throw Error((dir / "scene_gt.json").string() + ": image id '" + key.substr(0, 40) +
-                    "' is not a whole number");
+        throw Error((dir / ("scene_gt" + sfx + ".json")).string() + ": image id '" +
+                    key.substr(0, 40) + "' is not a whole number");
       ims.push_back(*im);
     }
     std::sort(ims.begin(), ims.end());
@@ -129,13 +130,14 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
     const fs::path dir = split_dir / Id6(scene);
     const std::string name = Id6(im);
     // The camera's image: rgb/, or gray/ for a grey camera.
-    const fs::path image_dir = fs::exists(dir / "rgb") ? dir / "rgb" : dir / "gray";
+    const fs::path image_dir =
+        fs::exists(dir / ("rgb" + sfx)) ? dir / ("rgb" + sfx) : dir / ("gray" + sfx);
     fs::path rgb_path = image_dir / (name + ".png");
     if (!fs::exists(rgb_path)) rgb_path = image_dir / (name + ".jpg");
     cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
     if (!options.versus.empty()) {
       // Colour against colour: the same image of the other dataset, labelled with the folders.
-      const fs::path other_dir = options.versus / split_dir.filename() / Id6(scene) / "rgb";
+      const fs::path other_dir = options.versus / split_dir.filename() / Id6(scene) / ("rgb" + sfx);
       fs::path other_path = other_dir / (name + ".png");
       if (!fs::exists(other_path)) other_path = other_dir / (name + ".jpg");
       std::vector<cv::Mat> panels = {rgb, ReadImage(other_path, cv::IMREAD_COLOR)};
@@ -153,14 +155,14 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       rows.push_back(row);
       continue;
     }
-    const cv::Mat depth = ReadImage(dir / "depth" / (name + ".png"), cv::IMREAD_UNCHANGED);
+    const cv::Mat depth = ReadImage(dir / ("depth" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
     const Json& gt = gts[scene][std::to_string(im)];
     const Eigen::Matrix3d k = Matrix3(cameras[scene].at(std::to_string(im)).at("cam_K"));
 
     cv::Mat masks = rgb * 0.35;
     for (size_t i = 0; i < gt.size(); ++i) {
       const fs::path mask_path =
-          dir / "mask_visib" / (name + "_" + Id6(static_cast<int>(i)) + ".png");
+          dir / ("mask_visib" + sfx) / (name + "_" + Id6(static_cast<int>(i)) + ".png");
       const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_GRAYSCALE);
       masks.setTo(InstanceColour(i), mask > 0);
     }
@@ -201,8 +203,9 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
     }
     // With a depth sensor model: the exact depth, then the sensor's, coloured over the same range.
     std::vector<cv::Mat> panels = {rgb};
-    if (fs::exists(dir / "depth_gt")) {
-      const cv::Mat exact = ReadImage(dir / "depth_gt" / (name + ".png"), cv::IMREAD_UNCHANGED);
+    if (fs::exists(dir / ("depth_gt" + sfx))) {
+      const cv::Mat exact =
+          ReadImage(dir / ("depth_gt" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
       panels.push_back(ColourDepth(exact));
       panels.push_back(ColourDepth(depth, exact));
     } else {

@@ -20,6 +20,8 @@ struct PreviewOptions {
   // Another dataset of the same views (e.g. the same recipe with render.mode: pbr): each row then
   // shows the two colour images side by side, without overlays, instead of the three panels.
   std::filesystem::path versus;
+  // A multi-sensor dataset's sensor (rgb_NAME/, scene_gt_NAME.json); empty: a single camera's.
+  std::string sensor;
 };
 
 // The 8 corners of `box` (model frame, mm) projected with `k` at pose `cam_from_model`, in pixel

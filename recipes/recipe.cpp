@@ -665,70 +665,73 @@ void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.Check(spec->tessellation, node, "tessellation");
 }
 
-void ReadCamera(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(
-      node, "camera",
-      {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image", "imager", "depth"});
-  Intrinsics& k = spec->intrinsics;
+// A camera's keys (`camera:`, or an entry of `cameras:` with its `other` keys read elsewhere).
+void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key, Intrinsics* kp,
+                SensorOptions* sensor, std::vector<std::string> other = {}) {
+  for (const char* known :
+       {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image", "imager", "depth"})
+    other.push_back(known);
+  r.ExpectMap(node, key, other);
+  Intrinsics& k = *kp;
   if (node["preset"]) {
-    const std::string preset = r.Scalar(node["preset"], "camera.preset");
+    const std::string preset = r.Scalar(node["preset"], key + ".preset");
     const CameraPreset* found = FindCameraPreset(preset);
     if (found == nullptr) {
       std::string known;
       for (const CameraPreset& p : CameraPresets())
         known += (known.empty() ? "" : ", ") + std::string(p.name);
-      r.Fail(node["preset"], "camera.preset",
+      r.Fail(node["preset"], key + ".preset",
              "unknown preset '" + preset + "' (known: " + known + ")");
     }
     k = found->intrinsics;
-    if (found->gray) spec->sensor.image = SensorOptions::Image::kGray;
+    if (found->gray) sensor->image = SensorOptions::Image::kGray;
   }
-  if (node["width"]) k.width = r.Integer(node["width"], "camera.width");
-  if (node["height"]) k.height = r.Integer(node["height"], "camera.height");
+  if (node["width"]) k.width = r.Integer(node["width"], key + ".width");
+  if (node["height"]) k.height = r.Integer(node["height"], key + ".height");
   if (node["hfov"]) {
-    const double hfov = r.Angle(node["hfov"], "camera.hfov");
+    const double hfov = r.Angle(node["hfov"], key + ".hfov");
     if (!(hfov > 0 && hfov < M_PI))
-      r.Fail(node["hfov"], "camera.hfov", "must lie between 0 and 180 degrees");
+      r.Fail(node["hfov"], key + ".hfov", "must lie between 0 and 180 degrees");
     if (node["fx"] || node["fy"] || node["cx"] || node["cy"])
-      r.Fail(node["hfov"], "camera.hfov", "give hfov or fx/fy/cx/cy, not both");
+      r.Fail(node["hfov"], key + ".hfov", "give hfov or fx/fy/cx/cy, not both");
     k = Intrinsics::FromFov(k.width, k.height, hfov);
   }
-  if (node["fx"]) k.fx = r.Number(node["fx"], "camera.fx");
-  if (node["fy"]) k.fy = r.Number(node["fy"], "camera.fy");
-  if (node["cx"]) k.cx = r.Number(node["cx"], "camera.cx");
-  if (node["cy"]) k.cy = r.Number(node["cy"], "camera.cy");
-  r.Check(k, node, "camera");
+  if (node["fx"]) k.fx = r.Number(node["fx"], key + ".fx");
+  if (node["fy"]) k.fy = r.Number(node["fy"], key + ".fy");
+  if (node["cx"]) k.cx = r.Number(node["cx"], key + ".cx");
+  if (node["cy"]) k.cy = r.Number(node["cy"], key + ".cy");
+  r.Check(k, node, key);
   if (node["image"]) {
-    const std::string image = r.Scalar(node["image"], "camera.image");
+    const std::string image = r.Scalar(node["image"], key + ".image");
     if (image == "rgb") {
-      spec->sensor.image = SensorOptions::Image::kRgb;
+      sensor->image = SensorOptions::Image::kRgb;
     } else if (image == "gray") {
-      spec->sensor.image = SensorOptions::Image::kGray;
+      sensor->image = SensorOptions::Image::kGray;
     } else if (image == "gray16") {
-      spec->sensor.image = SensorOptions::Image::kGray16;
+      sensor->image = SensorOptions::Image::kGray16;
     } else {
-      r.Fail(node["image"], "camera.image", "expected rgb, gray or gray16, got '" + image + "'");
+      r.Fail(node["image"], key + ".image", "expected rgb, gray or gray16, got '" + image + "'");
     }
   }
   if (const YAML::Node imager = node["imager"]) {
-    ReadFields(r, imager, "camera.imager", &spec->sensor.imager, {});
-    r.Check(spec->sensor.imager, imager, "camera.imager");
+    ReadFields(r, imager, key + ".imager", &sensor->imager, {});
+    r.Check(sensor->imager, imager, key + ".imager");
   }
   // depth: a model's name, or {model: NAME, KEY: VALUE...} overriding the model's defaults.
   if (const YAML::Node depth = node["depth"]) {
     const YAML::Node model = depth.IsMap() ? depth["model"] : depth;
-    if (!model) r.Fail(depth, "camera.depth", "give the sensor's 'model'");
-    const std::string key = depth.IsMap() ? "camera.depth.model" : "camera.depth";
+    if (!model) r.Fail(depth, key + ".depth", "give the sensor's 'model'");
+    const std::string model_key = depth.IsMap() ? key + ".depth.model" : key + ".depth";
     DepthModel m;
     DepthModel::Fields(m, [&](auto& value, const Field& field) {
       if constexpr (std::is_enum_v<std::decay_t<decltype(value)>>) {
-        if (field.key == "model") ReadField(r, model, key, field, &value);
+        if (field.key == "model") ReadField(r, model, model_key, field, &value);
       }
     });
     m = DepthModel::Defaults(m.kind);
-    if (depth.IsMap()) ReadFields(r, depth, "camera.depth", &m, {});
-    r.Check(m, depth, "camera.depth");
-    spec->sensor.depth = m;
+    if (depth.IsMap()) ReadFields(r, depth, key + ".depth", &m, {});
+    r.Check(m, depth, key + ".depth");
+    sensor->depth = m;
   }
 }
 
@@ -787,6 +790,87 @@ Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::strin
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) v[i] = length ? r.Length(node[i], key) : r.Number(node[i], key);
   return v;
+}
+
+// `cameras:`, a rig: a list of cameras with names, the first one the rig's frame (the sweep
+// places it) and the others fixed to it by `position` and `look_at` or `rotation`.
+void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
+  constexpr size_t kMaxSensors = 16;
+  if (!node.IsSequence() || node.size() == 0)
+    r.Fail(node, "cameras", "expected a list of cameras (a rig), each with a 'name'");
+  if (node.size() > kMaxSensors)
+    r.Fail(node, "cameras", "at most " + std::to_string(kMaxSensors) + " cameras in a rig");
+  spec->rig.clear();
+  for (size_t i = 0; i < node.size(); ++i) {
+    const YAML::Node entry = node[i];
+    const std::string key = "cameras[" + std::to_string(i) + "]";
+    RigSensor sensor;
+    sensor.where = r.Where(entry);
+    ReadCamera(r, entry, key, &sensor.intrinsics, &sensor.sensor,
+               {"name", "position", "look_at", "rotation"});
+    if (!entry["name"]) r.Fail(entry, key, "a rig's camera needs a 'name' (e.g. xyz, realsense)");
+    sensor.name = r.Scalar(entry["name"], key + ".name");
+    // BOP appends the name to folder names (rgb_NAME/): lower-case letters and digits only.
+    const bool plain = !sensor.name.empty() && sensor.name.size() <= 32 &&
+                       std::all_of(sensor.name.begin(), sensor.name.end(), [](char c) {
+                         return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9');
+                       });
+    if (!plain) {
+      r.Fail(
+          entry["name"], key + ".name",
+          "'" + sensor.name + "': use 1-32 lower-case letters and digits (BOP writes rgb_NAME/)");
+    }
+    for (const RigSensor& earlier : spec->rig) {
+      if (earlier.name == sensor.name)
+        r.Fail(entry["name"], key + ".name", "'" + sensor.name + "' names two cameras");
+    }
+    if (i == 0) {
+      for (const char* pose : {"position", "look_at", "rotation"}) {
+        if (entry[pose]) {
+          r.Fail(entry[pose], key + "." + pose,
+                 "the first camera is the rig's frame (the sweep places it): give the others' "
+                 "poses relative to it");
+        }
+      }
+    }
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    if (entry["position"]) position = Triple(r, entry["position"], key + ".position", true);
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    if (entry["look_at"] && entry["rotation"])
+      r.Fail(entry["rotation"], key + ".rotation", "give 'look_at' or 'rotation', not both");
+    if (entry["look_at"]) {
+      // z towards the point; x along the rig's y (down) x z, so the image does not roll.
+      const Eigen::Vector3d at = Triple(r, entry["look_at"], key + ".look_at", true);
+      const Eigen::Vector3d z = (at - position).normalized();
+      const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z);
+      if (!((at - position).norm() > 1e-9) || x.norm() < 1e-6) {
+        r.Fail(entry["look_at"], key + ".look_at",
+               "must lie away from the camera and not straight above or below it (the rig's y)");
+      }
+      rotation.col(0) = x.normalized();
+      rotation.col(2) = z;
+      rotation.col(1) = z.cross(rotation.col(0));
+    } else if (const YAML::Node rot = entry["rotation"]) {
+      if (!rot.IsSequence() || rot.size() != 9) {
+        r.Fail(rot, key + ".rotation",
+               "expected the 9 numbers of rig_R_cam, row-major (the camera's axes as columns)");
+      }
+      for (int k = 0; k < 9; ++k) rotation(k / 3, k % 3) = r.Number(rot[k], key + ".rotation");
+      if ((rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm() > 1e-4 ||
+          rotation.determinant() < 0) {
+        r.Fail(rot, key + ".rotation", "is not a rotation (orthonormal, determinant 1, to 1e-4)");
+      }
+      // Calibration files print 6-8 digits: the nearest exact rotation.
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(rotation,
+                                                  Eigen::ComputeFullU | Eigen::ComputeFullV);
+      rotation = svd.matrixU() * svd.matrixV().transpose();
+    }
+    sensor.rig_from_cam.linear() = rotation;
+    sensor.rig_from_cam.translation() = position;
+    spec->rig.push_back(std::move(sensor));
+  }
+  spec->intrinsics = spec->rig[0].intrinsics;
+  spec->sensor = spec->rig[0].sensor;
 }
 
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
@@ -1266,8 +1350,8 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   RunSpec spec = DefaultRunSpec();
   try {
     r.ExpectMap(root, "",
-                {"parts", "scene", "scenes", "classes", "tessellation", "camera", "sweep", "render",
-                 "materials", "lighting", "output", "limits"});
+                {"parts", "scene", "scenes", "classes", "tessellation", "camera", "cameras",
+                 "sweep", "render", "materials", "lighting", "output", "limits"});
     if (root["scenes"] && (root["parts"] || root["scene"])) {
       r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
     }
@@ -1298,7 +1382,12 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
     }
     if (root["classes"]) ReadClasses(r, root["classes"], &spec);
     if (root["tessellation"]) ReadTessellation(r, root["tessellation"], &spec);
-    if (root["camera"]) ReadCamera(r, root["camera"], &spec);
+    if (root["camera"] && root["cameras"]) {
+      r.Fail(root["cameras"], "cameras",
+             "give 'camera' (one camera) or 'cameras' (a rig of named cameras), not both");
+    }
+    if (root["camera"]) ReadCamera(r, root["camera"], "camera", &spec.intrinsics, &spec.sensor);
+    if (root["cameras"]) ReadCameras(r, root["cameras"], &spec);
     if (root["sweep"]) ReadSweep(r, root["sweep"], &spec);
     if (root["render"]) ReadRender(r, root["render"], &spec);
     // The default floor material follows the floor colour unless the recipe gives one.
@@ -1306,17 +1395,29 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
     if (root["materials"]) ReadMaterials(r, root["materials"], &spec);
     if (root["lighting"]) ReadLighting(r, root["lighting"], &spec);
     if (root["output"]) ReadOutput(r, root["output"], &spec);
+    // The camera's image (a rig: the first camera's) decides the paper and pvn3d formats, which
+    // are written for that camera only; every camera's image decides whether JPEG is possible.
+    const YAML::Node first =
+        root["cameras"] ? YAML::Node(root["cameras"][0]) : YAML::Node(root["camera"]);
+    const std::string first_key = root["cameras"] ? "cameras[0]" : "camera";
+    const auto image_node = [&](const YAML::Node& camera) {
+      return camera && camera["image"] ? YAML::Node(camera["image"]) : camera;
+    };
     if (spec.sensor.image != SensorOptions::Image::kRgb &&
         (spec.bop.paper_layout || spec.bop.pvn3d_meta)) {
-      r.Fail(root["camera"]["image"], "camera.image",
+      r.Fail(image_node(first), first_key + ".image",
              "the paper and pvn3d formats need colour images (image: rgb)");
     }
-    spec.bop.gray_bits = spec.sensor.image == SensorOptions::Image::kRgb      ? 0
-                         : spec.sensor.image == SensorOptions::Image::kGray16 ? 16
-                                                                              : 8;
-    if (spec.bop.gray_bits == 16 && spec.bop.jpeg_quality > 0) {
-      r.Fail(root["camera"]["image"], "camera.image",
-             "16-bit grey images cannot be JPEG (rgb: png)");
+    spec.bop.gray_bits = GrayBits(spec.sensor.image);
+    for (size_t i = 0; i < std::max<size_t>(1, spec.rig.size()); ++i) {
+      const SensorOptions::Image image =
+          spec.rig.empty() ? spec.sensor.image : spec.rig[i].sensor.image;
+      if (image == SensorOptions::Image::kGray16 && spec.bop.jpeg_quality > 0) {
+        const bool rig = !spec.rig.empty();
+        r.Fail(image_node(rig ? YAML::Node(root["cameras"][i]) : YAML::Node(root["camera"])),
+               (rig ? "cameras[" + std::to_string(i) + "]" : std::string("camera")) + ".image",
+               "16-bit grey images cannot be JPEG (rgb: png)");
+      }
     }
     if (root["limits"]) {
       ReadFields(r, root["limits"], "limits", &spec.limits, {});
@@ -1328,6 +1429,26 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
                 std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
   return spec;
+}
+
+int GrayBits(SensorOptions::Image image) {
+  switch (image) {
+    case SensorOptions::Image::kRgb:
+      return 0;
+    case SensorOptions::Image::kGray:
+      return 8;
+    case SensorOptions::Image::kGray16:
+      return 16;
+  }
+  return 0;
+}
+
+std::vector<RigSensor> RunSensors(const RunSpec& spec) {
+  if (!spec.rig.empty()) return spec.rig;
+  RigSensor one;
+  one.intrinsics = spec.intrinsics;
+  one.sensor = spec.sensor;
+  return {one};
 }
 
 bool RunLimits::Check(std::string* why) const {

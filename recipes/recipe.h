@@ -95,6 +95,21 @@ struct MaterialRule {
   std::string where;  // "recipe.yaml:12:7" (empty when built in)
 };
 
+// One sensor of a camera rig (the recipe's `cameras:` list): several sensors fixed to one
+// another, moved together by the sweep, each with its own intrinsics, image and depth model.
+struct RigSensor {
+  std::string name;  // BOP's CAMTYPE: rgb_NAME/, scene_gt_NAME.json, camera_NAME.json
+  Intrinsics intrinsics;
+  SensorOptions sensor;
+  // Where the sensor sits on the rig: the rig's frame is the first sensor's camera frame (x right,
+  // y down, z forward, mm), which the sweep places; the first sensor's is the identity.
+  Eigen::Isometry3d rig_from_cam = Eigen::Isometry3d::Identity();
+  std::string where;  // "recipe.yaml:12:5" (empty when built in code)
+};
+
+// BopOptions::gray_bits of a camera's image: 0 (colour), 8 or 16.
+int GrayBits(SensorOptions::Image image);
+
 // Everything one run needs, each module's options filled in.
 struct RunSpec {
   std::filesystem::path recipe;  // empty for the built-in default job
@@ -111,6 +126,10 @@ struct RunSpec {
   std::vector<std::pair<std::string, std::vector<std::string>>> class_groups;
   Intrinsics intrinsics;
   SensorOptions sensor;  // camera.image and camera.depth: grey images, depth sensor models
+  // A camera rig (`cameras:`): every sensor, the first one's intrinsics and sensor repeated in
+  // `intrinsics` and `sensor` above (camera.json, placement checks use them); empty: the one
+  // camera above, written in BOP's single-sensor layout.
+  std::vector<RigSensor> rig;
   SweepOptions sweep;
   ViewSampler sampler;         // kGrid: the sweep as listed
   int min_visible_pixels = 0;  // skip views where fewer object pixels are visible (0: keep all)
@@ -126,6 +145,10 @@ struct RunSpec {
   std::filesystem::path output;  // empty: the command line decides
   RunLimits limits;
 };
+
+// The sensors a run renders: `spec.rig`, or the one unnamed camera (intrinsics, sensor) without a
+// rig.
+std::vector<RigSensor> RunSensors(const RunSpec& spec);
 
 // Throws Error, naming the recipe entry (or `recipe` for run-wide options), when `spec` asks for
 // more than its limits allow.

@@ -1,6 +1,8 @@
 // Ray casting of a Scene with Embree: RGB, depth, visible instance ids and amodal masks.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -87,6 +89,13 @@ struct RenderOptions {
 // The kernels Embree traces with on this machine for `requested` (see RenderOptions::isa): the
 // requested width, or the widest this CPU has if it is narrower. E.g. "avx512", "avx2".
 std::string TracingIsa(const std::string& requested = "auto");
+
+// The `view` key of sensor k of a camera rig at view `view` (Renderer::Render): the view itself
+// for the first sensor, so a rig's first sensor renders what the single camera would, and keys
+// no view of a run reaches (2^40 apart) for the others, so each sensor has noise of its own.
+inline uint64_t SensorFrameKey(uint64_t view, size_t sensor) {
+  return view + (static_cast<uint64_t>(sensor) << 40);
+}
 
 // Builds the acceleration structures once; Render() may then be called from many threads.
 // One ray per pixel through its centre, traced as 16-ray packets over 4 x 4 pixel tiles (tiles in

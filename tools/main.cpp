@@ -39,9 +39,9 @@ usage:
   cadsynth merge DIR
   cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
   cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
-  cadsynth eval DATASET RESULTS.csv [--json FILE]
+  cadsynth eval DATASET RESULTS.csv [--json FILE] [--sensor NAME]
   cadsynth preview DATASET [-o FILE.png] [--count N | --frames S/I,...] [--width PX]
-                   [--versus DATASET2]
+                   [--versus DATASET2] [--sensor NAME]
   cadsynth --help | --version
   cadsynth COMMAND --help       every option of one command
 
@@ -121,6 +121,8 @@ struct Args {
   std::string results, json_file;
   // preview
   std::string frames, versus;
+  // eval, preview: a multi-sensor dataset's sensor
+  std::string sensor;
   int count = 4, width = 320;
 };
 
@@ -233,7 +235,7 @@ int RunVariants(const Args& a) {
 }
 
 int RunEval(const Args& a) {
-  const cadsynth::EvalReport report = cadsynth::Evaluate(a.dir, a.results);
+  const cadsynth::EvalReport report = cadsynth::Evaluate(a.dir, a.results, a.sensor);
   std::cout << cadsynth::EvalTable(report);
   if (!a.json_file.empty()) cadsynth::WriteEvalJson(a.json_file, report);
   return 0;
@@ -254,6 +256,7 @@ int RunPreview(const Args& a) {
   options.count = a.count;
   options.panel_width = a.width;
   options.versus = a.versus;
+  options.sensor = a.sensor;
   std::stringstream list(a.frames);
   for (std::string item; std::getline(list, item, ',');) {
     const size_t slash = item.find('/');
@@ -380,6 +383,9 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   eval->add_option("RESULTS", a.results, "the estimates, BOP's CSV format")->required();
   eval->add_option("--json", a.json_file, "also write the scores as JSON to FILE")
       ->type_name("FILE");
+  eval->add_option("--sensor", a.sensor,
+                   "a multi-sensor dataset's sensor the estimates are for (scene_gt_NAME.json)")
+      ->type_name("NAME");
 
   CLI::App* preview =
       add("preview",
@@ -401,6 +407,8 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
                    "another dataset of the same views (e.g. render.mode: pbr): show the two "
                    "colour images side by side")
       ->type_name("DATASET2");
+  preview->add_option("--sensor", a.sensor, "a multi-sensor dataset's sensor (rgb_NAME/, ...)")
+      ->type_name("NAME");
   preview->add_option("--width", a.width, "width of each of the three panels in pixels")
       ->check(CLI::Range(32, 4096))
       ->type_name("PX")

@@ -67,7 +67,7 @@ void Score(ObjectScores* s, const std::vector<double>& add_s, const std::vector<
 
 }  // namespace
 
-EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
+EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std::string& sensor) {
   if (!fs::is_directory(dataset)) throw Error(dataset.string() + ": no such dataset folder");
   // Models.
   const fs::path info_file = dataset / "models" / "models_info.json";
@@ -130,9 +130,10 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results) {
   };
   std::vector<Instance> truth;
   std::set<ImageKey> images;
-  const fs::path root = FindSceneFolder(dataset);
+  const fs::path root = FindSceneFolder(dataset, sensor);
   for (const auto& scene_dir : fs::directory_iterator(root)) {
-    const fs::path gt_file = scene_dir.path() / "scene_gt.json";
+    const fs::path gt_file =
+        scene_dir.path() / ("scene_gt" + (sensor.empty() ? "" : "_" + sensor) + ".json");
     if (!fs::exists(gt_file)) continue;
     const auto scene = ParseBopId(scene_dir.path().filename().string());
     if (!scene) continue;  // not a scene folder (BOP names them 000000, 000001, ...)

@@ -34,8 +34,10 @@ struct EvalReport {
 // evaluated, else every image. RESULTS is a BOP results CSV
 // (scene_id,im_id,obj_id,score,R,t,time; R row-major, t in mm). Every ground-truth instance of an
 // evaluated image counts; estimates are matched per (image, object) in decreasing score, each to
-// the unmatched instance with the smallest error. Throws Error naming the file and line.
-EvalReport Evaluate(const std::filesystem::path& dataset, const std::filesystem::path& results);
+// the unmatched instance with the smallest error. A multi-sensor dataset's estimates are for one
+// `sensor` (its cam_from_model, scene_gt_SENSOR.json). Throws Error naming the file and line.
+EvalReport Evaluate(const std::filesystem::path& dataset, const std::filesystem::path& results,
+                    const std::string& sensor = "");
 
 std::string EvalTable(const EvalReport& report);
 std::string EvalJson(const EvalReport& report);

@@ -1,5 +1,6 @@
 #include "tools/pipeline/generate.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -48,6 +49,14 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   if (!shard && options.overwrite) CheckReplaceable(output, inputs);
   std::string why;
   if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
+  // The rig's sensors (one unnamed camera without a rig), each with its image kind.
+  const std::vector<RigSensor> sensors = RunSensors(spec);
+  std::vector<BopSensor> bop_sensors;
+  for (const RigSensor& sensor : sensors) {
+    if (!sensor.intrinsics.Check(&why)) throw Error("camera '" + sensor.name + "': " + why);
+    bop_sensors.push_back(
+        {sensor.name, spec.rig.empty() ? spec.bop.gray_bits : GrayBits(sensor.sensor.image)});
+  }
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
   if (!spec.bop.Check(&why)) throw Error("output: " + why);
   CheckLimits(spec);  // a RunSpec built in code has not been through the recipe reader
@@ -102,10 +111,14 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   // The staging folder (or shard tree) is kept on errors from here on: a rerun resumes from it.
   std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
   size_t resumed = 0, damaged = 0, frames = 0;
-  std::vector<std::unique_ptr<BopSceneWriter>> writers;
+  std::vector<std::unique_ptr<RigSceneWriter>> writers;
   try {
     if (common) {
       WriteBopCamera(root, spec.intrinsics, spec.bop);
+      if (!spec.rig.empty()) {
+        for (const RigSensor& sensor : sensors)
+          WriteBopCamera(root, sensor.intrinsics, spec.bop, sensor.name);
+      }
       WriteBopModels(root, parts, prepared.classes);
       WriteModelPoints(root, parts, spec.bop);
       WriteFileAtomic(root / "variants.json", prepared.variants_json);
@@ -119,6 +132,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       run.shards = shard->count;
       run.views = views.size();
       run.bop = spec.bop;
+      if (!spec.rig.empty()) run.sensors = bop_sensors;
       run.obj_ids = prepared.obj_ids;
       run.categories = categories;
       run.classes = prepared.classes;
@@ -129,8 +143,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     // matches their manifest entry; the others are rendered (again).
     std::vector<std::unique_ptr<PaperSceneWriter>> papers;
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      auto& writer = *writers.emplace_back(std::make_unique<BopSceneWriter>(
-          root, static_cast<int>(s), spec.bop, prepared.obj_ids[s]));
+      auto& writer = *writers.emplace_back(std::make_unique<RigSceneWriter>(
+          root, static_cast<int>(s), spec.bop, prepared.obj_ids[s], bop_sensors));
       if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
       writer.SetCocoCategories(categories);
       std::vector<PaperInstance> paper_instances;
@@ -170,46 +184,60 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       RenderOptions render = spec.render;
       render.amodal_depth = spec.bop.visibility == BopOptions::Visibility::kBop19;
       const Renderer renderer(parts, prepared.scenes[s], render);
-      BopSceneWriter& writer = *writers[s];
+      RigSceneWriter& writer = *writers[s];
       const PaperSceneWriter& paper = *papers[s];
       size_t next = 0;
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
-      using FramePtr = std::shared_ptr<const Frame>;
+      // One unit renders every sensor of the rig at view i: sensor k sits at
+      // world_from_rig * rig_from_cam and draws its noise from the key (view, k).
+      using FramePtr = std::shared_ptr<const std::vector<Frame>>;
       tbb::parallel_pipeline(
-          tokens,
-          tbb::make_filter<void, size_t>(
-              tbb::filter_mode::serial_in_order,
-              [&](tbb::flow_control& control) -> size_t {
-                while (next < views.size() &&
-                       (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
-                  ++next;
-                }
-                if (next >= views.size()) {
-                  control.stop();
-                  return 0;
-                }
-                return next++;
-              }) &
-              tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
-                  tbb::filter_mode::parallel,
-                  [&](size_t i) {
-                    const Camera camera{spec.intrinsics, views[i].world_from_cam};
-                    return std::make_pair(
-                        i, std::make_shared<const Frame>(renderer.Render(camera, i, spec.sensor)));
-                  }) &
-              tbb::make_filter<std::pair<size_t, FramePtr>, void>(
-                  tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                    int visible = 0;
-                    for (const Frame::InstanceTruth& t : item.second->instances)
-                      visible += t.px_count_visib;
-                    if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
-                      ++(visible == 0 ? empty_views : sparse_views);
-                    } else {
-                      writer.WriteFrame(static_cast<int>(item.first), *item.second, {&paper});
-                    }
-                    const size_t n = ++done;
-                    if (options.progress) options.progress(n, to_render);
-                  }));
+          tokens, tbb::make_filter<void, size_t>(
+                      tbb::filter_mode::serial_in_order,
+                      [&](tbb::flow_control& control) -> size_t {
+                        while (next < views.size() &&
+                               (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+                          ++next;
+                        }
+                        if (next >= views.size()) {
+                          control.stop();
+                          return 0;
+                        }
+                        return next++;
+                      }) &
+                      tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
+                          tbb::filter_mode::parallel,
+                          [&](size_t i) {
+                            auto frames = std::make_shared<std::vector<Frame>>();
+                            for (size_t k = 0; k < sensors.size(); ++k) {
+                              const Camera camera{
+                                  sensors[k].intrinsics,
+                                  views[i].world_from_cam * sensors[k].rig_from_cam};
+                              frames->push_back(
+                                  renderer.Render(camera, SensorFrameKey(i, k), sensors[k].sensor));
+                            }
+                            return std::make_pair(i, FramePtr(std::move(frames)));
+                          }) &
+                      tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                          tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
+                            // A rig pose is kept when any of its sensors sees enough.
+                            int visible = 0;
+                            std::vector<const Frame*> frames;
+                            for (const Frame& frame : *item.second) {
+                              int seen = 0;
+                              for (const Frame::InstanceTruth& t : frame.instances)
+                                seen += t.px_count_visib;
+                              visible = std::max(visible, seen);
+                              frames.push_back(&frame);
+                            }
+                            if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
+                              ++(visible == 0 ? empty_views : sparse_views);
+                            } else {
+                              writer.WriteFrame(static_cast<int>(item.first), frames, {&paper});
+                            }
+                            const size_t n = ++done;
+                            if (options.progress) options.progress(n, to_render);
+                          }));
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
     }
     if (!shard) FinishDataset(root, spec.bop, writers, prepared.classes);

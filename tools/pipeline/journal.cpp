@@ -72,6 +72,18 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     fields("depth", spec.sensor.depth);
   }
   if (spec.sensor.imager.active()) fields("imager", spec.sensor.imager);
+  // A rig's sensors (recipes without `cameras:` keep their earlier run keys).
+  for (const RigSensor& sensor : spec.rig) {
+    const Intrinsics& c = sensor.intrinsics;
+    const Eigen::Matrix<double, 3, 4> pose = sensor.rig_from_cam.matrix().topRows<3>();
+    key << "sensor " << sensor.name << " " << c.width << " " << c.height << " " << c.fx << " "
+        << c.fy << " " << c.cx << " " << c.cy << " image " << static_cast<int>(sensor.sensor.image)
+        << " pose";
+    for (int i = 0; i < 12; ++i) key << " " << pose(i % 3, i / 3);
+    key << "\n";
+    fields("depth", sensor.sensor.depth);
+    fields("imager", sensor.sensor.imager);
+  }
   fields("output", spec.bop);
   fields("render", spec.render);
   fields("tessellation", spec.tessellation);
@@ -313,16 +325,24 @@ void StagingRun::Publish(const std::filesystem::path& output, bool overwrite,
 }
 
 size_t FinishDataset(const std::filesystem::path& root, const BopOptions& options,
-                     const std::vector<std::unique_ptr<BopSceneWriter>>& writers,
+                     const std::vector<std::unique_ptr<RigSceneWriter>>& writers,
                      const std::vector<ObjectClass>& classes) {
-  std::vector<SceneSplit> splits;
+  if (writers.empty()) return 0;
+  std::vector<BopSensor> sensors;
+  for (size_t k = 0; k < writers[0]->size(); ++k) sensors.push_back(writers[0]->sensor(k).sensor());
+  std::vector<std::vector<SceneSplit>> splits(sensors.size());  // per sensor, per scene
   size_t frames = 0;
   for (const auto& writer : writers) {
     frames += writer->WrittenFrames().size();
-    splits.push_back(writer->Finish());
+    std::vector<SceneSplit> scene = writer->Finish();
+    for (size_t k = 0; k < sensors.size(); ++k) splits[k].push_back(std::move(scene[k]));
   }
-  WriteSplits(root, splits);
-  WriteMergedCoco(root, options, splits, classes);
+  // splits/ and test_targets_bop19.json: the first sensor is the rig's evaluation sensor (the
+  // image ids, and so the splits, are the same for every sensor).
+  WriteSplits(root, splits[0]);
+  for (size_t k = 0; k < sensors.size(); ++k)
+    WriteMergedCoco(root, options, splits[k], classes, sensors[k]);
+  if (sensors.size() > 1) WriteMultiviewTargets(root, splits[0], sensors);
   return frames;
 }
 

@@ -78,7 +78,7 @@ class StagingRun {
 // the merged COCO files. The fragments stay until the caller removes them (a run interrupted
 // here finishes again). Returns the number of frames.
 size_t FinishDataset(const std::filesystem::path& root, const BopOptions& options,
-                     const std::vector<std::unique_ptr<BopSceneWriter>>& writers,
+                     const std::vector<std::unique_ptr<RigSceneWriter>>& writers,
                      const std::vector<ObjectClass>& classes);
 
 }  // namespace cadsynth

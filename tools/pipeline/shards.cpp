@@ -93,6 +93,10 @@ ShardRunInfo ReadRunInfo(const fs::path& path) {
       info.categories.push_back({o.at("obj_id"), o.at("name"), o.at("class_name")});
       info.classes.push_back({o.at("class_id"), o.at("class_name")});
     }
+    if (j.contains("sensors")) {  // a rig
+      for (const Json& sensor : j.at("sensors"))
+        info.sensors.push_back({sensor.at("name"), sensor.at("gray_bits")});
+    }
     if (info.shards < 1 || info.views < 1 || info.obj_ids.empty()) throw Error("impossible counts");
     return info;
   } catch (const Json::exception& e) {
@@ -239,11 +243,17 @@ void ShardTree::WriteRunInfo(const ShardRunInfo& info) const {
                        {"class_id", info.classes.at(o).id},
                        {"class_name", info.classes.at(o).name}});
   }
-  const Json j = {{"shards", info.shards},
-                  {"views", info.views},
-                  {"output", OptionsJson(info.bop)},
-                  {"scenes", scenes},
-                  {"objects", objects}};
+  Json j = {{"shards", info.shards},
+            {"views", info.views},
+            {"output", OptionsJson(info.bop)},
+            {"scenes", scenes},
+            {"objects", objects}};
+  if (!info.sensors.empty()) {
+    Json sensors = Json::array();
+    for (const BopSensor& sensor : info.sensors)
+      sensors.push_back({{"name", sensor.name}, {"gray_bits", sensor.gray_bits}});
+    j["sensors"] = sensors;
+  }
   WriteFileAtomic(Meta(dir_) / "run.json", j.dump(2) + "\n");
 }
 
@@ -288,7 +298,10 @@ MergeSummary Merge(const fs::path& dir_in,
     if (end == count.c_str())
       throw Error((meta / "merged").string() + ": unreadable (expected a frame count)");
     for (size_t s = 0; s < run.obj_ids.size(); ++s) {
-      fs::remove_all(dir / run.bop.split / Id6(static_cast<int>(s)) / ".fragments", ec);
+      const fs::path scene = dir / run.bop.split / Id6(static_cast<int>(s));
+      fs::remove_all(scene / ".fragments", ec);
+      for (const BopSensor& sensor : run.sensors)
+        fs::remove_all(scene / (".fragments" + sensor.Suffix()), ec);
     }
     fs::remove_all(meta, ec);
     if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());
@@ -322,10 +335,12 @@ MergeSummary Merge(const fs::path& dir_in,
   }
 
   const size_t scenes = run.obj_ids.size();
-  std::vector<std::unique_ptr<BopSceneWriter>> writers;
+  std::vector<std::unique_ptr<RigSceneWriter>> writers;
+  const std::vector<BopSensor> sensors =
+      run.sensors.empty() ? std::vector<BopSensor>{BopSensor{}} : run.sensors;
   for (size_t s = 0; s < scenes; ++s) {
-    writers.push_back(
-        std::make_unique<BopSceneWriter>(dir, static_cast<int>(s), run.bop, run.obj_ids[s]));
+    writers.push_back(std::make_unique<RigSceneWriter>(dir, static_cast<int>(s), run.bop,
+                                                       run.obj_ids[s], sensors));
     writers.back()->SetCocoCategories(run.categories);
   }
   // Frames per shard: written (fragments) and declared (done markers).

@@ -46,6 +46,7 @@ struct ShardRunInfo {
   std::vector<std::vector<int>> obj_ids;                 // per scene, obj_id of each instance
   std::vector<BopSceneWriter::CocoCategory> categories;  // per object (id = obj_id)
   std::vector<ObjectClass> classes;                      // per object
+  std::vector<BopSensor> sensors;                        // a rig's sensors; empty: one camera
 };
 
 // The output options as the shard file holds them (JSON, each option by its described name) and

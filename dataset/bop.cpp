@@ -738,7 +738,8 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
                           {"ignore", info.visib_fract < 0.1},
                           {"counts", CompressRleCounts(rle.counts)}});
   }
-  for (const FrameWriter* format : formats) format->WriteFrame(image_id, frame, scene_dir_, &files);
+  const BopFrameFiles bop{rgb_path, Folder("depth") / (im + ".png")};
+  for (const FrameWriter* format : formats) format->WriteFrame(image_id, frame, bop, &files);
   // One fragment per frame, written last: four lines of compact JSON read back in order by
   // Finish(), and the frame's manifest entry: every file it wrote with size and CRC-32.
   Json manifest = Json::array();

@@ -11,14 +11,19 @@
 
 namespace cadsynth {
 
+// Where BopSceneWriter wrote a frame's colour (or grey) image and its depth image.
+struct BopFrameFiles {
+  std::filesystem::path image, depth;
+};
+
 class FrameWriter {
  public:
   virtual ~FrameWriter() = default;
-  // Writes image `image_id` of `frame`; BOP's files of the frame are already in `bop_scene_dir`
-  // (colour and depth may be linked from there). Every file goes through `files` (the frame's
+  // Writes image `image_id` of `frame`; BOP's files of the frame are already written (`bop`:
+  // colour and depth may be linked from there). Every file goes through `files` (the frame's
   // manifest entry; null: not recorded). Called from several threads for different images.
-  virtual void WriteFrame(int image_id, const Frame& frame,
-                          const std::filesystem::path& bop_scene_dir, FileLog* files) const = 0;
+  virtual void WriteFrame(int image_id, const Frame& frame, const BopFrameFiles& bop,
+                          FileLog* files) const = 0;
 };
 
 }  // namespace cadsynth

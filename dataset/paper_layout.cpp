@@ -108,8 +108,7 @@ PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_
   if (options_.grasp_points) CreateFolder(grasp_dir_);
 }
 
-void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame,
-                                  const std::filesystem::path& bop_scene_dir,
+void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const BopFrameFiles& bop,
                                   FileLog* files_or_null) const {
   FileLog own(root_);
   FileLog& files = files_or_null != nullptr ? *files_or_null : own;
@@ -122,8 +121,8 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame,
   for (const PaperInstance& p : instances_) labels.push_back(p.obj_id);
   if (options_.paper_layout || options_.pvn3d_meta) {
     const std::string rgb = im + options_.RgbExtension();
-    files.Link(bop_scene_dir / "rgb" / rgb, paper_dir_ / "rgb" / rgb);
-    files.Link(bop_scene_dir / "depth" / (im + ".png"), paper_dir_ / "depth" / (im + ".png"));
+    files.Link(bop.image, paper_dir_ / "rgb" / rgb);
+    files.Link(bop.depth, paper_dir_ / "depth" / (im + ".png"));
     // The mask: each visible pixel gets its object's obj_id as grey value (8 or 16 bit).
     const int w = frame.width(), h = frame.height();
     const bool wide = !labels.empty() && *std::max_element(labels.begin(), labels.end()) > 255;

@@ -38,9 +38,9 @@ class PaperSceneWriter : public FrameWriter {
                    std::vector<PaperInstance> instances);
 
   // Call after BopSceneWriter::WriteFrame of the same image: links its colour and depth images
-  // from `bop_scene_dir`. Thread-safe for different images.
+  // (`bop`). Thread-safe for different images.
   // Every file goes through `files` (the frame's manifest entry; null: not recorded).
-  void WriteFrame(int image_id, const Frame& frame, const std::filesystem::path& bop_scene_dir,
+  void WriteFrame(int image_id, const Frame& frame, const BopFrameFiles& bop,
                   FileLog* files = nullptr) const override;
 
  private:

@@ -97,7 +97,9 @@ TEST(PaperLayout, MaskMetaAndPvn3dMatchTheFrame) {
     instances[i].world_from_model = s.scene.instances[i].world_from_model;
   }
   const PaperSceneWriter paper(dir.path(), 0, options, instances);
-  paper.WriteFrame(5, s.frame, bop.scene_dir());
+  paper.WriteFrame(
+      5, s.frame,
+      {bop.scene_dir() / "rgb" / "000005.png", bop.scene_dir() / "depth" / "000005.png"});
   const auto root = dir / "paper" / "000000";
 
   // Colour and depth are BOP's files (linked, not re-encoded).

@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <cmath>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -196,6 +197,81 @@ camera:
   EXPECT_EQ(ErrorOf("camera: {image: gray}\noutput: {formats: [bop, paper]}\n"),
             "r.yaml:1:17: camera.image: the paper and pvn3d formats need colour images (image: "
             "rgb)");
+}
+
+TEST(Recipe, CameraRig) {
+  const RunSpec spec = ParseRecipe(R"(
+cameras:
+  - name: xyz
+    preset: xyz_ibd
+    depth: structured_light
+  - name: realsense
+    preset: realsense_d435_640
+    position: [100 mm, 0, 0]
+    look_at: [0, 0, 600 mm]
+    depth: active_stereo
+  - name: cam1
+    image: gray16
+    position: [0, -5 cm, 0]
+    rotation: [0, -1, 0,  1, 0, 0,  0, 0, 1]
+)",
+                                   "r.yaml", ".");
+  ASSERT_EQ(spec.rig.size(), 3u);
+  EXPECT_EQ(spec.rig[0].name, "xyz");
+  EXPECT_EQ(spec.rig[0].sensor.image, SensorOptions::Image::kGray);  // the preset's
+  EXPECT_TRUE(spec.rig[0].rig_from_cam.matrix().isIdentity());
+  // The first camera is the run's camera as well.
+  EXPECT_EQ(spec.intrinsics.width, 1440);
+  EXPECT_EQ(spec.sensor.depth.kind, DepthModel::Kind::kStructuredLight);
+  EXPECT_EQ(spec.bop.gray_bits, 8);
+  // look_at: the optical axis from (100, 0, 0) through (0, 0, 600): (-1, 0, 6) / sqrt(37); x in
+  // the rig's x-z plane, y the rig's y.
+  const RigSensor& rs = spec.rig[1];
+  EXPECT_EQ(rs.intrinsics.width, 640);
+  EXPECT_EQ(rs.sensor.depth.kind, DepthModel::Kind::kActiveStereo);
+  EXPECT_TRUE(rs.rig_from_cam.translation().isApprox(Eigen::Vector3d(100, 0, 0)));
+  const Eigen::Matrix3d r = rs.rig_from_cam.linear();
+  EXPECT_TRUE(r.col(2).isApprox(Eigen::Vector3d(-1, 0, 6) / std::sqrt(37.0), 1e-12));
+  EXPECT_TRUE(r.col(0).isApprox(Eigen::Vector3d(6, 0, 1) / std::sqrt(37.0), 1e-12));
+  EXPECT_TRUE(r.col(1).isApprox(Eigen::Vector3d(0, 1, 0), 1e-12));
+  const RigSensor& cam1 = spec.rig[2];
+  EXPECT_EQ(cam1.sensor.image, SensorOptions::Image::kGray16);
+  EXPECT_TRUE(cam1.rig_from_cam.translation().isApprox(Eigen::Vector3d(0, -50, 0)));
+  EXPECT_TRUE(cam1.rig_from_cam.linear().col(0).isApprox(Eigen::Vector3d(0, 1, 0), 1e-12));
+
+  EXPECT_EQ(ErrorOf("camera: {preset: xyz_ibd}\ncameras: [{name: a}]\n"),
+            "r.yaml:2:10: cameras: give 'camera' (one camera) or 'cameras' (a rig of named "
+            "cameras), not both");
+  EXPECT_EQ(ErrorOf("cameras: {name: a}\n"),
+            "r.yaml:1:10: cameras: expected a list of cameras (a rig), each with a 'name'");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {preset: xyz_ibd}\n"),
+            "r.yaml:2:5: cameras[0]: a rig's camera needs a 'name' (e.g. xyz, realsense)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: Cam_1}\n"),
+            "r.yaml:2:12: cameras[0].name: 'Cam_1': use 1-32 lower-case letters and digits (BOP "
+            "writes rgb_NAME/)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a}\n  - {name: a, position: [1, 0, 0]}\n"),
+            "r.yaml:3:12: cameras[1].name: 'a' names two cameras");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a, position: [1, 0, 0]}\n"),
+            "r.yaml:2:25: cameras[0].position: the first camera is the rig's frame (the sweep "
+            "places it): give the others' poses relative to it");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a}\n  - {name: b, look_at: [0, 500, 0]}\n"),
+            "r.yaml:3:24: cameras[1].look_at: must lie away from the camera and not straight above "
+            "or below it (the rig's y)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a}\n  - {name: b, rotation: [1, 0, 0, 0, 1, 0, 0, 0, "
+                    "-1]}\n"),
+            "r.yaml:3:25: cameras[1].rotation: is not a rotation (orthonormal, determinant 1, to "
+            "1e-4)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a}\n  - {name: b, positon: [0, 0, 0]}\n"),
+            "r.yaml:3:15: unknown key 'cameras[1].positon' (did you mean 'position'?)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a}\n  - {name: b, image: gray16}\noutput: {rgb: jpg}\n"),
+            "r.yaml:3:22: cameras[1].image: 16-bit grey images cannot be JPEG (rgb: png)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a, image: gray}\n  - {name: b}\noutput: {formats: [bop, "
+                    "paper]}\n"),
+            "r.yaml:2:22: cameras[0].image: the paper and pvn3d formats need colour images "
+            "(image: rgb)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: a, depth: {model: kinect_v1, baseline: 0}}\n"),
+            "r.yaml:2:22: cameras[0].depth: baseline must not be 0 for kinect_v1 (its disparity is "
+            "f B / z)");
 }
 
 TEST(Recipe, Classes) {

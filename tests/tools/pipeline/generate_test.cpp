@@ -1,7 +1,10 @@
 #include "tools/pipeline/generate.h"
 
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include <tbb/global_control.h>
@@ -312,6 +315,223 @@ TEST(Generate, GreyCameraAndDepthSensorWriteGrayDepthAndDepthGt) {
     return n;
   };
   EXPECT_GT(black(2), black(1));
+}
+
+// A rig of four sensors over one scene, seen straight down from 600 mm: "left" (colour, exact
+// depth), "right" 60 mm to its right (grey), and "kinect" and "twin", the same Kinect v1 at the
+// same place 40 mm to the left, turned towards the target.
+RunSpec RigSpec() {
+  RunSpec spec = SmallDefault();
+  spec.scenes.resize(1);
+  spec.sweep.yaw_rad = {0.0, 1.0};
+  spec.sweep.pitch_rad = {M_PI / 2};
+  spec.sweep.radius_mm = {600.0};
+  spec.bop.test_every = 2;
+  const Intrinsics k{320, 240, 300.0, 300.0, 159.5, 119.5};
+  RigSensor left{"left", k, {}};
+  RigSensor right{"right", k, {}};
+  right.sensor.image = SensorOptions::Image::kGray;
+  right.rig_from_cam.translation() = Eigen::Vector3d(60, 0, 0);
+  RigSensor kinect{"kinect", Intrinsics{160, 120, 150.0, 150.0, 79.5, 59.5}, {}};
+  kinect.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
+  // Turned about the rig's y axis so that its optical axis passes through (0, 0, 600).
+  const double angle = std::atan2(40.0, 600.0);
+  kinect.rig_from_cam.linear() = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).matrix();
+  kinect.rig_from_cam.translation() = Eigen::Vector3d(-40, 0, 0);
+  RigSensor twin = kinect;
+  twin.name = "twin";
+  spec.rig = {left, right, kinect, twin};
+  spec.intrinsics = left.intrinsics;
+  spec.sensor = left.sensor;
+  return spec;
+}
+
+Eigen::Isometry3d Pose(const json& r, const json& t) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 9; ++i) pose.linear()(i / 3, i % 3) = r[i].get<double>();
+  for (int i = 0; i < 3; ++i) pose.translation()[i] = t[i].get<double>();
+  return pose;
+}
+
+// The visible instance (1-based, 0: none) of every pixel, from a sensor's mask_visib PNGs.
+cv::Mat VisibleIds(const std::filesystem::path& scene, const std::string& sensor, int im,
+                   size_t instances) {
+  cv::Mat ids;
+  for (size_t i = 0; i < instances; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d_%06zu.png", im, i);
+    const cv::Mat mask =
+        cv::imread((scene / ("mask_visib_" + sensor) / name).string(), cv::IMREAD_GRAYSCALE);
+    if (ids.empty()) ids = cv::Mat::zeros(mask.size(), CV_32S);
+    ids.setTo(static_cast<int>(i + 1), mask > 0);
+  }
+  return ids;
+}
+
+TEST(Generate, CameraRigWritesBopMultiSensorLayout) {
+  ScratchDir dir;
+  const RunSpec spec = RigSpec();
+  GenerateOptions options;
+  options.output = dir / "rig";
+  const GenerateSummary summary = Generate(spec, options);
+  ASSERT_EQ(summary.frames, 2u);
+  const std::filesystem::path root = dir / "rig", scene = root / "train" / "000000";
+
+  // The layout bop_toolkit's dataset_params.py reads for a multi-sensor dataset (xyzibd, ipd,
+  // itoddmv): {modality}_{sensor}/{im_id:06d}.png, scene_{camera,gt,gt_info,gt_coco}_{sensor}.json,
+  // mask[_visib]_{sensor}/{im_id:06d}_{gt_id:06d}.png, and camera_{sensor}.json at the root.
+  const std::map<std::string, std::vector<std::string>> modalities = {
+      {"left", {"rgb", "depth"}},
+      {"right", {"gray", "depth"}},
+      {"kinect", {"rgb", "depth", "depth_gt"}},
+      {"twin", {"rgb", "depth", "depth_gt"}}};
+  std::set<std::string> keys;
+  for (const auto& [sensor, list] : modalities) {
+    const json camera = ReadJson(root / ("camera_" + sensor + ".json"));
+    for (const char* key : {"cx", "cy", "fx", "fy", "width", "height", "depth_scale"})
+      EXPECT_TRUE(camera.contains(key)) << sensor << " " << key;
+    const json gt = ReadJson(scene / ("scene_gt_" + sensor + ".json"));
+    ASSERT_EQ(gt.size(), 2u) << sensor;
+    for (const char* file : {"scene_camera_", "scene_gt_info_", "scene_gt_coco_"})
+      EXPECT_TRUE(std::filesystem::exists(scene / (file + sensor + ".json"))) << file << sensor;
+    for (const auto& [im, instances] : gt.items()) {
+      keys.insert(sensor + ":" + im);
+      const std::string id = std::string(6 - im.size(), '0') + im;
+      for (const std::string& modality : list) {
+        EXPECT_TRUE(std::filesystem::exists(scene / (modality + "_" + sensor) / (id + ".png")))
+            << modality << "_" << sensor << "/" << id;
+      }
+      for (size_t i = 0; i < instances.size(); ++i) {
+        char name[32];
+        std::snprintf(name, sizeof(name), "%s_%06zu.png", id.c_str(), i);
+        EXPECT_TRUE(std::filesystem::exists(scene / ("mask_" + sensor) / name));
+        EXPECT_TRUE(std::filesystem::exists(scene / ("mask_visib_" + sensor) / name));
+      }
+    }
+    EXPECT_TRUE(std::filesystem::exists(root / "coco" / ("train_" + sensor + ".json")));
+  }
+  EXPECT_EQ(ReadJson(root / "camera.json"), ReadJson(root / "camera_left.json"));
+  // No single-sensor files beside them.
+  for (const char* name : {"rgb", "gray", "depth", "mask", "scene_gt.json", "scene_camera.json"})
+    EXPECT_FALSE(std::filesystem::exists(scene / name)) << name;
+  EXPECT_FALSE(std::filesystem::exists(scene / "gray_left"));
+  EXPECT_FALSE(std::filesystem::exists(scene / "rgb_right"));
+  EXPECT_FALSE(std::filesystem::exists(scene / "depth_gt_left"));  // ideal depth
+
+  // The multi-view targets: every test image (splits/test.txt) with all four sensors.
+  const json targets = ReadJson(root / "test_targets_multiview_bop25.json");
+  std::ifstream test_list(root / "splits" / "test.txt");
+  int scene_id = 0, im = 0;
+  size_t tests = 0;
+  while (test_list >> scene_id >> im) {
+    ASSERT_LT(tests, targets.size());
+    const json& t = targets[tests++];
+    EXPECT_EQ(t["scene_id"], scene_id);
+    ASSERT_EQ(t["im_id"].size(), 4u);
+    int k = 0;
+    for (const char* sensor : {"left", "right", "kinect", "twin"})
+      EXPECT_EQ(t["im_id"][k++], json::array({sensor, im}));
+  }
+  EXPECT_EQ(tests, 1u);  // test_every: 2 of two images
+  EXPECT_EQ(targets.size(), tests);
+
+  // Geometry: each sensor's cam_from_world is rig_from_cam^-1 times the first sensor's, and every
+  // sensor's cam_from_model puts each instance at the same world pose.
+  std::map<std::string, json> cameras, gts;
+  for (const auto& [sensor, list] : modalities) {
+    cameras[sensor] = ReadJson(scene / ("scene_camera_" + sensor + ".json"));
+    gts[sensor] = ReadJson(scene / ("scene_gt_" + sensor + ".json"));
+  }
+  for (const std::string im_key : {"0", "1"}) {
+    const auto w2c = [&](const std::string& sensor) {
+      const json& c = cameras[sensor][im_key];
+      return Pose(c["cam_R_w2c"], c["cam_t_w2c"]);
+    };
+    const Eigen::Isometry3d left = w2c("left");
+    for (const RigSensor& sensor : spec.rig) {
+      const Eigen::Isometry3d expected = sensor.rig_from_cam.inverse() * left;
+      EXPECT_LT((w2c(sensor.name).matrix() - expected.matrix()).norm(), 1e-6) << sensor.name;
+      const json& gt = gts[sensor.name][im_key];
+      for (size_t i = 0; i < gt.size(); ++i) {
+        const Eigen::Isometry3d world =
+            w2c(sensor.name).inverse() * Pose(gt[i]["cam_R_m2c"], gt[i]["cam_t_m2c"]);
+        const json& g0 = gts["left"][im_key][i];
+        const Eigen::Isometry3d world0 = left.inverse() * Pose(g0["cam_R_m2c"], g0["cam_t_m2c"]);
+        EXPECT_LT((world.matrix() - world0.matrix()).norm(), 1e-6) << sensor.name << " " << i;
+      }
+    }
+    // Image by hand: seen straight down, a point at depth z in the left image lies f B / z =
+    // 300 * 60 / z pixels further left in the right image, on the same row. Nearly every visible
+    // object pixel of the left image shows the same instance there (not where the right camera
+    // sees something in front of it); shifted the wrong way, few do.
+    const int image = std::stoi(im_key);
+    const size_t instances = gts["left"][im_key].size();
+    const cv::Mat ids_left = VisibleIds(scene, "left", image, instances);
+    const cv::Mat ids_right = VisibleIds(scene, "right", image, instances);
+    const cv::Mat depth =
+        cv::imread((scene / "depth_left" / (std::string(5, '0') + im_key + ".png")).string(),
+                   cv::IMREAD_UNCHANGED);
+    int object = 0, same = 0, same_wrong_way = 0;
+    for (int v = 0; v < depth.rows; ++v) {
+      for (int u = 0; u < depth.cols; ++u) {
+        const int id = ids_left.at<int>(v, u);
+        if (id == 0) continue;
+        const double disparity = 300.0 * 60.0 / (depth.at<uint16_t>(v, u) * 0.1);
+        const int ur = static_cast<int>(std::lround(u - disparity));
+        const int uw = static_cast<int>(std::lround(u + disparity));
+        if (ur < 1 || uw + 1 >= depth.cols) continue;
+        ++object;
+        // Within a pixel: the disparity is not whole, and the masks' edges are pixel steps.
+        const auto near = [&](int uc) {
+          for (int du = -1; du <= 1; ++du) {
+            if (ids_right.at<int>(v, uc + du) == id) return true;
+          }
+          return false;
+        };
+        same += near(ur);
+        same_wrong_way += near(uw);
+      }
+    }
+    ASSERT_GT(object, 1000);
+    EXPECT_GT(same, 0.95 * object) << same << " of " << object;
+    EXPECT_LT(same_wrong_way, 0.5 * object) << same_wrong_way << " of " << object;
+  }
+
+  // Twins: the same exact depth, their own noise (each sensor has its own seed key).
+  const auto bytes = [&](const std::string& folder) {
+    return testing::ReadFile(scene / folder / "000000.png");
+  };
+  EXPECT_EQ(bytes("depth_gt_kinect"), bytes("depth_gt_twin"));
+  EXPECT_NE(bytes("depth_kinect"), bytes("depth_twin"));
+
+  // The rig's first sensor renders what the same camera alone renders.
+  RunSpec alone = spec;
+  alone.rig.clear();
+  options.output = dir / "alone";
+  Generate(alone, options);
+  const std::filesystem::path single = dir / "alone" / "train" / "000000";
+  for (const char* im_name : {"000000.png", "000001.png"}) {
+    EXPECT_EQ(testing::ReadFile(single / "rgb" / im_name),
+              testing::ReadFile(scene / "rgb_left" / im_name));
+    EXPECT_EQ(testing::ReadFile(single / "depth" / im_name),
+              testing::ReadFile(scene / "depth_left" / im_name));
+  }
+  EXPECT_EQ(ReadJson(single / "scene_gt.json"), gts["left"]);
+
+  // preview and eval take the sensor; without one they name the sensors.
+  PreviewOptions preview;
+  preview.count = 1;
+  preview.panel_width = 64;
+  preview.sensor = "right";
+  EXPECT_FALSE(RenderPreview(root, preview).empty());
+  preview.sensor.clear();
+  try {
+    RenderPreview(root, preview);
+    ADD_FAILURE() << "a multi-sensor dataset needs a sensor";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("sensors: kinect, left, right, twin"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Generate, BadInputLeavesNoDatasetBehind) {

@@ -102,6 +102,30 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
     EXPECT_EQ(each_field(ImageSensor{}, noisy,
                          [](RunSpec& s) -> ImageSensor& { return s.sensor.imager; }),
               4);
+    // A rig: each sensor's name, intrinsics, image, pose, and every depth and imager field.
+    RunSpec rig = spec;
+    rig.rig = {RigSensor{"a", spec.intrinsics, spec.sensor},
+               RigSensor{"b", spec.intrinsics, spec.sensor}};
+    check(rig, "cameras");
+    const auto edited = [&](const char* what, auto edit) {
+      RunSpec c = rig;
+      edit(c.rig[1]);
+      check(c, what);
+    };
+    edited("cameras[1].name", [](RigSensor& s) { s.name = "c"; });
+    edited("cameras[1].fx", [](RigSensor& s) { s.intrinsics.fx += 1; });
+    edited("cameras[1].height", [](RigSensor& s) { s.intrinsics.height += 1; });
+    edited("cameras[1].image", [](RigSensor& s) { s.sensor.image = SensorOptions::Image::kGray; });
+    edited("cameras[1].position", [](RigSensor& s) { s.rig_from_cam.translation().x() = 1e-3; });
+    edited("cameras[1].rotation", [](RigSensor& s) {
+      s.rig_from_cam.linear() = Eigen::AngleAxisd(1e-6, Eigen::Vector3d::UnitZ()).matrix();
+    });
+    EXPECT_EQ(each_field(DepthModel{}, rig,
+                         [](RunSpec& s) -> DepthModel& { return s.rig[1].sensor.depth; }),
+              19);
+    EXPECT_EQ(each_field(ImageSensor{}, rig,
+                         [](RunSpec& s) -> ImageSensor& { return s.rig[1].sensor.imager; }),
+              4);
   }
   // The physically based look, read by hand from materials: and lighting:.
   {

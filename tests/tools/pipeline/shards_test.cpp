@@ -106,6 +106,34 @@ TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {
   ExpectSameTree(dir / "whole", dir / "again");
 }
 
+TEST(Shards, CameraRigShardsMergeToOneProcessesBytes) {
+  // Two sensors: the camera with a Kinect v1 depth model, and a grey camera 50 mm to its right.
+  // Three shards merge to the bytes of one process; a frame that only one sensor finished (a
+  // shard stopped between the sensors) is not written: merge names the shard, which renders it
+  // again.
+  ScratchDir dir;
+  RunSpec spec = SmallFarmSpec();
+  RigSensor a{"a", spec.intrinsics, {}};
+  a.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
+  RigSensor b{"b", Intrinsics{120, 90, 100.0, 100.0, 59.5, 44.5}, {}};
+  b.sensor.image = SensorOptions::Image::kGray;
+  b.rig_from_cam.translation() = Eigen::Vector3d(50, 0, 0);
+  spec.rig = {a, b};
+  spec.sensor = a.sensor;
+  EXPECT_EQ(RunJob(spec, dir / "whole").frames, 12u);
+  for (int i : {1, 2, 0}) RunJob(spec, dir / "tree", ShardSpec{i, 3});
+  const std::filesystem::path scene = dir / "tree" / "train" / "000001";
+  EXPECT_TRUE(std::filesystem::exists(scene / ".fragments_a" / "000001.json"));
+  std::filesystem::remove(scene / ".fragments_b" / "000001.json");  // unit 5: shard 2
+  EXPECT_NE(MergeError(dir / "tree").find("run shard(s) 2/3 again"), std::string::npos)
+      << MergeError(dir / "tree");
+  RunJob(spec, dir / "tree", ShardSpec{2, 3});
+  EXPECT_EQ(Merge(dir / "tree").frames, 12u);
+  ExpectSameTree(dir / "whole", dir / "tree");
+  EXPECT_FALSE(std::filesystem::exists(scene / ".fragments_a"));
+  EXPECT_TRUE(std::filesystem::exists(scene / "gray_b" / "000001.png"));
+}
+
 TEST(Shards, PhysicallyBasedShardsAreByteIdenticalToOneProcess) {
   // The path tracer's noise depends on (seed, view, pixel) only: shards render the same bytes,
   // the linear EXR colour included.

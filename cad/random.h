@@ -82,7 +82,8 @@ inline constexpr RandomStream kPointV{"points.v",
 // recipes: render.seed (render.mode: pbr)
 inline constexpr RandomStream kRenderPixel{
     "render.pixel",
-    "a frame's path-tracing sampler: index = view; each pixel's Owen-scrambled Sobol sequence "
+    "a frame's path-tracing sampler: index = view (a rig's sensor k: view + k 2^40); each pixel's "
+    "Owen-scrambled Sobol sequence "
     "hashes its (v * 65536 + u) onto that"};
 // recipes: a material's texture.seed
 inline constexpr RandomStream kTexturePattern{
@@ -97,8 +98,9 @@ inline constexpr RandomStream kDropPosition{
     "pile.position",
     "a dropped body's start above the drop region; index = (body << 8) + (attempt << 1) + axis"};
 // recipes: camera.depth.seed (depth sensor models, render/sensor.h)
-inline constexpr RandomStream kSensorFrame{"sensor.frame",
-                                           "the seed of one frame's depth noise; index = view"};
+inline constexpr RandomStream kSensorFrame{
+    "sensor.frame",
+    "the seed of one frame's depth noise; index = view (a rig's sensor k: view + k 2^40)"};
 inline constexpr RandomStream kSensorLateral{
     "sensor.lateral",
     "a pixel's lateral shift, seeded by sensor.frame; index = (pixel << 1) + draw (Box-Muller: "
@@ -115,8 +117,9 @@ inline constexpr RandomStream kSensorDots{
     "+ "
     "draw (present, x, y), cell = ((i + 2^20) << 21) + j + 2^20 for grid cell (i, j)"};
 // recipes: camera.imager.seed (image sensor noise, render/sensor.h)
-inline constexpr RandomStream kImageFrame{"sensor.image_frame",
-                                          "the seed of one frame's image noise; index = view"};
+inline constexpr RandomStream kImageFrame{
+    "sensor.image_frame",
+    "the seed of one frame's image noise; index = view (a rig's sensor k: view + k 2^40)"};
 inline constexpr RandomStream kImageNoise{
     "sensor.image",
     "a pixel's image noise, seeded by sensor.image_frame; index = (((pixel << 1) + pair) << 1) + "

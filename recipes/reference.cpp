@@ -71,7 +71,9 @@ std::string RecipeReference() {
   Section<DepthModel>(
       out, "camera.depth",
       "the depth sensor model (a name, or a map); the model's published defaults fill the keys "
-      "not given (README, \"Depth sensors\"); camera also takes image: rgb | gray | gray16");
+      "not given (README, \"Depth sensors\"); camera also takes image: rgb | gray | gray16; "
+      "cameras: [{name, position, look_at | rotation, and the camera keys}] is a rig of named "
+      "sensors moved together (README, \"Camera rigs\")");
   Section<ImageSensor>(
       out, "camera.imager",
       "the image sensor and lens of the colour or grey camera: shot and read noise "

@@ -820,6 +820,16 @@ void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
           entry["name"], key + ".name",
           "'" + sensor.name + "': use 1-32 lower-case letters and digits (BOP writes rgb_NAME/)");
     }
+    // scene_gt_NAME.json must not read as BOP's scene_gt_info.json, scene_gt_coco.json or our
+    // scene_gt_world.json.
+    for (const char* taken : {"info", "coco", "world"}) {
+      if (sensor.name.rfind(taken, 0) == 0) {
+        r.Fail(entry["name"], key + ".name",
+               "'" + sensor.name +
+                   "': names starting with info, coco or world would make scene_gt_NAME.json "
+                   "look like BOP's scene_gt_info.json and its kin");
+      }
+    }
     for (const RigSensor& earlier : spec->rig) {
       if (earlier.name == sensor.name)
         r.Fail(entry["name"], key + ".name", "'" + sensor.name + "' names two cameras");

@@ -249,6 +249,9 @@ cameras:
   EXPECT_EQ(ErrorOf("cameras:\n  - {name: Cam_1}\n"),
             "r.yaml:2:12: cameras[0].name: 'Cam_1': use 1-32 lower-case letters and digits (BOP "
             "writes rgb_NAME/)");
+  EXPECT_EQ(ErrorOf("cameras:\n  - {name: info2}\n"),
+            "r.yaml:2:12: cameras[0].name: 'info2': names starting with info, coco or world would "
+            "make scene_gt_NAME.json look like BOP's scene_gt_info.json and its kin");
   EXPECT_EQ(ErrorOf("cameras:\n  - {name: a}\n  - {name: a, position: [1, 0, 0]}\n"),
             "r.yaml:3:12: cameras[1].name: 'a' names two cameras");
   EXPECT_EQ(ErrorOf("cameras:\n  - {name: a, position: [1, 0, 0]}\n"),

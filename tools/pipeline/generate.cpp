@@ -74,8 +74,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   const bool common = !shard || shard->index == 0;  // writes the files every dataset has once
   if (common) {
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      for (const std::string& warning :
-           PlacementWarnings(parts, prepared.scenes[s].instances, spec.intrinsics, spec.sweep)) {
+      for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances,
+                                                          sensors[0].intrinsics, spec.sweep)) {
         Warn("scene '" + spec.scenes[s].name + "': " + warning);
       }
     }
@@ -114,7 +114,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   std::vector<std::unique_ptr<RigSceneWriter>> writers;
   try {
     if (common) {
-      WriteBopCamera(root, spec.intrinsics, spec.bop);
+      WriteBopCamera(root, sensors[0].intrinsics, spec.bop);  // a rig: its first sensor's
       if (!spec.rig.empty()) {
         for (const RigSensor& sensor : sensors)
           WriteBopCamera(root, sensor.intrinsics, spec.bop, sensor.name);
@@ -208,32 +208,32 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                       tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
                           tbb::filter_mode::parallel,
                           [&](size_t i) {
-                            auto frames = std::make_shared<std::vector<Frame>>();
+                            auto rig_frames = std::make_shared<std::vector<Frame>>();
                             for (size_t k = 0; k < sensors.size(); ++k) {
                               const Camera camera{
                                   sensors[k].intrinsics,
                                   views[i].world_from_cam * sensors[k].rig_from_cam};
-                              frames->push_back(
+                              rig_frames->push_back(
                                   renderer.Render(camera, SensorFrameKey(i, k), sensors[k].sensor));
                             }
-                            return std::make_pair(i, FramePtr(std::move(frames)));
+                            return std::make_pair(i, FramePtr(std::move(rig_frames)));
                           }) &
                       tbb::make_filter<std::pair<size_t, FramePtr>, void>(
                           tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
                             // A rig pose is kept when any of its sensors sees enough.
                             int visible = 0;
-                            std::vector<const Frame*> frames;
+                            std::vector<const Frame*> rig_frames;
                             for (const Frame& frame : *item.second) {
                               int seen = 0;
                               for (const Frame::InstanceTruth& t : frame.instances)
                                 seen += t.px_count_visib;
                               visible = std::max(visible, seen);
-                              frames.push_back(&frame);
+                              rig_frames.push_back(&frame);
                             }
                             if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
                               ++(visible == 0 ? empty_views : sparse_views);
                             } else {
-                              writer.WriteFrame(static_cast<int>(item.first), frames, {&paper});
+                              writer.WriteFrame(static_cast<int>(item.first), rig_frames, {&paper});
                             }
                             const size_t n = ++done;
                             if (options.progress) options.progress(n, to_render);

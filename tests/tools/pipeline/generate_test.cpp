@@ -19,6 +19,7 @@
 #include "dataset/preview.h"
 #include "tests/json_support.h"
 #include "tests/test_support.h"
+#include "tools/pipeline/eval.h"
 #include "tools/pipeline/journal.h"
 
 namespace cadsynth {
@@ -532,6 +533,30 @@ TEST(Generate, CameraRigWritesBopMultiSensorLayout) {
     EXPECT_NE(std::string(e.what()).find("sensors: kinect, left, right, twin"), std::string::npos)
         << e.what();
   }
+  // eval scores estimates against the named sensor's poses: the right camera's ground truth is
+  // exact for it and 60 mm off (the baseline) for the left camera.
+  std::ostringstream csv;
+  csv << "scene_id,im_id,obj_id,score,R,t,time\n";
+  for (const auto& [im_key, list] : gts["right"].items()) {
+    for (const json& g : list) {
+      csv << "0," << im_key << "," << g["obj_id"] << ",1,";
+      for (int i = 0; i < 9; ++i) csv << (i ? " " : "") << g["cam_R_m2c"][i].get<double>();
+      csv << ",";
+      for (int i = 0; i < 3; ++i) csv << (i ? " " : "") << g["cam_t_m2c"][i].get<double>();
+      csv << ",-1\n";
+    }
+  }
+  std::ofstream(dir / "right.csv") << csv.str();
+  const EvalReport right = Evaluate(root, dir / "right.csv", "right");
+  ASSERT_GT(right.overall.instances, 0);
+  EXPECT_EQ(right.overall.estimated, right.overall.instances);
+  EXPECT_NEAR(right.overall.mean_error_mm, 0.0, 1e-3);
+  const EvalReport left = Evaluate(root, dir / "right.csv", "left");
+  // ADD is exactly the 60 mm shift; ADD-S (the symmetric gears) and the matching to the nearest
+  // instance can only lower it.
+  EXPECT_GT(left.overall.mean_error_mm, 20.0);
+  EXPECT_LE(left.overall.mean_error_mm, 60.0 + 1e-3);
+  EXPECT_THROW(Evaluate(root, dir / "right.csv"), Error);  // which sensor?
 }
 
 TEST(Generate, BadInputLeavesNoDatasetBehind) {

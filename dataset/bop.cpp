@@ -86,6 +86,9 @@ bool BopOptions::IsTest(int index, int count) const {
 
 namespace {
 
+// OpenCV's distortion coefficients in its order: [k1, k2, p1, p2, k3].
+Json DistCoeffs(const Distortion& d) { return Json::array({d.k1, d.k2, d.p1, d.p2, d.k3}); }
+
 Json RowMajor(const Eigen::Matrix3d& r) {
   Json out = Json::array();
   for (int i = 0; i < 3; ++i) {
@@ -121,7 +124,8 @@ VisibleMasks::VisibleMasks(const Frame& frame, const BopOptions& options)
   // bop_toolkit's visibility.estimate_visib_mask_gt, visib_mode "bop19": visible where the model
   // rendered alone is hit and its distance minus the scene's is at most delta, or the scene's
   // (written) depth is 0. Distances as misc.depth_im_to_dist_im_fast makes them: depth times
-  // |((u - cx) / fx, (v - cy) / fy, 1)| at the pixel index (u, v).
+  // |((u - cx) / fx, (v - cy) / fy, 1)| at the pixel index (u, v). With lens distortion, which
+  // bop_toolkit does not know, the length of the pixel centre's own ray.
   const Intrinsics& k = frame.camera.intrinsics;
   const int w = frame.width();
   masks_.resize(frame.instances.size());
@@ -143,11 +147,12 @@ VisibleMasks::VisibleMasks(const Frame& frame, const BopOptions& options)
         const size_t q = static_cast<size_t>(v - v0) * (u1 - u0) + (u - u0);
         const float model = truth.amodal_depth[q];
         if (!(model > 0.0f)) continue;
-        const double x = (u - k.cx) / k.fx;
+        Eigen::Vector2d ray((u - k.cx) / k.fx, y);
+        if (k.distortion.active() && !k.Unproject(u + 0.5, v + 0.5, &ray)) continue;
         const double scene =
             EncodeDepth(frame.depth[static_cast<size_t>(v) * w + u], options.depth_scale) *
             options.depth_scale;
-        const double stretch = std::sqrt(x * x + y * y + 1.0);
+        const double stretch = std::sqrt(ray.squaredNorm() + 1.0);
         mask[q] = scene == 0.0 || (model - scene) * stretch <= options.visib_delta_mm;
       }
     }
@@ -479,13 +484,11 @@ void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,
                     const BopOptions& options, const std::string& sensor) {
   CreateFolder(root);
   const std::string name = sensor.empty() ? "camera.json" : "camera_" + sensor + ".json";
-  WriteJson(root / name, Json{{"cx", k.cx},
-                              {"cy", k.cy},
-                              {"depth_scale", options.depth_scale},
-                              {"fx", k.fx},
-                              {"fy", k.fy},
-                              {"height", k.height},
-                              {"width", k.width}});
+  Json camera{{"cx", k.cx},      {"cy", k.cy}, {"depth_scale", options.depth_scale},
+              {"fx", k.fx},      {"fy", k.fy}, {"height", k.height},
+              {"width", k.width}};
+  if (k.distortion.active()) camera["dist_coeffs"] = DistCoeffs(k.distortion);
+  WriteJson(root / name, camera);
 }
 
 BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
@@ -671,6 +674,10 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
                   {"depth_scale", options_.depth_scale},
                   {"cam_R_w2c", RowMajor(cam_from_world.linear())},
                   {"cam_t_w2c", Vec(cam_from_world.translation())}};
+  // Beside cam_K, in OpenCV's order; only for a camera with lens distortion (BOP's images have
+  // none: its readers ignore the key).
+  if (frame.camera.intrinsics.distortion.active())
+    camera_entry["cam_dist_coeffs"] = DistCoeffs(frame.camera.intrinsics.distortion);
 
   const VisibleMasks visible(frame, options_);
   const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_, visible);

@@ -20,6 +20,13 @@ std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instanc
       const uint16_t units = EncodeDepth(frame.depth[p], depth_scale);
       if (units == 0) continue;
       const double z = units * depth_scale / 1000.0;  // as a reader of the depth PNG gets it, in m
+      if (k.distortion.active()) {
+        Eigen::Vector2d ray;
+        if (!k.Unproject(u + 0.5, v + 0.5, &ray)) continue;
+        points.emplace_back(static_cast<float>(ray.x() * z), static_cast<float>(ray.y() * z),
+                            static_cast<float>(z));
+        continue;
+      }
       points.emplace_back(static_cast<float>((u + 0.5 - k.cx) * z / k.fx),
                           static_cast<float>((v + 0.5 - k.cy) * z / k.fy), static_cast<float>(z));
     }

@@ -12,7 +12,8 @@ namespace cadsynth {
 
 // The pixels where `instance` is visible and the written depth image (at `depth_scale` mm per
 // unit) has a value, back-projected through the pixel centre into the camera frame, in metres:
-// z = depth, x = (u + 0.5 - cx) z / fx, y = (v + 0.5 - cy) z / fy. Row-major pixel order.
+// z = depth, x = (u + 0.5 - cx) z / fx, y = (v + 0.5 - cy) z / fy (with lens distortion, x and y
+// of the pixel centre's ray, Intrinsics::Unproject, times z). Row-major pixel order.
 std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instance,
                                                  double depth_scale);
 

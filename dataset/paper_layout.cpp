@@ -53,9 +53,9 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame,
       for (int c = 0; c < 3; ++c) poses[r + 3 * c + 12 * j] = m2c.linear()(r, c);
       poses[r + 3 * 3 + 12 * j] = m2c.translation()(r) / 1000.0;
     }
-    const Eigen::Vector3d t = m2c.translation();
-    center[j] = k.fx * t.x() / t.z() + k.cx;      // column 0: u
-    center[j + n] = k.fy * t.y() / t.z() + k.cy;  // column 1: v
+    const Eigen::Vector2d uv = k.Project(m2c.translation());  // with the lens's distortion
+    center[j] = uv.x();                                       // column 0: u
+    center[j + n] = uv.y();                                   // column 1: v
   }
   std::vector<double> kmat(9), w2c(12);
   const Eigen::Matrix3d kk = k.K();
@@ -158,7 +158,7 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const BopFra
                          {"T_O_W", Matrix4(p.world_from_model)}});
     }
     const Eigen::Matrix3d k = frame.camera.intrinsics.K();
-    const Json meta = {
+    Json meta = {
         {"K",
          {{k(0, 0), k(0, 1), k(0, 2)}, {k(1, 0), k(1, 1), k(1, 2)}, {k(2, 0), k(2, 1), k(2, 2)}}},
         {"depth_scale", options_.depth_scale},
@@ -166,6 +166,8 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const BopFra
         {"height", h},
         {"T_C_W", Matrix4(world_from_cam)},
         {"objects", objects}};
+    const Distortion& d = frame.camera.intrinsics.distortion;
+    if (d.active()) meta["dist_coeffs"] = {d.k1, d.k2, d.p1, d.p2, d.k3};  // OpenCV's order
     files.Write(paper_dir_ / "meta" / (im + ".json"), meta.dump(2) + "\n");
     if (options_.pvn3d_meta) {
       const std::filesystem::path mat = paper_dir_ / "meta" / (im + "-meta.mat");

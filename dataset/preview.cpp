@@ -157,7 +157,15 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
     }
     const cv::Mat depth = ReadImage(dir / ("depth" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
     const Json& gt = gts[scene][std::to_string(im)];
-    const Eigen::Matrix3d k = Matrix3(cameras[scene].at(std::to_string(im)).at("cam_K"));
+    const Json& camera = cameras[scene].at(std::to_string(im));
+    const Eigen::Matrix3d kmat = Matrix3(camera.at("cam_K"));
+    // The lens's distortion, when the camera has one, bends the drawn points as it bends the image.
+    Intrinsics k;
+    k.fx = kmat(0, 0), k.fy = kmat(1, 1), k.cx = kmat(0, 2), k.cy = kmat(1, 2);
+    if (camera.contains("cam_dist_coeffs")) {
+      const Json& d = camera.at("cam_dist_coeffs");
+      k.distortion = Distortion{d.at(0), d.at(1), d.at(2), d.at(3), d.at(4)};
+    }
 
     cv::Mat masks = rgb * 0.35;
     for (size_t i = 0; i < gt.size(); ++i) {
@@ -178,7 +186,13 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       m2c.translation() =
           Eigen::Vector3d(g.at("cam_t_m2c")[0], g.at("cam_t_m2c")[1], g.at("cam_t_m2c")[2]);
       if (m2c.translation().z() <= 0) continue;
-      const auto c = ProjectBox(k, m2c, Eigen::AlignedBox3d(lo, lo + size));
+      std::vector<Eigen::Vector2d> c;
+      for (int a = 0; a < 8; ++a) {
+        const Eigen::Vector3d p =
+            m2c * Eigen::AlignedBox3d(lo, lo + size)
+                      .corner(static_cast<Eigen::AlignedBox3d::CornerType>(a));
+        c.push_back(p.z() > 0 ? k.Project(p) : Eigen::Vector2d(-1e4, -1e4));
+      }
       const auto pt = [](const Eigen::Vector2d& p) {
         return cv::Point(cvRound(p.x()), cvRound(p.y()));
       };
@@ -190,11 +204,11 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
         }
       }
       const double axis = 0.5 * size.maxCoeff();
-      const Eigen::Vector3d o = k * m2c.translation();
+      const Eigen::Vector2d o = k.Project(m2c.translation());
       for (int a = 0; a < 3; ++a) {
-        const Eigen::Vector3d e = k * (m2c * (axis * Eigen::Vector3d::Unit(a)));
+        const Eigen::Vector3d e = m2c * (axis * Eigen::Vector3d::Unit(a));
         if (e.z() <= 0) continue;
-        cv::line(rgb, pt(o.head<2>() / o.z()), pt(e.head<2>() / e.z()),
+        cv::line(rgb, pt(o), pt(k.Project(e)),
                  a == 0   ? cv::Scalar(0, 0, 255)
                  : a == 1 ? cv::Scalar(0, 200, 0)
                           : cv::Scalar(255, 0, 0),

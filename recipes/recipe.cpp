@@ -665,11 +665,19 @@ void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.Check(spec->tessellation, node, "tessellation");
 }
 
+Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::string& key,
+                       bool length) {
+  if (!node.IsSequence() || node.size() != 3) r.Fail(node, key, "expected [x, y, z]");
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) v[i] = length ? r.Length(node[i], key) : r.Number(node[i], key);
+  return v;
+}
+
 // A camera's keys (`camera:`, or an entry of `cameras:` with its `other` keys read elsewhere).
 void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key, Intrinsics* kp,
                 SensorOptions* sensor, std::vector<std::string> other = {}) {
-  for (const char* known :
-       {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image", "imager", "depth"})
+  for (const char* known : {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image",
+                            "imager", "depth", "distortion", "lens", "motion"})
     other.push_back(known);
   r.ExpectMap(node, key, other);
   Intrinsics& k = *kp;
@@ -700,7 +708,34 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
   if (node["fy"]) k.fy = r.Number(node["fy"], key + ".fy");
   if (node["cx"]) k.cx = r.Number(node["cx"], key + ".cx");
   if (node["cy"]) k.cy = r.Number(node["cy"], key + ".cy");
+  if (const YAML::Node distortion = node["distortion"]) {
+    ReadFields(r, distortion, key + ".distortion", &k.distortion, {});
+    r.Check(k, distortion, key + ".distortion");
+  }
   r.Check(k, node, key);
+  if (const YAML::Node lens = node["lens"]) {
+    ReadFields(r, lens, key + ".lens", &sensor->lens, {});
+    if (!lens["focal_length"])
+      r.Fail(lens, key + ".lens", "give the lens's 'focal_length' (with f_number: the aperture)");
+    r.Check(sensor->lens, lens, key + ".lens");
+  }
+  // motion: the camera's velocities in its own frame while the shutter is open.
+  if (const YAML::Node motion = node["motion"]) {
+    const std::string at = key + ".motion";
+    r.ExpectMap(motion, at, {"velocity_mm_s", "angular_velocity_deg_s", "exposure_ms"});
+    CameraMotion& m = sensor->motion;
+    if (!motion["exposure_ms"])
+      r.Fail(motion, at, "give 'exposure_ms', how long the shutter is open");
+    m.exposure_s = r.Number(motion["exposure_ms"], at + ".exposure_ms") / 1000.0;
+    if (motion["velocity_mm_s"])
+      m.velocity_mm_s = Triple(r, motion["velocity_mm_s"], at + ".velocity_mm_s", false);
+    if (motion["angular_velocity_deg_s"]) {
+      m.angular_velocity_rad_s =
+          Triple(r, motion["angular_velocity_deg_s"], at + ".angular_velocity_deg_s", false) *
+          (M_PI / 180.0);
+    }
+    r.Check(m, motion, at);
+  }
   if (node["image"]) {
     const std::string image = r.Scalar(node["image"], key + ".image");
     if (image == "rgb") {
@@ -784,14 +819,6 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.Check(v, node, "sweep");
 }
 
-Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::string& key,
-                       bool length) {
-  if (!node.IsSequence() || node.size() != 3) r.Fail(node, key, "expected [x, y, z]");
-  Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) v[i] = length ? r.Length(node[i], key) : r.Number(node[i], key);
-  return v;
-}
-
 // `cameras:`, a rig: a list of cameras with names, the first one the rig's frame (the sweep
 // places it) and the others fixed to it by `position` and `look_at` or `rotation`.
 void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
@@ -808,6 +835,10 @@ void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     sensor.where = r.Where(entry);
     ReadCamera(r, entry, key, &sensor.intrinsics, &sensor.sensor,
                {"name", "position", "look_at", "rotation"});
+    if (i > 0 && entry["motion"]) {
+      r.Fail(entry["motion"], key + ".motion",
+             "the rig moves as one: give its motion on the first camera (the rig's frame)");
+    }
     if (!entry["name"]) r.Fail(entry, key, "a rig's camera needs a 'name' (e.g. xyz, realsense)");
     sensor.name = r.Scalar(entry["name"], key + ".name");
     // BOP appends the name to folder names (rgb_NAME/): lower-case letters and digits only.
@@ -877,6 +908,8 @@ void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     }
     sensor.rig_from_cam.linear() = rotation;
     sensor.rig_from_cam.translation() = position;
+    // The rig's motion, as each camera on it sees it.
+    if (i > 0) sensor.sensor.motion = spec->rig[0].sensor.motion.Seen(sensor.rig_from_cam);
     spec->rig.push_back(std::move(sensor));
   }
   spec->intrinsics = spec->rig[0].intrinsics;
@@ -1419,6 +1452,27 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
              "the paper and pvn3d formats need colour images (image: rgb)");
     }
     spec.bop.gray_bits = GrayBits(spec.sensor.image);
+    // Depth of field and motion blur come from the path tracer's samples; distorted IR images
+    // cannot be matched by the stereo matcher, which wants them rectified.
+    for (size_t i = 0; i < std::max<size_t>(1, spec.rig.size()); ++i) {
+      const bool rig = !spec.rig.empty();
+      const YAML::Node camera = rig ? YAML::Node(root["cameras"][i]) : YAML::Node(root["camera"]);
+      const std::string at = rig ? "cameras[" + std::to_string(i) + "]" : std::string("camera");
+      const SensorOptions& sensor = rig ? spec.rig[i].sensor : spec.sensor;
+      const Intrinsics& k = rig ? spec.rig[i].intrinsics : spec.intrinsics;
+      for (const char* effect : {"lens", "motion"}) {
+        if (camera && camera[effect] && spec.render.mode != RenderOptions::Mode::kPbr) {
+          r.Fail(camera[effect], at + "." + effect,
+                 "depth of field and motion blur need render.mode: pbr (the path tracer's "
+                 "samples)");
+        }
+      }
+      if (k.distortion.active() && sensor.depth.kind == DepthModel::Kind::kActiveStereo) {
+        r.Fail(camera["distortion"], at + ".distortion",
+               "active_stereo matches rectified IR images: give the distortion to another camera "
+               "of the rig");
+      }
+    }
     for (size_t i = 0; i < std::max<size_t>(1, spec.rig.size()); ++i) {
       const SensorOptions::Image image =
           spec.rig.empty() ? spec.sensor.image : spec.rig[i].sensor.image;

@@ -78,6 +78,14 @@ std::string RecipeReference() {
       out, "camera.imager",
       "the image sensor and lens of the colour or grey camera: shot and read noise "
       "(Poisson-Gaussian) and cos^4 vignetting (README, \"Image sensor\")");
+  Section<Distortion>(out, "camera.distortion",
+                      "OpenCV's lens distortion (k1, k2, p1, p2, k3): the image, masks and depth "
+                      "are rendered through it, and the coefficients written beside cam_K "
+                      "(README, \"Lens effects\")");
+  Section<ThinLens>(out, "camera.lens",
+                    "depth of field, pbr only; camera.motion: {velocity_mm_s: [x, y, z], "
+                    "angular_velocity_deg_s: [x, y, z], exposure_ms} in the camera's frame is "
+                    "motion blur (README, \"Lens effects\")");
   Section<RunLimits>(out, "limits",
                      "how much work a recipe may ask for (raise them if you mean it)");
   return out.str();

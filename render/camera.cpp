@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace cadsynth {
@@ -67,6 +68,103 @@ Eigen::Matrix3d Intrinsics::K() const {
   return k;
 }
 
+Eigen::Vector2d Distortion::Distort(const Eigen::Vector2d& xy, Eigen::Matrix2d* jacobian) const {
+  const double x = xy.x(), y = xy.y(), r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  const Eigen::Vector2d out(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+                            y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+  if (jacobian != nullptr) {
+    // d radial / dx = 2 x radial', radial' = k1 + 2 k2 r^2 + 3 k3 r^4.
+    const double slope = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
+    const double cross = 2.0 * x * y * slope + 2.0 * p1 * x + 2.0 * p2 * y;
+    *jacobian << radial + 2.0 * x * x * slope + 2.0 * p1 * y + 6.0 * p2 * x, cross, cross,
+        radial + 2.0 * y * y * slope + 6.0 * p1 * y + 2.0 * p2 * x;
+  }
+  return out;
+}
+
+double Distortion::FoldRadius() const {
+  // d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)] = g(s) = 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3, s = r^2.
+  // The roots of g' = 3 k1 + 10 k2 s + 21 k3 s^2 cut s >= 0 into pieces where g is monotonic;
+  // the first piece whose end has g <= 0 holds the first root, found by bisection.
+  const auto g = [this](double s) { return 1.0 + s * (3.0 * k1 + s * (5.0 * k2 + s * 7.0 * k3)); };
+  std::vector<double> ends;
+  const double qa = 21.0 * k3, qb = 10.0 * k2, qc = 3.0 * k1;
+  if (qa != 0.0) {
+    const double disc = qb * qb - 4.0 * qa * qc;
+    if (disc >= 0.0) {
+      ends.push_back((-qb - std::sqrt(disc)) / (2.0 * qa));
+      ends.push_back((-qb + std::sqrt(disc)) / (2.0 * qa));
+    }
+  } else if (qb != 0.0) {
+    ends.push_back(-qc / qb);
+  }
+  std::sort(ends.begin(), ends.end());
+  ends.push_back(1e12);  // r = 10^6: no lens images that far out
+  double lo = 0.0;
+  for (double hi : ends) {
+    if (!(hi > lo)) continue;
+    if (g(hi) <= 0.0) {
+      for (int i = 0; i < 200 && hi - lo > 1e-15 * hi; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (g(mid) > 0.0 ? lo : hi) = mid;
+      }
+      return std::sqrt(lo);
+    }
+    lo = hi;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+bool Distortion::Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess,
+                           Eigen::Vector2d* xy) const {
+  return Undistort(xd, guess, FoldRadius(), xy);
+}
+
+bool Distortion::Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess,
+                           double fold_radius, Eigen::Vector2d* xy) const {
+  Eigen::Vector2d p = guess;
+  Eigen::Matrix2d jacobian;
+  double error = (Distort(p, &jacobian) - xd).norm();
+  for (int iteration = 0; iteration < 60 && error > 1e-13; ++iteration) {
+    const Eigen::Vector2d step = jacobian.inverse() * (Distort(p) - xd);
+    if (!step.allFinite()) return false;
+    // Halve the step until the residual falls.
+    double t = 1.0;
+    for (; t > 1e-6; t *= 0.5) {
+      const Eigen::Vector2d q = p - t * step;
+      const double e = (Distort(q) - xd).norm();
+      if (e < error) {
+        p = q;
+        error = e;
+        break;
+      }
+    }
+    if (t <= 1e-6) break;
+    Distort(p, &jacobian);
+  }
+  if (!(error <= 1e-12) || !(p.norm() < fold_radius)) return false;
+  Distort(p, &jacobian);
+  if (!(jacobian.determinant() > 0.0)) return false;
+  *xy = p;
+  return true;
+}
+
+bool Intrinsics::Unproject(double u, double v, Eigen::Vector2d* xy) const {
+  const Eigen::Vector2d pinhole((u - cx) / fx, (v - cy) / fy);
+  if (!distortion.active()) {
+    *xy = pinhole;
+    return true;
+  }
+  return distortion.Undistort(pinhole, pinhole, xy);
+}
+
+Eigen::Vector2d Intrinsics::Project(const Eigen::Vector3d& p) const {
+  Eigen::Vector2d xy(p.x() / p.z(), p.y() / p.z());
+  if (distortion.active()) xy = distortion.Distort(xy);
+  return Eigen::Vector2d(fx * xy.x() + cx, fy * xy.y() + cy);
+}
+
 bool Intrinsics::Check(std::string* why) const {
   std::ostringstream out;
   if (width <= 0 || height <= 0 || width > 16384 || height > 16384) {
@@ -75,11 +173,90 @@ bool Intrinsics::Check(std::string* why) const {
     out << "focal lengths must be positive (fx = " << fx << ", fy = " << fy << ")";
   } else if (!std::isfinite(cx) || !std::isfinite(cy)) {
     out << "principal point must be finite";
+  } else if (!std::isfinite(distortion.k1) || !std::isfinite(distortion.k2) ||
+             !std::isfinite(distortion.p1) || !std::isfinite(distortion.p2) ||
+             !std::isfinite(distortion.k3)) {
+    out << "distortion coefficients must be finite";
   } else {
+    // Every pixel corner on the image's border must have a ray: the fold lies outside the image.
+    if (distortion.active()) {
+      // The border's pixel corners, in order: top and bottom rows, then left and right columns.
+      std::vector<Eigen::Vector2i> border;
+      for (int u = 0; u <= width; ++u) border.emplace_back(u, 0), border.emplace_back(u, height);
+      for (int v = 0; v <= height; ++v) border.emplace_back(0, v), border.emplace_back(width, v);
+      const double fold = distortion.FoldRadius();
+      for (const Eigen::Vector2i& p : border) {
+        const Eigen::Vector2d pinhole((p.x() - cx) / fx, (p.y() - cy) / fy);
+        Eigen::Vector2d xy;
+        if (!distortion.Undistort(pinhole, pinhole, fold, &xy)) {
+          out << "pixel (" << p.x() << ", " << p.y() << ")";
+          break;
+        }
+      }
+      if (out.tellp() > 0) {
+        out << " has no ray: the distortion polynomial folds back inside the image (fold radius "
+            << distortion.FoldRadius() << " on the normalised plane); check the coefficients";
+        *why = out.str();
+        return false;
+      }
+    }
     return true;
   }
   *why = out.str();
   return false;
+}
+
+bool ThinLens::Check(std::string* why) const {
+  if (!(focal_length_mm >= 0.0) || !std::isfinite(focal_length_mm)) {
+    *why = "focal_length must be a length of 0 (a pinhole) or more";
+  } else if (!(f_number >= 0.5 && f_number <= 128.0)) {
+    *why = "f_number must lie between 0.5 and 128";
+  } else if (!(focus_distance_mm > 0.0) || focus_distance_mm > kMaxSceneExtentMm) {
+    *why = "focus_distance must be a positive length up to 1 km";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+bool CameraMotion::Check(std::string* why) const {
+  if (!velocity_mm_s.allFinite() || velocity_mm_s.norm() > 1e6) {
+    *why = "velocity must be finite and at most 1000 m/s";
+  } else if (!angular_velocity_rad_s.allFinite() || angular_velocity_rad_s.norm() > 1e4) {
+    *why = "angular velocity must be finite and at most 10^4 rad/s";
+  } else if (!(exposure_s >= 0.0 && exposure_s <= 10.0)) {
+    *why = "exposure must lie between 0 and 10 s";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+Eigen::Isometry3d CameraMotion::At(double tau) const {
+  const double t = tau * exposure_s;
+  const Eigen::Vector3d w = angular_velocity_rad_s * t, v = velocity_mm_s * t;
+  const double theta = w.norm();
+  Eigen::Matrix3d hat;
+  hat << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
+  // V = I + (1 - cos) / theta^2 [w] + (theta - sin) / theta^3 [w]^2, by series near 0.
+  double a = 0.5, b = 1.0 / 6.0;
+  if (theta > 1e-6) {
+    a = (1.0 - std::cos(theta)) / (theta * theta);
+    b = (theta - std::sin(theta)) / (theta * theta * theta);
+  }
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  if (theta > 0.0) out.linear() = Eigen::AngleAxisd(theta, w / theta).toRotationMatrix();
+  out.translation() = (Eigen::Matrix3d::Identity() + a * hat + b * hat * hat) * v;
+  return out;
+}
+
+CameraMotion CameraMotion::Seen(const Eigen::Isometry3d& this_from_other) const {
+  CameraMotion out = *this;
+  const Eigen::Matrix3d r_t = this_from_other.linear().transpose();
+  out.angular_velocity_rad_s = r_t * angular_velocity_rad_s;
+  out.velocity_mm_s =
+      r_t * (velocity_mm_s + angular_velocity_rad_s.cross(this_from_other.translation()));
+  return out;
 }
 
 bool SweepOptions::Check(std::string* why) const {

@@ -2,8 +2,9 @@
 //
 // Camera frame: OpenCV/BOP convention, x right, y down, z forward. A point moves between frames as
 // x_in_world = world_from_cam * x_in_cam. Pixel (u, v) covers [u, u+1) x [v, v+1); its centre is
-// (u + 0.5, v + 0.5), so the ray of pixel (u, v) passes through
-//   ((u + 0.5 - cx) / fx, (v + 0.5 - cy) / fy, 1) in the camera frame.
+// (u + 0.5, v + 0.5), so the ray of a pinhole camera's pixel (u, v) passes through
+//   ((u + 0.5 - cx) / fx, (v + 0.5 - cy) / fy, 1) in the camera frame,
+// and that of a camera with lens distortion through the point Intrinsics::Unproject gives.
 #pragma once
 
 #include <cstdint>
@@ -13,9 +14,44 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "cad/schema.h"
+
 namespace cadsynth {
 
-// Intrinsics in pixels. No distortion.
+// OpenCV's lens distortion (calib3d's model, coefficients in OpenCV's order k1, k2, p1, p2, k3):
+// the ray through (x, y, 1) in the camera frame shows at pixel (fx x' + cx, fy y' + cy) with
+//   x' = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),
+//   y' = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,   r^2 = x^2 + y^2.
+// The polynomial describes a lens only where it is one-to-one: inside the fold radius, where the
+// radial map r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing (barrel distortion folds back outside
+// the calibrated field). Rays beyond it are not imaged.
+struct Distortion {
+  double k1 = 0.0, k2 = 0.0, p1 = 0.0, p2 = 0.0, k3 = 0.0;
+
+  bool active() const { return k1 != 0.0 || k2 != 0.0 || p1 != 0.0 || p2 != 0.0 || k3 != 0.0; }
+  // (x', y') of (x, y), and its Jacobian if `jacobian` is not null.
+  Eigen::Vector2d Distort(const Eigen::Vector2d& xy, Eigen::Matrix2d* jacobian = nullptr) const;
+  // The first radius where d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)] = 0; infinity if there is none.
+  double FoldRadius() const;
+  // The (x, y) inside the fold radius, with a Jacobian of positive determinant, that distorts to
+  // `xd` (to 1e-12), by damped Newton steps from `guess`; false if there is none.
+  bool Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess,
+                 Eigen::Vector2d* xy) const;
+  // The same with FoldRadius() given (it costs as much as the Newton steps).
+  bool Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess, double fold_radius,
+                 Eigen::Vector2d* xy) const;
+
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.k1, Field{"k1", "number", "radial, r^2"});
+    visit(o.k2, Field{"k2", "number", "radial, r^4"});
+    visit(o.p1, Field{"p1", "number", "tangential"});
+    visit(o.p2, Field{"p2", "number", "tangential"});
+    visit(o.k3, Field{"k3", "number", "radial, r^6"});
+  }
+};
+
+// Intrinsics in pixels, and the lens distortion (none by default).
 struct Intrinsics {
   int width = 640;
   int height = 480;
@@ -33,8 +69,63 @@ struct Intrinsics {
   // Square pixels, principal point at the centre, horizontal field of view `hfov_rad`.
   static Intrinsics FromFov(int width, int height, double hfov_rad);
 
+  Distortion distortion;
+
   Eigen::Matrix3d K() const;
+  // The camera-frame ray (x, y, 1) through image point (u, v) (pixel centres at + 0.5); false
+  // where the lens images no ray (beyond the fold radius). Exact for a pinhole camera; with
+  // distortion, Distortion::Undistort from the pinhole guess.
+  bool Unproject(double u, double v, Eigen::Vector2d* xy) const;
+  // The image point of camera-frame point `p` (z > 0), distorted.
+  Eigen::Vector2d Project(const Eigen::Vector3d& p) const;
+  // Also that every point of the image (its border's pixel corners) has a ray.
   bool Check(std::string* why) const;
+};
+
+// A thin lens: depth of field in the physically based colour image (labels and depth keep the
+// pinhole's exact values). The aperture's diameter is focal_length / f_number, and the plane z =
+// focus_distance is sharp; a point at depth z blurs into a disc of f_px * aperture * |1 / focus -
+// 1 / z| pixels (f_px = fx). Blender's depth of field in the same terms (lens mm, f-stop, focus
+// distance). The focal length sets only the aperture: the image's scale is K's.
+struct ThinLens {
+  double focal_length_mm = 0.0;  // 0: a pinhole, everything sharp
+  double f_number = 2.8;
+  double focus_distance_mm = 1000.0;
+
+  bool active() const { return focal_length_mm > 0.0; }
+  double aperture_mm() const { return focal_length_mm / f_number; }
+  bool Check(std::string* why) const;
+
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.focal_length_mm,
+          Field{"focal_length", "length", "the lens's focal length (sets the aperture only)"});
+    visit(o.f_number, Field{"f_number", "number", "aperture: focal_length / f_number (0.5-128)"});
+    visit(o.focus_distance_mm,
+          Field{"focus_distance", "length", "depth of the sharp plane, along the optical axis"});
+  }
+};
+
+// The camera's motion while the shutter is open: motion blur in the physically based colour image
+// (labels and depth keep the pose at mid-exposure, the frame's pose). A constant velocity (mm/s)
+// and angular velocity (rad/s) in the camera's own frame over `exposure_s`, centred on the
+// frame's pose: at time tau * exposure_s from mid-exposure the camera sits at world_from_cam *
+// At(tau), tau in [-1/2, 1/2].
+struct CameraMotion {
+  Eigen::Vector3d velocity_mm_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular_velocity_rad_s = Eigen::Vector3d::Zero();
+  double exposure_s = 0.0;
+
+  bool active() const {
+    return exposure_s > 0.0 &&
+           (velocity_mm_s.squaredNorm() > 0.0 || angular_velocity_rad_s.squaredNorm() > 0.0);
+  }
+  bool Check(std::string* why) const;
+  // cam_mid_from_cam at tau: SE(3)'s exponential of the twist times tau * exposure_s.
+  Eigen::Isometry3d At(double tau) const;
+  // The motion of a camera fixed to this one (a rig), at this_from_other: the same rigid motion
+  // in the other camera's frame (the adjoint: w' = R^T w, v' = R^T (v + w x t)).
+  CameraMotion Seen(const Eigen::Isometry3d& this_from_other) const;
 };
 
 // Named cameras (the recipe's camera.preset). Nominal: square pixels and a centred principal point

@@ -18,6 +18,9 @@ namespace {
 
 constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+// Sampler dimensions of a camera path's aperture point and time (far above the bounces' 1 + 3 b,
+// so that switching depth of field or motion blur on changes no other number of a path).
+constexpr uint32_t kLensDimension = 1000, kTimeDimension = 1001;
 // Powers meet lengths here: a light's numbers are per m^2, the scene's lengths are mm.
 constexpr float kMm2PerM2 = 1e6f;
 
@@ -559,10 +562,14 @@ void PathTracer::ProjectorSignal(const RTCRayHit16& rh, const int valid[16],
   }
 }
 
-void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, uint64_t frame_seed,
-                           Eigen::Vector3f out[16]) const {
+void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const ThinLens& lens,
+                           const CameraMotion& motion, int u0, int v0, int samples,
+                           uint64_t frame_seed, Eigen::Vector3f out[16]) const {
   const Impl& im = *impl_;
   const Intrinsics& k = camera.intrinsics;
+  const float aperture_radius = lens.active() ? static_cast<float>(0.5 * lens.aperture_mm()) : 0.0f;
+  const float focus = static_cast<float>(lens.focus_distance_mm);
+  const bool moving = motion.active();
   const Eigen::Matrix3f rotation = camera.world_from_cam.linear().cast<float>();
   const Eigen::Vector3f origin = camera.world_from_cam.translation().cast<float>();
   const int bounces = im.scene.bounces;
@@ -598,12 +605,28 @@ void PathTracer::TraceTile(const Camera& camera, int u0, int v0, int samples, ui
       prev_pdf[j] = 0;
       cone_width[j] = 0;
       cone_spread[j] = pixel_spread;
-      const Eigen::Vector2f jitter = PixelSampler(pixel_seed[j], s).Get2D(0);
-      const Eigen::Vector3f d_cam(static_cast<float>((u + jitter.x() - k.cx) / k.fx),
-                                  static_cast<float>((v + jitter.y() - k.cy) / k.fy), 1.0f);
-      const Eigen::Vector3f d = rotation * d_cam;
+      const PixelSampler sampler(pixel_seed[j], s);
+      const Eigen::Vector2f jitter = sampler.Get2D(0);
+      Eigen::Vector2f xy = Eigen::Vector2f::Zero();
+      if (active[j] && !rays.At(u, v, jitter.x(), jitter.y(), &xy)) active[j] = 0;
+      Eigen::Vector3f o_cam = Eigen::Vector3f::Zero(), d_cam(xy.x(), xy.y(), 1.0f);
+      if (aperture_radius > 0.0f) {
+        // Through a point of the aperture to where the pixel's ray meets the plane of focus;
+        // camera z of the direction stays 1.
+        const Eigen::Vector2f l = ConcentricDisc(sampler.Get2D(kLensDimension)) * aperture_radius;
+        o_cam = Eigen::Vector3f(l.x(), l.y(), 0.0f);
+        d_cam -= o_cam / focus;
+      }
+      Eigen::Vector3f d = rotation * d_cam, o = origin + rotation * o_cam;
+      if (moving) {
+        const Eigen::Isometry3d pose =
+            camera.world_from_cam * motion.At(sampler.Get2D(kTimeDimension).x() - 0.5);
+        const Eigen::Matrix3f r = pose.linear().cast<float>();
+        d = r * d_cam;
+        o = pose.translation().cast<float>() + r * o_cam;
+      }
       dir[j] = d.normalized();
-      SetRayLane(&rh.ray, j, origin, d, im.scene.near_mm, im.scene.far_mm);
+      SetRayLane(&rh.ray, j, o, d, im.scene.near_mm, im.scene.far_mm);
       rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
     }
     rtcInitIntersectContext(&context);

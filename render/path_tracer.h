@@ -20,6 +20,7 @@
 #include "render/camera.h"
 #include "render/lights.h"
 #include "render/material.h"
+#include "render/pixel_rays.h"
 
 namespace cadsynth {
 
@@ -62,7 +63,12 @@ class PathTracer {
 
   // Mean linear radiance over `samples` paths through each pixel of the 4 x 4 tile whose top-left
   // pixel is (u0, v0) (pixel u0 + j % 4, v0 + j / 4 in out[j]; lanes outside the image are 0).
-  void TraceTile(const Camera& camera, int u0, int v0, int samples, uint64_t frame_seed,
+  // Each path starts at a random point of its pixel (through `rays`, so lens distortion bends it
+  // as it bends the labels' rays), of the thin lens's aperture when `lens` is active (depth of
+  // field), and at a random time of the exposure when `motion` is active (the camera at
+  // camera.world_from_cam * motion.At(tau); motion blur).
+  void TraceTile(const Camera& camera, const PixelRays& rays, const ThinLens& lens,
+                 const CameraMotion& motion, int u0, int v0, int samples, uint64_t frame_seed,
                  Eigen::Vector3f out[16]) const;
 
   // A depth sensor's projector return at the hits of a packet of camera rays traced in

@@ -12,6 +12,7 @@
 #include "cad/error.h"
 #include "render/image.h"
 #include "render/path_tracer.h"
+#include "render/pixel_rays.h"
 #include "render/ray_packet.h"
 #include "render/sensor.h"
 
@@ -157,6 +158,29 @@ struct Renderer::Impl {
     return f < fixtures.size() ? static_cast<int>(f) : -1;
   }
   std::unique_ptr<PathTracer> tracer;  // RenderOptions::Mode::kPbr
+  // The pixel rays of the cameras seen so far (a distorted camera's table costs a Newton solve
+  // per pixel): a few per rig, kept for the renderer's life.
+  mutable std::mutex rays_mutex;
+  mutable std::vector<std::shared_ptr<const PixelRays>> rays_cache;
+  std::shared_ptr<const PixelRays> RaysOf(const Intrinsics& k) const {
+    const auto same = [&k](const Intrinsics& o) {
+      const Distortion &a = k.distortion, &b = o.distortion;
+      return k.width == o.width && k.height == o.height && k.fx == o.fx && k.fy == o.fy &&
+             k.cx == o.cx && k.cy == o.cy && a.k1 == b.k1 && a.k2 == b.k2 && a.p1 == b.p1 &&
+             a.p2 == b.p2 && a.k3 == b.k3;
+    };
+    {
+      std::lock_guard<std::mutex> lock(rays_mutex);
+      for (const auto& r : rays_cache) {
+        if (same(r->intrinsics())) return r;
+      }
+    }
+    auto rays = std::make_shared<const PixelRays>(k);
+    std::lock_guard<std::mutex> lock(rays_mutex);
+    if (rays_cache.size() >= 16) rays_cache.erase(rays_cache.begin());
+    rays_cache.push_back(rays);
+    return rays;
+  }
 
   ~Impl() {
     for (RTCScene s : solo) rtcReleaseScene(s);
@@ -406,23 +430,38 @@ PixelRect ProjectedRect(const Eigen::AlignedBox3d& model_box,
 }
 
 // The camera's rays: origin, and direction with camera-frame z = 1 so that t is the depth:
-// world direction = col0 * x(u) + col1 * y(v) + col2, with x(u) = (u + du - cx) / fx and
-// y(v) = (v + dv - cy) / fy tabulated once per sample offset.
+// world direction = col0 * x + col1 * y + col2 for the ray (x, y, 1) of a pixel (PixelRays).
 struct RayGen {
   Eigen::Matrix3f rotation;
   Eigen::Vector3f origin;
-  const Intrinsics* k;
+  const PixelRays* rays;
   Eigen::Vector3f col0, col1, col2;
-  RayGen(const Eigen::Matrix3f& r, const Eigen::Vector3f& o, const Intrinsics* intrinsics)
-      : rotation(r), origin(o), k(intrinsics), col0(r.col(0)), col1(r.col(1)), col2(r.col(2)) {}
-  // x(u) for u in [0, width] and y(v) for v in [0, height] at sample offset (du, dv).
-  void Tabulate(double du, double dv, std::vector<float>* xs, std::vector<float>* ys) const {
-    xs->resize(k->width + kTile);
-    ys->resize(k->height + kTile);
-    for (size_t u = 0; u < xs->size(); ++u) (*xs)[u] = static_cast<float>((u + du - k->cx) / k->fx);
-    for (size_t v = 0; v < ys->size(); ++v) (*ys)[v] = static_cast<float>((v + dv - k->cy) / k->fy);
-  }
+  RayGen(const Eigen::Matrix3f& r, const Eigen::Vector3f& o, const PixelRays* pixel_rays)
+      : rotation(r), origin(o), rays(pixel_rays), col0(r.col(0)), col1(r.col(1)), col2(r.col(2)) {}
 };
+
+// The pixels that can see `model_box`, clamped to `bounds`: ProjectedRect for a pinhole camera,
+// and through the lens distortion otherwise.
+PixelRect ImageRect(const PixelRays& rays, const Eigen::AlignedBox3d& model_box,
+                    const Eigen::Isometry3d& cam_from_model, const PixelRect& bounds) {
+  if (!rays.distorted()) return ProjectedRect(model_box, cam_from_model, rays.intrinsics(), bounds);
+  const double inf = std::numeric_limits<double>::infinity();
+  double x0 = inf, y0 = inf, x1 = -inf, y1 = -inf;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p =
+        cam_from_model * model_box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
+    if (p.z() <= 1e-6) {  // behind the camera: any ray may reach it
+      x0 = y0 = -inf, x1 = y1 = inf;
+      break;
+    }
+    x0 = std::min(x0, p.x() / p.z()), x1 = std::max(x1, p.x() / p.z());
+    y0 = std::min(y0, p.y() / p.z()), y1 = std::max(y1, p.y() / p.z());
+  }
+  const int b[4] = {bounds.u0, bounds.v0, bounds.u1, bounds.v1};
+  int r[4];
+  rays.RectOfPlane(x0, y0, x1, y1, b, r);
+  return PixelRect{r[0], r[1], r[2], r[3]};
+}
 
 // Sets lane j of a shadow packet: from surface point `p` along unit `d` up to `tfar`, starting a
 // little off the surface (float error at a metre is ~1e-4 mm).
@@ -440,28 +479,37 @@ void SetLane(RTCRayHit16* rh, int j, const Eigen::Vector3f& origin, const Eigen:
   rh->hit.instID[0][j] = kInvalid;
 }
 
-// Fills a 16-ray packet for the 4 x 4 tile at (u0, v0) from tabulated x(u), y(v).
-void InitPacket(const RayGen& gen, int u0, int v0, int w, int h, const std::vector<float>& xs,
-                const std::vector<float>& ys, float tnear, float tfar, RTCRayHit16* rh,
-                int valid[16]) {
+// Fills a 16-ray packet for the 4 x 4 tile at (u0, v0) through points (u + du, v + dv) of its
+// pixels: from tabulated x(u), y(v) when `xs` is given (a pinhole camera), else from the pixel
+// rays (lanes without a ray are off).
+void InitPacket(const RayGen& gen, int u0, int v0, int w, int h, const std::vector<float>* xs,
+                const std::vector<float>* ys, float du, float dv, float tnear, float tfar,
+                RTCRayHit16* rh, int valid[16]) {
   for (int j = 0; j < 16; ++j) {
     const int u = u0 + j % kTile, v = v0 + j / kTile;
-    valid[j] = (u < w && v < h) ? -1 : 0;
-    SetLane(rh, j, gen.origin, gen.col0 * xs[u] + gen.col1 * ys[v] + gen.col2, tnear, tfar);
+    bool in = u < w && v < h;
+    Eigen::Vector2f xy = Eigen::Vector2f::Zero();
+    if (xs != nullptr) {
+      xy = Eigen::Vector2f((*xs)[static_cast<size_t>(u)], (*ys)[static_cast<size_t>(v)]);
+    } else if (in) {
+      in = gen.rays->At(u, v, du, dv, &xy);
+    }
+    valid[j] = in ? -1 : 0;
+    SetLane(rh, j, gen.origin, gen.col0 * xy.x() + gen.col1 * xy.y() + gen.col2, tnear, tfar);
   }
 }
 
 // A 4 x 4 packet at any pixel (u0, v0) of the 3x canvas, where the tabulated directions do not
-// reach; lanes outside `rect` are off. Same directions as InitPacket inside the image.
+// reach; lanes outside `rect` or without a ray are off. Same directions as InitPacket inside the
+// image.
 void InitCanvasPacket(const RayGen& gen, int u0, int v0, const PixelRect& rect, float tnear,
                       float tfar, RTCRayHit16* rh, int valid[16]) {
-  const Intrinsics& k = *gen.k;
   for (int j = 0; j < 16; ++j) {
     const int u = u0 + j % kTile, v = v0 + j / kTile;
-    valid[j] = (u < rect.u1 && v < rect.v1) ? -1 : 0;
-    const float x = static_cast<float>((u + 0.5 - k.cx) / k.fx),
-                y = static_cast<float>((v + 0.5 - k.cy) / k.fy);
-    SetLane(rh, j, gen.origin, gen.col0 * x + gen.col1 * y + gen.col2, tnear, tfar);
+    Eigen::Vector2f xy = Eigen::Vector2f::Zero();
+    const bool in = u < rect.u1 && v < rect.v1 && gen.rays->Anywhere(u, v, &xy);
+    valid[j] = in ? -1 : 0;
+    SetLane(rh, j, gen.origin, gen.col0 * xy.x() + gen.col1 * xy.y() + gen.col2, tnear, tfar);
   }
 }
 
@@ -632,10 +680,13 @@ std::vector<float> Renderer::Impl::InfraredPass(const Camera& camera, const Dept
   std::vector<float> out(num_pixels, 0.0f);
   std::vector<uint8_t> seen(num_pixels, 0);
   std::vector<float> signal(num_pixels, 0.0f);
+  const std::shared_ptr<const PixelRays> rays = RaysOf(k);
   const RayGen gen(camera.world_from_cam.linear().cast<float>(),
-                   camera.world_from_cam.translation().cast<float>(), &k);
+                   camera.world_from_cam.translation().cast<float>(), rays.get());
   std::vector<float> xs, ys;
-  gen.Tabulate(0.5, 0.5, &xs, &ys);
+  if (!rays->distorted()) rays->Tabulate(0.5, 0.5, kTile, &xs, &ys);
+  const std::vector<float>* pxs = rays->distorted() ? nullptr : &xs;
+  const std::vector<float>* pys = rays->distorted() ? nullptr : &ys;
   const Eigen::Matrix3f projector_from_world = gen.rotation.transpose();
   const float tnear = static_cast<float>(options.near_mm),
               tfar = static_cast<float>(options.far_mm);
@@ -649,7 +700,7 @@ std::vector<float> Renderer::Impl::InfraredPass(const Camera& camera, const Dept
         Shaded shaded[16];
         for (int tile = range.begin(); tile < range.end(); ++tile) {
           const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
-          InitPacket(gen, u0, v0, w, h, xs, ys, tnear, tfar, &rh, valid);
+          InitPacket(gen, u0, v0, w, h, pxs, pys, 0.5f, 0.5f, tnear, tfar, &rh, valid);
           rtcInitIntersectContext(&context);
           rtcIntersect16(valid, world, &context, &rh);
           ShadePacket(rh, valid, shaded, m.ambient > 0.0);
@@ -680,7 +731,14 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   const Intrinsics& k = camera.intrinsics;
   std::string why;
   if (!k.Check(&why)) throw Error("camera: " + why);
-  if (!sensor.Check(&why)) throw Error("camera.depth: " + why);
+  if (!sensor.Check(&why)) throw Error("camera: " + why);
+  if (im.tracer == nullptr && (sensor.lens.active() || sensor.motion.active()))
+    throw Error("camera: depth of field and motion blur need render.mode: pbr");
+  if (k.distortion.active() && sensor.depth.kind == DepthModel::Kind::kActiveStereo) {
+    throw Error(
+        "camera: active_stereo matches rectified IR images; give the lens distortion to another "
+        "camera of the rig");
+  }
   const int w = k.width, h = k.height;
   const size_t num_pixels = static_cast<size_t>(w) * h;
   const RenderOptions& o = im.options;
@@ -713,18 +771,21 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   const float exposure_scale = static_cast<float>(std::exp2(o.exposure));
   const bool filmic = o.view == RenderOptions::View::kFilmic;
 
+  const std::shared_ptr<const PixelRays> rays = im.RaysOf(k);
+  const bool distorted = rays->distorted();
   const RayGen gen(camera.world_from_cam.linear().cast<float>(),
-                   camera.world_from_cam.translation().cast<float>(), &k);
-  std::vector<float> xs, ys;  // pixel centres
-  gen.Tabulate(0.5, 0.5, &xs, &ys);
-  // Supersampling offsets (sx + 0.5) / ss, tabulated per sample.
+                   camera.world_from_cam.translation().cast<float>(), rays.get());
+  std::vector<float> xs, ys;  // pixel centres (pinhole)
+  if (!distorted) rays->Tabulate(0.5, 0.5, kTile, &xs, &ys);
+  // Supersampling offsets (sx + 0.5) / ss, tabulated per sample (pinhole).
   std::vector<std::vector<float>> sample_xs, sample_ys;
   for (int sy = 0; sy < im.options.supersampling && im.options.supersampling > 1; ++sy) {
     for (int sx = 0; sx < im.options.supersampling; ++sx) {
       sample_xs.emplace_back();
       sample_ys.emplace_back();
       const double n = im.options.supersampling;
-      gen.Tabulate((sx + 0.5) / n, (sy + 0.5) / n, &sample_xs.back(), &sample_ys.back());
+      if (!distorted)
+        rays->Tabulate((sx + 0.5) / n, (sy + 0.5) / n, kTile, &sample_xs.back(), &sample_ys.back());
     }
   }
   const Eigen::Matrix3f cam_from_world_rotation = gen.rotation.transpose();
@@ -743,8 +804,8 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   // projected corners holds its whole projection, with a pixel of margin.
   std::vector<uint8_t> reachable(static_cast<size_t>(tiles_x) * tiles_y, 0);
   for (size_t i = 0; i < im.scene.instances.size(); ++i) {
-    const PixelRect r = ProjectedRect(im.model_bounds[im.scene.instances[i].part],
-                                      frame.instances[i].cam_from_model, k, PixelRect{0, 0, w, h});
+    const PixelRect r = ImageRect(*rays, im.model_bounds[im.scene.instances[i].part],
+                                  frame.instances[i].cam_from_model, PixelRect{0, 0, w, h});
     for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
       for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
         reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
@@ -752,7 +813,7 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   }
   for (const Scene::Fixture& fixture : im.scene.fixtures) {
     const PixelRect r =
-        ProjectedRect(fixture.mesh.Bounds(), cam_from_world, k, PixelRect{0, 0, w, h});
+        ImageRect(*rays, fixture.mesh.Bounds(), cam_from_world, PixelRect{0, 0, w, h});
     for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
       for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
         reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
@@ -779,11 +840,14 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
         for (int tile = range.begin(); tile < range.end(); ++tile) {
           const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
           // The pixel centres: depth, instance, normal, and (without supersampling) colour.
-          InitPacket(gen, u0, v0, w, h, xs, ys, tnear, tfar, &rh, valid);
+          InitPacket(gen, u0, v0, w, h, distorted ? nullptr : &xs, distorted ? nullptr : &ys, 0.5f,
+                     0.5f, tnear, tfar, &rh, valid);
           // Incoherent packet traversal: Embree's coherent mode
           // (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) lost parts near the image centre of straight-down
           // views, also with robust scenes.
           trace(tile, &context, valid, &rh);
+          alignas(64) int centre_valid[16];  // the pixels (supersamples reuse `valid`)
+          std::copy(valid, valid + 16, centre_valid);
           Eigen::Vector3f color[16];
           // The fast mode's colour needs the lights; normals, albedo and points (for the sensor)
           // do not.
@@ -806,7 +870,8 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
           }
           Eigen::Vector3f radiance[16];
           if (pbr && o.shade) {
-            im.tracer->TraceTile(camera, u0, v0, o.samples, frame_seed, radiance);
+            im.tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples,
+                                 frame_seed, radiance);
             for (int j = 0; j < 16; ++j) {
               if (!valid[j]) continue;
               const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
@@ -818,21 +883,25 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
           // Supersampled colour: a regular grid of samples in each pixel.
           for (int sy = 0; o.shade && ss > 1 && sy < ss; ++sy) {
             for (int sx = 0; sx < ss; ++sx) {
-              InitPacket(gen, u0, v0, w, h, sample_xs[sy * ss + sx], sample_ys[sy * ss + sx], tnear,
-                         tfar, &rh, valid);
+              const size_t n = static_cast<size_t>(sy * ss + sx);
+              InitPacket(gen, u0, v0, w, h, distorted ? nullptr : &sample_xs[n],
+                         distorted ? nullptr : &sample_ys[n], (sx + 0.5f) / ss, (sy + 0.5f) / ss,
+                         tnear, tfar, &rh, valid);
               trace(tile, &context, valid, &rh);
               im.ShadePacket(rh, valid, shaded);
               for (int j = 0; j < 16; ++j) color[j] += shaded[j].color / float(ss * ss);
             }
           }
           for (int j = 0; j < 16; ++j) {
-            if (!valid[j]) continue;
+            if (!centre_valid[j]) continue;
             const int u = u0 + j % kTile, v = v0 + j / kTile;
             const size_t pixel = static_cast<size_t>(v) * w + u;
             const bool pbr_colour = pbr && o.shade;
             // The linear value the image sensor reads (pbr: the exposed radiance; fast: the
             // Lambert colour), then the display transform (pbr) and 8 bits.
-            const double vignette = imager.active() ? imager.Vignette(xs[u], ys[v]) : 1.0;
+            Eigen::Vector2f centre;
+            rays->Centre(u, v, &centre);
+            const double vignette = imager.active() ? imager.Vignette(centre.x(), centre.y()) : 1.0;
             // Noise draws: R, G, B and grey; a grey camera's colour image is not written, and
             // gets no noise.
             double normal[4] = {0.0, 0.0, 0.0, 0.0};
@@ -911,7 +980,7 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
     Frame::InstanceTruth& truth = frame.instances[i];
     truth.amodal_mask.assign(num_pixels, 0);
     const PixelRect r =
-        ProjectedRect(im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, k, canvas);
+        ImageRect(*rays, im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, canvas);
     truth.roi[0] = std::clamp(r.u0, 0, w);
     truth.roi[1] = std::clamp(r.v0, 0, h);
     truth.roi[2] = std::clamp(r.u1, 0, w);

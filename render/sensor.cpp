@@ -149,8 +149,11 @@ double Gaussian(uint64_t seed, const RandomStream& stream, uint64_t index) {
 float CosIncidence(const DepthSensorInput& in, int u, int v, size_t p) {
   if (in.normals == nullptr) return 1.0f;
   const Intrinsics& k = in.intrinsics;
-  const Eigen::Vector3f ray(static_cast<float>((u + 0.5 - k.cx) / k.fx),
-                            static_cast<float>((v + 0.5 - k.cy) / k.fy), 1.0f);
+  Eigen::Vector3f ray(static_cast<float>((u + 0.5 - k.cx) / k.fx),
+                      static_cast<float>((v + 0.5 - k.cy) / k.fy), 1.0f);
+  Eigen::Vector2d xy;
+  if (k.distortion.active() && k.Unproject(u + 0.5, v + 0.5, &xy))
+    ray = Eigen::Vector3f(static_cast<float>(xy.x()), static_cast<float>(xy.y()), 1.0f);
   return std::abs(in.normals[p].dot(ray.normalized()));
 }
 

@@ -198,7 +198,11 @@ struct SensorOptions {
   Image image = Image::kRgb;
   ImageSensor imager;
   DepthModel depth;
-  bool Check(std::string* why) const { return imager.Check(why) && depth.Check(why); }
+  ThinLens lens;        // depth of field (pbr colour only)
+  CameraMotion motion;  // motion blur (pbr colour only)
+  bool Check(std::string* why) const {
+    return imager.Check(why) && depth.Check(why) && lens.Check(why) && motion.Check(why);
+  }
 };
 
 // Per pixel, what the renderer knows for a depth model (row-major, width x height).

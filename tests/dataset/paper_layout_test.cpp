@@ -26,32 +26,37 @@ struct TwoParts {
                              MakePart("pin", MakeCylinder(8, 50), TessellationOptions{})};
   Scene scene;
   Frame frame;
-  TwoParts() {
+  explicit TwoParts(const Distortion& distortion = {}) {
     scene.instances = {
         Instance{0, "block", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 20))},
         Instance{1, "pin", Eigen::Translation3d(80, 0, 25) * Eigen::Isometry3d::Identity()}};
     Camera camera;
     camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.3, 0.9, 500.0);
+    camera.intrinsics.distortion = distortion;
+    // With distortion, the parts near the image's left edge, where the lens bends rays most.
+    if (distortion.active()) camera.intrinsics.cx = 100.0;
     frame = Renderer(parts, scene).Render(camera);
   }
 };
 
 TEST(Grasp, BackProjectedPointsLieOnTheObject) {
-  const TwoParts s;
-  for (int i = 0; i < 2; ++i) {
-    const std::vector<Eigen::Vector3f> points = BackProjectInstance(s.frame, i, 0.1);
-    EXPECT_EQ(static_cast<int>(points.size()),
-              s.frame.instances[i].px_count_visib);  // every depth is valid
-    // Back in the model frame (mm), every point is on the part's box, up to depth rounding.
-    const Eigen::Isometry3d model_from_cam = s.frame.instances[i].cam_from_model.inverse();
-    const Eigen::AlignedBox3d box = s.parts[i].mesh.Bounds();
-    double worst = 0;
-    for (const Eigen::Vector3f& p : points) {
-      const Eigen::Vector3d q = model_from_cam * (p.cast<double>() * 1000.0);
-      worst = std::max(worst, box.exteriorDistance(q));
+  // Also through a strongly distorting lens (the pinhole's rays would miss the box by about
+  // 10 mm where the parts are, 220 px left of the principal point).
+  for (const TwoParts& s : {TwoParts(), TwoParts(Distortion{-0.25, 0.05, 0.002, -0.001})})
+    for (int i = 0; i < 2; ++i) {
+      const std::vector<Eigen::Vector3f> points = BackProjectInstance(s.frame, i, 0.1);
+      EXPECT_EQ(static_cast<int>(points.size()),
+                s.frame.instances[i].px_count_visib);  // every depth is valid
+      // Back in the model frame (mm), every point is on the part's box, up to depth rounding.
+      const Eigen::Isometry3d model_from_cam = s.frame.instances[i].cam_from_model.inverse();
+      const Eigen::AlignedBox3d box = s.parts[i].mesh.Bounds();
+      double worst = 0;
+      for (const Eigen::Vector3f& p : points) {
+        const Eigen::Vector3d q = model_from_cam * (p.cast<double>() * 1000.0);
+        worst = std::max(worst, box.exteriorDistance(q));
+      }
+      EXPECT_LT(worst, 0.2) << "mm outside the box";
     }
-    EXPECT_LT(worst, 0.2) << "mm outside the box";
-  }
 }
 
 TEST(Grasp, NpyHeaderIsWhatNumpyReads) {

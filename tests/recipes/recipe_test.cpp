@@ -277,6 +277,61 @@ cameras:
             "f B / z)");
 }
 
+TEST(Recipe, LensEffects) {
+  const RunSpec spec = ParseRecipe(R"(
+render: {mode: pbr}
+cameras:
+  - name: left
+    preset: kinect_v1
+    distortion: {k1: -0.12, k2: 0.03, p1: 0.001, p2: -0.002, k3: 0.0}
+    lens: {focal_length: 8 mm, f_number: 1.4, focus_distance: 60 cm}
+    motion: {velocity_mm_s: [200, 0, 0], angular_velocity_deg_s: [0, 0, 90], exposure_ms: 8}
+  - name: right
+    position: [50 mm, 0, 0]
+)",
+                                   "r.yaml", ".");
+  ASSERT_EQ(spec.rig.size(), 2u);
+  const Distortion& d = spec.rig[0].intrinsics.distortion;
+  EXPECT_EQ(d.k1, -0.12);
+  EXPECT_EQ(d.p2, -0.002);
+  EXPECT_FALSE(spec.rig[1].intrinsics.distortion.active());
+  EXPECT_DOUBLE_EQ(spec.rig[0].sensor.lens.aperture_mm(), 8.0 / 1.4);
+  EXPECT_EQ(spec.rig[0].sensor.lens.focus_distance_mm, 600.0);
+  EXPECT_FALSE(spec.rig[1].sensor.lens.active());
+  const CameraMotion& m = spec.rig[0].sensor.motion;
+  EXPECT_EQ(m.exposure_s, 0.008);
+  EXPECT_NEAR(m.angular_velocity_rad_s.z(), M_PI / 2, 1e-15);
+  // The right camera, 50 mm along x of a rig turning at pi/2 rad/s about z, moves at
+  // v + w x t = (200, 0, 0) + (0, 0, pi/2) x (50, 0, 0) = (200, 25 pi, 0) mm/s.
+  const CameraMotion& r = spec.rig[1].sensor.motion;
+  EXPECT_TRUE(r.velocity_mm_s.isApprox(Eigen::Vector3d(200, 25 * M_PI, 0), 1e-12));
+  EXPECT_EQ(r.exposure_s, 0.008);
+
+  EXPECT_EQ(ErrorOf("camera: {hfov: 90, width: 640, height: 640, distortion: {k1: -0.3}}\n"),
+            "r.yaml:1:57: camera.distortion: pixel (0, 0) has no ray: the distortion polynomial "
+            "folds back inside the image (fold radius 1.05409 on the normalised plane); check the "
+            "coefficients");
+  EXPECT_EQ(ErrorOf("camera: {distortion: {k4: 0.1}}\n"),
+            "r.yaml:1:23: unknown key 'camera.distortion.k4' (did you mean 'k1'?)");
+  EXPECT_EQ(ErrorOf("camera: {lens: {focal_length: 8 mm}}\n"),
+            "r.yaml:1:16: camera.lens: depth of field and motion blur need render.mode: pbr (the "
+            "path tracer's samples)");
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\ncamera: {lens: {f_number: 2}}\n"),
+            "r.yaml:2:16: camera.lens: give the lens's 'focal_length' (with f_number: the "
+            "aperture)");
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\ncamera: {lens: {focal_length: 8, f_number: 0.1}}\n"),
+            "r.yaml:2:16: camera.lens: f_number must lie between 0.5 and 128");
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\ncamera: {motion: {velocity_mm_s: [1, 0, 0]}}\n"),
+            "r.yaml:2:18: camera.motion: give 'exposure_ms', how long the shutter is open");
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\ncameras:\n  - {name: a}\n  - {name: b, motion: "
+                    "{exposure_ms: 5}}\n"),
+            "r.yaml:4:23: cameras[1].motion: the rig moves as one: give its motion on the first "
+            "camera (the rig's frame)");
+  EXPECT_EQ(ErrorOf("camera: {depth: active_stereo, distortion: {k1: -0.1}}\n"),
+            "r.yaml:1:44: camera.distortion: active_stereo matches rectified IR images: give the "
+            "distortion to another camera of the rig");
+}
+
 TEST(Recipe, Classes) {
   const RunSpec spec = ParseRecipe(R"(
 classes:

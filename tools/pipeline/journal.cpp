@@ -72,6 +72,19 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     fields("depth", spec.sensor.depth);
   }
   if (spec.sensor.imager.active()) fields("imager", spec.sensor.imager);
+  // Lens distortion, depth of field and motion blur (recipes without them keep their run keys).
+  const auto optics = [&](const Intrinsics& k, const SensorOptions& sensor) {
+    if (k.distortion.active()) fields("distortion", k.distortion);
+    if (sensor.lens.active()) fields("lens", sensor.lens);
+    if (sensor.motion.active()) {
+      const CameraMotion& m = sensor.motion;
+      key << "motion " << FieldText(m.exposure_s, Field{});
+      for (int i = 0; i < 3; ++i) key << " " << FieldText(m.velocity_mm_s[i], Field{});
+      for (int i = 0; i < 3; ++i) key << " " << FieldText(m.angular_velocity_rad_s[i], Field{});
+      key << "\n";
+    }
+  };
+  optics(spec.intrinsics, spec.sensor);
   // A rig's sensors (recipes without `cameras:` keep their earlier run keys).
   for (const RigSensor& sensor : spec.rig) {
     const Intrinsics& c = sensor.intrinsics;
@@ -83,6 +96,7 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     key << "\n";
     fields("depth", sensor.sensor.depth);
     fields("imager", sensor.sensor.imager);
+    optics(sensor.intrinsics, sensor.sensor);
   }
   fields("output", spec.bop);
   fields("render", spec.render);

@@ -63,6 +63,16 @@ size_t EntriesIn(const std::filesystem::path& dir) {
   return static_cast<size_t>(std::distance(std::filesystem::directory_iterator(dir), {}));
 }
 
+// Generates `spec` into dir/NAME on `threads` threads and reads the tree back.
+std::map<std::string, std::string> GenerateOn(const RunSpec& spec, const std::filesystem::path& dir,
+                                              const std::string& name, size_t threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  GenerateOptions options;
+  options.output = dir / name;
+  Generate(spec, options);
+  return ReadTree(dir / name);
+}
+
 TEST(Generate, DefaultJobIsThePapersThreeDemoSets) {
   ScratchDir dir;
   GenerateOptions options;
@@ -240,14 +250,8 @@ scenes:
 
 TEST(Generate, SameSpecGivesTheSameBytesWhateverTheThreadCount) {
   ScratchDir dir;
-  const auto run = [&](const std::string& name, size_t threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    GenerateOptions options;
-    options.output = dir / name;
-    Generate(SmallDefault(), options);
-    return ReadTree(dir / name);
-  };
-  const auto one = run("one", 1), two = run("two", 2);
+  const auto one = GenerateOn(SmallDefault(), dir, "one", 1),
+             two = GenerateOn(SmallDefault(), dir, "two", 2);
   ASSERT_EQ(one.size(), two.size());
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
 }
@@ -262,14 +266,7 @@ TEST(Generate, GreyCameraAndDepthSensorWriteGrayDepthAndDepthGt) {
   spec.sensor.image = SensorOptions::Image::kGray16;
   spec.bop.gray_bits = 16;
   spec.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
-  const auto run = [&](const std::string& name, size_t threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    GenerateOptions options;
-    options.output = dir / name;
-    Generate(spec, options);
-    return ReadTree(dir / name);
-  };
-  const auto one = run("one", 1), two = run("two", 2);
+  const auto one = GenerateOn(spec, dir, "one", 1), two = GenerateOn(spec, dir, "two", 2);
   ASSERT_EQ(one.size(), two.size());
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
   const std::filesystem::path scene = dir / "one" / "train" / "000000";
@@ -367,6 +364,29 @@ cv::Mat VisibleIds(const std::filesystem::path& scene, const std::string& sensor
     ids.setTo(static_cast<int>(i + 1), mask > 0);
   }
   return ids;
+}
+
+TEST(Generate, LensEffectsAreWrittenBesideKAndGiveTheSameBytesOnAnyThreadCount) {
+  // Distortion, depth of field and motion blur together, path traced: the coefficients beside
+  // K in scene_camera.json and camera.json, and the same bytes on 1 and 2 threads.
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes.resize(1);
+  spec.render.mode = RenderOptions::Mode::kPbr;
+  spec.render.samples = 4;
+  spec.intrinsics.distortion = Distortion{-0.15, 0.02, 0.001, -0.0005, 0.003};
+  spec.sensor.lens = ThinLens{16.0, 2.0, 650.0};
+  spec.sensor.motion.velocity_mm_s = Eigen::Vector3d(300, 0, 0);
+  spec.sensor.motion.angular_velocity_rad_s = Eigen::Vector3d(0, 0, 0.2);
+  spec.sensor.motion.exposure_s = 0.01;
+  const auto one = GenerateOn(spec, dir, "one", 1), two = GenerateOn(spec, dir, "two", 2);
+  ASSERT_EQ(one.size(), two.size());
+  for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
+  const json dist = {-0.15, 0.02, 0.001, -0.0005, 0.003};
+  const json cameras = ReadJson(dir / "one" / "train" / "000000" / "scene_camera.json");
+  ASSERT_FALSE(cameras.empty());
+  for (const auto& [im, entry] : cameras.items()) EXPECT_EQ(entry["cam_dist_coeffs"], dist) << im;
+  EXPECT_EQ(ReadJson(dir / "one" / "camera.json")["dist_coeffs"], dist);
 }
 
 TEST(Generate, CameraRigWritesBopMultiSensorLayout) {

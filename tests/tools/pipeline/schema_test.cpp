@@ -126,6 +126,36 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
     EXPECT_EQ(each_field(ImageSensor{}, rig,
                          [](RunSpec& s) -> ImageSensor& { return s.rig[1].sensor.imager; }),
               4);
+    // Lens distortion, depth of field and motion blur: each coefficient and field, on the camera
+    // and on a rig's camera; inactive, they leave earlier run keys alone.
+    RunSpec lensed = spec;
+    lensed.intrinsics.distortion.k1 = -0.05;
+    lensed.sensor.lens.focal_length_mm = 8;
+    lensed.sensor.motion.exposure_s = 0.01;
+    lensed.sensor.motion.velocity_mm_s.x() = 100;
+    check(lensed, "camera.distortion, lens, motion");
+    EXPECT_EQ(each_field(Distortion{}, lensed,
+                         [](RunSpec& s) -> Distortion& { return s.intrinsics.distortion; }),
+              5);
+    EXPECT_EQ(each_field(ThinLens{}, lensed, [](RunSpec& s) -> ThinLens& { return s.sensor.lens; }),
+              3);
+    const auto moved = [&](const char* what, auto edit) {
+      RunSpec c = lensed;
+      edit(c.sensor.motion);
+      check(c, what);
+    };
+    moved("camera.motion.exposure_ms", [](CameraMotion& m) { m.exposure_s *= 2; });
+    for (int i = 0; i < 3; ++i) {
+      moved("camera.motion.velocity_mm_s", [i](CameraMotion& m) { m.velocity_mm_s[i] += 1; });
+      moved("camera.motion.angular_velocity_deg_s",
+            [i](CameraMotion& m) { m.angular_velocity_rad_s[i] += 1e-3; });
+    }
+    edited("cameras[1].distortion", [](RigSensor& s) { s.intrinsics.distortion.p2 = 1e-4; });
+    edited("cameras[1].lens", [](RigSensor& s) { s.sensor.lens.focal_length_mm = 12; });
+    edited("cameras[1].motion", [](RigSensor& s) {
+      s.sensor.motion.exposure_s = 0.01;
+      s.sensor.motion.angular_velocity_rad_s.z() = 1;
+    });
   }
   // The physically based look, read by hand from materials: and lighting:.
   {
@@ -268,6 +298,11 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
   DepthModel::Fields(depth, [&](const auto&, const Field& f) { expect_key("camera.depth", f); });
   const ImageSensor imager;
   ImageSensor::Fields(imager, [&](const auto&, const Field& f) { expect_key("camera.imager", f); });
+  const Distortion distortion;
+  Distortion::Fields(distortion,
+                     [&](const auto&, const Field& f) { expect_key("camera.distortion", f); });
+  const ThinLens lens;
+  ThinLens::Fields(lens, [&](const auto&, const Field& f) { expect_key("camera.lens", f); });
 }
 
 // Each camera.depth key is read over the model's defaults.

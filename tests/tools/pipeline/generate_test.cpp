@@ -250,8 +250,8 @@ scenes:
 
 TEST(Generate, SameSpecGivesTheSameBytesWhateverTheThreadCount) {
   ScratchDir dir;
-  const auto one = GenerateOn(SmallDefault(), dir, "one", 1),
-             two = GenerateOn(SmallDefault(), dir, "two", 2);
+  const auto one = GenerateOn(SmallDefault(), dir.path(), "one", 1),
+             two = GenerateOn(SmallDefault(), dir.path(), "two", 2);
   ASSERT_EQ(one.size(), two.size());
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
 }
@@ -266,7 +266,8 @@ TEST(Generate, GreyCameraAndDepthSensorWriteGrayDepthAndDepthGt) {
   spec.sensor.image = SensorOptions::Image::kGray16;
   spec.bop.gray_bits = 16;
   spec.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
-  const auto one = GenerateOn(spec, dir, "one", 1), two = GenerateOn(spec, dir, "two", 2);
+  const auto one = GenerateOn(spec, dir.path(), "one", 1),
+             two = GenerateOn(spec, dir.path(), "two", 2);
   ASSERT_EQ(one.size(), two.size());
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
   const std::filesystem::path scene = dir / "one" / "train" / "000000";
@@ -379,7 +380,8 @@ TEST(Generate, LensEffectsAreWrittenBesideKAndGiveTheSameBytesOnAnyThreadCount) 
   spec.sensor.motion.velocity_mm_s = Eigen::Vector3d(300, 0, 0);
   spec.sensor.motion.angular_velocity_rad_s = Eigen::Vector3d(0, 0, 0.2);
   spec.sensor.motion.exposure_s = 0.01;
-  const auto one = GenerateOn(spec, dir, "one", 1), two = GenerateOn(spec, dir, "two", 2);
+  const auto one = GenerateOn(spec, dir.path(), "one", 1),
+             two = GenerateOn(spec, dir.path(), "two", 2);
   ASSERT_EQ(one.size(), two.size());
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
   const json dist = {-0.15, 0.02, 0.001, -0.0005, 0.003};

@@ -11,6 +11,9 @@
 //                 2 azure_kinect, 3 structured_light, 4 active_stereo, at 640x480 and 1440x1080
 //                 (the Kinect v1's field of view), 2 threads, on every 12th view: what the model
 //                 adds to a frame is its time minus ideal's (writing excluded)
+//   BM_Distortion a frame (ideal depth) through 0 a pinhole, 1 a lens with OpenCV distortion (its
+//                 per-pixel ray table cached by the renderer), 2 the same lens with a new table
+//                 every frame (a camera whose K changes), at 640x480 and 1440x1080, 2 threads
 // Each reports ms per frame (real time); compare BM_EndToEnd with BM_Cast + BM_Encode.
 // CADSYNTH_BENCH_RECIPE=RECIPE.yaml measures that recipe's scenes and views instead.
 #include <benchmark/benchmark.h>
@@ -190,12 +193,40 @@ void BM_Sensor(benchmark::State& state) {
                  std::to_string(width * 3 / 4));
 }
 
+void BM_Distortion(benchmark::State& state) {
+  Fixture& f = Get();
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const int width = static_cast<int>(state.range(1));
+  Intrinsics k = Intrinsics::FromFov(width, width * 3 / 4, 2.0 * std::atan(320.0 / 525.0));
+  if (state.range(0) > 0) k.distortion = Distortion{-0.21, 0.045, 0.0006, -0.0004, 0.0};
+  size_t frames = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i < f.views.size(); i += 12) {
+      if (state.range(0) == 2) k.cx += 1e-6;  // another camera: the table is built again
+      const Camera camera{k, f.views[i].world_from_cam};
+      benchmark::DoNotOptimize(f.full[f.SceneFor(i)]->Render(camera, i));
+      ++frames;
+    }
+  }
+  state.counters["ms_per_frame"] =
+      benchmark::Counter(static_cast<double>(frames) * 1e-3,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  const char* names[] = {"pinhole", "distortion", "distortion, new table"};
+  state.SetLabel(std::string(names[state.range(0)]) + " " + std::to_string(width) + "x" +
+                 std::to_string(width * 3 / 4));
+}
+
 BENCHMARK(BM_Cast)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_Render)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_Encode)->Arg(1)->UseRealTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_EndToEnd)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_Sensor)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {640, 1440}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
+BENCHMARK(BM_Distortion)
+    ->ArgsProduct({{0, 1, 2}, {640, 1440}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(1.0);

@@ -626,6 +626,16 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     write_depth(frame.depth, "depth_gt");
   }
 
+  // ir/: the IR camera's image (active_stereo's left IR image, the projector's dots in it).
+  if (options_.infrared && !frame.infrared.empty()) {
+    if (frame.infrared.size() != static_cast<size_t>(w) * h)
+      throw Error("bop: the frame's IR image has the wrong size");
+    CreateFolder(Folder("ir"));
+    const cv::Mat ir(h, w, CV_8UC1, const_cast<uint8_t*>(frame.infrared.data()));
+    const std::filesystem::path ir_path = Folder("ir") / (im + ".png");
+    files.Write(ir_path, EncodePng(ir, ir_path));
+  }
+
   if (!frame.normals
            .empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
     CreateFolder(Folder("normal"));

@@ -72,6 +72,9 @@ struct BopOptions {
   // default) or the visible mask's box (modal). Annotations with visib_fract < 0.1 carry
   // "ignore": true either way, as bop_toolkit's.
   bool coco_amodal_bbox = true;
+  // Cameras with an IR image (active_stereo's left IR camera, the camera itself): also write it,
+  // 8 bits with the projector's dots, to ir[_CAMTYPE]/IMID.png.
+  bool infrared = false;
   // Model point clouds (models/points/obj_*.ply): points per part (the paper: 3,000; 0: none),
   // spread uniformly by area or evenly spaced, seeded.
   int model_points = 3000;
@@ -159,6 +162,9 @@ struct BopOptions {
                 "choice",
                 "COCO boxes: amodal (full silhouette, as bop_toolkit) or modal (visible part)",
                 {"modal", "amodal"}});
+    visit(o.infrared,
+          Field{"infrared", "bool",
+                "active_stereo cameras: also write the left IR image (ir/IMID.png, 8 bits)"});
   }
 };
 

@@ -391,6 +391,36 @@ TEST(Generate, LensEffectsAreWrittenBesideKAndGiveTheSameBytesOnAnyThreadCount) 
   EXPECT_EQ(ReadJson(dir / "one" / "camera.json")["dist_coeffs"], dist);
 }
 
+TEST(Generate, ActiveStereoCameraWritesItsIrImageWhenAsked) {
+  // output.infrared: the left IR image beside the depth it was matched into, 8 bits, dotted.
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes.resize(1);
+  spec.sweep.yaw_rad = {0.0};
+  spec.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kActiveStereo);
+  spec.bop.infrared = true;
+  GenerateOptions options;
+  options.output = dir / "out";
+  Generate(spec, options);
+  const cv::Mat ir = cv::imread((dir / "out" / "train" / "000000" / "ir" / "000000.png").string(),
+                                cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(ir.empty());
+  EXPECT_EQ(ir.type(), CV_8UC1);
+  EXPECT_EQ(ir.cols, 160);
+  EXPECT_EQ(ir.rows, 120);
+  // Dots: neighbouring pixels differ a lot somewhere in the picture.
+  cv::Mat dx;
+  cv::absdiff(ir.colRange(1, ir.cols), ir.colRange(0, ir.cols - 1), dx);
+  double largest = 0;
+  cv::minMaxLoc(dx, nullptr, &largest);
+  EXPECT_GT(largest, 40);
+  // Not asked for: no ir/.
+  spec.bop.infrared = false;
+  options.output = dir / "plain";
+  Generate(spec, options);
+  EXPECT_FALSE(std::filesystem::exists(dir / "plain" / "train" / "000000" / "ir"));
+}
+
 TEST(Generate, CameraRigWritesBopMultiSensorLayout) {
   ScratchDir dir;
   const RunSpec spec = RigSpec();

@@ -70,7 +70,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   };
   EXPECT_EQ(ForEachChange<BopOptions>(
                 spec, [](RunSpec& s) -> BopOptions& { return s.bop; }, check),
-            18);
+            19);
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
             15);

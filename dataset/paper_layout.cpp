@@ -53,9 +53,15 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame,
       for (int c = 0; c < 3; ++c) poses[r + 3 * c + 12 * j] = m2c.linear()(r, c);
       poses[r + 3 * 3 + 12 * j] = m2c.translation()(r) / 1000.0;
     }
-    const Eigen::Vector2d uv = k.Project(m2c.translation());  // with the lens's distortion
-    center[j] = uv.x();                                       // column 0: u
-    center[j + n] = uv.y();                                   // column 1: v
+    // With the lens's distortion; a centre beyond its fold radius (outside the imaged field) keeps
+    // the pinhole's point, which lies outside the image as well.
+    Eigen::Vector2d uv;
+    if (!k.Project(m2c.translation(), &uv)) {
+      const Eigen::Vector3d t = m2c.translation();
+      uv = Eigen::Vector2d(k.fx * t.x() / t.z() + k.cx, k.fy * t.y() / t.z() + k.cy);
+    }
+    center[j] = uv.x();      // column 0: u
+    center[j + n] = uv.y();  // column 1: v
   }
   std::vector<double> kmat(9), w2c(12);
   const Eigen::Matrix3d kk = k.K();

@@ -186,12 +186,14 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       m2c.translation() =
           Eigen::Vector3d(g.at("cam_t_m2c")[0], g.at("cam_t_m2c")[1], g.at("cam_t_m2c")[2]);
       if (m2c.translation().z() <= 0) continue;
-      std::vector<Eigen::Vector2d> c;
+      // Corners the camera does not image (behind it, beyond the lens's fold) draw no edges.
+      std::vector<Eigen::Vector2d> c(8);
+      bool imaged[8];
       for (int a = 0; a < 8; ++a) {
         const Eigen::Vector3d p =
             m2c * Eigen::AlignedBox3d(lo, lo + size)
                       .corner(static_cast<Eigen::AlignedBox3d::CornerType>(a));
-        c.push_back(p.z() > 0 ? k.Project(p) : Eigen::Vector2d(-1e4, -1e4));
+        imaged[a] = k.Project(p, &c[a]);
       }
       const auto pt = [](const Eigen::Vector2d& p) {
         return cv::Point(cvRound(p.x()), cvRound(p.y()));
@@ -199,16 +201,16 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       for (int a = 0; a < 8; ++a) {
         for (int b = a + 1; b < 8; ++b) {
           const int diff = a ^ b;  // corners differ in one coordinate: an edge
-          if (diff == 1 || diff == 2 || diff == 4)
+          if ((diff == 1 || diff == 2 || diff == 4) && imaged[a] && imaged[b])
             cv::line(rgb, pt(c[a]), pt(c[b]), InstanceColour(i), thickness, cv::LINE_AA);
         }
       }
       const double axis = 0.5 * size.maxCoeff();
-      const Eigen::Vector2d o = k.Project(m2c.translation());
+      Eigen::Vector2d o, tip;
+      const bool origin = k.Project(m2c.translation(), &o);
       for (int a = 0; a < 3; ++a) {
-        const Eigen::Vector3d e = m2c * (axis * Eigen::Vector3d::Unit(a));
-        if (e.z() <= 0) continue;
-        cv::line(rgb, pt(o), pt(k.Project(e)),
+        if (!origin || !k.Project(m2c * (axis * Eigen::Vector3d::Unit(a)), &tip)) continue;
+        cv::line(rgb, pt(o), pt(tip),
                  a == 0   ? cv::Scalar(0, 0, 255)
                  : a == 1 ? cv::Scalar(0, 200, 0)
                           : cv::Scalar(255, 0, 0),

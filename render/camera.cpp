@@ -83,31 +83,51 @@ Eigen::Vector2d Distortion::Distort(const Eigen::Vector2d& xy, Eigen::Matrix2d* 
   return out;
 }
 
-double Distortion::FoldRadius() const {
-  // d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)] = g(s) = 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3, s = r^2.
-  // The roots of g' = 3 k1 + 10 k2 s + 21 k3 s^2 cut s >= 0 into pieces where g is monotonic;
-  // the first piece whose end has g <= 0 holds the first root, found by bisection.
-  const auto g = [this](double s) { return 1.0 + s * (3.0 * k1 + s * (5.0 * k2 + s * 7.0 * k3)); };
-  std::vector<double> ends;
-  const double qa = 21.0 * k3, qb = 10.0 * k2, qc = 3.0 * k1;
+namespace {
+
+// g(s) = d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)] = 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3, s = r^2.
+double RadialSlope(const Distortion& d, double s) {
+  return 1.0 + s * (3.0 * d.k1 + s * (5.0 * d.k2 + s * 7.0 * d.k3));
+}
+
+// The positive roots of g' = 3 k1 + 10 k2 s + 21 k3 s^2 below `last`, in order, then `last`: the
+// ends of the pieces of [0, last] on which g is monotonic (in ends[0..count)). The quadratic's
+// roots in the cancellation-free form.
+int MonotonicEnds(const Distortion& d, double last, double ends[3]) {
+  double roots[2];
+  int n = 0;
+  const double qa = 21.0 * d.k3, qb = 10.0 * d.k2, qc = 3.0 * d.k1;
   if (qa != 0.0) {
     const double disc = qb * qb - 4.0 * qa * qc;
     if (disc >= 0.0) {
-      ends.push_back((-qb - std::sqrt(disc)) / (2.0 * qa));
-      ends.push_back((-qb + std::sqrt(disc)) / (2.0 * qa));
+      const double q = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+      roots[n++] = q / qa;
+      if (q != 0.0) roots[n++] = qc / q;
     }
   } else if (qb != 0.0) {
-    ends.push_back(-qc / qb);
+    roots[n++] = -qc / qb;
   }
-  std::sort(ends.begin(), ends.end());
-  ends.push_back(1e12);  // r = 10^6: no lens images that far out
-  double lo = 0.0;
-  for (double hi : ends) {
-    if (!(hi > lo)) continue;
-    if (g(hi) <= 0.0) {
+  if (n == 2 && roots[1] < roots[0]) std::swap(roots[0], roots[1]);
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    if (roots[i] > 0.0 && roots[i] < last) ends[count++] = roots[i];
+  }
+  ends[count++] = last;
+  return count;
+}
+
+}  // namespace
+
+double Distortion::FoldRadius() const {
+  // The first piece whose end has g <= 0 holds g's first root (g(0) = 1): bisect it.
+  double lo = 0.0, ends[3];
+  const int count = MonotonicEnds(*this, 1e12, ends);  // up to r = 10^6: no lens images farther
+  for (int e = 0; e < count; ++e) {
+    double hi = ends[e];
+    if (RadialSlope(*this, hi) <= 0.0) {
       for (int i = 0; i < 200 && hi - lo > 1e-15 * hi; ++i) {
         const double mid = 0.5 * (lo + hi);
-        (g(mid) > 0.0 ? lo : hi) = mid;
+        (RadialSlope(*this, mid) > 0.0 ? lo : hi) = mid;
       }
       return std::sqrt(lo);
     }
@@ -116,13 +136,18 @@ double Distortion::FoldRadius() const {
   return std::numeric_limits<double>::infinity();
 }
 
-bool Distortion::Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess,
-                           Eigen::Vector2d* xy) const {
-  return Undistort(xd, guess, FoldRadius(), xy);
+bool Distortion::InsideFold(double r2) const {
+  // g is monotonic between the ends, so its least value on [0, r2] is at one of them or at r2.
+  double ends[3];
+  const int count = MonotonicEnds(*this, r2, ends);
+  for (int e = 0; e < count; ++e) {
+    if (!(RadialSlope(*this, ends[e]) > 0.0)) return false;
+  }
+  return true;
 }
 
 bool Distortion::Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess,
-                           double fold_radius, Eigen::Vector2d* xy) const {
+                           Eigen::Vector2d* xy) const {
   Eigen::Vector2d p = guess;
   Eigen::Matrix2d jacobian;
   double error = (Distort(p, &jacobian) - xd).norm();
@@ -143,7 +168,7 @@ bool Distortion::Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& gue
     if (t <= 1e-6) break;
     Distort(p, &jacobian);
   }
-  if (!(error <= 1e-12) || !(p.norm() < fold_radius)) return false;
+  if (!(error <= 1e-12) || !InsideFold(p.squaredNorm())) return false;
   Distort(p, &jacobian);
   if (!(jacobian.determinant() > 0.0)) return false;
   *xy = p;
@@ -159,10 +184,15 @@ bool Intrinsics::Unproject(double u, double v, Eigen::Vector2d* xy) const {
   return distortion.Undistort(pinhole, pinhole, xy);
 }
 
-Eigen::Vector2d Intrinsics::Project(const Eigen::Vector3d& p) const {
-  Eigen::Vector2d xy(p.x() / p.z(), p.y() / p.z());
-  if (distortion.active()) xy = distortion.Distort(xy);
-  return Eigen::Vector2d(fx * xy.x() + cx, fy * xy.y() + cy);
+bool Intrinsics::Project(const Eigen::Vector3d& p, Eigen::Vector2d* uv) const {
+  if (!distortion.active()) {
+    *uv = Eigen::Vector2d(fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy);
+    return p.z() > 0.0;
+  }
+  const Eigen::Vector2d xy(p.x() / p.z(), p.y() / p.z());
+  const Eigen::Vector2d d = distortion.Distort(xy);
+  *uv = Eigen::Vector2d(fx * d.x() + cx, fy * d.y() + cy);
+  return p.z() > 0.0 && distortion.InsideFold(xy.squaredNorm());
 }
 
 bool Intrinsics::Check(std::string* why) const {
@@ -184,11 +214,10 @@ bool Intrinsics::Check(std::string* why) const {
       std::vector<Eigen::Vector2i> border;
       for (int u = 0; u <= width; ++u) border.emplace_back(u, 0), border.emplace_back(u, height);
       for (int v = 0; v <= height; ++v) border.emplace_back(0, v), border.emplace_back(width, v);
-      const double fold = distortion.FoldRadius();
       for (const Eigen::Vector2i& p : border) {
         const Eigen::Vector2d pinhole((p.x() - cx) / fx, (p.y() - cy) / fy);
         Eigen::Vector2d xy;
-        if (!distortion.Undistort(pinhole, pinhole, fold, &xy)) {
+        if (!distortion.Undistort(pinhole, pinhole, &xy)) {
           out << "pixel (" << p.x() << ", " << p.y() << ")";
           break;
         }

@@ -24,7 +24,9 @@ namespace cadsynth {
 //   y' = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,   r^2 = x^2 + y^2.
 // The polynomial describes a lens only where it is one-to-one: inside the fold radius, where the
 // radial map r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing (barrel distortion folds back outside
-// the calibrated field). Rays beyond it are not imaged.
+// the calibrated field). Rays beyond it are not imaged. (Strong tangential terms can fold the map
+// before that radius; Undistort also refuses a Jacobian of non-positive determinant, but the
+// bounds of PixelRays::RectOfPlane assume the fold is the radial one.)
 struct Distortion {
   double k1 = 0.0, k2 = 0.0, p1 = 0.0, p2 = 0.0, k3 = 0.0;
 
@@ -37,9 +39,8 @@ struct Distortion {
   // `xd` (to 1e-12), by damped Newton steps from `guess`; false if there is none.
   bool Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess,
                  Eigen::Vector2d* xy) const;
-  // The same with FoldRadius() given (it costs as much as the Newton steps).
-  bool Undistort(const Eigen::Vector2d& xd, const Eigen::Vector2d& guess, double fold_radius,
-                 Eigen::Vector2d* xy) const;
+  // r^2 lies inside the fold radius (without finding it: a few evaluations of the polynomial).
+  bool InsideFold(double r2) const;
 
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
@@ -76,8 +77,10 @@ struct Intrinsics {
   // where the lens images no ray (beyond the fold radius). Exact for a pinhole camera; with
   // distortion, Distortion::Undistort from the pinhole guess.
   bool Unproject(double u, double v, Eigen::Vector2d* xy) const;
-  // The image point of camera-frame point `p` (z > 0), distorted.
-  Eigen::Vector2d Project(const Eigen::Vector3d& p) const;
+  // The image point of camera-frame point `p`, distorted, in `uv`; false when the camera does not
+  // image it (behind the camera, or beyond the distortion's fold radius, where `uv` means
+  // nothing).
+  bool Project(const Eigen::Vector3d& p, Eigen::Vector2d* uv) const;
   // Also that every point of the image (its border's pixel corners) has a ray.
   bool Check(std::string* why) const;
 };

@@ -576,6 +576,7 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
   const float select_pdf = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
 
   Eigen::Vector3f sum[16];
+  int paths[16] = {};  // per lane: the paths that had a ray
   uint64_t pixel_seed[16];
   alignas(64) int in_image[16];
   for (int j = 0; j < 16; ++j) {
@@ -609,6 +610,7 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       const Eigen::Vector2f jitter = sampler.Get2D(0);
       Eigen::Vector2f xy = Eigen::Vector2f::Zero();
       if (active[j] && !rays.At(u, v, jitter.x(), jitter.y(), &xy)) active[j] = 0;
+      paths[j] += active[j] != 0;
       Eigen::Vector3f o_cam = Eigen::Vector3f::Zero(), d_cam(xy.x(), xy.y(), 1.0f);
       if (aperture_radius > 0.0f) {
         // Through a point of the aperture to where the pixel's ray meets the plane of focus;
@@ -777,8 +779,11 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       rtcIntersect16(active, im.scene.world, &context, &rh);
     }
   }
-  for (int j = 0; j < 16; ++j)
-    out[j] = in_image[j] ? Eigen::Vector3f(sum[j] / samples) : Eigen::Vector3f::Zero();
+  // (Paths from points of the pixel without a ray, beyond a lens's fold, are left out.)
+  for (int j = 0; j < 16; ++j) {
+    const int n = paths[j] < samples ? paths[j] : samples;
+    out[j] = in_image[j] && n > 0 ? Eigen::Vector3f(sum[j] / n) : Eigen::Vector3f::Zero();
+  }
 }
 
 }  // namespace cadsynth

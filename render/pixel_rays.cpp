@@ -25,8 +25,8 @@ PixelRays::PixelRays(const Intrinsics& k) : k_(k), distorted_(k.distortion.activ
     for (int u = 0; u < k.width; ++u) {
       const Eigen::Vector2d pinhole((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy);
       Eigen::Vector2d xy;
-      bool ok = k.distortion.Undistort(pinhole, have ? guess : pinhole, fold_, &xy);
-      if (!ok && have) ok = k.distortion.Undistort(pinhole, pinhole, fold_, &xy);
+      bool ok = k.distortion.Undistort(pinhole, have ? guess : pinhole, &xy);
+      if (!ok && have) ok = k.distortion.Undistort(pinhole, pinhole, &xy);
       const size_t p = static_cast<size_t>(v) * w + u;
       if (ok) {
         table_[p] = xy.cast<float>();
@@ -53,7 +53,7 @@ bool PixelRays::At(int u, int v, float du, float dv, Eigen::Vector2f* xy) const 
   const Eigen::Vector2d pinhole((u + du - k_.cx) / k_.fx, (v + dv - k_.cy) / k_.fy);
   Eigen::Vector2d out;
   if (!k_.distortion.Undistort(pinhole, have ? Eigen::Vector2d(centre.cast<double>()) : pinhole,
-                               fold_, &out))
+                               &out))
     return false;
   *xy = out.cast<float>();
   return true;
@@ -67,7 +67,7 @@ bool PixelRays::Anywhere(int u, int v, Eigen::Vector2f* xy) const {
     return true;
   }
   Eigen::Vector2d out;
-  if (!k_.distortion.Undistort(pinhole, pinhole, fold_, &out)) return false;
+  if (!k_.distortion.Undistort(pinhole, pinhole, &out)) return false;
   *xy = out.cast<float>();
   return true;
 }

@@ -8,6 +8,7 @@
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "cad/error.h"
 #include "render/image.h"
@@ -161,7 +162,7 @@ struct Renderer::Impl {
   // The pixel rays of the cameras seen so far (a distorted camera's table costs a Newton solve
   // per pixel): a few per rig, kept for the renderer's life.
   mutable std::mutex rays_mutex;
-  mutable std::vector<std::shared_ptr<const PixelRays>> rays_cache;
+  mutable std::vector<std::shared_ptr<const PixelRays>> rays_cache;  // at most 8
   std::shared_ptr<const PixelRays> RaysOf(const Intrinsics& k) const {
     const auto same = [&k](const Intrinsics& o) {
       const Distortion &a = k.distortion, &b = o.distortion;
@@ -169,15 +170,16 @@ struct Renderer::Impl {
              k.cx == o.cx && k.cy == o.cy && a.k1 == b.k1 && a.k2 == b.k2 && a.p1 == b.p1 &&
              a.p2 == b.p2 && a.k3 == b.k3;
     };
-    {
-      std::lock_guard<std::mutex> lock(rays_mutex);
-      for (const auto& r : rays_cache) {
-        if (same(r->intrinsics())) return r;
-      }
-    }
-    auto rays = std::make_shared<const PixelRays>(k);
     std::lock_guard<std::mutex> lock(rays_mutex);
-    if (rays_cache.size() >= 16) rays_cache.erase(rays_cache.begin());
+    for (const auto& r : rays_cache) {
+      if (same(r->intrinsics())) return r;
+    }
+    // Built once, under the lock (frames rendered at the same time wait for it instead of each
+    // building it), isolated so that this thread takes on no other frame's work, which would
+    // wait for the lock it holds, while the table's rows run in parallel.
+    std::shared_ptr<const PixelRays> rays;
+    tbb::this_task_arena::isolate([&] { rays = std::make_shared<const PixelRays>(k); });
+    if (rays_cache.size() >= 8) rays_cache.erase(rays_cache.begin());
     rays_cache.push_back(rays);
     return rays;
   }
@@ -731,6 +733,7 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   const Intrinsics& k = camera.intrinsics;
   std::string why;
   if (!k.Check(&why)) throw Error("camera: " + why);
+  if (!sensor.depth.Check(&why)) throw Error("camera.depth: " + why);
   if (!sensor.Check(&why)) throw Error("camera: " + why);
   if (im.tracer == nullptr && (sensor.lens.active() || sensor.motion.active()))
     throw Error("camera: depth of field and motion blur need render.mode: pbr");
@@ -881,6 +884,9 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
             }
           }
           // Supersampled colour: a regular grid of samples in each pixel.
+          // (Points of a pixel without a ray, beyond a lens's fold, are left out of its mean.)
+          int counted[16];
+          std::fill(counted, counted + 16, 0);
           for (int sy = 0; o.shade && ss > 1 && sy < ss; ++sy) {
             for (int sx = 0; sx < ss; ++sx) {
               const size_t n = static_cast<size_t>(sy * ss + sx);
@@ -889,8 +895,16 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
                          tnear, tfar, &rh, valid);
               trace(tile, &context, valid, &rh);
               im.ShadePacket(rh, valid, shaded);
-              for (int j = 0; j < 16; ++j) color[j] += shaded[j].color / float(ss * ss);
+              for (int j = 0; j < 16; ++j) {
+                if (!valid[j]) continue;
+                color[j] += shaded[j].color / float(ss * ss);
+                ++counted[j];
+              }
             }
+          }
+          for (int j = 0; o.shade && ss > 1 && j < 16; ++j) {
+            if (counted[j] > 0 && counted[j] < ss * ss)
+              color[j] *= static_cast<float>(ss * ss) / static_cast<float>(counted[j]);
           }
           for (int j = 0; j < 16; ++j) {
             if (!centre_valid[j]) continue;

@@ -34,7 +34,8 @@ TEST(Distortion, MatchesOpenCvProjectPoints) {
   std::vector<cv::Point2d> projected;
   cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, projected);
   for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector2d uv = k.Project(Eigen::Vector3d(points[i].x, points[i].y, points[i].z));
+    Eigen::Vector2d uv;
+    ASSERT_TRUE(k.Project(Eigen::Vector3d(points[i].x, points[i].y, points[i].z), &uv));
     EXPECT_NEAR(uv.x(), projected[i].x, 1e-9);
     EXPECT_NEAR(uv.y(), projected[i].y, 1e-9);
     // And back: the ray of that image point is the point's direction.
@@ -50,6 +51,12 @@ TEST(Distortion, FoldRadiusAndTheImagesItRefuses) {
   EXPECT_NEAR((Distortion{-0.3}).FoldRadius(), std::sqrt(1.0 / 0.9), 1e-12);
   // 1 + 3 k1 s + 5 k2 s^2 with k1 = -0.5, k2 = 0.05: roots s = 3 -+ sqrt(5), the first is the fold.
   EXPECT_NEAR((Distortion{-0.5, 0.05}).FoldRadius(), std::sqrt(3.0 - std::sqrt(5.0)), 1e-12);
+  // A tiny k3 must not lose that fold to cancellation in the quadratic of g's turning points.
+  EXPECT_NEAR((Distortion{-0.5, 0.05, 0, 0, 1e-19}).FoldRadius(), std::sqrt(3.0 - std::sqrt(5.0)),
+              1e-9);
+  EXPECT_TRUE((Distortion{-0.5, 0.05}).InsideFold(0.76));
+  EXPECT_FALSE((Distortion{-0.5, 0.05}).InsideFold(0.77));
+  EXPECT_FALSE((Distortion{-0.5, 0.05}).InsideFold(5.5));   // past the fold, though g > 0 again
   EXPECT_TRUE(std::isinf((Distortion{0.2}).FoldRadius()));  // pincushion never folds
   // Beyond the fold no ray: OpenCV's model is not a lens there.
   Eigen::Vector2d xy;

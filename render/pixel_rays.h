@@ -43,10 +43,10 @@ class PixelRays {
   void Tabulate(double du, double dv, int pad, std::vector<float>* xs,
                 std::vector<float>* ys) const;
 
-  // The pixels [u0, u1) x [v0, v1) whose rays can pass through the rectangle [x0, x1] x [y0, y1]
-  // of the plane z = 1, clamped to `bounds` (u0, v0, u1, v1): with distortion, the box around the
-  // distorted border of the rectangle's part inside the fold radius (sampled finely, with two
-  // pixels of margin). Empty (u0 = u1) when none can.
+  // A distorted camera's pixels [u0, u1) x [v0, v1) whose rays can pass through the rectangle
+  // [x0, x1] x [y0, y1] of the plane z = 1, clamped to `bounds` (u0, v0, u1, v1): the box around
+  // the distorted border of the rectangle's part inside the fold radius (sampled finely, with two
+  // pixels of margin). Empty (u0 = u1) when none can. (A pinhole's: renderer.cpp's ProjectedRect.)
   void RectOfPlane(double x0, double y0, double x1, double y1, const int bounds[4],
                    int out[4]) const;
 

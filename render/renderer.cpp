@@ -959,6 +959,7 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   if (noisy_depth) {
     DepthSensorInput input;
     input.intrinsics = k;
+    input.rays = rays.get();
     input.depth = frame.depth.data();
     input.normals = normals.data();
     input.projector_seen = projector ? projector_seen.data() : nullptr;

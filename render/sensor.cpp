@@ -1,5 +1,7 @@
 #include "render/sensor.h"
 
+#include "render/pixel_rays.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -151,9 +153,15 @@ float CosIncidence(const DepthSensorInput& in, int u, int v, size_t p) {
   const Intrinsics& k = in.intrinsics;
   Eigen::Vector3f ray(static_cast<float>((u + 0.5 - k.cx) / k.fx),
                       static_cast<float>((v + 0.5 - k.cy) / k.fy), 1.0f);
-  Eigen::Vector2d xy;
-  if (k.distortion.active() && k.Unproject(u + 0.5, v + 0.5, &xy))
-    ray = Eigen::Vector3f(static_cast<float>(xy.x()), static_cast<float>(xy.y()), 1.0f);
+  if (k.distortion.active()) {  // the traced ray (a Newton solve per pixel without the table)
+    Eigen::Vector2f xy;
+    Eigen::Vector2d solved;
+    if (in.rays != nullptr && in.rays->Centre(u, v, &xy)) {
+      ray = Eigen::Vector3f(xy.x(), xy.y(), 1.0f);
+    } else if (k.Unproject(u + 0.5, v + 0.5, &solved)) {
+      ray = Eigen::Vector3f(static_cast<float>(solved.x()), static_cast<float>(solved.y()), 1.0f);
+    }
+  }
   return std::abs(in.normals[p].dot(ray.normalized()));
 }
 

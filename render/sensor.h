@@ -205,9 +205,14 @@ struct SensorOptions {
   }
 };
 
+class PixelRays;  // render/pixel_rays.h
+
 // Per pixel, what the renderer knows for a depth model (row-major, width x height).
 struct DepthSensorInput {
   Intrinsics intrinsics;
+  // The camera's pixel rays as the renderer traced them (a distorting lens's table); null: from
+  // the intrinsics, per pixel.
+  const PixelRays* rays = nullptr;
   const float* depth = nullptr;              // exact camera z, mm; 0 = nothing
   const Eigen::Vector3f* normals = nullptr;  // camera frame, facing the camera; null: facing it
   const uint8_t* projector_seen = nullptr;   // 1 where the projector sees the point; null: all

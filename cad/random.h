@@ -124,6 +124,15 @@ inline constexpr RandomStream kImageNoise{
     "sensor.image",
     "a pixel's image noise, seeded by sensor.image_frame; index = (((pixel << 1) + pair) << 1) + "
     "draw (Box-Muller pairs: R and G, then B and the grey image)"};
+// recipes: randomize.seed (domain randomisation, render/randomize.h)
+inline constexpr RandomStream kRandomizeFrame{
+    "randomize.frame",
+    "the seed of one frame's (or scene's) randomised draws; index = (scene << 40) + view, or "
+    "(scene << 40) + 2^40 - 1 for draws made once per scene"};
+inline constexpr RandomStream kRandomizeDraw{
+    "randomize.draw",
+    "a randomised quantity, seeded by randomize.frame: stream 'randomize.draw.' + the quantity's "
+    "name (part.2.roughness, light.0.power, ...), index = draw (0; 1: Box-Muller's second)"};
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
@@ -137,6 +146,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kDropSeed,       streams::kPilePhysics,   streams::kSensorFrame,
     streams::kSensorLateral,  streams::kSensorAxial,   streams::kSensorInfrared,
     streams::kSensorDots,     streams::kImageFrame,    streams::kImageNoise,
+    streams::kRandomizeFrame, streams::kRandomizeDraw,
 };
 
 namespace random_detail {

@@ -171,18 +171,19 @@ bool VisibleMasks::operator()(size_t i, int u, int v) const {
 namespace {
 
 // A frame's fragment (.fragments/NNNNNN.json, written by WriteFrame): five lines of JSON, the
-// scene_camera, scene_gt and scene_gt_info entries, the COCO entry and the manifest. Every line's
-// shape is checked here, so Finish and CheckFrame never meet a value of the wrong type in a
-// damaged or hand-edited fragment.
+// scene_camera, scene_gt and scene_gt_info entries, the COCO entry and the manifest, and a sixth
+// with the frame's randomisation record when it has one. Every line's shape is checked here, so
+// Finish and CheckFrame never meet a value of the wrong type in a damaged or hand-edited fragment.
 struct Fragment {
   Json camera, gt, gt_info, coco;
   std::vector<FileRecord> files;
+  Json randomization;  // null when the frame has none
 };
 
 Fragment ParseFragmentText(const std::string& text, const std::string& origin) {
   std::vector<std::string> lines;
   size_t start = 0;
-  while (start < text.size() && lines.size() < 5) {
+  while (start < text.size() && lines.size() < 6) {
     const size_t end = text.find('\n', start);
     if (end == std::string::npos) break;
     lines.push_back(text.substr(start, end - start));
@@ -248,6 +249,14 @@ Fragment ParseFragmentText(const std::string& text, const std::string& origin) {
     if (path.empty() || path[0] == '/' || path.find("..") != std::string::npos)
       fail(5, "a manifest path leaves the dataset: " + path.substr(0, 80));
     f.files.push_back({path, file[1].get<uint64_t>(), file[2].get<uint32_t>()});
+  }
+  if (lines.size() == 6) {
+    try {
+      f.randomization = Json::parse(lines[5]);
+    } catch (const Json::exception&) {
+      fail(6, "not valid JSON");
+    }
+    if (!f.randomization.is_object()) fail(6, "the randomisation record is not an object");
   }
   return f;
 }
@@ -761,10 +770,13 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
   // Finish(), and the frame's manifest entry: every file it wrote with size and CRC-32.
   Json manifest = Json::array();
   for (const FileRecord& r : files.records()) manifest.push_back({r.path, r.size, r.crc32});
-  WriteFileAtomic(FragmentPath(image_id),
-                  camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() +
-                      "\n" + Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() +
-                      "\n" + Json{{"files", manifest}}.dump() + "\n");
+  WriteFileAtomic(
+      FragmentPath(image_id),
+      camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n" +
+          Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() + "\n" +
+          Json{{"files", manifest}}.dump() + "\n" +
+          (frame.randomization.empty() ? std::string()
+                                       : Json::parse(frame.randomization).dump() + "\n"));
   std::lock_guard<std::mutex> lock(mutex_);
   image_ids_.push_back(image_id);
 }
@@ -815,6 +827,8 @@ SceneSplit BopSceneWriter::Finish() {
     if (!coco) throw Error(coco_path.string() + ": cannot create file");
     coco << "{\n  \"annotations\": [";
   }
+  // scene_randomization.json: the frames' randomisation records, when they have them.
+  std::string randomization;
   for (size_t n = 0; n < image_ids_.size(); ++n) {
     const Fragment fragment = ReadFragment(FragmentPath(image_ids_[n]));
     const bool test = options_.IsTest(static_cast<int>(n), static_cast<int>(image_ids_.size()));
@@ -823,6 +837,11 @@ SceneSplit BopSceneWriter::Finish() {
     for (int f = 0; f < 3; ++f) {
       out[f] << (n == 0 ? "\n  \"" : ",\n  \"") << image_ids_[n]
              << "\": " << indent(entries[f]->dump(2));
+    }
+    if (!fragment.randomization.is_null()) {
+      randomization += (randomization.empty() ? "{\n  \"" : ",\n  \"") +
+                       std::to_string(image_ids_[n]) +
+                       "\": " + indent(fragment.randomization.dump(2));
     }
     if (test) {  // gt_info: count the instances visible enough, per object
       std::map<int, int> counts;
@@ -889,6 +908,8 @@ SceneSplit BopSceneWriter::Finish() {
       throw Error((scene_dir_ / names[f]).string() +
                   ": cannot move file into place: " + ec.message());
   }
+  if (!randomization.empty())
+    WriteFileAtomic(scene_dir_ / ("scene_randomization" + sfx + ".json"), randomization + "\n}\n");
   return split;
 }
 

@@ -11,6 +11,8 @@
 //   ROOT/SPLIT/SCENEID/scene_camera.json     cam_K, depth_scale, cam_R_w2c, cam_t_w2c per image
 //   ROOT/SPLIT/SCENEID/scene_gt.json         cam_R_m2c, cam_t_m2c, obj_id per instance
 //   ROOT/SPLIT/SCENEID/scene_gt_info.json    bboxes, pixel counts, visib_fract per instance
+//   ROOT/SPLIT/SCENEID/scene_randomization.json  (cadsynth, domain randomisation) per image, what
+//                                            was drawn for it (Frame::randomization)
 //
 // A camera rig (several sensors moved together) writes BOP's multi-sensor layout instead: every
 // folder and scene file of a sensor NAME carries its name (bop_toolkit's dataset_params.py,
@@ -299,7 +301,8 @@ class BopSceneWriter {
   // Drops a written frame's record, so that it counts as not written (e.g. a damaged file).
   void ForgetFrame(int image_id);
 
-  // Writes scene_camera.json, scene_gt.json and scene_gt_info.json (and scene_gt_coco.json) from
+  // Writes scene_camera.json, scene_gt.json and scene_gt_info.json (and scene_gt_coco.json, and
+  // scene_randomization.json when frames carry a randomisation record) from
   // the fragments, ordered by image id, streaming one frame at a time, and returns the scene's
   // split. The fragments stay (a resumed run finishes the scene again) until RemoveFragments().
   SceneSplit Finish();

@@ -647,7 +647,8 @@ SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::str
   if (!node.IsMap()) r.ExpectMap(node, key, {"name", "parts"});
   if (!node["parts"]) r.Fail(node, key, "a scene needs 'parts'");
   SceneSpec scene;
-  ReadLayout(r, node, key, &scene, {"name", "parts"});
+  // (`randomize` is read once the recipe's own is known.)
+  ReadLayout(r, node, key, &scene, {"name", "parts", "randomize"});
   scene.name = node["name"] ? r.Scalar(node["name"], key + ".name") : key;
   scene.sources = ReadParts(r, node["parts"], key + ".parts");
   return scene;
@@ -1256,6 +1257,259 @@ void ReadLighting(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   }
 }
 
+// A distribution of one number: a value (fixed), or {uniform: [low, high]},
+// {normal: [mean, sigma]}, {log_uniform: [low, high]} or {choice: [a, b, ...]}; `parse` reads
+// one number (lengths with their units).
+template <typename Parse>
+Distribution ReadDistribution(const Reader& r, const YAML::Node& node, const std::string& key,
+                              Parse parse) {
+  Distribution d;
+  if (node.IsScalar()) {
+    d = Distribution::Fixed(parse(node, key));
+  } else {
+    static const std::vector<std::string> kinds = {"uniform", "normal", "log_uniform", "choice"};
+    if (!node.IsMap() || node.size() != 1) {
+      r.Fail(node, key,
+             "expected a value or one of {uniform: [low, high]}, {normal: [mean, sigma]}, "
+             "{log_uniform: [low, high]}, {choice: [...]}");
+    }
+    const YAML::Node name_node = node.begin()->first;
+    const std::string name = name_node.as<std::string>();
+    const YAML::Node list = node.begin()->second;
+    const auto it = std::find(kinds.begin(), kinds.end(), name);
+    if (it == kinds.end()) {
+      const std::string best = NearestName(name, kinds);
+      r.Fail(name_node, key,
+             "unknown distribution '" + name + "'" +
+                 (best.empty() ? "" : " (did you mean '" + best + "'?)") +
+                 "; known: uniform, normal, log_uniform, choice");
+    }
+    if (!list.IsSequence()) r.Fail(list, key + "." + name, "expected a list");
+    if (name == "choice") {
+      d.kind = Distribution::Kind::kChoice;
+      for (const YAML::Node& v : list) d.values.push_back(parse(v, key + ".choice"));
+    } else {
+      if (list.size() != 2)
+        r.Fail(list, key + "." + name,
+               name == "normal" ? "expected [mean, sigma]" : "expected [low, high]");
+      d.kind = name == "uniform"  ? Distribution::Kind::kUniform
+               : name == "normal" ? Distribution::Kind::kNormal
+                                  : Distribution::Kind::kLogUniform;
+      d.a = parse(list[0], key + "." + name);
+      d.b = parse(list[1], key + "." + name);
+    }
+  }
+  std::string why;
+  if (!d.Check(&why)) r.Fail(node, key, why);
+  return d;
+}
+
+// A list of names, or one name, or {choice: [names]}: what is picked from, equally likely.
+std::vector<std::pair<YAML::Node, std::string>> ReadNameChoice(const Reader& r,
+                                                               const YAML::Node& node,
+                                                               const std::string& key) {
+  std::vector<std::pair<YAML::Node, std::string>> names;
+  YAML::Node list = node;
+  if (node.IsMap()) {
+    r.ExpectMap(node, key, {"choice"});
+    list = node["choice"];
+  }
+  if (list.IsScalar()) {
+    names.emplace_back(list, r.Scalar(list, key));
+  } else if (list.IsSequence() && list.size() > 0) {
+    for (const YAML::Node& n : list) names.emplace_back(n, r.Scalar(n, key));
+  } else {
+    r.Fail(node, key, "expected a name, or {choice: [names]} (not empty)");
+  }
+  return names;
+}
+
+DrawPer ReadPer(const Reader& r, const YAML::Node& node, const std::string& key) {
+  const std::string per = r.Scalar(node, key);
+  if (per == "frame") return DrawPer::kFrame;
+  if (per == "scene") return DrawPer::kScene;
+  r.Fail(node, key, "expected 'frame' or 'scene', got '" + per + "'");
+}
+
+// A material's randomisation (parts, floor, fixtures) besides `other` keys.
+MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Node& node,
+                                                const std::string& key,
+                                                std::vector<std::string> other, DrawPer* per) {
+  for (const char* k : {"preset", "hue", "saturation", "value", "metallic", "roughness", "specular",
+                        "texture_scale", "per"}) {
+    other.emplace_back(k);
+  }
+  r.ExpectMap(node, key, other);
+  MaterialRandomization m;
+  const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
+  if (const YAML::Node p = node["preset"]) {
+    for (const auto& [n, name] : ReadNameChoice(r, p, key + ".preset")) {
+      Material preset;
+      if (!MaterialPreset(name, &preset)) {
+        const std::string best = NearestName(name, MaterialPresetNames());
+        r.Fail(n, key + ".preset",
+               "unknown material '" + name + "'" +
+                   (best.empty() ? "" : " (did you mean '" + best + "'?)"));
+      }
+      m.presets.push_back(preset);
+      m.preset_names.push_back(name);
+    }
+  }
+  const auto read = [&](const char* k, std::optional<Distribution>* d) {
+    if (node[k]) *d = ReadDistribution(r, node[k], key + "." + k, number);
+  };
+  read("hue", &m.hue);
+  read("saturation", &m.saturation);
+  read("value", &m.value);
+  read("metallic", &m.metallic);
+  read("roughness", &m.roughness);
+  read("specular", &m.specular);
+  read("texture_scale", &m.texture_scale);
+  if (node["per"]) *per = ReadPer(r, node["per"], key + ".per");
+  std::string why;
+  if (!m.Check(&why)) r.Fail(node, key, why);
+  return m;
+}
+
+// `randomize:` (or a scene's, which replaces the groups it gives of `base`).
+RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::string& key,
+                            const RandomizeSpec& base) {
+  r.ExpectMap(node, key, {"seed", "parts", "floor", "fixtures", "lights", "environment", "camera"});
+  RandomizeSpec spec = base;
+  Randomization& d = spec.draws;
+  const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
+  const auto length = [&r](const YAML::Node& n, const std::string& k) { return r.Length(n, k); };
+  if (node["seed"]) d.seed = static_cast<uint64_t>(r.Integer(node["seed"], key + ".seed"));
+  if (const YAML::Node parts = node["parts"]) {
+    if (!parts.IsSequence())
+      r.Fail(parts, key + ".parts", "expected a list of {name|family|file: pattern, ...}");
+    d.parts.clear();
+    spec.part_rules.clear();
+    for (size_t i = 0; i < parts.size(); ++i) {
+      const std::string at = key + ".parts[" + std::to_string(i) + "]";
+      const YAML::Node item = parts[i];
+      if (!item.IsMap()) r.ExpectMap(item, at, {});
+      PartRandomization p;
+      p.where = r.Where(item);
+      p.material =
+          ReadMaterialRandomization(r, item, at, {"name", "family", "file", "each"}, &p.per);
+      if (const YAML::Node each = item["each"]) {
+        const std::string e = r.Scalar(each, at + ".each");
+        if (e != "part" && e != "instance")
+          r.Fail(each, at + ".each", "expected 'part' or 'instance', got '" + e + "'");
+        p.per_instance = e == "instance";
+      }
+      RandomizeRule rule;
+      rule.where = p.where;
+      ReadPartPatterns(r, item, at, &rule);
+      d.parts.push_back(std::move(p));
+      spec.part_rules.push_back(std::move(rule));
+    }
+  }
+  if (node["floor"])
+    d.floor = ReadMaterialRandomization(r, node["floor"], key + ".floor", {}, &d.surfaces_per);
+  if (node["fixtures"]) {
+    d.fixtures =
+        ReadMaterialRandomization(r, node["fixtures"], key + ".fixtures", {}, &d.surfaces_per);
+  }
+  if (const YAML::Node n = node["lights"]) {
+    const std::string at = key + ".lights";
+    r.ExpectMap(n, at,
+                {"count", "type", "elevation", "azimuth", "distance", "power", "temperature",
+                 "size", "keep", "per"});
+    LightRandomization l;
+    if (n["count"]) l.count = ReadDistribution(r, n["count"], at + ".count", number);
+    if (n["type"]) {
+      l.kinds.clear();
+      for (const auto& [t, name] : ReadNameChoice(r, n["type"], at + ".type")) {
+        static const std::vector<std::pair<std::string, LightSource::Kind>> kinds = {
+            {"point", LightSource::Kind::kPoint},
+            {"spot", LightSource::Kind::kSpot},
+            {"rect", LightSource::Kind::kRect},
+            {"disc", LightSource::Kind::kDisc}};
+        const auto it = std::find_if(kinds.begin(), kinds.end(),
+                                     [&](const auto& k) { return k.first == name; });
+        if (it == kinds.end())
+          r.Fail(t, at + ".type", "unknown light '" + name + "' (known: point, spot, rect, disc)");
+        l.kinds.push_back(it->second);
+      }
+    }
+    const auto read = [&](const char* k, Distribution* dist, auto parse) {
+      if (n[k]) *dist = ReadDistribution(r, n[k], at + "." + k, parse);
+    };
+    read("elevation", &l.elevation_deg, number);
+    read("azimuth", &l.azimuth_deg, number);
+    read("distance", &l.distance_mm, length);
+    read("power", &l.power, number);
+    read("temperature", &l.temperature_k, number);
+    read("size", &l.size_mm, length);
+    if (n["keep"]) l.keep = r.Bool(n["keep"], at + ".keep");
+    if (n["per"]) d.lights_per = ReadPer(r, n["per"], at + ".per");
+    std::string why;
+    if (!l.Check(&why)) r.Fail(n, at, why);
+    d.lights = l;
+  }
+  if (const YAML::Node n = node["environment"]) {
+    const std::string at = key + ".environment";
+    r.ExpectMap(n, at, {"strength", "rotation", "temperature", "per"});
+    EnvironmentRandomization e;
+    if (n["strength"]) e.strength = ReadDistribution(r, n["strength"], at + ".strength", number);
+    if (n["rotation"])
+      e.rotation_deg = ReadDistribution(r, n["rotation"], at + ".rotation", number);
+    if (n["temperature"])
+      e.temperature_k = ReadDistribution(r, n["temperature"], at + ".temperature", number);
+    if (n["per"]) d.environment_per = ReadPer(r, n["per"], at + ".per");
+    std::string why;
+    if (!e.Check(&why)) r.Fail(n, at, why);
+    d.environment = e;
+  }
+  if (const YAML::Node n = node["camera"]) {
+    const std::string at = key + ".camera";
+    r.ExpectMap(n, at,
+                {"exposure", "white_balance", "noise_gain", "focus_distance", "f_number",
+                 "rotation", "translation"});
+    CameraRandomization c;
+    const auto read = [&](const char* k, std::optional<Distribution>* dist, auto parse) {
+      if (n[k]) *dist = ReadDistribution(r, n[k], at + "." + k, parse);
+    };
+    read("exposure", &c.exposure, number);
+    read("white_balance", &c.white_balance_k, number);
+    read("noise_gain", &c.noise_gain, number);
+    read("focus_distance", &c.focus_distance_mm, length);
+    read("f_number", &c.f_number, number);
+    read("rotation", &c.rotation_deg, number);
+    read("translation", &c.translation_mm, length);
+    std::string why;
+    if (!c.Check(&why)) r.Fail(n, at, why);
+    d.camera = c;
+  }
+  return spec;
+}
+
+// What a recipe's (or scene's) randomisation needs of the rest of the recipe.
+void CheckRandomize(const Reader& r, const YAML::Node& node, const std::string& key,
+                    const RandomizeSpec& spec, const RunSpec& run) {
+  const Randomization& d = spec.draws;
+  if (d.changes_look() && run.render.mode != RenderOptions::Mode::kPbr) {
+    r.Fail(node, key,
+           "materials, lights, the environment, exposure and white balance are randomised in "
+           "render.mode: pbr (only the camera's pose jitters in the fast mode)");
+  }
+  if (!d.camera) return;
+  for (const RigSensor& sensor : RunSensors(run)) {
+    const std::string who = run.rig.empty() ? "camera" : "cameras '" + sensor.name + "'";
+    if (d.camera->noise_gain && !(sensor.sensor.imager.full_well > 0)) {
+      r.Fail(node["camera"]["noise_gain"], key + ".camera.noise_gain",
+             "scales the image noise: " + who + " has none (give it imager.full_well)");
+    }
+    if ((d.camera->focus_distance_mm || d.camera->f_number) && !sensor.sensor.lens.active()) {
+      r.Fail(node["camera"], key + ".camera",
+             "focus_distance and f_number draw the lens's: " + who +
+                 " has no lens (give it lens.focal_length)");
+    }
+  }
+}
+
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   ReadFields(r, node, "output", &spec->bop, {"dir", "formats", "rgb"});
   // Keys that depend on others.
@@ -1394,7 +1648,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   try {
     r.ExpectMap(root, "",
                 {"parts", "scene", "scenes", "classes", "tessellation", "camera", "cameras",
-                 "sweep", "render", "materials", "lighting", "output", "limits"});
+                 "sweep", "render", "materials", "lighting", "randomize", "output", "limits"});
     if (root["scenes"] && (root["parts"] || root["scene"])) {
       r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
     }
@@ -1481,6 +1735,19 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
         r.Fail(image_node(rig ? YAML::Node(root["cameras"][i]) : YAML::Node(root["camera"])),
                (rig ? "cameras[" + std::to_string(i) + "]" : std::string("camera")) + ".image",
                "16-bit grey images cannot be JPEG (rgb: png)");
+      }
+    }
+    if (root["randomize"]) {
+      spec.randomize = ReadRandomize(r, root["randomize"], "randomize", RandomizeSpec{});
+      CheckRandomize(r, root["randomize"], "randomize", spec.randomize, spec);
+    }
+    if (const YAML::Node scenes = root["scenes"]; scenes && scenes.IsSequence()) {
+      for (size_t i = 0; i < scenes.size(); ++i) {
+        const YAML::Node own = scenes[i]["randomize"];
+        if (!own) continue;
+        const std::string at = "scenes[" + std::to_string(i) + "].randomize";
+        spec.scenes[i].randomize = ReadRandomize(r, own, at, spec.randomize);
+        CheckRandomize(r, own, at, *spec.scenes[i].randomize, spec);
       }
     }
     if (root["limits"]) {

@@ -13,6 +13,7 @@
 #include "cad/shape.h"
 #include "dataset/bop.h"
 #include "render/camera.h"
+#include "render/randomize.h"
 #include "render/renderer.h"
 #include "render/scene.h"
 #include "render/sensor.h"
@@ -39,6 +40,18 @@ struct PartSource {
   std::string where;  // "recipe.yaml:3:5" (empty when built in)
 };
 
+// Domain randomisation as the recipe gives it (`randomize:`): the draws, and for each of
+// draws.parts the patterns of the parts it is for (by name, family or file, as MaterialRule; the
+// first matching rule draws a part's material). The run resolves draws.instance_rule per scene.
+struct RandomizeRule {
+  std::string name, family, file;
+  std::string where;  // "recipe.yaml:12:7"
+};
+struct RandomizeSpec {
+  Randomization draws;
+  std::vector<RandomizeRule> part_rules;  // one per draws.parts entry
+};
+
 // A pile's (or dropped parts') physics for the parts a rule matches: patterns as MaterialRule's.
 struct PhysicsRule {
   std::string name, family, file;
@@ -60,6 +73,9 @@ struct SceneSpec {
   // Physics per part: the first rule matching a part; parts matching none (or no rules, when
   // `physics` is one map) take arrangement.physics.
   std::vector<PhysicsRule> physics_rules;
+  // This scene's `randomize:` (the recipe's, with the groups the scene gives replaced); unset:
+  // the recipe's.
+  std::optional<RandomizeSpec> randomize;
 };
 
 // Bounds on how much work a recipe may ask for, so a typo (5,000 teeth, a grid of 100,000
@@ -141,6 +157,7 @@ struct RunSpec {
   std::optional<Material> default_material;
   bool cad_colors = true;  // colours from the CAD files where they have them, else the palette
   RenderOptions render;
+  RandomizeSpec randomize;  // the recipe's `randomize:` (scenes may replace groups of it)
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides
   RunLimits limits;

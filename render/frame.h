@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -32,6 +33,10 @@ struct Frame {
   std::vector<float> sensor_depth;
   // active_stereo: the left IR image the matcher read (8 bit, the dots and the ambient light).
   std::vector<uint8_t> infrared;
+
+  // Domain randomisation: what was drawn for this frame, as a JSON object of named draws
+  // (written to scene_randomization.json); empty when nothing is randomised.
+  std::string randomization;
 
   struct InstanceTruth {
     Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();

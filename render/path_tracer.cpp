@@ -266,17 +266,25 @@ bool HitLight(const PreparedLight& l, const Eigen::Vector3f& o, const Eigen::Vec
 // The environment: evaluation, and sampling in proportion to what a surface receives from it.
 class PreparedEnvironment {
  public:
-  explicit PreparedEnvironment(const Environment& e) : env_(e) {
+  // `like`: an environment prepared before whose image's sampling tables can be shared (the
+  // same pixels: only strength or rotation differ).
+  explicit PreparedEnvironment(const Environment& e, const PreparedEnvironment* like = nullptr)
+      : env_(e) {
     if (e.kind == Environment::Kind::kImage) {
-      image_ = e.pixels;
-      if (!image_) image_ = LoadLinearImage(e.image);
-      BuildDistribution();
+      if (like != nullptr && like->image_ && like->image_ == e.pixels) {
+        image_ = like->image_;
+        tables_ = like->tables_;
+      } else {
+        image_ = e.pixels;
+        if (!image_) image_ = LoadLinearImage(e.image);
+        BuildDistribution();
+      }
     }
     black_ = e.strength <= 0 ||
              (e.kind == Environment::Kind::kUniform && e.color.maxCoeff() <= 0) ||
              (e.kind == Environment::Kind::kSky && e.zenith.maxCoeff() <= 0 &&
               e.horizon.maxCoeff() <= 0 && e.ground.maxCoeff() <= 0) ||
-             (e.kind == Environment::Kind::kImage && total_ <= 0);
+             (e.kind == Environment::Kind::kImage && tables_->total <= 0);
   }
   bool black() const { return black_; }
 
@@ -309,18 +317,19 @@ class PreparedEnvironment {
       return (local.x() * t + local.y() * b + local.z() * n).normalized();
     }
     const int w = image_->width, h = image_->height;
+    const Tables& t = *tables_;
     // Row by the marginal distribution, then the column within it.
     const int y = static_cast<int>(std::min<size_t>(
-        std::upper_bound(row_cdf_.begin(), row_cdf_.end(), u.y() * total_) - row_cdf_.begin(),
+        std::upper_bound(t.row_cdf.begin(), t.row_cdf.end(), u.y() * t.total) - t.row_cdf.begin(),
         static_cast<size_t>(h - 1)));
-    const float* cdf = &col_cdf_[static_cast<size_t>(y) * w];
+    const float* cdf = &t.col_cdf[static_cast<size_t>(y) * w];
     const float row_total = cdf[w - 1];
     const int x = static_cast<int>(
         std::min<ptrdiff_t>(std::upper_bound(cdf, cdf + w, u.x() * row_total) - cdf, w - 1));
     // A point inside the pixel: reuse what is left of the numbers.
-    const float row_lo = y > 0 ? row_cdf_[y - 1] : 0.0f;
+    const float row_lo = y > 0 ? t.row_cdf[y - 1] : 0.0f;
     const float col_lo = x > 0 ? cdf[x - 1] : 0.0f;
-    const float fy = std::clamp((u.y() * total_ - row_lo) / (row_cdf_[y] - row_lo), 0.0f, 1.0f);
+    const float fy = std::clamp((u.y() * t.total - row_lo) / (t.row_cdf[y] - row_lo), 0.0f, 1.0f);
     const float fx = std::clamp((u.x() * row_total - col_lo) / (cdf[x] - col_lo), 0.0f, 1.0f);
     const float theta = kPiF * (y + fy) / h;
     const float uu = (x + fx) / w;
@@ -335,10 +344,11 @@ class PreparedEnvironment {
     if (env_.kind != Environment::Kind::kImage) return std::max(0.0f, d.dot(n)) / kPiF;
     const auto [x, y] = Pixel(d);
     const float sin_theta = std::sqrt(std::max(0.0f, 1 - d.z() * d.z()));
-    if (sin_theta <= 0 || total_ <= 0) return 0.0f;
+    const Tables& t = *tables_;
+    if (sin_theta <= 0 || t.total <= 0) return 0.0f;
     // Density on the unit square is weight * w * h / total; dOmega = 2 pi^2 sin(theta) du dv.
-    const float p_uv = weight_[static_cast<size_t>(y) * image_->width + x] * image_->width *
-                       image_->height / total_;
+    const float p_uv = t.weight[static_cast<size_t>(y) * image_->width + x] * image_->width *
+                       image_->height / t.total;
     return p_uv / (2 * kPiF * kPiF * sin_theta);
   }
 
@@ -355,9 +365,12 @@ class PreparedEnvironment {
 
   void BuildDistribution() {
     const int w = image_->width, h = image_->height;
-    weight_.resize(static_cast<size_t>(w) * h);
-    col_cdf_.resize(weight_.size());
-    row_cdf_.resize(h);
+    auto tables = std::make_shared<Tables>();
+    std::vector<float>&weight = tables->weight, &col_cdf = tables->col_cdf,
+    &row_cdf = tables->row_cdf;
+    weight.resize(static_cast<size_t>(w) * h);
+    col_cdf.resize(weight.size());
+    row_cdf.resize(h);
     double total = 0;
     for (int y = 0; y < h; ++y) {
       const float sin_theta = std::sin(kPiF * (y + 0.5f) / h);
@@ -366,21 +379,26 @@ class PreparedEnvironment {
         const float* c = image_->at(x, y);
         const float lum = std::max(0.0f, Luminance(Eigen::Vector3f(c[0], c[1], c[2])));
         const size_t i = static_cast<size_t>(y) * w + x;
-        weight_[i] = lum * sin_theta;
-        row += weight_[i];
-        col_cdf_[i] = static_cast<float>(row);
+        weight[i] = lum * sin_theta;
+        row += weight[i];
+        col_cdf[i] = static_cast<float>(row);
       }
       total += row;
-      row_cdf_[y] = static_cast<float>(total);
+      row_cdf[y] = static_cast<float>(total);
     }
-    total_ = static_cast<float>(total);
-    // Recompute the weights' sum as the CDF will see it, so densities integrate to 1.
+    tables->total = static_cast<float>(total);
+    tables_ = std::move(tables);
   }
 
+  // An image's sampling tables: per pixel luminance times sin(theta), each row's running sum,
+  // and the rows' running sum.
+  struct Tables {
+    std::vector<float> weight, col_cdf, row_cdf;
+    float total = 0;
+  };
   Environment env_;
   std::shared_ptr<const LinearImage> image_;
-  std::vector<float> weight_, col_cdf_, row_cdf_;
-  float total_ = 0;
+  std::shared_ptr<const Tables> tables_;
   bool black_ = false;
 };
 
@@ -438,13 +456,16 @@ struct PathTracer::Impl {
   };
 };
 
-PathTracer::PathTracer(PathTracerScene scene) : impl_(std::make_unique<Impl>()) {
+PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
+    : impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   im.scene = std::move(scene);
   for (const LightSource& s : im.scene.lights) {
     if (s.power > 0 && s.color.maxCoeff() > 0) im.lights.push_back(Prepare(s));
   }
-  const PreparedEnvironment env(im.scene.environment);
+  const PreparedEnvironment* before =
+      like != nullptr && like->impl_->environment ? &*like->impl_->environment : nullptr;
+  const PreparedEnvironment env(im.scene.environment, before);
   if (!env.black()) im.environment.emplace(env);
   im.num_strategies = static_cast<int>(im.lights.size()) + (im.environment ? 1 : 0);
   const auto image_of = [](const Material& m) -> std::shared_ptr<const LinearImage> {

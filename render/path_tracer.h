@@ -58,7 +58,9 @@ class PathTracer {
  public:
   // Loads the environment's and textures' images that are not loaded yet; throws Error naming the
   // file when one cannot be read.
-  explicit PathTracer(PathTracerScene scene);
+  // `like`: a path tracer of the same geometry built before, whose environment image's sampling
+  // tables are reused when the environment shows the same pixels (a frame's own look).
+  explicit PathTracer(PathTracerScene scene, const PathTracer* like = nullptr);
   ~PathTracer();
 
   // Mean linear radiance over `samples` paths through each pixel of the 4 x 4 tile whose top-left

@@ -138,14 +138,14 @@ struct Renderer::Impl {
   // A depth sensor's projector at `projector` (world): for the hits of a packet of camera rays,
   // whether it sees them (a shadow ray) and how much of its light they return to the camera
   // (render/sensor.h), written to pixel (u0 + j % 4, v0 + j / 4) of the w-wide images.
-  void ProjectorPacket(const RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
-                       const Eigen::Vector3f& projector, float spread, int u0, int v0, int w,
-                       uint8_t* seen, float* signal) const;
+  void ProjectorPacket(const PathTracer* tracer, const RTCRayHit16& rh, const int valid[16],
+                       const Shaded shaded[16], const Eigen::Vector3f& projector, float spread,
+                       int u0, int v0, int w, uint8_t* seen, float* signal) const;
   // active_stereo: the noiseless IR image `camera` sees (render/sensor.h): the dots of the
   // projector at `projector` (world; its axes are the camera's) where it lights the point, plus
   // the ambient share of the Lambert shading.
-  std::vector<float> InfraredPass(const Camera& camera, const DepthModel& model,
-                                  const Eigen::Vector3f& projector) const;
+  std::vector<float> InfraredPass(const PathTracer* tracer, const Camera& camera,
+                                  const DepthModel& model, const Eigen::Vector3f& projector) const;
   unsigned floor_id = kInvalid;
   // Fixtures: top-level geometry ids first_fixture_id + f, their triangles and normals (world).
   unsigned first_fixture_id = kInvalid;
@@ -158,7 +158,9 @@ struct Renderer::Impl {
     const unsigned f = geom_id - first_fixture_id;
     return f < fixtures.size() ? static_cast<int>(f) : -1;
   }
-  std::unique_ptr<PathTracer> tracer;  // RenderOptions::Mode::kPbr
+  std::unique_ptr<PathTracer> tracer;            // RenderOptions::Mode::kPbr
+  PathTracerScene traced;                        // what `tracer` was built from
+  std::vector<Eigen::Vector3f> instance_linear;  // the instances' own colours, linear
   // The pixel rays of the cameras seen so far (a distorted camera's table costs a Newton solve
   // per pixel): a few per rig, kept for the renderer's life.
   mutable std::mutex rays_mutex;
@@ -360,10 +362,10 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
         throw Error("renderer: instance '" + instance.name + "' refers to a missing material");
       // Part colours are sRGB (CAD files and the palette); materials take linear colours.
       ti.material = m < 0 ? Scene::DefaultMaterial(im.albedo_of[i]) : scene.materials[m];
-      if (ti.material.base_from_part) {
-        for (int c = 0; c < 3; ++c)
-          ti.material.surface.base_color[c] = SrgbToLinear(im.albedo_of[i][c]);
-      }
+      Eigen::Vector3f linear;
+      for (int c = 0; c < 3; ++c) linear[c] = SrgbToLinear(im.albedo_of[i][c]);
+      im.instance_linear.push_back(linear);
+      if (ti.material.base_from_part) ti.material.surface.base_color = linear;
       pts.instances.push_back(std::move(ti));
     }
     std::string why;
@@ -378,8 +380,22 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
       if (!l.Check(&why)) throw Error("renderer: light: " + why);
     }
     if (!scene.environment.Check(&why)) throw Error("renderer: environment: " + why);
+    im.traced = pts;
     im.tracer = std::make_unique<PathTracer>(std::move(pts));
   }
+}
+
+FrameLook Renderer::BaseLook() const {
+  const Impl& im = *impl_;
+  FrameLook look;
+  for (const TracedInstance& ti : im.traced.instances)
+    look.instance_materials.push_back(ti.material);
+  look.instance_colors = im.instance_linear;
+  look.floor = im.traced.floor;
+  for (const TracedFixture& tf : im.traced.fixtures) look.fixture_materials.push_back(tf.material);
+  look.lights = im.traced.lights;
+  look.environment = im.traced.environment;
+  return look;
 }
 
 Renderer::~Renderer() = default;
@@ -632,10 +648,10 @@ void Renderer::Impl::ShadePacket(const RTCRayHit16& rh, const int valid[16], Sha
   }
 }
 
-void Renderer::Impl::ProjectorPacket(const RTCRayHit16& rh, const int valid[16],
-                                     const Shaded shaded[16], const Eigen::Vector3f& projector,
-                                     float spread, int u0, int v0, int w, uint8_t* seen,
-                                     float* signal) const {
+void Renderer::Impl::ProjectorPacket(const PathTracer* tracer, const RTCRayHit16& rh,
+                                     const int valid[16], const Shaded shaded[16],
+                                     const Eigen::Vector3f& projector, float spread, int u0, int v0,
+                                     int w, uint8_t* seen, float* signal) const {
   float value[16];
   if (tracer) {
     tracer->ProjectorSignal(rh, valid, projector, spread, value);
@@ -674,7 +690,8 @@ void Renderer::Impl::ProjectorPacket(const RTCRayHit16& rh, const int valid[16],
   }
 }
 
-std::vector<float> Renderer::Impl::InfraredPass(const Camera& camera, const DepthModel& m,
+std::vector<float> Renderer::Impl::InfraredPass(const PathTracer* tracer, const Camera& camera,
+                                                const DepthModel& m,
                                                 const Eigen::Vector3f& projector) const {
   const Intrinsics& k = camera.intrinsics;
   const int w = k.width, h = k.height;
@@ -706,7 +723,7 @@ std::vector<float> Renderer::Impl::InfraredPass(const Camera& camera, const Dept
           rtcInitIntersectContext(&context);
           rtcIntersect16(valid, world, &context, &rh);
           ShadePacket(rh, valid, shaded, m.ambient > 0.0);
-          ProjectorPacket(rh, valid, shaded, projector, spread, u0, v0, w, seen.data(),
+          ProjectorPacket(tracer, rh, valid, shaded, projector, spread, u0, v0, w, seen.data(),
                           signal.data());
           for (int j = 0; j < 16; ++j) {
             if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
@@ -728,14 +745,47 @@ std::vector<float> Renderer::Impl::InfraredPass(const Camera& camera, const Dept
   return out;
 }
 
-Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions& sensor) const {
+Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions& sensor,
+                       const FrameLook* look) const {
   const Impl& im = *impl_;
+  // A frame's own look: a path tracer of its own over the same geometry.
+  std::unique_ptr<PathTracer> own;
+  const PathTracer* tracer = im.tracer.get();
+  if (look != nullptr) {
+    if (tracer == nullptr) throw Error("renderer: a frame's own look needs render.mode: pbr");
+    if (look->instance_materials.size() != im.traced.instances.size() ||
+        look->fixture_materials.size() != im.traced.fixtures.size()) {
+      throw Error("renderer: the frame's look has materials for another scene");
+    }
+    std::string why;
+    for (const Material& m : look->instance_materials) {
+      if (!m.Check(&why)) throw Error("renderer: material: " + why);
+    }
+    for (const Material& m : look->fixture_materials) {
+      if (!m.Check(&why)) throw Error("renderer: fixture material: " + why);
+    }
+    if (!look->floor.Check(&why)) throw Error("renderer: floor material: " + why);
+    for (const LightSource& l : look->lights) {
+      if (!l.Check(&why)) throw Error("renderer: light: " + why);
+    }
+    if (!look->environment.Check(&why)) throw Error("renderer: environment: " + why);
+    PathTracerScene pts = im.traced;
+    for (size_t i = 0; i < pts.instances.size(); ++i)
+      pts.instances[i].material = look->instance_materials[i];
+    for (size_t f = 0; f < pts.fixtures.size(); ++f)
+      pts.fixtures[f].material = look->fixture_materials[f];
+    pts.floor = look->floor;
+    pts.lights = look->lights;
+    pts.environment = look->environment;
+    own = std::make_unique<PathTracer>(std::move(pts), tracer);
+    tracer = own.get();
+  }
   const Intrinsics& k = camera.intrinsics;
   std::string why;
   if (!k.Check(&why)) throw Error("camera: " + why);
   if (!sensor.depth.Check(&why)) throw Error("camera.depth: " + why);
   if (!sensor.Check(&why)) throw Error("camera: " + why);
-  if (im.tracer == nullptr && (sensor.lens.active() || sensor.motion.active()))
+  if (tracer == nullptr && (sensor.lens.active() || sensor.motion.active()))
     throw Error("camera: depth of field and motion blur need render.mode: pbr");
   if (k.distortion.active() && sensor.depth.kind == DepthModel::Kind::kActiveStereo) {
     throw Error(
@@ -768,10 +818,14 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   const ImageSensor& imager = sensor.imager;
   const uint64_t noise_seed = ImageNoiseSeed(imager, view);
   if (gray) frame.gray.assign(num_pixels, 0.0f);
-  const bool pbr = im.tracer != nullptr;
+  const bool pbr = tracer != nullptr;
   if (o.hdr) frame.radiance.assign(3 * num_pixels, 0.0f);
   const uint64_t frame_seed = FrameSeed(o.seed, view);
-  const float exposure_scale = static_cast<float>(std::exp2(o.exposure));
+  const float exposure_scale =
+      static_cast<float>(std::exp2(o.exposure + (look != nullptr ? look->exposure : 0.0)));
+  const Eigen::Vector3f white_balance =
+      look != nullptr ? look->white_balance : Eigen::Vector3f::Ones();
+  const bool balanced = white_balance != Eigen::Vector3f::Ones();
   const bool filmic = o.view == RenderOptions::View::kFilmic;
 
   const std::shared_ptr<const PixelRays> rays = im.RaysOf(k);
@@ -868,13 +922,13 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
             color[j] = (ss == 1 && o.shade && !pbr) ? shaded[j].color : Eigen::Vector3f::Zero();
           }
           if (projector) {
-            im.ProjectorPacket(rh, valid, shaded, projector_world, pixel_spread, u0, v0, w,
+            im.ProjectorPacket(tracer, rh, valid, shaded, projector_world, pixel_spread, u0, v0, w,
                                projector_seen.data(), signal.data());
           }
           Eigen::Vector3f radiance[16];
           if (pbr && o.shade) {
-            im.tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples,
-                                 frame_seed, radiance);
+            tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples,
+                              frame_seed, radiance);
             for (int j = 0; j < 16; ++j) {
               if (!valid[j]) continue;
               const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
@@ -931,6 +985,8 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
               if (!imager.active()) return linear;
               return static_cast<float>(imager.Read(linear, vignette, normal[channel]));
             };
+            // The camera's white balance (domain randomisation) scales what the sensor reads.
+            if (pbr_colour && balanced) radiance[j] = radiance[j].cwiseProduct(white_balance);
             const Eigen::Vector3f linear =
                 pbr_colour ? Eigen::Vector3f(exposure_scale * radiance[j]) : color[j];
             for (int c = 0; c < 3; ++c) {
@@ -974,11 +1030,11 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
       const Eigen::Vector3f dots =
           (camera.world_from_cam * Eigen::Vector3d(0.5 * depth_model.baseline_mm, 0.0, 0.0))
               .cast<float>();
-      const std::vector<float> left = im.InfraredPass(camera, depth_model, dots);
+      const std::vector<float> left = im.InfraredPass(tracer, camera, depth_model, dots);
       const double gain = InfraredGain(left);
       ir_left = InfraredImage(depth_model, view, 0, left, gain);
-      ir_right =
-          InfraredImage(depth_model, view, 1, im.InfraredPass(right, depth_model, dots), gain);
+      ir_right = InfraredImage(depth_model, view, 1,
+                               im.InfraredPass(tracer, right, depth_model, dots), gain);
       input.ir_left = ir_left.data();
       input.ir_right = ir_right.data();
     }

@@ -112,7 +112,14 @@ class Renderer {
   // `view` numbers the frame for the path tracer's sampler and the sensor's noise (the view index
   // of the run), so that every frame has its own noise and the same view renders the same bytes
   // anywhere. `sensor` adds a grey image and the depth a real sensor returns (render/sensor.h).
-  Frame Render(const Camera& camera, uint64_t view = 0, const SensorOptions& sensor = {}) const;
+  // `look` (pbr only) shades this frame with its own materials, lights, environment, exposure
+  // and white balance (domain randomisation, render/randomize.h) over the same geometry; labels
+  // and depth do not depend on it.
+  Frame Render(const Camera& camera, uint64_t view = 0, const SensorOptions& sensor = {},
+               const FrameLook* look = nullptr) const;
+  // The scene's own look in the pbr mode (materials with base colours resolved, lights,
+  // environment): what a frame's look is drawn around. Empty in the fast mode.
+  FrameLook BaseLook() const;
 
  private:
   struct Impl;

@@ -64,6 +64,22 @@ struct Scene {
   static std::vector<LightSource> DefaultLightSources();
 };
 
+// One frame's appearance in the physically based mode (domain randomisation, render/randomize.h):
+// what the path tracer shades with instead of the Scene's materials, lights and environment, and
+// the camera's exposure and white balance. Depth and every label are unchanged by it.
+struct FrameLook {
+  std::vector<Material> instance_materials;  // one per instance, base colours resolved (linear)
+  // The instances' own colours (linear; the CAD colour or the palette's), for presets that take
+  // the part's colour (Material::base_from_part). The renderer does not read them.
+  std::vector<Eigen::Vector3f> instance_colors;
+  Material floor;
+  std::vector<Material> fixture_materials;  // one per fixture
+  std::vector<LightSource> lights;
+  Environment environment;
+  double exposure = 0.0;  // stops, added to RenderOptions::exposure
+  Eigen::Vector3f white_balance = Eigen::Vector3f::Ones();  // gains on the linear colour
+};
+
 // A palette of well-separated colours for parts without a colour of their own.
 Eigen::Vector3f PaletteColor(int index);
 

@@ -11,15 +11,32 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
+#include <nlohmann/json.hpp>
 
 #include "cad/error.h"
 #include "dataset/bop.h"
 #include "dataset/file_io.h"
 #include "dataset/paper_layout.h"
+#include "render/randomize.h"
 #include "render/renderer.h"
 #include "tools/pipeline/journal.h"
 
 namespace cadsynth {
+
+std::string RandomizationRecord(const std::vector<Drawn>& record) {
+  // In draw order (nlohmann's ordered_json keeps insertion order).
+  nlohmann::ordered_json json = nlohmann::ordered_json::object();
+  for (const Drawn& d : record) {
+    if (!d.text.empty()) {
+      json[d.key] = d.text;
+    } else if (d.values.size() == 1) {
+      json[d.key] = d.values[0];
+    } else {
+      json[d.key] = d.values;
+    }
+  }
+  return json.dump();
+}
 
 GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -184,6 +201,18 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       RenderOptions render = spec.render;
       render.amodal_depth = spec.bop.visibility == BopOptions::Visibility::kBop19;
       const Renderer renderer(parts, prepared.scenes[s], render);
+      // Domain randomisation: each frame's look and camera drawn around the scene's own, lights
+      // placed about the middle of its instances on the floor.
+      const Randomization& randomization = prepared.randomization[s];
+      const FrameLook base_look = randomization.changes_look() ? renderer.BaseLook() : FrameLook{};
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      if (!prepared.scenes[s].instances.empty()) {
+        Eigen::AlignedBox3d box;
+        for (const Instance& instance : prepared.scenes[s].instances)
+          box.extend(instance.world_from_model.translation());
+        centre = box.center();
+        centre.z() = 0.0;
+      }
       RigSceneWriter& writer = *writers[s];
       const PaperSceneWriter& paper = *papers[s];
       size_t next = 0;
@@ -192,52 +221,67 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       // world_from_rig * rig_from_cam and draws its noise from the key (view, k).
       using FramePtr = std::shared_ptr<const std::vector<Frame>>;
       tbb::parallel_pipeline(
-          tokens, tbb::make_filter<void, size_t>(
-                      tbb::filter_mode::serial_in_order,
-                      [&](tbb::flow_control& control) -> size_t {
-                        while (next < views.size() &&
-                               (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
-                          ++next;
-                        }
-                        if (next >= views.size()) {
-                          control.stop();
-                          return 0;
-                        }
-                        return next++;
-                      }) &
-                      tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
-                          tbb::filter_mode::parallel,
-                          [&](size_t i) {
-                            auto rig_frames = std::make_shared<std::vector<Frame>>();
-                            for (size_t k = 0; k < sensors.size(); ++k) {
-                              const Camera camera{
-                                  sensors[k].intrinsics,
-                                  views[i].world_from_cam * sensors[k].rig_from_cam};
-                              rig_frames->push_back(
-                                  renderer.Render(camera, SensorFrameKey(i, k), sensors[k].sensor));
-                            }
-                            return std::make_pair(i, FramePtr(std::move(rig_frames)));
-                          }) &
-                      tbb::make_filter<std::pair<size_t, FramePtr>, void>(
-                          tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                            // A rig pose is kept when any of its sensors sees enough.
-                            int visible = 0;
-                            std::vector<const Frame*> rig_frames;
-                            for (const Frame& frame : *item.second) {
-                              int seen = 0;
-                              for (const Frame::InstanceTruth& t : frame.instances)
-                                seen += t.px_count_visib;
-                              visible = std::max(visible, seen);
-                              rig_frames.push_back(&frame);
-                            }
-                            if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
-                              ++(visible == 0 ? empty_views : sparse_views);
-                            } else {
-                              writer.WriteFrame(static_cast<int>(item.first), rig_frames, {&paper});
-                            }
-                            const size_t n = ++done;
-                            if (options.progress) options.progress(n, to_render);
-                          }));
+          tokens,
+          tbb::make_filter<void, size_t>(
+              tbb::filter_mode::serial_in_order,
+              [&](tbb::flow_control& control) -> size_t {
+                while (next < views.size() &&
+                       (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+                  ++next;
+                }
+                if (next >= views.size()) {
+                  control.stop();
+                  return 0;
+                }
+                return next++;
+              }) &
+              tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
+                  tbb::filter_mode::parallel,
+                  [&](size_t i) {
+                    auto rig_frames = std::make_shared<std::vector<Frame>>();
+                    for (size_t k = 0; k < sensors.size(); ++k) {
+                      if (!randomization.active()) {
+                        const Camera camera{sensors[k].intrinsics,
+                                            views[i].world_from_cam * sensors[k].rig_from_cam};
+                        rig_frames->push_back(
+                            renderer.Render(camera, SensorFrameKey(i, k), sensors[k].sensor));
+                        continue;
+                      }
+                      // Every sensor of the rig draws the same numbers (the keys name
+                      // the scene, the view and the quantity, not the sensor).
+                      const FrameDraw draw =
+                          DrawFrame(randomization, base_look, views[i].world_from_cam,
+                                    sensors[k].sensor, centre, s, i);
+                      const Camera camera{sensors[k].intrinsics,
+                                          draw.world_from_cam * sensors[k].rig_from_cam};
+                      Frame frame =
+                          renderer.Render(camera, SensorFrameKey(i, k), draw.sensor,
+                                          randomization.changes_look() ? &draw.look : nullptr);
+                      frame.randomization = RandomizationRecord(draw.record);
+                      rig_frames->push_back(std::move(frame));
+                    }
+                    return std::make_pair(i, FramePtr(std::move(rig_frames)));
+                  }) &
+              tbb::make_filter<std::pair<size_t, FramePtr>, void>(
+                  tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
+                    // A rig pose is kept when any of its sensors sees enough.
+                    int visible = 0;
+                    std::vector<const Frame*> rig_frames;
+                    for (const Frame& frame : *item.second) {
+                      int seen = 0;
+                      for (const Frame::InstanceTruth& t : frame.instances)
+                        seen += t.px_count_visib;
+                      visible = std::max(visible, seen);
+                      rig_frames.push_back(&frame);
+                    }
+                    if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
+                      ++(visible == 0 ? empty_views : sparse_views);
+                    } else {
+                      writer.WriteFrame(static_cast<int>(item.first), rig_frames, {&paper});
+                    }
+                    const size_t n = ++done;
+                    if (options.progress) options.progress(n, to_render);
+                  }));
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
     }
     if (!shard) FinishDataset(root, spec.bop, writers, prepared.classes);

@@ -9,6 +9,7 @@
 
 #include "dataset/bop.h"
 #include "recipes/recipe.h"
+#include "render/randomize.h"
 #include "render/scene.h"
 #include "tools/pipeline/prepare.h"
 #include "tools/pipeline/shards.h"
@@ -53,5 +54,10 @@ struct GenerateSummary {
 // failed one completed (checked against their manifest entries). With options.shard, renders
 // that shard's units into `output` directly. Throws Error.
 GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options);
+
+// A frame's domain randomisation record (render/randomize.h) as the compact JSON object the
+// dataset writes to scene_randomization.json: each draw under its name, in draw order; a number,
+// a list of numbers (a rotation's angle and axis) or a name (a preset, a light type).
+std::string RandomizationRecord(const std::vector<Drawn>& record);
 
 }  // namespace cadsynth

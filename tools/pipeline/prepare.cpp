@@ -488,6 +488,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   struct SceneRun {
     Scene scene;
     std::vector<int> obj_ids;
+    Randomization randomization;
   };
   std::vector<SceneRun> runs(spec.scenes.size());
   std::vector<bool> used_rules(spec.material_rules.size(), false);
@@ -623,6 +624,23 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
                     "them): use 'auto' or 'triplanar'");
       }
     }
+    // Domain randomisation: the scene's own (or the recipe's), each instance's first matching
+    // part rule.
+    const RandomizeSpec& randomize = scene_spec.randomize ? *scene_spec.randomize : spec.randomize;
+    run.randomization = randomize.draws;
+    run.randomization.instance_rule.assign(run.scene.instances.size(), -1);
+    run.randomization.instance_part.clear();
+    for (size_t i = 0; i < run.scene.instances.size(); ++i) {
+      const PartSource& source = *jobs[arranged.group[i]].source;
+      const int part = run.scene.instances[i].part;
+      run.randomization.instance_part.push_back(part);
+      for (size_t r = 0; r < randomize.part_rules.size(); ++r) {
+        if (RuleMatches(randomize.part_rules[r], parts[part].name, source)) {
+          run.randomization.instance_rule[i] = static_cast<int>(r);
+          break;
+        }
+      }
+    }
     run.scene.part_colors.clear();
     for (size_t i = 0; i < parts.size(); ++i) {
       const Eigen::Vector3f palette = PaletteColor(static_cast<int>(i));
@@ -664,6 +682,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   for (SceneRun& run : runs) {
     prepared.scenes.push_back(std::move(run.scene));
     prepared.obj_ids.push_back(std::move(run.obj_ids));
+    prepared.randomization.push_back(std::move(run.randomization));
   }
   prepared.parts = std::move(all.parts);
   prepared.classes = classes;

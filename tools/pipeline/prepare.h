@@ -21,6 +21,8 @@ struct PreparedRun {
   std::vector<ObjectClass> classes;
   std::vector<Scene> scenes;
   std::vector<std::vector<int>> obj_ids;
+  // Per scene, its domain randomisation with instance_rule and instance_part resolved.
+  std::vector<Randomization> randomization;
   std::string variants_json;
 };
 

@@ -1,0 +1,168 @@
+// Domain randomisation (the recipe's `randomize:` section): every frame (or every scene) drawn
+// with its own materials, lights, environment and camera settings from distributions the recipe
+// gives, as a fixed function of (seed, scene, view, what is drawn).
+//
+// Every quantity has its own stream: its draws hash (seed, scene, frame or scene, the quantity's
+// name, an index), so adding or changing one distribution moves no other draw, any thread count,
+// shard or resumed run draws the same numbers, and a frame can be drawn again from its key alone.
+// Every draw is recorded (`Drawn`) under the quantity's name: the run writes them per frame to
+// scene_randomization.json so that a bad frame's settings can be found and ablated.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "render/camera.h"
+#include "render/lights.h"
+#include "render/material.h"
+#include "render/scene.h"
+#include "render/sensor.h"
+
+namespace cadsynth {
+
+// A distribution of one number.
+struct Distribution {
+  enum class Kind {
+    kFixed,       // always a
+    kUniform,     // uniform on [a, b]
+    kNormal,      // normal of mean a and standard deviation b
+    kLogUniform,  // log-uniform on [a, b], 0 < a: intensities, scales
+    kChoice,      // one of `values`, equally likely
+  };
+  Kind kind = Kind::kFixed;
+  double a = 0.0, b = 0.0;
+  std::vector<double> values;
+
+  static Distribution Fixed(double v) { return {Kind::kFixed, v, v, {}}; }
+  static Distribution Uniform(double lo, double hi) { return {Kind::kUniform, lo, hi, {}}; }
+  bool Check(std::string* why) const;
+  // The draw of stream `stream` (cad/random.h UniformDraw) for `seed`: uniform, log-uniform and
+  // choice by the inverse CDF of draw 0, normal by Box-Muller from draws 0 and 1.
+  double Draw(uint64_t seed, const std::string& stream) const;
+  // The smallest and largest value a draw can take (normal: mean -+ 8 sigma).
+  double Lowest() const;
+  double Highest() const;
+};
+
+// How often a group's quantities are drawn anew: every frame, or once per scene (all its frames
+// share the draw).
+enum class DrawPer { kFrame, kScene };
+
+// A surface's material redrawn around its own: a preset picked from `presets` (none: keep the
+// material), its base colour jittered in HSV (sRGB, as a colour picker shows it: `hue` added in
+// turns, `saturation` and `value` multiplied), and the Principled parameters and the texture's
+// feature size (a factor) drawn. Unset distributions leave the value as it is.
+struct MaterialRandomization {
+  std::vector<Material> presets;
+  std::vector<std::string> preset_names;  // one per preset, for the record
+  std::optional<Distribution> hue, saturation, value;
+  std::optional<Distribution> metallic, roughness, specular, texture_scale;
+  bool Check(std::string* why) const;
+};
+
+// Parts the rule matches (by name, family or file; the run resolves which instances) get a
+// material drawn once per part (every copy alike) or once per instance.
+struct PartRandomization {
+  MaterialRandomization material;
+  bool per_instance = false;
+  DrawPer per = DrawPer::kFrame;
+  std::string where;  // the rule's place in the recipe, for messages
+};
+
+// Lights on a shell about the scene: `count` lights of a kind picked from `kinds`, each at an
+// elevation (degrees above the floor) and azimuth (degrees) on a sphere of radius `distance`
+// (mm) about the scene's centre, aimed at it, of `power` W (Blender's), with the colour of a
+// black body at `temperature` kelvin (render/randomize.h BlackbodyColor) and `size` (mm: a
+// rect's side, a disc's diameter, a sphere light's diameter). They replace the recipe's lights
+// unless `keep` is set.
+struct LightRandomization {
+  Distribution count = Distribution::Fixed(1);
+  std::vector<LightSource::Kind> kinds = {LightSource::Kind::kRect};
+  Distribution elevation_deg = Distribution::Uniform(30, 90);
+  Distribution azimuth_deg = Distribution::Uniform(0, 360);
+  Distribution distance_mm = Distribution::Uniform(1200, 2500);
+  Distribution power = {Distribution::Kind::kLogUniform, 10, 200, {}};
+  Distribution temperature_k = Distribution::Uniform(3500, 6500);
+  Distribution size_mm = Distribution::Uniform(200, 1000);
+  bool keep = false;
+  bool Check(std::string* why) const;
+};
+
+// The environment's strength (absolute), rotation about z (degrees), and, for uniform ones, a
+// colour temperature (kelvin) of its colour.
+struct EnvironmentRandomization {
+  std::optional<Distribution> strength, rotation_deg, temperature_k;
+  bool Check(std::string* why) const;
+};
+
+// The camera: exposure (stops added to render.exposure), white balance (the kelvin the camera
+// is balanced for: light of that temperature comes out neutral), a noise gain (ISO: multiplies
+// the image noise's standard deviation; needs camera.imager.full_well), the lens's focus
+// distance (mm) and f-number (needs camera.lens), and a small jitter of its pose: a rotation by
+// `rotation_deg` about a random axis through the camera and a shift by `translation_mm` in a
+// random direction (the labels follow the jittered pose).
+struct CameraRandomization {
+  std::optional<Distribution> exposure, white_balance_k, noise_gain, focus_distance_mm, f_number;
+  std::optional<Distribution> rotation_deg, translation_mm;
+  bool Check(std::string* why) const;
+};
+
+// A scene's randomisation. Groups left unset are not randomised.
+struct Randomization {
+  uint64_t seed = 0;
+  std::vector<PartRandomization> parts;
+  // Per instance, the rule in `parts` that draws its material, or -1, and its part (filled in
+  // by the run).
+  std::vector<int> instance_rule, instance_part;
+  std::optional<MaterialRandomization> floor, fixtures;
+  DrawPer surfaces_per = DrawPer::kFrame;  // floor and fixtures
+  std::optional<LightRandomization> lights;
+  DrawPer lights_per = DrawPer::kFrame;
+  std::optional<EnvironmentRandomization> environment;
+  DrawPer environment_per = DrawPer::kFrame;
+  std::optional<CameraRandomization> camera;  // always per frame
+
+  // Anything the path tracer shades differently (materials, lights, environment, exposure and
+  // white balance): needs render.mode pbr.
+  bool changes_look() const;
+  bool active() const { return changes_look() || camera.has_value(); }
+  bool Check(std::string* why) const;
+};
+
+// One recorded draw: the quantity's name (dotted, e.g. "part.2.roughness", "light.0.power",
+// "camera.exposure") and its value (numbers, or a name for a picked preset or light type).
+struct Drawn {
+  std::string key;
+  std::vector<double> values;
+  std::string text;
+};
+
+// What one frame is drawn to be.
+struct FrameDraw {
+  FrameLook look;
+  Eigen::Isometry3d world_from_cam = Eigen::Isometry3d::Identity();  // jittered
+  SensorOptions sensor;
+  std::vector<Drawn> record;
+};
+
+// Draws frame `view` of scene `scene`: `base` is the scene's own look (Renderer::BaseLook),
+// `world_from_cam` and `sensor` the frame's camera as the sweep places it, `centre` the point
+// (world, mm) lights are aimed at and placed about.
+FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
+                    const Eigen::Isometry3d& world_from_cam, const SensorOptions& sensor,
+                    const Eigen::Vector3d& centre, uint64_t scene, uint64_t view);
+
+// The colour of a black body at `kelvin` (1,667-25,000 K) as linear sRGB (Rec. 709 primaries,
+// D65 white) scaled so that its largest component is 1: the Planckian locus in CIE xy by Kim et
+// al.'s cubic fit (as Blender's Blackbody node), then XYZ with Y = 1 to linear sRGB.
+Eigen::Vector3f BlackbodyColor(double kelvin);
+// Gains on linear RGB that make light of `kelvin` neutral (green gain 1): a camera white-balanced
+// for that colour temperature.
+Eigen::Vector3f WhiteBalanceGains(double kelvin);
+
+}  // namespace cadsynth

@@ -15,6 +15,7 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 constexpr uint64_t kPerScene = (uint64_t{1} << 40) - 1;
 constexpr int kMaxLights = 64;
+constexpr double kHuge = 1e300;
 
 // Linear RGB <-> HSV of the sRGB-encoded colour (h in turns, s and v in [0, 1]).
 Eigen::Vector3f ToHsv(const Eigen::Vector3f& linear) {
@@ -80,7 +81,7 @@ bool CheckRange(const std::optional<Distribution>& d, const char* name, double l
   if (!CheckOptional(d, name, why)) return false;
   if (d && !(d->Lowest() >= lo && d->Highest() <= hi)) {
     *why = std::string(name) + ": draws must lie in [" + std::to_string(lo) + ", " +
-           std::to_string(hi) + "] (a normal reaches mean -+ 8 sigma)";
+           std::to_string(hi) + "] (a normal's mean; its tails are clipped to them)";
     return false;
   }
   return true;
@@ -90,8 +91,11 @@ bool CheckRange(const std::optional<Distribution>& d, const char* name, double l
 class Drawer {
  public:
   explicit Drawer(std::vector<Drawn>* record) : record_(record) {}
-  double operator()(uint64_t seed, const Distribution& d, const std::string& name) {
-    const double v = d.Draw(seed, "randomize.draw." + name);
+  // Draws that fall outside [lo, hi] (a normal's tails) are clipped to it; the record keeps the
+  // value used.
+  double operator()(uint64_t seed, const Distribution& d, const std::string& name,
+                    double lo = -kHuge, double hi = kHuge) {
+    const double v = std::clamp(d.Draw(seed, "randomize.draw." + name), lo, hi);
     record_->push_back({name, {v}, ""});
     return v;
   }
@@ -134,22 +138,23 @@ Material DrawMaterial(const MaterialRandomization& m, const Material& base,
     Eigen::Vector3f hsv = ToHsv(out.surface.base_color);
     if (m.hue) hsv[0] += static_cast<float>(draw(seed, *m.hue, prefix + ".hue"));
     if (m.saturation)
-      hsv[1] =
-          std::clamp(hsv[1] * static_cast<float>(draw(seed, *m.saturation, prefix + ".saturation")),
-                     0.0f, 1.0f);
+      hsv[1] = std::clamp(
+          hsv[1] * static_cast<float>(draw(seed, *m.saturation, prefix + ".saturation", 0, kHuge)),
+          0.0f, 1.0f);
     if (m.value)
-      hsv[2] = std::clamp(hsv[2] * static_cast<float>(draw(seed, *m.value, prefix + ".value")),
-                          0.0f, 1.0f);
+      hsv[2] =
+          std::clamp(hsv[2] * static_cast<float>(draw(seed, *m.value, prefix + ".value", 0, kHuge)),
+                     0.0f, 1.0f);
     out.surface.base_color = FromHsv(hsv);
   }
   const auto unit = [&](const std::optional<Distribution>& d, const char* name, float* value) {
-    if (d) *value = static_cast<float>(std::clamp(draw(seed, *d, prefix + "." + name), 0.0, 1.0));
+    if (d) *value = static_cast<float>(draw(seed, *d, prefix + "." + name, 0, 1));
   };
   unit(m.metallic, "metallic", &out.surface.metallic);
   unit(m.roughness, "roughness", &out.surface.roughness);
   unit(m.specular, "specular", &out.surface.specular);
   if (m.texture_scale)
-    out.texture.scale_mm *= draw(seed, *m.texture_scale, prefix + ".texture_scale");
+    out.texture.scale_mm *= draw(seed, *m.texture_scale, prefix + ".texture_scale", 1e-3, 1e3);
   return out;
 }
 
@@ -238,7 +243,7 @@ double Distribution::Draw(uint64_t seed, const std::string& stream) const {
 double Distribution::Lowest() const {
   switch (kind) {
     case Kind::kNormal:
-      return a - 8 * b;
+      return a;
     case Kind::kChoice:
       return *std::min_element(values.begin(), values.end());
     default:
@@ -251,7 +256,7 @@ double Distribution::Highest() const {
     case Kind::kFixed:
       return a;
     case Kind::kNormal:
-      return a + 8 * b;
+      return a;
     case Kind::kChoice:
       return *std::max_element(values.begin(), values.end());
     default:
@@ -274,9 +279,7 @@ bool MaterialRandomization::Check(std::string* why) const {
   return CheckOptional(hue, "hue", why) && CheckRange(saturation, "saturation", 0, 1e6, why) &&
          CheckRange(value, "value", 0, 1e6, why) && CheckOptional(metallic, "metallic", why) &&
          CheckOptional(roughness, "roughness", why) && CheckOptional(specular, "specular", why) &&
-         CheckRange(texture_scale, "texture_scale", 1e-6, 1e6, why) &&
-         (!texture_scale || texture_scale->Lowest() > 0 ||
-          (*why = "texture_scale: a factor above 0", false));
+         CheckRange(texture_scale, "texture_scale", 1e-3, 1e3, why);
 }
 
 bool LightRandomization::Check(std::string* why) const {
@@ -382,20 +385,21 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
   if (r.lights) {
     const LightRandomization& l = *r.lights;
     const uint64_t seed = seed_of(r.lights_per);
-    const int count = std::clamp(static_cast<int>(std::lround(draw(seed, l.count, "light.count"))),
-                                 0, kMaxLights);
+    const int count =
+        std::clamp(static_cast<int>(std::lround(draw(seed, l.count, "light.count", 0, kMaxLights))),
+                   0, kMaxLights);
     if (!l.keep) out.look.lights.clear();
     for (int i = 0; i < count; ++i) {
       const std::string p = "light." + std::to_string(i);
       LightSource s;
       s.kind = l.kinds[draw.Pick(seed, l.kinds.size(), p + ".type")];
       draw.Text(p + ".type", KindName(s.kind));
-      const double el = draw(seed, l.elevation_deg, p + ".elevation") * kDeg;
+      const double el = draw(seed, l.elevation_deg, p + ".elevation", -90, 90) * kDeg;
       const double az = draw(seed, l.azimuth_deg, p + ".azimuth") * kDeg;
-      const double dist = draw(seed, l.distance_mm, p + ".distance");
-      s.power = draw(seed, l.power, p + ".power");
-      s.color = BlackbodyColor(draw(seed, l.temperature_k, p + ".temperature"));
-      const double size = draw(seed, l.size_mm, p + ".size");
+      const double dist = draw(seed, l.distance_mm, p + ".distance", 1e-3, kHuge);
+      s.power = draw(seed, l.power, p + ".power", 0, kHuge);
+      s.color = BlackbodyColor(draw(seed, l.temperature_k, p + ".temperature", 1667, 25000));
+      const double size = draw(seed, l.size_mm, p + ".size", 0, kHuge);
       const Eigen::Vector3d offset(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                                    std::sin(el));
       s.position = centre + dist * offset;
@@ -410,33 +414,34 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
     const uint64_t seed = seed_of(r.environment_per);
     Environment& env = out.look.environment;
     if (e.strength)
-      env.strength = static_cast<float>(draw(seed, *e.strength, "environment.strength"));
+      env.strength = static_cast<float>(draw(seed, *e.strength, "environment.strength", 0, kHuge));
     if (e.rotation_deg)
       env.rotation_rad = draw(seed, *e.rotation_deg, "environment.rotation") * kDeg;
     if (e.temperature_k) {
       // The colour's luminance kept, its hue a black body's.
       const Eigen::Vector3f bb =
-          BlackbodyColor(draw(seed, *e.temperature_k, "environment.temperature"));
+          BlackbodyColor(draw(seed, *e.temperature_k, "environment.temperature", 1667, 25000));
       env.color = (bb * (Luminance(env.color) / Luminance(bb))).cwiseMin(1.0f);
     }
   }
   if (r.camera) {
     const CameraRandomization& c = *r.camera;
     const uint64_t seed = seed_of(DrawPer::kFrame);
-    if (c.exposure) out.look.exposure += draw(seed, *c.exposure, "camera.exposure");
+    if (c.exposure) out.look.exposure += draw(seed, *c.exposure, "camera.exposure", -20, 20);
     if (c.white_balance_k)
       out.look.white_balance =
-          WhiteBalanceGains(draw(seed, *c.white_balance_k, "camera.white_balance"));
+          WhiteBalanceGains(draw(seed, *c.white_balance_k, "camera.white_balance", 1667, 25000));
     if (c.noise_gain) {
       // The noise's standard deviation times g: the full well shrinks by g^2, the read noise
       // (in electrons of the smaller well) by g.
-      const double g = draw(seed, *c.noise_gain, "camera.noise_gain");
+      const double g = draw(seed, *c.noise_gain, "camera.noise_gain", 1e-3, 1e3);
       out.sensor.imager.full_well /= g * g;
       out.sensor.imager.read_noise /= g;
     }
     if (c.focus_distance_mm)
-      out.sensor.lens.focus_distance_mm = draw(seed, *c.focus_distance_mm, "camera.focus_distance");
-    if (c.f_number) out.sensor.lens.f_number = draw(seed, *c.f_number, "camera.f_number");
+      out.sensor.lens.focus_distance_mm =
+          draw(seed, *c.focus_distance_mm, "camera.focus_distance", 1e-3, kHuge);
+    if (c.f_number) out.sensor.lens.f_number = draw(seed, *c.f_number, "camera.f_number", 0.5, 128);
     if (c.rotation_deg) {
       const double angle = c.rotation_deg->Draw(seed, "randomize.draw.camera.rotation");
       const Eigen::Vector3d axis = UniformDirection(seed, "camera.rotation_axis");

@@ -44,7 +44,8 @@ struct Distribution {
   // The draw of stream `stream` (cad/random.h UniformDraw) for `seed`: uniform, log-uniform and
   // choice by the inverse CDF of draw 0, normal by Box-Muller from draws 0 and 1.
   double Draw(uint64_t seed, const std::string& stream) const;
-  // The smallest and largest value a draw can take (normal: mean -+ 8 sigma).
+  // The smallest and largest value a draw can take; a normal's mean (where a quantity has a
+  // range, the tails of a normal are clipped to it).
   double Lowest() const;
   double Highest() const;
 };

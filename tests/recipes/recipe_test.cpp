@@ -820,6 +820,97 @@ TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
   EXPECT_EQ(uv.material_rules[0].where, "r.yaml:2:12");
 }
 
+TEST(Recipe, RandomizeReadsDistributionsPerGroupAndPerScene) {
+  const RunSpec spec = ParseRecipe(R"(
+scenes:
+  - {name: a, parts: [{family: hex_bolt}]}
+  - name: b
+    parts: [{family: hex_bolt}]
+    randomize:
+      lights: {count: 2, per: scene}
+render: {mode: pbr}
+randomize:
+  seed: 9
+  parts:
+    - {family: hex_bolt, each: instance, preset: {choice: [steel, brass]}, roughness: {uniform: [0.2, 0.6]}}
+  floor: {preset: concrete, texture_scale: {log_uniform: [0.5, 2]}}
+  lights: {count: {choice: [1, 2]}, type: [rect, spot], distance: {uniform: [1 m, 2 m]}}
+  environment: {strength: {normal: [0.3, 0.05]}}
+  camera: {exposure: {normal: [0, 0.5]}, rotation: 1, translation: 2 cm}
+)",
+                                   "r.yaml", ".");
+  const Randomization& d = spec.randomize.draws;
+  EXPECT_EQ(d.seed, 9u);
+  ASSERT_EQ(d.parts.size(), 1u);
+  EXPECT_TRUE(d.parts[0].per_instance);
+  EXPECT_EQ(d.parts[0].material.preset_names, (std::vector<std::string>{"steel", "brass"}));
+  EXPECT_EQ(d.parts[0].material.roughness->kind, Distribution::Kind::kUniform);
+  EXPECT_EQ(d.parts[0].material.roughness->b, 0.6);
+  EXPECT_EQ(spec.randomize.part_rules[0].family, "hex_bolt");
+  EXPECT_EQ(spec.randomize.part_rules[0].where, "r.yaml:12:7");
+  EXPECT_EQ(d.floor->preset_names, std::vector<std::string>{"concrete"});
+  EXPECT_EQ(d.lights->kinds.size(), 2u);
+  EXPECT_EQ(d.lights->distance_mm.a, 1000.0);  // lengths in their units
+  EXPECT_EQ(d.lights->count.values, (std::vector<double>{1, 2}));
+  EXPECT_EQ(d.environment->strength->kind, Distribution::Kind::kNormal);
+  EXPECT_EQ(d.camera->translation_mm->a, 20.0);
+  EXPECT_EQ(d.lights_per, DrawPer::kFrame);
+  // Scene b replaces the lights only.
+  EXPECT_FALSE(spec.scenes[0].randomize.has_value());
+  ASSERT_TRUE(spec.scenes[1].randomize.has_value());
+  const Randomization& b = spec.scenes[1].randomize->draws;
+  EXPECT_EQ(b.lights->count.kind, Distribution::Kind::kFixed);
+  EXPECT_EQ(b.lights->count.a, 2.0);
+  EXPECT_EQ(b.lights->kinds.size(), 1u);  // the scene's own lights, from the defaults
+  EXPECT_EQ(b.lights_per, DrawPer::kScene);
+  EXPECT_EQ(b.parts.size(), 1u);
+  EXPECT_TRUE(b.camera.has_value());
+}
+
+TEST(Recipe, RandomizeErrorsPointAtTheKey) {
+  const std::string pbr = "render: {mode: pbr}\n";
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  lights: {power: {uniform: [50, 10]}}\n"),
+            "r.yaml:3:19: randomize.lights.power: uniform: [low, high] with low <= high, got "
+            "[50.000000, 10.000000]");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  environment: {strength: {gauss: [1, 0.1]}}\n"),
+            "r.yaml:3:28: randomize.environment.strength: unknown distribution 'gauss'; known: "
+            "uniform, normal, log_uniform, choice");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  camera: {exposure: {normall: [0, 1]}}\n"),
+            "r.yaml:3:23: randomize.camera.exposure: unknown distribution 'normall' (did you mean "
+            "'normal'?); known: uniform, normal, log_uniform, choice");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  floor: {preset: {choice: [wood, steal]}}\n"),
+            "r.yaml:3:35: randomize.floor.preset: unknown material 'steal' (did you mean "
+            "'steel'?)");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  lights: {count: {choice: []}}\n"),
+            "r.yaml:3:19: randomize.lights.count: choice: the list is empty");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  lights: {temperature: {uniform: [800, 5000]}}\n"),
+            "r.yaml:3:11: randomize.lights: temperature: draws must lie in [1667.000000, "
+            "25000.000000] (a normal's mean; its tails are clipped to them)");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  parts: [{name: '*', each: copy}]\n"),
+            "r.yaml:3:29: randomize.parts[0].each: expected 'part' or 'instance', got 'copy'");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  parts: [{roughness: 0.5}]\n"),
+            "r.yaml:3:11: randomize.parts[0]: say which parts: 'name', 'family' or 'file' (a "
+            "pattern)");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  sky: {}\n"), "r.yaml:3:3: unknown key 'randomize.sky'");
+  // What the rest of the recipe must allow.
+  EXPECT_EQ(ErrorOf("randomize:\n  lights: {count: 2}\n"),
+            "r.yaml:2:3: randomize: materials, lights, the environment, exposure and white "
+            "balance are randomised in render.mode: pbr (only the camera's pose jitters in the "
+            "fast mode)");
+  EXPECT_NO_THROW(
+      ParseRecipe("randomize:\n  camera: {rotation: {normal: [0, 1]}}\n", "r.yaml", "."));
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  camera: {noise_gain: 2}\n"),
+            "r.yaml:3:24: randomize.camera.noise_gain: scales the image noise: camera has none "
+            "(give it imager.full_well)");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  camera: {f_number: {uniform: [2, 8]}}\n"),
+            "r.yaml:3:11: randomize.camera: focus_distance and f_number draw the lens's: camera "
+            "has no lens (give it lens.focal_length)");
+  EXPECT_EQ(ErrorOf(pbr + "scenes:\n  - {name: a, parts: [{family: hex_bolt}], randomize: {lights: "
+                          "{size: {uniform: [2, 1]}}}}\n"),
+            "r.yaml:3:71: scenes[0].randomize.lights.size: uniform: [low, high] with low <= high, "
+            "got [2.000000, 1.000000]");
+}
+
 TEST(Recipe, ShippedRecipesParse) {
   const bool have_data = std::filesystem::exists(testing::DataDir() / "step");
   int parsed = 0;

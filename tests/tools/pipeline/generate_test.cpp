@@ -391,6 +391,102 @@ TEST(Generate, LensEffectsAreWrittenBesideKAndGiveTheSameBytesOnAnyThreadCount) 
   EXPECT_EQ(ReadJson(dir / "one" / "camera.json")["dist_coeffs"], dist);
 }
 
+// A look randomised per frame: every part's roughness and hue per instance, lights, exposure.
+RandomizeSpec LookRandomization() {
+  RandomizeSpec r;
+  r.draws.seed = 3;
+  PartRandomization p;
+  p.per_instance = true;
+  p.material.roughness = Distribution::Uniform(0.1, 0.9);
+  p.material.hue = Distribution::Uniform(-0.2, 0.2);
+  r.draws.parts = {p};
+  r.part_rules = {RandomizeRule{"*", "", "", ""}};
+  r.draws.floor = MaterialRandomization{};
+  r.draws.floor->value = Distribution::Uniform(0.5, 1.5);
+  r.draws.lights = LightRandomization{};
+  r.draws.camera = CameraRandomization{};
+  r.draws.camera->exposure = Distribution{Distribution::Kind::kNormal, 0, 0.5, {}};
+  return r;
+}
+
+TEST(Generate, RandomizedLooksChangeOnlyTheColourAndAreRecordedPerFrame) {
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes.resize(2);
+  spec.render.mode = RenderOptions::Mode::kPbr;
+  spec.render.samples = 2;
+  spec.render.bounces = 1;
+  const auto plain = GenerateOn(spec, dir.path(), "plain", 2);
+  spec.randomize = LookRandomization();
+  const auto one = GenerateOn(spec, dir.path(), "one", 1),
+             two = GenerateOn(spec, dir.path(), "two", 2);
+  ASSERT_EQ(one.size(), two.size());
+  for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
+  // Labels, depth and masks are the unrandomised run's; every colour image differs.
+  int colours = 0;
+  for (const auto& [name, bytes] : plain) {
+    if (name.find("/rgb/") != std::string::npos) {
+      EXPECT_FALSE(one.at(name) == bytes) << name;
+      ++colours;
+    } else if (name.find(".fragments") == std::string::npos &&
+               name.find("scene_randomization") == std::string::npos &&
+               name.find(".cadsynth_dataset") == std::string::npos) {
+      EXPECT_TRUE(one.at(name) == bytes) << name;
+    }
+  }
+  EXPECT_EQ(colours, 4);
+  // What each frame drew: the two views of a scene differ; scene 1 differs from scene 0.
+  const json r0 = ReadJson(dir / "one" / "train" / "000000" / "scene_randomization.json");
+  const json r1 = ReadJson(dir / "one" / "train" / "000001" / "scene_randomization.json");
+  ASSERT_EQ(r0.size(), 2u);
+  for (const char* key :
+       {"instance.0.roughness", "instance.0.hue", "floor.value", "light.count", "light.0.type",
+        "light.0.power", "light.0.temperature", "camera.exposure"}) {
+    EXPECT_TRUE(r0["0"].contains(key)) << key;
+  }
+  EXPECT_NE(r0["0"]["instance.0.roughness"], r0["1"]["instance.0.roughness"]);
+  EXPECT_NE(r0["0"]["camera.exposure"], r1["0"]["camera.exposure"]);
+  const double roughness = r0["0"]["instance.0.roughness"];
+  EXPECT_GE(roughness, 0.1);
+  EXPECT_LE(roughness, 0.9);
+  EXPECT_FALSE(
+      std::filesystem::exists(dir / "plain" / "train" / "000000" / "scene_randomization.json"));
+}
+
+TEST(Generate, CameraJitterMovesThePoseTheLabelsFollow) {
+  // The fast mode jitters the camera only; scene_camera.json holds the jittered pose, by the
+  // recorded angle and distance.
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes.resize(1);
+  GenerateOn(spec, dir.path(), "plain", 2);
+  spec.randomize.draws.camera = CameraRandomization{};
+  spec.randomize.draws.camera->rotation_deg = Distribution::Uniform(1, 2);
+  spec.randomize.draws.camera->translation_mm = Distribution::Uniform(5, 10);
+  GenerateOn(spec, dir.path(), "jitter", 2);
+  const json before = ReadJson(dir / "plain" / "train" / "000000" / "scene_camera.json");
+  const json after = ReadJson(dir / "jitter" / "train" / "000000" / "scene_camera.json");
+  const json record = ReadJson(dir / "jitter" / "train" / "000000" / "scene_randomization.json");
+  ASSERT_EQ(after.size(), 2u);
+  for (const auto& [im, entry] : after.items()) {
+    const auto pose = [](const json& e) {
+      Eigen::Matrix3d r;
+      for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = e["cam_R_w2c"][i];
+      const Eigen::Vector3d t(e["cam_t_w2c"][0], e["cam_t_w2c"][1], e["cam_t_w2c"][2]);
+      Eigen::Isometry3d w2c = Eigen::Isometry3d::Identity();
+      w2c.linear() = r;
+      w2c.translation() = t;
+      return Eigen::Isometry3d(w2c.inverse());
+    };
+    const Eigen::Isometry3d a = pose(before[im]), b = pose(entry);
+    const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+    EXPECT_NEAR(angle * 180 / M_PI, record[im]["camera.rotation"][0].get<double>(), 1e-4) << im;
+    EXPECT_NEAR((b.translation() - a.translation()).norm(),
+                record[im]["camera.translation"][0].get<double>(), 1e-3)
+        << im;
+  }
+}
+
 TEST(Generate, ActiveStereoCameraWritesItsIrImageWhenAsked) {
   // output.infrared: the left IR image beside the depth it was matched into, 8 bits, dotted.
   ScratchDir dir;

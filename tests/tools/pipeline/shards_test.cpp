@@ -154,6 +154,30 @@ TEST(Shards, PhysicallyBasedShardsAreByteIdenticalToOneProcess) {
       std::filesystem::exists(dir / "whole" / "train" / "000001" / "rgb_hdr" / "000002.exr"));
 }
 
+TEST(Shards, RandomizedShardsAreByteIdenticalToOneProcess) {
+  // Every draw is keyed by (seed, scene, view, quantity): shards draw what one process draws,
+  // and merge writes the same scene_randomization.json.
+  ScratchDir dir;
+  RunSpec spec = SmallFarmSpec();
+  spec.render.mode = RenderOptions::Mode::kPbr;
+  spec.render.samples = 1;
+  spec.render.bounces = 1;
+  spec.randomize.draws.seed = 5;
+  PartRandomization p;
+  p.material.roughness = Distribution::Uniform(0, 1);
+  spec.randomize.draws.parts = {p};
+  spec.randomize.part_rules = {RandomizeRule{"*", "", "", ""}};
+  spec.randomize.draws.lights = LightRandomization{};
+  spec.randomize.draws.camera = CameraRandomization{};
+  spec.randomize.draws.camera->rotation_deg = Distribution::Uniform(0, 1);
+  RunJob(spec, dir / "whole");
+  for (int i : {2, 0, 1}) RunJob(spec, dir / "tree", ShardSpec{i, 3});
+  Merge(dir / "tree");
+  ExpectSameTree(dir / "whole", dir / "tree");
+  EXPECT_TRUE(
+      std::filesystem::exists(dir / "whole" / "train" / "000001" / "scene_randomization.json"));
+}
+
 TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {
   ScratchDir dir;
   const RunSpec spec = SmallFarmSpec();

@@ -1335,8 +1335,8 @@ DrawPer ReadPer(const Reader& r, const YAML::Node& node, const std::string& key)
 MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Node& node,
                                                 const std::string& key,
                                                 std::vector<std::string> other, DrawPer* per) {
-  for (const char* k : {"preset", "hue", "saturation", "value", "metallic", "roughness", "specular",
-                        "texture_scale", "per"}) {
+  for (const char* k : {"preset", "textures", "hue", "saturation", "value", "metallic", "roughness",
+                        "specular", "texture_scale", "per"}) {
     other.emplace_back(k);
   }
   r.ExpectMap(node, key, other);
@@ -1353,6 +1353,50 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
       }
       m.presets.push_back(preset);
       m.preset_names.push_back(name);
+    }
+  }
+  if (const YAML::Node t = node["textures"]) {
+    // Every image in a folder (sorted by name, so the picks do not depend on the file system),
+    // projected triplanarly in tiles of `scale` (meshes with texture coordinates use them).
+    const std::string at = key + ".textures";
+    r.ExpectMap(t, at, {"folder", "scale"});
+    if (!t["folder"]) r.Fail(t, at, "give the 'folder' of images to pick from");
+    std::filesystem::path folder = r.Scalar(t["folder"], at + ".folder");
+    if (folder.is_relative()) folder = r.base_dir() / folder;
+    folder = folder.lexically_normal();
+    std::error_code ec;
+    if (!std::filesystem::is_directory(folder, ec))
+      r.Fail(t["folder"], at + ".folder", folder.string() + ": no such folder");
+    std::vector<std::filesystem::path> files;
+    for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+      std::string ext = entry.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(),
+                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      if (entry.is_regular_file() &&
+          (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".exr" || ext == ".hdr")) {
+        files.push_back(entry.path());
+      }
+    }
+    if (files.empty())
+      r.Fail(t["folder"], at + ".folder",
+             folder.string() + ": no PNG, JPEG, EXR or HDR images in the folder");
+    std::sort(files.begin(), files.end());
+    Texture texture;
+    texture.kind = Texture::Kind::kImage;
+    texture.scale_mm = 200.0;
+    if (t["scale"]) {
+      texture.scale_mm = r.Length(t["scale"], at + ".scale");
+      if (!(texture.scale_mm > 0)) r.Fail(t["scale"], at + ".scale", "must be positive");
+    }
+    for (const std::filesystem::path& file : files) {
+      texture.image = file;
+      try {
+        texture.pixels = LoadLinearImage(file);
+      } catch (const Error& e) {
+        r.Fail(t["folder"], at + ".folder", e.what());
+      }
+      m.textures.push_back(texture);
+      m.texture_names.push_back(file.filename().string());
     }
   }
   const auto read = [&](const char* k, std::optional<Distribution>* d) {

@@ -134,6 +134,11 @@ Material DrawMaterial(const MaterialRandomization& m, const Material& base,
     out = m.presets[i];
     if (out.base_from_part) out.surface.base_color = own_color;
   }
+  if (!m.textures.empty()) {
+    const size_t i = draw.Pick(seed, m.textures.size(), prefix + ".texture");
+    draw.Text(prefix + ".texture", m.texture_names[i]);
+    out.texture = m.textures[i];
+  }
   if (m.hue || m.saturation || m.value) {
     Eigen::Vector3f hsv = ToHsv(out.surface.base_color);
     if (m.hue) hsv[0] += static_cast<float>(draw(seed, *m.hue, prefix + ".hue"));
@@ -265,9 +270,15 @@ double Distribution::Highest() const {
 }
 
 bool MaterialRandomization::Check(std::string* why) const {
-  if (presets.size() != preset_names.size()) {
-    *why = "presets: a name per preset";
+  if (presets.size() != preset_names.size() || textures.size() != texture_names.size()) {
+    *why = "presets and textures: a name for each";
     return false;
+  }
+  for (const Texture& t : textures) {
+    if (t.kind != Texture::Kind::kImage || !t.pixels || !(t.scale_mm > 0)) {
+      *why = "textures: image textures with their pixels and a positive scale";
+      return false;
+    }
   }
   std::string w;
   for (const Material& m : presets) {

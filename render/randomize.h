@@ -55,12 +55,17 @@ struct Distribution {
 enum class DrawPer { kFrame, kScene };
 
 // A surface's material redrawn around its own: a preset picked from `presets` (none: keep the
-// material), its base colour jittered in HSV (sRGB, as a colour picker shows it: `hue` added in
-// turns, `saturation` and `value` multiplied), and the Principled parameters and the texture's
-// feature size (a factor) drawn. Unset distributions leave the value as it is.
+// material), an image texture picked from `textures` (none: keep the texture), its base colour
+// jittered in HSV (sRGB, as a colour picker shows it: `hue` added in turns, `saturation` and
+// `value` multiplied), and the Principled parameters and the texture's feature size (a factor)
+// drawn. Unset distributions leave the value as it is.
 struct MaterialRandomization {
   std::vector<Material> presets;
   std::vector<std::string> preset_names;  // one per preset, for the record
+  // Image textures to pick from (after the preset; each an image Texture with its pixels), and
+  // their file names for the record.
+  std::vector<Texture> textures;
+  std::vector<std::string> texture_names;
   std::optional<Distribution> hue, saturation, value;
   std::optional<Distribution> metallic, roughness, specular, texture_scale;
   bool Check(std::string* why) const;

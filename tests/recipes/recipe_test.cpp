@@ -867,6 +867,35 @@ randomize:
   EXPECT_TRUE(b.camera.has_value());
 }
 
+TEST(Recipe, RandomizeTexturesComeFromAFolder) {
+  testing::ScratchDir dir;
+  std::filesystem::create_directories(dir / "tex");
+  std::filesystem::create_directories(dir / "empty");
+  for (const char* name : {"b.png", "a.png"}) {
+    std::ofstream(dir / "tex" / name, std::ios::binary)  // a binary PPM (read by content)
+        << "P6\n2 2\n255\n"
+        << std::string(12, '\x40');
+  }
+  std::ofstream(dir / "tex" / "notes.txt") << "not an image\n";
+  const RunSpec spec = ParseRecipe(
+      "render: {mode: pbr}\nrandomize:\n  floor: {textures: {folder: tex, scale: 0.5 m}}\n",
+      "r.yaml", dir.path());
+  const MaterialRandomization& floor = *spec.randomize.draws.floor;
+  EXPECT_EQ(floor.texture_names, (std::vector<std::string>{"a.png", "b.png"}));
+  ASSERT_EQ(floor.textures.size(), 2u);
+  EXPECT_EQ(floor.textures[0].scale_mm, 500.0);
+  ASSERT_TRUE(floor.textures[1].pixels);
+  EXPECT_EQ(floor.textures[1].pixels->width, 2);
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\nrandomize:\n  floor: {textures: {folder: empty}}\n",
+                    dir.path()),
+            "r.yaml:3:30: randomize.floor.textures.folder: " + (dir / "empty").string() +
+                ": no PNG, JPEG, EXR or HDR images in the folder");
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\nrandomize:\n  fixtures: {textures: {folder: nowhere}}\n",
+                    dir.path()),
+            "r.yaml:3:33: randomize.fixtures.textures.folder: " + (dir / "nowhere").string() +
+                ": no such folder");
+}
+
 TEST(Recipe, RandomizeErrorsPointAtTheKey) {
   const std::string pbr = "render: {mode: pbr}\n";
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  lights: {power: {uniform: [50, 10]}}\n"),

@@ -211,6 +211,35 @@ TEST(DrawFrame, PerPartCopiesMatchPerInstanceCopiesDiffer) {
   EXPECT_EQ(count, 1);
 }
 
+TEST(DrawFrame, TexturesArePickedAndRecordedByName) {
+  Randomization r;
+  r.floor = MaterialRandomization{};
+  auto pixels = std::make_shared<LinearImage>();
+  pixels->width = pixels->height = 1;
+  pixels->rgb = {0.5f, 0.5f, 0.5f};
+  for (const char* name : {"a.png", "b.png", "c.png"}) {
+    Texture t;
+    t.kind = Texture::Kind::kImage;
+    t.pixels = pixels;
+    t.image = name;
+    r.floor->textures.push_back(t);
+    r.floor->texture_names.push_back(name);
+  }
+  std::string why;
+  ASSERT_TRUE(r.Check(&why)) << why;
+  std::map<std::string, int> picked;
+  for (uint64_t view = 0; view < 300; ++view) {
+    const FrameDraw d = Draw(r, 0, view);
+    const auto it = std::find_if(d.record.begin(), d.record.end(),
+                                 [](const Drawn& x) { return x.key == "floor.texture"; });
+    ASSERT_NE(it, d.record.end());
+    EXPECT_EQ(d.look.floor.texture.image.string(), it->text);
+    ++picked[it->text];
+  }
+  ASSERT_EQ(picked.size(), 3u);
+  for (const auto& [name, n] : picked) EXPECT_GT(n, 60) << name;  // about 100 each
+}
+
 TEST(DrawFrame, PerSceneDrawsAreSharedByTheScenesFrames) {
   Randomization r = PartsOnly(false);
   r.parts[0].per = DrawPer::kScene;

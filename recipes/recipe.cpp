@@ -1451,10 +1451,10 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
     }
   }
   if (node["floor"])
-    d.floor = ReadMaterialRandomization(r, node["floor"], key + ".floor", {}, &d.surfaces_per);
+    d.floor = ReadMaterialRandomization(r, node["floor"], key + ".floor", {}, &d.floor_per);
   if (node["fixtures"]) {
     d.fixtures =
-        ReadMaterialRandomization(r, node["fixtures"], key + ".fixtures", {}, &d.surfaces_per);
+        ReadMaterialRandomization(r, node["fixtures"], key + ".fixtures", {}, &d.fixtures_per);
   }
   if (const YAML::Node n = node["lights"]) {
     const std::string at = key + ".lights";
@@ -1534,20 +1534,53 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
 void CheckRandomize(const Reader& r, const YAML::Node& node, const std::string& key,
                     const RandomizeSpec& spec, const RunSpec& run) {
   const Randomization& d = spec.draws;
+  // Where a group's key is (a scene's randomize may inherit the group from the recipe's: then
+  // the scene's randomize itself).
+  const auto at = [&node](const char* group, const char* k) {
+    const YAML::Node g = node[group];
+    if (!g) return node;
+    const YAML::Node n = g[k];
+    return n ? n : g;
+  };
   if (d.changes_look() && run.render.mode != RenderOptions::Mode::kPbr) {
     r.Fail(node, key,
            "materials, lights, the environment, exposure and white balance are randomised in "
            "render.mode: pbr (only the camera's pose jitters in the fast mode)");
   }
+  if (const auto& e = d.environment) {
+    const Environment::Kind kind = run.look.environment.kind;
+    if (e->temperature_k && kind != Environment::Kind::kUniform) {
+      r.Fail(at("environment", "temperature"), key + ".environment.temperature",
+             "tints a uniform environment's colour (lighting.environment is not uniform)");
+    }
+    if (e->rotation_deg && kind != Environment::Kind::kImage) {
+      r.Fail(at("environment", "rotation"), key + ".environment.rotation",
+             "turns an image environment (lighting.environment is not an image)");
+    }
+  }
   if (!d.camera) return;
   for (const RigSensor& sensor : RunSensors(run)) {
     const std::string who = run.rig.empty() ? "camera" : "cameras '" + sensor.name + "'";
-    if (d.camera->noise_gain && !(sensor.sensor.imager.full_well > 0)) {
-      r.Fail(node["camera"]["noise_gain"], key + ".camera.noise_gain",
-             "scales the image noise: " + who + " has none (give it imager.full_well)");
+    if (const auto& gain = d.camera->noise_gain) {
+      const YAML::Node where = at("camera", "noise_gain");
+      if (!(sensor.sensor.imager.full_well > 0)) {
+        r.Fail(where, key + ".camera.noise_gain",
+               "scales the image noise: " + who + " has none (give it imager.full_well)");
+      }
+      // The noisiest and the quietest sensor it can draw must be sensors.
+      const bool normal = gain->kind == Distribution::Kind::kNormal;
+      for (const double g : {normal ? CameraRandomization::kMinNoiseGain : gain->Lowest(),
+                             normal ? CameraRandomization::kMaxNoiseGain : gain->Highest()}) {
+        ImageSensor s = sensor.sensor.imager;
+        s.full_well /= g * g;
+        s.read_noise /= g;
+        std::string why;
+        if (!s.Check(&why))
+          r.Fail(where, key + ".camera.noise_gain", "a gain of " + std::to_string(g) + ": " + why);
+      }
     }
     if ((d.camera->focus_distance_mm || d.camera->f_number) && !sensor.sensor.lens.active()) {
-      r.Fail(node["camera"], key + ".camera",
+      r.Fail(at("camera", "f_number"), key + ".camera",
              "focus_distance and f_number draw the lens's: " + who +
                  " has no lens (give it lens.focal_length)");
     }

@@ -16,6 +16,9 @@ constexpr double kDeg = M_PI / 180.0;
 constexpr uint64_t kPerScene = (uint64_t{1} << 40) - 1;
 constexpr int kMaxLights = 64;
 constexpr double kHuge = 1e300;
+// Lengths drawn for lights and the lens: at most 100 m (a light's position, the focus distance
+// stay inside the renderer's 1 km), a light at least 0.1 mm across.
+constexpr double kFar = 1e5, kSmallest = 0.1;
 
 // Linear RGB <-> HSV of the sRGB-encoded colour (h in turns, s and v in [0, 1]).
 Eigen::Vector3f ToHsv(const Eigen::Vector3f& linear) {
@@ -288,8 +291,9 @@ bool MaterialRandomization::Check(std::string* why) const {
     }
   }
   return CheckOptional(hue, "hue", why) && CheckRange(saturation, "saturation", 0, 1e6, why) &&
-         CheckRange(value, "value", 0, 1e6, why) && CheckOptional(metallic, "metallic", why) &&
-         CheckOptional(roughness, "roughness", why) && CheckOptional(specular, "specular", why) &&
+         CheckRange(value, "value", 0, 1e6, why) && CheckRange(metallic, "metallic", 0, 1, why) &&
+         CheckRange(roughness, "roughness", 0, 1, why) &&
+         CheckRange(specular, "specular", 0, 1, why) &&
          CheckRange(texture_scale, "texture_scale", 1e-3, 1e3, why);
 }
 
@@ -301,10 +305,10 @@ bool LightRandomization::Check(std::string* why) const {
     *why = "type: no light types to pick from";
     return false;
   }
-  return check(count, "count", 0, kMaxLights) && check(elevation_deg, "elevation", -90, 90) &&
-         check(azimuth_deg, "azimuth", -1e6, 1e6) && check(distance_mm, "distance", 1e-3, 1e9) &&
+  return check(count, "count", 0, kMaxLights) && check(elevation_deg, "elevation", 0, 90) &&
+         check(azimuth_deg, "azimuth", -1e6, 1e6) && check(distance_mm, "distance", 1, kFar) &&
          check(power, "power", 0, 1e12) && check(temperature_k, "temperature", 1667, 25000) &&
-         check(size_mm, "size", 0, 1e9);
+         check(size_mm, "size", kSmallest, kFar);
 }
 
 bool EnvironmentRandomization::Check(std::string* why) const {
@@ -316,8 +320,9 @@ bool EnvironmentRandomization::Check(std::string* why) const {
 bool CameraRandomization::Check(std::string* why) const {
   return CheckRange(exposure, "exposure", -20, 20, why) &&
          CheckRange(white_balance_k, "white_balance", 1667, 25000, why) &&
-         CheckRange(noise_gain, "noise_gain", 1e-3, 1e3, why) &&
-         CheckRange(focus_distance_mm, "focus_distance", 1e-3, 1e12, why) &&
+         CheckRange(noise_gain, "noise_gain", CameraRandomization::kMinNoiseGain,
+                    CameraRandomization::kMaxNoiseGain, why) &&
+         CheckRange(focus_distance_mm, "focus_distance", 1, kFar, why) &&
          CheckRange(f_number, "f_number", 0.5, 128, why) &&
          CheckRange(rotation_deg, "rotation", -180, 180, why) &&
          CheckRange(translation_mm, "translation", -1e6, 1e6, why);
@@ -379,18 +384,16 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
                                                     seed, prefix, first ? draw : quiet);
     }
   }
-  if (r.floor || r.fixtures) {
-    const uint64_t seed = seed_of(r.surfaces_per);
-    if (r.floor) {
-      out.look.floor =
-          DrawMaterial(*r.floor, base.floor, base.floor.surface.base_color, seed, "floor", draw);
-    }
-    if (r.fixtures) {
-      for (size_t f = 0; f < base.fixture_materials.size(); ++f) {
-        const Material& m = base.fixture_materials[f];
-        out.look.fixture_materials[f] = DrawMaterial(*r.fixtures, m, m.surface.base_color, seed,
-                                                     "fixture." + std::to_string(f), draw);
-      }
+  if (r.floor) {
+    out.look.floor = DrawMaterial(*r.floor, base.floor, base.floor.surface.base_color,
+                                  seed_of(r.floor_per), "floor", draw);
+  }
+  if (r.fixtures) {
+    for (size_t f = 0; f < base.fixture_materials.size(); ++f) {
+      const Material& m = base.fixture_materials[f];
+      out.look.fixture_materials[f] =
+          DrawMaterial(*r.fixtures, m, m.surface.base_color, seed_of(r.fixtures_per),
+                       "fixture." + std::to_string(f), draw);
     }
   }
   if (r.lights) {
@@ -405,12 +408,12 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
       LightSource s;
       s.kind = l.kinds[draw.Pick(seed, l.kinds.size(), p + ".type")];
       draw.Text(p + ".type", KindName(s.kind));
-      const double el = draw(seed, l.elevation_deg, p + ".elevation", -90, 90) * kDeg;
+      const double el = draw(seed, l.elevation_deg, p + ".elevation", 0, 90) * kDeg;
       const double az = draw(seed, l.azimuth_deg, p + ".azimuth") * kDeg;
-      const double dist = draw(seed, l.distance_mm, p + ".distance", 1e-3, kHuge);
+      const double dist = draw(seed, l.distance_mm, p + ".distance", 1, kFar);
       s.power = draw(seed, l.power, p + ".power", 0, kHuge);
       s.color = BlackbodyColor(draw(seed, l.temperature_k, p + ".temperature", 1667, 25000));
-      const double size = draw(seed, l.size_mm, p + ".size", 0, kHuge);
+      const double size = draw(seed, l.size_mm, p + ".size", kSmallest, kFar);
       const Eigen::Vector3d offset(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                                    std::sin(el));
       s.position = centre + dist * offset;
@@ -429,10 +432,16 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
     if (e.rotation_deg)
       env.rotation_rad = draw(seed, *e.rotation_deg, "environment.rotation") * kDeg;
     if (e.temperature_k) {
-      // The colour's luminance kept, its hue a black body's.
+      // The colour's luminance kept, its hue a black body's (what exceeds 1 moves into the
+      // strength).
       const Eigen::Vector3f bb =
           BlackbodyColor(draw(seed, *e.temperature_k, "environment.temperature", 1667, 25000));
-      env.color = (bb * (Luminance(env.color) / Luminance(bb))).cwiseMin(1.0f);
+      Eigen::Vector3f c = bb * (Luminance(env.color) / Luminance(bb));
+      if (c.maxCoeff() > 1.0f) {
+        env.strength *= c.maxCoeff();
+        c /= c.maxCoeff();
+      }
+      env.color = c;
     }
   }
   if (r.camera) {
@@ -445,13 +454,14 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
     if (c.noise_gain) {
       // The noise's standard deviation times g: the full well shrinks by g^2, the read noise
       // (in electrons of the smaller well) by g.
-      const double g = draw(seed, *c.noise_gain, "camera.noise_gain", 1e-3, 1e3);
+      const double g = draw(seed, *c.noise_gain, "camera.noise_gain",
+                            CameraRandomization::kMinNoiseGain, CameraRandomization::kMaxNoiseGain);
       out.sensor.imager.full_well /= g * g;
       out.sensor.imager.read_noise /= g;
     }
     if (c.focus_distance_mm)
       out.sensor.lens.focus_distance_mm =
-          draw(seed, *c.focus_distance_mm, "camera.focus_distance", 1e-3, kHuge);
+          draw(seed, *c.focus_distance_mm, "camera.focus_distance", 1, kFar);
     if (c.f_number) out.sensor.lens.f_number = draw(seed, *c.f_number, "camera.f_number", 0.5, 128);
     if (c.rotation_deg) {
       const double angle = c.rotation_deg->Draw(seed, "randomize.draw.camera.rotation");

@@ -107,12 +107,15 @@ struct EnvironmentRandomization {
 };
 
 // The camera: exposure (stops added to render.exposure), white balance (the kelvin the camera
-// is balanced for: light of that temperature comes out neutral), a noise gain (ISO: multiplies
+// is balanced for: light of that temperature reads as a 6,504 K black body, D65's temperature,
+// reads unbalanced), a noise gain (ISO: multiplies
 // the image noise's standard deviation; needs camera.imager.full_well), the lens's focus
 // distance (mm) and f-number (needs camera.lens), and a small jitter of its pose: a rotation by
 // `rotation_deg` about a random axis through the camera and a shift by `translation_mm` in a
 // random direction (the labels follow the jittered pose).
 struct CameraRandomization {
+  // noise_gain's range (draws are clipped to it).
+  static constexpr double kMinNoiseGain = 0.05, kMaxNoiseGain = 20.0;
   std::optional<Distribution> exposure, white_balance_k, noise_gain, focus_distance_mm, f_number;
   std::optional<Distribution> rotation_deg, translation_mm;
   bool Check(std::string* why) const;
@@ -126,7 +129,7 @@ struct Randomization {
   // by the run).
   std::vector<int> instance_rule, instance_part;
   std::optional<MaterialRandomization> floor, fixtures;
-  DrawPer surfaces_per = DrawPer::kFrame;  // floor and fixtures
+  DrawPer floor_per = DrawPer::kFrame, fixtures_per = DrawPer::kFrame;
   std::optional<LightRandomization> lights;
   DrawPer lights_per = DrawPer::kFrame;
   std::optional<EnvironmentRandomization> environment;
@@ -167,8 +170,8 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
 // D65 white) scaled so that its largest component is 1: the Planckian locus in CIE xy by Kim et
 // al.'s cubic fit (as Blender's Blackbody node), then XYZ with Y = 1 to linear sRGB.
 Eigen::Vector3f BlackbodyColor(double kelvin);
-// Gains on linear RGB that make light of `kelvin` neutral (green gain 1): a camera white-balanced
-// for that colour temperature.
+// Gains on linear RGB (green gain 1) that turn light of `kelvin` into light of 6,504 K (D65's
+// temperature; gains 1 there): a camera white-balanced for that colour temperature.
 Eigen::Vector3f WhiteBalanceGains(double kelvin);
 
 }  // namespace cadsynth

@@ -114,7 +114,7 @@ class Renderer {
   // anywhere. `sensor` adds a grey image and the depth a real sensor returns (render/sensor.h).
   // `look` (pbr only) shades this frame with its own materials, lights, environment, exposure
   // and white balance (domain randomisation, render/randomize.h) over the same geometry; labels
-  // and depth do not depend on it.
+  // and the exact depth do not depend on it (a depth model's projector return does).
   Frame Render(const Camera& camera, uint64_t view = 0, const SensorOptions& sensor = {},
                const FrameLook* look = nullptr) const;
   // The scene's own look in the pbr mode (materials with base colours resolved, lights,

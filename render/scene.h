@@ -66,7 +66,8 @@ struct Scene {
 
 // One frame's appearance in the physically based mode (domain randomisation, render/randomize.h):
 // what the path tracer shades with instead of the Scene's materials, lights and environment, and
-// the camera's exposure and white balance. Depth and every label are unchanged by it.
+// the camera's exposure and white balance. The exact depth and every label are unchanged by it (a
+// depth sensor model's depth is not: its projector's return goes through the frame's materials).
 struct FrameLook {
   std::vector<Material> instance_materials;  // one per instance, base colours resolved (linear)
   // The instances' own colours (linear; the CAD colour or the palette's), for presets that take

@@ -920,6 +920,19 @@ TEST(Recipe, RandomizeErrorsPointAtTheKey) {
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  parts: [{roughness: 0.5}]\n"),
             "r.yaml:3:11: randomize.parts[0]: say which parts: 'name', 'family' or 'file' (a "
             "pattern)");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  parts: [{name: '*', roughness: {uniform: [2, 5]}}]\n"),
+            "r.yaml:3:11: randomize.parts[0]: roughness: draws must lie in [0.000000, 1.000000] "
+            "(a normal's mean; its tails are clipped to them)");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  lights: {elevation: {uniform: [-30, 60]}}\n"),
+            "r.yaml:3:11: randomize.lights: elevation: draws must lie in [0.000000, 90.000000] "
+            "(a normal's mean; its tails are clipped to them)");
+  EXPECT_EQ(ErrorOf(pbr + "randomize:\n  environment: {rotation: {uniform: [0, 360]}}\n"),
+            "r.yaml:3:27: randomize.environment.rotation: turns an image environment "
+            "(lighting.environment is not an image)");
+  EXPECT_EQ(ErrorOf(pbr + "camera: {imager: {full_well: 500000000}}\nrandomize:\n  camera: "
+                          "{noise_gain: {uniform: [0.5, 2]}}\n"),
+            "r.yaml:4:24: randomize.camera.noise_gain: a gain of 0.500000: full_well must lie "
+            "between 0 (no noise) and 1e9 electrons");
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  sky: {}\n"), "r.yaml:3:3: unknown key 'randomize.sky'");
   // What the rest of the recipe must allow.
   EXPECT_EQ(ErrorOf("randomize:\n  lights: {count: 2}\n"),
@@ -932,7 +945,7 @@ TEST(Recipe, RandomizeErrorsPointAtTheKey) {
             "r.yaml:3:24: randomize.camera.noise_gain: scales the image noise: camera has none "
             "(give it imager.full_well)");
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  camera: {f_number: {uniform: [2, 8]}}\n"),
-            "r.yaml:3:11: randomize.camera: focus_distance and f_number draw the lens's: camera "
+            "r.yaml:3:22: randomize.camera: focus_distance and f_number draw the lens's: camera "
             "has no lens (give it lens.focal_length)");
   EXPECT_EQ(ErrorOf(pbr + "scenes:\n  - {name: a, parts: [{family: hex_bolt}], randomize: {lights: "
                           "{size: {uniform: [2, 1]}}}}\n"),

@@ -185,6 +185,73 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
       << " " << env.ground.transpose() << " " << env.image.string() << " " << env.rotation_rad
       << "\n";
   if (!env.image.empty()) images.insert(env.image);
+  // Domain randomisation, as each scene resolved it (a RunSpec built in code too), and the
+  // images its texture folders hold (a file added to a folder moves the picks).
+  const auto dist = [&](const char* what, const std::optional<Distribution>& d) {
+    key << " " << what;
+    if (!d) return;
+    key << " " << static_cast<int>(d->kind) << " " << d->a << " " << d->b;
+    for (double v : d->values) key << " " << v;
+  };
+  const auto randomized = [&](const char* what, const MaterialRandomization& m) {
+    key << what;
+    for (const std::string& name : m.preset_names) key << " preset " << name;
+    for (const Texture& t : m.textures) {
+      key << " texture " << t.image.string() << " " << t.scale_mm;
+      images.insert(t.image);
+    }
+    dist("hue", m.hue);
+    dist("saturation", m.saturation);
+    dist("value", m.value);
+    dist("metallic", m.metallic);
+    dist("roughness", m.roughness);
+    dist("specular", m.specular);
+    dist("texture_scale", m.texture_scale);
+    key << "\n";
+  };
+  for (const Randomization& r : prepared.randomization) {
+    key << "randomize " << r.seed << " " << static_cast<int>(r.floor_per) << " "
+        << static_cast<int>(r.fixtures_per) << " " << static_cast<int>(r.lights_per) << " "
+        << static_cast<int>(r.environment_per) << "\n";
+    for (const PartRandomization& p : r.parts) {
+      key << "randomize_part " << p.per_instance << " " << static_cast<int>(p.per) << " ";
+      randomized("", p.material);
+    }
+    for (int rule : r.instance_rule) key << " " << rule;
+    key << "\n";
+    if (r.floor) randomized("randomize_floor", *r.floor);
+    if (r.fixtures) randomized("randomize_fixtures", *r.fixtures);
+    if (const auto& l = r.lights) {
+      key << "randomize_lights " << l->keep;
+      for (LightSource::Kind k : l->kinds) key << " " << static_cast<int>(k);
+      dist("count", l->count);
+      dist("elevation", l->elevation_deg);
+      dist("azimuth", l->azimuth_deg);
+      dist("distance", l->distance_mm);
+      dist("power", l->power);
+      dist("temperature", l->temperature_k);
+      dist("size", l->size_mm);
+      key << "\n";
+    }
+    if (const auto& e = r.environment) {
+      key << "randomize_environment";
+      dist("strength", e->strength);
+      dist("rotation", e->rotation_deg);
+      dist("temperature", e->temperature_k);
+      key << "\n";
+    }
+    if (const auto& c = r.camera) {
+      key << "randomize_camera";
+      dist("exposure", c->exposure);
+      dist("white_balance", c->white_balance_k);
+      dist("noise_gain", c->noise_gain);
+      dist("focus_distance", c->focus_distance_mm);
+      dist("f_number", c->f_number);
+      dist("rotation", c->rotation_deg);
+      dist("translation", c->translation_mm);
+      key << "\n";
+    }
+  }
   for (const std::filesystem::path& image : images) {
     const std::string bytes = ReadFileText(image);
     key << "image " << image.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";

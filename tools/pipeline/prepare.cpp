@@ -492,6 +492,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   };
   std::vector<SceneRun> runs(spec.scenes.size());
   std::vector<bool> used_rules(spec.material_rules.size(), false);
+  std::vector<bool> used_randomize_rules(spec.randomize.part_rules.size(), false);
+  bool recipe_randomize_used = false;
   for (size_t s = 0; s < spec.scenes.size(); ++s) {
     std::vector<Instance> instances;
     std::vector<int> groups;
@@ -641,6 +643,19 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         }
       }
     }
+    // Rules matching no part: a scene's own are reported for it; the recipe's once, below.
+    for (size_t r = 0; r < randomize.part_rules.size(); ++r) {
+      const std::vector<int>& rules = run.randomization.instance_rule;
+      const bool used = std::find(rules.begin(), rules.end(), static_cast<int>(r)) != rules.end();
+      if (!scene_spec.randomize) {
+        used_randomize_rules[r] = used_randomize_rules[r] || used;
+      } else if (!used) {
+        const std::string& where = randomize.part_rules[r].where;
+        Warn((where.empty() ? "" : where + ": ") + "scene '" + scene_spec.name +
+             "': randomize.parts[" + std::to_string(r) + "] matches no part");
+      }
+    }
+    recipe_randomize_used = recipe_randomize_used || !scene_spec.randomize;
     run.scene.part_colors.clear();
     for (size_t i = 0; i < parts.size(); ++i) {
       const Eigen::Vector3f palette = PaletteColor(static_cast<int>(i));
@@ -653,6 +668,13 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   }
   for (size_t r = 0; r < used_rules.size(); ++r) {
     if (!used_rules[r]) Warn("materials.assign[" + std::to_string(r) + "] matches no part");
+  }
+  for (size_t r = 0; recipe_randomize_used && r < used_randomize_rules.size(); ++r) {
+    if (!used_randomize_rules[r]) {
+      const std::string& where = spec.randomize.part_rules[r].where;
+      Warn((where.empty() ? "" : where + ": ") + "randomize.parts[" + std::to_string(r) +
+           "] matches no part");
+    }
   }
   // variants.json: what each file or variant is, and which objects it became.
   Json variants = Json::array();

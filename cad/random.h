@@ -57,6 +57,10 @@ inline constexpr RandomStream kDropSeed{
     "arrange.drop_seed",
     "the seed of one copy's fall onto the floor (pose: dropped), for its pile.rotation and "
     "pile.position draws; index as arrange.copy_pose"};
+// recipes: randomize.seed (distractors, per scene)
+inline constexpr RandomStream kDistractorOrder{
+    "arrange.distractor_order",
+    "where a distractor falls in a pile's drop order (before which copy); index = distractor"};
 // recipes: sweep.seed (random view samplers)
 inline constexpr RandomStream kViewYaw{"view.yaw", "a random view's yaw; index = view"};
 inline constexpr RandomStream kViewPitch{"view.pitch",
@@ -136,17 +140,17 @@ inline constexpr RandomStream kRandomizeDraw{
 }  // namespace streams
 
 inline constexpr RandomStream kRandomStreams[] = {
-    streams::kFamilyParam,    streams::kAssembledPose, streams::kCopyPose,
-    streams::kCopyYaw,        streams::kClutterRadius, streams::kClutterAngle,
-    streams::kViewYaw,        streams::kViewPitch,     streams::kViewRadius,
-    streams::kTargetHeight,   streams::kTargetAzimuth, streams::kTargetRadius,
-    streams::kViewRoll,       streams::kTestImage,     streams::kPointTriangle,
-    streams::kPointU,         streams::kPointV,        streams::kRenderPixel,
-    streams::kTexturePattern, streams::kDropRotation,  streams::kDropPosition,
-    streams::kDropSeed,       streams::kPilePhysics,   streams::kSensorFrame,
-    streams::kSensorLateral,  streams::kSensorAxial,   streams::kSensorInfrared,
-    streams::kSensorDots,     streams::kImageFrame,    streams::kImageNoise,
-    streams::kRandomizeFrame, streams::kRandomizeDraw,
+    streams::kFamilyParam,    streams::kAssembledPose,  streams::kCopyPose,
+    streams::kCopyYaw,        streams::kClutterRadius,  streams::kClutterAngle,
+    streams::kViewYaw,        streams::kViewPitch,      streams::kViewRadius,
+    streams::kTargetHeight,   streams::kTargetAzimuth,  streams::kTargetRadius,
+    streams::kViewRoll,       streams::kTestImage,      streams::kPointTriangle,
+    streams::kPointU,         streams::kPointV,         streams::kRenderPixel,
+    streams::kTexturePattern, streams::kDropRotation,   streams::kDropPosition,
+    streams::kDropSeed,       streams::kPilePhysics,    streams::kDistractorOrder,
+    streams::kSensorFrame,    streams::kSensorLateral,  streams::kSensorAxial,
+    streams::kSensorInfrared, streams::kSensorDots,     streams::kImageFrame,
+    streams::kImageNoise,     streams::kRandomizeFrame, streams::kRandomizeDraw,
 };
 
 namespace random_detail {

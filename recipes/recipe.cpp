@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <system_error>
 
@@ -1415,10 +1416,135 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
   return m;
 }
 
+// `randomize.distractors:`: how many, what (primitives, files, folders, families), how large, and
+// their materials.
+void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at,
+                     RandomizeSpec* spec) {
+  r.ExpectMap(n, at, {"count", "objects", "size", "material"});
+  DistractorRandomization d;
+  const auto number = [&r](const YAML::Node& v, const std::string& k) { return r.Number(v, k); };
+  const auto length = [&r](const YAML::Node& v, const std::string& k) { return r.Length(v, k); };
+  if (n["count"]) d.count = ReadDistribution(r, n["count"], at + ".count", number);
+  if (n["size"]) d.size_mm = ReadDistribution(r, n["size"], at + ".size", length);
+  if (n["material"]) {
+    d.material = ReadMaterialRandomization(r, n["material"], at + ".material", {}, &d.material_per);
+  }
+  std::vector<DistractorObject> objects;
+  if (const YAML::Node list = n["objects"]) {
+    if (!list.IsSequence() || list.size() == 0) {
+      r.Fail(list, at + ".objects",
+             "expected a list such as [box, cylinder, {file: part.stl}, {folder: clutter/}, "
+             "{family: hex_nut}]");
+    }
+    static const std::vector<std::pair<std::string, DistractorObject::Kind>> primitives = {
+        {"box", DistractorObject::Kind::kBox},
+        {"cylinder", DistractorObject::Kind::kCylinder},
+        {"sphere", DistractorObject::Kind::kSphere}};
+    for (size_t i = 0; i < list.size(); ++i) {
+      const YAML::Node item = list[i];
+      const std::string key = at + ".objects[" + std::to_string(i) + "]";
+      DistractorObject object;
+      object.where = r.Where(item);
+      if (item.IsScalar() || item["primitive"]) {
+        const YAML::Node name_node = item.IsScalar() ? item : item["primitive"];
+        if (!item.IsScalar()) r.ExpectMap(item, key, {"primitive"});
+        const std::string name = r.Scalar(name_node, key);
+        const auto it = std::find_if(primitives.begin(), primitives.end(),
+                                     [&](const auto& p) { return p.first == name; });
+        if (it == primitives.end()) {
+          r.Fail(name_node, key,
+                 "unknown primitive '" + name +
+                     "' (known: box, cylinder, sphere; files and families go in a map such as "
+                     "{file: part.stl})");
+        }
+        object.kind = it->second;
+        objects.push_back(std::move(object));
+        continue;
+      }
+      r.ExpectMap(
+          item, key,
+          {"primitive", "file", "folder", "unit", "up", "family", "params", "grid", "random"});
+      if ((item["file"] ? 1 : 0) + (item["folder"] ? 1 : 0) + (item["family"] ? 1 : 0) != 1)
+        r.Fail(item, key, "give one of 'primitive', 'file', 'folder' or 'family'");
+      object.kind = DistractorObject::Kind::kSource;
+      ReadUp(r, item, key, &object.source);
+      if (item["family"]) {
+        if (item["unit"]) r.Fail(item["unit"], key + ".unit", "goes with 'file' or 'folder'");
+        ReadFamily(r, item, key, &object.source);
+        objects.push_back(std::move(object));
+        continue;
+      }
+      for (const char* k : {"params", "grid", "random"}) {
+        if (item[k]) r.Fail(item[k], key + "." + k, "goes with 'family'");
+      }
+      if (item["file"]) {
+        ReadFileSource(r, item, key, &object.source);
+        objects.push_back(std::move(object));
+        continue;
+      }
+      // A folder: every CAD and mesh file in it, sorted by name (the picks do not depend on the
+      // file system's order).
+      std::filesystem::path folder = r.Scalar(item["folder"], key + ".folder");
+      if (folder.is_relative()) folder = r.base_dir() / folder;
+      folder = folder.lexically_normal();
+      std::error_code ec;
+      if (!std::filesystem::is_directory(folder, ec))
+        r.Fail(item["folder"], key + ".folder", folder.string() + ": no such folder");
+      static const std::set<std::string> extensions = {".step", ".stp",  ".p21", ".iges", ".igs",
+                                                       ".brep", ".rle",  ".stl", ".obj",  ".ply",
+                                                       ".dae",  ".gltf", ".glb", ".3mf",  ".off"};
+      std::vector<std::filesystem::path> files;
+      for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+        std::string ext = entry.path().extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(),
+                       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        if (entry.is_regular_file() && extensions.count(ext) != 0) files.push_back(entry.path());
+      }
+      if (files.empty()) {
+        r.Fail(item["folder"], key + ".folder",
+               folder.string() +
+                   ": no CAD or mesh files in the folder (STEP, IGES, BREP, STL, "
+                   "OBJ, PLY, DAE, glTF, 3MF, OFF)");
+      }
+      std::sort(files.begin(), files.end());
+      PartSource base = object.source;
+      if (item["unit"]) {
+        base.unit = r.Scalar(item["unit"], key + ".unit");
+        if (!LengthUnitMm(base.unit)) {
+          r.Fail(item["unit"], key + ".unit",
+                 "unknown length unit '" + base.unit + "' (use um, mm, cm, m, in or ft)");
+        }
+      }
+      for (const std::filesystem::path& file : files) {
+        DistractorObject one = object;
+        one.source = base;
+        one.source.kind = PartSource::Kind::kFile;
+        one.source.path = file;
+        one.source.where = r.Where(item["folder"]);
+        objects.push_back(std::move(one));
+      }
+    }
+  } else {
+    for (const auto kind : {DistractorObject::Kind::kBox, DistractorObject::Kind::kCylinder,
+                            DistractorObject::Kind::kSphere}) {
+      DistractorObject object;
+      object.kind = kind;
+      object.where = r.Where(n);
+      objects.push_back(std::move(object));
+    }
+  }
+  std::string why;
+  if (!d.Check(&why)) r.Fail(n, at, why);
+  spec->draws.distractors = std::move(d);
+  spec->distractor_objects = std::move(objects);
+}
+
 // `randomize:` (or a scene's, which replaces the groups it gives of `base`).
 RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::string& key,
                             const RandomizeSpec& base) {
-  r.ExpectMap(node, key, {"seed", "parts", "floor", "fixtures", "lights", "environment", "camera"});
+  r.ExpectMap(
+      node, key,
+      {"seed", "parts", "floor", "fixtures", "lights", "environment", "camera", "distractors"});
   RandomizeSpec spec = base;
   Randomization& d = spec.draws;
   const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
@@ -1527,6 +1653,7 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
     if (!c.Check(&why)) r.Fail(n, at, why);
     d.camera = c;
   }
+  if (node["distractors"]) ReadDistractors(r, node["distractors"], key + ".distractors", &spec);
   return spec;
 }
 
@@ -1875,8 +2002,21 @@ bool RunLimits::Check(std::string* why) const {
 void CheckLimits(const RunSpec& spec, const std::string& recipe) {
   const RunLimits& limits = spec.limits;
   size_t variants = 0;
+  // The scenes' parts and every distractor source.
+  std::vector<const PartSource*> sources;
+  const auto distractors = [&sources](const RandomizeSpec& randomize) {
+    for (const DistractorObject& object : randomize.distractor_objects) {
+      if (object.kind == DistractorObject::Kind::kSource) sources.push_back(&object.source);
+    }
+  };
+  distractors(spec.randomize);
   for (const SceneSpec& scene : spec.scenes) {
-    for (const PartSource& source : scene.sources) {
+    for (const PartSource& source : scene.sources) sources.push_back(&source);
+    if (scene.randomize) distractors(*scene.randomize);
+  }
+  {
+    for (const PartSource* each : sources) {
+      const PartSource& source = *each;
       const std::string where = source.where.empty() ? "" : source.where + ": ";
       variants += source.kind == PartSource::Kind::kFile ? 1 : source.variants.size();
       if (variants > static_cast<size_t>(limits.max_variants)) {

@@ -47,9 +47,20 @@ struct RandomizeRule {
   std::string name, family, file;
   std::string where;  // "recipe.yaml:12:7"
 };
+// A distractor object (randomize.distractors.objects): a primitive whose size the scene draws,
+// or a part source (a file, each file of a folder, a family's variants), every distinct part of
+// which is an object to pick.
+struct DistractorObject {
+  enum class Kind { kBox, kCylinder, kSphere, kSource };
+  Kind kind = Kind::kBox;
+  PartSource source;  // kSource
+  std::string where;  // "recipe.yaml:12:7"
+};
 struct RandomizeSpec {
   Randomization draws;
   std::vector<RandomizeRule> part_rules;  // one per draws.parts entry
+  // With draws.distractors: what they are (default: a box, a cylinder and a sphere).
+  std::vector<DistractorObject> distractor_objects;
 };
 
 // A pile's (or dropped parts') physics for the parts a rule matches: patterns as MaterialRule's.

@@ -328,9 +328,20 @@ bool CameraRandomization::Check(std::string* why) const {
          CheckRange(translation_mm, "translation", -1e6, 1e6, why);
 }
 
+bool DistractorRandomization::Check(std::string* why) const {
+  if (!CheckRange(count, "count", 0, kMaxCount, why) || !CheckRange(size_mm, "size", 1, 10000, why))
+    return false;
+  if (material && !material->Check(why)) {
+    *why = "material." + *why;
+    return false;
+  }
+  return true;
+}
+
 bool Randomization::changes_look() const {
   return !parts.empty() || floor || fixtures || lights || environment ||
-         (camera && (camera->exposure || camera->white_balance_k));
+         (camera && (camera->exposure || camera->white_balance_k)) ||
+         (distractors && distractors->material);
 }
 
 bool Randomization::Check(std::string* why) const {
@@ -347,7 +358,56 @@ bool Randomization::Check(std::string* why) const {
     return false;
   };
   return sub(floor, "floor") && sub(fixtures, "fixtures") && sub(lights, "lights") &&
-         sub(environment, "environment") && sub(camera, "camera");
+         sub(environment, "environment") && sub(camera, "camera") &&
+         sub(distractors, "distractors");
+}
+
+namespace {
+uint64_t RunSeed(const Randomization& r) { return Hash(streams::kRandomizeFrame.id(), r.seed); }
+uint64_t SceneSeed(const Randomization& r, uint64_t scene) {
+  return Hash(RunSeed(r), (scene << 40) + kPerScene);
+}
+}  // namespace
+
+std::vector<DistractorPick> DrawDistractors(const Randomization& r, uint64_t scene,
+                                            const std::vector<std::string>& names,
+                                            const std::vector<int>& sizes,
+                                            std::vector<Drawn>* record) {
+  std::vector<DistractorPick> picks;
+  if (!r.distractors || names.empty() || sizes.size() != names.size()) return picks;
+  const DistractorRandomization& d = *r.distractors;
+  const uint64_t seed = SceneSeed(r, scene);
+  Drawer draw(record);
+  const int count = std::clamp(
+      static_cast<int>(std::lround(draw(seed, d.count, "distractor.count", 0, d.kMaxCount))), 0,
+      DistractorRandomization::kMaxCount);
+  for (int k = 0; k < count; ++k) {
+    const std::string p = "distractor." + std::to_string(k);
+    DistractorPick pick;
+    pick.object = static_cast<int>(draw.Pick(seed, names.size(), p + ".object"));
+    draw.Text(p + ".object", names[static_cast<size_t>(pick.object)]);
+    // Always three draws (an object's sizes do not depend on which object another one is).
+    for (int i = 0; i < 3; ++i) {
+      pick.size_mm[i] = std::clamp(
+          d.size_mm.Draw(seed, "randomize.draw." + p + ".size." + std::to_string(i)), 1.0, 1e4);
+    }
+    const int used = std::clamp(sizes[static_cast<size_t>(pick.object)], 0, 3);
+    if (used > 0)
+      draw.Numbers(p + ".size",
+                   std::vector<double>(pick.size_mm.data(), pick.size_mm.data() + used));
+    const std::string stream = "randomize.draw." + p + ".color";
+    const double h = UniformDraw(seed, stream, 0), sat = 0.1 + 0.8 * UniformDraw(seed, stream, 1),
+                 val = 0.15 + 0.75 * UniformDraw(seed, stream, 2);
+    const Eigen::Vector3f linear = FromHsv(Eigen::Vector3f(h, sat, val));
+    for (int c = 0; c < 3; ++c) pick.color[c] = LinearToSrgb(linear[c]);
+    draw.Numbers(p + ".color", {pick.color.x(), pick.color.y(), pick.color.z()});
+    picks.push_back(pick);
+  }
+  return picks;
+}
+
+uint64_t DistractorDropSeed(const Randomization& r, uint64_t scene) {
+  return Hash(SceneSeed(r, scene), Fnv1a64("randomize.draw.distractor.drop"));
 }
 
 FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
@@ -357,8 +417,9 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
   out.look = base;
   out.world_from_cam = world_from_cam;
   out.sensor = sensor;
+  out.record = r.scene_record;
   Drawer draw(&out.record);
-  const uint64_t run_seed = Hash(streams::kRandomizeFrame.id(), r.seed);
+  const uint64_t run_seed = RunSeed(r);
   const auto seed_of = [&](DrawPer per) {
     return Hash(run_seed, (scene << 40) + (per == DrawPer::kScene ? kPerScene : view));
   };
@@ -388,12 +449,18 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
     out.look.floor = DrawMaterial(*r.floor, base.floor, base.floor.surface.base_color,
                                   seed_of(r.floor_per), "floor", draw);
   }
-  if (r.fixtures) {
-    for (size_t f = 0; f < base.fixture_materials.size(); ++f) {
-      const Material& m = base.fixture_materials[f];
+  for (size_t f = 0; f < base.fixture_materials.size(); ++f) {
+    // Containers and the like take `fixtures`; distractors (the last fixtures) their own.
+    const bool distractor = r.distractors && f >= r.first_distractor;
+    const Material& m = base.fixture_materials[f];
+    if (!distractor && r.fixtures) {
       out.look.fixture_materials[f] =
           DrawMaterial(*r.fixtures, m, m.surface.base_color, seed_of(r.fixtures_per),
                        "fixture." + std::to_string(f), draw);
+    } else if (distractor && r.distractors->material) {
+      out.look.fixture_materials[f] = DrawMaterial(
+          *r.distractors->material, m, m.surface.base_color, seed_of(r.distractors->material_per),
+          "distractor." + std::to_string(f - r.first_distractor), draw);
     }
   }
   if (r.lights) {

@@ -121,6 +121,39 @@ struct CameraRandomization {
   bool Check(std::string* why) const;
 };
 
+// One recorded draw: the quantity's name (dotted, e.g. "part.2.roughness", "light.0.power",
+// "camera.exposure") and its value (numbers, or a name for a picked preset or light type).
+struct Drawn {
+  std::string key;
+  std::vector<double> values;
+  std::string text;
+};
+
+// Distractors: objects that are not targets (no instance id, no labels; they occlude the targets
+// and show in the images and the depth), `count` of them per scene, each an object picked
+// uniformly from the run's list (primitives, files, family variants: DrawDistractors gets their
+// number), a primitive's sides (box), diameter and height (cylinder) or diameter (sphere) drawn
+// from `size_mm`, and a colour drawn uniformly in HSV (sRGB: any hue, saturation 0.1-0.9, value
+// 0.15-0.9). Being geometry, they are drawn once per scene: the run drops them among the parts
+// with the scene's physics. Their materials are redrawn per frame or per scene from `material`
+// (each distractor on its own) when it is set.
+struct DistractorRandomization {
+  static constexpr int kMaxCount = 200;
+  Distribution count = Distribution::Uniform(3, 8);
+  Distribution size_mm = Distribution::Uniform(20, 80);
+  std::optional<MaterialRandomization> material;
+  DrawPer material_per = DrawPer::kFrame;
+  bool Check(std::string* why) const;
+};
+
+// One distractor of a scene: the object picked (an index into the run's list), the primitive's
+// three sizes (mm; the run uses the ones its kind needs) and its colour (sRGB).
+struct DistractorPick {
+  int object = 0;
+  Eigen::Vector3d size_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3f color = Eigen::Vector3f::Constant(0.5f);
+};
+
 // A scene's randomisation. Groups left unset are not randomised.
 struct Randomization {
   uint64_t seed = 0;
@@ -134,21 +167,18 @@ struct Randomization {
   DrawPer lights_per = DrawPer::kFrame;
   std::optional<EnvironmentRandomization> environment;
   DrawPer environment_per = DrawPer::kFrame;
-  std::optional<CameraRandomization> camera;  // always per frame
+  std::optional<CameraRandomization> camera;           // always per frame
+  std::optional<DistractorRandomization> distractors;  // per scene (geometry)
+  // Filled in by the run: the scene's first distractor among its fixtures (they are the last
+  // ones), and what its distractors are (every frame's record repeats it).
+  size_t first_distractor = 0;
+  std::vector<Drawn> scene_record;
 
   // Anything the path tracer shades differently (materials, lights, environment, exposure and
-  // white balance): needs render.mode pbr.
+  // white balance; distractors' own materials, but not the distractors): needs render.mode pbr.
   bool changes_look() const;
-  bool active() const { return changes_look() || camera.has_value(); }
+  bool active() const { return changes_look() || camera.has_value() || distractors.has_value(); }
   bool Check(std::string* why) const;
-};
-
-// One recorded draw: the quantity's name (dotted, e.g. "part.2.roughness", "light.0.power",
-// "camera.exposure") and its value (numbers, or a name for a picked preset or light type).
-struct Drawn {
-  std::string key;
-  std::vector<double> values;
-  std::string text;
 };
 
 // What one frame is drawn to be.
@@ -165,6 +195,17 @@ struct FrameDraw {
 FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
                     const Eigen::Isometry3d& world_from_cam, const SensorOptions& sensor,
                     const Eigen::Vector3d& centre, uint64_t scene, uint64_t view);
+
+// The distractors of scene `scene` (none unless r.distractors is set), picked from the objects
+// named `names`, of which object i takes sizes[i] of the three sizes (a box 3, a cylinder 2, a
+// sphere 1, a part 0), recorded in `record` as "distractor.count", "distractor.K.object", ".size"
+// (the sizes it takes) and ".color". Drawn per scene, from streams randomize.draw.distractor.*.
+std::vector<DistractorPick> DrawDistractors(const Randomization& r, uint64_t scene,
+                                            const std::vector<std::string>& names,
+                                            const std::vector<int>& sizes,
+                                            std::vector<Drawn>* record);
+// The seed of a scene's distractor drop (ArrangementOptions::distractor_seed).
+uint64_t DistractorDropSeed(const Randomization& r, uint64_t scene);
 
 // The colour of a black body at `kelvin` (1,667-25,000 K) as linear sRGB (Rec. 709 primaries,
 // D65 white) scaled so that its largest component is 1: the Planckian locus in CIE xy by Kim et

@@ -229,11 +229,11 @@ bool Drop(const std::vector<Part>& parts, const std::vector<CollisionShape>& sha
   return r.restless.empty();
 }
 
-}  // namespace
-
-Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                    const ArrangementOptions& options, const std::vector<int>& group,
-                    const std::vector<CollisionShape>* shapes) {
+// The arrangement of `instances`; a pile's distractors fall with it (the other layouts' fall in
+// Arrange, after it).
+Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                         const ArrangementOptions& options, const std::vector<int>& group,
+                         const std::vector<CollisionShape>* shapes) {
   ArrangementOptions o = options;
   if (o.pose == PoseMode::kAuto)
     o.pose = o.layout == Layout::kAssembled ? PoseMode::kUpright : PoseMode::kStable;
@@ -289,6 +289,24 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
         out.group.push_back(g.group);
       }
     }
+    // Distractors join the drop: distractor k falls just before copy `slot` (after the last
+    // copy for slot = copies), drawn uniformly; `body_of[b]` says what body b is (>= 0: a copy,
+    // -1 - k: distractor k).
+    std::vector<std::pair<double, int>> order;
+    for (size_t c = 0; c < copies.size(); ++c) order.emplace_back(c + 0.5, static_cast<int>(c));
+    for (size_t k = 0; k < o.distractors.size(); ++k) {
+      const double slot = std::floor(UniformDraw(o.distractor_seed, streams::kDistractorOrder, k) *
+                                     (copies.size() + 1));
+      order.emplace_back(slot, -1 - static_cast<int>(k));
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<int> body_of;
+    pile.bodies.clear();
+    for (const auto& [slot, what] : order) {
+      body_of.push_back(what);
+      pile.bodies.push_back(what >= 0 ? copies[what].part : o.distractors[-1 - what]);
+    }
     std::vector<CollisionShape> own;
     if (shapes == nullptr) {
       std::vector<bool> needed(parts.size(), false);
@@ -300,12 +318,35 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
       shapes = &own;
     }
     const PileResult r = DropPile(parts, *shapes, pile);
-    for (size_t i = 0; i < copies.size(); ++i) {
-      copies[i].world_from_model = r.world_from_model[i];
+    std::vector<int> index_of_body(body_of.size());
+    out.distractors.resize(o.distractors.size());
+    for (size_t b = 0; b < body_of.size(); ++b) {
+      const int what = body_of[b];
+      if (what >= 0) {
+        copies[what].world_from_model = r.world_from_model[b];
+        index_of_body[b] = what;
+      } else {
+        Instance& d = out.distractors[-1 - what];
+        d.part = o.distractors[-1 - what];
+        d.name = "distractor " + std::to_string(-1 - what);
+        d.world_from_model = r.world_from_model[b];
+        index_of_body[b] = what;
+      }
     }
+    for (const std::vector<int>* from : {&r.restless, &r.escaped}) {
+      std::vector<int>& to = from == &r.restless ? out.restless : out.escaped;
+      for (int b : *from) {
+        const int what = index_of_body[b];
+        if (what >= 0) {
+          to.push_back(what);
+        } else if (from == &r.restless) {
+          out.restless_distractors.push_back(-1 - what);
+        }
+      }
+      std::sort(to.begin(), to.end());
+    }
+    std::sort(out.restless_distractors.begin(), out.restless_distractors.end());
     out.instances = std::move(copies);
-    out.restless = r.restless;
-    out.escaped = r.escaped;
     out.settle_seconds = r.seconds;
     return out;
   }
@@ -477,6 +518,61 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
           Eigen::Translation3d(-all.center().x(), -all.center().y(), 0.0) * i.world_from_model;
     }
   }
+  return out;
+}
+
+}  // namespace
+
+Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                    const ArrangementOptions& o, const std::vector<int>& group,
+                    const std::vector<CollisionShape>* shapes) {
+  for (int d : o.distractors) {
+    if (d < 0 || static_cast<size_t>(d) >= parts.size())
+      throw Error("arrangement: a distractor refers to a missing part");
+  }
+  Arrangement out = ArrangeParts(parts, instances, o, group, shapes);
+  if (o.layout == Layout::kPile || o.distractors.empty() || out.instances.empty()) return out;
+  // The other layouts: the distractors fall onto the floor over the arranged parts, which stay.
+  PileOptions pile;
+  pile.container.kind = Container::Kind::kFloor;
+  pile.container.material = o.container.material;
+  pile.drop_height_mm = o.drop_height_mm;
+  pile.max_seconds = o.settle_time_s;
+  pile.time_step_s = o.time_step_s;
+  pile.seed = o.distractor_seed;
+  pile.bodies = o.distractors;
+  for (size_t p = 0; p < parts.size(); ++p)
+    pile.materials.push_back(
+        (o.part_physics.empty() ? o.physics : o.part_physics[p]).Draw(o.seed, p));
+  // Over the parts' floor plan (they are centred on the z axis), 20 mm wider each side.
+  Eigen::AlignedBox3d all;
+  for (const Instance& i : out.instances) {
+    all.extend(parts[i.part].mesh.Bounds(i.world_from_model));
+    pile.fixed.push_back({i.part, i.world_from_model});
+  }
+  const Eigen::Vector2d reach =
+      all.min().head<2>().cwiseAbs().cwiseMax(all.max().head<2>().cwiseAbs());
+  pile.drop_size_mm = 2.0 * reach + Eigen::Vector2d::Constant(40.0);
+  std::vector<CollisionShape> own;
+  if (shapes == nullptr) {
+    std::vector<bool> needed(parts.size(), false);
+    for (int b : pile.bodies) needed[static_cast<size_t>(b)] = true;
+    for (const PileOptions::Fixed& f : pile.fixed) needed[static_cast<size_t>(f.part)] = true;
+    own.resize(parts.size());
+    for (size_t p = 0; p < parts.size(); ++p) {
+      if (needed[p]) own[p] = MakeCollisionShape(parts[p]);
+    }
+    shapes = &own;
+  }
+  const PileResult r = DropPile(parts, *shapes, pile);
+  for (size_t k = 0; k < o.distractors.size(); ++k) {
+    Instance d;
+    d.part = o.distractors[k];
+    d.name = "distractor " + std::to_string(k);
+    d.world_from_model = r.world_from_model[k];
+    out.distractors.push_back(std::move(d));
+  }
+  out.restless_distractors = r.restless;
   return out;
 }
 

@@ -63,6 +63,14 @@ struct ArrangementOptions {
   double drop_height_mm = 30.0;
   double settle_time_s = 10.0;  // simulated; parts still moving then are reported
   double time_step_s = PileOptions{}.time_step_s;
+  // Distractors (domain randomisation): parts that are dropped among the arranged ones but are
+  // not instances of the arrangement (indices into `parts`, each falling alone). A pile drops
+  // them with its copies, each at a place in the drop order drawn from `distractor_seed` (stream
+  // arrange.distractor_order); the other layouts arrange first and then drop them from
+  // `distractor_seed` onto the floor over the arranged parts, which stay where they are (static
+  // bodies). Their physics is `physics` (or part_physics) like the parts'.
+  std::vector<int> distractors;
+  uint64_t distractor_seed = 0;
 
   bool Check(std::string* why) const;
 
@@ -102,6 +110,10 @@ struct Arrangement {
   // time it took (pose: dropped: instances of bodies still moving, the longest fall).
   std::vector<int> restless, escaped;
   double settle_seconds = 0;
+  // Where ArrangementOptions::distractors came to rest (their `part` as given), and which of them
+  // were still moving when settle_time ran out.
+  std::vector<Instance> distractors;
+  std::vector<int> restless_distractors;
 };
 
 // Arranges `instances` (`group[i]` is the group of instance i; empty: one group per instance).

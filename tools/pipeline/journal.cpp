@@ -240,6 +240,14 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
       dist("temperature", e->temperature_k);
       key << "\n";
     }
+    if (const auto& d = r.distractors) {
+      key << "randomize_distractors " << static_cast<int>(d->material_per) << " "
+          << r.first_distractor;
+      dist("count", d->count);
+      dist("size", d->size_mm);
+      key << "\n";
+      if (d->material) randomized("randomize_distractor_material", *d->material);
+    }
     if (const auto& c = r.camera) {
       key << "randomize_camera";
       dist("exposure", c->exposure);
@@ -251,10 +259,6 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
       dist("translation", c->translation_mm);
       key << "\n";
     }
-  }
-  for (const std::filesystem::path& image : images) {
-    const std::string bytes = ReadFileText(image);
-    key << "image " << image.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
   }
   // What prepare made of the recipe, whatever option decided it (a RunSpec built in code can
   // change a scene's arrangement or a part without changing the recipe text): every object's
@@ -271,6 +275,17 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     }
     for (const Eigen::Vector3f& color : scene.part_colors) key << color.transpose() << " ";
     key << "\n";
+    // Totes, containers from files and distractors: where they are and how they look.
+    for (const Scene::Fixture& f : scene.fixtures) {
+      key << "fixture " << f.name << " " << KeyHasher().Geometry(f.mesh).Key().Hex() << " "
+          << f.color.transpose() << "\n";
+      material("fixture_material", f.material);
+    }
+  }
+  // The bytes of every image a material above reads.
+  for (const std::filesystem::path& image : images) {
+    const std::string bytes = ReadFileText(image);
+    key << "image " << image.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
   }
   for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
   // Embree's kernels on this machine: different widths give different last bits.

@@ -20,7 +20,9 @@
 #include "cad/import.h"
 #include "cad/part_cache.h"
 #include "cad/schema.h"
+#include "cad/shape.h"
 #include "dataset/file_io.h"
+#include "render/randomize.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
 
@@ -392,6 +394,84 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     }
   }
 
+  // Distractor objects (randomize.distractors.objects) of the recipe and of scenes with their
+  // own: primitives by name, and every distinct part of each file or family variant (read like
+  // part files, and cached alike). An object listed once but inherited by several scenes
+  // (the same recipe place) is read once.
+  struct DistractorCandidate {
+    std::string name;
+    DistractorObject::Kind kind = DistractorObject::Kind::kBox;
+    Part part;  // kSource
+  };
+  std::vector<std::vector<DistractorCandidate>> distractor_candidates(spec.scenes.size());
+  {
+    std::vector<Job> sources;
+    std::map<std::string, std::vector<size_t>> jobs_of;  // by where and what: its jobs
+    const auto what = [](const DistractorObject& o) {
+      return o.where + "|" + o.source.path.string() + "|" + o.source.family;
+    };
+    for (size_t s = 0; s < spec.scenes.size(); ++s) {
+      const RandomizeSpec& r =
+          spec.scenes[s].randomize ? *spec.scenes[s].randomize : spec.randomize;
+      if (!r.draws.distractors) continue;
+      for (const DistractorObject& object : r.distractor_objects) {
+        if (object.kind != DistractorObject::Kind::kSource || jobs_of.count(what(object))) continue;
+        std::vector<size_t>& mine = jobs_of[what(object)];
+        const PartSource& source = object.source;
+        const size_t variants = source.kind == PartSource::Kind::kFile ? 1 : source.variants.size();
+        for (size_t v = 0; v < variants; ++v) {
+          mine.push_back(sources.size());
+          sources.push_back({static_cast<int>(s),
+                             &source,
+                             v,
+                             source.kind == PartSource::Kind::kFile
+                                 ? source.path.string()
+                                 : source.family + "/" + std::to_string(v),
+                             {},
+                             {},
+                             {}});
+        }
+      }
+    }
+    tbb::parallel_for(size_t{0}, sources.size(),
+                      [&](size_t j) { Build(spec, cache, reader, &sources[j]); });
+    for (const Job& job : sources) {
+      for (const std::string& warning : job.warnings) Warn(warning);
+      if (!job.error.empty()) throw Error(job.error);
+    }
+    for (size_t s = 0; s < spec.scenes.size(); ++s) {
+      const RandomizeSpec& r =
+          spec.scenes[s].randomize ? *spec.scenes[s].randomize : spec.randomize;
+      if (!r.draws.distractors) continue;
+      for (const DistractorObject& object : r.distractor_objects) {
+        if (object.kind != DistractorObject::Kind::kSource) {
+          DistractorCandidate c;
+          c.kind = object.kind;
+          c.name = object.kind == DistractorObject::Kind::kBox        ? "box"
+                   : object.kind == DistractorObject::Kind::kCylinder ? "cylinder"
+                                                                      : "sphere";
+          distractor_candidates[s].push_back(std::move(c));
+          continue;
+        }
+        for (size_t j : jobs_of[what(object)]) {
+          const Job& job = sources[j];
+          const Assembly& a = job.assembly;
+          for (const Part& part : a.parts) {
+            DistractorCandidate c;
+            c.kind = DistractorObject::Kind::kSource;
+            c.name = job.id + (a.parts.size() > 1 ? "/" + part.name : std::string());
+            c.part = part;
+            distractor_candidates[s].push_back(std::move(c));
+          }
+        }
+      }
+      if (distractor_candidates[s].empty()) {
+        throw Error("scene '" + spec.scenes[s].name +
+                    "': randomize.distractors: its objects have no parts");
+      }
+    }
+  }
+
   // One list of parts; instances remember their job (a rigid group) and scene.
   Assembly all;
   std::vector<int> job_of_instance;
@@ -504,6 +584,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     }
     SceneRun& run = runs[s];
     run.scene = spec.look;
+    std::vector<Drawn> distractor_record;
+    size_t first_distractor = 0;
     const SceneSpec& scene_spec = spec.scenes[s];
     Arrangement arranged;
     try {
@@ -524,9 +606,70 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       }
       ArrangementOptions arrangement = scene_spec.arrangement;
       if (scene_spec.container_file) arrangement.container.mesh = container_mesh[s];
+      // Distractors: drawn for the scene, made (primitives) or taken (file and family parts),
+      // given collision shapes, and dropped with (a pile) or onto (other layouts) the parts.
+      const RandomizeSpec& randomize_spec =
+          scene_spec.randomize ? *scene_spec.randomize : spec.randomize;
+      std::vector<Part> with_distractors;
+      std::vector<DistractorPick> picks;
+      if (randomize_spec.draws.distractors) {
+        std::vector<std::string> names;
+        std::vector<int> sizes;
+        for (const DistractorCandidate& c : distractor_candidates[s]) {
+          names.push_back(c.name);
+          sizes.push_back(c.kind == DistractorObject::Kind::kBox        ? 3
+                          : c.kind == DistractorObject::Kind::kCylinder ? 2
+                          : c.kind == DistractorObject::Kind::kSphere   ? 1
+                                                                        : 0);
+        }
+        picks = DrawDistractors(randomize_spec.draws, s, names, sizes, &distractor_record);
+      }
+      if (!picks.empty()) {
+        with_distractors = parts;
+        std::vector<Part> made(picks.size());
+        tbb::parallel_for(size_t{0}, picks.size(), [&](size_t k) {
+          const DistractorCandidate& c = distractor_candidates[s][picks[k].object];
+          const Eigen::Vector3d& size = picks[k].size_mm;
+          const std::string name = "distractor " + std::to_string(k) + " (" + c.name + ")";
+          switch (c.kind) {
+            case DistractorObject::Kind::kBox:
+              made[k] = MakePart(name, MakeBox(size.x(), size.y(), size.z()), spec.tessellation);
+              break;
+            case DistractorObject::Kind::kCylinder:
+              made[k] = MakePart(name, MakeCylinder(0.5 * size.x(), size.y()), spec.tessellation);
+              break;
+            case DistractorObject::Kind::kSphere:
+              made[k] = MakePart(name, MakeSphere(0.5 * size.x()), spec.tessellation);
+              break;
+            case DistractorObject::Kind::kSource:
+              made[k] = c.part;
+              made[k].name = name;
+              break;
+          }
+        });
+        shapes.resize(parts.size() + picks.size());
+        for (size_t k = 0; k < picks.size(); ++k) {
+          arrangement.distractors.push_back(static_cast<int>(with_distractors.size()));
+          with_distractors.push_back(std::move(made[k]));
+        }
+        // Collision shapes of every part that falls or is fallen on (cached where they can be).
+        std::vector<size_t> need;
+        for (const Instance& instance : instances)
+          need.push_back(static_cast<size_t>(instance.part));
+        for (int d : arrangement.distractors) need.push_back(static_cast<size_t>(d));
+        std::sort(need.begin(), need.end());
+        need.erase(std::unique(need.begin(), need.end()), need.end());
+        tbb::parallel_for(size_t{0}, need.size(), [&](size_t k) {
+          if (shapes[need[k]].pieces.empty())
+            shapes[need[k]] = PartCollisionShape(with_distractors[need[k]], cache);
+        });
+        arrangement.distractor_seed = DistractorDropSeed(randomize_spec.draws, s);
+      }
+      const std::vector<Part>& arranged_parts = picks.empty() ? parts : with_distractors;
       if (!scene_spec.physics_rules.empty()) {
-        // Each part's physics: the first rule matching it (by the source of its first instance).
-        arrangement.part_physics.assign(parts.size(), arrangement.physics);
+        // Each part's physics: the first rule matching it (by the source of its first instance);
+        // distractors take the scene's.
+        arrangement.part_physics.assign(arranged_parts.size(), arrangement.physics);
         std::vector<bool> done(parts.size(), false);
         for (size_t i = 0; i < instances.size(); ++i) {
           const auto p = static_cast<size_t>(instances[i].part);
@@ -541,7 +684,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         }
       }
       if (dropped) {
-        arranged = Arrange(parts, instances, arrangement, groups, &shapes);
+        arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
         if (!arranged.restless.empty()) {
           std::ostringstream m;
           m << "scene '" << scene_spec.name << "': " << arranged.restless.size()
@@ -552,7 +695,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
           Warn(m.str());
         }
       } else if (pile) {
-        arranged = Arrange(parts, instances, arrangement, groups, &shapes);
+        arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
         std::ostringstream m;
         m << "scene '" << scene_spec.name << "': " << arranged.instances.size()
           << " parts dropped; ";
@@ -586,7 +729,32 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
           run.scene.fixtures.push_back(std::move(fixture));
         }
       } else {
-        arranged = Arrange(parts, instances, scene_spec.arrangement, groups);
+        arranged = Arrange(arranged_parts, instances, arrangement, groups,
+                           picks.empty() ? nullptr : &shapes);
+      }
+      // The distractors as fixtures: drawn and traced, occluding, never labelled.
+      first_distractor = run.scene.fixtures.size();
+      for (size_t k = 0; k < arranged.distractors.size(); ++k) {
+        const Instance& d = arranged.distractors[k];
+        Scene::Fixture fixture;
+        fixture.name = arranged_parts[d.part].name;
+        fixture.mesh = arranged_parts[d.part].mesh;
+        fixture.mesh.Transform(d.world_from_model);
+        fixture.color = picks[k].color;
+        fixture.material = Scene::DefaultMaterial(fixture.color);
+        run.scene.fixtures.push_back(std::move(fixture));
+        const Eigen::Quaterniond q(d.world_from_model.linear());
+        const Eigen::Vector3d t = d.world_from_model.translation();
+        distractor_record.push_back({"distractor." + std::to_string(k) + ".pose",
+                                     {t.x(), t.y(), t.z(), q.w(), q.x(), q.y(), q.z()},
+                                     ""});
+      }
+      if (!arranged.restless_distractors.empty()) {
+        Warn("scene '" + scene_spec.name +
+             "': " + std::to_string(arranged.restless_distractors.size()) +
+             " distractors still moving after settle_time (" +
+             std::to_string(scene_spec.arrangement.settle_time_s) +
+             " s, simulated): they are kept where they were");
       }
     } catch (const Error& e) {
       throw Error("scene '" + scene_spec.name + "': " + e.what());
@@ -630,6 +798,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     // part rule.
     const RandomizeSpec& randomize = scene_spec.randomize ? *scene_spec.randomize : spec.randomize;
     run.randomization = randomize.draws;
+    run.randomization.first_distractor = first_distractor;
+    run.randomization.scene_record = std::move(distractor_record);
     run.randomization.instance_rule.assign(run.scene.instances.size(), -1);
     run.randomization.instance_part.clear();
     for (size_t i = 0; i < run.scene.instances.size(); ++i) {

@@ -271,12 +271,30 @@ struct Simulation {
     AddContainer(o.container, &world);
     models.resize(parts.size());
     std::vector<bool> made(parts.size(), false);
-    for (int p : o.bodies) {
+    std::vector<int> used = o.bodies;
+    for (const PileOptions::Fixed& f : o.fixed) used.push_back(f.part);
+    for (int p : used) {
       if (made[p]) continue;
       const PhysicsMaterial m = o.materials.empty() ? PhysicsMaterial{} : o.materials[p];
       models[p] = MakeBodyModel(parts[p], shapes[p], m);
       made[p] = true;
     }
+    for (const PileOptions::Fixed& f : o.fixed) AddFixed(f.part, f.world_from_model, o);
+  }
+
+  // A part that does not move (its shape is the model's, which outlives the world).
+  void AddFixed(int part, const Eigen::Isometry3d& world_from_model, const PileOptions& o) {
+    const BodyModel& m = models[part];
+    const PhysicsMaterial mat = o.materials.empty() ? PhysicsMaterial{} : o.materials[part];
+    btRigidBody::btRigidBodyConstructionInfo info(0.0, nullptr, m.shape.get());
+    info.m_friction = mat.friction;
+    info.m_restitution = mat.restitution;
+    info.m_spinningFriction = 0.0;  // as the container's (World::AddStatic)
+    info.m_rollingFriction = 0.0;
+    auto body = std::make_unique<btRigidBody>(info);
+    body->setWorldTransform(ToBtTransform(world_from_model * m.model_from_body));
+    world.world.addRigidBody(body.get());
+    world.bodies.push_back(std::move(body));
   }
 
   void AddBody(int part, const Eigen::Isometry3d& world_from_model, const PileOptions& o) {
@@ -401,7 +419,9 @@ void CheckInputs(const std::vector<Part>& parts, const std::vector<CollisionShap
   if (shapes.size() != parts.size()) throw Error("pile: one collision shape per part needed");
   if (!o.materials.empty() && o.materials.size() != parts.size())
     throw Error("pile: one physics material per part needed");
-  for (int b : o.bodies) {
+  std::vector<int> used = o.bodies;
+  for (const PileOptions::Fixed& f : o.fixed) used.push_back(f.part);
+  for (int b : used) {
     if (b < 0 || static_cast<size_t>(b) >= parts.size())
       throw Error("pile: a body refers to part " + std::to_string(b) + ", which does not exist");
     if (shapes[b].pieces.empty()) throw Error("pile: part '" + parts[b].name + "' has no shape");
@@ -548,7 +568,12 @@ PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionS
                                      : Eigen::Vector2d::Zero();
   // Start positions: for each body in turn, a few random spots in the region; the one where its
   // bounding sphere clears every earlier body's at the lowest height wins.
-  const double base = o.container.RimZ() + o.drop_height_mm;
+  double top = o.container.RimZ();
+  for (const PileOptions::Fixed& f : o.fixed) {
+    for (const Eigen::Vector3d& corner : sim.models[f.part].corners_in_model)
+      top = std::max(top, (f.world_from_model * corner).z());
+  }
+  const double base = top + o.drop_height_mm;
   struct Sphere {
     Eigen::Vector3d centre;
     double radius;

@@ -59,7 +59,15 @@ struct Container {
 Mesh MakeContainerMesh(const Container& container);
 
 struct PileOptions {
-  std::vector<int> bodies;                 // the part of each dropped copy, in drop order
+  std::vector<int> bodies;  // the part of each dropped copy, in drop order
+  // Parts that stay where they are (static bodies, added before the drop): what a drop of
+  // distractors among an arranged scene's parts lands on. The drop starts above the highest of
+  // them (or the rim, whichever is higher).
+  struct Fixed {
+    int part = 0;
+    Eigen::Isometry3d world_from_model = Eigen::Isometry3d::Identity();
+  };
+  std::vector<Fixed> fixed;
   std::vector<PhysicsMaterial> materials;  // per part; empty: PhysicsMaterial{} for all
   Container container;
   // The drop region: a rectangle centred over the origin, or over the middle of a mesh

@@ -896,6 +896,62 @@ TEST(Recipe, RandomizeTexturesComeFromAFolder) {
                 ": no such folder");
 }
 
+TEST(Recipe, RandomizeDistractorsAreListedObjectsAndFolders) {
+  testing::ScratchDir dir;
+  std::filesystem::create_directories(dir / "clutter");
+  std::filesystem::create_directories(dir / "nothing");
+  const std::string cube =
+      "solid c\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+      "vertex 0 1 0\nendloop\nendfacet\nendsolid c\n";
+  for (const char* name : {"b.stl", "a.STL"}) std::ofstream(dir / "clutter" / name) << cube;
+  std::ofstream(dir / "clutter" / "readme.txt") << "not a mesh\n";
+  std::ofstream(dir / "nothing" / "readme.txt") << "not a mesh\n";
+  const RunSpec spec = ParseRecipe(R"(
+randomize:
+  distractors:
+    count: {uniform: [2, 5]}
+    size: {uniform: [1 cm, 4 cm]}
+    objects: [box, {primitive: sphere}, {folder: clutter, unit: cm}, {family: hex_nut}]
+)",
+                                   "r.yaml", dir.path());
+  const RandomizeSpec& r = spec.randomize;
+  ASSERT_TRUE(r.draws.distractors);
+  EXPECT_EQ(r.draws.distractors->count.b, 5.0);
+  EXPECT_EQ(r.draws.distractors->size_mm.a, 10.0);  // lengths in their units
+  EXPECT_FALSE(r.draws.distractors->material);
+  ASSERT_EQ(r.distractor_objects.size(), 5u);  // the folder's two meshes, sorted by name
+  EXPECT_EQ(r.distractor_objects[0].kind, DistractorObject::Kind::kBox);
+  EXPECT_EQ(r.distractor_objects[1].kind, DistractorObject::Kind::kSphere);
+  EXPECT_EQ(r.distractor_objects[2].source.path.filename(), "a.STL");
+  EXPECT_EQ(r.distractor_objects[3].source.path.filename(), "b.stl");
+  EXPECT_EQ(r.distractor_objects[3].source.unit, "cm");
+  EXPECT_EQ(r.distractor_objects[4].source.family, "hex_nut");
+  // Without a list: a box, a cylinder and a sphere. Geometry needs no pbr; their materials do.
+  const RunSpec plain = ParseRecipe("randomize: {distractors: {count: 3}}\n", "r.yaml", ".");
+  EXPECT_EQ(plain.randomize.distractor_objects.size(), 3u);
+  EXPECT_EQ(ErrorOf("randomize: {distractors: {material: {roughness: 0.5}}}\n"),
+            "r.yaml:1:12: randomize: materials, lights, the environment, exposure and white "
+            "balance are randomised in render.mode: pbr (only the camera's pose jitters in the "
+            "fast mode)");
+  EXPECT_EQ(ErrorOf("randomize:\n  distractors: {objects: [cube]}\n"),
+            "r.yaml:2:27: randomize.distractors.objects[0]: unknown primitive 'cube' (known: box, "
+            "cylinder, sphere; files and families go in a map such as {file: part.stl})");
+  EXPECT_EQ(ErrorOf("randomize:\n  distractors: {objects: [{folder: nothing}]}\n", dir.path()),
+            "r.yaml:2:36: randomize.distractors.objects[0].folder: " + (dir / "nothing").string() +
+                ": no CAD or mesh files in the folder (STEP, IGES, BREP, STL, OBJ, PLY, DAE, "
+                "glTF, 3MF, OFF)");
+  EXPECT_EQ(ErrorOf("randomize:\n  distractors: {count: {uniform: [6, 2]}}\n"),
+            "r.yaml:2:24: randomize.distractors.count: uniform: [low, high] with low <= high, got "
+            "[6.000000, 2.000000]");
+  EXPECT_EQ(
+      ErrorOf("randomize:\n  distractors: {count: 500}\n"),
+      "r.yaml:2:16: randomize.distractors: count: draws must lie in [0.000000, 200.000000] (a "
+      "normal's mean; its tails are clipped to them)");
+  EXPECT_EQ(ErrorOf("randomize:\n  distractors: {objects: [{file: a.stl, family: hex_nut}]}\n"),
+            "r.yaml:2:27: randomize.distractors.objects[0]: give one of 'primitive', 'file', "
+            "'folder' or 'family'");
+}
+
 TEST(Recipe, RandomizeErrorsPointAtTheKey) {
   const std::string pbr = "render: {mode: pbr}\n";
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  lights: {power: {uniform: [50, 10]}}\n"),

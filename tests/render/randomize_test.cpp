@@ -195,6 +195,79 @@ TEST(DrawFrame, SameKeySameDrawsAndOtherDistributionsDoNotMoveThem) {
   EXPECT_EQ(a.world_from_cam.matrix(), LookingDown({0, 0, 500}).matrix());
 }
 
+// Distractors are drawn per scene: the same scene gives the same picks, another scene others; the
+// count is uniform on its range (rounded), objects are equally likely, and a changed size
+// distribution changes sizes only. Their materials are redrawn per frame, apart from the
+// fixtures before them (a tote), which keep theirs unless `fixtures` is set.
+TEST(DrawDistractors, PerSceneAndEachQuantityOnItsOwn) {
+  Randomization r;
+  r.seed = 2;
+  r.distractors = DistractorRandomization{};
+  r.distractors->count = Distribution::Uniform(2, 6);
+  const std::vector<std::string> names = {"box", "sphere", "nut"};
+  const std::vector<int> sizes = {3, 1, 0};
+  std::vector<Drawn> rec_a, rec_b, rec_c;
+  const auto a = DrawDistractors(r, 0, names, sizes, &rec_a);
+  const auto b = DrawDistractors(r, 0, names, sizes, &rec_b);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].object, b[k].object);
+    EXPECT_EQ(a[k].size_mm, b[k].size_mm);
+  }
+  std::map<size_t, int> counts;
+  std::vector<int> objects(3, 0);
+  for (uint64_t scene = 0; scene < 2000; ++scene) {
+    std::vector<Drawn> rec;
+    const auto picks = DrawDistractors(r, scene, names, sizes, &rec);
+    ++counts[picks.size()];
+    for (const DistractorPick& p : picks) {
+      ++objects[static_cast<size_t>(p.object)];
+      EXPECT_GE(p.size_mm.minCoeff(), 20.0);
+      EXPECT_LE(p.size_mm.maxCoeff(), 80.0);
+    }
+    // The record: the count, and per distractor its object, the sizes it takes, its colour.
+    if (!picks.empty() && picks[0].object == 1) {
+      for (const Drawn& d : rec) {
+        if (d.key == "distractor.0.size") EXPECT_EQ(d.values.size(), 1u);
+      }
+    }
+  }
+  // lround of a uniform on [2, 6]: 2 and 6 take half a unit each, 3, 4, 5 a whole one (of 4).
+  ASSERT_EQ(counts.size(), 5u);
+  EXPECT_NEAR(counts[2] / 2000.0, 0.125, 0.03);
+  EXPECT_NEAR(counts[4] / 2000.0, 0.25, 0.04);
+  EXPECT_NEAR(counts[6] / 2000.0, 0.125, 0.03);
+  const int total = objects[0] + objects[1] + objects[2];
+  for (int n : objects) EXPECT_NEAR(n / static_cast<double>(total), 1.0 / 3, 0.03);
+  // Another size distribution: the same objects and colours, other sizes.
+  Randomization big = r;
+  big.distractors->size_mm = Distribution::Uniform(100, 200);
+  const auto c = DrawDistractors(big, 0, names, sizes, &rec_c);
+  ASSERT_EQ(c.size(), a.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(c[k].object, a[k].object);
+    EXPECT_EQ(c[k].color, a[k].color);
+    EXPECT_GE(c[k].size_mm.minCoeff(), 100.0);
+  }
+  // Materials: a tote (fixture 0) keeps its own, the distractors (fixtures 1, 2) draw theirs.
+  r.distractors->material = MaterialRandomization{};
+  r.distractors->material->roughness = Distribution::Uniform(0, 1);
+  r.first_distractor = 1;
+  r.scene_record = rec_a;
+  FrameLook base = BaseLook();
+  base.fixture_materials.assign(3, Scene::DefaultMaterial(Eigen::Vector3f::Constant(0.5f)));
+  const FrameDraw f =
+      DrawFrame(r, base, LookingDown({0, 0, 500}), SensorOptions{}, Eigen::Vector3d::Zero(), 0, 0);
+  EXPECT_EQ(f.look.fixture_materials[0].surface.roughness,
+            base.fixture_materials[0].surface.roughness);
+  EXPECT_FLOAT_EQ(f.look.fixture_materials[1].surface.roughness,
+                  Recorded(f, "distractor.0.roughness"));
+  EXPECT_FLOAT_EQ(f.look.fixture_materials[2].surface.roughness,
+                  Recorded(f, "distractor.1.roughness"));
+  EXPECT_EQ(Recorded(f, "distractor.count"),
+            Recorded(FrameDraw{{}, {}, {}, rec_a}, "distractor.count"));
+}
+
 TEST(DrawFrame, PerPartCopiesMatchPerInstanceCopiesDiffer) {
   const FrameDraw part = Draw(PartsOnly(false), 0, 3);
   const auto& m = part.look.instance_materials;

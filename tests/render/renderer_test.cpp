@@ -179,6 +179,37 @@ TEST(Renderer, FixturesOccludeButAreNotObjects) {
   EXPECT_THROW(Renderer(parts, empty), Error);
 }
 
+// A distractor (a fixture: domain randomisation drops them among the parts) hiding part of a
+// target, worked out by hand: the camera 600 mm above a 100 x 100 x 20 mm box looks straight
+// down; a bar 40 mm wide (x in [-20, 20]) and 10 mm thick, its underside 100 mm up, runs across
+// it. Seen from the camera, its top edges (490 mm away) shadow |x| < 20 * 580 / 490 = 23.67 mm of
+// the box's top (580 mm away): the box's side faces are not seen, so the visible fraction of
+// its silhouette is 1 - 47.35 / 100 = 0.5265.
+TEST(Renderer, DistractorHidesTheFractionOfATargetGeometryPredicts) {
+  const std::vector<Part> parts = {MakePart("box", MakeBox(100, 100, 20), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.instances = {Place(0, parts[0], {0, 0, 10})};
+  Scene::Fixture bar;
+  bar.name = "distractor 0 (box)";
+  bar.mesh = MakePart("bar", MakeBox(40, 300, 10), TessellationOptions{}).mesh;
+  bar.mesh.Transform(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 105)));
+  scene.fixtures = {bar};
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 600});
+  const Frame frame = Renderer(parts, scene).Render(camera);
+  ASSERT_EQ(frame.instances.size(), 1u);
+  const double visib = static_cast<double>(frame.instances[0].px_count_visib) /
+                       static_cast<double>(frame.instances[0].px_count_all);
+  // The box's top is 90.5 pixels across: a pixel column either side is 0.011.
+  EXPECT_NEAR(visib, 1.0 - 2 * 20.0 * 580.0 / 490.0 / 100.0, 0.012);
+  Scene alone = scene;
+  alone.fixtures.clear();
+  const Frame solo = Renderer(parts, alone).Render(camera);
+  EXPECT_EQ(solo.instances[0].px_count_all, frame.instances[0].px_count_all);  // amodal: the same
+  EXPECT_EQ(solo.instances[0].px_count_visib, solo.instances[0].px_count_all);
+}
+
 TEST(Renderer, PosesComposeFromCameraAndInstance) {
   const std::vector<Part> parts = {MakePart("box", MakeBox(30, 20, 10), TessellationOptions{})};
   Scene scene;

@@ -172,6 +172,76 @@ TEST(Arrange, AllPosesAndSingle) {
   EXPECT_THROW(Arrange(Kit().parts, Kit().instances, o, Kit().group), Error);  // three groups
 }
 
+// Distractors fall onto a laid-out scene without moving its parts: the grid is the grid without
+// them, every distractor rests (on the floor or on a part, never below the floor), and the same
+// seed drops them the same way. In a pile they fall with the copies, inside the tote.
+TEST(Arrange, DistractorsFallAmongThePartsAndLeaveALayoutAsItWas) {
+  Fixture f = Kit();
+  f.parts.push_back(MakePart("ball", MakeSphere(12), TessellationOptions{}));
+  f.parts.push_back(MakePart("brick", MakeBox(40, 20, 15), TessellationOptions{}));
+  ArrangementOptions o;
+  o.layout = Layout::kGrid;
+  const Arrangement plain = Arrange(f.parts, f.instances, o, f.group);
+  o.distractors = {3, 4, 4};
+  o.distractor_seed = 9;
+  // Round parts need more hull corners than the default 32 to stay within 0.5 mm of their
+  // surface (the run gives primitives 128).
+  CollisionOptions round;
+  round.max_corners = 128;
+  std::vector<CollisionShape> shapes;
+  for (const Part& part : f.parts) shapes.push_back(MakeCollisionShape(part, round));
+  const Arrangement with = Arrange(f.parts, f.instances, o, f.group, &shapes);
+  ASSERT_EQ(with.instances.size(), plain.instances.size());
+  for (size_t i = 0; i < plain.instances.size(); ++i) {
+    EXPECT_EQ(with.instances[i].world_from_model.matrix(),
+              plain.instances[i].world_from_model.matrix());
+  }
+  ASSERT_EQ(with.distractors.size(), 3u);
+  EXPECT_TRUE(with.restless_distractors.empty());
+  const Eigen::AlignedBox3d layout = [&] {
+    Eigen::AlignedBox3d b;
+    for (const Instance& i : plain.instances)
+      b.extend(f.parts[i.part].mesh.Bounds(i.world_from_model));
+    return b;
+  }();
+  for (size_t k = 0; k < 3; ++k) {
+    const Instance& d = with.distractors[k];
+    EXPECT_EQ(d.part, o.distractors[k]);
+    const Eigen::AlignedBox3d box = f.parts[d.part].mesh.Bounds(d.world_from_model);
+    EXPECT_GT(box.min().z(), -0.6) << k;
+    EXPECT_LT(box.min().z(), layout.max().z() + 1) << k << ": resting, not in the air";
+    // Where they were dropped: over the layout's floor plan (20 mm wider), give or take a roll.
+    EXPECT_LT(std::abs(box.center().x()), layout.sizes().x() + 100) << k;
+  }
+  const Arrangement again = Arrange(f.parts, f.instances, o, f.group, &shapes);
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(again.distractors[k].world_from_model.matrix(),
+              with.distractors[k].world_from_model.matrix());
+  }
+  // A pile: 8 cubes and 3 distractors in a tote, all inside it.
+  ArrangementOptions pile;
+  pile.layout = Layout::kPile;
+  pile.copies = 8;
+  pile.container.kind = Container::Kind::kTote;
+  pile.container.inner_mm = {200, 150};
+  pile.container.height_mm = 80;
+  pile.distractors = {3, 4, 3};
+  pile.distractor_seed = 4;
+  const Arrangement tote = Arrange(f.parts, {f.instances[2]}, pile, {}, &shapes);
+  ASSERT_EQ(tote.instances.size(), 8u);
+  ASSERT_EQ(tote.distractors.size(), 3u);
+  EXPECT_TRUE(tote.escaped.empty());
+  for (const Instance& d : tote.distractors) {
+    const Eigen::Vector3d c = d.world_from_model.translation();
+    EXPECT_LT(std::abs(c.x()), 100.0);
+    EXPECT_LT(std::abs(c.y()), 75.0);
+    EXPECT_GT(f.parts[d.part].mesh.Bounds(d.world_from_model).min().z(),
+              pile.container.floor_mm - 0.6);
+  }
+  o.distractors = {9};
+  EXPECT_THROW(Arrange(f.parts, f.instances, o, f.group), Error);
+}
+
 TEST(Arrange, RejectsBadInput) {
   Fixture f = Kit();
   ArrangementOptions o;

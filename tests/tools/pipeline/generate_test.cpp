@@ -453,6 +453,67 @@ TEST(Generate, RandomizedLooksChangeOnlyTheColourAndAreRecordedPerFrame) {
       std::filesystem::exists(dir / "plain" / "train" / "000000" / "scene_randomization.json"));
 }
 
+// Distractors are scenery: scene_gt, COCO and the test targets list the same targets as without
+// them (a grid layout keeps its poses exactly), the amodal masks are the same, the visible ones
+// lose what the distractors hide (visib_fract = px_count_visib / px_count_all), and the depth
+// shows them. The same bytes on 1 and 2 threads; the record names each distractor.
+TEST(Generate, DistractorsOccludeButAreNeverTargets) {
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes = {spec.scenes[2]};  // the assembly benchmark's grid
+  spec.bop.test_every = 2;
+  GenerateOn(spec, dir.path(), "plain", 2);
+  spec.randomize.draws.distractors = DistractorRandomization{};
+  spec.randomize.draws.distractors->count = Distribution::Fixed(6);
+  spec.randomize.draws.distractors->size_mm = Distribution::Uniform(40, 70);
+  for (const auto kind : {DistractorObject::Kind::kBox, DistractorObject::Kind::kSphere}) {
+    DistractorObject object;
+    object.kind = kind;
+    spec.randomize.distractor_objects.push_back(object);
+  }
+  const auto one = GenerateOn(spec, dir.path(), "one", 1),
+             two = GenerateOn(spec, dir.path(), "two", 2);
+  for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
+  const std::filesystem::path plain = dir / "plain" / "train" / "000000",
+                              with = dir / "one" / "train" / "000000";
+  EXPECT_EQ(ReadJson(with / "scene_gt.json"), ReadJson(plain / "scene_gt.json"));
+  EXPECT_EQ(ReadJson(dir / "one" / "test_targets_bop19.json"),
+            ReadJson(dir / "plain" / "test_targets_bop19.json"));
+  const json coco = ReadJson(with / "scene_gt_coco.json"),
+             coco_plain = ReadJson(plain / "scene_gt_coco.json");
+  EXPECT_EQ(coco["categories"], coco_plain["categories"]);
+  EXPECT_LE(coco["annotations"].size(), coco_plain["annotations"].size());
+  const json info = ReadJson(with / "scene_gt_info.json"),
+             info_plain = ReadJson(plain / "scene_gt_info.json");
+  int hidden = 0;
+  for (const auto& [im, entries] : info.items()) {
+    ASSERT_EQ(entries.size(), info_plain[im].size());
+    for (size_t i = 0; i < entries.size(); ++i) {
+      const json& e = entries[i];
+      const json& p = info_plain[im][i];
+      EXPECT_EQ(e["px_count_all"], p["px_count_all"]);
+      EXPECT_LE(e["px_count_visib"].get<int>(), p["px_count_visib"].get<int>());
+      hidden += p["px_count_visib"].get<int>() - e["px_count_visib"].get<int>();
+      if (e["px_count_all"].get<int>() > 0) {
+        EXPECT_NEAR(e["visib_fract"].get<double>(),
+                    e["px_count_visib"].get<double>() / e["px_count_all"].get<double>(), 1e-6);
+      }
+    }
+  }
+  EXPECT_GT(hidden, 0) << "six distractors of 40-70 mm among the parts hide none of them";
+  EXPECT_FALSE(one.at("train/000000/depth/000000.png") ==
+               ReadTree(dir / "plain").at("train/000000/depth/000000.png"));
+  const json record = ReadJson(with / "scene_randomization.json");
+  ASSERT_EQ(record.size(), 2u);
+  EXPECT_EQ(record["0"]["distractor.count"], 6.0);
+  for (int k = 0; k < 6; ++k) {
+    const std::string d = "distractor." + std::to_string(k);
+    EXPECT_TRUE(record["0"].contains(d + ".object")) << d;
+    EXPECT_TRUE(record["0"].contains(d + ".pose")) << d;
+    EXPECT_EQ(record["0"][d + ".pose"], record["1"][d + ".pose"]);  // per scene
+  }
+}
+
 TEST(Generate, CameraJitterMovesThePoseTheLabelsFollow) {
   // The fast mode jitters the camera only; scene_camera.json holds the jittered pose, by the
   // recorded angle and distance.

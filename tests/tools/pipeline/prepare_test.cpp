@@ -290,6 +290,41 @@ TEST(Prepare, PileSceneDropsCopiesIntoItsTote) {
   }
 }
 
+// Distractors in a pile fall with the copies: the tote, then one fixture per distractor (a
+// family's part and primitives), all inside the tote; the parts (objects) are only the nuts, the
+// instances only the copies. Without a cache and with one: the same poses.
+TEST(Prepare, PileDistractorsFallWithTheCopiesAndAreFixtures) {
+  testing::ScratchDir dir;
+  const std::string recipe =
+      "scenes:\n  - name: bin\n    parts: [{family: hex_nut}]\n    layout: pile\n"
+      "    copies: 8\n    seed: 4\n"
+      "    container: {type: tote, inner: [120 mm, 90 mm], height: 60 mm}\n"
+      "randomize:\n  seed: 3\n  distractors: {count: 4, size: {uniform: [10 mm, 25 mm]},\n"
+      "                objects: [box, cylinder, {family: washer}]}\n";
+  const RunSpec spec = ParseRecipe(recipe, "r.yaml", dir.path());
+  PartCache cache(dir / "cache", "test");
+  const PreparedRun run = Prepare(spec, {}, &cache);
+  ASSERT_EQ(run.parts.size(), 1u);
+  const Scene& scene = run.scenes[0];
+  ASSERT_EQ(scene.instances.size(), 8u);
+  ASSERT_EQ(scene.fixtures.size(), 5u);
+  EXPECT_EQ(scene.fixtures[0].name, "tote");
+  EXPECT_EQ(run.randomization[0].first_distractor, 1u);
+  for (size_t f = 1; f < 5; ++f) {
+    EXPECT_EQ(scene.fixtures[f].name.rfind("distractor " + std::to_string(f - 1) + " (", 0), 0u)
+        << scene.fixtures[f].name;
+    const Eigen::AlignedBox3d box = scene.fixtures[f].mesh.Bounds();
+    EXPECT_GT(box.min().z(), 6.0 - 0.6) << f;
+    EXPECT_LT(std::max(std::abs(box.min().x()), std::abs(box.max().x())), 60.6) << f;
+    EXPECT_LT(std::max(std::abs(box.min().y()), std::abs(box.max().y())), 45.6) << f;
+  }
+  ExpectInside120x90Tote(run, scene);
+  const PreparedRun warm = Prepare(spec, {}, &cache);
+  for (size_t f = 0; f < 5; ++f) {
+    EXPECT_EQ(warm.scenes[0].fixtures[f].mesh.positions, scene.fixtures[f].mesh.positions);
+  }
+}
+
 // Physics rules reach the parts they match: a rule for another family leaves the pile as it was;
 // a rule for the nuts changes it; a dropped scene puts every copy flat on the floor.
 TEST(Prepare, PhysicsRulesMatchTheirPartsAndDroppedPartsLieOnTheFloor) {

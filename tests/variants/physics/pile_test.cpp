@@ -281,6 +281,42 @@ TEST(Pile, SettledPileStaysPutWhenSimulatedAgain) {
   EXPECT_LT(later.drift_mm, 0.5);
 }
 
+// Fixed parts (what distractors fall onto in a laid-out scene) do not move and carry what lands
+// on them: nuts dropped over the middle of a 120 x 120 x 30 mm block resting on the floor all
+// come to rest on its top face (z >= 30 less the collision margin), none inside it or in another
+// nut.
+TEST(Pile, FixedPartsStayPutAndCarryWhatFallsOnThem) {
+  const std::vector<Part> parts = {MakePart("block", MakeBox(120, 120, 30), TessellationOptions{}),
+                                   FamilyPart("hex_nut", {{"size", std::string("M12")}})};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0]),
+                                              MakeCollisionShape(parts[1])};
+  PileOptions o;
+  o.bodies = {1, 1, 1, 1};
+  // The block's model frame is its centre: lifted by half its height onto the floor.
+  o.fixed = {{0, Eigen::Isometry3d(Eigen::Translation3d(0, 0, 15))}};
+  o.drop_size_mm = {50, 50};
+  o.seed = 3;
+  const PileResult r = DropPile(parts, shapes, o);
+  EXPECT_TRUE(r.restless.empty());
+  ASSERT_EQ(r.world_from_model.size(), 4u);  // the dropped bodies only
+  std::vector<Placed> placed;
+  placed.push_back(Place(parts[0], o.fixed[0].world_from_model));
+  for (size_t i = 0; i < 4; ++i) {
+    placed.push_back(Place(parts[1], r.world_from_model[i]));
+    for (const Eigen::Vector3f& v : parts[1].mesh.positions)
+      EXPECT_GT((r.world_from_model[i] * v.cast<double>()).z(), 30 - 0.6) << "nut " << i;
+  }
+  double worst = 0;
+  for (size_t i = 0; i < placed.size(); ++i) {
+    for (size_t j = 0; j < placed.size(); ++j) {
+      if (i != j) worst = std::max(worst, Penetration(placed[i], placed[j]));
+    }
+  }
+  EXPECT_LT(worst, 0.5) << "mm";
+  o.fixed[0].part = 7;
+  EXPECT_THROW(DropPile(parts, shapes, o), Error);
+}
+
 TEST(Pile, ImpossibleOptionsAndRestlessPilesAreReported) {
   const std::vector<Part> parts = {MakePart("cube", MakeBox(20, 20, 20), TessellationOptions{})};
   const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};

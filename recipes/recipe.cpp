@@ -1333,6 +1333,41 @@ DrawPer ReadPer(const Reader& r, const YAML::Node& node, const std::string& key)
 }
 
 // A material's randomisation (parts, floor, fixtures) besides `other` keys.
+// Every PNG, JPEG, EXR and HDR image in the folder `node` names (relative to the recipe), sorted
+// by name so that picks do not depend on the file system, read once.
+ImageChoice ReadImageFolder(const Reader& r, const YAML::Node& node, const std::string& key) {
+  std::filesystem::path folder = r.Scalar(node, key);
+  if (folder.is_relative()) folder = r.base_dir() / folder;
+  folder = folder.lexically_normal();
+  std::error_code ec;
+  if (!std::filesystem::is_directory(folder, ec))
+    r.Fail(node, key, folder.string() + ": no such folder");
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (entry.is_regular_file() &&
+        (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".exr" || ext == ".hdr")) {
+      files.push_back(entry.path());
+    }
+  }
+  if (files.empty())
+    r.Fail(node, key, folder.string() + ": no PNG, JPEG, EXR or HDR images in the folder");
+  std::sort(files.begin(), files.end());
+  ImageChoice images;
+  for (const std::filesystem::path& file : files) {
+    try {
+      images.pixels.push_back(LoadLinearImage(file));
+    } catch (const Error& e) {
+      r.Fail(node, key, e.what());
+    }
+    images.files.push_back(file);
+    images.names.push_back(file.filename().string());
+  }
+  return images;
+}
+
 MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Node& node,
                                                 const std::string& key,
                                                 std::vector<std::string> other, DrawPer* per) {
@@ -1357,31 +1392,12 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
     }
   }
   if (const YAML::Node t = node["textures"]) {
-    // Every image in a folder (sorted by name, so the picks do not depend on the file system),
-    // projected triplanarly in tiles of `scale` (meshes with texture coordinates use them).
+    // Every image in a folder, projected triplanarly in tiles of `scale` (meshes with texture
+    // coordinates use them).
     const std::string at = key + ".textures";
     r.ExpectMap(t, at, {"folder", "scale"});
     if (!t["folder"]) r.Fail(t, at, "give the 'folder' of images to pick from");
-    std::filesystem::path folder = r.Scalar(t["folder"], at + ".folder");
-    if (folder.is_relative()) folder = r.base_dir() / folder;
-    folder = folder.lexically_normal();
-    std::error_code ec;
-    if (!std::filesystem::is_directory(folder, ec))
-      r.Fail(t["folder"], at + ".folder", folder.string() + ": no such folder");
-    std::vector<std::filesystem::path> files;
-    for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
-      std::string ext = entry.path().extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(),
-                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-      if (entry.is_regular_file() &&
-          (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".exr" || ext == ".hdr")) {
-        files.push_back(entry.path());
-      }
-    }
-    if (files.empty())
-      r.Fail(t["folder"], at + ".folder",
-             folder.string() + ": no PNG, JPEG, EXR or HDR images in the folder");
-    std::sort(files.begin(), files.end());
+    const ImageChoice images = ReadImageFolder(r, t["folder"], at + ".folder");
     Texture texture;
     texture.kind = Texture::Kind::kImage;
     texture.scale_mm = 200.0;
@@ -1389,15 +1405,11 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
       texture.scale_mm = r.Length(t["scale"], at + ".scale");
       if (!(texture.scale_mm > 0)) r.Fail(t["scale"], at + ".scale", "must be positive");
     }
-    for (const std::filesystem::path& file : files) {
-      texture.image = file;
-      try {
-        texture.pixels = LoadLinearImage(file);
-      } catch (const Error& e) {
-        r.Fail(t["folder"], at + ".folder", e.what());
-      }
+    for (size_t i = 0; i < images.files.size(); ++i) {
+      texture.image = images.files[i];
+      texture.pixels = images.pixels[i];
       m.textures.push_back(texture);
-      m.texture_names.push_back(file.filename().string());
+      m.texture_names.push_back(images.names[i]);
     }
   }
   const auto read = [&](const char* k, std::optional<Distribution>* d) {
@@ -1542,9 +1554,9 @@ void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at
 // `randomize:` (or a scene's, which replaces the groups it gives of `base`).
 RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::string& key,
                             const RandomizeSpec& base) {
-  r.ExpectMap(
-      node, key,
-      {"seed", "parts", "floor", "fixtures", "lights", "environment", "camera", "distractors"});
+  r.ExpectMap(node, key,
+              {"seed", "parts", "floor", "fixtures", "lights", "environment", "camera",
+               "distractors", "background"});
   RandomizeSpec spec = base;
   Randomization& d = spec.draws;
   const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
@@ -1621,8 +1633,14 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
   }
   if (const YAML::Node n = node["environment"]) {
     const std::string at = key + ".environment";
-    r.ExpectMap(n, at, {"strength", "rotation", "temperature", "per"});
+    r.ExpectMap(n, at, {"images", "strength", "rotation", "temperature", "per"});
     EnvironmentRandomization e;
+    if (const YAML::Node images = n["images"]) {
+      r.ExpectMap(images, at + ".images", {"folder"});
+      if (!images["folder"])
+        r.Fail(images, at + ".images", "give the 'folder' of equirectangular images to pick from");
+      e.images = ReadImageFolder(r, images["folder"], at + ".images.folder");
+    }
     if (n["strength"]) e.strength = ReadDistribution(r, n["strength"], at + ".strength", number);
     if (n["rotation"])
       e.rotation_deg = ReadDistribution(r, n["rotation"], at + ".rotation", number);
@@ -1654,6 +1672,15 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
     d.camera = c;
   }
   if (node["distractors"]) ReadDistractors(r, node["distractors"], key + ".distractors", &spec);
+  if (const YAML::Node n = node["background"]) {
+    const std::string at = key + ".background";
+    r.ExpectMap(n, at, {"folder", "per"});
+    if (!n["folder"]) r.Fail(n, at, "give the 'folder' of photos to pick from");
+    BackgroundRandomization b;
+    b.images = ReadImageFolder(r, n["folder"], at + ".folder");
+    if (n["per"]) d.background_per = ReadPer(r, n["per"], at + ".per");
+    d.background = std::move(b);
+  }
   return spec;
 }
 
@@ -1671,19 +1698,27 @@ void CheckRandomize(const Reader& r, const YAML::Node& node, const std::string& 
   };
   if (d.changes_look() && run.render.mode != RenderOptions::Mode::kPbr) {
     r.Fail(node, key,
-           "materials, lights, the environment, exposure and white balance are randomised in "
-           "render.mode: pbr (only the camera's pose jitters in the fast mode)");
+           "materials, lights, the environment, exposure, white balance and background photos "
+           "are randomised in render.mode: pbr (the fast mode takes the camera's pose jitter "
+           "and distractors)");
   }
   if (const auto& e = d.environment) {
     const Environment::Kind kind = run.look.environment.kind;
-    if (e->temperature_k && kind != Environment::Kind::kUniform) {
+    if (e->temperature_k && (kind != Environment::Kind::kUniform || e->images)) {
       r.Fail(at("environment", "temperature"), key + ".environment.temperature",
-             "tints a uniform environment's colour (lighting.environment is not uniform)");
+             e->images ? "tints a uniform environment's colour (images are drawn)"
+                       : "tints a uniform environment's colour (lighting.environment is not "
+                         "uniform)");
     }
-    if (e->rotation_deg && kind != Environment::Kind::kImage) {
+    if (e->rotation_deg && kind != Environment::Kind::kImage && !e->images) {
       r.Fail(at("environment", "rotation"), key + ".environment.rotation",
              "turns an image environment (lighting.environment is not an image)");
     }
+  }
+  if (d.background && run.look.floor) {
+    r.Fail(at("background", "folder"), key + ".background",
+           "pastes photos where nothing is hit, but the floor fills every downward view: set "
+           "render.floor: false");
   }
   if (!d.camera) return;
   for (const RigSensor& sensor : RunSensors(run)) {

@@ -311,7 +311,22 @@ bool LightRandomization::Check(std::string* why) const {
          check(size_mm, "size", kSmallest, kFar);
 }
 
+bool ImageChoice::Check(std::string* why) const {
+  if (files.empty() || pixels.size() != files.size() || names.size() != files.size()) {
+    *why = "images: at least one, each with its pixels and name";
+    return false;
+  }
+  for (const auto& p : pixels) {
+    if (!p || p->width <= 0 || p->height <= 0) {
+      *why = "images: each with its pixels";
+      return false;
+    }
+  }
+  return true;
+}
+
 bool EnvironmentRandomization::Check(std::string* why) const {
+  if (images && !images->Check(why)) return false;
   return CheckRange(strength, "strength", 0, 1e12, why) &&
          CheckOptional(rotation_deg, "rotation", why) &&
          CheckRange(temperature_k, "temperature", 1667, 25000, why);
@@ -341,7 +356,7 @@ bool DistractorRandomization::Check(std::string* why) const {
 bool Randomization::changes_look() const {
   return !parts.empty() || floor || fixtures || lights || environment ||
          (camera && (camera->exposure || camera->white_balance_k)) ||
-         (distractors && distractors->material);
+         (distractors && distractors->material) || background;
 }
 
 bool Randomization::Check(std::string* why) const {
@@ -359,7 +374,7 @@ bool Randomization::Check(std::string* why) const {
   };
   return sub(floor, "floor") && sub(fixtures, "fixtures") && sub(lights, "lights") &&
          sub(environment, "environment") && sub(camera, "camera") &&
-         sub(distractors, "distractors");
+         sub(distractors, "distractors") && sub(background, "background");
 }
 
 namespace {
@@ -494,6 +509,13 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
     const EnvironmentRandomization& e = *r.environment;
     const uint64_t seed = seed_of(r.environment_per);
     Environment& env = out.look.environment;
+    if (e.images) {
+      const size_t i = draw.Pick(seed, e.images->files.size(), "environment.image");
+      draw.Text("environment.image", e.images->names[i]);
+      env.kind = Environment::Kind::kImage;
+      env.image = e.images->files[i];
+      env.pixels = e.images->pixels[i];
+    }
     if (e.strength)
       env.strength = static_cast<float>(draw(seed, *e.strength, "environment.strength", 0, kHuge));
     if (e.rotation_deg)
@@ -510,6 +532,12 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
       }
       env.color = c;
     }
+  }
+  if (r.background) {
+    const ImageChoice& images = r.background->images;
+    const size_t i = draw.Pick(seed_of(r.background_per), images.files.size(), "background");
+    draw.Text("background", images.names[i]);
+    out.look.background = images.pixels[i];
   }
   if (r.camera) {
     const CameraRandomization& c = *r.camera;

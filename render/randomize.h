@@ -10,6 +10,8 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -99,11 +101,29 @@ struct LightRandomization {
   bool Check(std::string* why) const;
 };
 
-// The environment's strength (absolute), rotation about z (degrees), and, for uniform ones, a
-// colour temperature (kelvin) of its colour.
+// Images picked from a folder, equally likely (each with its pixels, read once), and their file
+// names for the record.
+struct ImageChoice {
+  std::vector<std::filesystem::path> files;
+  std::vector<std::shared_ptr<const LinearImage>> pixels;
+  std::vector<std::string> names;
+  bool Check(std::string* why) const;
+};
+
+// The environment's image (picked from `images`: the world becomes that equirectangular image),
+// strength (absolute), rotation about z (degrees; image worlds), and, for uniform ones, a colour
+// temperature (kelvin) of its colour.
 struct EnvironmentRandomization {
+  std::optional<ImageChoice> images;
   std::optional<Distribution> strength, rotation_deg, temperature_k;
   bool Check(std::string* why) const;
+};
+
+// Background photos (FrameLook::background) picked from a folder: the render pasted over a photo
+// where nothing is hit.
+struct BackgroundRandomization {
+  ImageChoice images;
+  bool Check(std::string* why) const { return images.Check(why); }
 };
 
 // The camera: exposure (stops added to render.exposure), white balance (the kelvin the camera
@@ -167,6 +187,8 @@ struct Randomization {
   DrawPer lights_per = DrawPer::kFrame;
   std::optional<EnvironmentRandomization> environment;
   DrawPer environment_per = DrawPer::kFrame;
+  std::optional<BackgroundRandomization> background;
+  DrawPer background_per = DrawPer::kFrame;
   std::optional<CameraRandomization> camera;           // always per frame
   std::optional<DistractorRandomization> distractors;  // per scene (geometry)
   // Filled in by the run: the scene's first distractor among its fixtures (they are the last
@@ -175,7 +197,8 @@ struct Randomization {
   std::vector<Drawn> scene_record;
 
   // Anything the path tracer shades differently (materials, lights, environment, exposure and
-  // white balance; distractors' own materials, but not the distractors): needs render.mode pbr.
+  // white balance; distractors' own materials, but not the distractors; background photos): needs
+  // render.mode pbr.
   bool changes_look() const;
   bool active() const { return changes_look() || camera.has_value() || distractors.has_value(); }
   bool Check(std::string* why) const;

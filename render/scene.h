@@ -1,12 +1,14 @@
 // What the renderer draws: placed instances of parts, a floor, lights and a background.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "cad/part.h"
+#include "render/image.h"
 #include "render/lights.h"
 #include "render/material.h"
 
@@ -79,6 +81,10 @@ struct FrameLook {
   Environment environment;
   double exposure = 0.0;  // stops, added to RenderOptions::exposure
   Eigen::Vector3f white_balance = Eigen::Vector3f::Ones();  // gains on the linear colour
+  // A photo the colour (and grey) image shows where the pixel's centre ray hits nothing (the
+  // render-and-paste baseline): scaled to cover the image and centred, pasted after the display
+  // transform, without the sensor's noise. Null: none.
+  std::shared_ptr<const LinearImage> background;
 };
 
 // A palette of well-separated colours for parts without a colour of their own.

@@ -890,6 +890,32 @@ TEST(Recipe, RandomizeTexturesComeFromAFolder) {
                     dir.path()),
             "r.yaml:3:30: randomize.floor.textures.folder: " + (dir / "empty").string() +
                 ": no PNG, JPEG, EXR or HDR images in the folder");
+  // Environment images and background photos come from folders the same way.
+  const RunSpec worlds = ParseRecipe(
+      "render: {mode: pbr, floor: false}\nrandomize:\n  environment: {images: {folder: tex}, "
+      "rotation: {uniform: [0, 360]}}\n  background: {folder: tex, per: scene}\n",
+      "r.yaml", dir.path());
+  const Randomization& w = worlds.randomize.draws;
+  EXPECT_EQ(w.environment->images->names, (std::vector<std::string>{"a.png", "b.png"}));
+  EXPECT_EQ(w.background->images.pixels.size(), 2u);
+  EXPECT_EQ(w.background_per, DrawPer::kScene);
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\nrandomize:\n  background: {folder: tex}\n", dir.path()),
+            "r.yaml:3:24: randomize.background: pastes photos where nothing is hit, but the floor "
+            "fills every downward view: set render.floor: false");
+  EXPECT_EQ(ErrorOf("render: {mode: pbr, floor: false}\nrandomize:\n  background: {folder: tex}\n",
+                    dir.path() / "empty"),
+            "r.yaml:3:24: randomize.background.folder: " + (dir / "empty" / "tex").string() +
+                ": no such folder");
+  EXPECT_EQ(ErrorOf("render: {mode: pbr}\nrandomize:\n  environment: {images: {folder: tex}, "
+                    "temperature: 5000}\n",
+                    dir.path()),
+            "r.yaml:3:53: randomize.environment.temperature: tints a uniform environment's colour "
+            "(images are drawn)");
+  EXPECT_EQ(
+      ErrorOf("randomize:\n  background: {folder: tex}\n", dir.path()),
+      "r.yaml:2:3: randomize: materials, lights, the environment, exposure, white balance and "
+      "background photos are randomised in render.mode: pbr (the fast mode takes the "
+      "camera's pose jitter and distractors)");
   EXPECT_EQ(ErrorOf("render: {mode: pbr}\nrandomize:\n  fixtures: {textures: {folder: nowhere}}\n",
                     dir.path()),
             "r.yaml:3:33: randomize.fixtures.textures.folder: " + (dir / "nowhere").string() +
@@ -929,10 +955,11 @@ randomize:
   // Without a list: a box, a cylinder and a sphere. Geometry needs no pbr; their materials do.
   const RunSpec plain = ParseRecipe("randomize: {distractors: {count: 3}}\n", "r.yaml", ".");
   EXPECT_EQ(plain.randomize.distractor_objects.size(), 3u);
-  EXPECT_EQ(ErrorOf("randomize: {distractors: {material: {roughness: 0.5}}}\n"),
-            "r.yaml:1:12: randomize: materials, lights, the environment, exposure and white "
-            "balance are randomised in render.mode: pbr (only the camera's pose jitters in the "
-            "fast mode)");
+  EXPECT_EQ(
+      ErrorOf("randomize: {distractors: {material: {roughness: 0.5}}}\n"),
+      "r.yaml:1:12: randomize: materials, lights, the environment, exposure, white balance and "
+      "background photos are randomised in render.mode: pbr (the fast mode takes the "
+      "camera's pose jitter and distractors)");
   EXPECT_EQ(ErrorOf("randomize:\n  distractors: {objects: [cube]}\n"),
             "r.yaml:2:27: randomize.distractors.objects[0]: unknown primitive 'cube' (known: box, "
             "cylinder, sphere; files and families go in a map such as {file: part.stl})");
@@ -991,10 +1018,11 @@ TEST(Recipe, RandomizeErrorsPointAtTheKey) {
             "between 0 (no noise) and 1e9 electrons");
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  sky: {}\n"), "r.yaml:3:3: unknown key 'randomize.sky'");
   // What the rest of the recipe must allow.
-  EXPECT_EQ(ErrorOf("randomize:\n  lights: {count: 2}\n"),
-            "r.yaml:2:3: randomize: materials, lights, the environment, exposure and white "
-            "balance are randomised in render.mode: pbr (only the camera's pose jitters in the "
-            "fast mode)");
+  EXPECT_EQ(
+      ErrorOf("randomize:\n  lights: {count: 2}\n"),
+      "r.yaml:2:3: randomize: materials, lights, the environment, exposure, white balance and "
+      "background photos are randomised in render.mode: pbr (the fast mode takes the "
+      "camera's pose jitter and distractors)");
   EXPECT_NO_THROW(
       ParseRecipe("randomize:\n  camera: {rotation: {normal: [0, 1]}}\n", "r.yaml", "."));
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  camera: {noise_gain: 2}\n"),

@@ -210,6 +210,44 @@ TEST(Renderer, DistractorHidesTheFractionOfATargetGeometryPredicts) {
   EXPECT_EQ(solo.instances[0].px_count_visib, solo.instances[0].px_count_all);
 }
 
+// A background photo shows exactly where the pixel's centre ray hits nothing, as its sRGB
+// bytes (a uniform photo of linear 0.5 is byte round(255 * 0.7354) = 188 everywhere there), and
+// leaves every pixel that sees the part as it was; the labels do not change.
+TEST(Renderer, BackgroundPhotoFillsWhatNothingCovers) {
+  const std::vector<Part> parts = {MakePart("box", MakeBox(100, 100, 20), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.instances = {Place(0, parts[0], {0, 0, 10})};
+  Camera camera;
+  camera.world_from_cam = LookingDown({0, 0, 600});
+  RenderOptions o;
+  o.mode = RenderOptions::Mode::kPbr;
+  o.samples = 2;
+  const Renderer renderer(parts, scene, o);
+  FrameLook look = renderer.BaseLook();
+  const Frame plain = renderer.Render(camera, 0, SensorOptions{}, &look);
+  auto photo = std::make_shared<LinearImage>();
+  photo->width = 30;
+  photo->height = 20;
+  photo->rgb.assign(3 * 30 * 20, 0.5f);
+  look.background = photo;
+  const Frame pasted = renderer.Render(camera, 0, SensorOptions{}, &look);
+  size_t background = 0;
+  for (size_t p = 0; p < plain.depth.size(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      if (plain.depth[p] == 0.0f) {
+        EXPECT_EQ(pasted.rgb[3 * p + c], 188) << p;
+      } else {
+        EXPECT_EQ(pasted.rgb[3 * p + c], plain.rgb[3 * p + c]) << p;
+      }
+    }
+    background += plain.depth[p] == 0.0f;
+  }
+  EXPECT_GT(background, plain.depth.size() / 2);
+  EXPECT_EQ(pasted.instance, plain.instance);
+  EXPECT_EQ(pasted.depth, plain.depth);
+}
+
 TEST(Renderer, PosesComposeFromCameraAndInstance) {
   const std::vector<Part> parts = {MakePart("box", MakeBox(30, 20, 10), TessellationOptions{})};
   Scene scene;

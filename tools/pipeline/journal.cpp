@@ -233,7 +233,20 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
       dist("size", l->size_mm);
       key << "\n";
     }
+    const auto image_choice = [&](const char* what, const ImageChoice& c) {
+      key << what;
+      for (const std::filesystem::path& file : c.files) {
+        key << " " << file.string();
+        images.insert(file);
+      }
+      key << "\n";
+    };
+    if (r.background) {
+      key << "randomize_background " << static_cast<int>(r.background_per) << " ";
+      image_choice("images", r.background->images);
+    }
     if (const auto& e = r.environment) {
+      if (e->images) image_choice("randomize_environment_images", *e->images);
       key << "randomize_environment";
       dist("strength", e->strength);
       dist("rotation", e->rotation_deg);

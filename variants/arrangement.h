@@ -114,6 +114,7 @@ struct Arrangement {
   // were still moving when settle_time ran out.
   std::vector<Instance> distractors;
   std::vector<int> restless_distractors;
+  double distractor_seconds = 0;  // the simulated time of their drop (a pile's: settle_seconds)
 };
 
 // Arranges `instances` (`group[i]` is the group of instance i; empty: one group per instance).

@@ -651,11 +651,13 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         for (size_t k = 0; k < picks.size(); ++k) {
           arrangement.distractors.push_back(static_cast<int>(with_distractors.size()));
           with_distractors.push_back(std::move(made[k]));
-          // Primitives: exact hulls; round ones need more corners than the default 32 to stay
-          // within 0.5 mm of their surface (a 24 mm ball sank 1.4 mm into the floor with 32).
-          if (distractor_candidates[s][picks[k].object].kind != DistractorObject::Kind::kSource) {
+          // Primitives: their hulls; a ball needs more corners than the default 32 to stay within
+          // 0.5 mm of its surface (a 24 mm ball sank 1.4 mm into the floor with 32). Every
+          // contact scans them all, so cylinders take 64 and boxes have their 8.
+          const DistractorObject::Kind kind = distractor_candidates[s][picks[k].object].kind;
+          if (kind != DistractorObject::Kind::kSource) {
             CollisionOptions round;
-            round.max_corners = 128;
+            round.max_corners = kind == DistractorObject::Kind::kSphere ? 128 : 64;
             shapes[parts.size() + k] = MakeCollisionShape(with_distractors.back(), round);
           }
         }
@@ -755,6 +757,13 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         distractor_record.push_back({"distractor." + std::to_string(k) + ".pose",
                                      {t.x(), t.y(), t.z(), q.w(), q.x(), q.y(), q.z()},
                                      ""});
+      }
+      if (!arranged.distractors.empty() && !pile) {
+        std::ostringstream m;
+        m << "scene '" << scene_spec.name << "': " << arranged.distractors.size()
+          << " distractors dropped among the parts; at rest after " << arranged.distractor_seconds
+          << " s (simulated)";
+        info(m.str());
       }
       if (!arranged.restless_distractors.empty()) {
         Warn("scene '" + scene_spec.name +

@@ -154,10 +154,8 @@ TEST(Shards, PhysicallyBasedShardsAreByteIdenticalToOneProcess) {
       std::filesystem::exists(dir / "whole" / "train" / "000001" / "rgb_hdr" / "000002.exr"));
 }
 
-TEST(Shards, RandomizedShardsAreByteIdenticalToOneProcess) {
-  // Every draw is keyed by (seed, scene, view, quantity): shards draw what one process draws,
-  // and merge writes the same scene_randomization.json.
-  ScratchDir dir;
+// The small farm with materials, lights, camera jitter and distractors randomised.
+RunSpec RandomizedFarmSpec() {
   RunSpec spec = SmallFarmSpec();
   spec.render.mode = RenderOptions::Mode::kPbr;
   spec.render.samples = 1;
@@ -170,6 +168,27 @@ TEST(Shards, RandomizedShardsAreByteIdenticalToOneProcess) {
   spec.randomize.draws.lights = LightRandomization{};
   spec.randomize.draws.camera = CameraRandomization{};
   spec.randomize.draws.camera->rotation_deg = Distribution::Uniform(0, 1);
+  // Distractors in the benchmark's grid only (its parts are convex enough for one hull each:
+  // the gears' convex decompositions would take seconds per run without a part cache).
+  RandomizeSpec grid = spec.randomize;
+  grid.draws.distractors = DistractorRandomization{};
+  grid.draws.distractors->count = Distribution::Uniform(1, 3);
+  grid.draws.distractors->material = MaterialRandomization{};
+  grid.draws.distractors->material->hue = Distribution::Uniform(0, 1);
+  for (const auto kind : {DistractorObject::Kind::kBox, DistractorObject::Kind::kCylinder}) {
+    DistractorObject object;
+    object.kind = kind;
+    grid.distractor_objects.push_back(object);
+  }
+  spec.scenes[2].randomize = grid;
+  return spec;
+}
+
+TEST(Shards, RandomizedShardsAreByteIdenticalToOneProcess) {
+  // Every draw is keyed by (seed, scene, view, quantity): shards draw what one process draws,
+  // and merge writes the same scene_randomization.json.
+  ScratchDir dir;
+  const RunSpec spec = RandomizedFarmSpec();
   RunJob(spec, dir / "whole");
   for (int i : {2, 0, 1}) RunJob(spec, dir / "tree", ShardSpec{i, 3});
   Merge(dir / "tree");
@@ -367,6 +386,23 @@ TEST(Resume, AChangedRunStartsOverAndADamagedFrameIsRenderedAgain) {
   EXPECT_EQ(changed.resumed, 0u);
   RunJob(spec, dir / "fresh");
   ExpectSameTree(dir / "fresh", dir / "out");
+}
+
+// A randomised run (distractors included) interrupted and resumed: the same bytes as one
+// uninterrupted run.
+TEST(Resume, ARandomizedRunResumesToTheSameBytes) {
+  ScratchDir dir;
+  const RunSpec spec = RandomizedFarmSpec();
+  RunJob(spec, dir / "whole");
+  Interrupt(spec, dir / "out");
+  std::vector<std::string> info;
+  GenerateOptions options;
+  options.output = dir / "out";
+  options.info = [&](const std::string& line) { info.push_back(line); };
+  const GenerateSummary resumed = Generate(spec, options);
+  EXPECT_TRUE(Says(info, "resuming the interrupted run")) << ::testing::PrintToString(info);
+  EXPECT_GE(resumed.resumed, 1u);
+  ExpectSameTree(dir / "whole", dir / "out");
 }
 
 }  // namespace

@@ -1473,13 +1473,11 @@ void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at
         objects.push_back(std::move(object));
         continue;
       }
-      r.ExpectMap(
-          item, key,
-          {"primitive", "file", "folder", "unit", "up", "family", "params", "grid", "random"});
+      r.ExpectMap(item, key,
+                  {"primitive", "file", "folder", "unit", "family", "params", "grid", "random"});
       if ((item["file"] ? 1 : 0) + (item["folder"] ? 1 : 0) + (item["family"] ? 1 : 0) != 1)
         r.Fail(item, key, "give one of 'primitive', 'file', 'folder' or 'family'");
-      object.kind = DistractorObject::Kind::kSource;
-      ReadUp(r, item, key, &object.source);
+      object.kind = DistractorObject::Kind::kSource;  // (no `up`: distractors fall at random)
       if (item["family"]) {
         if (item["unit"]) r.Fail(item["unit"], key + ".unit", "goes with 'file' or 'folder'");
         ReadFamily(r, item, key, &object.source);
@@ -2037,17 +2035,22 @@ bool RunLimits::Check(std::string* why) const {
 void CheckLimits(const RunSpec& spec, const std::string& recipe) {
   const RunLimits& limits = spec.limits;
   size_t variants = 0;
-  // The scenes' parts and every distractor source.
+  // The scenes' parts and the distractor sources the scenes use (an inherited one once).
   std::vector<const PartSource*> sources;
-  const auto distractors = [&sources](const RandomizeSpec& randomize) {
+  std::set<std::string> counted;
+  const auto distractors = [&](const RandomizeSpec& randomize) {
+    if (!randomize.draws.distractors) return;
     for (const DistractorObject& object : randomize.distractor_objects) {
-      if (object.kind == DistractorObject::Kind::kSource) sources.push_back(&object.source);
+      if (object.kind != DistractorObject::Kind::kSource) continue;
+      const std::string key = object.where + "|" + object.source.path.string() + "|" +
+                              object.source.family + "|" +
+                              std::to_string(object.source.variants.size());
+      if (object.where.empty() || counted.insert(key).second) sources.push_back(&object.source);
     }
   };
-  distractors(spec.randomize);
   for (const SceneSpec& scene : spec.scenes) {
     for (const PartSource& source : scene.sources) sources.push_back(&source);
-    if (scene.randomize) distractors(*scene.randomize);
+    distractors(scene.randomize ? *scene.randomize : spec.randomize);
   }
   {
     for (const PartSource* each : sources) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <set>
 
+#include "cad/error.h"
 #include "cad/random.h"
 #include "render/image.h"
 #include "render/sampling.h"
@@ -104,6 +105,7 @@ class Drawer {
   }
   // One of n things, equally likely (the caller records which by name).
   size_t Pick(uint64_t seed, size_t n, const std::string& name) {
+    if (n == 0) throw Error("randomize: " + name + ": nothing to pick from");
     return std::min(n - 1, static_cast<size_t>(UniformDraw(seed, "randomize.draw." + name, 0) * n));
   }
   void Text(const std::string& name, const std::string& text) {

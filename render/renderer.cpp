@@ -1009,36 +1009,6 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
         }
       });
 
-  if (look != nullptr && look->background && o.shade) {
-    // The photo where the centre ray hit nothing: scaled to cover the image, centred, sampled
-    // bilinearly (linear values), shown as the display shows them.
-    const LinearImage& photo = *look->background;
-    const double scale =
-        std::max(static_cast<double>(w) / photo.width, static_cast<double>(h) / photo.height);
-    for (int v = 0; v < h; ++v) {
-      for (int u = 0; u < w; ++u) {
-        const size_t pixel = static_cast<size_t>(v) * w + u;
-        if (frame.depth[pixel] != 0.0f) continue;
-        const double x = (u + 0.5 - 0.5 * w) / scale + 0.5 * photo.width - 0.5;
-        const double y = (v + 0.5 - 0.5 * h) / scale + 0.5 * photo.height - 0.5;
-        const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, photo.width - 1);
-        const int y0 = std::clamp(static_cast<int>(std::floor(y)), 0, photo.height - 1);
-        const int x1 = std::min(x0 + 1, photo.width - 1), y1 = std::min(y0 + 1, photo.height - 1);
-        const float fx = static_cast<float>(std::clamp(x - x0, 0.0, 1.0));
-        const float fy = static_cast<float>(std::clamp(y - y0, 0.0, 1.0));
-        Eigen::Vector3f linear;
-        for (int c = 0; c < 3; ++c) {
-          linear[c] = (1 - fy) * ((1 - fx) * photo.at(x0, y0)[c] + fx * photo.at(x1, y0)[c]) +
-                      fy * ((1 - fx) * photo.at(x0, y1)[c] + fx * photo.at(x1, y1)[c]);
-          frame.rgb[3 * pixel + c] = ToByte(LinearToSrgb(linear[c]));
-          if (o.hdr) {
-            frame.radiance[3 * pixel + c] = pbr ? linear[c] / exposure_scale : linear[c];
-          }
-        }
-        if (gray) frame.gray[pixel] = LinearToSrgb(Luminance(linear));
-      }
-    }
-  }
   for (size_t p = 0; p < num_pixels; ++p) {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }
@@ -1070,6 +1040,43 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
     }
     frame.sensor_depth = SimulateDepth(depth_model, input, view);
     frame.infrared = std::move(ir_left);
+  }
+  if (look != nullptr && look->background && o.shade) {
+    // The photo where the centre ray hit nothing: scaled to cover the image, centred, sampled
+    // bilinearly (linear values), shown as the display shows them; after the depth model, which
+    // reads the rendered colour only (the photo is not in the scene).
+    const LinearImage& photo = *look->background;
+    if (photo.width <= 0 || photo.height <= 0 ||
+        photo.rgb.size() != 3u * photo.width * photo.height)
+      throw Error("renderer: the background photo has no pixels");
+    const double scale =
+        std::max(static_cast<double>(w) / photo.width, static_cast<double>(h) / photo.height);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const size_t pixel = static_cast<size_t>(v) * w + u;
+        if (frame.depth[pixel] != 0.0f) continue;
+        const double x = (u + 0.5 - 0.5 * w) / scale + 0.5 * photo.width - 0.5;
+        const double y = (v + 0.5 - 0.5 * h) / scale + 0.5 * photo.height - 0.5;
+        const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, photo.width - 1);
+        const int y0 = std::clamp(static_cast<int>(std::floor(y)), 0, photo.height - 1);
+        const int x1 = std::min(x0 + 1, photo.width - 1), y1 = std::min(y0 + 1, photo.height - 1);
+        const float fx = static_cast<float>(std::clamp(x - x0, 0.0, 1.0));
+        const float fy = static_cast<float>(std::clamp(y - y0, 0.0, 1.0));
+        Eigen::Vector3f linear;
+        for (int c = 0; c < 3; ++c) {
+          linear[c] = (1 - fy) * ((1 - fx) * photo.at(x0, y0)[c] + fx * photo.at(x1, y0)[c]) +
+                      fy * ((1 - fx) * photo.at(x0, y1)[c] + fx * photo.at(x1, y1)[c]);
+          frame.rgb[3 * pixel + c] = ToByte(LinearToSrgb(linear[c]));
+          if (o.hdr) {
+            // The scene radiance that would show as the photo (before exposure and white balance).
+            frame.radiance[3 * pixel + c] =
+                pbr ? linear[c] / (exposure_scale * (balanced ? white_balance[c] : 1.0f))
+                    : linear[c];
+          }
+        }
+        if (gray) frame.gray[pixel] = LinearToSrgb(Luminance(linear));
+      }
+    }
   }
   if (o.normals) frame.normals = std::move(normals);
   if (!o.amodal_masks) return frame;

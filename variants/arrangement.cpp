@@ -339,13 +339,15 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
         const int what = index_of_body[b];
         if (what >= 0) {
           to.push_back(what);
-        } else if (from == &r.restless) {
-          out.restless_distractors.push_back(-1 - what);
+        } else {
+          (from == &r.restless ? out.restless_distractors : out.escaped_distractors)
+              .push_back(-1 - what);
         }
       }
       std::sort(to.begin(), to.end());
     }
     std::sort(out.restless_distractors.begin(), out.restless_distractors.end());
+    std::sort(out.escaped_distractors.begin(), out.escaped_distractors.end());
     out.instances = std::move(copies);
     out.settle_seconds = r.seconds;
     return out;
@@ -548,23 +550,32 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
         (o.part_physics.empty() ? o.physics : o.part_physics[p]).Draw(o.seed, p));
   // Over the parts' floor plan (they are centred on the z axis), 20 mm wider each side.
   Eigen::AlignedBox3d all;
-  for (const Instance& i : out.instances) {
-    all.extend(parts[i.part].mesh.Bounds(i.world_from_model));
-    pile.fixed.push_back({i.part, i.world_from_model});
-  }
+  for (const Instance& i : out.instances) all.extend(parts[i.part].mesh.Bounds(i.world_from_model));
   const Eigen::Vector2d reach =
       all.min().head<2>().cwiseAbs().cwiseMax(all.max().head<2>().cwiseAbs());
   pile.drop_size_mm = 2.0 * reach + Eigen::Vector2d::Constant(40.0);
   std::vector<CollisionShape> own;
   if (shapes == nullptr) {
-    std::vector<bool> needed(parts.size(), false);
-    for (int b : pile.bodies) needed[static_cast<size_t>(b)] = true;
-    for (const PileOptions::Fixed& f : pile.fixed) needed[static_cast<size_t>(f.part)] = true;
+    std::vector<bool> falls(parts.size(), false), stays(parts.size(), false);
+    for (int b : pile.bodies) falls[static_cast<size_t>(b)] = true;
+    for (const Instance& i : out.instances) stays[static_cast<size_t>(i.part)] = true;
     own.resize(parts.size());
     for (size_t p = 0; p < parts.size(); ++p) {
-      if (needed[p]) own[p] = MakeCollisionShape(parts[p]);
+      if (falls[p]) {
+        own[p] = MakeCollisionShape(parts[p]);
+      } else if (stays[p]) {
+        try {
+          own[p] = MakeCollisionShape(parts[p]);
+        } catch (const Error&) {  // flat: distractors do not land on it
+        }
+      }
     }
     shapes = &own;
+  }
+  // The arranged parts stay (static bodies of their collision shapes; a flat part has none).
+  for (const Instance& i : out.instances) {
+    if (static_cast<size_t>(i.part) < shapes->size() && !(*shapes)[i.part].pieces.empty())
+      pile.fixed.push_back({i.part, i.world_from_model});
   }
   const PileResult r = DropPile(parts, *shapes, pile);
   for (size_t k = 0; k < o.distractors.size(); ++k) {

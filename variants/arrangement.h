@@ -110,10 +110,10 @@ struct Arrangement {
   // time it took (pose: dropped: instances of bodies still moving, the longest fall).
   std::vector<int> restless, escaped;
   double settle_seconds = 0;
-  // Where ArrangementOptions::distractors came to rest (their `part` as given), and which of them
-  // were still moving when settle_time ran out.
+  // Where ArrangementOptions::distractors came to rest (their `part` as given), which of them
+  // were still moving when settle_time ran out, and (a pile) which ended outside the tote.
   std::vector<Instance> distractors;
-  std::vector<int> restless_distractors;
+  std::vector<int> restless_distractors, escaped_distractors;
   double distractor_seconds = 0;  // the simulated time of their drop (a pile's: settle_seconds)
 };
 

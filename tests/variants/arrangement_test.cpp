@@ -238,6 +238,21 @@ TEST(Arrange, DistractorsFallAmongThePartsAndLeaveALayoutAsItWas) {
     EXPECT_GT(f.parts[d.part].mesh.Bounds(d.world_from_model).min().z(),
               pile.container.floor_mm - 0.6);
   }
+  // A flat part (no volume) among the parts: nothing to land on, but no error either.
+  Fixture flat = f;
+  Part sheet;
+  sheet.name = "sheet";
+  sheet.mesh.positions = {{-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}};
+  sheet.mesh.normals.assign(4, Eigen::Vector3f::UnitZ());
+  sheet.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  flat.parts.push_back(sheet);
+  flat.instances.push_back({5, "sheet", Eigen::Isometry3d::Identity()});
+  flat.group.push_back(5);
+  ArrangementOptions row = o;
+  row.layout = Layout::kRow;
+  row.pose = PoseMode::kAsDesigned;
+  row.distractors = {3};
+  EXPECT_EQ(Arrange(flat.parts, flat.instances, row, flat.group).distractors.size(), 1u);
   o.distractors = {9};
   EXPECT_THROW(Arrange(f.parts, f.instances, o, f.group), Error);
 }

@@ -407,8 +407,14 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   {
     std::vector<Job> sources;
     std::map<std::string, std::vector<size_t>> jobs_of;  // by where and what: its jobs
+    // Everything that decides what a source builds: its place in the recipe, file, unit,
+    // family and every variant's parameters.
     const auto what = [](const DistractorObject& o) {
-      return o.where + "|" + o.source.path.string() + "|" + o.source.family;
+      std::ostringstream key;
+      key << o.where << "|" << o.source.path.string() << "|" << o.source.unit << "|"
+          << o.source.encoding << "|" << o.source.family;
+      for (const ParamValues& v : o.source.variants) key << "|" << ParamsJson(v).dump();
+      return key.str();
     };
     for (size_t s = 0; s < spec.scenes.size(); ++s) {
       const RandomizeSpec& r =
@@ -613,6 +619,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       std::vector<Part> with_distractors;
       std::vector<DistractorPick> picks;
       if (randomize_spec.draws.distractors) {
+        std::string why;
+        if (!randomize_spec.draws.Check(&why)) throw Error("randomize: " + why);
         std::vector<std::string> names;
         std::vector<int> sizes;
         for (const DistractorCandidate& c : distractor_candidates[s]) {
@@ -668,10 +676,19 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         for (int d : arrangement.distractors) need.push_back(static_cast<size_t>(d));
         std::sort(need.begin(), need.end());
         need.erase(std::unique(need.begin(), need.end()), need.end());
+        // A flat part (no volume) has no shape: distractors do not land on it.
+        std::vector<std::string> errors(need.size());
         tbb::parallel_for(size_t{0}, need.size(), [&](size_t k) {
-          if (shapes[need[k]].pieces.empty())
+          if (!shapes[need[k]].pieces.empty()) return;
+          try {
             shapes[need[k]] = PartCollisionShape(with_distractors[need[k]], cache);
+          } catch (const Error& e) {
+            errors[k] = e.what();
+          }
         });
+        for (size_t k = 0; k < need.size(); ++k) {
+          if (!errors[k].empty() && need[k] >= parts.size()) throw Error(errors[k]);
+        }
         arrangement.distractor_seed = DistractorDropSeed(randomize_spec.draws, s);
       }
       const std::vector<Part>& arranged_parts = picks.empty() ? parts : with_distractors;
@@ -761,9 +778,14 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       if (!arranged.distractors.empty() && !pile) {
         std::ostringstream m;
         m << "scene '" << scene_spec.name << "': " << arranged.distractors.size()
-          << " distractors dropped among the parts; at rest after " << arranged.distractor_seconds
+          << " distractors dropped among the parts in " << arranged.distractor_seconds
           << " s (simulated)";
         info(m.str());
+      }
+      if (!arranged.escaped_distractors.empty()) {
+        Warn("scene '" + scene_spec.name +
+             "': " + std::to_string(arranged.escaped_distractors.size()) +
+             " distractors bounced out of the tote (they are kept where they landed)");
       }
       if (!arranged.restless_distractors.empty()) {
         Warn("scene '" + scene_spec.name +
@@ -814,6 +836,11 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     // part rule.
     const RandomizeSpec& randomize = scene_spec.randomize ? *scene_spec.randomize : spec.randomize;
     run.randomization = randomize.draws;
+    {
+      std::string why;
+      if (!run.randomization.Check(&why))
+        throw Error("scene '" + scene_spec.name + "': randomize: " + why);
+    }
     run.randomization.first_distractor = first_distractor;
     run.randomization.scene_record = std::move(distractor_record);
     run.randomization.instance_rule.assign(run.scene.instances.size(), -1);

@@ -325,6 +325,42 @@ TEST(Prepare, PileDistractorsFallWithTheCopiesAndAreFixtures) {
   }
 }
 
+// A scene's own distractors replace the recipe's; scenes without inherit them; two family
+// entries with other parameters are two objects (not one read twice); a flat layout of files
+// and families keeps its parts where the layout put them.
+TEST(Prepare, SceneDistractorsOverrideTheRecipesAndSourcesAreTheirOwn) {
+  testing::ScratchDir dir;
+  const std::string recipe =
+      "scenes:\n"
+      "  - {name: a, parts: [{family: hex_nut}], layout: row}\n"
+      "  - name: b\n"
+      "    parts: [{family: hex_nut}]\n"
+      "    layout: row\n"
+      "    randomize:\n"
+      "      distractors: {count: 6, objects: [{family: washer, params: {size: M8}},\n"
+      "                                        {family: washer, params: {size: M20}}]}\n"
+      "randomize:\n  seed: 2\n  distractors: {count: 2, objects: [sphere]}\n";
+  const PreparedRun run = Prepare(ParseRecipe(recipe, "r.yaml", dir.path()));
+  ASSERT_EQ(run.scenes.size(), 2u);
+  ASSERT_EQ(run.scenes[0].fixtures.size(), 2u);
+  for (const auto& f : run.scenes[0].fixtures)
+    EXPECT_NE(f.name.find("(sphere)"), std::string::npos);
+  ASSERT_EQ(run.scenes[1].fixtures.size(), 6u);
+  std::set<double> widths;
+  for (const auto& f : run.scenes[1].fixtures) {
+    EXPECT_NE(f.name.find("washer"), std::string::npos) << f.name;
+    const Eigen::Vector3d size = f.mesh.Bounds().sizes();
+    widths.insert(std::round(std::max({size.x(), size.y(), size.z()})));
+  }
+  EXPECT_EQ(widths.size(), 2u) << "both washers picked, each its own size";
+  // The nuts (the only objects) rest as the row puts them, distractors or not.
+  const PreparedRun plain = Prepare(ParseRecipe(
+      "scenes:\n  - {name: a, parts: [{family: hex_nut}], layout: row}\n", "r.yaml", dir.path()));
+  EXPECT_EQ(run.parts.size(), 1u);
+  EXPECT_EQ(run.scenes[0].instances[0].world_from_model.matrix(),
+            plain.scenes[0].instances[0].world_from_model.matrix());
+}
+
 // Physics rules reach the parts they match: a rule for another family leaves the pile as it was;
 // a rule for the nuts changes it; a dropped scene puts every copy flat on the floor.
 TEST(Prepare, PhysicsRulesMatchTheirPartsAndDroppedPartsLieOnTheFloor) {

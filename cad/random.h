@@ -61,6 +61,13 @@ inline constexpr RandomStream kDropSeed{
 inline constexpr RandomStream kDistractorOrder{
     "arrange.distractor_order",
     "where a distractor falls in a pile's drop order (before which copy); index = distractor"};
+// grasps: the grasp seed (per part)
+inline constexpr RandomStream kGraspPoint{
+    "grasp.point",
+    "an antipodal grasp's first contact: its triangle (by area) and barycentrics; index = "
+    "(sample << 2) + draw"};
+inline constexpr RandomStream kGraspApproach{
+    "grasp.approach", "the first of a contact pair's evenly spaced approaches; index = sample"};
 // recipes: sweep.seed (random view samplers)
 inline constexpr RandomStream kViewYaw{"view.yaw", "a random view's yaw; index = view"};
 inline constexpr RandomStream kViewPitch{"view.pitch",
@@ -151,6 +158,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kSensorFrame,    streams::kSensorLateral,  streams::kSensorAxial,
     streams::kSensorInfrared, streams::kSensorDots,     streams::kImageFrame,
     streams::kImageNoise,     streams::kRandomizeFrame, streams::kRandomizeDraw,
+    streams::kGraspPoint,     streams::kGraspApproach,
 };
 
 namespace random_detail {

@@ -1883,9 +1883,10 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   const Reader r(name, base_dir);
   RunSpec spec = DefaultRunSpec();
   try {
-    r.ExpectMap(root, "",
-                {"parts", "scene", "scenes", "classes", "tessellation", "camera", "cameras",
-                 "sweep", "render", "materials", "lighting", "randomize", "output", "limits"});
+    r.ExpectMap(
+        root, "",
+        {"parts", "scene", "scenes", "classes", "tessellation", "camera", "cameras", "sweep",
+         "render", "materials", "lighting", "randomize", "grasps", "output", "limits"});
     if (root["scenes"] && (root["parts"] || root["scene"])) {
       r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
     }
@@ -1986,6 +1987,24 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
         spec.scenes[i].randomize = ReadRandomize(r, own, at, spec.randomize);
         CheckRandomize(r, own, at, *spec.scenes[i].randomize, spec);
       }
+    }
+    if (const YAML::Node g = root["grasps"]) {
+      r.ExpectMap(g, "grasps", {"gripper", "friction", "samples", "approaches", "seed"});
+      GraspSpec& grasps = spec.grasps;
+      grasps.enabled = true;
+      if (g["gripper"]) {
+        const std::string name = r.Scalar(g["gripper"], "grasps.gripper");
+        if (name != "franka")
+          r.Fail(g["gripper"], "grasps.gripper", "unknown gripper '" + name + "' (known: franka)");
+      }
+      AntipodalOptions& s = grasps.sampling;
+      if (g["friction"]) s.friction = r.Number(g["friction"], "grasps.friction");
+      if (g["samples"]) s.samples = static_cast<int>(r.Integer(g["samples"], "grasps.samples"));
+      if (g["approaches"])
+        s.approaches = static_cast<int>(r.Integer(g["approaches"], "grasps.approaches"));
+      if (g["seed"]) s.seed = static_cast<uint64_t>(r.Integer(g["seed"], "grasps.seed"));
+      std::string why;
+      if (!s.Check(&why)) r.Fail(g, "grasps", why);
     }
     if (root["limits"]) {
       ReadFields(r, root["limits"], "limits", &spec.limits, {});

@@ -19,6 +19,7 @@
 #include "render/sensor.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
+#include "variants/grasp/parallel_jaw.h"
 
 namespace cadsynth {
 
@@ -87,6 +88,14 @@ struct SceneSpec {
   // This scene's `randomize:` (the recipe's, with the groups the scene gives replaced); unset:
   // the recipe's.
   std::optional<RandomizeSpec> randomize;
+};
+
+// Grasp labels (`grasps:`): antipodal parallel-jaw grasps sampled per object in its model frame,
+// written as ACRONYM's per-object HDF5 files (models/grasps/obj_OBJID.h5).
+struct GraspSpec {
+  bool enabled = false;
+  ParallelJawGripper gripper = ParallelJawGripper::Franka();
+  AntipodalOptions sampling;
 };
 
 // Bounds on how much work a recipe may ask for, so a typo (5,000 teeth, a grid of 100,000
@@ -169,6 +178,7 @@ struct RunSpec {
   bool cad_colors = true;  // colours from the CAD files where they have them, else the palette
   RenderOptions render;
   RandomizeSpec randomize;  // the recipe's `randomize:` (scenes may replace groups of it)
+  GraspSpec grasps;
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides
   RunLimits limits;

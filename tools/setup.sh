@@ -12,7 +12,8 @@ packages=(
   libocct-foundation-dev libocct-ocaf-dev libocct-visualization-dev
   libcgal-dev libeigen3-dev libassimp-dev libembree-dev libopencv-dev libtbb-dev
   libyaml-cpp-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libmatio-dev zlib1g-dev
-  libcli11-dev libxxhash-dev libbullet-dev libbullet-extras-dev
+  libcli11-dev libxxhash-dev libbullet-dev libbullet-extras-dev libfcl-dev
+  libhdf5-dev
 )
 case "${1:-}" in
   --tests) packages+=(slurm-wlm munge clang-format) ;;

@@ -979,6 +979,25 @@ randomize:
             "'folder' or 'family'");
 }
 
+TEST(Recipe, GraspsSectionSetsTheGripperAndSampling) {
+  const RunSpec spec = ParseRecipe(
+      "grasps: {gripper: franka, friction: 0.4, samples: 300, approaches: 4, seed: 7}\n", "r.yaml",
+      ".");
+  EXPECT_TRUE(spec.grasps.enabled);
+  EXPECT_EQ(spec.grasps.gripper.max_opening_mm, 80.0);
+  EXPECT_EQ(spec.grasps.sampling.friction, 0.4);
+  EXPECT_EQ(spec.grasps.sampling.samples, 300);
+  EXPECT_EQ(spec.grasps.sampling.approaches, 4);
+  EXPECT_EQ(spec.grasps.sampling.seed, 7u);
+  EXPECT_FALSE(ParseRecipe("parts: [{family: hex_nut}]\n", "r.yaml", ".").grasps.enabled);
+  EXPECT_EQ(ErrorOf("grasps: {gripper: robotiq}\n"),
+            "r.yaml:1:19: grasps.gripper: unknown gripper 'robotiq' (known: franka)");
+  EXPECT_EQ(ErrorOf("grasps: {friction: 0}\n"),
+            "r.yaml:1:9: grasps: friction (mu) must lie in (0, 10]");
+  EXPECT_EQ(ErrorOf("grasps: {sample: 3}\n"),
+            "r.yaml:1:10: unknown key 'grasps.sample' (did you mean 'samples'?)");
+}
+
 TEST(Recipe, RandomizeErrorsPointAtTheKey) {
   const std::string pbr = "render: {mode: pbr}\n";
   EXPECT_EQ(ErrorOf(pbr + "randomize:\n  lights: {power: {uniform: [50, 10]}}\n"),

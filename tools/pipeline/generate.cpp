@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -14,14 +16,56 @@
 #include <nlohmann/json.hpp>
 
 #include "cad/error.h"
+#include "dataset/acronym.h"
 #include "dataset/bop.h"
 #include "dataset/file_io.h"
 #include "dataset/paper_layout.h"
 #include "render/randomize.h"
 #include "render/renderer.h"
+#include "render/sampling.h"
 #include "tools/pipeline/journal.h"
 
 namespace cadsynth {
+
+namespace {
+
+// grasps: each object's antipodal grasps (in parallel, each from its own seed), written as
+// ACRONYM's per-object HDF5 file models/grasps/obj_OBJID.h5.
+void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>& parts,
+                     const GraspSpec& spec, const std::function<void(const std::string&)>& info) {
+  std::filesystem::create_directories(root / "models" / "grasps");
+  std::vector<size_t> counts(parts.size(), 0);
+  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
+    AntipodalOptions options = spec.sampling;
+    options.seed = Hash(spec.sampling.seed, p);
+    const std::vector<ParallelJawGrasp> grasps =
+        SampleAntipodalGrasps(parts[p], spec.gripper, options);
+    char id[16];
+    std::snprintf(id, sizeof(id), "%06zu", p + 1);
+    AcronymGrasps file;
+    file.object_file = std::string("models/obj_") + id + ".ply";
+    file.gripper_configuration = 0.5e-3 * spec.gripper.max_opening_mm;
+    file.friction = options.friction;
+    file.volume_m3 = parts[p].mass.volume_mm3 * 1e-9;
+    file.com_m = parts[p].mass.center_of_mass * 1e-3;
+    for (const ParallelJawGrasp& g : grasps) {
+      file.model_from_gripper.push_back(g.model_from_gripper);
+      file.width_mm.push_back(g.width_mm);
+      file.quality.push_back(g.quality);
+      file.success.push_back(1);
+    }
+    WriteAcronymFile(root / "models" / "grasps" / (std::string("obj_") + id + ".h5"), file);
+    counts[p] = grasps.size();
+  });
+  if (info) {
+    std::ostringstream line;
+    line << "grasps (" << spec.gripper.name << ", mu " << spec.sampling.friction << "):";
+    for (size_t p = 0; p < parts.size(); ++p) line << " obj " << p + 1 << ": " << counts[p];
+    info(line.str());
+  }
+}
+
+}  // namespace
 
 std::string RandomizationRecord(const std::vector<Drawn>& record) {
   // In draw order (nlohmann's ordered_json keeps insertion order).
@@ -138,6 +182,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       }
       WriteBopModels(root, parts, prepared.classes);
       WriteModelPoints(root, parts, spec.bop);
+      if (spec.grasps.enabled) WriteGraspFiles(root, parts, spec.grasps, options.info);
       WriteFileAtomic(root / "variants.json", prepared.variants_json);
     }
     std::vector<BopSceneWriter::CocoCategory> categories;

@@ -295,6 +295,14 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
       material("fixture_material", f.material);
     }
   }
+  if (spec.grasps.enabled) {
+    const ParallelJawGripper& g = spec.grasps.gripper;
+    const AntipodalOptions& a = spec.grasps.sampling;
+    key << "grasps " << g.name << " " << g.max_opening_mm << " " << g.finger_width_mm << " "
+        << g.finger_thickness_mm << " " << g.finger_length_mm << " " << g.palm_height_mm << " "
+        << g.palm_width_mm << " " << g.palm_depth_mm << " " << g.pad_mm << " " << a.friction << " "
+        << a.samples << " " << a.approaches << " " << a.clearance_mm << " " << a.seed << "\n";
+  }
   // The bytes of every image a material above reads.
   for (const std::filesystem::path& image : images) {
     const std::string bytes = ReadFileText(image);

@@ -16,6 +16,7 @@
 #include "cad/error.h"
 #include "cad/shape.h"
 #include "cad/step.h"
+#include "dataset/acronym.h"
 #include "dataset/preview.h"
 #include "tests/json_support.h"
 #include "tests/test_support.h"
@@ -512,6 +513,37 @@ TEST(Generate, DistractorsOccludeButAreNeverTargets) {
     EXPECT_TRUE(record["0"].contains(d + ".pose")) << d;
     EXPECT_EQ(record["0"][d + ".pose"], record["1"][d + ".pose"]);  // per scene
   }
+}
+
+// grasps: one ACRONYM file per object beside its model, the same bytes on 1 and 2 threads, every
+// grasp within the opening and its contacts on the object's surface.
+TEST(Generate, GraspsAreWrittenPerObjectAsAcronymFiles) {
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes = {spec.scenes[2]};  // pegs, faceplate, shaft, bolt
+  spec.sweep.yaw_rad = {0.0};
+  spec.grasps.enabled = true;
+  spec.grasps.sampling.samples = 150;
+  spec.grasps.sampling.approaches = 4;
+  const auto one = GenerateOn(spec, dir.path(), "one", 1),
+             two = GenerateOn(spec, dir.path(), "two", 2);
+  for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
+  size_t objects = 0, grasps = 0;
+  for (const auto& [name, bytes] : one) {
+    if (name.rfind("models/grasps/", 0) != 0) continue;
+    ++objects;
+    const AcronymGrasps g = ReadAcronymFile(dir / "one" / name);
+    EXPECT_EQ(g.object_file, "models/" + name.substr(14, 10) + ".ply") << name;
+    EXPECT_TRUE(one.count(g.object_file)) << g.object_file;
+    for (size_t i = 0; i < g.model_from_gripper.size(); ++i) {
+      EXPECT_LE(g.width_mm[i], 80.0 - 2.0);
+      EXPECT_GE(g.quality[i], 0.0);
+      EXPECT_LE(g.quality[i], 1.0);
+    }
+    grasps += g.model_from_gripper.size();
+  }
+  EXPECT_EQ(objects, 5u);
+  EXPECT_GT(grasps, 100u);
 }
 
 TEST(Generate, CameraJitterMovesThePoseTheLabelsFollow) {

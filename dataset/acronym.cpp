@@ -163,8 +163,9 @@ void WriteAcronymFile(const std::filesystem::path& path, const AcronymGrasps& g)
   w.Doubles("gripper/configuration", {1}, &g.gripper_configuration);
   w.Text("object/file", g.object_file);
   w.Scalar("object/scale", g.object_scale);
-  w.Scalar("object/mass", g.mass_kg);
-  w.Scalar("object/density", g.density);
+  // Mass and density only when known (a part's material is not: 0 means unknown).
+  if (g.mass_kg > 0) w.Scalar("object/mass", g.mass_kg);
+  if (g.density > 0) w.Scalar("object/density", g.density);
   w.Scalar("object/friction", g.friction);
   w.Scalar("object/volume", g.volume_m3);
   w.Doubles("object/com", {3}, g.com_m.data());
@@ -199,8 +200,11 @@ AcronymGrasps ReadAcronymFile(const std::filesystem::path& path) {
     return ReadAll<double>(file.get(), name, H5T_NATIVE_DOUBLE, path).at(0);
   };
   g.object_scale = scalar("object/scale");
-  g.mass_kg = scalar("object/mass");
-  g.density = scalar("object/density");
+  const auto optional = [&](const char* name) {
+    return H5Lexists(file.get(), name, H5P_DEFAULT) > 0 ? scalar(name) : 0.0;
+  };
+  g.mass_kg = optional("object/mass");
+  g.density = optional("object/density");
   g.friction = scalar("object/friction");
   g.volume_m3 = scalar("object/volume");
   const std::vector<double> com =

@@ -33,8 +33,8 @@ struct AcronymGrasps {
 //   grasps/qualities/flex/object_in_gripper (N,) int64 (our success labels);
 //   grasps/qualities/cadsynth/force_closure (N,) float64; grasps/widths (N,) float64, metres;
 //   gripper/type (string), gripper/configuration (1,) float64;
-//   object/file (string), object/scale, object/mass, object/density, object/friction,
-//   object/volume float64 scalars, object/com (3,) float64.
+//   object/file (string), object/scale, object/friction, object/volume float64 scalars,
+//   object/com (3,) float64, and object/mass, object/density when they are above 0 (known).
 // Throws Error naming the file when it cannot be written or the arrays disagree in length.
 void WriteAcronymFile(const std::filesystem::path& path, const AcronymGrasps& grasps);
 

@@ -60,6 +60,8 @@ TEST(Acronym, FileHoldsTransformsInMetresAndReadsBack) {
   EXPECT_EQ(H5Tget_size(type), 8u);
   H5Tclose(type);
   H5Dclose(labels);
+  EXPECT_GT(H5Lexists(file, "object/mass", H5P_DEFAULT), 0);
+  EXPECT_EQ(H5Lexists(file, "object/density", H5P_DEFAULT), 0);  // unknown: not written
   H5Fclose(file);
 
   const AcronymGrasps back = ReadAcronymFile(path);
@@ -74,6 +76,7 @@ TEST(Acronym, FileHoldsTransformsInMetresAndReadsBack) {
   EXPECT_DOUBLE_EQ(back.object_scale, 1e-3);
   EXPECT_DOUBLE_EQ(back.gripper_configuration, 0.04);
   EXPECT_DOUBLE_EQ(back.mass_kg, 0.5);
+  EXPECT_DOUBLE_EQ(back.density, 0.0);  // unknown: not written, read back as 0
   EXPECT_EQ(back.com_m, g.com_m);
 
   // The same grasps, the same bytes (HDF5 would record modification times by default).

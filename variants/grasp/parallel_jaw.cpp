@@ -174,8 +174,8 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
     if (width <= 0 || far == tri) continue;
     if (width + 2 * o.clearance_mm > gripper.max_opening_mm) continue;
     const Eigen::Vector3d n2 = FaceNormal(mesh, far);
-    // The second contact pushes along -n2: it must lie within the cone about -x ... i.e. n2
-    // within `cone` of +x (the axis leaves the part through it).
+    // The far jaw pushes along -x: its contact holds when its outward normal n2 lies within
+    // `cone` of +x (the axis leaves the part through it).
     const double angle = std::acos(std::clamp(n2.dot(x), -1.0, 1.0));
     if (angle > cone) continue;
     const Eigen::Vector3d p2 = p1 + width * x;

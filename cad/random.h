@@ -68,6 +68,10 @@ inline constexpr RandomStream kGraspPoint{
     "(sample << 2) + draw"};
 inline constexpr RandomStream kGraspApproach{
     "grasp.approach", "the first of a contact pair's evenly spaced approaches; index = sample"};
+inline constexpr RandomStream kSuctionPoint{
+    "grasp.suction_point",
+    "a suction grasp's contact: its triangle (by area) and barycentrics; index = (sample << 2) + "
+    "draw"};
 // recipes: sweep.seed (random view samplers)
 inline constexpr RandomStream kViewYaw{"view.yaw", "a random view's yaw; index = view"};
 inline constexpr RandomStream kViewPitch{"view.pitch",
@@ -158,7 +162,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kSensorFrame,    streams::kSensorLateral,  streams::kSensorAxial,
     streams::kSensorInfrared, streams::kSensorDots,     streams::kImageFrame,
     streams::kImageNoise,     streams::kRandomizeFrame, streams::kRandomizeDraw,
-    streams::kGraspPoint,     streams::kGraspApproach,
+    streams::kGraspPoint,     streams::kGraspApproach,  streams::kSuctionPoint,
 };
 
 namespace random_detail {

@@ -169,6 +169,30 @@ void WriteAcronymFile(const std::filesystem::path& path, const AcronymGrasps& g)
   w.Scalar("object/friction", g.friction);
   w.Scalar("object/volume", g.volume_m3);
   w.Doubles("object/com", {3}, g.com_m.data());
+  if (g.cup_diameter_mm > 0) {
+    const size_t m = g.suction_points_mm.size();
+    if (g.suction_approaches.size() != m || g.suction_seal.size() != m ||
+        g.suction_wrench.size() != m)
+      throw Error(path.string() + ": one approach, seal and wrench score per suction grasp needed");
+    std::vector<double> points, approaches, score;
+    for (size_t i = 0; i < m; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        points.push_back(1e-3 * g.suction_points_mm[i][k]);
+        approaches.push_back(g.suction_approaches[i][k]);
+      }
+      score.push_back(g.suction_seal[i] * g.suction_wrench[i]);
+    }
+    w.Group("suction");
+    w.Group("suction/qualities");
+    const hsize_t rows = m;
+    w.Doubles("suction/points", {rows, 3}, points.data());
+    w.Doubles("suction/approaches", {rows, 3}, approaches.data());
+    w.Doubles("suction/qualities/seal", {rows}, g.suction_seal.data());
+    w.Doubles("suction/qualities/wrench", {rows}, g.suction_wrench.data());
+    w.Doubles("suction/qualities/score", {rows}, score.data());
+    w.Scalar("suction/cup_diameter", 1e-3 * g.cup_diameter_mm);
+    w.Scalar("suction/vacuum", 1e3 * g.cup_vacuum_kpa);
+  }
   w.Close();
 }
 
@@ -210,6 +234,24 @@ AcronymGrasps ReadAcronymFile(const std::filesystem::path& path) {
   const std::vector<double> com =
       ReadAll<double>(file.get(), "object/com", H5T_NATIVE_DOUBLE, path);
   if (com.size() == 3) g.com_m = Eigen::Vector3d(com[0], com[1], com[2]);
+  if (H5Lexists(file.get(), "suction", H5P_DEFAULT) > 0) {
+    const auto all = [&](const char* name) {
+      return ReadAll<double>(file.get(), name, H5T_NATIVE_DOUBLE, path);
+    };
+    const std::vector<double> points = all("suction/points"), approaches = all("suction/approaches");
+    if (points.size() % 3 != 0 || approaches.size() != points.size())
+      throw Error(path.string() + ": suction/points and suction/approaches are not M x 3");
+    for (size_t i = 0; i < points.size() / 3; ++i) {
+      g.suction_points_mm.emplace_back(1e3 * points[3 * i], 1e3 * points[3 * i + 1],
+                                       1e3 * points[3 * i + 2]);
+      g.suction_approaches.emplace_back(approaches[3 * i], approaches[3 * i + 1],
+                                        approaches[3 * i + 2]);
+    }
+    g.suction_seal = all("suction/qualities/seal");
+    g.suction_wrench = all("suction/qualities/wrench");
+    g.cup_diameter_mm = 1e3 * scalar("suction/cup_diameter");
+    g.cup_vacuum_kpa = 1e-3 * scalar("suction/vacuum");
+  }
   return g;
 }
 

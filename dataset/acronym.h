@@ -26,6 +26,12 @@ struct AcronymGrasps {
   // model frame, density (kg/m^3), friction, volume (m^3).
   double mass_kg = 0, density = 0, friction = 0, volume_m3 = 0;
   Eigen::Vector3d com_m = Eigen::Vector3d::Zero();
+  // Suction grasps, in cadsynth's own group beside ACRONYM's (written when the cup's diameter is
+  // above 0): contact points (model frame, mm; the file holds metres), approach directions (unit,
+  // into the surface), seal and wrench scores (cad/grasp.h), and the cup.
+  std::vector<Eigen::Vector3d> suction_points_mm, suction_approaches;
+  std::vector<double> suction_seal, suction_wrench;
+  double cup_diameter_mm = 0, cup_vacuum_kpa = 0;
 };
 
 // Writes `grasps` to `path` in ACRONYM's layout:
@@ -34,7 +40,10 @@ struct AcronymGrasps {
 //   grasps/qualities/cadsynth/force_closure (N,) float64; grasps/widths (N,) float64, metres;
 //   gripper/type (string), gripper/configuration (1,) float64;
 //   object/file (string), object/scale, object/friction, object/volume float64 scalars,
-//   object/com (3,) float64, and object/mass, object/density when they are above 0 (known).
+//   object/com (3,) float64, and object/mass, object/density when they are above 0 (known);
+//   with a cup: suction/points (M, 3) and suction/approaches (M, 3) float64 (metres, unit),
+//   suction/qualities/seal, suction/qualities/wrench, suction/qualities/score (seal x wrench)
+//   (M,) float64, suction/cup_diameter (m) and suction/vacuum (Pa) scalars.
 // Throws Error naming the file when it cannot be written or the arrays disagree in length.
 void WriteAcronymFile(const std::filesystem::path& path, const AcronymGrasps& grasps);
 

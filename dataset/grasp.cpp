@@ -34,11 +34,11 @@ std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instanc
   return points;
 }
 
-std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points) {
+std::string EncodeNpy(const float* values, size_t rows, size_t cols) {
   static_assert(std::endian::native == std::endian::little,
                 "the .npy writer copies floats as they are in memory");
   std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
-                       std::to_string(points.size()) + ", 3), }";
+                       std::to_string(rows) + ", " + std::to_string(cols) + "), }";
   // Magic (6) + version (2) + header length (2) + header, padded with spaces to a multiple of 64
   // bytes and ended by a newline.
   const size_t unpadded = 10 + header.size() + 1;
@@ -49,11 +49,16 @@ std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points) {
   out += static_cast<char>(header.size() >> 8);
   out += header;
   const size_t start = out.size();
-  out.resize(start + points.size() * 3 * sizeof(float));
-  for (size_t i = 0; i < points.size(); ++i) {
-    std::memcpy(&out[start + i * 3 * sizeof(float)], points[i].data(), 3 * sizeof(float));
-  }
+  out.resize(start + rows * cols * sizeof(float));
+  if (rows * cols > 0) std::memcpy(&out[start], values, rows * cols * sizeof(float));
   return out;
+}
+
+std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points) {
+  std::vector<float> values;
+  values.reserve(points.size() * 3);
+  for (const Eigen::Vector3f& p : points) values.insert(values.end(), {p.x(), p.y(), p.z()});
+  return EncodeNpy(values.data(), points.size(), 3);
 }
 
 }  // namespace cadsynth

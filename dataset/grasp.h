@@ -19,5 +19,7 @@ std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instanc
 
 // A NumPy .npy file (format 1.0) holding `points` as a little-endian float32 array (N, 3).
 std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points);
+// A NumPy .npy file (format 1.0) holding `rows` x `cols` little-endian float32 values (row-major).
+std::string EncodeNpy(const float* values, size_t rows, size_t cols);
 
 }  // namespace cadsynth

@@ -1868,6 +1868,119 @@ void RejectDuplicateKeys(const std::string& name, const YAML::Node& node) {
   }
 }
 
+namespace {
+
+// `grasps:` (see GraspSpec).
+GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
+  r.ExpectMap(g, "grasps",
+              {"gripper", "friction", "samples", "approaches", "clearance", "seed", "suction",
+               "approach_distance", "per_instance", "visibility_tolerance", "formats"});
+  GraspSpec grasps;
+  grasps.enabled = true;
+  std::string why;
+  if (const YAML::Node node = g["gripper"]) {
+    const auto preset = [&](const YAML::Node& n, const std::string& key) {
+      const std::string name = r.Scalar(n, key);
+      if (name == "franka") return ParallelJawGripper::Franka();
+      if (name == "robotiq_2f85") return ParallelJawGripper::Robotiq2F85();
+      r.Fail(n, key, "unknown gripper '" + name + "' (known: franka, robotiq_2f85)");
+    };
+    if (node.IsMap()) {
+      r.ExpectMap(node, "grasps.gripper",
+                  {"preset", "name", "max_opening", "finger_width", "finger_thickness",
+                   "finger_length", "palm_height", "palm_width", "palm_depth", "pad"});
+      ParallelJawGripper& p = grasps.gripper;
+      if (node["preset"]) p = preset(node["preset"], "grasps.gripper.preset");
+      if (node["name"]) p.name = r.Scalar(node["name"], "grasps.gripper.name");
+      const std::pair<const char*, double*> lengths[] = {
+          {"max_opening", &p.max_opening_mm},     {"finger_width", &p.finger_width_mm},
+          {"finger_thickness", &p.finger_thickness_mm}, {"finger_length", &p.finger_length_mm},
+          {"palm_height", &p.palm_height_mm},     {"palm_width", &p.palm_width_mm},
+          {"palm_depth", &p.palm_depth_mm},       {"pad", &p.pad_mm}};
+      for (const auto& [key, value] : lengths) {
+        if (node[key]) *value = r.Length(node[key], std::string("grasps.gripper.") + key);
+      }
+      if (!p.Check(&why)) r.Fail(node, "grasps.gripper", why);
+    } else {
+      grasps.gripper = preset(node, "grasps.gripper");
+    }
+  }
+  AntipodalOptions& s = grasps.sampling;
+  if (g["friction"]) s.friction = r.Number(g["friction"], "grasps.friction");
+  if (g["samples"]) s.samples = r.Integer(g["samples"], "grasps.samples");
+  if (g["approaches"]) s.approaches = r.Integer(g["approaches"], "grasps.approaches");
+  if (g["clearance"]) s.clearance_mm = r.Length(g["clearance"], "grasps.clearance");
+  if (g["seed"]) {
+    const int seed = r.Integer(g["seed"], "grasps.seed");
+    if (seed < 0) r.Fail(g["seed"], "grasps.seed", "must not be negative");
+    s.seed = static_cast<uint64_t>(seed);
+  }
+  if (!s.Check(&why)) r.Fail(g, "grasps", why);
+  if (const YAML::Node node = g["suction"]) {
+    if (node.IsScalar()) {
+      grasps.suction = r.Bool(node, "grasps.suction");  // true: the default cup
+    } else {
+      grasps.suction = true;
+      r.ExpectMap(node, "grasps.suction",
+                  {"name", "diameter", "ring_points", "compliance", "stretch", "vacuum",
+                   "cup_length", "shaft_diameter", "shaft_length", "samples", "density"});
+      SuctionCup& c = grasps.cup;
+      if (node["name"]) c.name = r.Scalar(node["name"], "grasps.suction.name");
+      const std::pair<const char*, double*> lengths[] = {
+          {"diameter", &c.diameter_mm},         {"compliance", &c.compliance_mm},
+          {"cup_length", &c.cup_length_mm},     {"shaft_diameter", &c.shaft_diameter_mm},
+          {"shaft_length", &c.shaft_length_mm}};
+      for (const auto& [key, value] : lengths) {
+        if (node[key]) *value = r.Length(node[key], std::string("grasps.suction.") + key);
+      }
+      if (node["ring_points"])
+        c.ring_points = r.Integer(node["ring_points"], "grasps.suction.ring_points");
+      if (node["stretch"]) c.stretch = r.Number(node["stretch"], "grasps.suction.stretch");
+      if (node["vacuum"]) c.vacuum_kpa = r.Number(node["vacuum"], "grasps.suction.vacuum");
+      if (!c.Check(&why)) r.Fail(node, "grasps.suction", why);
+      SuctionOptions& o = grasps.suction_sampling;
+      if (node["samples"]) o.samples = r.Integer(node["samples"], "grasps.suction.samples");
+      if (node["density"]) o.density_kg_m3 = r.Number(node["density"], "grasps.suction.density");
+      if (!o.Check(&why)) r.Fail(node, "grasps.suction", why);
+    }
+  }
+  grasps.suction_sampling.seed = s.seed;
+  if (g["approach_distance"])
+    grasps.scene.approach_mm = r.Length(g["approach_distance"], "grasps.approach_distance");
+  if (!grasps.scene.Check(&why)) r.Fail(g["approach_distance"], "grasps", why);
+  GraspLabelOptions& labels = grasps.labels;
+  if (g["per_instance"])
+    labels.max_per_instance = r.Integer(g["per_instance"], "grasps.per_instance");
+  if (g["visibility_tolerance"])
+    labels.visibility_mm = r.Length(g["visibility_tolerance"], "grasps.visibility_tolerance");
+  if (!labels.Check(&why)) r.Fail(g, "grasps", why);
+  labels.graspnet = true;
+  labels.suctionnet = grasps.suction;
+  if (const YAML::Node formats = g["formats"]) {
+    if (!formats.IsSequence() || formats.size() == 0)
+      r.Fail(formats, "grasps.formats", "expected a list of acronym, graspnet, suctionnet");
+    grasps.acronym = labels.graspnet = labels.suctionnet = false;
+    for (const YAML::Node& item : formats) {
+      const std::string name = r.Scalar(item, "grasps.formats");
+      if (name == "acronym") {
+        grasps.acronym = true;
+      } else if (name == "graspnet") {
+        labels.graspnet = true;
+      } else if (name == "suctionnet") {
+        if (!grasps.suction)
+          r.Fail(item, "grasps.formats", "suctionnet needs a cup (grasps.suction)");
+        labels.suctionnet = true;
+      } else {
+        r.Fail(item, "grasps.formats",
+               "unknown format '" + name + "' (known: acronym, graspnet, suctionnet)");
+      }
+    }
+  }
+  return grasps;
+}
+
+}  // namespace
+
 RunSpec ParseRecipe(const std::string& text, const std::string& name,
                     const std::filesystem::path& base_dir) {
   YAML::Node root;
@@ -1988,24 +2101,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
         CheckRandomize(r, own, at, *spec.scenes[i].randomize, spec);
       }
     }
-    if (const YAML::Node g = root["grasps"]) {
-      r.ExpectMap(g, "grasps", {"gripper", "friction", "samples", "approaches", "seed"});
-      GraspSpec& grasps = spec.grasps;
-      grasps.enabled = true;
-      if (g["gripper"]) {
-        const std::string name = r.Scalar(g["gripper"], "grasps.gripper");
-        if (name != "franka")
-          r.Fail(g["gripper"], "grasps.gripper", "unknown gripper '" + name + "' (known: franka)");
-      }
-      AntipodalOptions& s = grasps.sampling;
-      if (g["friction"]) s.friction = r.Number(g["friction"], "grasps.friction");
-      if (g["samples"]) s.samples = static_cast<int>(r.Integer(g["samples"], "grasps.samples"));
-      if (g["approaches"])
-        s.approaches = static_cast<int>(r.Integer(g["approaches"], "grasps.approaches"));
-      if (g["seed"]) s.seed = static_cast<uint64_t>(r.Integer(g["seed"], "grasps.seed"));
-      std::string why;
-      if (!s.Check(&why)) r.Fail(g, "grasps", why);
-    }
+    if (const YAML::Node g = root["grasps"]) spec.grasps = ReadGrasps(r, g);
     if (root["limits"]) {
       ReadFields(r, root["limits"], "limits", &spec.limits, {});
       r.Check(spec.limits, root["limits"], "limits");

@@ -19,7 +19,10 @@
 #include "render/sensor.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
+#include "dataset/grasp_labels.h"
 #include "variants/grasp/parallel_jaw.h"
+#include "variants/grasp/scene_grasps.h"
+#include "variants/grasp/suction.h"
 
 namespace cadsynth {
 
@@ -90,12 +93,20 @@ struct SceneSpec {
   std::optional<RandomizeSpec> randomize;
 };
 
-// Grasp labels (`grasps:`): antipodal parallel-jaw grasps sampled per object in its model frame,
-// written as ACRONYM's per-object HDF5 files (models/grasps/obj_OBJID.h5).
+// Grasp labels (`grasps:`): antipodal parallel-jaw grasps (and, with a cup, suction grasps)
+// sampled per object in its model frame, written as ACRONYM's per-object HDF5 files
+// (models/grasps/obj_OBJID.h5); placed on every instance of each scene, filtered for collisions
+// and written per frame in GraspNet-1Billion's and SuctionNet-1Billion's layouts.
 struct GraspSpec {
   bool enabled = false;
   ParallelJawGripper gripper = ParallelJawGripper::Franka();
   AntipodalOptions sampling;
+  bool suction = false;  // `suction:` given
+  SuctionCup cup;
+  SuctionOptions suction_sampling;
+  SceneGraspOptions scene;
+  GraspLabelOptions labels;  // graspnet on by default, suctionnet with a cup
+  bool acronym = true;
 };
 
 // Bounds on how much work a recipe may ask for, so a typo (5,000 teeth, a grid of 100,000

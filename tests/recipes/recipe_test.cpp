@@ -991,11 +991,60 @@ TEST(Recipe, GraspsSectionSetsTheGripperAndSampling) {
   EXPECT_EQ(spec.grasps.sampling.seed, 7u);
   EXPECT_FALSE(ParseRecipe("parts: [{family: hex_nut}]\n", "r.yaml", ".").grasps.enabled);
   EXPECT_EQ(ErrorOf("grasps: {gripper: robotiq}\n"),
-            "r.yaml:1:19: grasps.gripper: unknown gripper 'robotiq' (known: franka)");
+            "r.yaml:1:19: grasps.gripper: unknown gripper 'robotiq' (known: franka, "
+            "robotiq_2f85)");
   EXPECT_EQ(ErrorOf("grasps: {friction: 0}\n"),
             "r.yaml:1:9: grasps: friction (mu) must lie in (0, 10]");
   EXPECT_EQ(ErrorOf("grasps: {sample: 3}\n"),
             "r.yaml:1:10: unknown key 'grasps.sample' (did you mean 'samples'?)");
+  // Defaults: ACRONYM files and GraspNet rows, no cup.
+  EXPECT_TRUE(spec.grasps.acronym);
+  EXPECT_TRUE(spec.grasps.labels.graspnet);
+  EXPECT_FALSE(spec.grasps.suction);
+  EXPECT_FALSE(spec.grasps.labels.suctionnet);
+}
+
+TEST(Recipe, GraspsSectionReadsGrippersCupsAndFormats) {
+  const RunSpec robotiq = ParseRecipe("grasps: {gripper: robotiq_2f85}\n", "r.yaml", ".");
+  EXPECT_EQ(robotiq.grasps.gripper.name, "robotiq_2f85");
+  EXPECT_EQ(robotiq.grasps.gripper.max_opening_mm, 85.0);
+  const RunSpec custom = ParseRecipe(
+      "grasps:\n"
+      "  gripper: {preset: franka, name: wide, max_opening: 12 cm, pad: 5}\n"
+      "  suction: {diameter: 30, vacuum: 60, density: 2700, samples: 50}\n"
+      "  approach_distance: 80\n"
+      "  per_instance: 0\n"
+      "  formats: [suctionnet]\n",
+      "r.yaml", ".");
+  const GraspSpec& g = custom.grasps;
+  EXPECT_EQ(g.gripper.name, "wide");
+  EXPECT_EQ(g.gripper.max_opening_mm, 120.0);
+  EXPECT_EQ(g.gripper.pad_mm, 5.0);
+  EXPECT_EQ(g.gripper.finger_length_mm, 46.2);  // the preset's
+  EXPECT_TRUE(g.suction);
+  EXPECT_EQ(g.cup.diameter_mm, 30.0);
+  EXPECT_EQ(g.cup.vacuum_kpa, 60.0);
+  EXPECT_EQ(g.suction_sampling.density_kg_m3, 2700.0);
+  EXPECT_EQ(g.suction_sampling.samples, 50);
+  EXPECT_EQ(g.scene.approach_mm, 80.0);
+  EXPECT_EQ(g.labels.max_per_instance, 0);
+  EXPECT_FALSE(g.acronym);
+  EXPECT_FALSE(g.labels.graspnet);
+  EXPECT_TRUE(g.labels.suctionnet);
+  EXPECT_TRUE(ParseRecipe("grasps: {suction: true}\n", "r.yaml", ".").grasps.labels.suctionnet);
+  EXPECT_EQ(ErrorOf("grasps: {formats: [suctionnet]}\n"),
+            "r.yaml:1:20: grasps.formats: suctionnet needs a cup (grasps.suction)");
+  EXPECT_EQ(ErrorOf("grasps: {formats: [dexnet]}\n"),
+            "r.yaml:1:20: grasps.formats: unknown format 'dexnet' (known: acronym, graspnet, "
+            "suctionnet)");
+  EXPECT_EQ(ErrorOf("grasps: {suction: {vacuum: 200}}\n"),
+            "r.yaml:1:19: grasps.suction: vacuum must lie in (0, 101.325] kPa (a pressure "
+            "difference below one atmosphere)");
+  EXPECT_EQ(ErrorOf("grasps: {gripper: {pad: 60}}\n"),
+            "r.yaml:1:19: grasps.gripper: pad must lie on the finger (0 to finger_length below "
+            "the tip)");
+  EXPECT_EQ(ErrorOf("grasps: {per_instance: -1}\n"),
+            "r.yaml:1:9: grasps: per_instance must be 0 (all) to 1,000,000");
 }
 
 TEST(Recipe, RandomizeErrorsPointAtTheKey) {

@@ -19,6 +19,7 @@
 #include "dataset/acronym.h"
 #include "dataset/bop.h"
 #include "dataset/file_io.h"
+#include "dataset/grasp_labels.h"
 #include "dataset/paper_layout.h"
 #include "render/randomize.h"
 #include "render/renderer.h"
@@ -29,40 +30,109 @@ namespace cadsynth {
 
 namespace {
 
-// grasps: each object's antipodal grasps (in parallel, each from its own seed), written as
-// ACRONYM's per-object HDF5 file models/grasps/obj_OBJID.h5.
-void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>& parts,
-                     const GraspSpec& spec, const std::function<void(const std::string&)>& info) {
-  std::filesystem::create_directories(root / "models" / "grasps");
-  std::vector<size_t> counts(parts.size(), 0);
+// Every object's grasps in its model frame (grasps:), sampled in parallel, each object from its
+// own seed.
+struct RunGrasps {
+  std::vector<std::vector<ParallelJawGrasp>> jaw;  // per part
+  std::vector<std::vector<SuctionGrasp>> suction;  // per part; empty without a cup
+};
+
+RunGrasps SampleGrasps(const std::vector<Part>& parts, const GraspSpec& spec,
+                       const std::function<void(const std::string&)>& info) {
+  const auto start = std::chrono::steady_clock::now();
+  RunGrasps grasps;
+  grasps.jaw.resize(parts.size());
+  if (spec.suction) grasps.suction.resize(parts.size());
   tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
     AntipodalOptions options = spec.sampling;
     options.seed = Hash(spec.sampling.seed, p);
-    const std::vector<ParallelJawGrasp> grasps =
-        SampleAntipodalGrasps(parts[p], spec.gripper, options);
+    grasps.jaw[p] = SampleAntipodalGrasps(parts[p], spec.gripper, options);
+    if (spec.suction) {
+      SuctionOptions suction = spec.suction_sampling;
+      suction.seed = Hash(spec.suction_sampling.seed, p);
+      grasps.suction[p] = SampleSuctionGrasps(parts[p], spec.cup, suction);
+    }
+  });
+  if (info) {
+    std::ostringstream line;
+    line << "grasps (" << spec.gripper.name << ", mu " << spec.sampling.friction;
+    if (spec.suction) line << "; suction cup " << spec.cup.name;
+    line << "):";
+    for (size_t p = 0; p < parts.size(); ++p) {
+      line << " obj " << p + 1 << ": " << grasps.jaw[p].size();
+      if (spec.suction) line << " + " << grasps.suction[p].size() << " suction";
+    }
+    line << " ("
+         << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+         << " s)";
+    info(line.str());
+  }
+  return grasps;
+}
+
+// The objects' grasps as ACRONYM's per-object HDF5 files models/grasps/obj_OBJID.h5.
+void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>& parts,
+                     const GraspSpec& spec, const RunGrasps& grasps) {
+  std::filesystem::create_directories(root / "models" / "grasps");
+  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
     char id[16];
     std::snprintf(id, sizeof(id), "%06zu", p + 1);
     AcronymGrasps file;
     file.object_file = std::string("models/obj_") + id + ".ply";
+    file.gripper = spec.gripper.name == "franka" ? "panda" : spec.gripper.name;
     file.gripper_configuration = 0.5e-3 * spec.gripper.max_opening_mm;
-    file.friction = options.friction;
+    file.friction = spec.sampling.friction;
     file.volume_m3 = parts[p].mass.volume_mm3 * 1e-9;
     file.com_m = parts[p].mass.center_of_mass * 1e-3;
-    for (const ParallelJawGrasp& g : grasps) {
+    for (const ParallelJawGrasp& g : grasps.jaw[p]) {
       file.model_from_gripper.push_back(g.model_from_gripper);
       file.width_mm.push_back(g.width_mm);
       file.quality.push_back(g.quality);
       file.success.push_back(1);
     }
+    if (spec.suction) {
+      // The suction wrench assumed this density: the mass is known.
+      file.density = spec.suction_sampling.density_kg_m3;
+      file.mass_kg = file.density * file.volume_m3;
+      file.cup_diameter_mm = spec.cup.diameter_mm;
+      file.cup_vacuum_kpa = spec.cup.vacuum_kpa;
+      for (const SuctionGrasp& g : grasps.suction[p]) {
+        file.suction_points_mm.push_back(g.point);
+        file.suction_approaches.push_back(g.approach);
+        file.suction_seal.push_back(g.seal);
+        file.suction_wrench.push_back(g.wrench);
+      }
+    }
     WriteAcronymFile(root / "models" / "grasps" / (std::string("obj_") + id + ".h5"), file);
-    counts[p] = grasps.size();
   });
-  if (info) {
-    std::ostringstream line;
-    line << "grasps (" << spec.gripper.name << ", mu " << spec.sampling.friction << "):";
-    for (size_t p = 0; p < parts.size(); ++p) line << " obj " << p + 1 << ": " << counts[p];
-    info(line.str());
+}
+
+// One scene's grasps placed on its instances and filtered against its floor, fixtures and
+// instances, for the per-frame writer.
+SceneGrasps PlaceSceneGrasps(const std::vector<Part>& parts, const Scene& scene,
+                             const std::vector<int>& obj_ids, const GraspSpec& spec,
+                             const RunGrasps& grasps) {
+  GraspObstacles obstacles;
+  obstacles.floor = scene.floor;
+  for (const Scene::Fixture& fixture : scene.fixtures) obstacles.fixtures.push_back(&fixture.mesh);
+  SceneGrasps out;
+  for (const Instance& instance : scene.instances) {
+    obstacles.instances.push_back({&parts[static_cast<size_t>(instance.part)].mesh,
+                                   instance.world_from_model, instance.part});
+    out.part_of_instance.push_back(instance.part);
   }
+  out.obj_id_of_instance = obj_ids;
+  out.gripper = spec.gripper;
+  out.cup = spec.cup;
+  if (spec.labels.graspnet) {
+    out.jaw = &grasps.jaw;
+    out.jaw_placed = PlaceParallelJawGrasps(obstacles, grasps.jaw, spec.gripper, spec.scene);
+  }
+  if (spec.labels.suctionnet) {
+    out.suction = &grasps.suction;
+    out.suction_placed = PlaceSuctionGrasps(obstacles, grasps.suction, spec.cup, spec.scene);
+  }
+  return out;
 }
 
 }  // namespace
@@ -155,6 +225,9 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   };
   const std::string run_key = RunKey(spec, prepared, views);
   info("tracing with Embree's " + TracingIsa(spec.render.isa) + " kernels");
+  // Grasps: every shard samples them (its frames need them); the common files write them.
+  RunGrasps run_grasps;
+  if (spec.grasps.enabled) run_grasps = SampleGrasps(parts, spec.grasps, options.info);
   // A single run writes to a hidden staging folder beside the output, renamed into place at the
   // end. An interrupted run (killed, disk full) leaves it; the same run started again continues
   // from the frames it completed, if its run key (recipe text, parts, views, output options)
@@ -182,7 +255,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       }
       WriteBopModels(root, parts, prepared.classes);
       WriteModelPoints(root, parts, spec.bop);
-      if (spec.grasps.enabled) WriteGraspFiles(root, parts, spec.grasps, options.info);
+      if (spec.grasps.enabled && spec.grasps.acronym)
+        WriteGraspFiles(root, parts, spec.grasps, run_grasps);
       WriteFileAtomic(root / "variants.json", prepared.variants_json);
     }
     std::vector<BopSceneWriter::CocoCategory> categories;
@@ -204,6 +278,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     // Every scene's writers first: frames of an interrupted attempt count when every file still
     // matches their manifest entry; the others are rendered (again).
     std::vector<std::unique_ptr<PaperSceneWriter>> papers;
+    std::vector<std::unique_ptr<GraspLabelWriter>> grasp_writers(prepared.scenes.size());
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
       auto& writer = *writers.emplace_back(std::make_unique<RigSceneWriter>(
           root, static_cast<int>(s), spec.bop, prepared.obj_ids[s], bop_sensors));
@@ -218,6 +293,22 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       }
       papers.push_back(std::make_unique<PaperSceneWriter>(root, static_cast<int>(s), spec.bop,
                                                           std::move(paper_instances)));
+      if (spec.grasps.enabled && (spec.grasps.labels.graspnet || spec.grasps.labels.suctionnet)) {
+        const auto placing = std::chrono::steady_clock::now();
+        SceneGrasps scene_grasps = PlaceSceneGrasps(parts, prepared.scenes[s], prepared.obj_ids[s],
+                                                    spec.grasps, run_grasps);
+        std::ostringstream line;
+        line << "scene '" << spec.scenes[s].name << "': grasps free of the scene: "
+             << scene_grasps.jaw_placed.size();
+        if (spec.grasps.labels.suctionnet) line << " + " << scene_grasps.suction_placed.size() << " suction";
+        line << " ("
+             << std::chrono::duration<double>(std::chrono::steady_clock::now() - placing).count()
+             << " s)";
+        info(line.str());
+        grasp_writers[s] = std::make_unique<GraspLabelWriter>(root, static_cast<int>(s),
+                                                              spec.grasps.labels,
+                                                              std::move(scene_grasps));
+      }
       std::vector<int> earlier;
       for (int id : writer.WrittenFrames()) {
         if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id)))
@@ -259,7 +350,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
         centre.z() = 0.0;
       }
       RigSceneWriter& writer = *writers[s];
-      const PaperSceneWriter& paper = *papers[s];
+      std::vector<const FrameWriter*> formats = {papers[s].get()};
+      if (grasp_writers[s]) formats.push_back(grasp_writers[s].get());
       size_t next = 0;
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
       // One unit renders every sensor of the rig at view i: sensor k sits at
@@ -322,7 +414,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                     if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
                       ++(visible == 0 ? empty_views : sparse_views);
                     } else {
-                      writer.WriteFrame(static_cast<int>(item.first), rig_frames, {&paper});
+                      writer.WriteFrame(static_cast<int>(item.first), rig_frames, formats);
                     }
                     const size_t n = ++done;
                     if (options.progress) options.progress(n, to_render);

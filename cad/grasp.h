@@ -1,0 +1,106 @@
+// Grasp vocabulary (issue 19): grippers as data and the grasps of a part, plain structs shared
+// by the sampler (variants/grasp/), the writers (dataset/) and the recipe reader. Lengths in mm.
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace cadsynth {
+
+// A parallel-jaw gripper in its own frame, as ACRONYM and 6-DOF GraspNet define it: the origin at
+// the hand's base, +z the approach direction, the fingers closing along x, symmetric about the
+// y-z plane. A box model:
+//   palm:    a box centred on the z axis from z = 0 to palm_height_mm, palm_width_mm along x,
+//            palm_depth_mm along y;
+//   fingers: two boxes finger_thickness_mm (x) by finger_width_mm (y) by finger_length_mm (z),
+//            from palm_height_mm to tip_mm = palm_height_mm + finger_length_mm, their inner faces
+//            at x = +-opening / 2;
+//   pad:     a grasp's contacts sit on the fingers' inner faces pad_mm below the tips.
+struct ParallelJawGripper {
+  std::string name = "franka";
+  double max_opening_mm = 80.0;
+  double finger_width_mm = 20.0;
+  double finger_thickness_mm = 10.0;
+  double finger_length_mm = 46.2;
+  double palm_height_mm = 66.0;
+  double palm_width_mm = 204.0;
+  double palm_depth_mm = 63.2;
+  double pad_mm = 8.8;
+
+  bool Check(std::string* why) const;
+  double tip_mm() const { return palm_height_mm + finger_length_mm; }
+  // The contacts' height in the gripper frame (the grasp centre lies at (0, 0, contact_z_mm())).
+  double contact_z_mm() const { return tip_mm() - pad_mm; }
+
+  // The Franka Emika hand of ACRONYM and 6-DOF GraspNet (NVlabs/acronym's gripper marker and
+  // collision mesh: fingers at x = +-41 mm from z = 66 to 112.2 mm, the hand +-102 x +-31.6 mm;
+  // Contact-GraspNet's control points put the pad centre at z = 103.4 mm), 80 mm opening.
+  static ParallelJawGripper Franka();
+  // The Robotiq 2F-85 as boxes around its open linkage: 85 mm stroke, 22 mm wide pads, the tips
+  // 163 mm from the coupling (Robotiq's open height) and the grasp point 155 mm (rai-robotModels'
+  // gripper marker), the body and knuckles a 110 x 76 mm box up to 100 mm. Approximate: the real
+  // fingers swing on four-bar linkages; this is their envelope when open.
+  static ParallelJawGripper Robotiq2F85();
+};
+
+// A suction cup on a straight tool, as Dex-Net 3.0 models it: a ring of contact points (the
+// cup's rim, ring_points of them on a circle of diameter_mm) projected along the approach onto
+// the surface, joined by perimeter springs and carried by a compliant bellows. The tool: the cup
+// (diameter_mm wide, cup_length_mm long) then a shaft (shaft_diameter_mm, shaft_length_mm)
+// straight behind it along -approach.
+struct SuctionCup {
+  std::string name = "cup20";
+  double diameter_mm = 20.0;   // SuctionNet-1Billion's cup: radius 10 mm
+  int ring_points = 16;        // rim contacts (Dex-Net 3.0: 8; SuctionNet: 72-bin rings)
+  double compliance_mm = 2.0;  // the bellows' give: the rim's largest distance off a plane
+  double stretch = 0.1;        // perimeter springs: the largest relative stretch (Dex-Net: 10%)
+  double vacuum_kpa = 80.0;    // the pressure difference the vacuum holds
+  double cup_length_mm = 20.0;
+  double shaft_diameter_mm = 12.0;
+  double shaft_length_mm = 100.0;
+
+  bool Check(std::string* why) const;
+  double radius_mm() const { return 0.5 * diameter_mm; }
+  // The vacuum's pull, V = dP pi a^2, in newtons.
+  double vacuum_force_n() const;
+};
+
+// One parallel-jaw grasp of a part, in its model frame.
+struct ParallelJawGrasp {
+  Eigen::Isometry3d model_from_gripper = Eigen::Isometry3d::Identity();
+  double width_mm = 0;          // the distance between the contacts along x
+  Eigen::Vector3d contacts[2];  // model frame, mm
+  Eigen::Vector3d normals[2];   // outward surface normals at the contacts
+  // The force-closure margin: 1 - (angle between the closing axis and the second contact's
+  // inward normal) / atan(mu); the first contact's normal is the axis itself (angle 0). 1: the
+  // two normals are exactly opposite; 0: on the edge of the friction cone.
+  double quality = 0;
+};
+
+// One suction grasp of a part, in its model frame: the cup's centre touches `point` moving along
+// `approach` (unit, into the surface: minus the outward normal for a head-on grasp).
+struct SuctionGrasp {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d approach = -Eigen::Vector3d::UnitZ();
+  // Seal: 1 - max(rim's distance off its best plane / compliance, largest perimeter stretch /
+  // stretch); in (0, 1] for a seal.
+  double seal = 0;
+  // Wrench against gravity with the approach vertical (the part hanging under the cup):
+  // 1 - (m g + 2 M / a) / V, M the moment of the weight about the contact, a the cup's radius;
+  // above 0 the rim stays pressed all round (see README, "Suction").
+  double wrench = 0;
+  double quality() const { return seal * wrench; }
+};
+
+// Where a part's grasp lands in a scene: instance `instance` (Scene::instances order), grasp
+// `grasp` of that part's list; approach_blocked: the tool, moved back along -approach by the
+// scene's approach distance, hits something on the way in.
+struct PlacedGrasp {
+  int instance = 0;
+  int grasp = 0;
+  bool approach_blocked = false;
+};
+
+}  // namespace cadsynth

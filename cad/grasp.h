@@ -17,7 +17,8 @@ namespace cadsynth {
 //   fingers: two boxes finger_thickness_mm (x) by finger_width_mm (y) by finger_length_mm (z),
 //            from palm_height_mm to tip_mm = palm_height_mm + finger_length_mm, their inner faces
 //            at x = +-opening / 2;
-//   pad:     a grasp's contacts sit on the fingers' inner faces pad_mm below the tips.
+//   pad:     a grasp's contacts sit on the fingers' inner faces pad_mm below the tips (the
+//            default grasp depth; AntipodalOptions::depths_mm may give others).
 struct ParallelJawGripper {
   std::string name = "franka";
   double max_opening_mm = 80.0;
@@ -31,8 +32,6 @@ struct ParallelJawGripper {
 
   bool Check(std::string* why) const;
   double tip_mm() const { return palm_height_mm + finger_length_mm; }
-  // The contacts' height in the gripper frame (the grasp centre lies at (0, 0, contact_z_mm())).
-  double contact_z_mm() const { return tip_mm() - pad_mm; }
 
   // The Franka Emika hand of ACRONYM and 6-DOF GraspNet (NVlabs/acronym's gripper marker and
   // collision mesh: fingers at x = +-41 mm from z = 66 to 112.2 mm, the hand +-102 x +-31.6 mm;
@@ -71,6 +70,8 @@ struct SuctionCup {
 struct ParallelJawGrasp {
   Eigen::Isometry3d model_from_gripper = Eigen::Isometry3d::Identity();
   double width_mm = 0;          // the distance between the contacts along x
+  double opening_mm = 0;        // the fingers' opening the grasp was checked with
+  double depth_mm = 0;          // the fingertips' reach past the contacts along the approach
   Eigen::Vector3d contacts[2];  // model frame, mm
   Eigen::Vector3d normals[2];   // outward surface normals at the contacts
   // The force-closure margin: 1 - (angle between the closing axis and the second contact's

@@ -101,7 +101,7 @@ std::vector<float> GraspNetRows(const Frame& frame, const SceneGrasps& grasps,
     rows.push_back(static_cast<float>(g.quality));
     rows.push_back(static_cast<float>(1e-3 * g.width_mm));
     rows.push_back(static_cast<float>(1e-3 * grasps.gripper.finger_width_mm));
-    rows.push_back(static_cast<float>(1e-3 * grasps.gripper.pad_mm));
+    rows.push_back(static_cast<float>(1e-3 * g.depth_mm));
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) rows.push_back(static_cast<float>(graspnet(i, j)));
     }

@@ -1873,7 +1873,7 @@ namespace {
 // `grasps:` (see GraspSpec).
 GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
   r.ExpectMap(g, "grasps",
-              {"gripper", "friction", "samples", "approaches", "clearance", "seed", "suction",
+              {"gripper", "friction", "samples", "approaches", "clearance", "depths", "seed", "suction",
                "approach_distance", "per_instance", "visibility_tolerance", "formats"});
   GraspSpec grasps;
   grasps.enabled = true;
@@ -1910,6 +1910,19 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
   if (g["samples"]) s.samples = r.Integer(g["samples"], "grasps.samples");
   if (g["approaches"]) s.approaches = r.Integer(g["approaches"], "grasps.approaches");
   if (g["clearance"]) s.clearance_mm = r.Length(g["clearance"], "grasps.clearance");
+  if (const YAML::Node depths = g["depths"]) {
+    if (!depths.IsSequence() || depths.size() == 0)
+      r.Fail(depths, "grasps.depths", "expected a list of lengths");
+    for (const YAML::Node& item : depths) {
+      const double depth = r.Length(item, "grasps.depths");
+      if (!(depth >= 0 && depth <= grasps.gripper.finger_length_mm)) {
+        std::ostringstream what;
+        what << "must lie on the fingers (0 to " << grasps.gripper.finger_length_mm << " mm)";
+        r.Fail(item, "grasps.depths", what.str());
+      }
+      s.depths_mm.push_back(depth);
+    }
+  }
   if (g["seed"]) {
     const int seed = r.Integer(g["seed"], "grasps.seed");
     if (seed < 0) r.Fail(g["seed"], "grasps.seed", "must not be negative");

@@ -305,7 +305,9 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
         << a.samples << " " << a.approaches << " " << a.clearance_mm << " " << a.seed << " "
         << grasps.acronym << " " << grasps.scene.approach_mm << " "
         << grasps.labels.graspnet << " " << grasps.labels.suctionnet << " "
-        << grasps.labels.max_per_instance << " " << grasps.labels.visibility_mm << "\n";
+        << grasps.labels.max_per_instance << " " << grasps.labels.visibility_mm << " depths";
+    for (const double depth : a.depths_mm) key << " " << depth;
+    key << "\n";
     if (grasps.suction) {
       const SuctionCup& c = grasps.cup;
       const SuctionOptions& o = grasps.suction_sampling;

@@ -121,9 +121,10 @@ ToolShape Rod(double diameter, double z0, double z1) {
 }
 }  // namespace
 
-std::vector<ToolShape> GripperShapes(const ParallelJawGripper& g, double back_mm) {
+std::vector<ToolShape> GripperShapes(const ParallelJawGripper& g, double opening_mm,
+                                     double back_mm) {
   std::vector<ToolShape> shapes;
-  const double half = 0.5 * g.max_opening_mm;
+  const double half = 0.5 * opening_mm;
   for (const double side : {-1.0, 1.0}) {
     shapes.push_back(SlabBox(g.finger_thickness_mm, g.finger_width_mm,
                              g.palm_height_mm - back_mm, g.tip_mm(),

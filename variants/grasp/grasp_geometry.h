@@ -57,9 +57,11 @@ struct ToolShape {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
 };
 
-// The open parallel-jaw gripper (fingers at +-max_opening / 2) as boxes in its frame, each
-// stretched `back_mm` further along -z: the volume it sweeps coming in from back_mm away.
-std::vector<ToolShape> GripperShapes(const ParallelJawGripper& gripper, double back_mm = 0);
+// The parallel-jaw gripper opened to `opening_mm` (the fingers' inner faces at +-opening / 2) as
+// boxes in its frame, each stretched `back_mm` further along -z: the volume it sweeps coming in
+// from back_mm away.
+std::vector<ToolShape> GripperShapes(const ParallelJawGripper& gripper, double opening_mm,
+                                     double back_mm = 0);
 
 // The suction tool in the frame of its contact (origin at the cup's centre on the surface, +z the
 // approach): the cup, a cylinder from z = -cup_length to -lift_mm, and the shaft behind it, each

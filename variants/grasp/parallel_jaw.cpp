@@ -21,8 +21,10 @@ bool AntipodalOptions::Check(std::string* why) const {
     *why = "samples must be 1 to 10,000,000";
   } else if (approaches < 1 || approaches > 360) {
     *why = "approaches must be 1 to 360";
-  } else if (!(clearance_mm >= 0)) {
-    *why = "clearance must not be negative";
+  } else if (!(clearance_mm >= 0 && clearance_mm <= 1000)) {
+    *why = "clearance must lie in [0, 1000] mm";
+  } else if (depths_mm.size() > 64) {
+    *why = "at most 64 depths";
   } else {
     return true;
   }
@@ -44,9 +46,8 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
   // The part and the open gripper for FCL.
   const fcl::CollisionObjectd part_object(grasp_detail::FclMesh(mesh),
                                           fcl::Transform3d::Identity());
-  const std::vector<grasp_detail::ToolShape> tool = grasp_detail::GripperShapes(gripper);
-  const auto collides = [&](const Eigen::Isometry3d& model_from_gripper) {
-    for (const grasp_detail::ToolShape& shape : tool) {
+  const auto collides = [&](const Eigen::Isometry3d& model_from_gripper, double opening) {
+    for (const grasp_detail::ToolShape& shape : grasp_detail::GripperShapes(gripper, opening)) {
       const fcl::CollisionObjectd object(shape.shape, model_from_gripper * shape.pose);
       fcl::CollisionRequestd request;
       fcl::CollisionResultd result;
@@ -56,6 +57,14 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
     return false;
   };
 
+  std::vector<double> depths = o.depths_mm;
+  if (depths.empty()) depths.push_back(gripper.pad_mm);
+  for (const double depth : depths) {
+    if (!(depth >= 0 && depth <= gripper.finger_length_mm))
+      throw Error("grasps: a depth of " + std::to_string(depth) + " mm is off the " +
+                  gripper.name + "'s fingers (0 to " + std::to_string(gripper.finger_length_mm) +
+                  " mm)");
+  }
   const double cone = std::atan(o.friction);
   std::vector<ParallelJawGrasp> grasps;
   for (int s = 0; s < o.samples; ++s) {
@@ -72,6 +81,7 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
     double width = 0;
     if (!rays.First(p1, x, 1e-6, &width, &far) || far == tri || !(width > 0)) continue;
     if (width + 2 * o.clearance_mm > gripper.max_opening_mm) continue;
+    const double opening = width + 2 * o.clearance_mm;
     const Eigen::Vector3d n2 = surface.Normal(far);
     // The far jaw pushes along -x: its contact holds when its outward normal n2 lies within
     // `cone` of +x (the axis leaves the part through it).
@@ -88,19 +98,23 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
       const double phi = start + 2 * M_PI * k / o.approaches;
       const Eigen::Vector3d z = std::cos(phi) * e1 + std::sin(phi) * e2;
       const Eigen::Vector3d y = z.cross(x);
+      for (const double depth : depths) {
       ParallelJawGrasp g;
       g.model_from_gripper.linear().col(0) = x;
       g.model_from_gripper.linear().col(1) = y;
       g.model_from_gripper.linear().col(2) = z;
-      g.model_from_gripper.translation() = centre - gripper.contact_z_mm() * z;
-      if (collides(g.model_from_gripper)) continue;
+      g.model_from_gripper.translation() = centre - (gripper.tip_mm() - depth) * z;
+      if (collides(g.model_from_gripper, opening)) continue;
       g.width_mm = width;
+      g.opening_mm = opening;
+      g.depth_mm = depth;
       g.contacts[0] = p1;
       g.contacts[1] = p2;
       g.normals[0] = n1;
       g.normals[1] = n2;
       g.quality = 1.0 - angle / cone;
       grasps.push_back(g);
+      }
     }
   }
   return grasps;

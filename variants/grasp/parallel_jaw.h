@@ -16,7 +16,12 @@ struct AntipodalOptions {
   double friction = 0.5;      // Coulomb's mu at the contacts
   int samples = 2000;         // surface points tried
   int approaches = 8;         // approach directions tried about each contact pair's axis
-  double clearance_mm = 1.0;  // the open fingers' inner faces this far outside the part's reach
+  // The fingers open to the grasp's width plus this on each side (within the gripper's maximum),
+  // as a controller opens them before closing.
+  double clearance_mm = 5.0;
+  // Grasp depths: how far the fingertips reach past the contacts (GraspNet samples 10 to 40 mm).
+  // Each contact pair and approach is tried at each; empty: the gripper's pad_mm only.
+  std::vector<double> depths_mm;
   uint64_t seed = 0;
 
   bool Check(std::string* why) const;
@@ -25,8 +30,8 @@ struct AntipodalOptions {
 // Samples antipodal grasps of `part` (a closed, outward-wound mesh): a surface point drawn by
 // area, the closing axis along its inward normal, the part's far side where the axis leaves it
 // (the second contact), kept when the second contact's normal lies inside the friction cone about
-// the axis, the width is within the opening, and the gripper, open to its full width, is free of
-// the part at that approach (FCL: the part's triangles against the palm's and fingers' boxes).
+// the axis, the width plus twice the clearance is within the opening, and the gripper, opened to
+// that, is free of the part at that approach (FCL: the part's triangles against the palm's and fingers' boxes).
 // Same options, same grasps, in the order sampled. Throws Error for impossible options or a part
 // without triangles.
 std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,

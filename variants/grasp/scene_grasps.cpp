@@ -17,14 +17,16 @@ namespace cadsynth {
 
 namespace {
 
-// The scene for FCL: every obstacle in one dynamic AABB tree. An object's user data is its tag:
-// instance index + 1, or 0 for the floor and the fixtures.
+// The scene for FCL: the fixtures and instances in one dynamic AABB tree (an object's user data
+// is its tag: instance index + 1, or 0 for a fixture), the floor's half-space beside it (its
+// infinite bounding box would break the tree's construction).
 class SceneCollider {
  public:
   explicit SceneCollider(const GraspObstacles& scene) {
     if (scene.floor) {
-      Add(std::make_shared<fcl::Halfspaced>(fcl::Vector3d::UnitZ(), 0.0),
-          Eigen::Isometry3d::Identity(), 0);
+      floor_ = std::make_unique<fcl::CollisionObjectd>(
+          std::make_shared<fcl::Halfspaced>(fcl::Vector3d::UnitZ(), 0.0),
+          fcl::Transform3d::Identity());
     }
     for (const Mesh* fixture : scene.fixtures) {
       if (fixture != nullptr && !fixture->triangles.empty())
@@ -50,6 +52,13 @@ class SceneCollider {
             const Eigen::Isometry3d& world_from_tool, int skip) const {
     for (const grasp_detail::ToolShape& shape : tool) {
       fcl::CollisionObjectd object(shape.shape, world_from_tool * shape.pose);
+      object.setUserData(nullptr);  // FCL leaves it uninitialised
+      if (floor_) {
+        fcl::CollisionRequestd request;
+        fcl::CollisionResultd result;
+        fcl::collide(floor_.get(), &object, request, result);
+        if (result.isCollision()) return true;
+      }
       Query query{static_cast<intptr_t>(skip) + 1, false};
       manager_.collide(&object, &query, &Callback);
       if (query.hit) return true;
@@ -84,18 +93,18 @@ class SceneCollider {
     objects_.push_back(std::move(object));
   }
 
+  std::unique_ptr<fcl::CollisionObjectd> floor_;
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects_;
   fcl::DynamicAABBTreeCollisionManagerd manager_;
 };
 
-// Places every instance's grasps: `pose(grasp)` is the tool frame in the model frame; `at` the
-// tool's shapes at the grasp (tested against all but the instance itself), `in` the shapes swept
-// back (tested against everything).
-template <typename Grasp, typename Pose>
+// Places every instance's grasps: `pose(grasp)` is the tool frame in the model frame; `tool(grasp,
+// back)` the tool's shapes at the grasp (back 0: tested against all but the instance itself) and
+// swept back by `approach_mm` (tested against everything).
+template <typename Grasp, typename Pose, typename Tool>
 std::vector<PlacedGrasp> Place(const GraspObstacles& scene,
                                const std::vector<std::vector<Grasp>>& part_grasps,
-                               const std::vector<grasp_detail::ToolShape>& at,
-                               const std::vector<grasp_detail::ToolShape>& in, const Pose& pose) {
+                               double approach_mm, const Pose& pose, const Tool& tool) {
   for (const GraspObstacles::Body& body : scene.instances) {
     if (body.part < 0 || static_cast<size_t>(body.part) >= part_grasps.size())
       throw Error("grasps: an instance names part " + std::to_string(body.part) + " of " +
@@ -108,11 +117,12 @@ std::vector<PlacedGrasp> Place(const GraspObstacles& scene,
     const std::vector<Grasp>& grasps = part_grasps[static_cast<size_t>(body.part)];
     for (size_t g = 0; g < grasps.size(); ++g) {
       const Eigen::Isometry3d world_from_tool = body.world_from_model * pose(grasps[g]);
-      if (collider.Hits(at, world_from_tool, static_cast<int>(i))) continue;
+      if (collider.Hits(tool(grasps[g], 0.0), world_from_tool, static_cast<int>(i))) continue;
       PlacedGrasp placed;
       placed.instance = static_cast<int>(i);
       placed.grasp = static_cast<int>(g);
-      placed.approach_blocked = !in.empty() && collider.Hits(in, world_from_tool, -1);
+      placed.approach_blocked =
+          approach_mm > 0 && collider.Hits(tool(grasps[g], approach_mm), world_from_tool, -1);
       per_instance[i].push_back(placed);
     }
   });
@@ -142,12 +152,15 @@ std::vector<PlacedGrasp> PlaceParallelJawGrasps(
   CheckOptions(options);
   std::string why;
   if (!gripper.Check(&why)) throw Error("gripper '" + gripper.name + "': " + why);
-  // The way in: the gripper swept back from the grasp. Its own part cannot be hit at the grasp
-  // (the sampler checked that), but can be on the way in.
-  std::vector<grasp_detail::ToolShape> in;
-  if (options.approach_mm > 0) in = grasp_detail::GripperShapes(gripper, options.approach_mm);
-  return Place(scene, part_grasps, grasp_detail::GripperShapes(gripper), in,
-               [](const ParallelJawGrasp& g) { return g.model_from_gripper; });
+  // The fingers opened as the sampler checked them. The way in: the gripper swept back from the
+  // grasp; its own part cannot be hit at the grasp (the sampler checked that), but can be on the
+  // way in.
+  return Place(
+      scene, part_grasps, options.approach_mm,
+      [](const ParallelJawGrasp& g) { return g.model_from_gripper; },
+      [&](const ParallelJawGrasp& g, double back) {
+        return grasp_detail::GripperShapes(gripper, g.opening_mm, back);
+      });
 }
 
 Eigen::Isometry3d ModelFromSuctionTool(const SuctionGrasp& grasp) {
@@ -166,11 +179,11 @@ std::vector<PlacedGrasp> PlaceSuctionGrasps(
   // At the grasp the cup's rim touches its own part: the others are tested from the rim up. On
   // the way in, the tool starts clear of the sealed rim (compliance + 0.5 mm above the contact)
   // and is tested against its own part too.
-  std::vector<grasp_detail::ToolShape> in;
-  if (options.approach_mm > 0)
-    in = grasp_detail::SuctionShapes(cup, cup.compliance_mm + 0.5, options.approach_mm);
-  return Place(scene, part_grasps, grasp_detail::SuctionShapes(cup, 0.0), in,
-               ModelFromSuctionTool);
+  const std::vector<grasp_detail::ToolShape> at = grasp_detail::SuctionShapes(cup, 0.0);
+  const std::vector<grasp_detail::ToolShape> in =
+      grasp_detail::SuctionShapes(cup, cup.compliance_mm + 0.5, options.approach_mm);
+  return Place(scene, part_grasps, options.approach_mm, ModelFromSuctionTool,
+               [&](const SuctionGrasp&, double back) { return back > 0 ? in : at; });
 }
 
 }  // namespace cadsynth

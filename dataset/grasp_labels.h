@@ -15,7 +15,7 @@
 namespace cadsynth {
 
 struct GraspLabelOptions {
-  bool graspnet = false;    // parallel-jaw rows: DIR/graspnet/SCENE/IMAGE.npy
+  bool graspnet = true;     // parallel-jaw rows: DIR/graspnet/SCENE/IMAGE.npy
   bool suctionnet = false;  // suction rows: DIR/suctionnet/SCENE/IMAGE.npy
   // Per frame and visible instance, the best grasps by quality (ties: in the part's order); 0:
   // all of them.

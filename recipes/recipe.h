@@ -105,7 +105,7 @@ struct GraspSpec {
   SuctionCup cup;
   SuctionOptions suction_sampling;
   SceneGraspOptions scene;
-  GraspLabelOptions labels;  // graspnet on by default, suctionnet with a cup
+  GraspLabelOptions labels;  // graspnet on by default, suctionnet with a cup (the reader)
   bool acronym = true;
 };
 

@@ -517,18 +517,31 @@ TEST(Generate, DistractorsOccludeButAreNeverTargets) {
 
 // grasps: one ACRONYM file per object beside its model, the same bytes on 1 and 2 threads, every
 // grasp within the opening and its contacts on the object's surface.
-TEST(Generate, GraspsAreWrittenPerObjectAsAcronymFiles) {
+// The shape (rows, cols) of a float32 .npy file as EncodeNpy writes it.
+std::pair<size_t, size_t> NpyShape(const std::string& bytes) {
+  const size_t open = bytes.find("'shape': (");
+  if (open == std::string::npos) return {0, 0};
+  size_t rows = 0, cols = 0;
+  std::sscanf(bytes.c_str() + open + 10, "%zu, %zu", &rows, &cols);
+  return {rows, cols};
+}
+
+TEST(Generate, GraspsAreWrittenPerObjectAndPerFrame) {
   ScratchDir dir;
   RunSpec spec = SmallDefault();
   spec.scenes = {spec.scenes[2]};  // pegs, faceplate, shaft, bolt
-  spec.sweep.yaw_rad = {0.0};
+  spec.sweep.yaw_rad = {0.0, 1.0};
   spec.grasps.enabled = true;
   spec.grasps.sampling.samples = 150;
   spec.grasps.sampling.approaches = 4;
+  spec.grasps.suction = true;
+  spec.grasps.suction_sampling.samples = 600;
+  spec.grasps.labels.suctionnet = true;
+  spec.grasps.labels.max_per_instance = 5;
   const auto one = GenerateOn(spec, dir.path(), "one", 1),
              two = GenerateOn(spec, dir.path(), "two", 2);
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
-  size_t objects = 0, grasps = 0;
+  size_t objects = 0, grasps = 0, suction = 0;
   for (const auto& [name, bytes] : one) {
     if (name.rfind("models/grasps/", 0) != 0) continue;
     ++objects;
@@ -536,14 +549,40 @@ TEST(Generate, GraspsAreWrittenPerObjectAsAcronymFiles) {
     EXPECT_EQ(g.object_file, "models/" + name.substr(14, 10) + ".ply") << name;
     EXPECT_TRUE(one.count(g.object_file)) << g.object_file;
     for (size_t i = 0; i < g.model_from_gripper.size(); ++i) {
-      EXPECT_LE(g.width_mm[i], 80.0 - 2.0);
+      EXPECT_LE(g.width_mm[i], 80.0 - 2 * 5.0);  // the opening less the clearance
       EXPECT_GE(g.quality[i], 0.0);
       EXPECT_LE(g.quality[i], 1.0);
     }
     grasps += g.model_from_gripper.size();
+    suction += g.suction_points_mm.size();
+    EXPECT_NEAR(g.density, 7850, 1e-9);
+    EXPECT_NEAR(g.mass_kg, 7850 * g.volume_m3, 1e-12);
   }
   EXPECT_EQ(objects, 5u);
   EXPECT_GT(grasps, 100u);
+  EXPECT_GT(suction, 5u);
+  // Per frame: GraspNet and SuctionNet rows with their labels, at most 5 per visible instance.
+  size_t frames = 0, rows = 0, suction_rows = 0;
+  for (const auto& [name, bytes] : one) {
+    if (name.rfind("graspnet/000000/", 0) == 0 && name.find("_labels") == std::string::npos) {
+      ++frames;
+      const auto [n, cols] = NpyShape(bytes);
+      EXPECT_EQ(cols, 17u) << name;
+      const std::string labels = name.substr(0, name.size() - 4) + "_labels.npy";
+      ASSERT_TRUE(one.count(labels)) << labels;
+      EXPECT_EQ(NpyShape(one.at(labels)), std::make_pair(n, size_t{6}));
+      rows += n;
+    }
+    if (name.rfind("suctionnet/000000/", 0) == 0 && name.find("_labels") == std::string::npos) {
+      const auto [n, cols] = NpyShape(bytes);
+      EXPECT_EQ(cols, 7u) << name;
+      suction_rows += n;
+    }
+  }
+  EXPECT_EQ(frames, 2u);
+  EXPECT_GT(rows, 0u);
+  EXPECT_LE(rows, 2u * 5 * 5);
+  EXPECT_GT(suction_rows, 0u);
 }
 
 TEST(Generate, CameraJitterMovesThePoseTheLabelsFollow) {

@@ -238,7 +238,8 @@ AcronymGrasps ReadAcronymFile(const std::filesystem::path& path) {
     const auto all = [&](const char* name) {
       return ReadAll<double>(file.get(), name, H5T_NATIVE_DOUBLE, path);
     };
-    const std::vector<double> points = all("suction/points"), approaches = all("suction/approaches");
+    const std::vector<double> points = all("suction/points"),
+                              approaches = all("suction/approaches");
     if (points.size() % 3 != 0 || approaches.size() != points.size())
       throw Error(path.string() + ": suction/points and suction/approaches are not M x 3");
     for (size_t i = 0; i < points.size() / 3; ++i) {

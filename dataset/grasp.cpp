@@ -1,7 +1,10 @@
 #include "dataset/grasp.h"
 
 #include <bit>
+#include <cstdio>
 #include <cstring>
+
+#include "cad/error.h"
 
 #include "dataset/bop.h"
 
@@ -52,6 +55,34 @@ std::string EncodeNpy(const float* values, size_t rows, size_t cols) {
   out.resize(start + rows * cols * sizeof(float));
   if (rows * cols > 0) std::memcpy(&out[start], values, rows * cols * sizeof(float));
   return out;
+}
+
+std::vector<float> DecodeNpy(const std::string& bytes, const std::string& origin, size_t* rows,
+                             size_t* cols) {
+  const auto fail = [&](const std::string& what) -> std::vector<float> {
+    throw Error(origin + ": " + what);
+  };
+  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0 || bytes[6] != 1)
+    return fail("not a version 1 .npy file");
+  const size_t length =
+      static_cast<uint8_t>(bytes[8]) | static_cast<size_t>(static_cast<uint8_t>(bytes[9])) << 8;
+  if (bytes.size() < 10 + length) return fail("its header is cut short");
+  const std::string header = bytes.substr(10, length);
+  if (header.find("'descr': '<f4'") == std::string::npos ||
+      header.find("'fortran_order': False") == std::string::npos)
+    return fail("not a C-order float32 array");
+  const size_t open = header.find("'shape': (");
+  if (open == std::string::npos ||
+      std::sscanf(header.c_str() + open + 10, "%zu, %zu)", rows, cols) != 2)
+    return fail("not a 2-D array");
+  if (*cols != 0 && *rows > (bytes.size() - 10 - length) / sizeof(float) / *cols)
+    return fail("its data is cut short");
+  std::vector<float> values(*rows * *cols);
+  if (bytes.size() - 10 - length != values.size() * sizeof(float))
+    return fail("its data does not match its shape");
+  if (!values.empty())
+    std::memcpy(values.data(), bytes.data() + 10 + length, bytes.size() - 10 - length);
+  return values;
 }
 
 std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points) {

@@ -21,5 +21,9 @@ std::vector<Eigen::Vector3f> BackProjectInstance(const Frame& frame, int instanc
 std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points);
 // A NumPy .npy file (format 1.0) holding `rows` x `cols` little-endian float32 values (row-major).
 std::string EncodeNpy(const float* values, size_t rows, size_t cols);
+// The values of a 2-D little-endian float32 .npy file (C order), its shape in *rows, *cols. Throws
+// Error naming `origin` for anything else.
+std::vector<float> DecodeNpy(const std::string& bytes, const std::string& origin, size_t* rows,
+                             size_t* cols);
 
 }  // namespace cadsynth

@@ -15,7 +15,8 @@ namespace {
 // The placed grasps of visible instances to write, per instance the best `max` by quality (ties
 // in list order), in instance order.
 std::vector<const PlacedGrasp*> Chosen(const Frame& frame, const std::vector<PlacedGrasp>& placed,
-                                       int max, const std::function<double(const PlacedGrasp&)>& quality) {
+                                       int max,
+                                       const std::function<double(const PlacedGrasp&)>& quality) {
   std::vector<const PlacedGrasp*> chosen;
   size_t begin = 0;
   while (begin < placed.size()) {
@@ -29,7 +30,8 @@ std::vector<const PlacedGrasp*> Chosen(const Frame& frame, const std::vector<Pla
       std::stable_sort(group.begin(), group.end(), [&](const PlacedGrasp* a, const PlacedGrasp* b) {
         return quality(*a) > quality(*b);
       });
-      if (max > 0 && group.size() > static_cast<size_t>(max)) group.resize(static_cast<size_t>(max));
+      if (max > 0 && group.size() > static_cast<size_t>(max))
+        group.resize(static_cast<size_t>(max));
       chosen.insert(chosen.end(), group.begin(), group.end());
     }
     begin = end;
@@ -69,8 +71,8 @@ bool PointSeen(const Frame& frame, int instance, const Eigen::Vector3d& p, doubl
   for (int v = v0 - 1; v <= v0 + 1; ++v) {
     for (int u = u0 - 1; u <= u0 + 1; ++u) {
       if (u < 0 || v < 0 || u >= frame.width() || v >= frame.height()) continue;
-      const size_t k = static_cast<size_t>(v) * static_cast<size_t>(frame.width()) +
-                       static_cast<size_t>(u);
+      const size_t k =
+          static_cast<size_t>(v) * static_cast<size_t>(frame.width()) + static_cast<size_t>(u);
       if (frame.instance[k] == id && std::abs(frame.depth[k] - p.z()) <= tolerance_mm) return true;
     }
   }
@@ -82,9 +84,7 @@ std::vector<float> GraspNetRows(const Frame& frame, const SceneGrasps& grasps,
   std::vector<float> rows;
   labels->clear();
   if (grasps.jaw == nullptr) return rows;
-  const auto quality = [&](const PlacedGrasp& p) {
-    return Lookup(*grasps.jaw, grasps, p).quality;
-  };
+  const auto quality = [&](const PlacedGrasp& p) { return Lookup(*grasps.jaw, grasps, p).quality; };
   for (const PlacedGrasp* placed :
        Chosen(frame, grasps.jaw_placed, options.max_per_instance, quality)) {
     const ParallelJawGrasp& g = Lookup(*grasps.jaw, grasps, *placed);
@@ -136,12 +136,12 @@ std::vector<float> SuctionNetRows(const Frame& frame, const SceneGrasps& grasps,
     rows.push_back(static_cast<float>(g.quality()));
     for (int i = 0; i < 3; ++i) rows.push_back(static_cast<float>(direction[i]));
     for (int i = 0; i < 3; ++i) rows.push_back(static_cast<float>(1e-3 * point[i]));
-    labels->insert(labels->end(),
-                   {static_cast<float>(placed->instance),
-                    static_cast<float>(ObjId(grasps, placed->instance)),
-                    placed->approach_blocked ? 1.0f : 0.0f,
-                    PointSeen(frame, placed->instance, point, options.visibility_mm) ? 1.0f : 0.0f,
-                    static_cast<float>(g.seal), static_cast<float>(g.wrench)});
+    labels->insert(
+        labels->end(),
+        {static_cast<float>(placed->instance), static_cast<float>(ObjId(grasps, placed->instance)),
+         placed->approach_blocked ? 1.0f : 0.0f,
+         PointSeen(frame, placed->instance, point, options.visibility_mm) ? 1.0f : 0.0f,
+         static_cast<float>(g.seal), static_cast<float>(g.wrench)});
   }
   return rows;
 }

@@ -44,10 +44,10 @@ bool PointSeen(const Frame& frame, int instance, const Eigen::Vector3d& p, doubl
 
 // The frame's parallel-jaw rows, graspnetAPI's GraspGroup layout, 17 float32 each: score (the
 // force-closure margin), width (m, between the contacts), height (m, the finger's width), depth
-// (m, the contacts to the fingertips, the grasp's depth), the rotation row-major (columns: approach, closing
-// direction, their cross product, in the camera frame), the translation (m, the contacts'
-// midpoint, camera frame) and the BOP obj_id. `labels` gets 6 per row: instance index (BOP
-// scene_gt order), obj_id, approach blocked (0/1), first and second contact seen (0/1), the
+// (m, the contacts to the fingertips, the grasp's depth), the rotation row-major (columns:
+// approach, closing direction, their cross product, in the camera frame), the translation (m, the
+// contacts' midpoint, camera frame) and the BOP obj_id. `labels` gets 6 per row: instance index
+// (BOP scene_gt order), obj_id, approach blocked (0/1), first and second contact seen (0/1), the
 // grasp's index in its object's ACRONYM file. Visible instances only (in instance order).
 std::vector<float> GraspNetRows(const Frame& frame, const SceneGrasps& grasps,
                                 const GraspLabelOptions& options, std::vector<float>* labels);

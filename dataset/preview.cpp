@@ -1,6 +1,7 @@
 #include "dataset/preview.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 #include "dataset/bop.h"
 #include "dataset/bop_read.h"
 #include "dataset/file_io.h"
+#include "dataset/grasp.h"
 
 namespace cadsynth {
 namespace {
@@ -61,6 +63,78 @@ Eigen::Matrix3d Matrix3(const Json& v) {
   Eigen::Matrix3d m;
   for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = v.at(i).get<double>();
   return m;
+}
+
+// The `count` best rows of a grasp file (scores in column 0) whose labels (column 2 of
+// the labels file) say the way in is free, best first; none when the files are not there.
+std::vector<const float*> BestGrasps(const fs::path& rows_path, int count, size_t want_cols,
+                                     std::vector<float>* rows, std::vector<float>* labels) {
+  const fs::path labels_path =
+      rows_path.parent_path() / (rows_path.stem().string() + "_labels.npy");
+  if (!fs::exists(rows_path) || !fs::exists(labels_path)) return {};
+  size_t n = 0, cols = 0, label_rows = 0, label_cols = 0;
+  *rows = DecodeNpy(ReadFileText(rows_path), rows_path.string(), &n, &cols);
+  *labels = DecodeNpy(ReadFileText(labels_path), labels_path.string(), &label_rows, &label_cols);
+  if (cols != want_cols || label_rows != n || label_cols < 3)
+    throw Error(rows_path.string() + ": not the grasp rows cadsynth writes");
+  std::vector<size_t> order;
+  for (size_t i = 0; i < n; ++i) {
+    if ((*labels)[i * label_cols + 2] == 0) order.push_back(i);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return (*rows)[a * cols] > (*rows)[b * cols]; });
+  if (order.size() > static_cast<size_t>(count)) order.resize(static_cast<size_t>(count));
+  std::vector<const float*> best;
+  for (size_t i : order) best.push_back(rows->data() + i * cols);
+  return best;
+}
+
+// Draws frame (scene, im)'s best grasps on `image` (see PreviewOptions::grasps), coloured from
+// red (score 0) to green (1).
+void DrawGrasps(const fs::path& dataset, int scene, int im, const Intrinsics& k, int count,
+                int thickness, cv::Mat* image) {
+  const auto colour = [](float score) {
+    const double s = std::clamp(static_cast<double>(score), 0.0, 1.0);
+    return cv::Scalar(0, 255 * s, 255 * (1 - s));
+  };
+  // A polyline of camera-frame points (m), drawn where every point is imaged.
+  const auto line = [&](const std::vector<Eigen::Vector3d>& points, const cv::Scalar& c) {
+    std::vector<cv::Point> pixels;
+    for (const Eigen::Vector3d& p : points) {
+      Eigen::Vector2d uv;
+      if (!k.Project(1e3 * p, &uv)) return;
+      pixels.emplace_back(cvRound(uv.x()), cvRound(uv.y()));
+    }
+    cv::polylines(*image, pixels, false, c, thickness, cv::LINE_AA);
+  };
+  std::vector<float> rows, labels;
+  for (const float* g : BestGrasps(dataset / "graspnet" / Id6(scene) / (Id6(im) + ".npy"), count,
+                                   17, &rows, &labels)) {
+    // GraspNet's frame: columns approach, closing, height; the contacts' midpoint t.
+    Eigen::Matrix3d r;
+    for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = g[4 + i];
+    const Eigen::Vector3d a = r.col(0), c = r.col(1), t(g[13], g[14], g[15]);
+    const double half = 0.5 * g[1], depth = g[3], back = 0.02;
+    const Eigen::Vector3d base = t - back * a;
+    line({t + half * c + depth * a, base + half * c, base - half * c, t - half * c + depth * a},
+         colour(g[0]));
+    line({base, base - 2 * back * a}, colour(g[0]));
+  }
+  for (const float* g : BestGrasps(dataset / "suctionnet" / Id6(scene) / (Id6(im) + ".npy"), count,
+                                   7, &rows, &labels)) {
+    // The rim (10 mm radius drawn) about the point, perpendicular to the direction, and the axis.
+    const Eigen::Vector3d n(g[1], g[2], g[3]), p(g[4], g[5], g[6]);
+    const Eigen::Vector3d helper =
+        std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d e1 = n.cross(helper).normalized(), e2 = n.cross(e1);
+    std::vector<Eigen::Vector3d> rim;
+    for (int i = 0; i <= 24; ++i) {
+      const double theta = 2 * M_PI * i / 24;
+      rim.push_back(p + 0.01 * (std::cos(theta) * e1 + std::sin(theta) * e2));
+    }
+    line(rim, colour(g[0]));
+    line({p, p + 0.04 * n}, colour(g[0]));
+  }
 }
 
 }  // namespace
@@ -174,8 +248,16 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_GRAYSCALE);
       masks.setTo(InstanceColour(i), mask > 0);
     }
-    // Boxes and axes (x red, y green, z blue) on the colour image.
+    // Grasp labels on a copy of the colour image, the last panel.
     const int thickness = std::max(1, rgb.cols / 320);
+    cv::Mat grasps;
+    if (options.grasps > 0 && options.sensor.empty() &&
+        (fs::exists(dataset / "graspnet" / Id6(scene)) ||
+         fs::exists(dataset / "suctionnet" / Id6(scene)))) {
+      grasps = rgb.clone();
+      DrawGrasps(dataset, scene, im, k, options.grasps, thickness, &grasps);
+    }
+    // Boxes and axes (x red, y green, z blue) on the colour image.
     for (size_t i = 0; i < gt.size(); ++i) {
       const Json& g = gt[i];
       const Json& m = info.at(std::to_string(g.at("obj_id").get<int>()));
@@ -228,6 +310,7 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       panels.push_back(ColourDepth(depth));
     }
     panels.push_back(masks);
+    if (!grasps.empty()) panels.push_back(grasps);
     const double scale = static_cast<double>(options.panel_width) / rgb.cols;
     for (cv::Mat& p : panels) {
       cv::resize(p, p, cv::Size(options.panel_width, std::max(1, cvRound(rgb.rows * scale))), 0, 0,
@@ -239,7 +322,15 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
     cv::hconcat(panels, row);
     rows.push_back(row);
   }
-  cv::Mat sheet;  // rows share the width (3 or 4 panels), heights may differ
+  // Rows of 3 to 5 panels, heights may differ: narrower rows are padded on the right.
+  int width = 0;
+  for (const cv::Mat& row : rows) width = std::max(width, row.cols);
+  for (cv::Mat& row : rows) {
+    if (row.cols < width)
+      cv::copyMakeBorder(row, row, 0, 0, 0, width - row.cols, cv::BORDER_CONSTANT,
+                         cv::Scalar::all(0));
+  }
+  cv::Mat sheet;
   cv::vconcat(rows, sheet);
   std::vector<uchar> png;
   if (!cv::imencode(".png", sheet, png)) throw Error("preview: PNG encoding failed");

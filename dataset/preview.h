@@ -22,6 +22,10 @@ struct PreviewOptions {
   std::filesystem::path versus;
   // A multi-sensor dataset's sensor (rgb_NAME/, scene_gt_NAME.json); empty: a single camera's.
   std::string sensor;
+  // Grasp labels (graspnet/, suctionnet/ beside the scenes): this many of each frame's best
+  // grasps whose way in is free, drawn on the colour image in a last panel (parallel jaws as a U of
+  // the fingers and the hand's axis, suction cups as their rim's circle and axis); 0: none.
+  int grasps = 10;
 };
 
 // The 8 corners of `box` (model frame, mm) projected with `k` at pose `cam_from_model`, in pixel

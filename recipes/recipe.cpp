@@ -1873,8 +1873,8 @@ namespace {
 // `grasps:` (see GraspSpec).
 GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
   r.ExpectMap(g, "grasps",
-              {"gripper", "friction", "samples", "approaches", "clearance", "depths", "seed", "suction",
-               "approach_distance", "per_instance", "visibility_tolerance", "formats"});
+              {"gripper", "friction", "samples", "approaches", "clearance", "depths", "seed",
+               "suction", "approach_distance", "per_instance", "visibility_tolerance", "formats"});
   GraspSpec grasps;
   grasps.enabled = true;
   std::string why;
@@ -1893,10 +1893,14 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
       if (node["preset"]) p = preset(node["preset"], "grasps.gripper.preset");
       if (node["name"]) p.name = r.Scalar(node["name"], "grasps.gripper.name");
       const std::pair<const char*, double*> lengths[] = {
-          {"max_opening", &p.max_opening_mm},     {"finger_width", &p.finger_width_mm},
-          {"finger_thickness", &p.finger_thickness_mm}, {"finger_length", &p.finger_length_mm},
-          {"palm_height", &p.palm_height_mm},     {"palm_width", &p.palm_width_mm},
-          {"palm_depth", &p.palm_depth_mm},       {"pad", &p.pad_mm}};
+          {"max_opening", &p.max_opening_mm},
+          {"finger_width", &p.finger_width_mm},
+          {"finger_thickness", &p.finger_thickness_mm},
+          {"finger_length", &p.finger_length_mm},
+          {"palm_height", &p.palm_height_mm},
+          {"palm_width", &p.palm_width_mm},
+          {"palm_depth", &p.palm_depth_mm},
+          {"pad", &p.pad_mm}};
       for (const auto& [key, value] : lengths) {
         if (node[key]) *value = r.Length(node[key], std::string("grasps.gripper.") + key);
       }
@@ -1939,10 +1943,11 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
                    "cup_length", "shaft_diameter", "shaft_length", "samples", "density"});
       SuctionCup& c = grasps.cup;
       if (node["name"]) c.name = r.Scalar(node["name"], "grasps.suction.name");
-      const std::pair<const char*, double*> lengths[] = {
-          {"diameter", &c.diameter_mm},         {"compliance", &c.compliance_mm},
-          {"cup_length", &c.cup_length_mm},     {"shaft_diameter", &c.shaft_diameter_mm},
-          {"shaft_length", &c.shaft_length_mm}};
+      const std::pair<const char*, double*> lengths[] = {{"diameter", &c.diameter_mm},
+                                                         {"compliance", &c.compliance_mm},
+                                                         {"cup_length", &c.cup_length_mm},
+                                                         {"shaft_diameter", &c.shaft_diameter_mm},
+                                                         {"shaft_length", &c.shaft_length_mm}};
       for (const auto& [key, value] : lengths) {
         if (node[key]) *value = r.Length(node[key], std::string("grasps.suction.") + key);
       }

@@ -89,6 +89,8 @@ preview    Writes a contact sheet PNG: per frame the colour image with every obj
   --width PX     width of each of the three panels (default 320)
   --versus DATASET2  another dataset of the same views (e.g. the same recipe with
                  render.mode: pbr): each row shows the two colour images side by side
+  --grasps N     with grasp labels (recipe grasps:), each frame's N best grasps whose way in
+                 is free: jaws red (score 0) to green (1), suction cups as rims (default 10)
 )";
 
 struct UsageError {
@@ -123,7 +125,7 @@ struct Args {
   std::string frames, versus;
   // eval, preview: a multi-sensor dataset's sensor
   std::string sensor;
-  int count = 4, width = 320;
+  int count = 4, width = 320, grasps = 10;
 };
 
 // This executable, to read CAD and mesh files in child processes (a reader that crashes or hangs
@@ -255,6 +257,7 @@ int RunPreview(const Args& a) {
   cadsynth::PreviewOptions options;
   options.count = a.count;
   options.panel_width = a.width;
+  options.grasps = a.grasps;
   options.versus = a.versus;
   options.sensor = a.sensor;
   std::stringstream list(a.frames);
@@ -412,6 +415,12 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   preview->add_option("--width", a.width, "width of each of the three panels in pixels")
       ->check(CLI::Range(32, 4096))
       ->type_name("PX")
+      ->capture_default_str();
+  preview
+      ->add_option("--grasps", a.grasps,
+                   "with grasp labels, each frame's N best grasps whose way in is free (0: none)")
+      ->check(CLI::Range(0, 1000))
+      ->type_name("N")
       ->capture_default_str();
   return commands;
 }

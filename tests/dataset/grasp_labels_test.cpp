@@ -19,7 +19,8 @@ Frame TestFrame() {
   f.instance.assign(100 * 80, 1);
   f.depth.assign(100 * 80, 500.0f);
   Frame::InstanceTruth t;
-  t.cam_from_model = Eigen::Translation3d(0, 0, 500) * Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ());
+  t.cam_from_model =
+      Eigen::Translation3d(0, 0, 500) * Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ());
   t.px_count_visib = 8000;
   f.instances = {t};
   return f;
@@ -29,8 +30,8 @@ Frame TestFrame() {
 ParallelJawGrasp CubeGrasp(double quality) {
   ParallelJawGrasp g;
   g.model_from_gripper.linear() << 1, 0, 0,  //
-      0, -1, 0,                             //
-      0, 0, -1;                             // x closing, z approach (down), y = z cross x
+      0, -1, 0,                              //
+      0, 0, -1;                              // x closing, z approach (down), y = z cross x
   g.model_from_gripper.translation() = Eigen::Vector3d(0, 0, 100);
   g.width_mm = 40;
   g.depth_mm = 8.8;
@@ -63,8 +64,8 @@ TEST(GraspLabels, GraspNetRowsAreTheGraspInTheCameraFrame) {
   // The camera sees the model turned 90 degrees about z: model x -> camera y, model y -> -x.
   // Approach (model -z) stays -z; closing (model x) becomes camera +y; height = approach x
   // closing = (0, 0, -1) x (0, 1, 0) = (1, 0, 0).
-  const float expected[9] = {0, 0, 1,    // row 0: x of approach, closing, height
-                             0, 1, 0,    // row 1
+  const float expected[9] = {0,  0, 1,   // row 0: x of approach, closing, height
+                             0,  1, 0,   // row 1
                              -1, 0, 0};  // row 2
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(rows[4 + k], expected[k], 1e-6) << k;
   // The contacts' midpoint: the model origin, 0.5 m in front of the camera.
@@ -92,8 +93,8 @@ TEST(GraspLabels, AContactIsSeenWhereItsInstanceShowsAtItsDepth) {
   // (10, 0, 500) projects to u = 50 + 100 x 10 / 500 = 52, v = 40: pixel (52, 40).
   EXPECT_TRUE(PointSeen(frame, 0, {10, 0, 500}, 3.0));
   EXPECT_TRUE(PointSeen(frame, 0, {10, 0, 502.5}, 3.0));
-  EXPECT_FALSE(PointSeen(frame, 0, {10, 0, 510}, 3.0));  // behind the surface seen
-  EXPECT_FALSE(PointSeen(frame, 1, {10, 0, 500}, 3.0));  // another instance's pixels
+  EXPECT_FALSE(PointSeen(frame, 0, {10, 0, 510}, 3.0));    // behind the surface seen
+  EXPECT_FALSE(PointSeen(frame, 1, {10, 0, 500}, 3.0));    // another instance's pixels
   EXPECT_FALSE(PointSeen(frame, 0, {1000, 0, 500}, 3.0));  // outside the image
   // Another instance in front over the 3 x 3 pixels around (52, 40): hidden.
   for (int v = 39; v <= 41; ++v) {

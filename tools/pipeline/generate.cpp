@@ -53,6 +53,14 @@ RunGrasps SampleGrasps(const std::vector<Part>& parts, const GraspSpec& spec,
       grasps.suction[p] = SampleSuctionGrasps(parts[p], spec.cup, suction);
     }
   });
+  if (spec.suction) {
+    for (const Part& part : parts) {
+      if (!(part.mass.volume_mm3 > 0))
+        Warn("grasps: '" + part.name +
+             "' has no known volume (an open mesh): its suction grasps are scored without its "
+             "weight");
+    }
+  }
   if (info) {
     std::ostringstream line;
     line << "grasps (" << spec.gripper.name << ", mu " << spec.sampling.friction;
@@ -62,8 +70,7 @@ RunGrasps SampleGrasps(const std::vector<Part>& parts, const GraspSpec& spec,
       line << " obj " << p + 1 << ": " << grasps.jaw[p].size();
       if (spec.suction) line << " + " << grasps.suction[p].size() << " suction";
     }
-    line << " ("
-         << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+    line << " (" << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
          << " s)";
     info(line.str());
   }
@@ -293,21 +300,24 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       }
       papers.push_back(std::make_unique<PaperSceneWriter>(root, static_cast<int>(s), spec.bop,
                                                           std::move(paper_instances)));
-      if (spec.grasps.enabled && (spec.grasps.labels.graspnet || spec.grasps.labels.suctionnet)) {
+      bool renders_here = false;  // a shard places only the grasps of scenes it renders frames of
+      for (size_t i = 0; i < views.size() && !renders_here; ++i) renders_here = owns(s, i);
+      if (spec.grasps.enabled && (spec.grasps.labels.graspnet || spec.grasps.labels.suctionnet) &&
+          renders_here) {
         const auto placing = std::chrono::steady_clock::now();
         SceneGrasps scene_grasps = PlaceSceneGrasps(parts, prepared.scenes[s], prepared.obj_ids[s],
                                                     spec.grasps, run_grasps);
         std::ostringstream line;
-        line << "scene '" << spec.scenes[s].name << "': grasps free of the scene: "
-             << scene_grasps.jaw_placed.size();
-        if (spec.grasps.labels.suctionnet) line << " + " << scene_grasps.suction_placed.size() << " suction";
+        line << "scene '" << spec.scenes[s].name
+             << "': grasps free of the scene: " << scene_grasps.jaw_placed.size();
+        if (spec.grasps.labels.suctionnet)
+          line << " + " << scene_grasps.suction_placed.size() << " suction";
         line << " ("
              << std::chrono::duration<double>(std::chrono::steady_clock::now() - placing).count()
              << " s)";
         info(line.str());
-        grasp_writers[s] = std::make_unique<GraspLabelWriter>(root, static_cast<int>(s),
-                                                              spec.grasps.labels,
-                                                              std::move(scene_grasps));
+        grasp_writers[s] = std::make_unique<GraspLabelWriter>(
+            root, static_cast<int>(s), spec.grasps.labels, std::move(scene_grasps));
       }
       std::vector<int> earlier;
       for (int id : writer.WrittenFrames()) {

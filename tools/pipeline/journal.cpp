@@ -303,9 +303,9 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
         << g.finger_thickness_mm << " " << g.finger_length_mm << " " << g.palm_height_mm << " "
         << g.palm_width_mm << " " << g.palm_depth_mm << " " << g.pad_mm << " " << a.friction << " "
         << a.samples << " " << a.approaches << " " << a.clearance_mm << " " << a.seed << " "
-        << grasps.acronym << " " << grasps.scene.approach_mm << " "
-        << grasps.labels.graspnet << " " << grasps.labels.suctionnet << " "
-        << grasps.labels.max_per_instance << " " << grasps.labels.visibility_mm << " depths";
+        << grasps.acronym << " " << grasps.scene.approach_mm << " " << grasps.labels.graspnet << " "
+        << grasps.labels.suctionnet << " " << grasps.labels.max_per_instance << " "
+        << grasps.labels.visibility_mm << " depths";
     for (const double depth : a.depths_mm) key << " " << depth;
     key << "\n";
     if (grasps.suction) {

@@ -126,9 +126,8 @@ std::vector<ToolShape> GripperShapes(const ParallelJawGripper& g, double opening
   std::vector<ToolShape> shapes;
   const double half = 0.5 * opening_mm;
   for (const double side : {-1.0, 1.0}) {
-    shapes.push_back(SlabBox(g.finger_thickness_mm, g.finger_width_mm,
-                             g.palm_height_mm - back_mm, g.tip_mm(),
-                             side * (half + 0.5 * g.finger_thickness_mm)));
+    shapes.push_back(SlabBox(g.finger_thickness_mm, g.finger_width_mm, g.palm_height_mm - back_mm,
+                             g.tip_mm(), side * (half + 0.5 * g.finger_thickness_mm)));
   }
   if (g.palm_width_mm > 0 && g.palm_depth_mm > 0 && g.palm_height_mm + back_mm > 0) {
     shapes.push_back(SlabBox(g.palm_width_mm, g.palm_depth_mm, -back_mm, g.palm_height_mm, 0.0));
@@ -141,8 +140,7 @@ std::vector<ToolShape> SuctionShapes(const SuctionCup& cup, double lift_mm, doub
   if (cup.cup_length_mm > lift_mm)
     shapes.push_back(Rod(cup.diameter_mm, -cup.cup_length_mm - back_mm, -lift_mm));
   if (cup.shaft_length_mm > 0) {
-    shapes.push_back(Rod(cup.shaft_diameter_mm,
-                         -cup.cup_length_mm - cup.shaft_length_mm - back_mm,
+    shapes.push_back(Rod(cup.shaft_diameter_mm, -cup.cup_length_mm - cup.shaft_length_mm - back_mm,
                          -cup.cup_length_mm - back_mm));
   }
   return shapes;

@@ -6,10 +6,10 @@
 #include <memory>
 #include <vector>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/collision_geometry.h>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "cad/grasp.h"
 #include "cad/mesh.h"

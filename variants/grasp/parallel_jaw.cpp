@@ -61,19 +61,18 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
   if (depths.empty()) depths.push_back(gripper.pad_mm);
   for (const double depth : depths) {
     if (!(depth >= 0 && depth <= gripper.finger_length_mm))
-      throw Error("grasps: a depth of " + std::to_string(depth) + " mm is off the " +
-                  gripper.name + "'s fingers (0 to " + std::to_string(gripper.finger_length_mm) +
-                  " mm)");
+      throw Error("grasps: a depth of " + std::to_string(depth) + " mm is off the " + gripper.name +
+                  "'s fingers (0 to " + std::to_string(gripper.finger_length_mm) + " mm)");
   }
   const double cone = std::atan(o.friction);
   std::vector<ParallelJawGrasp> grasps;
   for (int s = 0; s < o.samples; ++s) {
     const uint64_t i = static_cast<uint64_t>(s);
     size_t tri = 0;
-    const Eigen::Vector3d p1 = surface.Point(UniformDraw(o.seed, streams::kGraspPoint, (i << 2) + 0),
-                                             UniformDraw(o.seed, streams::kGraspPoint, (i << 2) + 1),
-                                             UniformDraw(o.seed, streams::kGraspPoint, (i << 2) + 2),
-                                             &tri);
+    const Eigen::Vector3d p1 =
+        surface.Point(UniformDraw(o.seed, streams::kGraspPoint, (i << 2) + 0),
+                      UniformDraw(o.seed, streams::kGraspPoint, (i << 2) + 1),
+                      UniformDraw(o.seed, streams::kGraspPoint, (i << 2) + 2), &tri);
     const Eigen::Vector3d n1 = surface.Normal(tri);
     // Closing along the inward normal; the far contact where the axis leaves the part.
     const Eigen::Vector3d x = -n1;
@@ -99,21 +98,21 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
       const Eigen::Vector3d z = std::cos(phi) * e1 + std::sin(phi) * e2;
       const Eigen::Vector3d y = z.cross(x);
       for (const double depth : depths) {
-      ParallelJawGrasp g;
-      g.model_from_gripper.linear().col(0) = x;
-      g.model_from_gripper.linear().col(1) = y;
-      g.model_from_gripper.linear().col(2) = z;
-      g.model_from_gripper.translation() = centre - (gripper.tip_mm() - depth) * z;
-      if (collides(g.model_from_gripper, opening)) continue;
-      g.width_mm = width;
-      g.opening_mm = opening;
-      g.depth_mm = depth;
-      g.contacts[0] = p1;
-      g.contacts[1] = p2;
-      g.normals[0] = n1;
-      g.normals[1] = n2;
-      g.quality = 1.0 - angle / cone;
-      grasps.push_back(g);
+        ParallelJawGrasp g;
+        g.model_from_gripper.linear().col(0) = x;
+        g.model_from_gripper.linear().col(1) = y;
+        g.model_from_gripper.linear().col(2) = z;
+        g.model_from_gripper.translation() = centre - (gripper.tip_mm() - depth) * z;
+        if (collides(g.model_from_gripper, opening)) continue;
+        g.width_mm = width;
+        g.opening_mm = opening;
+        g.depth_mm = depth;
+        g.contacts[0] = p1;
+        g.contacts[1] = p2;
+        g.normals[0] = n1;
+        g.normals[1] = n2;
+        g.quality = 1.0 - angle / cone;
+        grasps.push_back(g);
       }
     }
   }

@@ -13,9 +13,9 @@
 namespace cadsynth {
 
 struct AntipodalOptions {
-  double friction = 0.5;      // Coulomb's mu at the contacts
-  int samples = 2000;         // surface points tried
-  int approaches = 8;         // approach directions tried about each contact pair's axis
+  double friction = 0.5;  // Coulomb's mu at the contacts
+  int samples = 2000;     // surface points tried
+  int approaches = 8;     // approach directions tried about each contact pair's axis
   // The fingers open to the grasp's width plus this on each side (within the gripper's maximum),
   // as a controller opens them before closing.
   double clearance_mm = 5.0;
@@ -31,9 +31,9 @@ struct AntipodalOptions {
 // area, the closing axis along its inward normal, the part's far side where the axis leaves it
 // (the second contact), kept when the second contact's normal lies inside the friction cone about
 // the axis, the width plus twice the clearance is within the opening, and the gripper, opened to
-// that, is free of the part at that approach (FCL: the part's triangles against the palm's and fingers' boxes).
-// Same options, same grasps, in the order sampled. Throws Error for impossible options or a part
-// without triangles.
+// that, is free of the part at that approach (FCL: the part's triangles against the palm's and
+// fingers' boxes). Same options, same grasps, in the order sampled. Throws Error for impossible
+// options or a part without triangles.
 std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
                                                     const ParallelJawGripper& gripper,
                                                     const AntipodalOptions& options);

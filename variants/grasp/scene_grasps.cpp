@@ -42,8 +42,10 @@ class SceneCollider {
     }
     std::vector<fcl::CollisionObjectd*> pointers;
     for (const auto& object : objects_) pointers.push_back(object.get());
-    manager_.registerObjects(pointers);
-    manager_.setup();
+    if (!pointers.empty()) {
+      manager_.registerObjects(pointers);
+      manager_.setup();
+    }
   }
 
   // Whether any of `tool`'s shapes at world_from_tool hits an obstacle other than instance
@@ -76,8 +78,8 @@ class SceneCollider {
     Query& query = *static_cast<Query*>(data);
     if (query.hit) return true;
     // One of the two is the tool (no user data); the other the obstacle.
-    const intptr_t tag = reinterpret_cast<intptr_t>(a->getUserData()) +
-                         reinterpret_cast<intptr_t>(b->getUserData());
+    const intptr_t tag =
+        reinterpret_cast<intptr_t>(a->getUserData()) + reinterpret_cast<intptr_t>(b->getUserData());
     if (query.skip > 0 && tag == query.skip) return false;
     fcl::CollisionRequestd request;
     fcl::CollisionResultd result;

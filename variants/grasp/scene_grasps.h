@@ -14,7 +14,7 @@ namespace cadsynth {
 
 // What a tool may hit, in the world frame (mm). The pointers must outlive the call.
 struct GraspObstacles {
-  bool floor = true;  // the half-space z <= 0
+  bool floor = true;                  // the half-space z <= 0
   std::vector<const Mesh*> fixtures;  // world-frame meshes: totes, distractors
   struct Body {
     const Mesh* mesh = nullptr;  // in its model frame

@@ -12,8 +12,8 @@
 namespace cadsynth {
 
 struct SuctionOptions {
-  int samples = 2000;            // surface points tried
-  double density_kg_m3 = 7850;   // the part's mass = density x its volume (steel by default)
+  int samples = 2000;           // surface points tried
+  double density_kg_m3 = 7850;  // the part's mass = density x its volume (steel by default)
   double gravity_m_s2 = 9.80665;
   uint64_t seed = 0;
 
@@ -30,7 +30,9 @@ struct SuctionOptions {
 // stretch / cup.stretch). Wrench: the part hanging under the cup with a vertical, weight
 // F = m g, moment M = F |com - c projected off a|; the rim stays pressed while
 // F + 2 M / r < V = vacuum x pi r^2, and the score is 1 - (F + 2 M / r) / V. Kept when both
-// scores are above 0. Throws Error for impossible options or a part without triangles.
+// scores are above 0. A part whose volume is unknown (an open mesh, MassProperties volume 0) has
+// no weight here: every wrench score is 1 (the pipeline warns). Throws Error for impossible
+// options or a part without triangles.
 std::vector<SuctionGrasp> SampleSuctionGrasps(const Part& part, const SuctionCup& cup,
                                               const SuctionOptions& options);
 

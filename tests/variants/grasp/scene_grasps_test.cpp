@@ -177,8 +177,7 @@ TEST(SceneGrasps, SuctionCupsAreKeptWhereTheToolIsFree) {
   const SuctionCup cup;
   SuctionOptions o;
   o.samples = 400;
-  std::vector<std::vector<SuctionGrasp>> grasps = {SampleSuctionGrasps(scene.parts[0], cup, o),
-                                                   {}};
+  std::vector<std::vector<SuctionGrasp>> grasps = {SampleSuctionGrasps(scene.parts[0], cup, o), {}};
   SceneGraspOptions options;
   const std::vector<PlacedGrasp> placed = PlaceSuctionGrasps(scene.obstacles, grasps, cup, options);
   int top = 0;
@@ -204,9 +203,9 @@ TEST(SceneGrasps, BadInputIsRefused) {
   const TestScene scene;
   SceneGraspOptions options;
   options.approach_mm = -1;
-  EXPECT_THROW(PlaceParallelJawGrasps(scene.obstacles, {{}, {}}, ParallelJawGripper::Franka(),
-                                      options),
-               Error);
+  EXPECT_THROW(
+      PlaceParallelJawGrasps(scene.obstacles, {{}, {}}, ParallelJawGripper::Franka(), options),
+      Error);
   // An instance naming a part without a grasp list.
   EXPECT_THROW(PlaceParallelJawGrasps(scene.obstacles, {{}}, ParallelJawGripper::Franka(),
                                       SceneGraspOptions{}),

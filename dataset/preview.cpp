@@ -65,8 +65,10 @@ Eigen::Matrix3d Matrix3(const Json& v) {
   return m;
 }
 
-// The `count` best rows of a grasp file (scores in column 0) whose labels (column 2 of
-// the labels file) say the way in is free, best first; none when the files are not there.
+// Up to `count` rows of a grasp file whose labels (column 2 of the labels file) say the way in is
+// free, spread over the instances (labels column 0): each instance's best first (scores in
+// column 0), the instances in order of their best, then each one's second best, and so on. None
+// when the files are not there.
 std::vector<const float*> BestGrasps(const fs::path& rows_path, int count, size_t want_cols,
                                      std::vector<float>* rows, std::vector<float>* labels) {
   const fs::path labels_path =
@@ -77,15 +79,29 @@ std::vector<const float*> BestGrasps(const fs::path& rows_path, int count, size_
   *labels = DecodeNpy(ReadFileText(labels_path), labels_path.string(), &label_rows, &label_cols);
   if (cols != want_cols || label_rows != n || label_cols < 3)
     throw Error(rows_path.string() + ": not the grasp rows cadsynth writes");
-  std::vector<size_t> order;
+  const auto score = [&](size_t i) { return (*rows)[i * cols]; };
+  std::map<float, std::vector<size_t>> by_instance;
   for (size_t i = 0; i < n; ++i) {
-    if ((*labels)[i * label_cols + 2] == 0) order.push_back(i);
+    if ((*labels)[i * label_cols + 2] == 0) by_instance[(*labels)[i * label_cols]].push_back(i);
   }
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return (*rows)[a * cols] > (*rows)[b * cols]; });
-  if (order.size() > static_cast<size_t>(count)) order.resize(static_cast<size_t>(count));
+  std::vector<std::vector<size_t>> groups;
+  for (auto& [instance, group] : by_instance) {
+    std::stable_sort(group.begin(), group.end(),
+                     [&](size_t a, size_t b) { return score(a) > score(b); });
+    groups.push_back(std::move(group));
+  }
+  std::stable_sort(groups.begin(), groups.end(),
+                   [&](const auto& a, const auto& b) { return score(a[0]) > score(b[0]); });
   std::vector<const float*> best;
-  for (size_t i : order) best.push_back(rows->data() + i * cols);
+  for (size_t round = 0; best.size() < static_cast<size_t>(count); ++round) {
+    bool any = false;
+    for (const auto& group : groups) {
+      if (round >= group.size() || best.size() >= static_cast<size_t>(count)) continue;
+      best.push_back(rows->data() + group[round] * cols);
+      any = true;
+    }
+    if (!any) break;
+  }
   return best;
 }
 

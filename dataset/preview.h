@@ -22,8 +22,9 @@ struct PreviewOptions {
   std::filesystem::path versus;
   // A multi-sensor dataset's sensor (rgb_NAME/, scene_gt_NAME.json); empty: a single camera's.
   std::string sensor;
-  // Grasp labels (graspnet/, suctionnet/ beside the scenes): this many of each frame's best
-  // grasps whose way in is free, drawn on the colour image in a last panel (parallel jaws as a U of
+  // Grasp labels (graspnet/, suctionnet/ beside the scenes): this many of each frame's grasps
+  // whose way in is free (spread over the instances, each one's best first), drawn on the colour
+  // image in a last panel (parallel jaws as a U of
   // the fingers and the hand's axis, suction cups as their rim's circle and axis); 0: none.
   int grasps = 10;
 };

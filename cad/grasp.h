@@ -31,6 +31,7 @@ struct ParallelJawGripper {
   double pad_mm = 8.8;
 
   bool Check(std::string* why) const;
+  bool operator==(const ParallelJawGripper&) const = default;
   double tip_mm() const { return palm_height_mm + finger_length_mm; }
 
   // The Franka Emika hand of ACRONYM and 6-DOF GraspNet (NVlabs/acronym's gripper marker and
@@ -74,9 +75,10 @@ struct ParallelJawGrasp {
   double depth_mm = 0;          // the fingertips' reach past the contacts along the approach
   Eigen::Vector3d contacts[2];  // model frame, mm
   Eigen::Vector3d normals[2];   // outward surface normals at the contacts
-  // The force-closure margin: 1 - (angle between the closing axis and the second contact's
-  // inward normal) / atan(mu); the first contact's normal is the axis itself (angle 0). 1: the
-  // two normals are exactly opposite; 0: on the edge of the friction cone.
+  // The force-closure margin: 1 - angle / atan(mu), the angle between the closing axis (from the
+  // first contact to the second) and the second contact's outward normal; the first contact's
+  // inward normal is the axis itself (angle 0). 1: the two normals are exactly opposite; 0: on
+  // the edge of the friction cone.
   double quality = 0;
 };
 
@@ -92,6 +94,9 @@ struct SuctionGrasp {
   // 1 - (m g + 2 M / a) / V, M the moment of the weight about the contact, a the cup's radius;
   // above 0 the rim stays pressed all round (see README, "Suction").
   double wrench = 0;
+  // The rim's highest point above `point` towards the cup (mm; 0 on a flat face): the cup's body
+  // clears the part from there up.
+  double rim_height_mm = 0;
   double quality() const { return seal * wrench; }
 };
 

@@ -250,6 +250,9 @@ AcronymGrasps ReadAcronymFile(const std::filesystem::path& path) {
     }
     g.suction_seal = all("suction/qualities/seal");
     g.suction_wrench = all("suction/qualities/wrench");
+    if (g.suction_seal.size() != g.suction_points_mm.size() ||
+        g.suction_wrench.size() != g.suction_points_mm.size())
+      throw Error(path.string() + ": one seal and wrench score per suction point needed");
     g.cup_diameter_mm = 1e3 * scalar("suction/cup_diameter");
     g.cup_vacuum_kpa = 1e-3 * scalar("suction/vacuum");
   }

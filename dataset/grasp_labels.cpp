@@ -66,6 +66,8 @@ bool GraspLabelOptions::Check(std::string* why) const {
 bool PointSeen(const Frame& frame, int instance, const Eigen::Vector3d& p, double tolerance_mm) {
   Eigen::Vector2d uv;
   if (!frame.camera.intrinsics.Project(p, &uv)) return false;
+  if (!(uv.x() > -2 && uv.y() > -2 && uv.x() < frame.width() + 2 && uv.y() < frame.height() + 2))
+    return false;  // outside the image (and no int overflow below)
   const int u0 = static_cast<int>(std::floor(uv.x())), v0 = static_cast<int>(std::floor(uv.y()));
   const uint16_t id = static_cast<uint16_t>(instance + 1);
   for (int v = v0 - 1; v <= v0 + 1; ++v) {
@@ -99,7 +101,7 @@ std::vector<float> GraspNetRows(const Frame& frame, const SceneGrasps& grasps,
     const Eigen::Vector3d c1 = cam_from_model * g.contacts[1];
     const Eigen::Vector3d t = 0.5e-3 * (c0 + c1);
     rows.push_back(static_cast<float>(g.quality));
-    rows.push_back(static_cast<float>(1e-3 * g.width_mm));
+    rows.push_back(static_cast<float>(1e-3 * g.opening_mm));
     rows.push_back(static_cast<float>(1e-3 * grasps.gripper.finger_width_mm));
     rows.push_back(static_cast<float>(1e-3 * g.depth_mm));
     for (int i = 0; i < 3; ++i) {

@@ -43,7 +43,8 @@ struct SceneGrasps {
 bool PointSeen(const Frame& frame, int instance, const Eigen::Vector3d& p, double tolerance_mm);
 
 // The frame's parallel-jaw rows, graspnetAPI's GraspGroup layout, 17 float32 each: score (the
-// force-closure margin), width (m, between the contacts), height (m, the finger's width), depth
+// force-closure margin), width (m, the fingers' opening the grasp was checked free with: the
+// contacts' distance plus the clearance on each side), height (m, the finger's width), depth
 // (m, the contacts to the fingertips, the grasp's depth), the rotation row-major (columns:
 // approach, closing direction, their cross product, in the camera frame), the translation (m, the
 // contacts' midpoint, camera frame) and the BOP obj_id. `labels` gets 6 per row: instance index

@@ -1965,13 +1965,16 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
   grasps.suction_sampling.seed = s.seed;
   if (g["approach_distance"])
     grasps.scene.approach_mm = r.Length(g["approach_distance"], "grasps.approach_distance");
-  if (!grasps.scene.Check(&why)) r.Fail(g["approach_distance"], "grasps", why);
+  if (!grasps.scene.Check(&why)) r.Fail(g["approach_distance"], "grasps.approach_distance", why);
   GraspLabelOptions& labels = grasps.labels;
-  if (g["per_instance"])
-    labels.max_per_instance = r.Integer(g["per_instance"], "grasps.per_instance");
-  if (g["visibility_tolerance"])
-    labels.visibility_mm = r.Length(g["visibility_tolerance"], "grasps.visibility_tolerance");
-  if (!labels.Check(&why)) r.Fail(g, "grasps", why);
+  if (const YAML::Node n = g["per_instance"]) {
+    labels.max_per_instance = r.Integer(n, "grasps.per_instance");
+    if (!labels.Check(&why)) r.Fail(n, "grasps.per_instance", why);
+  }
+  if (const YAML::Node n = g["visibility_tolerance"]) {
+    labels.visibility_mm = r.Length(n, "grasps.visibility_tolerance");
+    if (!labels.Check(&why)) r.Fail(n, "grasps.visibility_tolerance", why);
+  }
   labels.graspnet = true;
   labels.suctionnet = grasps.suction;
   if (const YAML::Node formats = g["formats"]) {

@@ -26,14 +26,17 @@ Frame TestFrame() {
   return f;
 }
 
-// A grasp across a 40 mm cube's x faces (model frame), approaching along -z from above the top.
+// A grasp of the Franka hand across a 40 mm cube's x faces (model frame), approaching along -z
+// from above: the contacts' midpoint (the origin) lies tip - depth = 112.2 - 8.8 = 103.4 mm from
+// the hand's base along the approach.
 ParallelJawGrasp CubeGrasp(double quality) {
   ParallelJawGrasp g;
   g.model_from_gripper.linear() << 1, 0, 0,  //
       0, -1, 0,                              //
       0, 0, -1;                              // x closing, z approach (down), y = z cross x
-  g.model_from_gripper.translation() = Eigen::Vector3d(0, 0, 100);
+  g.model_from_gripper.translation() = Eigen::Vector3d(0, 0, 103.4);
   g.width_mm = 40;
+  g.opening_mm = 50;
   g.depth_mm = 8.8;
   g.contacts[0] = Eigen::Vector3d(-20, 0, 0);
   g.contacts[1] = Eigen::Vector3d(20, 0, 0);
@@ -58,7 +61,7 @@ TEST(GraspLabels, GraspNetRowsAreTheGraspInTheCameraFrame) {
   ASSERT_EQ(labels.size(), 2u * 6);
   EXPECT_FLOAT_EQ(rows[0], 0.9f);
   EXPECT_FLOAT_EQ(rows[17], 0.7f);
-  EXPECT_FLOAT_EQ(rows[1], 0.040f);   // width, m
+  EXPECT_FLOAT_EQ(rows[1], 0.050f);   // width: the opening checked, m
   EXPECT_FLOAT_EQ(rows[2], 0.020f);   // height: the Franka finger's width
   EXPECT_FLOAT_EQ(rows[3], 0.0088f);  // depth
   // The camera sees the model turned 90 degrees about z: model x -> camera y, model y -> -x.
@@ -68,7 +71,14 @@ TEST(GraspLabels, GraspNetRowsAreTheGraspInTheCameraFrame) {
                              0,  1, 0,   // row 1
                              -1, 0, 0};  // row 2
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(rows[4 + k], expected[k], 1e-6) << k;
-  // The contacts' midpoint: the model origin, 0.5 m in front of the camera.
+  // The contacts' midpoint: the model origin, 0.5 m in front of the camera; the hand's base lies
+  // 103.4 mm back along the approach from it.
+  const Eigen::Isometry3d cam_from_gripper =
+      frame.instances[0].cam_from_model * jaw[0][1].model_from_gripper;
+  EXPECT_NEAR((cam_from_gripper.translation() + 103.4 * cam_from_gripper.linear().col(2) -
+               Eigen::Vector3d(0, 0, 500))
+                  .norm(),
+              0.0, 1e-9);
   EXPECT_NEAR(rows[13], 0.0, 1e-7);
   EXPECT_NEAR(rows[14], 0.0, 1e-7);
   EXPECT_NEAR(rows[15], 0.5, 1e-7);

@@ -1044,7 +1044,7 @@ TEST(Recipe, GraspsSectionReadsGrippersCupsAndFormats) {
             "r.yaml:1:19: grasps.gripper: pad must lie on the finger (0 to finger_length below "
             "the tip)");
   EXPECT_EQ(ErrorOf("grasps: {per_instance: -1}\n"),
-            "r.yaml:1:9: grasps: per_instance must be 0 (all) to 1,000,000");
+            "r.yaml:1:24: grasps.per_instance: per_instance must be 0 (all) to 1,000,000");
 }
 
 TEST(Recipe, RandomizeErrorsPointAtTheKey) {

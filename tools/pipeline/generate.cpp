@@ -86,7 +86,10 @@ void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>&
     std::snprintf(id, sizeof(id), "%06zu", p + 1);
     AcronymGrasps file;
     file.object_file = std::string("models/obj_") + id + ".ply";
-    file.gripper = spec.gripper.name == "franka" ? "panda" : spec.gripper.name;
+    // ACRONYM names the Franka hand "panda"; a hand of other sizes keeps its own name.
+    ParallelJawGripper franka = ParallelJawGripper::Franka();
+    franka.name = spec.gripper.name;
+    file.gripper = spec.gripper == franka ? "panda" : spec.gripper.name;
     file.gripper_configuration = 0.5e-3 * spec.gripper.max_opening_mm;
     file.friction = spec.sampling.friction;
     file.volume_m3 = parts[p].mass.volume_mm3 * 1e-9;
@@ -197,6 +200,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   }
   if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
   if (!spec.bop.Check(&why)) throw Error("output: " + why);
+  if (spec.grasps.enabled && spec.grasps.labels.suctionnet && !spec.grasps.suction)
+    throw Error("grasps: the suctionnet format needs a suction cup (grasps.suction)");
   CheckLimits(spec);  // a RunSpec built in code has not been through the recipe reader
 
   std::optional<PartCache> cache;

@@ -141,7 +141,7 @@ std::vector<ToolShape> SuctionShapes(const SuctionCup& cup, double lift_mm, doub
     shapes.push_back(Rod(cup.diameter_mm, -cup.cup_length_mm - back_mm, -lift_mm));
   if (cup.shaft_length_mm > 0) {
     shapes.push_back(Rod(cup.shaft_diameter_mm, -cup.cup_length_mm - cup.shaft_length_mm - back_mm,
-                         -cup.cup_length_mm - back_mm));
+                         -cup.cup_length_mm));
   }
   return shapes;
 }

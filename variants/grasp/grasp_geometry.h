@@ -63,6 +63,9 @@ struct ToolShape {
 std::vector<ToolShape> GripperShapes(const ParallelJawGripper& gripper, double opening_mm,
                                      double back_mm = 0);
 
+// How far above the rim's highest point the suction tool's body is checked against its own part.
+inline constexpr double kRimClearanceMm = 0.5;
+
 // The suction tool in the frame of its contact (origin at the cup's centre on the surface, +z the
 // approach): the cup, a cylinder from z = -cup_length to -lift_mm, and the shaft behind it, each
 // stretched back_mm further along -z.

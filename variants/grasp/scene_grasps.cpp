@@ -178,14 +178,17 @@ std::vector<PlacedGrasp> PlaceSuctionGrasps(
   CheckOptions(options);
   std::string why;
   if (!cup.Check(&why)) throw Error("suction cup '" + cup.name + "': " + why);
-  // At the grasp the cup's rim touches its own part: the others are tested from the rim up. On
-  // the way in, the tool starts clear of the sealed rim (compliance + 0.5 mm above the contact)
-  // and is tested against its own part too.
-  const std::vector<grasp_detail::ToolShape> at = grasp_detail::SuctionShapes(cup, 0.0);
-  const std::vector<grasp_detail::ToolShape> in =
-      grasp_detail::SuctionShapes(cup, cup.compliance_mm + 0.5, options.approach_mm);
+  // At the grasp the cup's rim touches its own part: the others are tested from the rim up (the
+  // sampler checked its own part). On the way in, the tool starts clear of the sealed rim (its
+  // highest point + 0.5 mm) and is tested against its own part too.
+  // Shapes are built per grasp: FCL writes a shape's bounding box when an object is made of it,
+  // so threads must not share them.
   return Place(scene, part_grasps, options.approach_mm, ModelFromSuctionTool,
-               [&](const SuctionGrasp&, double back) { return back > 0 ? in : at; });
+               [&](const SuctionGrasp& g, double back) {
+                 return back > 0 ? grasp_detail::SuctionShapes(
+                                       cup, g.rim_height_mm + grasp_detail::kRimClearanceMm, back)
+                                 : grasp_detail::SuctionShapes(cup, 0.0);
+               });
 }
 
 }  // namespace cadsynth

@@ -3,18 +3,23 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/collision_object.h>
+
 #include "cad/error.h"
 #include "cad/random.h"
 #include "variants/grasp/grasp_geometry.h"
+#include "variants/grasp/scene_grasps.h"
 
 namespace cadsynth {
 
 namespace {
 
 // The seal score of the cup at c approaching along a on the mesh behind `rays` (see
-// SampleSuctionGrasps); `reach` is a distance from c that clears the part.
+// SampleSuctionGrasps); `reach` is a distance from c that clears the part. *rim_height: the
+// rim's highest hit above c towards the cup.
 double Seal(const grasp_detail::MeshRays& rays, const SuctionCup& cup, const Eigen::Vector3d& c,
-            const Eigen::Vector3d& a, double reach) {
+            const Eigen::Vector3d& a, double reach, double* rim_height) {
   double t = 0;
   size_t triangle = 0;
   // c must be the first surface the approach meets.
@@ -41,6 +46,7 @@ double Seal(const grasp_detail::MeshRays& rays, const SuctionCup& cup, const Eig
     hx += 2.0 / n * height[static_cast<size_t>(i)] * std::cos(theta);
     hy += 2.0 / n * height[static_cast<size_t>(i)] * std::sin(theta);
   }
+  *rim_height = std::max(0.0, *std::max_element(height.begin(), height.end()));
   double off_plane = 0;
   for (int i = 0; i < n; ++i) {
     const double theta = 2 * M_PI * i / n;
@@ -90,7 +96,8 @@ double SuctionSeal(const Part& part, const SuctionCup& cup, const Eigen::Vector3
                    const Eigen::Vector3d& a) {
   CheckInputs(part, cup);
   const grasp_detail::MeshRays rays(part.mesh);
-  return Seal(rays, cup, c, a.normalized(), Reach(part.mesh));
+  double rim_height = 0;
+  return Seal(rays, cup, c, a.normalized(), Reach(part.mesh), &rim_height);
 }
 
 std::vector<SuctionGrasp> SampleSuctionGrasps(const Part& part, const SuctionCup& cup,
@@ -101,6 +108,8 @@ std::vector<SuctionGrasp> SampleSuctionGrasps(const Part& part, const SuctionCup
   const grasp_detail::SurfaceSampler surface(part.mesh);
   if (!(surface.area() > 0)) throw Error("suction: part '" + part.name + "' has no area");
   const grasp_detail::MeshRays rays(part.mesh);
+  const fcl::CollisionObjectd part_object(grasp_detail::FclMesh(part.mesh),
+                                          fcl::Transform3d::Identity());
   const double reach = Reach(part.mesh);
   const double weight = o.density_kg_m3 * part.mass.volume_mm3 * 1e-9 * o.gravity_m_s2;  // N
   const double vacuum = cup.vacuum_force_n();
@@ -114,8 +123,22 @@ std::vector<SuctionGrasp> SampleSuctionGrasps(const Part& part, const SuctionCup
                       UniformDraw(o.seed, streams::kSuctionPoint, (i << 2) + 1),
                       UniformDraw(o.seed, streams::kSuctionPoint, (i << 2) + 2), &tri);
     const Eigen::Vector3d a = -surface.Normal(tri);
-    const double seal = Seal(rays, cup, c, a, reach);
+    double rim_height = 0;
+    const double seal = Seal(rays, cup, c, a, reach, &rim_height);
     if (!(seal > 0)) continue;
+    // The cup's body, from just above the rim up, and the shaft must be free of the part (a pin
+    // or a wall inside or beside the rim).
+    const Eigen::Isometry3d model_from_tool = ModelFromSuctionTool({c, a});
+    bool hits = false;
+    for (const grasp_detail::ToolShape& shape :
+         grasp_detail::SuctionShapes(cup, rim_height + grasp_detail::kRimClearanceMm)) {
+      const fcl::CollisionObjectd object(shape.shape, model_from_tool * shape.pose);
+      fcl::CollisionRequestd request;
+      fcl::CollisionResultd result;
+      fcl::collide(&part_object, &object, request, result);
+      hits = hits || result.isCollision();
+    }
+    if (hits) continue;
     const Eigen::Vector3d r = part.mass.center_of_mass - c;
     const double arm_m = 1e-3 * (r - r.dot(a) * a).norm();
     const double wrench = 1.0 - (weight + 2.0 * weight * arm_m / radius_m) / vacuum;
@@ -125,6 +148,7 @@ std::vector<SuctionGrasp> SampleSuctionGrasps(const Part& part, const SuctionCup
     g.approach = a;
     g.seal = seal;
     g.wrench = wrench;
+    g.rim_height_mm = rim_height;
     grasps.push_back(g);
   }
   return grasps;

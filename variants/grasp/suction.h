@@ -27,7 +27,8 @@ struct SuctionOptions {
 // every rim ray hits the part, the hits lie within compliance_mm of their least-squares plane and
 // no perimeter spring (between neighbouring hits, rest length 2 r sin(pi / n)) stretches or
 // shrinks by more than `stretch`; its seal score is 1 - max(plane distance / compliance,
-// stretch / cup.stretch). Wrench: the part hanging under the cup with a vertical, weight
+// stretch / cup.stretch), and the cup's body (from 0.5 mm above the rim's highest hit) and shaft
+// must be free of the part (FCL). Wrench: the part hanging under the cup with a vertical, weight
 // F = m g, moment M = F |com - c projected off a|; the rim stays pressed while
 // F + 2 M / r < V = vacuum x pi r^2, and the score is 1 - (F + 2 M / r) / V. Kept when both
 // scores are above 0. A part whose volume is unknown (an open mesh, MassProperties volume 0) has

@@ -1872,9 +1872,10 @@ namespace {
 
 // `grasps:` (see GraspSpec).
 GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
-  r.ExpectMap(g, "grasps",
-              {"gripper", "friction", "samples", "approaches", "clearance", "depths", "seed",
-               "suction", "approach_distance", "per_instance", "visibility_tolerance", "formats"});
+  r.ExpectMap(
+      g, "grasps",
+      {"gripper", "friction", "samples", "per_part", "approaches", "clearance", "depths", "seed",
+       "suction", "approach_distance", "per_instance", "visibility_tolerance", "formats"});
   GraspSpec grasps;
   grasps.enabled = true;
   std::string why;
@@ -1912,6 +1913,7 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
   AntipodalOptions& s = grasps.sampling;
   if (g["friction"]) s.friction = r.Number(g["friction"], "grasps.friction");
   if (g["samples"]) s.samples = r.Integer(g["samples"], "grasps.samples");
+  if (g["per_part"]) s.max_grasps = r.Integer(g["per_part"], "grasps.per_part");
   if (g["approaches"]) s.approaches = r.Integer(g["approaches"], "grasps.approaches");
   if (g["clearance"]) s.clearance_mm = r.Length(g["clearance"], "grasps.clearance");
   if (const YAML::Node depths = g["depths"]) {
@@ -1963,6 +1965,7 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
     }
   }
   grasps.suction_sampling.seed = s.seed;
+  grasps.suction_sampling.max_grasps = s.max_grasps;
   if (g["approach_distance"])
     grasps.scene.approach_mm = r.Length(g["approach_distance"], "grasps.approach_distance");
   if (!grasps.scene.Check(&why)) r.Fail(g["approach_distance"], "grasps.approach_distance", why);

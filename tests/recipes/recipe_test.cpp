@@ -1013,6 +1013,7 @@ TEST(Recipe, GraspsSectionReadsGrippersCupsAndFormats) {
       "  gripper: {preset: franka, name: wide, max_opening: 12 cm, pad: 5}\n"
       "  suction: {diameter: 30, vacuum: 60, density: 2700, samples: 50}\n"
       "  approach_distance: 80\n"
+      "  per_part: 500\n"
       "  per_instance: 0\n"
       "  formats: [suctionnet]\n",
       "r.yaml", ".");
@@ -1027,6 +1028,8 @@ TEST(Recipe, GraspsSectionReadsGrippersCupsAndFormats) {
   EXPECT_EQ(g.suction_sampling.density_kg_m3, 2700.0);
   EXPECT_EQ(g.suction_sampling.samples, 50);
   EXPECT_EQ(g.scene.approach_mm, 80.0);
+  EXPECT_EQ(g.sampling.max_grasps, 500);
+  EXPECT_EQ(g.suction_sampling.max_grasps, 500);
   EXPECT_EQ(g.labels.max_per_instance, 0);
   EXPECT_FALSE(g.acronym);
   EXPECT_FALSE(g.labels.graspnet);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 
@@ -25,6 +26,8 @@ bool AntipodalOptions::Check(std::string* why) const {
     *why = "clearance must lie in [0, 1000] mm";
   } else if (depths_mm.size() > 64) {
     *why = "at most 64 depths";
+  } else if (max_grasps < 0) {
+    *why = "the number of grasps per part must not be negative";
   } else {
     return true;
   }
@@ -66,7 +69,8 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
   }
   const double cone = std::atan(o.friction);
   std::vector<ParallelJawGrasp> grasps;
-  for (int s = 0; s < o.samples; ++s) {
+  const size_t cap = o.max_grasps > 0 ? static_cast<size_t>(o.max_grasps) : SIZE_MAX;
+  for (int s = 0; s < o.samples && grasps.size() < cap; ++s) {
     const uint64_t i = static_cast<uint64_t>(s);
     size_t tri = 0;
     const Eigen::Vector3d p1 =
@@ -113,6 +117,7 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
         g.normals[1] = n2;
         g.quality = 1.0 - angle / cone;
         grasps.push_back(g);
+        if (grasps.size() >= cap) return grasps;
       }
     }
   }

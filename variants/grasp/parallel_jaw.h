@@ -22,6 +22,9 @@ struct AntipodalOptions {
   // Grasp depths: how far the fingertips reach past the contacts (GraspNet samples 10 to 40 mm).
   // Each contact pair and approach is tried at each; empty: the gripper's pad_mm only.
   std::vector<double> depths_mm;
+  // Stop once this many grasps are kept (0: no limit): the first in sampling order, a uniform
+  // subset of what all the samples would give.
+  int max_grasps = 0;
   uint64_t seed = 0;
 
   bool Check(std::string* why) const;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/collision_object.h>
@@ -86,6 +87,8 @@ bool SuctionOptions::Check(std::string* why) const {
     *why = "density must lie in (0, 100000] kg/m^3";
   } else if (!(gravity_m_s2 >= 0 && gravity_m_s2 <= 1000)) {
     *why = "gravity must lie in [0, 1000] m/s^2";
+  } else if (max_grasps < 0) {
+    *why = "the number of grasps per part must not be negative";
   } else {
     return true;
   }
@@ -115,7 +118,8 @@ std::vector<SuctionGrasp> SampleSuctionGrasps(const Part& part, const SuctionCup
   const double vacuum = cup.vacuum_force_n();
   const double radius_m = 1e-3 * cup.radius_mm();
   std::vector<SuctionGrasp> grasps;
-  for (int s = 0; s < o.samples; ++s) {
+  const size_t cap = o.max_grasps > 0 ? static_cast<size_t>(o.max_grasps) : SIZE_MAX;
+  for (int s = 0; s < o.samples && grasps.size() < cap; ++s) {
     const uint64_t i = static_cast<uint64_t>(s);
     size_t tri = 0;
     const Eigen::Vector3d c =

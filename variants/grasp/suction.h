@@ -15,6 +15,7 @@ struct SuctionOptions {
   int samples = 2000;           // surface points tried
   double density_kg_m3 = 7850;  // the part's mass = density x its volume (steel by default)
   double gravity_m_s2 = 9.80665;
+  int max_grasps = 0;  // stop once this many are kept (0: no limit)
   uint64_t seed = 0;
 
   bool Check(std::string* why) const;

@@ -81,6 +81,13 @@ TEST(AntipodalGrasps, CubeGraspsAre40mmWideAlongAFaceNormal) {
   ASSERT_EQ(again.size(), grasps.size());
   for (size_t i = 0; i < grasps.size(); ++i)
     EXPECT_EQ(again[i].model_from_gripper.matrix(), grasps[i].model_from_gripper.matrix());
+  // At most 25: the first 25 of the same list.
+  AntipodalOptions capped = o;
+  capped.max_grasps = 25;
+  const auto first = SampleAntipodalGrasps(cube, franka, capped);
+  ASSERT_EQ(first.size(), 25u);
+  for (size_t i = 0; i < first.size(); ++i)
+    EXPECT_EQ(first[i].model_from_gripper.matrix(), grasps[i].model_from_gripper.matrix());
   // Too wide for the opening: none.
   const Part big = MakePart("big", MakeBox(100, 100, 100), TessellationOptions{});
   EXPECT_TRUE(SampleAntipodalGrasps(big, franka, o).empty());

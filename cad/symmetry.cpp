@@ -1,0 +1,308 @@
+#include "cad/symmetry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+#include <Eigen/Eigenvalues>
+
+#include "cad/error.h"
+
+namespace cadsynth {
+
+namespace {
+
+using K = CGAL::Simple_cartesian<double>;
+using Triangles = std::vector<K::Triangle_3>;
+using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+// Distances to a mesh's surface (CGAL's AABB tree).
+class Surface {
+ public:
+  explicit Surface(const Mesh& mesh) {
+    const auto point = [&](uint32_t i) {
+      const Eigen::Vector3f& p = mesh.positions[i];
+      return K::Point_3(p.x(), p.y(), p.z());
+    };
+    for (const auto& t : mesh.triangles)
+      triangles_.emplace_back(point(t[0]), point(t[1]), point(t[2]));
+    tree_.insert(triangles_.cbegin(), triangles_.cend());
+    tree_.build();
+    tree_.accelerate_distance_queries();
+  }
+  double Distance(const Eigen::Vector3d& p) const {
+    return std::sqrt(tree_.squared_distance(K::Point_3(p.x(), p.y(), p.z())));
+  }
+
+ private:
+  Triangles triangles_;
+  Tree tree_;
+};
+
+// How far `t` moves surface points off the surface: the largest distance, or the first above
+// `stop` (then the test has failed anyway).
+double Deviation(const Surface& surface, const std::vector<Eigen::Vector3d>& points,
+                 const Eigen::Isometry3d& t, double stop) {
+  double worst = 0;
+  for (const Eigen::Vector3d& p : points) {
+    worst = std::max(worst, surface.Distance(t * p));
+    if (worst > stop) break;
+  }
+  return worst;
+}
+
+Eigen::Isometry3d RotationAbout(const Eigen::Vector3d& centre, const Eigen::Vector3d& axis,
+                                double angle) {
+  return Eigen::Translation3d(centre) * Eigen::AngleAxisd(angle, axis) *
+         Eigen::Translation3d(-centre);
+}
+
+// Whether a and b move every corner of `box` to within `within` of each other: the same motion
+// as far as the part can tell (a flip refined to 0.0003 rad is the exact one).
+bool SameMotion(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
+                const Eigen::AlignedBox3d& box, double within) {
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
+    if ((a * p - b * p).norm() > within) return false;
+  }
+  return true;
+}
+
+// Irrational-looking angles: a shape symmetric under all three is taken as a solid of revolution.
+constexpr double kContinuousAngles[] = {0.70710678, 2.23606798, 4.12310563};
+
+}  // namespace
+
+bool SymmetryOptions::Check(std::string* why) const {
+  if (!(tolerance_mm >= 0 && tolerance_mm <= 1000)) {
+    *why = "symmetry tolerance must lie in [0, 1000] mm (0: automatic)";
+  } else if (!(deviation_mm >= 0 && deviation_mm <= 1000)) {
+    *why = "tessellation deviation must lie in [0, 1000] mm";
+  } else if (max_order < 2 || max_order > 10000) {
+    *why = "max_order must be 2 to 10,000";
+  } else if (max_points < 16 || max_points > 10000000) {
+    *why = "max_points must be 16 to 10,000,000";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& options) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("symmetry: " + why);
+  if (mesh.triangles.empty()) throw Error("symmetry: the mesh has no triangles");
+  DetectedSymmetries out;
+
+  // The surface's area centroid and second moments, and its flat areas by direction.
+  double area = 0;
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  std::map<std::array<int, 3>, std::pair<double, Eigen::Vector3d>> normals;
+  Eigen::AlignedBox3d box;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>(),
+                          b = mesh.positions[t[1]].cast<double>(),
+                          c = mesh.positions[t[2]].cast<double>();
+    box.extend(a);
+    box.extend(b);
+    box.extend(c);
+    const Eigen::Vector3d cross = (b - a).cross(c - a);
+    const double A = 0.5 * cross.norm();
+    if (!(A > 0)) continue;
+    const Eigen::Vector3d m = (a + b + c) / 3;
+    area += A;
+    first += A * m;
+    second += A / 12 *
+              (a * a.transpose() + b * b.transpose() + c * c.transpose() + 9 * m * m.transpose());
+    Eigen::Vector3d n = cross.normalized();
+    // One key per line (n and -n together), 0.01 wide.
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(n[k]) > 1e-9) {
+        if (n[k] < 0) n = -n;
+        break;
+      }
+    }
+    const std::array<int, 3> key = {static_cast<int>(std::lround(100 * n.x())),
+                                    static_cast<int>(std::lround(100 * n.y())),
+                                    static_cast<int>(std::lround(100 * n.z()))};
+    auto& bucket = normals[key];
+    bucket.first += A;
+    bucket.second += A * n;
+  }
+  if (!(area > 0)) throw Error("symmetry: the mesh has no area");
+  const Eigen::Vector3d centre = first / area;
+  out.centre = centre;
+  const double diagonal = box.diagonal().norm();
+  const double tol = options.tolerance_mm > 0 ? options.tolerance_mm
+                                              : 0.0025 * diagonal + 2 * options.deviation_mm;
+  out.tolerance_mm = tol;
+
+  // Surface points: every vertex, then triangle centroids, thinned evenly to max_points; a
+  // quick subset spread over them.
+  std::vector<Eigen::Vector3d> candidates;
+  for (const Eigen::Vector3f& p : mesh.positions) candidates.push_back(p.cast<double>());
+  for (const auto& t : mesh.triangles) {
+    candidates.push_back((mesh.positions[t[0]].cast<double>() +
+                          mesh.positions[t[1]].cast<double>() +
+                          mesh.positions[t[2]].cast<double>()) /
+                         3);
+  }
+  std::vector<Eigen::Vector3d> points;
+  const size_t max_points = static_cast<size_t>(options.max_points);
+  if (candidates.size() <= max_points) {
+    points = candidates;
+  } else {
+    for (size_t i = 0; i < max_points; ++i)
+      points.push_back(candidates[i * candidates.size() / max_points]);
+  }
+  std::vector<Eigen::Vector3d> quick;
+  for (size_t i = 0; i < 64; ++i) quick.push_back(points[(i * 7919) % points.size()]);
+  const Surface surface(mesh);
+  const auto holds = [&](const Eigen::Isometry3d& t, double* deviation) {
+    if (Deviation(surface, quick, t, tol) > tol) return false;
+    *deviation = Deviation(surface, points, t, tol);
+    return *deviation <= tol;
+  };
+
+  // Candidate axes: the principal axes of the surface, then the lines of its largest flat areas.
+  std::vector<Eigen::Vector3d> axes;
+  const auto add_axis = [&](Eigen::Vector3d a) {
+    if (!(a.norm() > 1e-9)) return;
+    a.normalize();
+    for (const Eigen::Vector3d& b : axes) {
+      if (std::abs(a.dot(b)) > 0.9999) return;
+    }
+    axes.push_back(a);
+  };
+  const Eigen::Matrix3d covariance = second / area - centre * centre.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  for (int k = 2; k >= 0; --k) add_axis(eigen.eigenvectors().col(k));
+  std::vector<std::pair<double, Eigen::Vector3d>> flats;
+  for (const auto& [key, bucket] : normals) flats.push_back(bucket);
+  std::stable_sort(flats.begin(), flats.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (size_t i = 0; i < flats.size() && i < 12; ++i) add_axis(flats[i].second);
+
+  // Each axis: continuous, else its largest n-fold rotation.
+  std::vector<Eigen::Isometry3d> generators;
+  for (const Eigen::Vector3d& a : axes) {
+    double worst = 0, deviation = 0;
+    bool continuous = true;
+    for (const double angle : kContinuousAngles) {
+      if (!holds(RotationAbout(centre, a, angle), &deviation)) {
+        continuous = false;
+        break;
+      }
+      worst = std::max(worst, deviation);
+    }
+    if (continuous) {
+      out.axes.push_back({a, 0});
+      out.symmetries.continuous.push_back({a, centre});
+      out.continuous_deviation_mm.push_back(worst);
+      continue;
+    }
+    for (int n = options.max_order; n >= 2; --n) {
+      // Every power must hold, not only the smallest turn (which a loose tolerance lets through
+      // for any large n).
+      bool powers = true;
+      for (int k = 2; k <= n / 2 && powers; ++k)
+        powers = holds(RotationAbout(centre, a, 2 * M_PI * k / n), &deviation);
+      if (powers && holds(RotationAbout(centre, a, 2 * M_PI / n), &deviation)) {
+        out.axes.push_back({a, n});
+        generators.push_back(RotationAbout(centre, a, 2 * M_PI / n));
+        break;
+      }
+    }
+  }
+  // The main axis first: continuous, else the highest order (stable: candidates' order).
+  std::stable_sort(out.axes.begin(), out.axes.end(), [](const auto& x, const auto& y) {
+    const int ox = x.order == 0 ? 1 << 30 : x.order, oy = y.order == 0 ? 1 << 30 : y.order;
+    return ox > oy;
+  });
+
+  // Half-turns about an axis perpendicular to the main one: flip axes of an n-fold symmetry
+  // repeat every pi / n, so one lies in [0, pi / n); scan it, refine the best, check it.
+  // (Not needed when a candidate axis perpendicular to the main one already turns: the group
+  // then has its flips, exactly.)
+  bool have_flip = false;
+  for (size_t i = 1; i < out.axes.size(); ++i) {
+    have_flip = have_flip || (out.axes[i].order >= 2 &&
+                              std::abs(out.axes[i].direction.dot(out.axes[0].direction)) < 1e-6);
+  }
+  if (!out.axes.empty() && !(have_flip && out.axes[0].order != 0)) {
+    const Eigen::Vector3d m = out.axes[0].direction;
+    const int n = std::max(1, out.axes[0].order);
+    const Eigen::Vector3d hint =
+        std::abs(m.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d u = (hint - hint.dot(m) * m).normalized(), v = m.cross(u);
+    const auto flip = [&](double phi) {
+      return RotationAbout(centre, std::cos(phi) * u + std::sin(phi) * v, M_PI);
+    };
+    const auto quick_deviation = [&](double phi) {
+      return Deviation(surface, quick, flip(phi), 1e300);
+    };
+    const int steps = 96;
+    const double period = M_PI / n;
+    double best_phi = 0, best = 1e300;
+    for (int k = 0; k < steps; ++k) {
+      const double phi = period * k / steps;
+      const double d = quick_deviation(phi);
+      if (d < best) best = d, best_phi = phi;
+    }
+    // Golden-section search on the quick deviation within a step either side.
+    double lo = best_phi - period / steps, hi = best_phi + period / steps;
+    const double g = 0.5 * (std::sqrt(5.0) - 1);
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double f1 = quick_deviation(x1), f2 = quick_deviation(x2);
+    for (int it = 0; it < 40; ++it) {
+      if (f1 < f2) {
+        hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = quick_deviation(x1);
+      } else {
+        lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = quick_deviation(x2);
+      }
+    }
+    const double phi = f1 < best ? (f1 < f2 ? x1 : x2) : best_phi;
+    double deviation = 0;
+    if (holds(flip(phi), &deviation)) {
+      if (out.axes[0].order == 0) {
+        // About a continuous axis BOP lists one flip: the rotations make the others.
+        out.symmetries.discrete.push_back(flip(phi));
+        out.discrete_deviation_mm.push_back(deviation);
+        return out;
+      }
+      generators.push_back(flip(phi));
+    }
+    if (out.axes[0].order == 0) return out;
+  }
+
+  // The group the generators make (a continuous axis contributes its flips only).
+  std::vector<Eigen::Isometry3d> group = {Eigen::Isometry3d::Identity()};
+  const size_t cap = 2 * static_cast<size_t>(options.max_order) + 48;
+  for (size_t i = 0; i < group.size() && group.size() < cap; ++i) {
+    for (const Eigen::Isometry3d& g : generators) {
+      const Eigen::Isometry3d product = g * group[i];
+      bool known = false;
+      for (const Eigen::Isometry3d& e : group)
+        known = known || SameMotion(e, product, box, 0.25 * tol);
+      if (!known) group.push_back(product);
+      if (group.size() >= cap) break;
+    }
+  }
+  // Every member measured; those products that drift beyond the tolerance are left out.
+  for (size_t i = 1; i < group.size(); ++i) {
+    const double d = Deviation(surface, points, group[i], 1e300);
+    if (d > tol) continue;
+    out.symmetries.discrete.push_back(group[i]);
+    out.discrete_deviation_mm.push_back(d);
+  }
+  return out;
+}
+
+}  // namespace cadsynth

@@ -1,0 +1,48 @@
+// Symmetry detection (issue 20): the rotations that map a part's mesh onto itself within a
+// tolerance, for parts that declare none (imported STEP and mesh files). BOP's convention:
+// discrete rotations as 4 x 4 transforms and continuous rotations about an axis, in the part's
+// model frame.
+#pragma once
+
+#include <vector>
+
+#include "cad/mesh.h"
+#include "cad/part.h"
+
+namespace cadsynth {
+
+struct SymmetryOptions {
+  // A point of the surface moved by a symmetry must land within this of the surface (mm). 0:
+  // 0.25% of the mesh's bounding-box diagonal plus twice `deviation_mm`.
+  double tolerance_mm = 0;
+  double deviation_mm = 0;  // the tessellation's distance from the exact surface, when known
+  int max_order = 360;      // the largest n-fold rotation looked for
+  int max_points = 6000;    // surface points tested (vertices first, then triangle centroids)
+  bool Check(std::string* why) const;
+};
+
+struct DetectedSymmetries {
+  Symmetries symmetries;  // in the mesh's frame
+  // The largest distance (mm) of a moved surface point from the surface, per discrete symmetry
+  // (same order) and per continuous axis (the worst of a few test angles): how exactly each
+  // holds, so that a user can judge symmetries that only small details break.
+  std::vector<double> discrete_deviation_mm, continuous_deviation_mm;
+  double tolerance_mm = 0;  // the tolerance used
+  // The rotation axes found (through `centre`) and their orders (0: continuous), main axis first.
+  struct Axis {
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+    int order = 0;
+  };
+  std::vector<Axis> axes;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // the surface's area centroid
+};
+
+// The symmetries of `mesh`: candidate axes through the surface's centroid (its principal axes of
+// area and the directions of its largest flat areas), each tested for continuous rotation and
+// for n-fold rotation (the largest n up to max_order), half-turns about axes perpendicular to
+// the main one (scanned over the angle, then refined), and the group these generate, every
+// member checked on the surface points. Deterministic; throws Error for an empty mesh or bad
+// options.
+DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& options = {});
+
+}  // namespace cadsynth

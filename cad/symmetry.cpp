@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <sstream>
 #include <string>
 
 #include <CGAL/AABB_traits.h>
@@ -303,6 +304,32 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     out.discrete_deviation_mm.push_back(d);
   }
   return out;
+}
+
+std::string DescribeSymmetries(const DetectedSymmetries& d) {
+  std::ostringstream text;
+  text.precision(3);
+  if (d.axes.empty() || d.symmetries.empty()) return "none";
+  const DetectedSymmetries::Axis& main = d.axes[0];
+  const Eigen::Vector3d& a = main.direction;
+  const auto near_zero = [](double v) { return std::abs(v) < 5e-7 ? 0.0 : v; };
+  if (main.order == 0) {
+    text << "continuous";
+  } else {
+    text << main.order << "-fold";
+  }
+  text << " about (" << near_zero(a.x()) << ", " << near_zero(a.y()) << ", " << near_zero(a.z())
+       << ")";
+  size_t flips = 0;
+  for (const Eigen::Isometry3d& t : d.symmetries.discrete) flips += (t.linear() * a).dot(a) < -0.5;
+  if (flips > 0) text << " and " << flips << (flips == 1 ? " flip" : " flips");
+  if (d.symmetries.discrete.size() > flips + std::max(0, main.order - 1))
+    text << " (" << d.symmetries.discrete.size() << " discrete in all)";
+  double worst = 0;
+  for (double v : d.discrete_deviation_mm) worst = std::max(worst, v);
+  for (double v : d.continuous_deviation_mm) worst = std::max(worst, v);
+  text << "; largest deviation " << worst << " mm (tolerance " << d.tolerance_mm << " mm)";
+  return text.str();
 }
 
 }  // namespace cadsynth

@@ -4,6 +4,7 @@
 // model frame.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "cad/mesh.h"
@@ -36,6 +37,10 @@ struct DetectedSymmetries {
   std::vector<Axis> axes;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // the surface's area centroid
 };
+
+// "6-fold about (0, 0, 1) and 6 flips; largest deviation 0.012 mm (tolerance 0.2 mm)": for
+// messages and `inspect`.
+std::string DescribeSymmetries(const DetectedSymmetries& detected);
 
 // The symmetries of `mesh`: candidate axes through the surface's centroid (its principal axes of
 // area and the directions of its largest flat areas), each tested for continuous rotation and

@@ -395,11 +395,23 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
     const YAML::Node item = node[i];
     const std::string key = where + "[" + std::to_string(i) + "]";
     r.ExpectMap(item, key,
-                {"file", "unit", "encoding", "family", "params", "grid", "random", "class", "up"});
+                {"file", "unit", "encoding", "family", "params", "grid", "random", "class", "up",
+                 "symmetry", "symmetry_tolerance"});
     if (!item["file"] == !item["family"])
       r.Fail(item, key, "give exactly one of 'file' or 'family'");
     PartSource source;
     ReadUp(r, item, key, &source);
+    if (const YAML::Node n = item["symmetry"]) {
+      const std::string policy = r.Scalar(n, key + ".symmetry");
+      if (policy != "auto" && policy != "none")
+        r.Fail(n, key + ".symmetry", "expected auto or none, got '" + policy + "'");
+      source.detect_symmetry = policy == "auto";
+    }
+    if (const YAML::Node n = item["symmetry_tolerance"]) {
+      source.symmetry_tolerance_mm = r.Length(n, key + ".symmetry_tolerance");
+      if (!(source.symmetry_tolerance_mm > 0 && source.symmetry_tolerance_mm <= 1000))
+        r.Fail(n, key + ".symmetry_tolerance", "must lie in (0, 1000] mm");
+    }
     if (item["file"]) {
       for (const char* k : {"params", "grid", "random", "class"}) {
         if (item[k]) r.Fail(item[k], key + "." + k, "goes with 'family', not 'file'");

@@ -41,6 +41,10 @@ struct PartSource {
   // The axis its designer drew as up (recipe `up: y` for a file drawn Y-up): this rotation turns
   // it to +z before the scene is arranged. Identity for z.
   Eigen::Matrix3d z_from_up = Eigen::Matrix3d::Identity();
+  // Parts that declare no symmetries (files; families declare theirs): `symmetry: auto` finds
+  // them (cad/symmetry.h, within symmetry_tolerance_mm, 0: automatic), `none` leaves them empty.
+  bool detect_symmetry = true;
+  double symmetry_tolerance_mm = 0;
   std::string where;  // "recipe.yaml:3:5" (empty when built in)
 };
 

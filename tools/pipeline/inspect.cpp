@@ -1,11 +1,13 @@
 #include "tools/pipeline/inspect.h"
 
 #include "cad/error.h"
+#include "cad/symmetry.h"
 
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
+#include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
 
 namespace cadsynth {
@@ -76,6 +78,22 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
     std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %5d  %-28s %9zu  %-7s  %13s  %-6s  %s\n",
                   i + 1, Printable(p.name).c_str(), counts[i], size, p.mesh.num_triangles(),
                   Hex(p.color).c_str(), volume, p.watertight ? "yes" : "NO", deviation);
+    out << line;
+  }
+  // Symmetries found on each part's mesh (cad/symmetry.h), as the pipeline finds them.
+  std::vector<std::string> symmetries(a.parts.size());
+  tbb::parallel_for(size_t{0}, a.parts.size(), [&](size_t i) {
+    const Part& p = a.parts[i];
+    if (p.mesh.triangles.empty()) return;
+    SymmetryOptions o;
+    o.deviation_mm = std::max(0.0, p.max_deviation_mm);
+    symmetries[i] = DescribeSymmetries(DetectSymmetries(p.mesh, o));
+  });
+  out << "\n  symmetries (found on the meshes, in each part's model frame):\n";
+  for (size_t i = 0; i < a.parts.size(); ++i) {
+    std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %s\n", i + 1,
+                  Printable(a.parts[i].name).c_str(),
+                  symmetries[i].empty() ? "-" : symmetries[i].c_str());
     out << line;
   }
   out << "\n  assembly tree (instance: part id, position of its model frame in the root frame, "

@@ -21,6 +21,7 @@
 #include "cad/part_cache.h"
 #include "cad/schema.h"
 #include "cad/shape.h"
+#include "cad/symmetry.h"
 #include "dataset/file_io.h"
 #include "render/randomize.h"
 #include "variants/arrangement.h"
@@ -480,6 +481,11 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
 
   // One list of parts; instances remember their job (a rigid group) and scene.
   Assembly all;
+  struct Detect {
+    size_t part;
+    double tolerance_mm;
+  };
+  std::vector<Detect> detect;  // parts without declared symmetries, to look for them
   std::vector<int> job_of_instance;
   std::vector<std::string> label_of_part;
   for (size_t j = 0; j < jobs.size(); ++j) {
@@ -496,11 +502,31 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     for (Part& part : a.parts) {
       label_of_part.push_back(source.one_class ? source.family : std::string());
       all.parts.push_back(std::move(part));
+      if (source.detect_symmetry && all.parts.back().symmetries.empty())
+        detect.push_back({all.parts.size() - 1, source.symmetry_tolerance_mm});
     }
     for (Instance instance : a.instances) {
       instance.part += offset;
       all.instances.push_back(std::move(instance));
       job_of_instance.push_back(static_cast<int>(j));
+    }
+  }
+  // Symmetries of the parts that declare none (imported files), found on their meshes.
+  {
+    std::vector<DetectedSymmetries> found(detect.size());
+    tbb::parallel_for(size_t{0}, detect.size(), [&](size_t k) {
+      const Part& part = all.parts[detect[k].part];
+      if (part.mesh.triangles.empty()) return;
+      SymmetryOptions options;
+      options.tolerance_mm = detect[k].tolerance_mm;
+      options.deviation_mm = std::max(0.0, part.max_deviation_mm);
+      found[k] = DetectSymmetries(part.mesh, options);
+    });
+    for (size_t k = 0; k < detect.size(); ++k) {
+      Part& part = all.parts[detect[k].part];
+      part.symmetries = found[k].symmetries;
+      if (part.symmetries.empty()) continue;
+      info("symmetries of '" + part.name + "': " + DescribeSymmetries(found[k]));
     }
   }
   for (const SceneSpec& scene : spec.scenes) {

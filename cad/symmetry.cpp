@@ -133,7 +133,8 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     const std::array<int, 3> key = {static_cast<int>(std::lround(100 * n.x())),
                                     static_cast<int>(std::lround(100 * n.y())),
                                     static_cast<int>(std::lround(100 * n.z()))};
-    auto& bucket = normals[key];
+    // (Eigen's vectors start uninitialised: the bucket is made with an explicit zero.)
+    auto& bucket = normals.try_emplace(key, 0.0, Eigen::Vector3d::Zero()).first->second;
     bucket.first += A;
     bucket.second += A * n;
   }
@@ -184,7 +185,16 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
   };
   const Eigen::Matrix3d covariance = second / area - centre * centre.transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-  for (int k = 2; k >= 0; --k) add_axis(eigen.eigenvectors().col(k));
+  // An eigenvector is an axis only when its eigenvalue stands apart: within a repeated eigenvalue
+  // the vectors are arbitrary (they turn with the last bits of the sums).
+  const Eigen::Vector3d values = eigen.eigenvalues();
+  const double spread = 1e-6 * std::max(1e-300, values.cwiseAbs().maxCoeff());
+  for (int k = 2; k >= 0; --k) {
+    bool apart = true;
+    for (int j = 0; j < 3; ++j)
+      apart = apart && (j == k || std::abs(values[j] - values[k]) > spread);
+    if (apart) add_axis(eigen.eigenvectors().col(k));
+  }
   std::vector<std::pair<double, Eigen::Vector3d>> flats;
   for (const auto& [key, bucket] : normals) flats.push_back(bucket);
   std::stable_sort(flats.begin(), flats.end(),
@@ -291,7 +301,7 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
       const Eigen::Isometry3d product = g * group[i];
       bool known = false;
       for (const Eigen::Isometry3d& e : group)
-        known = known || SameMotion(e, product, box, 0.25 * tol);
+        known = known || SameMotion(e, product, box, 0.5 * tol);
       if (!known) group.push_back(product);
       if (group.size() >= cap) break;
     }

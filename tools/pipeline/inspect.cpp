@@ -7,7 +7,6 @@
 #include <sstream>
 #include <vector>
 
-#include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
 
 namespace cadsynth {
@@ -82,13 +81,13 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
   }
   // Symmetries found on each part's mesh (cad/symmetry.h), as the pipeline finds them.
   std::vector<std::string> symmetries(a.parts.size());
-  tbb::parallel_for(size_t{0}, a.parts.size(), [&](size_t i) {
+  for (size_t i = 0; i < a.parts.size(); ++i) {
     const Part& p = a.parts[i];
-    if (p.mesh.triangles.empty()) return;
+    if (p.mesh.triangles.empty()) continue;
     SymmetryOptions o;
     o.deviation_mm = std::max(0.0, p.max_deviation_mm);
     symmetries[i] = DescribeSymmetries(DetectSymmetries(p.mesh, o));
-  });
+  }
   out << "\n  symmetries (found on the meshes, in each part's model frame):\n";
   for (size_t i = 0; i < a.parts.size(); ++i) {
     std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %s\n", i + 1,

@@ -70,11 +70,11 @@ struct SuctionCup {
 // One parallel-jaw grasp of a part, in its model frame.
 struct ParallelJawGrasp {
   Eigen::Isometry3d model_from_gripper = Eigen::Isometry3d::Identity();
-  double width_mm = 0;          // the distance between the contacts along x
-  double opening_mm = 0;        // the fingers' opening the grasp was checked with
-  double depth_mm = 0;          // the fingertips' reach past the contacts along the approach
-  Eigen::Vector3d contacts[2];  // model frame, mm
-  Eigen::Vector3d normals[2];   // outward surface normals at the contacts
+  double width_mm = 0;    // the distance between the contacts along x
+  double opening_mm = 0;  // the fingers' opening the grasp was checked with
+  double depth_mm = 0;    // the fingertips' reach past the contacts along the approach
+  Eigen::Vector3d contacts[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};  // model, mm
+  Eigen::Vector3d normals[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};   // outward
   // The force-closure margin: 1 - angle / atan(mu), the angle between the closing axis (from the
   // first contact to the second) and the second contact's outward normal; the first contact's
   // inward normal is the axis itself (angle 0). 1: the two normals are exactly opposite; 0: on

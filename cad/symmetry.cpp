@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -26,6 +27,8 @@ using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 // Distances to a mesh's surface (CGAL's AABB tree).
 class Surface {
  public:
+  Surface(const Surface&) = delete;
+  Surface& operator=(const Surface&) = delete;
   explicit Surface(const Mesh& mesh) {
     const auto point = [&](uint32_t i) {
       const Eigen::Vector3f& p = mesh.positions[i];
@@ -123,13 +126,10 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     second += A / 12 *
               (a * a.transpose() + b * b.transpose() + c * c.transpose() + 9 * m * m.transpose());
     Eigen::Vector3d n = cross.normalized();
-    // One key per line (n and -n together), 0.01 wide.
-    for (int k = 0; k < 3; ++k) {
-      if (std::abs(n[k]) > 1e-9) {
-        if (n[k] < 0) n = -n;
-        break;
-      }
-    }
+    // One key per line (n and -n together, signed by the largest component), 0.01 wide.
+    int largest = 0;
+    n.cwiseAbs().maxCoeff(&largest);
+    if (n[largest] < 0) n = -n;
     const std::array<int, 3> key = {static_cast<int>(std::lround(100 * n.x())),
                                     static_cast<int>(std::lround(100 * n.y())),
                                     static_cast<int>(std::lround(100 * n.z()))};
@@ -221,11 +221,14 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     }
     for (int n = options.max_order; n >= 2; --n) {
       // Every power must hold, not only the smallest turn (which a loose tolerance lets through
-      // for any large n).
+      // for any large n): the smallest on the quick points first (most n fail there), then the
+      // half-way turn (the largest move), then the rest.
+      if (Deviation(surface, quick, RotationAbout(centre, a, 2 * M_PI / n), tol) > tol) continue;
+      if (!holds(RotationAbout(centre, a, 2 * M_PI * (n / 2) / n), &deviation)) continue;
       bool powers = true;
-      for (int k = 2; k <= n / 2 && powers; ++k)
+      for (int k = 1; k < n / 2 && powers; ++k)
         powers = holds(RotationAbout(centre, a, 2 * M_PI * k / n), &deviation);
-      if (powers && holds(RotationAbout(centre, a, 2 * M_PI / n), &deviation)) {
+      if (powers) {
         out.axes.push_back({a, n});
         generators.push_back(RotationAbout(centre, a, 2 * M_PI / n));
         break;
@@ -243,6 +246,7 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
   // (Not needed when a candidate axis perpendicular to the main one already turns: the group
   // then has its flips, exactly.)
   bool have_flip = false;
+  std::optional<Eigen::Isometry3d> flip_found;
   for (size_t i = 1; i < out.axes.size(); ++i) {
     have_flip = have_flip || (out.axes[i].order >= 2 &&
                               std::abs(out.axes[i].direction.dot(out.axes[0].direction)) < 1e-6);
@@ -279,7 +283,7 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
         lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = quick_deviation(x2);
       }
     }
-    const double phi = f1 < best ? (f1 < f2 ? x1 : x2) : best_phi;
+    const double phi = std::min(f1, f2) < best ? (f1 < f2 ? x1 : x2) : best_phi;
     double deviation = 0;
     if (holds(flip(phi), &deviation)) {
       if (out.axes[0].order == 0) {
@@ -289,26 +293,39 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
         return out;
       }
       generators.push_back(flip(phi));
+      flip_found = flip(phi);
     }
     if (out.axes[0].order == 0) return out;
   }
 
-  // The group the generators make (a continuous axis contributes its flips only).
-  std::vector<Eigen::Isometry3d> group = {Eigen::Isometry3d::Identity()};
+  // The group the generators make (a continuous axis contributes its flips only). Candidate axes
+  // tilted within the tolerance can make near-duplicates without end: at the cap, the group of
+  // the main axis's turn and the flip alone.
   const size_t cap = 2 * static_cast<size_t>(options.max_order) + 48;
-  for (size_t i = 0; i < group.size() && group.size() < cap; ++i) {
-    for (const Eigen::Isometry3d& g : generators) {
-      const Eigen::Isometry3d product = g * group[i];
-      bool known = false;
-      for (const Eigen::Isometry3d& e : group)
-        known = known || SameMotion(e, product, box, 0.5 * tol);
-      if (!known) group.push_back(product);
-      if (group.size() >= cap) break;
+  const auto closure = [&](const std::vector<Eigen::Isometry3d>& from) {
+    std::vector<Eigen::Isometry3d> group = {Eigen::Isometry3d::Identity()};
+    for (size_t i = 0; i < group.size() && group.size() < cap; ++i) {
+      for (const Eigen::Isometry3d& g : from) {
+        const Eigen::Isometry3d product = g * group[i];
+        bool known = false;
+        for (const Eigen::Isometry3d& e : group)
+          known = known || SameMotion(e, product, box, 0.5 * tol);
+        if (!known) group.push_back(product);
+        if (group.size() >= cap) break;
+      }
     }
+    return group;
+  };
+  std::vector<Eigen::Isometry3d> group = closure(generators);
+  if (group.size() >= cap && !out.axes.empty() && out.axes[0].order >= 2) {
+    std::vector<Eigen::Isometry3d> main = {
+        RotationAbout(centre, out.axes[0].direction, 2 * M_PI / out.axes[0].order)};
+    if (flip_found) main.push_back(*flip_found);
+    group = closure(main);
   }
   // Every member measured; those products that drift beyond the tolerance are left out.
   for (size_t i = 1; i < group.size(); ++i) {
-    const double d = Deviation(surface, points, group[i], 1e300);
+    const double d = Deviation(surface, points, group[i], tol);
     if (d > tol) continue;
     out.symmetries.discrete.push_back(group[i]);
     out.discrete_deviation_mm.push_back(d);

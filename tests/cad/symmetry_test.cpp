@@ -13,6 +13,30 @@
 namespace cadsynth {
 namespace {
 
+// Whether a and b move the corners of `box` to within `within` of each other.
+bool Same(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const Eigen::AlignedBox3d& box,
+          double within) {
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
+    if ((a * p - b * p).norm() > within) return false;
+  }
+  return true;
+}
+
+// Every product of two members (and each member) is a member: the set is a group.
+void ExpectClosed(const std::vector<Eigen::Isometry3d>& members, const Eigen::AlignedBox3d& box,
+                  double within) {
+  std::vector<Eigen::Isometry3d> all = members;
+  all.push_back(Eigen::Isometry3d::Identity());
+  for (const Eigen::Isometry3d& a : all) {
+    for (const Eigen::Isometry3d& b : all) {
+      bool found = false;
+      for (const Eigen::Isometry3d& c : all) found = found || Same(a * b, c, box, within);
+      EXPECT_TRUE(found);
+    }
+  }
+}
+
 void ExpectWithinTolerance(const DetectedSymmetries& d) {
   ASSERT_EQ(d.discrete_deviation_mm.size(), d.symmetries.discrete.size());
   for (double deviation : d.discrete_deviation_mm) EXPECT_LE(deviation, d.tolerance_mm);
@@ -82,7 +106,30 @@ TEST(Symmetry, FamilyPartsGetTheirDeclaredSymmetriesBack) {
       EXPECT_EQ(d.symmetries.discrete.size(), part.symmetries.discrete.size()) << c.family;
     ASSERT_FALSE(d.axes.empty());
     EXPECT_EQ(d.axes[0].order, c.order) << c.family;
+    const Eigen::AlignedBox3d box = part.mesh.Bounds().cast<double>();
+    ExpectClosed(d.symmetries.discrete, box, d.tolerance_mm);
+    // Each declared symmetry is one found (the same motion of the part's box corners).
+    for (const Eigen::Isometry3d& declared : part.symmetries.discrete) {
+      bool found = false;
+      for (const Eigen::Isometry3d& t : d.symmetries.discrete)
+        found = found || Same(declared, t, box, d.tolerance_mm);
+      EXPECT_TRUE(found) << c.family;
+    }
   }
+}
+
+TEST(Symmetry, AnswersDoNotDependOnEarlierCalls) {
+  // Found once by valgrind: an uninitialised Eigen vector made a box's answer depend on what had
+  // been detected before. The same mesh before and after another gives the same bytes.
+  const Part box = MakePart("box", MakeBox(30, 24, 6), TessellationOptions{});
+  const Part rod = MakePart("rod", MakeCylinder(15, 40), TessellationOptions{});
+  const DetectedSymmetries first = DetectSymmetries(box.mesh);
+  DetectSymmetries(rod.mesh);
+  const DetectedSymmetries again = DetectSymmetries(box.mesh);
+  ASSERT_EQ(first.symmetries.discrete.size(), 3u);
+  ASSERT_EQ(again.symmetries.discrete.size(), first.symmetries.discrete.size());
+  for (size_t i = 0; i < first.symmetries.discrete.size(); ++i)
+    EXPECT_EQ(first.symmetries.discrete[i].matrix(), again.symmetries.discrete[i].matrix());
 }
 
 TEST(Symmetry, BadInputIsRefused) {

@@ -86,7 +86,11 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
     if (p.mesh.triangles.empty()) continue;
     SymmetryOptions o;
     o.deviation_mm = std::max(0.0, p.max_deviation_mm);
-    symmetries[i] = DescribeSymmetries(DetectSymmetries(p.mesh, o));
+    try {
+      symmetries[i] = DescribeSymmetries(DetectSymmetries(p.mesh, o));
+    } catch (const Error& e) {
+      symmetries[i] = std::string("not looked for: ") + e.what();
+    }
   }
   out << "\n  symmetries (found on the meshes, in each part's model frame):\n";
   for (size_t i = 0; i < a.parts.size(); ++i) {

@@ -520,10 +520,18 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       SymmetryOptions options;
       options.tolerance_mm = detect[k].tolerance_mm;
       options.deviation_mm = std::max(0.0, part.max_deviation_mm);
-      found[k] = DetectSymmetries(part.mesh, options);
+      try {
+        found[k] = DetectSymmetries(part.mesh, options);
+      } catch (const Error&) {
+        found[k].tolerance_mm = -1;  // reported below, in order
+      }
     });
     for (size_t k = 0; k < detect.size(); ++k) {
       Part& part = all.parts[detect[k].part];
+      if (found[k].tolerance_mm < 0) {
+        Warn("'" + part.name + "': no symmetries looked for (its mesh has no area)");
+        continue;
+      }
       part.symmetries = found[k].symmetries;
       if (part.symmetries.empty()) continue;
       info("symmetries of '" + part.name + "': " + DescribeSymmetries(found[k]));

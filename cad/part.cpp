@@ -16,7 +16,7 @@ Symmetries Symmetries::InFrame(const Eigen::Isometry3d& old_from_new) const {
   return out;
 }
 
-Symmetries Symmetries::Cyclic(int n, bool flips, double mid_z) {
+Symmetries Symmetries::Cyclic(int n, bool flips, double mid_z, double flip_angle) {
   Symmetries s;
   const Eigen::Isometry3d to_mid(Eigen::Translation3d(0, 0, mid_z));
   for (int k = 1; k < n; ++k) {
@@ -26,7 +26,7 @@ Symmetries Symmetries::Cyclic(int n, bool flips, double mid_z) {
   if (flips) {
     // Half-turns about horizontal axes at angles pi k / n through (0, 0, mid_z).
     for (int k = 0; k < n; ++k) {
-      const double a = M_PI * k / n;
+      const double a = flip_angle + M_PI * k / n;
       const Eigen::Vector3d axis(std::cos(a), std::sin(a), 0.0);
       s.discrete.push_back(to_mid * Eigen::AngleAxisd(M_PI, axis) * to_mid.inverse());
     }

@@ -37,8 +37,9 @@ struct Symmetries {
   Symmetries InFrame(const Eigen::Isometry3d& old_from_new) const;
   // Common cases, about the z axis through the origin: an n-fold rotation, optionally with the
   // n half-turns about horizontal axes that flip the shape over (for shapes symmetric top to
-  // bottom about `mid_z`); continuous rotation about z, optionally with a flip about x.
-  static Symmetries Cyclic(int n, bool flips, double mid_z = 0.0);
+  // bottom about `mid_z`), the first at `flip_angle` from +x; continuous rotation about z,
+  // optionally with a flip about x.
+  static Symmetries Cyclic(int n, bool flips, double mid_z = 0.0, double flip_angle = 0.0);
   static Symmetries Revolution(bool flip, double mid_z = 0.0);
 };
 

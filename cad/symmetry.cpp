@@ -98,18 +98,32 @@ bool SymmetryOptions::Check(std::string* why) const {
   return false;
 }
 
-DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& options) {
-  std::string why;
-  if (!options.Check(&why)) throw Error("symmetry: " + why);
-  if (mesh.triangles.empty()) throw Error("symmetry: the mesh has no triangles");
-  DetectedSymmetries out;
+namespace {
 
-  // The surface's area centroid and second moments, and its flat areas by direction.
+// What detection and measurement share: the surface's centroid, moments and flat areas, the
+// tolerance, the points tested and the distance queries.
+struct Probe {
+  explicit Probe(const Mesh& mesh, const SymmetryOptions& options);
+  bool Holds(const Eigen::Isometry3d& t, double* deviation) const {
+    if (Deviation(*surface, quick, t, tol) > tol) return false;
+    *deviation = Deviation(*surface, points, t, tol);
+    return *deviation <= tol;
+  }
   double area = 0;
-  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
   std::map<std::array<int, 3>, std::pair<double, Eigen::Vector3d>> normals;
   Eigen::AlignedBox3d box;
+  double tol = 0;
+  std::vector<Eigen::Vector3d> points, quick;
+  std::unique_ptr<Surface> surface;
+};
+
+Probe::Probe(const Mesh& mesh, const SymmetryOptions& options) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("symmetry: " + why);
+  if (mesh.triangles.empty()) throw Error("symmetry: the mesh has no triangles");
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
   for (const auto& t : mesh.triangles) {
     const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>(),
                           b = mesh.positions[t[1]].cast<double>(),
@@ -139,12 +153,10 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     bucket.second += A * n;
   }
   if (!(area > 0)) throw Error("symmetry: the mesh has no area");
-  const Eigen::Vector3d centre = first / area;
-  out.centre = centre;
+  centre = first / area;
   const double diagonal = box.diagonal().norm();
-  const double tol = options.tolerance_mm > 0 ? options.tolerance_mm
-                                              : 0.0025 * diagonal + 2 * options.deviation_mm;
-  out.tolerance_mm = tol;
+  tol = options.tolerance_mm > 0 ? options.tolerance_mm
+                                 : 0.0025 * diagonal + 2 * options.deviation_mm;
 
   // Surface points: every vertex, then triangle centroids, thinned evenly to max_points; a
   // quick subset spread over them.
@@ -156,7 +168,6 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
                           mesh.positions[t[2]].cast<double>()) /
                          3);
   }
-  std::vector<Eigen::Vector3d> points;
   const size_t max_points = static_cast<size_t>(options.max_points);
   if (candidates.size() <= max_points) {
     points = candidates;
@@ -164,14 +175,43 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     for (size_t i = 0; i < max_points; ++i)
       points.push_back(candidates[i * candidates.size() / max_points]);
   }
-  std::vector<Eigen::Vector3d> quick;
   for (size_t i = 0; i < 64; ++i) quick.push_back(points[(i * 7919) % points.size()]);
-  const Surface surface(mesh);
+  surface = std::make_unique<Surface>(mesh);
+}
+
+// The group `from` generates, up to `cap` members (identity first), members told apart by how
+// they move the box's corners.
+std::vector<Eigen::Isometry3d> Closure(const std::vector<Eigen::Isometry3d>& from,
+                                       const Eigen::AlignedBox3d& box, double within, size_t cap) {
+  std::vector<Eigen::Isometry3d> group = {Eigen::Isometry3d::Identity()};
+  for (size_t i = 0; i < group.size() && group.size() < cap; ++i) {
+    for (const Eigen::Isometry3d& g : from) {
+      const Eigen::Isometry3d product = g * group[i];
+      bool known = false;
+      for (const Eigen::Isometry3d& e : group) known = known || SameMotion(e, product, box, within);
+      if (!known) group.push_back(product);
+      if (group.size() >= cap) break;
+    }
+  }
+  return group;
+}
+
+}  // namespace
+
+DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& options) {
+  const Probe probe(mesh, options);
+  DetectedSymmetries out;
+  const Eigen::Vector3d& centre = probe.centre;
+  const double tol = probe.tol;
+  const Eigen::AlignedBox3d& box = probe.box;
+  out.centre = centre;
+  out.tolerance_mm = tol;
   const auto holds = [&](const Eigen::Isometry3d& t, double* deviation) {
-    if (Deviation(surface, quick, t, tol) > tol) return false;
-    *deviation = Deviation(surface, points, t, tol);
-    return *deviation <= tol;
+    return probe.Holds(t, deviation);
   };
+  const Surface& surface = *probe.surface;
+  const std::vector<Eigen::Vector3d>& points = probe.points;
+  const std::vector<Eigen::Vector3d>& quick = probe.quick;
 
   // Candidate axes: the principal axes of the surface, then the lines of its largest flat areas.
   std::vector<Eigen::Vector3d> axes;
@@ -183,7 +223,7 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     }
     axes.push_back(a);
   };
-  const Eigen::Matrix3d covariance = second / area - centre * centre.transpose();
+  const Eigen::Matrix3d covariance = probe.second / probe.area - centre * centre.transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
   // An eigenvector is an axis only when its eigenvalue stands apart: within a repeated eigenvalue
   // the vectors are arbitrary (they turn with the last bits of the sums).
@@ -195,8 +235,15 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
       apart = apart && (j == k || std::abs(values[j] - values[k]) > spread);
     if (apart) add_axis(eigen.eigenvectors().col(k));
   }
+  // The exact axes of revolution the B-rep gives, where they pass through the centroid.
+  for (const SymmetryOptions::Line& line : options.axis_hints) {
+    if (!(line.direction.norm() > 1e-9)) continue;
+    const Eigen::Vector3d d = line.direction.normalized();
+    const Eigen::Vector3d off = centre - line.point;
+    if ((off - off.dot(d) * d).norm() <= tol) add_axis(d);
+  }
   std::vector<std::pair<double, Eigen::Vector3d>> flats;
-  for (const auto& [key, bucket] : normals) flats.push_back(bucket);
+  for (const auto& [key, bucket] : probe.normals) flats.push_back(bucket);
   std::stable_sort(flats.begin(), flats.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   for (size_t i = 0; i < flats.size() && i < 12; ++i) add_axis(flats[i].second);
@@ -303,18 +350,7 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
   // the main axis's turn and the flip alone.
   const size_t cap = 2 * static_cast<size_t>(options.max_order) + 48;
   const auto closure = [&](const std::vector<Eigen::Isometry3d>& from) {
-    std::vector<Eigen::Isometry3d> group = {Eigen::Isometry3d::Identity()};
-    for (size_t i = 0; i < group.size() && group.size() < cap; ++i) {
-      for (const Eigen::Isometry3d& g : from) {
-        const Eigen::Isometry3d product = g * group[i];
-        bool known = false;
-        for (const Eigen::Isometry3d& e : group)
-          known = known || SameMotion(e, product, box, 0.5 * tol);
-        if (!known) group.push_back(product);
-        if (group.size() >= cap) break;
-      }
-    }
-    return group;
+    return Closure(from, box, 0.5 * tol, cap);
   };
   std::vector<Eigen::Isometry3d> group = closure(generators);
   if (group.size() >= cap && !out.axes.empty() && out.axes[0].order >= 2) {
@@ -330,6 +366,49 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     out.symmetries.discrete.push_back(group[i]);
     out.discrete_deviation_mm.push_back(d);
   }
+  return out;
+}
+
+DetectedSymmetries MeasureSymmetries(const Mesh& mesh, const Symmetries& given,
+                                     const SymmetryOptions& options) {
+  const Probe probe(mesh, options);
+  DetectedSymmetries out;
+  out.centre = probe.centre;
+  out.tolerance_mm = probe.tol;
+  const auto measure = [&](const Eigen::Isometry3d& t) {
+    return Deviation(*probe.surface, probe.points, t, 1e300);
+  };
+  for (const Symmetries::Axis& a : given.continuous) {
+    double worst = 0;
+    for (const double angle : kContinuousAngles)
+      worst = std::max(worst, measure(RotationAbout(a.offset, a.direction, angle)));
+    out.symmetries.continuous.push_back(a);
+    out.continuous_deviation_mm.push_back(worst);
+    out.axes.push_back({a.direction, 0});
+  }
+  const std::vector<Eigen::Isometry3d> group = Closure(
+      given.discrete, probe.box, 0.5 * probe.tol, 2 * static_cast<size_t>(options.max_order) + 48);
+  for (size_t i = 1; i < group.size(); ++i) {
+    out.symmetries.discrete.push_back(group[i]);
+    out.discrete_deviation_mm.push_back(measure(group[i]));
+  }
+  // The axes of the listed rotations with their orders (the smallest power that is the
+  // identity), the highest first after any continuous one.
+  std::vector<DetectedSymmetries::Axis> turns;
+  for (const Eigen::Isometry3d& t : given.discrete) {
+    const Eigen::AngleAxisd r(t.linear());
+    if (!(r.angle() > 1e-9)) continue;
+    int order = 0;
+    Eigen::Isometry3d power = t;
+    for (int n = 2; n <= options.max_order && order == 0; ++n) {
+      power = t * power;
+      if (SameMotion(power, Eigen::Isometry3d::Identity(), probe.box, 0.5 * probe.tol)) order = n;
+    }
+    if (order > 0) turns.push_back({r.axis(), order});
+  }
+  std::stable_sort(turns.begin(), turns.end(),
+                   [](const auto& x, const auto& y) { return x.order > y.order; });
+  out.axes.insert(out.axes.end(), turns.begin(), turns.end());
   return out;
 }
 

@@ -19,6 +19,14 @@ struct SymmetryOptions {
   double deviation_mm = 0;  // the tessellation's distance from the exact surface, when known
   int max_order = 360;      // the largest n-fold rotation looked for
   int max_points = 6000;    // surface points tested (vertices first, then triangle centroids)
+  // Lines to test as axes besides those the mesh suggests, in the mesh's frame: the axes of the
+  // exact B-rep's surfaces of revolution (RevolutionAxes). A line is tested when it passes
+  // within the tolerance of the surface's centroid.
+  struct Line {
+    Eigen::Vector3d point = Eigen::Vector3d::Zero();
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+  };
+  std::vector<Line> axis_hints;
   bool Check(std::string* why) const;
 };
 
@@ -38,6 +46,15 @@ struct DetectedSymmetries {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // the surface's area centroid
 };
 
+// The axes of a B-rep's faces of revolution (cylinders, cones, tori, surfaces of revolution),
+// exact, in the shape's frame, merged where they are one line and sorted by the area of their
+// faces, largest first (at most `max_axes`). Empty for a null shape.
+std::vector<SymmetryOptions::Line> RevolutionAxes(const Shape& shape, int max_axes = 8);
+
+// The options the pipeline detects a part's symmetries with: its measured tessellation
+// deviation, and the axes of revolution of its B-rep (if it has one) in its model frame.
+SymmetryOptions PartSymmetryOptions(const Part& part, double tolerance_mm = 0);
+
 // "6-fold about (0, 0, 1) and 6 flips; largest deviation 0.012 mm (tolerance 0.2 mm)": for
 // messages and `inspect`.
 std::string DescribeSymmetries(const DetectedSymmetries& detected);
@@ -49,5 +66,12 @@ std::string DescribeSymmetries(const DetectedSymmetries& detected);
 // member checked on the surface points. Deterministic; throws Error for an empty mesh or bad
 // options.
 DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& options = {});
+
+// Symmetries given by a user (a recipe's explicit list), completed to the group they generate
+// (every product of the discrete ones) and measured on `mesh` as DetectSymmetries measures its
+// own: the deviations say how exactly each holds; nothing is left out. Throws Error for an empty
+// mesh or bad options.
+DetectedSymmetries MeasureSymmetries(const Mesh& mesh, const Symmetries& given,
+                                     const SymmetryOptions& options = {});
 
 }  // namespace cadsynth

@@ -407,8 +407,13 @@ double InvoluteFitError(const GearOptions& options) {
 }
 
 Symmetries GearSymmetries(const GearOptions& o) {
-  const bool flat = o.helix_angle_rad == 0.0 && o.hub_length_mm == 0.0;
-  return Symmetries::Cyclic(o.teeth, flat, 0.5 * o.face_width_mm);
+  // Without a hub the gear is the same seen from either face: half-turns about radial axes
+  // through mid-face. A helical gear has them too (a half-turn keeps a helix's hand): its tooth
+  // 0 is turned by (b / 2) tan(helix) / r at mid-face, and so are the axes.
+  const bool flat = o.hub_length_mm == 0.0;
+  const double mid = 0.5 * o.face_width_mm;
+  return Symmetries::Cyclic(o.teeth, flat, mid,
+                            mid * std::tan(o.helix_angle_rad) / o.PitchRadius());
 }
 
 Shape MakeGear(const GearOptions& o) {

@@ -56,8 +56,8 @@ double InvoluteFitError(const GearOptions& options);
 // The gear solid. Throws Error (with the reason) for impossible parameters.
 Shape MakeGear(const GearOptions& options);
 
-// Its symmetries: z-fold about the axis, and for spur gears without a hub the flips that turn it
-// over (CAD frame).
+// Its symmetries: z-fold about the axis, and for gears without a hub (spur or helical) the z
+// half-turns that turn it over (CAD frame).
 Symmetries GearSymmetries(const GearOptions& options);
 
 }  // namespace cadsynth

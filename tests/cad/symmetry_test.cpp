@@ -5,9 +5,18 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <BRepFilletAPI_MakeChamfer.hxx>
+#include <BRep_Tool.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS.hxx>
 
 #include "cad/error.h"
+#include "cad/import.h"
+#include "cad/occt_shape.h"
 #include "cad/shape.h"
+#include "cad/step.h"
+#include "tests/test_support.h"
 #include "variants/families.h"
 
 namespace cadsynth {
@@ -92,9 +101,14 @@ TEST(Symmetry, FamilyPartsGetTheirDeclaredSymmetriesBack) {
   const Case cases[] = {
       {"hex_nut", {}, 11, 6},                    // 6 turns and 6 flips
       {"spur_gear", {{"teeth", 17.0}}, 33, 17},  // 17 turns and 17 flips
-      // A helical gear keeps its half-turns about radial axes (a helix does: a rotation keeps its
-      // hand), though the family declares only its 20 turns.
+      // A helical gear keeps its half-turns about radial axes (a rotation keeps a helix's hand),
+      // turned by the twist at mid-face.
       {"spur_gear", {{"teeth", 20.0}, {"helix_angle", 0.3}}, 39, 20},
+      // With a hub it can no longer be turned over.
+      {"spur_gear",
+       {{"teeth", 20.0}, {"helix_angle", 0.3}, {"hub_diameter", 20.0}, {"hub_length", 8.0}},
+       19,
+       20},
   };
   for (const Case& c : cases) {
     const Part part = FamilyPart(c.family, c.values);
@@ -102,8 +116,7 @@ TEST(Symmetry, FamilyPartsGetTheirDeclaredSymmetriesBack) {
     ExpectWithinTolerance(d);
     EXPECT_TRUE(d.symmetries.continuous.empty()) << c.family;
     EXPECT_EQ(d.symmetries.discrete.size(), c.discrete) << c.family;
-    if (!c.values.count("helix_angle"))
-      EXPECT_EQ(d.symmetries.discrete.size(), part.symmetries.discrete.size()) << c.family;
+    EXPECT_EQ(d.symmetries.discrete.size(), part.symmetries.discrete.size()) << c.family;
     ASSERT_FALSE(d.axes.empty());
     EXPECT_EQ(d.axes[0].order, c.order) << c.family;
     const Eigen::AlignedBox3d box = part.mesh.Bounds().cast<double>();
@@ -130,6 +143,140 @@ TEST(Symmetry, AnswersDoNotDependOnEarlierCalls) {
   ASSERT_EQ(again.symmetries.discrete.size(), first.symmetries.discrete.size());
   for (size_t i = 0; i < first.symmetries.discrete.size(); ++i)
     EXPECT_EQ(first.symmetries.discrete[i].matrix(), again.symmetries.discrete[i].matrix());
+}
+
+// The half-turns in `found`, and whether the n-fold turn about the main axis is there.
+size_t Flips(const DetectedSymmetries& d) {
+  size_t flips = 0;
+  const Eigen::Vector3d a = d.axes.at(0).direction;
+  for (const Eigen::Isometry3d& t : d.symmetries.discrete) flips += (t.linear() * a).dot(a) < -0.5;
+  return flips;
+}
+
+TEST(Symmetry, FamilyPartsWrittenToStepAndReadBackKeepTheirSymmetries) {
+  // The known answers, through a STEP file: the symmetries come from the B-rep's axes of
+  // revolution and the mesh read back, nothing of the family survives the file.
+  struct Case {
+    std::string family;
+    ParamValues values;
+    int order;     // main axis: n-fold, 0 continuous
+    size_t flips;  // half-turns turning it over
+  };
+  const Case cases[] = {
+      {"spur_gear", {{"teeth", 23.0}}, 23, 23},
+      {"spur_gear", {{"teeth", 20.0}, {"helix_angle", 0.3}}, 20, 20},
+      {"spur_gear",
+       {{"teeth", 20.0}, {"helix_angle", 0.3}, {"hub_diameter", 20.0}, {"hub_length", 8.0}},
+       20,
+       0},
+      {"hex_nut", {}, 6, 6},
+      {"washer", {}, 0, 1},
+  };
+  testing::ScratchDir dir;
+  for (const Case& c : cases) {
+    const FamilyInfo& family = *FindFamily(c.family);
+    const ShapeAssembly shapes = BuildVariantShapes(family, CompleteParams(family, c.values));
+    const std::filesystem::path file = dir.path() / (c.family + ".step");
+    WriteStep(file, c.family, {StepComponent{c.family, shapes.components.at(0).shape}});
+    ImportOptions import;
+    import.tessellation = TessellationOptions{0.01, 0.2};
+    const Assembly back = ImportCad(file, import);
+    ASSERT_EQ(back.parts.size(), 1u) << c.family;
+    const Part& part = back.parts[0];
+    ASSERT_TRUE(part.symmetries.empty()) << "a STEP file carries no symmetries";
+    const DetectedSymmetries d = DetectSymmetries(part.mesh, PartSymmetryOptions(part));
+    ExpectWithinTolerance(d);
+    ASSERT_FALSE(d.axes.empty()) << c.family;
+    EXPECT_EQ(d.axes[0].order, c.order) << c.family << ": " << DescribeSymmetries(d);
+    EXPECT_NEAR(std::abs(d.axes[0].direction.z()), 1.0, 1e-6) << c.family;
+    EXPECT_EQ(Flips(d), c.flips) << c.family << ": " << DescribeSymmetries(d);
+    if (c.order == 0) {
+      EXPECT_EQ(d.symmetries.continuous.size(), 1u);
+    } else {
+      EXPECT_EQ(d.symmetries.discrete.size(), c.order - 1 + c.flips) << c.family;
+    }
+  }
+}
+
+TEST(Symmetry, OneChamferedCornerBreaksThemOrShowsInTheDeviation) {
+  // A 2 mm chamfer on one vertical edge of the 60 x 40 x 30 box.
+  const Shape solid = MakeBox(60, 40, 30);
+  const TopoDS_Shape& box = OcctShape(solid);
+  TopTools_IndexedMapOfShape edges;
+  TopExp::MapShapes(box, TopAbs_EDGE, edges);
+  BRepFilletAPI_MakeChamfer chamfer(box);
+  bool added = false;
+  for (int i = 1; i <= edges.Extent() && !added; ++i) {
+    TopoDS_Vertex a, b;
+    TopExp::Vertices(TopoDS::Edge(edges(i)), a, b);
+    const gp_Pnt p = BRep_Tool::Pnt(a), q = BRep_Tool::Pnt(b);
+    if (std::abs(p.X() - 60) < 1e-6 && std::abs(q.X() - 60) < 1e-6 && std::abs(p.Y() - 40) < 1e-6 &&
+        std::abs(q.Y() - 40) < 1e-6) {
+      chamfer.Add(2.0, TopoDS::Edge(edges(i)));
+      added = true;
+    }
+  }
+  ASSERT_TRUE(added);
+  const Part part = MakePart("chamfered", WrapShape(chamfer.Shape()), TessellationOptions{});
+  EXPECT_TRUE(DetectSymmetries(part.mesh, PartSymmetryOptions(part)).symmetries.empty());
+  // Within a 3 mm tolerance the three half-turns are back, each with the chamfer's deviation:
+  // its corner point moved onto the sharp corner lies 2 / sqrt(2) mm from the chamfer face.
+  const DetectedSymmetries loose = DetectSymmetries(part.mesh, PartSymmetryOptions(part, 3.0));
+  ASSERT_EQ(loose.symmetries.discrete.size(), 3u) << DescribeSymmetries(loose);
+  size_t broken = 0;
+  for (double deviation : loose.discrete_deviation_mm) {
+    EXPECT_LE(deviation, std::sqrt(2.0) + 0.05);
+    broken += deviation > 1.0;
+  }
+  // The half-turn about z moves the chamfered edge onto the sharp one diagonally opposite; the
+  // other two move it onto edges as well: all three see it.
+  EXPECT_EQ(broken, 3u);
+}
+
+TEST(Symmetry, TheEightCylindersOfEightCylStpTurnFreelyAndFlip) {
+  CADSYNTH_REQUIRE_DATA(file, "step/assemblies/eight_cyl.stp");
+  const Assembly a = ImportCad(file, ImportOptions{});
+  ASSERT_EQ(a.parts.size(), 1u);
+  const DetectedSymmetries d = DetectSymmetries(a.parts[0].mesh, PartSymmetryOptions(a.parts[0]));
+  ExpectWithinTolerance(d);
+  ASSERT_EQ(d.symmetries.continuous.size(), 1u) << DescribeSymmetries(d);
+  ASSERT_EQ(d.symmetries.discrete.size(), 1u) << DescribeSymmetries(d);
+  // The flip turns the axis over.
+  const Eigen::Vector3d axis = d.symmetries.continuous[0].direction;
+  EXPECT_NEAR((d.symmetries.discrete[0].linear() * axis).dot(axis), -1.0, 1e-6);
+  // In the scene, each of the eight copies turns about its own axis.
+  EXPECT_EQ(a.instances.size(), 8u);
+}
+
+TEST(Symmetry, RevolutionAxesAreTheBrepsExactAxes) {
+  // A cylinder along z through (0, 0): one axis, exactly z.
+  const std::vector<SymmetryOptions::Line> axes = RevolutionAxes(MakeCylinder(15, 40));
+  ASSERT_EQ(axes.size(), 1u);
+  EXPECT_NEAR(std::abs(axes[0].direction.z()), 1.0, 1e-12);
+  EXPECT_NEAR(axes[0].point.head<2>().norm(), 0.0, 1e-12);
+  EXPECT_TRUE(RevolutionAxes(MakeBox(1, 2, 3)).empty());
+  EXPECT_TRUE(RevolutionAxes(Shape()).empty());
+}
+
+TEST(Symmetry, AListGivenByHandIsCompletedAndMeasured) {
+  const Part box = MakePart("box", MakeBox(60, 40, 30), TessellationOptions{});
+  // A half-turn about z and one about x through the box's centre make the third (about y).
+  Symmetries given;
+  given.discrete.push_back(Eigen::Isometry3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ())));
+  given.discrete.push_back(Eigen::Isometry3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX())));
+  const DetectedSymmetries d = MeasureSymmetries(box.mesh, given);
+  ASSERT_EQ(d.symmetries.discrete.size(), 3u);
+  for (double deviation : d.discrete_deviation_mm) EXPECT_LT(deviation, 1e-4);
+  ASSERT_FALSE(d.axes.empty());
+  EXPECT_EQ(d.axes[0].order, 2);
+  // A quarter-turn about z does not hold: measured, the long side's end lands 10 mm outside.
+  Symmetries wrong;
+  wrong.discrete.push_back(
+      Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ())));
+  const DetectedSymmetries w = MeasureSymmetries(box.mesh, wrong);
+  ASSERT_EQ(w.symmetries.discrete.size(), 3u);  // quarter, half and three-quarter turns
+  EXPECT_EQ(w.axes.at(0).order, 4);
+  EXPECT_NEAR(w.discrete_deviation_mm[0], 10.0, 1e-3);
 }
 
 TEST(Symmetry, BadInputIsRefused) {

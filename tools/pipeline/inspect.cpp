@@ -84,10 +84,8 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
   for (size_t i = 0; i < a.parts.size(); ++i) {
     const Part& p = a.parts[i];
     if (p.mesh.triangles.empty()) continue;
-    SymmetryOptions o;
-    o.deviation_mm = std::max(0.0, p.max_deviation_mm);
     try {
-      symmetries[i] = DescribeSymmetries(DetectSymmetries(p.mesh, o));
+      symmetries[i] = DescribeSymmetries(DetectSymmetries(p.mesh, PartSymmetryOptions(p)));
     } catch (const Error& e) {
       symmetries[i] = std::string("not looked for: ") + e.what();
     }

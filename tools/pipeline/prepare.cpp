@@ -517,11 +517,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     tbb::parallel_for(size_t{0}, detect.size(), [&](size_t k) {
       const Part& part = all.parts[detect[k].part];
       if (part.mesh.triangles.empty()) return;
-      SymmetryOptions options;
-      options.tolerance_mm = detect[k].tolerance_mm;
-      options.deviation_mm = std::max(0.0, part.max_deviation_mm);
       try {
-        found[k] = DetectSymmetries(part.mesh, options);
+        found[k] = DetectSymmetries(part.mesh, PartSymmetryOptions(part, detect[k].tolerance_mm));
       } catch (const Error&) {
         found[k].tolerance_mm = -1;  // reported below, in order
       }

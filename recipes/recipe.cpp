@@ -385,6 +385,9 @@ void ReadFileSource(const Reader& r, const YAML::Node& item, const std::string& 
   DetectFormatOrFail(r, item["file"], key + ".file", source->path);
 }
 
+Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::string& key,
+                       bool length);
+
 std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
                                   const std::string& where) {
   if (!node.IsSequence() || node.size() == 0) {
@@ -401,10 +404,37 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
       r.Fail(item, key, "give exactly one of 'file' or 'family'");
     PartSource source;
     ReadUp(r, item, key, &source);
-    if (const YAML::Node n = item["symmetry"]) {
+    if (const YAML::Node n = item["symmetry"]; n && n.IsSequence()) {
+      if (!item["file"])
+        r.Fail(n, key + ".symmetry", "a list goes with 'file' (families declare theirs)");
+      if (n.size() == 0) r.Fail(n, key + ".symmetry", "an empty list: write 'none'");
+      for (size_t k = 0; k < n.size(); ++k) {
+        const YAML::Node e = n[k];
+        const std::string at = key + ".symmetry[" + std::to_string(k) + "]";
+        r.ExpectMap(e, at, {"axis", "order", "continuous", "through"});
+        if (!e["axis"]) r.Fail(e, at, "give the 'axis' to turn about, e.g. [0, 0, 1]");
+        PartSource::GivenSymmetry g;
+        g.where = r.Where(e);
+        g.axis = Triple(r, e["axis"], at + ".axis", false);
+        if (!(g.axis.norm() > 0)) r.Fail(e["axis"], at + ".axis", "must not be zero");
+        g.axis.normalize();
+        const bool continuous = e["continuous"] && r.Bool(e["continuous"], at + ".continuous");
+        if (continuous == static_cast<bool>(e["order"]))
+          r.Fail(e, at, "give 'order: n' (an n-fold turn) or 'continuous: true'");
+        if (e["order"]) {
+          g.order = r.Integer(e["order"], at + ".order");
+          if (g.order < 2 || g.order > 360)
+            r.Fail(e["order"], at + ".order", "must be 2 to 360 (2: a half-turn, a flip)");
+        }
+        if (e["through"]) g.through = Triple(r, e["through"], at + ".through", true);
+        source.given_symmetries.push_back(g);
+      }
+      source.detect_symmetry = false;
+    } else if (n) {
       const std::string policy = r.Scalar(n, key + ".symmetry");
       if (policy != "auto" && policy != "none")
-        r.Fail(n, key + ".symmetry", "expected auto or none, got '" + policy + "'");
+        r.Fail(n, key + ".symmetry",
+               "expected auto, none or a list of {axis, order | continuous}, got '" + policy + "'");
       source.detect_symmetry = policy == "auto";
     }
     if (const YAML::Node n = item["symmetry_tolerance"]) {

@@ -45,6 +45,17 @@ struct PartSource {
   // them (cad/symmetry.h, within symmetry_tolerance_mm, 0: automatic), `none` leaves them empty.
   bool detect_symmetry = true;
   double symmetry_tolerance_mm = 0;
+  // An explicit list (`symmetry: [{axis: [0, 0, 1], order: 6}, ...]`) instead of detection: each
+  // an n-fold rotation (order 0: continuous) about `axis` through `through`, in the part's own
+  // CAD frame (mm; default: the centroid of its surface). The run completes the list to its group
+  // and measures every member; one beyond the tolerance stops the run. Files with one part only.
+  struct GivenSymmetry {
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+    int order = 0;
+    std::optional<Eigen::Vector3d> through;
+    std::string where;  // "recipe.yaml:7:9"
+  };
+  std::vector<GivenSymmetry> given_symmetries;
   std::string where;  // "recipe.yaml:3:5" (empty when built in)
 };
 

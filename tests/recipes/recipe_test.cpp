@@ -1131,5 +1131,42 @@ TEST(Recipe, ShippedRecipesParse) {
   EXPECT_EQ(paper.bop.model_points, 3000);
 }
 
+TEST(Recipe, SymmetryListsAreReadInTheFilesFrame) {
+  testing::ScratchDir dir;
+  std::ofstream(dir / "nut.step") << "ISO-10303-21;\n";
+  const RunSpec spec = ParseRecipe(R"(parts:
+  - file: nut.step
+    symmetry:
+      - {axis: [0, 0, 2], order: 6}
+      - {axis: [1, 0, 0], order: 2, through: [0, 0, 0.5 in]}
+      - {axis: [0, 0, 1], continuous: true}
+)",
+                                   "r.yaml", dir.path());
+  const PartSource& source = spec.scenes.at(0).sources.at(0);
+  ASSERT_EQ(source.given_symmetries.size(), 3u);
+  EXPECT_FALSE(source.detect_symmetry);
+  EXPECT_TRUE(source.given_symmetries[0].axis.isApprox(Eigen::Vector3d::UnitZ()));
+  EXPECT_EQ(source.given_symmetries[0].order, 6);
+  EXPECT_EQ(source.given_symmetries[0].where, "r.yaml:4:9");
+  ASSERT_TRUE(source.given_symmetries[1].through.has_value());
+  EXPECT_NEAR(source.given_symmetries[1].through->z(), 12.7, 1e-12);
+  EXPECT_EQ(source.given_symmetries[2].order, 0);
+  const auto error = [](const std::string& list) {
+    return ErrorOf("parts: [{file: a.stl, symmetry: " + list + "}]\n");
+  };
+  EXPECT_EQ(error("[{axis: [0, 0, 1]}]"),
+            "r.yaml:1:34: parts[0].symmetry[0]: give 'order: n' (an n-fold turn) or "
+            "'continuous: true'");
+  EXPECT_EQ(error("[{axis: [0, 0, 0], order: 2}]"),
+            "r.yaml:1:41: parts[0].symmetry[0].axis: must not be zero");
+  EXPECT_EQ(error("[{axis: [0, 0, 1], order: 1}]"),
+            "r.yaml:1:59: parts[0].symmetry[0].order: must be 2 to 360 (2: a half-turn, a flip)");
+  EXPECT_EQ(error("[{order: 2}]"),
+            "r.yaml:1:34: parts[0].symmetry[0]: give the 'axis' to turn about, e.g. [0, 0, 1]");
+  EXPECT_EQ(error("[]"), "r.yaml:1:33: parts[0].symmetry: an empty list: write 'none'");
+  EXPECT_EQ(ErrorOf("parts: [{family: hex_nut, symmetry: [{axis: [0, 0, 1], order: 6}]}]\n"),
+            "r.yaml:1:37: parts[0].symmetry: a list goes with 'file' (families declare theirs)");
+}
+
 }  // namespace
 }  // namespace cadsynth

@@ -484,6 +484,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   struct Detect {
     size_t part;
     double tolerance_mm;
+    const PartSource* given = nullptr;  // a recipe's explicit list, measured instead
   };
   std::vector<Detect> detect;  // parts without declared symmetries, to look for them
   std::vector<int> job_of_instance;
@@ -502,8 +503,16 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     for (Part& part : a.parts) {
       label_of_part.push_back(source.one_class ? source.family : std::string());
       all.parts.push_back(std::move(part));
-      if (source.detect_symmetry && all.parts.back().symmetries.empty())
+      if (!source.given_symmetries.empty()) {
+        if (a.parts.size() != 1) {
+          throw Error(source.given_symmetries[0].where +
+                      ": symmetry: a list is for a file of one " + "part; " + source.path.string() +
+                      " has " + std::to_string(a.parts.size()));
+        }
+        detect.push_back({all.parts.size() - 1, source.symmetry_tolerance_mm, &source});
+      } else if (source.detect_symmetry && all.parts.back().symmetries.empty()) {
         detect.push_back({all.parts.size() - 1, source.symmetry_tolerance_mm});
+      }
     }
     for (Instance instance : a.instances) {
       instance.part += offset;
@@ -511,14 +520,48 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       job_of_instance.push_back(static_cast<int>(j));
     }
   }
-  // Symmetries of the parts that declare none (imported files), found on their meshes.
+  // Symmetries of the parts that declare none (imported files), found on their meshes, or as
+  // the recipe lists them, measured on the meshes.
   {
     std::vector<DetectedSymmetries> found(detect.size());
+    // Per listed entry, its own worst deviation (to name the entry that does not hold).
+    std::vector<std::vector<double>> entry_deviation(detect.size());
     tbb::parallel_for(size_t{0}, detect.size(), [&](size_t k) {
       const Part& part = all.parts[detect[k].part];
       if (part.mesh.triangles.empty()) return;
       try {
-        found[k] = DetectSymmetries(part.mesh, PartSymmetryOptions(part, detect[k].tolerance_mm));
+        const SymmetryOptions options = PartSymmetryOptions(part, detect[k].tolerance_mm);
+        if (detect[k].given == nullptr) {
+          found[k] = DetectSymmetries(part.mesh, options);
+          return;
+        }
+        // The list is in the part's CAD frame; an axis without a point passes through the
+        // surface's centroid.
+        const Eigen::Vector3d centre = MeasureSymmetries(part.mesh, {}, options).centre;
+        const Eigen::Isometry3d model_from_cad = part.cad_from_model.inverse();
+        Symmetries all_given;
+        for (const PartSource::GivenSymmetry& g : detect[k].given->given_symmetries) {
+          Symmetries one;
+          const Eigen::Vector3d axis = model_from_cad.linear() * g.axis;
+          const Eigen::Vector3d point = g.through ? model_from_cad * *g.through : centre;
+          if (g.order == 0) {
+            one.continuous.push_back({axis, point});
+          } else {
+            one.discrete.push_back(Eigen::Translation3d(point) *
+                                   Eigen::AngleAxisd(2 * M_PI / g.order, axis) *
+                                   Eigen::Translation3d(-point));
+          }
+          const DetectedSymmetries measured = MeasureSymmetries(part.mesh, one, options);
+          double worst = 0;
+          for (double d : measured.discrete_deviation_mm) worst = std::max(worst, d);
+          for (double d : measured.continuous_deviation_mm) worst = std::max(worst, d);
+          entry_deviation[k].push_back(worst);
+          all_given.discrete.insert(all_given.discrete.end(), one.discrete.begin(),
+                                    one.discrete.end());
+          all_given.continuous.insert(all_given.continuous.end(), one.continuous.begin(),
+                                      one.continuous.end());
+        }
+        found[k] = MeasureSymmetries(part.mesh, all_given, options);
       } catch (const Error&) {
         found[k].tolerance_mm = -1;  // reported below, in order
       }
@@ -529,9 +572,36 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         Warn("'" + part.name + "': no symmetries looked for (its mesh has no area)");
         continue;
       }
+      if (detect[k].given != nullptr) {
+        // Every listed symmetry, and every product of them, must hold within the tolerance.
+        const auto& list = detect[k].given->given_symmetries;
+        const auto mm = [](double v) {
+          std::ostringstream text;
+          text.precision(3);
+          text << v << " mm";
+          return text.str();
+        };
+        for (size_t e = 0; e < list.size(); ++e) {
+          if (entry_deviation[k][e] > found[k].tolerance_mm) {
+            throw Error(list[e].where + ": symmetry: this turn moves the surface of '" + part.name +
+                        "' up to " + mm(entry_deviation[k][e]) + " off itself, beyond the " +
+                        "tolerance of " + mm(found[k].tolerance_mm) +
+                        " (raise symmetry_tolerance to accept it)");
+          }
+        }
+        double worst = 0;
+        for (double d : found[k].discrete_deviation_mm) worst = std::max(worst, d);
+        if (worst > found[k].tolerance_mm) {
+          throw Error(list[0].where +
+                      ": symmetry: the listed turns combined move the surface of '" + part.name +
+                      "' up to " + mm(worst) + " off itself, beyond the tolerance of " +
+                      mm(found[k].tolerance_mm) + " (are the axes through the same point?)");
+        }
+      }
       part.symmetries = found[k].symmetries;
       if (part.symmetries.empty()) continue;
-      info("symmetries of '" + part.name + "': " + DescribeSymmetries(found[k]));
+      info("symmetries of '" + part.name + "'" + (detect[k].given ? " (as listed)" : "") + ": " +
+           DescribeSymmetries(found[k]));
     }
   }
   for (const SceneSpec& scene : spec.scenes) {

@@ -1012,5 +1012,49 @@ sweep: {yaw: [0], pitch: [89], radius: [1 m]}
   EXPECT_EQ(EntriesIn(dir / "out/train/000000/mask_visib"), 200u);
 }
 
+// A part read from STEP gets the symmetries found on it in models_info.json; a recipe's list
+// replaces them and is measured: a turn that does not hold stops the run at its line.
+TEST(Generate, FileSymmetriesAreFoundOrListedAndMeasured) {
+  ScratchDir dir;
+  WriteStep(dir / "box.step", "box", {StepComponent{"box", MakeBox(60, 40, 30)}});
+  const auto run = [&](const std::string& symmetry, const std::string& name) {
+    RunSpec spec = ParseRecipe("parts: [{file: box.step" + symmetry + R"(}]
+camera: {width: 64, height: 48, fx: 300, fy: 300, cx: 31.5, cy: 23.5}
+sweep: {yaw: [0], pitch: [60], radius: [400 mm]}
+)",
+                               "r.yaml", dir.path());
+    GenerateOptions options;
+    options.output = dir / name;
+    Generate(spec, options);
+    return json::parse(ReadFileText(dir / name / "models/models_info.json"))["1"];
+  };
+  const json found = run("", "auto");
+  EXPECT_EQ(found["symmetries_discrete"].size(), 3u);  // the three half-turns
+  EXPECT_EQ(run(", symmetry: none", "none").count("symmetries_discrete"), 0u);
+  // Listed: a half-turn about z through the box's centre (the model frame's origin).
+  const json listed = run(", symmetry: [{axis: [0, 0, 1], order: 2}]", "listed");
+  ASSERT_EQ(listed["symmetries_discrete"].size(), 1u);
+  const std::vector<double> m = listed["symmetries_discrete"][0].get<std::vector<double>>();
+  const std::vector<double> half_turn = {-1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  ASSERT_EQ(m.size(), 16u);
+  for (size_t i = 0; i < 16; ++i) EXPECT_NEAR(m[i], half_turn[i], 1e-6) << i;
+  // Through a point given in the file's frame: the same turn.
+  const json through = run(", symmetry: [{axis: [0, 0, 1], order: 2, through: [30, 20, 0]}]", "at");
+  ASSERT_EQ(through["symmetries_discrete"].size(), 1u);
+  EXPECT_NEAR(through["symmetries_discrete"][0][3].get<double>(), 0.0, 1e-6);
+  // A quarter-turn does not hold on a 60 x 40 box, nor a half-turn about its corner.
+  for (const std::string bad : {", symmetry: [{axis: [0, 0, 1], order: 4}]",
+                                ", symmetry: [{axis: [0, 0, 1], order: 2, through: [0, 0, 0]}]"}) {
+    try {
+      run(bad, "bad");
+      ADD_FAILURE() << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("r.yaml:1:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("beyond the tolerance"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad/models/models_info.json"));
+  }
+}
+
 }  // namespace
 }  // namespace cadsynth

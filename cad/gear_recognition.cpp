@@ -1,0 +1,399 @@
+#include "cad/gear_recognition.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <sstream>
+
+namespace cadsynth {
+
+namespace {
+
+constexpr int kBins = 4096;  // angular bins of a section's radius profile
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double Involute(double a) { return std::tan(a) - a; }
+
+// Cylindrical coordinates about an axis: h along it, r and theta about it (theta counter-
+// clockwise seen from the axis's tip, from `u`).
+struct Frame {
+  Frame(const SymmetryOptions::Line& line) : origin(line.point), axis(line.direction.normalized()) {
+    const Eigen::Vector3d hint =
+        std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    u = (hint - hint.dot(axis) * axis).normalized();
+    v = axis.cross(u);
+  }
+  Eigen::Vector3d Local(const Eigen::Vector3d& p) const {  // (x, y, h)
+    const Eigen::Vector3d d = p - origin;
+    return {d.dot(u), d.dot(v), d.dot(axis)};
+  }
+  Eigen::Vector3d origin, axis, u, v;
+};
+
+// A transverse section's radius profile: per angular bin the largest and the smallest radius of
+// the section's outline (empty bins filled from their neighbours).
+struct Profile {
+  std::vector<double> outer, inner;
+  bool ok = false;
+};
+
+int Bin(double theta) {
+  const int b = static_cast<int>(std::floor((theta + M_PI) / (2 * M_PI) * kBins));
+  return std::clamp(b, 0, kBins - 1);
+}
+double BinAngle(int b) { return -M_PI + (b + 0.5) * 2 * M_PI / kBins; }
+
+// Fills the bins left at `empty` by walking round from the last filled one (a bin the outline
+// crosses only between samples).
+bool Fill(std::vector<double>* p, double empty) {
+  int first = -1;
+  for (int b = 0; b < kBins && first < 0; ++b) first = (*p)[b] != empty ? b : -1;
+  if (first < 0) return false;
+  double last = (*p)[first];
+  for (int k = 1; k <= kBins; ++k) {
+    double& x = (*p)[(first + k) % kBins];
+    if (x == empty) {
+      x = last;
+    } else {
+      last = x;
+    }
+  }
+  return true;
+}
+
+Profile Section(const Mesh& mesh, const std::vector<Eigen::Vector3d>& local, double h,
+                double step) {
+  Profile p;
+  p.outer.assign(kBins, -kInf);
+  p.inner.assign(kBins, kInf);
+  for (const auto& t : mesh.triangles) {
+    Eigen::Vector2d ends[2];
+    int n = 0;
+    for (int e = 0; e < 3 && n < 2; ++e) {
+      const Eigen::Vector3d& a = local[t[e]];
+      const Eigen::Vector3d& b = local[t[(e + 1) % 3]];
+      if ((a.z() >= h) == (b.z() >= h)) continue;
+      const double s = (h - a.z()) / (b.z() - a.z());
+      ends[n++] = a.head<2>() + s * (b.head<2>() - a.head<2>());
+    }
+    if (n < 2) continue;
+    const int samples = 1 + static_cast<int>((ends[1] - ends[0]).norm() / step);
+    for (int k = 0; k <= samples; ++k) {
+      const Eigen::Vector2d q = ends[0] + (ends[1] - ends[0]) * (double(k) / samples);
+      const int b = Bin(std::atan2(q.y(), q.x()));
+      const double r = q.norm();
+      p.outer[b] = std::max(p.outer[b], r);
+      p.inner[b] = std::min(p.inner[b], r);
+    }
+  }
+  p.ok = Fill(&p.outer, -kInf) && Fill(&p.inner, kInf);
+  return p;
+}
+
+// Teeth of a periodic radius profile: rises through 65% of its range after falling below 35%.
+int CountTeeth(const std::vector<double>& p) {
+  const auto [lo_it, hi_it] = std::minmax_element(p.begin(), p.end());
+  const double lo = *lo_it, hi = *hi_it;
+  if (!(hi - lo > 0)) return 0;
+  const double low = lo + 0.35 * (hi - lo), high = lo + 0.65 * (hi - lo);
+  const int start = static_cast<int>(lo_it - p.begin());
+  bool up = false;
+  int count = 0;
+  for (int k = 1; k <= kBins; ++k) {
+    const double x = p[(start + k) % kBins];
+    if (!up && x > high) up = true, ++count;
+    if (up && x < low) up = false;
+  }
+  return count;
+}
+
+// The angle of the profile's peaks (mod 2 pi / z): its z-th Fourier component's phase.
+double Phase(const std::vector<double>& p, int z) {
+  std::complex<double> c = 0;
+  for (int b = 0; b < kBins; ++b) c += p[b] * std::polar(1.0, -z * BinAngle(b));
+  return -std::arg(c) / z;
+}
+
+double Wrap(double angle, double period) {  // into [-period / 2, period / 2)
+  return angle - period * std::floor(angle / period + 0.5);
+}
+
+std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions::Line& line) {
+  const Frame frame(line);
+  std::vector<Eigen::Vector3d> local;
+  local.reserve(mesh.positions.size());
+  double h_lo = kInf, h_hi = -kInf, r_max = 0;
+  for (const Eigen::Vector3f& p : mesh.positions) {
+    local.push_back(frame.Local(p.cast<double>()));
+    h_lo = std::min(h_lo, local.back().z());
+    h_hi = std::max(h_hi, local.back().z());
+    r_max = std::max(r_max, local.back().head<2>().norm());
+  }
+  if (!(h_hi > h_lo) || !(r_max > 0)) return std::nullopt;
+  const double step = 2 * M_PI * r_max / (4 * kBins);
+  const auto radius = [&](size_t i) { return local[i].head<2>().norm(); };
+
+  // The section and side (outer: external teeth; inner: internal) whose profile swings most.
+  bool internal = false;
+  int z = 0;
+  double best = 0, h_best = 0;
+  for (int k = 0; k < 9; ++k) {
+    const double h = h_lo + (k + 0.5) / 9 * (h_hi - h_lo);
+    const Profile p = Section(mesh, local, h, step);
+    if (!p.ok) continue;
+    for (const bool in : {false, true}) {
+      const std::vector<double>& q = in ? p.inner : p.outer;
+      const auto [lo, hi] = std::minmax_element(q.begin(), q.end());
+      const int teeth = CountTeeth(q);
+      const double swing = (*hi - *lo) / *hi;
+      if (teeth >= 5 && swing > best + 1e-9) best = swing, z = teeth, internal = in, h_best = h;
+    }
+  }
+  if (z < 5) return std::nullopt;
+  const Profile first = Section(mesh, local, h_best, step);
+  const std::vector<double>& q0 = internal ? first.inner : first.outer;
+  const auto [lo0, hi0] = std::minmax_element(q0.begin(), q0.end());
+  // Tip and root as the section samples them (between vertices a chord cuts in), then exactly:
+  // the outline's vertices lie on the surface.
+  const double tip_s = internal ? *lo0 : *hi0, root_s = internal ? *hi0 : *lo0;
+  const double depth_s = std::abs(tip_s - root_s);
+  const auto near = [&](double r, double target) { return std::abs(r - target) < 0.1 * depth_s; };
+  double tip = internal ? kInf : -kInf;
+  for (size_t i = 0; i < local.size(); ++i) {
+    const double r = radius(i);
+    if (near(r, tip_s)) tip = internal ? std::min(tip, r) : std::max(tip, r);
+  }
+  if (!std::isfinite(tip)) return std::nullopt;
+  // The toothed band: the heights of the tips' vertices.
+  double h0 = kInf, h1 = -kInf;
+  for (size_t i = 0; i < local.size(); ++i) {
+    if (std::abs(radius(i) - tip) < 0.02 * depth_s)
+      h0 = std::min(h0, local[i].z()), h1 = std::max(h1, local[i].z());
+  }
+  if (!(h1 > h0)) return std::nullopt;
+  double root = internal ? -kInf : kInf;
+  for (size_t i = 0; i < local.size(); ++i) {
+    const double r = radius(i);
+    if (local[i].z() >= h0 && local[i].z() <= h1 && near(r, root_s))
+      root = internal ? std::max(root, r) : std::min(root, r);
+  }
+  if (!std::isfinite(root)) return std::nullopt;
+  const double depth = std::abs(tip - root);
+  // A gear's teeth are about as deep as 0.7 of their pitch; a hexagon's corners are not.
+  const double pitch_at_tip = 2 * M_PI * tip / z;
+  if (!(depth > 0.3 * pitch_at_tip && depth < 1.2 * pitch_at_tip)) return std::nullopt;
+
+  RecognizedGear g;
+  g.teeth = z;
+  g.internal = internal;
+  g.tip_radius_mm = tip;
+  g.root_radius_mm = root;
+  g.face_width_mm = h1 - h0;
+  g.module_mm = depth / 2.25;
+
+  // The teeth's phase along the band: a straight line in h (a helix's twist), or a V with its
+  // apex at mid-face (a double helical, herringbone gear).
+  const int slices = 13;
+  std::vector<double> hs, phases;
+  for (int k = 0; k < slices; ++k) {
+    const double h = h0 + (0.04 + 0.92 * k / (slices - 1)) * (h1 - h0);
+    const Profile p = Section(mesh, local, h, step);
+    if (!p.ok) continue;
+    double phi = Phase(internal ? p.inner : p.outer, z);
+    if (!phases.empty()) phi += (2 * M_PI / z) * std::round((phases.back() - phi) / (2 * M_PI / z));
+    hs.push_back(h - h0);
+    phases.push_back(phi);
+  }
+  if (hs.size() < 3) return std::nullopt;
+  const double apex = 0.5 * (h1 - h0);
+  // Least squares phase = phi0 + twist * shape(h); returns the residual sum of squares.
+  const auto fit_phase = [&](const auto& shape, double* phi0, double* twist) {
+    double mh = 0, mp = 0;
+    for (size_t i = 0; i < hs.size(); ++i)
+      mh += shape(hs[i]) / hs.size(), mp += phases[i] / hs.size();
+    double shh = 0, shp = 0;
+    for (size_t i = 0; i < hs.size(); ++i)
+      shh += (shape(hs[i]) - mh) * (shape(hs[i]) - mh),
+          shp += (shape(hs[i]) - mh) * (phases[i] - mp);
+    *twist = shh > 0 ? shp / shh : 0;
+    *phi0 = mp - *twist * mh;
+    double sse = 0;
+    for (size_t i = 0; i < hs.size(); ++i) {
+      const double res = phases[i] - *phi0 - *twist * shape(hs[i]);
+      sse += res * res;
+    }
+    return sse;
+  };
+  const auto straight = [](double h) { return h; };
+  const auto vee = [apex](double h) { return apex - std::abs(h - apex); };
+  double phi0 = 0, twist = 0, phi0_v = 0, twist_v = 0;
+  const double sse = fit_phase(straight, &phi0, &twist);
+  const double sse_v = fit_phase(vee, &phi0_v, &twist_v);
+  // A V fits far better than a line only where the teeth really turn back.
+  g.herringbone = sse_v < 0.1 * sse && std::abs(twist_v) * apex > 1e-3 * (2 * M_PI / z);
+  if (g.herringbone) phi0 = phi0_v, twist = twist_v;
+  const auto turn = [&](double h) { return twist * (g.herringbone ? vee(h) : h); };
+  const double sin_helix = twist * z * g.module_mm / 2;
+  if (!(std::abs(sin_helix) < 0.8)) return std::nullopt;
+  g.helix_angle_rad = std::asin(sin_helix);
+  if (std::abs(g.helix_angle_rad) < 1e-4) g.helix_angle_rad = 0;
+  g.transverse_module_mm = g.module_mm / std::cos(g.helix_angle_rad);
+  g.pitch_radius_mm = 0.5 * z * g.transverse_module_mm;
+
+  // The flanks: vertices of the band between the root's fillet and the tip's corner, each at its
+  // angle from the middle of its tooth (internal: of its tooth space). An involute tooth's half
+  // angle at radius r is psi_b - inv(acos(r_b / r)); fit r_b, psi_b and a phase correction e.
+  const double r_lo = internal
+                          ? tip + 0.1 * depth
+                          : std::max(root + 0.35 * depth, g.pitch_radius_mm - 0.15 * g.module_mm);
+  const double r_hi = internal ? root - 0.35 * depth : tip - 0.1 * depth;
+  struct Point {
+    double r, y, side;
+  };
+  std::vector<Point> flank;
+  const double period = 2 * M_PI / z;
+  for (size_t i = 0; i < local.size(); ++i) {
+    const double r = radius(i), h = local[i].z();
+    if (r < r_lo || r > r_hi || h < h0 || h > h1) continue;
+    const double delta = Wrap(std::atan2(local[i].y(), local[i].x()) - phi0 - turn(h - h0), period);
+    flank.push_back({r, std::abs(delta), delta >= 0 ? 1.0 : -1.0});
+  }
+  if (flank.size() < 8) return std::nullopt;
+  struct Fit {
+    double rb = 0, psi = 0, e = 0, sse = kInf;
+  };
+  const auto fit = [&](double rb) {
+    // Least squares for y + inv = psi + side e.
+    double n = 0, s = 0, ss = 0, t = 0, st = 0;
+    for (const Point& p : flank) {
+      const double target = p.y + Involute(std::acos(std::min(1.0, rb / p.r)));
+      n += 1, s += p.side, ss += p.side * p.side, t += target, st += p.side * target;
+    }
+    Fit f;
+    f.rb = rb;
+    const double det = n * ss - s * s;
+    if (!(std::abs(det) > 0)) return f;
+    f.psi = (ss * t - s * st) / det;
+    f.e = (n * st - s * t) / det;
+    f.sse = 0;
+    for (const Point& p : flank) {
+      const double target = p.y + Involute(std::acos(std::min(1.0, rb / p.r)));
+      const double res = target - f.psi - p.side * f.e;
+      f.sse += res * res;
+    }
+    return f;
+  };
+  double a = 0.5 * r_lo, b = 0.99999 * r_lo;
+  const double golden = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
+  Fit f1 = fit(x1), f2 = fit(x2);
+  for (int it = 0; it < 80; ++it) {
+    if (f1.sse < f2.sse) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - golden * (b - a), f1 = fit(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + golden * (b - a), f2 = fit(x2);
+    }
+  }
+  const Fit best_fit = f1.sse < f2.sse ? f1 : f2;
+  double worst = 0, sum = 0;
+  for (const Point& p : flank) {
+    const double alpha = std::acos(std::min(1.0, best_fit.rb / p.r));
+    const double res = p.y + Involute(alpha) - best_fit.psi - p.side * best_fit.e;
+    const double mm = std::abs(res) * p.r * std::cos(alpha);
+    worst = std::max(worst, mm);
+    sum += mm * mm;
+  }
+  const double rms = std::sqrt(sum / flank.size());
+  if (!(rms < 0.05 * g.module_mm)) return std::nullopt;
+  phi0 += best_fit.e;
+  g.involute_deviation_mm = worst;
+  g.base_radius_mm = best_fit.rb;
+  if (!(g.base_radius_mm < g.pitch_radius_mm)) return std::nullopt;
+  g.transverse_pressure_angle_rad = std::acos(g.base_radius_mm / g.pitch_radius_mm);
+  g.pressure_angle_rad =
+      std::atan(std::tan(g.transverse_pressure_angle_rad) * std::cos(g.helix_angle_rad));
+  g.profile_shift = (tip - g.pitch_radius_mm) / g.module_mm + (internal ? 1.0 : -1.0);
+
+  // A round bore at mid-face: the inner outline, when most of it lies on one circle well inside
+  // the root (a key way may cut the rest), measured on its vertices.
+  if (!internal) {
+    const Profile mid = Section(mesh, local, 0.5 * (h0 + h1), step);
+    std::vector<double> inner = mid.inner;
+    std::nth_element(inner.begin(), inner.begin() + kBins / 2, inner.end());
+    const double median = inner[kBins / 2];
+    int round = 0;
+    for (double r : mid.inner) round += std::abs(r - median) < 0.02 * median;
+    if (mid.ok && median < root - 0.25 * depth && round > 0.75 * kBins) {
+      std::vector<double> on;
+      for (size_t i = 0; i < local.size(); ++i) {
+        const double r = radius(i);
+        if (local[i].z() >= h0 && local[i].z() <= h1 && std::abs(r - median) < 0.02 * median)
+          on.push_back(r);
+      }
+      if (!on.empty()) {
+        std::nth_element(on.begin(), on.begin() + on.size() / 2, on.end());
+        g.bore_diameter_mm = 2 * on[on.size() / 2];
+      }
+    }
+  }
+  g.axis = frame.axis;
+  g.centre = frame.origin + h0 * frame.axis;
+  g.reference = std::cos(phi0) * frame.u + std::sin(phi0) * frame.v;
+  return g;
+}
+
+}  // namespace
+
+std::optional<RecognizedGear> RecognizeGear(const Mesh& mesh,
+                                            const std::vector<SymmetryOptions::Line>& axes) {
+  if (mesh.triangles.empty()) return std::nullopt;
+  std::vector<SymmetryOptions::Line> tried;
+  for (const SymmetryOptions::Line& line : axes) {
+    if (!(line.direction.norm() > 0)) continue;
+    bool seen = false;
+    for (const SymmetryOptions::Line& t : tried) {
+      const Eigen::Vector3d d = t.direction.normalized(), off = line.point - t.point;
+      seen = seen || (std::abs(line.direction.normalized().dot(d)) > 1 - 1e-9 &&
+                      (off - off.dot(d) * d).norm() < 1e-6);
+    }
+    if (seen) continue;
+    tried.push_back(line);
+    if (std::optional<RecognizedGear> g = AboutAxis(mesh, line)) return g;
+  }
+  return std::nullopt;
+}
+
+std::optional<RecognizedGear> RecognizePartGear(const Part& part, const DetectedSymmetries& found) {
+  std::vector<SymmetryOptions::Line> axes;
+  for (const DetectedSymmetries::Axis& a : found.axes) {
+    if (a.order >= 2) axes.push_back({found.centre, a.direction});
+  }
+  for (const SymmetryOptions::Line& line : PartSymmetryOptions(part).axis_hints)
+    axes.push_back(line);
+  return RecognizeGear(part.mesh, axes);
+}
+
+std::string DescribeGear(const RecognizedGear& g) {
+  std::ostringstream out;
+  out.precision(4);
+  const double deg = 180 / M_PI;
+  out << (g.internal ? "internal " : "")
+      << (g.helix_angle_rad == 0 ? "spur"
+          : g.herringbone        ? "herringbone"
+                                 : "helical")
+      << ", " << g.teeth << " teeth, module " << g.module_mm << " mm, pressure angle "
+      << g.pressure_angle_rad * deg << " deg";
+  if (g.helix_angle_rad != 0)
+    out << ", helix " << std::abs(g.helix_angle_rad) * deg << " deg "
+        << (g.helix_angle_rad > 0 ? "right" : "left") << " hand";
+  out << ", face width " << g.face_width_mm << " mm";
+  if (std::abs(g.profile_shift) >= 0.005) out << ", profile shift " << g.profile_shift;
+  if (g.bore_diameter_mm > 0) out << ", bore " << g.bore_diameter_mm << " mm";
+  out << "; tip/root/base radius " << g.tip_radius_mm << "/" << g.root_radius_mm << "/"
+      << g.base_radius_mm << " mm; flanks within " << g.involute_deviation_mm
+      << " mm of an involute";
+  return out.str();
+}
+
+}  // namespace cadsynth

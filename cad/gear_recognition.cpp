@@ -62,6 +62,10 @@ bool Fill(std::vector<double>* p, double empty) {
   return true;
 }
 
+double Wrap(double angle, double period) {  // into [-period / 2, period / 2)
+  return angle - period * std::floor(angle / period + 0.5);
+}
+
 Profile Section(const Mesh& mesh, const std::vector<Eigen::Vector3d>& local, double h,
                 double step) {
   Profile p;
@@ -78,7 +82,11 @@ Profile Section(const Mesh& mesh, const std::vector<Eigen::Vector3d>& local, dou
       ends[n++] = a.head<2>() + s * (b.head<2>() - a.head<2>());
     }
     if (n < 2) continue;
-    const int samples = 1 + static_cast<int>((ends[1] - ends[0]).norm() / step);
+    // Dense enough in length and in angle (a bore's outline is short but turns all the way).
+    const double turn = std::abs(Wrap(
+        std::atan2(ends[1].y(), ends[1].x()) - std::atan2(ends[0].y(), ends[0].x()), 2 * M_PI));
+    const int samples =
+        1 + static_cast<int>(std::max((ends[1] - ends[0]).norm() / step, turn * kBins / M_PI));
     for (int k = 0; k <= samples; ++k) {
       const Eigen::Vector2d q = ends[0] + (ends[1] - ends[0]) * (double(k) / samples);
       const int b = Bin(std::atan2(q.y(), q.x()));
@@ -113,10 +121,6 @@ double Phase(const std::vector<double>& p, int z) {
   std::complex<double> c = 0;
   for (int b = 0; b < kBins; ++b) c += p[b] * std::polar(1.0, -z * BinAngle(b));
   return -std::arg(c) / z;
-}
-
-double Wrap(double angle, double period) {  // into [-period / 2, period / 2)
-  return angle - period * std::floor(angle / period + 0.5);
 }
 
 std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions::Line& line) {

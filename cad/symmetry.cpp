@@ -298,7 +298,8 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     have_flip = have_flip || (out.axes[i].order >= 2 &&
                               std::abs(out.axes[i].direction.dot(out.axes[0].direction)) < 1e-6);
   }
-  if (!out.axes.empty() && !(have_flip && out.axes[0].order != 0)) {
+  // The best half-turn about an axis perpendicular to the main one (not yet checked).
+  const auto scan_flip = [&]() {
     const Eigen::Vector3d m = out.axes[0].direction;
     const int n = std::max(1, out.axes[0].order);
     const Eigen::Vector3d hint =
@@ -331,16 +332,20 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
       }
     }
     const double phi = std::min(f1, f2) < best ? (f1 < f2 ? x1 : x2) : best_phi;
+    return flip(phi);
+  };
+  if (!out.axes.empty() && !(have_flip && out.axes[0].order != 0)) {
+    const Eigen::Isometry3d flip = scan_flip();
     double deviation = 0;
-    if (holds(flip(phi), &deviation)) {
+    if (holds(flip, &deviation)) {
       if (out.axes[0].order == 0) {
         // About a continuous axis BOP lists one flip: the rotations make the others.
-        out.symmetries.discrete.push_back(flip(phi));
+        out.symmetries.discrete.push_back(flip);
         out.discrete_deviation_mm.push_back(deviation);
         return out;
       }
-      generators.push_back(flip(phi));
-      flip_found = flip(phi);
+      generators.push_back(flip);
+      flip_found = flip;
     }
     if (out.axes[0].order == 0) return out;
   }
@@ -356,6 +361,12 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
   if (group.size() >= cap && !out.axes.empty() && out.axes[0].order >= 2) {
     std::vector<Eigen::Isometry3d> main = {
         RotationAbout(centre, out.axes[0].direction, 2 * M_PI / out.axes[0].order)};
+    // (The candidate flips were among the tilted ones: the flip scanned for and refined.)
+    if (!flip_found) {
+      const Eigen::Isometry3d flip = scan_flip();
+      double deviation = 0;
+      if (holds(flip, &deviation)) flip_found = flip;
+    }
     if (flip_found) main.push_back(*flip_found);
     group = closure(main);
   }

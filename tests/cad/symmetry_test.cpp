@@ -164,6 +164,7 @@ TEST(Symmetry, FamilyPartsWrittenToStepAndReadBackKeepTheirSymmetries) {
   };
   const Case cases[] = {
       {"spur_gear", {{"teeth", 23.0}}, 23, 23},
+      {"spur_gear", {{"teeth", 25.0}, {"module", 1.5}, {"bore", 10.0}}, 25, 25},
       {"spur_gear", {{"teeth", 20.0}, {"helix_angle", 0.3}}, 20, 20},
       {"spur_gear",
        {{"teeth", 20.0}, {"helix_angle", 0.3}, {"hub_diameter", 20.0}, {"hub_length", 8.0}},

@@ -1,13 +1,18 @@
 #include "tools/pipeline/inspect.h"
 
-#include "cad/error.h"
-#include "cad/symmetry.h"
+#include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "cad/error.h"
+#include "cad/gear_recognition.h"
+#include "cad/symmetry.h"
 
 namespace cadsynth {
 namespace {
@@ -34,6 +39,32 @@ std::vector<int> InstanceCounts(const Assembly& a) {
   std::vector<int> counts(a.parts.size(), 0);
   for (const Instance& i : a.instances) ++counts[i.part];
   return counts;
+}
+
+// What the pipeline works out about each part (issue 20): its symmetries, found on its mesh as
+// a run finds them, and the gear it is, if it is one.
+struct Understood {
+  std::string error;  // why nothing was looked for
+  DetectedSymmetries symmetries;
+  std::optional<RecognizedGear> gear;
+};
+
+std::vector<Understood> Understand(const Assembly& a) {
+  std::vector<Understood> out(a.parts.size());
+  tbb::parallel_for(size_t{0}, a.parts.size(), [&](size_t i) {
+    const Part& p = a.parts[i];
+    if (p.mesh.triangles.empty()) {
+      out[i].error = "no triangles";
+      return;
+    }
+    try {
+      out[i].symmetries = DetectSymmetries(p.mesh, PartSymmetryOptions(p));
+      out[i].gear = RecognizePartGear(p, out[i].symmetries);
+    } catch (const Error& e) {
+      out[i].error = e.what();
+    }
+  });
+  return out;
 }
 
 }  // namespace
@@ -79,22 +110,25 @@ std::string InspectText(const std::filesystem::path& path, const ImportOptions& 
                   Hex(p.color).c_str(), volume, p.watertight ? "yes" : "NO", deviation);
     out << line;
   }
-  // Symmetries found on each part's mesh (cad/symmetry.h), as the pipeline finds them.
-  std::vector<std::string> symmetries(a.parts.size());
-  for (size_t i = 0; i < a.parts.size(); ++i) {
-    const Part& p = a.parts[i];
-    if (p.mesh.triangles.empty()) continue;
-    try {
-      symmetries[i] = DescribeSymmetries(DetectSymmetries(p.mesh, PartSymmetryOptions(p)));
-    } catch (const Error& e) {
-      symmetries[i] = std::string("not looked for: ") + e.what();
-    }
-  }
+  // Symmetries found on each part's mesh (cad/symmetry.h), as the pipeline finds them, and the
+  // gears recognised (cad/gear_recognition.h).
+  const std::vector<Understood> understood = Understand(a);
   out << "\n  symmetries (found on the meshes, in each part's model frame):\n";
   for (size_t i = 0; i < a.parts.size(); ++i) {
+    const Understood& u = understood[i];
+    const std::string text =
+        !u.error.empty() ? "not looked for: " + u.error : DescribeSymmetries(u.symmetries);
     std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %s\n", i + 1,
-                  Printable(a.parts[i].name).c_str(),
-                  symmetries[i].empty() ? "-" : symmetries[i].c_str());
+                  Printable(a.parts[i].name).c_str(), text.c_str());
+    out << line;
+  }
+  bool any_gear = false;
+  for (size_t i = 0; i < a.parts.size(); ++i) {
+    if (!understood[i].gear) continue;
+    if (!any_gear) out << "\n  gears (recognised on the meshes):\n";
+    any_gear = true;
+    std::snprintf(line, sizeof(line), "  %3zu  %-28.28s %s\n", i + 1,
+                  Printable(a.parts[i].name).c_str(), DescribeGear(*understood[i].gear).c_str());
     out << line;
   }
   out << "\n  assembly tree (instance: part id, position of its model frame in the root frame, "
@@ -132,9 +166,48 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
   const Assembly a = Read(path, options, reader);
   const std::vector<int> counts = InstanceCounts(a);
   const auto vec = [](const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); };
+  const std::vector<Understood> understood = Understand(a);
   Json parts = Json::array();
   for (size_t i = 0; i < a.parts.size(); ++i) {
     const Part& p = a.parts[i];
+    const Understood& u = understood[i];
+    Json symmetry;
+    if (u.error.empty()) {
+      Json axes = Json::array();
+      for (const DetectedSymmetries::Axis& axis : u.symmetries.axes)
+        axes.push_back({{"direction", vec(axis.direction)}, {"order", axis.order}});
+      double worst = 0;
+      for (double d : u.symmetries.discrete_deviation_mm) worst = std::max(worst, d);
+      for (double d : u.symmetries.continuous_deviation_mm) worst = std::max(worst, d);
+      symmetry = {{"description", DescribeSymmetries(u.symmetries)},
+                  {"discrete", u.symmetries.symmetries.discrete.size()},
+                  {"continuous", u.symmetries.symmetries.continuous.size()},
+                  {"axes", axes},
+                  {"centre_mm", vec(u.symmetries.centre)},
+                  {"largest_deviation_mm", worst},
+                  {"tolerance_mm", u.symmetries.tolerance_mm}};
+    }
+    Json gear;
+    if (u.gear) {
+      const RecognizedGear& g = *u.gear;
+      const double deg = 180 / M_PI;
+      gear = {{"teeth", g.teeth},
+              {"internal", g.internal},
+              {"module_mm", g.module_mm},
+              {"transverse_module_mm", g.transverse_module_mm},
+              {"pressure_angle_deg", g.pressure_angle_rad * deg},
+              {"helix_angle_deg", g.helix_angle_rad * deg},
+              {"herringbone", g.herringbone},
+              {"profile_shift", g.profile_shift},
+              {"face_width_mm", g.face_width_mm},
+              {"bore_diameter_mm", g.bore_diameter_mm},
+              {"tip_radius_mm", g.tip_radius_mm},
+              {"root_radius_mm", g.root_radius_mm},
+              {"base_radius_mm", g.base_radius_mm},
+              {"involute_deviation_mm", g.involute_deviation_mm},
+              {"axis", vec(g.axis)},
+              {"centre_mm", vec(g.centre)}};
+    }
     const Eigen::AlignedBox3d box = p.mesh.Bounds();
     Json part = {
         {"id", i + 1},
@@ -148,7 +221,9 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
         {"volume_mm3", p.mass.volume_mm3 > 0 ? Json(p.mass.volume_mm3) : Json()},
         {"volume_from", p.mass_from_brep ? "brep" : (p.mass.volume_mm3 > 0 ? "mesh" : "none")},
         {"watertight", p.watertight},
-        {"max_deviation_mm", p.max_deviation_mm >= 0 ? Json(p.max_deviation_mm) : Json()}};
+        {"max_deviation_mm", p.max_deviation_mm >= 0 ? Json(p.max_deviation_mm) : Json()},
+        {"symmetry", symmetry},
+        {"gear", gear}};
     parts.push_back(part);
   }
   Json instances = Json::array();

@@ -29,7 +29,7 @@ struct RecognizedGear {
   // gear's lower half has this helix, its upper half the opposite.
   double helix_angle_rad = 0;
   bool herringbone = false;
-  double profile_shift = 0;    // x, in normal modules, from the tip radius
+  double profile_shift = 0;  // x, in normal modules, from the tip radius
   double tip_radius_mm = 0, root_radius_mm = 0, base_radius_mm = 0, pitch_radius_mm = 0;
   double face_width_mm = 0;
   double bore_diameter_mm = 0;  // the round hole at mid-face (0: none, or not round)

@@ -397,7 +397,13 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
     const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned
                                               ? std::vector<StablePose>{}
                                               : StablePoses(parts, groups[g].instances);
-    const size_t faces = o.pose == PoseMode::kAll ? poses.size() : 1;
+    // `all`: a copy on each distinct pose (its first face): faces the part's symmetry maps onto
+    // each other would give copies that look the same.
+    std::vector<size_t> pose_starts;
+    for (size_t i = 0; i < poses.size(); ++i) {
+      if (i == 0 || poses[i].pose != poses[i - 1].pose) pose_starts.push_back(i);
+    }
+    const size_t faces = o.pose == PoseMode::kAll ? pose_starts.size() : 1;
     for (int c = 0; c < o.copies; ++c) {
       for (size_t f = 0; f < faces; ++f) {
         const uint64_t index =
@@ -408,7 +414,7 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
           bodies.push_back(std::move(body));
           continue;
         }
-        size_t pick = o.pose == PoseMode::kAll ? f : 0;
+        size_t pick = o.pose == PoseMode::kAll ? pose_starts[f] : 0;
         if (o.pose == PoseMode::kUpright) pick = UprightPose(poses);
         if (o.pose == PoseMode::kRandom) {
           const double u = UniformDraw(o.seed, streams::kCopyPose, index);

@@ -27,7 +27,7 @@ enum class Layout {
 enum class PoseMode {
   kStable,      // on its most probable face
   kRandom,      // on a face drawn by probability, at a random yaw
-  kAll,         // one copy on every stable face
+  kAll,         // one copy on every distinct stable pose (faces a symmetry relates are one)
   kAsDesigned,  // as the CAD has it, lowered onto the floor
   kUpright,     // on the stable face nearest the design's down (-z): the way it was drawn standing
   kAuto,        // upright for an assembled layout, stable for the others

@@ -79,13 +79,30 @@ std::vector<StablePose> FlatPoses(const std::vector<Eigen::Vector3d>& points,
   return poses;
 }
 
+// Whether a symmetry turns the normal `a` into `b` (body frame; within 1e-3: a facet's normal
+// is exact to far better, distinct faces differ by far more). About a continuous axis any
+// normal with the same component along it is reached, after any of the discrete turns.
+bool SameUpToSymmetry(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Symmetries& s) {
+  constexpr double kWithin = 1e-3;
+  std::vector<Eigen::Vector3d> images = {a};
+  for (const Eigen::Isometry3d& t : s.discrete) images.push_back(t.linear() * a);
+  for (const Eigen::Vector3d& n : images) {
+    if ((n - b).norm() < kWithin) return true;
+    for (const Symmetries::Axis& axis : s.continuous) {
+      const Eigen::Vector3d d = axis.direction.normalized();
+      if (std::abs(n.dot(d) - b.dot(d)) < kWithin) return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
-                                    const Eigen::Vector3d& com) {
+                                    const Eigen::Vector3d& com, const Symmetries* symmetries) {
   if (std::vector<StablePose> flat = FlatPoses(points, com); !flat.empty()) return flat;
   try {
-    return StablePoses(ComputeConvexHull(points, /*diameter=*/false), com);
+    return StablePoses(ComputeConvexHull(points, /*diameter=*/false), com, symmetries);
   } catch (const Error&) {
     std::vector<StablePose> flat = FlatPoses(points, com);
     if (flat.empty()) throw;
@@ -93,7 +110,8 @@ std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
   }
 }
 
-std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com) {
+std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com,
+                                    const Symmetries* symmetries) {
   // A sheet whose float vertices leave its plane by rounding has a hull of no real thickness.
   if (std::vector<StablePose> flat = FlatPoses(hull.vertices, com); !flat.empty()) return flat;
   if (hull.triangles.size() < 4)
@@ -311,12 +329,32 @@ std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3
     std::sort(level.begin(), level.end(), [&](const StablePose& a, const StablePose& b) {
       return a.probability != b.probability ? a.probability < b.probability : normal_less(a, b);
     });
+    const size_t first = groups.size();
     for (size_t i = 0; i < level.size(); ++i) {
       if (i == 0 ||
           level[i].probability - groups.back().front().probability > 1e-3 * level[i].probability) {
         groups.emplace_back();
       }
       groups.back().push_back(level[i]);
+    }
+    // With the body's symmetries known, only faces that one of them maps onto each other are
+    // one pose (a box 40 x 40 x 30 with a hole in one side rests on four sides at one height;
+    // two of them show the hole).
+    if (symmetries != nullptr && !symmetries->empty()) {
+      std::vector<std::vector<StablePose>> split;
+      for (size_t g = first; g < groups.size(); ++g) {
+        const size_t before = split.size();
+        for (const StablePose& p : groups[g]) {
+          size_t k = before;
+          while (k < split.size() &&
+                 !SameUpToSymmetry(split[k].front().normal, p.normal, *symmetries))
+            ++k;
+          if (k == split.size()) split.emplace_back();
+          split[k].push_back(p);
+        }
+      }
+      groups.resize(first);
+      for (std::vector<StablePose>& g : split) groups.push_back(std::move(g));
     }
     start = end;
   }
@@ -379,8 +417,14 @@ std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
                 (instances.empty() ? std::string() : parts[instances[0].part].name) +
                 "' has no volume or area");
   }
-  if (moved) return StablePoses(*moved, moment / weight);
-  return StablePoses(points, moment / weight);
+  // One placed part: its symmetries, turned into the body frame, decide which faces are one pose.
+  std::optional<Symmetries> turned;
+  if (instances.size() == 1 && !parts.at(instances[0].part).symmetries.empty())
+    turned =
+        parts.at(instances[0].part).symmetries.InFrame(instances[0].world_from_model.inverse());
+  const Symmetries* symmetries = turned ? &*turned : nullptr;
+  if (moved) return StablePoses(*moved, moment / weight, symmetries);
+  return StablePoses(points, moment / weight, symmetries);
 }
 
 }  // namespace cadsynth

@@ -33,14 +33,18 @@ struct StablePose {
 // centre of mass goes to the face it tips onto (over its edge furthest beyond the centre of mass),
 // repeatedly, until a stable face is reached. Points in one plane (a sheet) rest on either side
 // of it, probability 1/2 each. Throws Error for points that span no area, or are not finite.
+// With `symmetries` (body frame), faces at one height are one pose only when a symmetry maps one
+// onto the other.
 std::vector<StablePose> StablePoses(const std::vector<Eigen::Vector3d>& points,
-                                    const Eigen::Vector3d& com);
+                                    const Eigen::Vector3d& com,
+                                    const Symmetries* symmetries = nullptr);
 // The same from the hull itself.
-std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com);
+std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3d& com,
+                                    const Symmetries* symmetries = nullptr);
 
 // The stable poses of instances of `parts` taken together as one rigid body (body frame = the
 // instances' frame); the centre of mass combines the parts' volumes (or, for open meshes, their
-// box centres weighted by surface area).
+// box centres weighted by surface area). One instance's part's symmetries pool its faces.
 std::vector<StablePose> StablePoses(const std::vector<Part>& parts,
                                     const std::vector<Instance>& instances);
 

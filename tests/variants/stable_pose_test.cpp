@@ -33,6 +33,35 @@ TEST(StablePoses, CubeRestsOnAnyFaceWithEqualOdds) {
   }
 }
 
+// A 40 x 40 x 30 block rests on its four sides at height 20 and on its two caps at height 15.
+// Which faces are one pose is the part's symmetry's to say: the square prism's (4 turns about z
+// and 4 flips) pools the sides and the caps; a part that only a half-turn about z keeps (a hole
+// through one side and its opposite, a boss on top) rests 4 distinct ways. Without symmetries
+// the height decides.
+TEST(StablePoses, SymmetriesDecideWhichFacesAreOnePose) {
+  const Mesh block = Tessellate(MakeBox(40, 40, 30), TessellationOptions{});
+  const Eigen::Vector3d centre(20, 20, 15);
+  const auto count = [&](const Symmetries* s) {
+    const std::vector<StablePose> poses = StablePoses(Points(block), centre, s);
+    EXPECT_EQ(poses.size(), 6u);
+    int most = 0;
+    for (const StablePose& p : poses) most = std::max(most, p.pose + 1);
+    return most;
+  };
+  EXPECT_EQ(count(nullptr), 2);
+  const Symmetries square =
+      Symmetries::Cyclic(4, true, 15).InFrame(Eigen::Isometry3d(Eigen::Translation3d(-20, -20, 0)));
+  EXPECT_EQ(count(&square), 2);
+  const Symmetries half =
+      Symmetries::Cyclic(2, false).InFrame(Eigen::Isometry3d(Eigen::Translation3d(-20, -20, 0)));
+  EXPECT_EQ(count(&half), 4);  // +-x, +-y, top, bottom
+  // The pooled sides still share the probability the faces have together.
+  const std::vector<StablePose> poses = StablePoses(Points(block), centre, &half);
+  double total = 0;
+  for (const StablePose& p : poses) total += p.probability;
+  EXPECT_NEAR(total, 1.0, 1e-9);
+}
+
 TEST(StablePoses, CylinderCapsAndSideAsWorkedByHand) {
   // r = 10, h = 20: each cap subtends 2 pi (1 - 10 / sqrt(10^2 + 10^2)) = 2 pi (1 - 0.7071) sr at
   // the centre: probability 0.1464 each; the side takes the remaining 0.7071.

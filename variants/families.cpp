@@ -4,9 +4,12 @@
 #include <sstream>
 
 #include "cad/error.h"
+#include "cad/gear_recognition.h"
 #include "cad/mesh_analysis.h"
+#include "cad/symmetry.h"
 #include "cad/util.h"
 #include "variants/gear.h"
+#include "variants/gear_from_file.h"
 #include "variants/standard_parts.h"
 
 namespace cadsynth {
@@ -86,6 +89,43 @@ std::vector<std::pair<double, double>> ParseSections(const std::string& text) {
     sections.emplace_back(d, l);
   }
   return sections;
+}
+
+// from_file: the file's gear (the named part, or the first part recognised as one), rebuilt.
+ShapeAssembly GearFromFile(const ParamValues& v) {
+  const std::string& file = Str(v, "file");
+  if (file.empty()) throw Error("give the file whose gear to rebuild");
+  ImportOptions import;
+  import.unit = Str(v, "unit");
+  const Assembly a = ImportCad(file, import);
+  const std::string& wanted = Str(v, "part");
+  for (const Part& part : a.parts) {
+    if (!wanted.empty() && part.name != wanted) continue;
+    if (part.mesh.triangles.empty()) continue;
+    const std::optional<RecognizedGear> gear =
+        RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
+    if (!gear) {
+      if (!wanted.empty()) throw Error("no gear recognised in part '" + wanted + "' of " + file);
+      continue;
+    }
+    const GearRebuild change{Int(v, "teeth"), Num(v, "module"), Num(v, "face_width")};
+    // Named for what it now is: "Spur gear (25 teeth) as z16 m1.5".
+    std::ostringstream name;
+    name.precision(4);
+    name << part.name << " as z" << (change.teeth > 0 ? change.teeth : gear->teeth) << " m"
+         << (change.module_mm > 0 ? change.module_mm : std::round(gear->module_mm * 1e3) / 1e3);
+    if (change.face_width_mm > 0) name << " b" << change.face_width_mm;
+    ShapeAssembly::Component c{name.str(), RebuildGear(part, *gear, change), {}};
+    return Single(name.str(), std::move(c));
+  }
+  if (!wanted.empty()) {
+    std::vector<std::string> names;
+    for (const Part& part : a.parts) names.push_back(part.name);
+    const std::string best = NearestName(wanted, names);
+    throw Error(file + " has no part '" + wanted + "'" +
+                (best.empty() ? "" : " (did you mean '" + best + "'?)"));
+  }
+  throw Error("no gear recognised in " + file);
 }
 
 }  // namespace
@@ -173,6 +213,16 @@ const std::vector<FamilyInfo>& Families() {
           Number("scale_y", 1.0, "extra scale along y"),
           Number("scale_z", 1.0, "extra scale along z"),
           Text("unit", "", "the file's unit (see parts.unit)")}});
+    f.push_back(
+        {"from_file",
+         "the gear recognised in a CAD file, rebuilt with other teeth, module or face width",
+         {Text("file", "", "the STEP, IGES or BREP file (relative to the recipe)"),
+          Text("unit", "", "the file's unit (see parts.unit)"),
+          Text("part", "", "which part (by name; empty: the first recognised as a gear)"),
+          Count("teeth", 0, "number of teeth (0: as the file has it)"),
+          Length("module", 0.0, "normal module (0: as the file has it)"),
+          Length("face_width", 0.0,
+                 "tooth width, centred on the file's (0: as the file has it)")}});
     return f;
   }();
   return families;
@@ -273,6 +323,7 @@ ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& v)
     if (f == "washer") return Single(f, MakeWasher(Str(v, "size")));
     if (f == "ball_bearing")
       return Single(f, MakeBallBearing(Num(v, "bore"), Num(v, "outer_diameter"), Num(v, "width")));
+    if (f == "from_file") return GearFromFile(v);
   } catch (const Error& e) {
     throw Error(f + ": " + e.what());
   }

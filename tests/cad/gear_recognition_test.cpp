@@ -137,5 +137,26 @@ TEST(GearRecognition, ThePapersLeftGearIsAHerringboneOfTwentyTeeth) {
   EXPECT_NEAR(2 * g->tip_radius_mm, 25.09, 0.01);
 }
 
+// A gear somebody else drew: Onshape's "Spur gear (25 teeth)" in the microscope assembly.
+TEST(GearRecognition, TheOnshapeMicroscopesSpurGear) {
+  CADSYNTH_REQUIRE_DATA(file, "step/assemblies/digital_microscope_onshape.step");
+  const Assembly a = ImportCad(file, ImportOptions{});
+  int gears = 0;
+  for (const Part& part : a.parts) {
+    const std::optional<RecognizedGear> g =
+        RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
+    if (!g) continue;
+    ++gears;
+    EXPECT_EQ(part.name, "Spur gear (25 teeth)");
+    EXPECT_EQ(g->teeth, 25);
+    EXPECT_NEAR(g->module_mm, 2.0, 0.02);
+    EXPECT_NEAR(g->pressure_angle_rad, 20 * kDeg, 0.2 * kDeg);
+    EXPECT_EQ(g->helix_angle_rad, 0.0);
+    EXPECT_NEAR(g->face_width_mm, 10.0, 0.01);
+    EXPECT_LT(g->involute_deviation_mm, 0.01);
+  }
+  EXPECT_EQ(gears, 1);  // the other five parts are not gears
+}
+
 }  // namespace
 }  // namespace cadsynth

@@ -46,6 +46,13 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   for (const SceneSpec& scene : spec.scenes) {
     for (const PartSource& source : scene.sources) {
       if (source.kind == PartSource::Kind::kFile) files.insert(source.path);
+      // A family made from a file (scaled, from_file): that file's bytes too.
+      for (const ParamValues& values : source.variants) {
+        const auto it = values.find("file");
+        if (it == values.end()) continue;
+        const std::string* path = std::get_if<std::string>(&it->second);
+        if (path != nullptr && !path->empty()) files.insert(*path);
+      }
     }
     if (scene.container_file) files.insert(scene.container_file->path);
   }

@@ -22,6 +22,7 @@
 #include "tests/test_support.h"
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/journal.h"
+#include "variants/families.h"
 
 namespace cadsynth {
 namespace {
@@ -1010,6 +1011,39 @@ sweep: {yaw: [0], pitch: [89], radius: [1 m]}
   EXPECT_LE(pixels, 320 * 240);
   EXPECT_EQ(EntriesIn(dir / "out/train/000000/mask"), 200u);
   EXPECT_EQ(EntriesIn(dir / "out/train/000000/mask_visib"), 200u);
+}
+
+// family: from_file makes a user's gear a family: a hubbed gear written by our own code, rebuilt
+// with 18 and 30 teeth; each variant is an object of the size its teeth give.
+TEST(Generate, AGearFromAFileIsAFamily) {
+  ScratchDir dir;
+  const FamilyInfo& spur = *FindFamily("spur_gear");
+  const ShapeAssembly gear = BuildVariantShapes(
+      spur,
+      CompleteParams(
+          spur, {{"teeth", 24.0}, {"bore", 8.0}, {"hub_diameter", 16.0}, {"hub_length", 6.0}}));
+  WriteStep(dir / "gear.step", "gear", {StepComponent{"gear", gear.components.at(0).shape}});
+  RunSpec spec = ParseRecipe(R"(parts:
+  - family: from_file
+    params: {file: gear.step}
+    grid: {teeth: [18, 30]}
+camera: {width: 64, height: 48, fx: 300, fy: 300, cx: 31.5, cy: 23.5}
+sweep: {yaw: [0], pitch: [60], radius: [400 mm]}
+)",
+                             "r.yaml", dir.path());
+  GenerateOptions options;
+  options.output = dir / "out";
+  Generate(spec, options);
+  const json info = json::parse(ReadFileText(dir / "out/models/models_info.json"));
+  ASSERT_EQ(info.size(), 2u);
+  // Tip diameters: module 2 x (teeth + 2).
+  EXPECT_NEAR(info["1"]["size_x"].get<double>(), 40.0, 0.2);
+  EXPECT_NEAR(info["2"]["size_x"].get<double>(), 64.0, 0.2);
+  // The hub is kept: 6 mm below the 10 mm teeth.
+  EXPECT_NEAR(info["1"]["size_z"].get<double>(), 16.0, 0.01);
+  const json variants = json::parse(ReadFileText(dir / "out/variants.json"))["variants"];
+  ASSERT_EQ(variants.size(), 2u);
+  EXPECT_EQ(variants[1]["params"]["teeth"], 30.0);
 }
 
 // A part read from STEP gets the symmetries found on it in models_info.json; a recipe's list

@@ -197,6 +197,55 @@ std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::st
       if (!found->is_array()) throw Error(where + ": " + key_name + " must be a list");
       m.symmetric = m.symmetric || !found->empty();
     }
+    // The symmetries themselves, for MSSD.
+    std::vector<Eigen::Isometry3d> discrete = {Eigen::Isometry3d::Identity()};
+    if (const auto found = entry.find("symmetries_discrete"); found != entry.end()) {
+      for (const Json& matrix : *found) {
+        const std::string at = where + " symmetries_discrete";
+        if (!matrix.is_array() || matrix.size() != 16)
+          throw Error(at + ": each is a 4 x 4 matrix of 16 numbers");
+        Eigen::Matrix4d t;
+        for (int k = 0; k < 16; ++k) t(k / 4, k % 4) = Number(matrix[k], at);
+        Eigen::Isometry3d pose;
+        pose.matrix() = t;
+        if (!((t.topLeftCorner<3, 3>() * t.topLeftCorner<3, 3>().transpose() -
+               Eigen::Matrix3d::Identity())
+                      .cwiseAbs()
+                      .maxCoeff() < 1e-3 &&
+              t.topLeftCorner<3, 3>().determinant() > 0))
+          throw Error(at + ": the upper-left 3 x 3 block must be a rotation");
+        discrete.push_back(pose);
+      }
+    }
+    std::vector<Eigen::Isometry3d> continuous;
+    if (const auto found = entry.find("symmetries_continuous"); found != entry.end()) {
+      const int steps = static_cast<int>(std::ceil(M_PI / 0.01));
+      for (const Json& sym : *found) {
+        const std::string at = where + " symmetries_continuous";
+        if (!sym.is_object()) throw Error(at + ": each is {\"axis\", \"offset\"}");
+        Eigen::Vector3d axis, offset;
+        for (int k = 0; k < 3; ++k) {
+          const Json& a = Member(sym, "axis", at);
+          const Json& o = Member(sym, "offset", at);
+          if (!a.is_array() || a.size() != 3 || !o.is_array() || o.size() != 3)
+            throw Error(at + ": axis and offset are 3 numbers each");
+          axis[k] = Number(a[k], at), offset[k] = Number(o[k], at);
+        }
+        if (!(axis.norm() > 0)) throw Error(at + ": the axis must not be zero");
+        for (int i = 0; i < steps; ++i) {
+          continuous.push_back(Eigen::Translation3d(offset) *
+                               Eigen::AngleAxisd(2 * M_PI * i / steps, axis.normalized()) *
+                               Eigen::Translation3d(-offset));
+        }
+      }
+    }
+    for (const Eigen::Isometry3d& d : discrete) {
+      if (continuous.empty()) {
+        m.symmetry_poses.push_back(d);
+      } else {
+        for (const Eigen::Isometry3d& c : continuous) m.symmetry_poses.push_back(c * d);
+      }
+    }
     out.push_back(m);
   }
   return out;

@@ -50,6 +50,12 @@ struct BopModelInfo {
   int obj_id = 0;
   double diameter = 0;     // mm, > 0
   bool symmetric = false;  // any discrete or continuous symmetry listed
+  // The poses the object cannot be told apart in, as bop_toolkit's
+  // misc.get_symmetry_transformations expands them for MSSD (max_sym_disc_step 0.01): the
+  // identity and each discrete symmetry, each combined with every step of 2 pi / 315 about each
+  // continuous axis (the step of 0 included: older bop_toolkit versions leave it out, which
+  // scores a perfect estimate of a cylinder 0.02 radians off).
+  std::vector<Eigen::Isometry3d> symmetry_poses;
 };
 
 // models_info.json: {"obj_id": {"diameter", ["symmetries_discrete"], ["symmetries_continuous"]}}.

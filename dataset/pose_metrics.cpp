@@ -57,4 +57,33 @@ double ShareBelow(const std::vector<double>& errors, double threshold) {
   return static_cast<double>(hits) / static_cast<double>(errors.size());
 }
 
+double MssdError(const std::vector<Eigen::Vector3f>& model_points,
+                 const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth,
+                 const std::vector<Eigen::Isometry3d>& symmetry_poses) {
+  if (model_points.empty()) return 0.0;
+  const std::vector<Eigen::Vector3d> est = Transformed(model_points, estimate);
+  double best = std::numeric_limits<double>::infinity();
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+  const std::vector<Eigen::Isometry3d> just_identity = {identity};
+  for (const Eigen::Isometry3d& s : symmetry_poses.empty() ? just_identity : symmetry_poses) {
+    const Eigen::Isometry3d moved = truth * s;
+    double worst = 0;
+    for (size_t i = 0; i < est.size() && worst < best; ++i)
+      worst = std::max(worst, (est[i] - moved * model_points[i].cast<double>()).squaredNorm());
+    best = std::min(best, worst);
+  }
+  return std::sqrt(best);
+}
+
+double AverageRecallMssd(const std::vector<double>& errors, const std::vector<double>& diameters) {
+  if (errors.empty()) return 0.0;
+  double sum = 0;
+  for (int k = 1; k <= 10; ++k) {
+    int hits = 0;
+    for (size_t i = 0; i < errors.size(); ++i) hits += errors[i] < 0.05 * k * diameters[i];
+    sum += static_cast<double>(hits) / errors.size();
+  }
+  return sum / 10;
+}
+
 }  // namespace cadsynth

@@ -19,6 +19,17 @@ double AddError(const std::vector<Eigen::Vector3f>& model_points, const Eigen::I
 double AddSError(const std::vector<Eigen::Vector3f>& model_points,
                  const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);
 
+// BOP's Maximum Symmetry-aware Surface Distance (Hodan et al. 2020): the smallest, over the
+// object's symmetry poses S (the identity among them; BopModelInfo::symmetry_poses), of the
+// largest distance between a model point under the estimate and under truth * S.
+double MssdError(const std::vector<Eigen::Vector3f>& model_points,
+                 const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth,
+                 const std::vector<Eigen::Isometry3d>& symmetry_poses);
+
+// BOP's recall averaged over the MSSD thresholds 0.05, 0.10, ..., 0.50 of the diameter (an error
+// counts below a threshold when strictly less; a missed object is an infinite error).
+double AverageRecallMssd(const std::vector<double>& errors, const std::vector<double>& diameters);
+
 // The area under the accuracy-threshold curve for thresholds 0..max_threshold, divided by
 // max_threshold (PoseCNN / PVN3D report it with max_threshold = 0.1 m). Accuracy at t is the share
 // of errors <= t; a missed object is an infinite error. Computed exactly for the step curve:

@@ -31,6 +31,7 @@ struct Model {
   bool symmetric = false;
   double diameter = 0;
   std::vector<Eigen::Vector3f> points;
+  std::vector<Eigen::Isometry3d> symmetry_poses;  // for MSSD
 };
 
 struct Estimate {
@@ -49,7 +50,14 @@ std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::
 }
 
 void Score(ObjectScores* s, const std::vector<double>& add_s, const std::vector<double>& add_or_s,
-           const std::vector<double>& diameters) {
+           const std::vector<double>& mssd, const std::vector<double>& diameters) {
+  double mssd_sum = 0;
+  int mssd_count = 0;
+  for (double e : mssd) {
+    if (std::isfinite(e)) mssd_sum += e, ++mssd_count;
+  }
+  s->mean_mssd_mm = mssd_count ? mssd_sum / mssd_count : std::numeric_limits<double>::quiet_NaN();
+  s->ar_mssd = AverageRecallMssd(mssd, diameters);
   s->instances = static_cast<int>(add_s.size());
   double sum = 0;
   int hits = 0;
@@ -86,6 +94,7 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
     Model m;
     m.diameter = info.diameter;
     m.symmetric = info.symmetric;
+    m.symmetry_poses = info.symmetry_poses;
     const std::string key = std::to_string(info.obj_id);
     m.name = "obj_" + key;
     if (cad.is_object() && cad.contains(key) && cad[key].is_object() && cad[key].contains("name") &&
@@ -156,7 +165,8 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
   std::map<std::pair<ImageKey, int>, std::vector<size_t>> groups;
   for (size_t i = 0; i < truth.size(); ++i) groups[{truth[i].image, truth[i].obj_id}].push_back(i);
   const double inf = std::numeric_limits<double>::infinity();
-  std::vector<double> add_s(truth.size(), inf), add_or_s(truth.size(), inf);
+  std::vector<double> add_s(truth.size(), inf), add_or_s(truth.size(), inf),
+      mssd(truth.size(), inf);
   std::vector<std::pair<std::pair<ImageKey, int>, std::vector<size_t>>> work(groups.begin(),
                                                                              groups.end());
   std::vector<int> surplus(work.size(), 0);
@@ -186,6 +196,8 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
       taken[best] = true;
       add_or_s[members[best]] = best_error;
       add_s[members[best]] = best_add_s;
+      mssd[members[best]] =
+          MssdError(model.points, e.pose, truth[members[best]].pose, model.symmetry_poses);
     }
   });
   for (const auto& [key, list] : estimates) {
@@ -199,10 +211,11 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
   std::vector<double> all_diam;
   for (const Instance& t : truth) all_diam.push_back(models.at(t.obj_id).diameter);
   for (const auto& [obj, model] : models) {
-    std::vector<double> a, b, d;
+    std::vector<double> a, b, m, d;
     for (size_t i = 0; i < truth.size(); ++i) {
       if (truth[i].obj_id != obj) continue;
-      a.push_back(add_s[i]), b.push_back(add_or_s[i]), d.push_back(model.diameter);
+      a.push_back(add_s[i]), b.push_back(add_or_s[i]), m.push_back(mssd[i]);
+      d.push_back(model.diameter);
     }
     if (a.empty()) continue;
     ObjectScores s;
@@ -210,11 +223,11 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
     s.name = model.name;
     s.symmetric = model.symmetric;
     s.diameter_mm = model.diameter;
-    Score(&s, a, b, d);
+    Score(&s, a, b, m, d);
     report.objects.push_back(s);
   }
   report.overall.name = "all";
-  Score(&report.overall, add_s, add_or_s, all_diam);
+  Score(&report.overall, add_s, add_or_s, mssd, all_diam);
   return report;
 }
 
@@ -224,7 +237,7 @@ std::string EvalTable(const EvalReport& report) {
   out << std::left << std::setw(8) << "obj_id" << std::setw(22) << "name" << std::right
       << std::setw(5) << "sym" << std::setw(11) << "diam mm" << std::setw(11) << "found"
       << std::setw(13) << "ADD(-S) mm" << std::setw(10) << "<10% d" << std::setw(11) << "AUC ADD-S"
-      << std::setw(13) << "AUC ADD(-S)"
+      << std::setw(13) << "AUC ADD(-S)" << std::setw(10) << "MSSD mm" << std::setw(9) << "AR MSSD"
       << "\n";
   const auto row = [&](const ObjectScores& s) {
     out << std::left << std::setw(8) << (s.obj_id ? std::to_string(s.obj_id) : "") << std::setw(22)
@@ -238,7 +251,9 @@ std::string EvalTable(const EvalReport& report) {
     out << std::setw(11) << (std::to_string(s.estimated) + "/" + std::to_string(s.instances))
         << std::setw(13) << std::setprecision(2) << s.mean_error_mm << std::setw(9)
         << std::setprecision(1) << 100 * s.within_10pct << "%" << std::setw(10) << 100 * s.auc_adds
-        << "%" << std::setw(12) << 100 * s.auc_add_or_s << "%\n";
+        << "%" << std::setw(12) << 100 * s.auc_add_or_s << "%" << std::setw(10)
+        << std::setprecision(2) << s.mean_mssd_mm << std::setw(8) << std::setprecision(1)
+        << 100 * s.ar_mssd << "%\n";
   };
   for (const ObjectScores& s : report.objects) row(s);
   row(report.overall);
@@ -256,7 +271,9 @@ std::string EvalJson(const EvalReport& report) {
               {"mean_error_mm", std::isfinite(s.mean_error_mm) ? Json(s.mean_error_mm) : Json()},
               {"within_10pct_diameter", s.within_10pct},
               {"auc_adds", s.auc_adds},
-              {"auc_add_or_s", s.auc_add_or_s}};
+              {"auc_add_or_s", s.auc_add_or_s},
+              {"mean_mssd_mm", std::isfinite(s.mean_mssd_mm) ? Json(s.mean_mssd_mm) : Json()},
+              {"ar_mssd", s.ar_mssd}};
     if (s.obj_id) {
       j["obj_id"] = s.obj_id;
       j["name"] = s.name;

@@ -18,6 +18,8 @@ struct ObjectScores {
   double within_10pct = 0;   // share with ADD(-S) < 10% of the diameter (the paper's Table II)
   double auc_adds = 0;       // area under the accuracy curve up to 100 mm, with ADD-S for all
   double auc_add_or_s = 0;   // same with ADD(-S)
+  double mean_mssd_mm = 0;   // BOP's MSSD over the matched instances (NaN if none)
+  double ar_mssd = 0;        // BOP's average recall of MSSD (thresholds 5% to 50% of diameter)
 };
 
 struct EvalReport {

@@ -123,6 +123,10 @@ double Phase(const std::vector<double>& p, int z) {
   return -std::arg(c) / z;
 }
 
+std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
+                                      const std::vector<Eigen::Vector3d>& local, double step,
+                                      bool internal, int z, double h_best);
+
 std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions::Line& line) {
   const Frame frame(line);
   std::vector<Eigen::Vector3d> local;
@@ -138,10 +142,15 @@ std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions:
   const double step = 2 * M_PI * r_max / (4 * kBins);
   const auto radius = [&](size_t i) { return local[i].head<2>().norm(); };
 
-  // The section and side (outer: external teeth; inner: internal) whose profile swings most.
-  bool internal = false;
-  int z = 0;
-  double best = 0, h_best = 0;
+  // Per side (outer: external teeth; inner: internal), the section whose profile swings most
+  // with 5 or more teeth; the side that swings more is tried first, then the other (a gear on
+  // a hex bore swings more inside than out, and is still an external gear).
+  struct Candidate {
+    bool internal = false;
+    int z = 0;
+    double swing = 0, h = 0;
+  };
+  Candidate sides[2];
   for (int k = 0; k < 9; ++k) {
     const double h = h_lo + (k + 0.5) / 9 * (h_hi - h_lo);
     const Profile p = Section(mesh, local, h, step);
@@ -151,10 +160,24 @@ std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions:
       const auto [lo, hi] = std::minmax_element(q.begin(), q.end());
       const int teeth = CountTeeth(q);
       const double swing = (*hi - *lo) / *hi;
-      if (teeth >= 5 && swing > best + 1e-9) best = swing, z = teeth, internal = in, h_best = h;
+      Candidate& c = sides[in ? 1 : 0];
+      if (teeth >= 5 && swing > c.swing + 1e-9) c = {in, teeth, swing, h};
     }
   }
-  if (z < 5) return std::nullopt;
+  if (sides[1].swing > sides[0].swing) std::swap(sides[0], sides[1]);
+  for (const Candidate& c : sides) {
+    if (c.z < 5) continue;
+    if (std::optional<RecognizedGear> g = Measure(mesh, frame, local, step, c.internal, c.z, c.h))
+      return g;
+  }
+  return std::nullopt;
+}
+
+// The gear on one side of the profile with z teeth, measured from the section at h_best.
+std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
+                                      const std::vector<Eigen::Vector3d>& local, double step,
+                                      bool internal, int z, double h_best) {
+  const auto radius = [&](size_t i) { return local[i].head<2>().norm(); };
   const Profile first = Section(mesh, local, h_best, step);
   const std::vector<double>& q0 = internal ? first.inner : first.outer;
   const auto [lo0, hi0] = std::minmax_element(q0.begin(), q0.end());
@@ -198,7 +221,13 @@ std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions:
 
   // The teeth's phase along the band: a straight line in h (a helix's twist), or a V with its
   // apex at mid-face (a double helical, herringbone gear).
-  const int slices = 13;
+  // Between neighbouring sections the teeth must turn less than half a pitch (else the phase
+  // wraps unseen): a helix of up to 50 degrees turns b tan(50) / r_p over the band.
+  const double r_pitch = 0.5 * (tip + root);
+  const int slices =
+      std::clamp(1 + static_cast<int>(std::ceil(4 * (h1 - h0) * std::tan(50 * M_PI / 180) /
+                                                r_pitch * z / (2 * M_PI))),
+                 13, 400);
   std::vector<double> hs, phases;
   for (int k = 0; k < slices; ++k) {
     const double h = h0 + (0.04 + 0.92 * k / (slices - 1)) * (h1 - h0);
@@ -288,7 +317,9 @@ std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions:
     }
     return f;
   };
-  double a = 0.5 * r_lo, b = 0.99999 * r_lo;
+  // The base circle lies below the flanks of an external gear; a ring's (up to about 25 teeth at
+  // 20 degrees) may lie among them, where the clamp makes the part below it radial.
+  double a = 0.5 * r_lo, b = 0.99999 * (internal ? r_hi : r_lo);
   const double golden = 0.5 * (std::sqrt(5.0) - 1);
   double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
   Fit f1 = fit(x1), f2 = fit(x2);
@@ -383,14 +414,18 @@ std::string DescribeGear(const RecognizedGear& g) {
   out.precision(4);
   const double deg = 180 / M_PI;
   out << (g.internal ? "internal " : "")
-      << (g.helix_angle_rad == 0 ? "spur"
-          : g.herringbone        ? "herringbone"
-                                 : "helical")
+      << (g.herringbone            ? "herringbone"
+          : g.helix_angle_rad == 0 ? "spur"
+                                   : "helical")
       << ", " << g.teeth << " teeth, module " << g.module_mm << " mm, pressure angle "
       << g.pressure_angle_rad * deg << " deg";
-  if (g.helix_angle_rad != 0)
+  // (A herringbone's hand depends on which half is looked at: its helices only.)
+  if (g.herringbone) {
+    out << ", helices " << std::abs(g.helix_angle_rad) * deg << " deg";
+  } else if (g.helix_angle_rad != 0) {
     out << ", helix " << std::abs(g.helix_angle_rad) * deg << " deg "
         << (g.helix_angle_rad > 0 ? "right" : "left") << " hand";
+  }
   out << ", face width " << g.face_width_mm << " mm";
   if (std::abs(g.profile_shift) >= 0.005) out << ", profile shift " << g.profile_shift;
   if (g.bore_diameter_mm > 0) out << ", bore " << g.bore_diameter_mm << " mm";

@@ -26,7 +26,7 @@ struct RecognizedGear {
   double pressure_angle_rad = 0;  // normal, from the flanks' base circle
   double transverse_pressure_angle_rad = 0;
   // Right hand positive, as the spur_gear family's helix_angle. A herringbone (double helical)
-  // gear's lower half has this helix, its upper half the opposite.
+  // gear's lower half (along `axis`) has this helix, its upper half the opposite.
   double helix_angle_rad = 0;
   bool herringbone = false;
   double profile_shift = 0;  // x, in normal modules, from the tip radius
@@ -45,9 +45,10 @@ struct RecognizedGear {
 };
 
 // Recognises a gear on `mesh` about one of the candidate axes (lines in the mesh's frame; the
-// symmetry's main axis and the B-rep's axes of revolution are good ones). Empty when none
-// of them carries involute-like teeth: at least 5 teeth, a tooth depth between 0.35 and 1.2
-// circular pitches, and flanks within a tenth of a module of an involute.
+// symmetry's main axis and the B-rep's axes of revolution are good ones). Empty when none of
+// them carries involute teeth: at least 5 teeth on the outer (external) or inner (internal)
+// outline, a tooth depth between 0.3 and 1.2 of the circular pitch at the tip (a hexagon's
+// corners are far shallower), and flank vertices within 0.05 modules (RMS) of an involute.
 std::optional<RecognizedGear> RecognizeGear(const Mesh& mesh,
                                             const std::vector<SymmetryOptions::Line>& axes);
 

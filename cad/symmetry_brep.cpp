@@ -5,6 +5,7 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepGProp.hxx>
 #include <GProp_GProps.hxx>
+#include <Standard_Failure.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <gp_Ax1.hxx>
@@ -17,8 +18,7 @@ namespace cadsynth {
 std::vector<SymmetryOptions::Line> RevolutionAxes(const Shape& shape, int max_axes) {
   std::vector<std::pair<double, SymmetryOptions::Line>> lines;  // area, line
   if (shape.IsNull()) return {};
-  for (TopExp_Explorer e(OcctShape(shape), TopAbs_FACE); e.More(); e.Next()) {
-    const TopoDS_Face& face = TopoDS::Face(e.Current());
+  const auto add = [&](const TopoDS_Face& face) {
     const BRepAdaptor_Surface surface(face, /*useTrsf=*/true);
     gp_Ax1 axis;
     switch (surface.GetType()) {
@@ -35,7 +35,7 @@ std::vector<SymmetryOptions::Line> RevolutionAxes(const Shape& shape, int max_ax
         axis = surface.AxeOfRevolution();
         break;
       default:
-        continue;
+        return;
     }
     GProp_GProps props;
     BRepGProp::SurfaceProperties(face, props);
@@ -43,17 +43,23 @@ std::vector<SymmetryOptions::Line> RevolutionAxes(const Shape& shape, int max_ax
     line.point = {axis.Location().X(), axis.Location().Y(), axis.Location().Z()};
     line.direction = {axis.Direction().X(), axis.Direction().Y(), axis.Direction().Z()};
     // One line however its faces place their origins and orient their axes.
-    bool merged = false;
     for (auto& [area, known] : lines) {
       const Eigen::Vector3d off = line.point - known.point;
       if (std::abs(line.direction.dot(known.direction)) > 1 - 1e-9 &&
           (off - off.dot(known.direction) * known.direction).norm() < 1e-6) {
         area += props.Mass();
-        merged = true;
-        break;
+        return;
       }
     }
-    if (!merged) lines.emplace_back(props.Mass(), line);
+    lines.emplace_back(props.Mass(), line);
+  };
+  for (TopExp_Explorer e(OcctShape(shape), TopAbs_FACE); e.More(); e.Next()) {
+    // A damaged face (imported B-reps have them) gives no axis rather than an OpenCASCADE
+    // exception: the axes are only candidates, the mesh decides.
+    try {
+      add(TopoDS::Face(e.Current()));
+    } catch (const Standard_Failure&) {
+    }
   }
   std::stable_sort(lines.begin(), lines.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });

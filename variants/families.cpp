@@ -101,7 +101,10 @@ ShapeAssembly GearFromFile(const ParamValues& v) {
   const std::string& wanted = Str(v, "part");
   for (const Part& part : a.parts) {
     if (!wanted.empty() && part.name != wanted) continue;
-    if (part.mesh.triangles.empty()) continue;
+    if (part.mesh.triangles.empty()) {
+      if (!wanted.empty()) throw Error("part '" + wanted + "' of " + file + " has no triangles");
+      continue;
+    }
     const std::optional<RecognizedGear> gear =
         RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
     if (!gear) {

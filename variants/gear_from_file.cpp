@@ -93,18 +93,29 @@ Shape RebuildGear(const Part& part, const RecognizedGear& gear, const GearRebuil
   model_from_gear.linear().col(2) = z;
   model_from_gear.translation() = gear.centre + 0.5 * (gear.face_width_mm - o.face_width_mm) * z;
   const Eigen::Isometry3d cad_from_gear = part.cad_from_model * model_from_gear;
-  // The part's extent along the axis, in the gear frame, with a margin.
-  double lo = 0, hi = o.face_width_mm;
+  // The part's extent along the axis (in the gear frame) and from it, with a margin.
+  double lo = 0, hi = o.face_width_mm, reach = 0;
   for (const Eigen::Vector3f& p : part.mesh.positions) {
-    const double h = (p.cast<double>() - model_from_gear.translation()).dot(z);
+    const Eigen::Vector3d d = p.cast<double>() - model_from_gear.translation();
+    const double h = d.dot(z);
     lo = std::min(lo, h), hi = std::max(hi, h);
+    reach = std::max(reach, (d - h * z).norm());
   }
   lo -= 1, hi += 1;
+  // The file's toothed band in the gear frame.
+  const double band_lo = 0.5 * (o.face_width_mm - gear.face_width_mm);
+  const double band_hi = band_lo + gear.face_width_mm;
 
   try {
     const TopoDS_Shape& original = OcctShape(part.brep);
+    // The old teeth: the ring outside r_cut along the old band. Everything else (the hub, the
+    // web, a flange or a second gear beside the band) is kept.
+    const TopoDS_Shape old_ring =
+        Run(BRepAlgoAPI_Cut(Cylinder(cad_from_gear, reach + 1, band_lo, band_hi),
+                            Cylinder(cad_from_gear, r_cut, band_lo - 1, band_hi + 1)),
+            "outline the old teeth");
+    const TopoDS_Shape kept = Run(BRepAlgoAPI_Cut(original, old_ring), "cut the old teeth off");
     const TopoDS_Shape inner = Cylinder(cad_from_gear, r_cut, lo, hi);
-    const TopoDS_Shape kept = Run(BRepAlgoAPI_Common(original, inner), "keep the gear's body");
     const TopoDS_Shape teeth =
         BRepBuilderAPI_Transform(OcctShape(MakeGear(o)), ToTrsf(cad_from_gear), /*copy=*/true)
             .Shape();

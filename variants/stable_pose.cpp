@@ -337,20 +337,39 @@ std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3
       }
       groups.back().push_back(level[i]);
     }
-    // With the body's symmetries known, only faces that one of them maps onto each other are
-    // one pose (a box 40 x 40 x 30 with a hole in one side rests on four sides at one height;
-    // two of them show the hole).
+    // With the body's symmetries known, faces at one height are one pose when one of them maps
+    // one onto the other (a box 40 x 40 x 30 with a hole in one side rests on four sides at one
+    // height; two of them show the hole), or when they are neighbouring flats of one tessellated
+    // curve (a flange with 5 bolt holes rolls on its rim: its N rim flats, within 26 degrees of
+    // each other in turn, are one pose whatever N is).
     if (symmetries != nullptr && !symmetries->empty()) {
       std::vector<std::vector<StablePose>> split;
       for (size_t g = first; g < groups.size(); ++g) {
-        const size_t before = split.size();
-        for (const StablePose& p : groups[g]) {
-          size_t k = before;
-          while (k < split.size() &&
-                 !SameUpToSymmetry(split[k].front().normal, p.normal, *symmetries))
-            ++k;
-          if (k == split.size()) split.emplace_back();
-          split[k].push_back(p);
+        const std::vector<StablePose>& members = groups[g];
+        std::vector<size_t> root(members.size());
+        for (size_t i = 0; i < root.size(); ++i) root[i] = i;
+        const auto find = [&](size_t i) {
+          while (root[i] != i) i = root[i] = root[root[i]];
+          return i;
+        };
+        const double neighbours = std::cos(0.45);
+        for (size_t i = 0; i < members.size(); ++i) {
+          for (size_t j = i + 1; j < members.size(); ++j) {
+            if (members[i].normal.dot(members[j].normal) > neighbours ||
+                SameUpToSymmetry(members[i].normal, members[j].normal, *symmetries)) {
+              const size_t a = find(i), b = find(j);
+              root[std::max(a, b)] = std::min(a, b);  // the smaller index leads: deterministic
+            }
+          }
+        }
+        std::vector<int> slot(members.size(), -1);
+        for (size_t i = 0; i < members.size(); ++i) {
+          const size_t r = find(i);
+          if (slot[r] < 0) {
+            slot[r] = static_cast<int>(split.size());
+            split.emplace_back();
+          }
+          split[slot[r]].push_back(members[i]);
         }
       }
       groups.resize(first);

@@ -6,11 +6,18 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <BRepAlgoAPI_Cut.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
 
 #include "cad/import.h"
+#include "cad/occt_shape.h"
+#include "cad/shape.h"
 #include "cad/step.h"
 #include "tests/test_support.h"
 #include "variants/families.h"
+#include "variants/gear.h"
 
 namespace cadsynth {
 namespace {
@@ -102,6 +109,49 @@ TEST(GearRecognition, HelicalShiftedAndInternalGears) {
     EXPECT_EQ(g.teeth, 48);
     EXPECT_NEAR(g.module_mm, 1.0, 0.01);
     EXPECT_NEAR(g.pressure_angle_rad, 20 * kDeg, 0.01 * 20 * kDeg) << DescribeGear(g);
+  }
+}
+
+// Cases a first version got wrong (found in review): a gear on a hex bore (its inner outline
+// swings more than its teeth), a ring of few teeth (its base circle among its flanks) and a
+// helical gear 60 modules wide (its teeth turn more than a pitch along the band).
+TEST(GearRecognition, HexBoreFewTeethRingAndWideHelix) {
+  {
+    GearOptions o;
+    o.teeth = 36;
+    o.module_mm = 1.0;
+    o.face_width_mm = 8.0;
+    BRepBuilderAPI_MakePolygon hexagon;
+    for (int k = 0; k < 6; ++k)
+      hexagon.Add(gp_Pnt(5 * std::cos(k * M_PI / 3), 5 * std::sin(k * M_PI / 3), -1));
+    hexagon.Close();
+    const TopoDS_Shape prism =
+        BRepPrimAPI_MakePrism(BRepBuilderAPI_MakeFace(hexagon.Wire()).Face(), gp_Vec(0, 0, 10));
+    const TopoDS_Shape bored = BRepAlgoAPI_Cut(OcctShape(MakeGear(o)), prism).Shape();
+    const Part part = MakePart("hex_bored", WrapShape(bored), TessellationOptions{0.02, 0.2});
+    const std::optional<RecognizedGear> g =
+        RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
+    ASSERT_TRUE(g.has_value());
+    EXPECT_FALSE(g->internal);
+    EXPECT_EQ(g->teeth, 36);
+    EXPECT_NEAR(g->module_mm, 1.0, 0.01);
+    EXPECT_EQ(g->bore_diameter_mm, 0.0);  // not round
+  }
+  {
+    const ReadBack r = ThroughStep("ring_gear", {{"teeth", 20.0}, {"module", 2.0}});
+    ASSERT_TRUE(r.gear.has_value());
+    EXPECT_TRUE(r.gear->internal);
+    EXPECT_EQ(r.gear->teeth, 20);
+    EXPECT_NEAR(r.gear->pressure_angle_rad, 20 * kDeg, 0.01 * 20 * kDeg) << DescribeGear(*r.gear);
+  }
+  {
+    const ReadBack r = ThroughStep(
+        "spur_gear",
+        {{"teeth", 20.0}, {"module", 1.0}, {"helix_angle", 30 * kDeg}, {"face_width", 60.0}},
+        /*detect=*/true);
+    ASSERT_TRUE(r.gear.has_value());
+    EXPECT_NEAR(r.gear->helix_angle_rad, 30 * kDeg, 0.01 * 30 * kDeg) << DescribeGear(*r.gear);
+    EXPECT_NEAR(r.gear->face_width_mm, 60.0, 1e-3);
   }
 }
 

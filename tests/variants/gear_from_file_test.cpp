@@ -81,6 +81,37 @@ TEST(GearFromFile, RebuiltTeethAreRecognisedAndTheHubIsKept) {
   }
 }
 
+// A flange wider than the teeth beside the toothed band (a 60 mm "hub" 3 mm thick, as a gear's
+// shoulder or a sprocket's plate): kept whole, only the teeth are rebuilt.
+TEST(GearFromFile, AFlangeBesideTheTeethIsKept) {
+  GearOptions o;
+  o.teeth = 20;
+  o.module_mm = 2.0;
+  o.face_width_mm = 10.0;
+  o.bore_diameter_mm = 8.0;
+  o.hub_diameter_mm = 60.0;
+  o.hub_length_mm = 3.0;
+  const Shape body = MakeGear(o);
+  const Part part = MakePart("flanged", body, TessellationOptions{0.05, 0.3});
+  const std::optional<RecognizedGear> gear =
+      RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
+  ASSERT_TRUE(gear.has_value());
+  EXPECT_EQ(gear->teeth, 20);
+  const Shape rebuilt = RebuildGear(part, *gear, GearRebuild{32, 0, 0});
+  // The flange: pi (30^2 - 4^2) 3 mm^3, in the file and after the rebuild.
+  const Shape slab =
+      Transformed(MakeCylinder(31, 3), Eigen::Isometry3d(Eigen::Translation3d(0, 0, -3)));
+  const double expected = M_PI * (30 * 30 - 4 * 4) * 3;
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+  EXPECT_NEAR(CommonVolume(body, identity, slab, identity), expected, 1e-3 * expected);
+  EXPECT_NEAR(CommonVolume(rebuilt, identity, slab, identity), expected, 1e-3 * expected);
+  const Part back = MakePart("back", rebuilt, TessellationOptions{0.05, 0.3});
+  const std::optional<RecognizedGear> g =
+      RecognizePartGear(back, DetectSymmetries(back.mesh, PartSymmetryOptions(back)));
+  ASSERT_TRUE(g.has_value());
+  EXPECT_EQ(g->teeth, 32);
+}
+
 TEST(GearFromFile, TheFamilyBuildsVariantsAndRefusesWhatItCannot) {
   const HubbedGear file;
   const FamilyInfo& family = *FindFamily("from_file");

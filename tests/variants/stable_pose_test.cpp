@@ -55,6 +55,16 @@ TEST(StablePoses, SymmetriesDecideWhichFacesAreOnePose) {
   const Symmetries half =
       Symmetries::Cyclic(2, false).InFrame(Eigen::Isometry3d(Eigen::Translation3d(-20, -20, 0)));
   EXPECT_EQ(count(&half), 4);  // +-x, +-y, top, bottom
+  // A cylinder (r 10, h 20) that only a 5-fold turn keeps (five holes round its axis, say):
+  // its 5-fold symmetry cannot relate the rim's tessellated flats (their count is no multiple
+  // of 5), which are still one pose, the side; the caps stay two (no flip relates them).
+  const Mesh cylinder = Tessellate(MakeCylinder(10, 20), TessellationOptions{});
+  const Symmetries five = Symmetries::Cyclic(5, false);
+  const std::vector<StablePose> rolls = StablePoses(Points(cylinder), {0, 0, 10}, &five);
+  int most = 0;
+  for (const StablePose& p : rolls) most = std::max(most, p.pose + 1);
+  EXPECT_EQ(most, 3);
+  EXPECT_GT(rolls.size(), 10u);
   // The pooled sides still share the probability the faces have together.
   const std::vector<StablePose> poses = StablePoses(Points(block), centre, &half);
   double total = 0;

@@ -223,6 +223,7 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
         {"watertight", p.watertight},
         {"max_deviation_mm", p.max_deviation_mm >= 0 ? Json(p.max_deviation_mm) : Json()},
         {"symmetry", symmetry},
+        {"symmetry_error", u.error.empty() ? Json() : Json(u.error)},
         {"gear", gear}};
     parts.push_back(part);
   }

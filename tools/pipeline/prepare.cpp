@@ -526,9 +526,13 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     std::vector<DetectedSymmetries> found(detect.size());
     // Per listed entry, its own worst deviation (to name the entry that does not hold).
     std::vector<std::vector<double>> entry_deviation(detect.size());
+    std::vector<std::string> failure(detect.size());  // why nothing could be measured
     tbb::parallel_for(size_t{0}, detect.size(), [&](size_t k) {
       const Part& part = all.parts[detect[k].part];
-      if (part.mesh.triangles.empty()) return;
+      if (part.mesh.triangles.empty()) {
+        failure[k] = "its mesh has no triangles";
+        return;
+      }
       try {
         const SymmetryOptions options = PartSymmetryOptions(part, detect[k].tolerance_mm);
         if (detect[k].given == nullptr) {
@@ -562,14 +566,21 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
                                       one.continuous.end());
         }
         found[k] = MeasureSymmetries(part.mesh, all_given, options);
-      } catch (const Error&) {
-        found[k].tolerance_mm = -1;  // reported below, in order
+      } catch (const Error& e) {
+        failure[k] = e.what();  // reported below, in order
       }
     });
     for (size_t k = 0; k < detect.size(); ++k) {
       Part& part = all.parts[detect[k].part];
-      if (found[k].tolerance_mm < 0) {
-        Warn("'" + part.name + "': no symmetries looked for (its mesh has no area)");
+      if (!failure[k].empty()) {
+        // A list the recipe gives must hold: it cannot be checked, so the run stops there.
+        if (detect[k].given != nullptr) {
+          throw Error(detect[k].given->given_symmetries[0].where +
+                      ": symmetry: the list cannot be measured on '" + part.name +
+                      "': " + failure[k]);
+        }
+        if (!part.mesh.triangles.empty())
+          Warn("'" + part.name + "': no symmetries looked for (" + failure[k] + ")");
         continue;
       }
       if (detect[k].given != nullptr) {

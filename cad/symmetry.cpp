@@ -446,6 +446,18 @@ std::string DescribeSymmetries(const DetectedSymmetries& d) {
   for (double v : d.discrete_deviation_mm) worst = std::max(worst, v);
   for (double v : d.continuous_deviation_mm) worst = std::max(worst, v);
   text << "; largest deviation " << worst << " mm (tolerance " << d.tolerance_mm << " mm)";
+  if (!d.discrete_brep_mm.empty() || !d.continuous_brep_mm.empty()) {
+    double brep = 0;
+    for (double v : d.discrete_brep_mm) brep = std::max(brep, v);
+    for (double v : d.continuous_brep_mm) brep = std::max(brep, v);
+    if (std::isfinite(brep)) {
+      text << "; B-rep surfaces match within " << brep << " mm";
+    } else {
+      text << "; some B-rep surfaces have no match (a detail breaks it)";
+    }
+    if (d.brep_faces_not_compared > 0)
+      text << " (" << d.brep_faces_not_compared << " free-form face images not compared)";
+  }
   return text.str();
 }
 

@@ -1,6 +1,7 @@
 // The B-rep's share of symmetry detection: the exact axes of its faces of revolution.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepGProp.hxx>
@@ -67,6 +68,161 @@ std::vector<SymmetryOptions::Line> RevolutionAxes(const Shape& shape, int max_ax
   for (size_t i = 0; i < lines.size() && static_cast<int>(i) < max_axes; ++i)
     out.push_back(lines[i].second);
   return out;
+}
+
+namespace {
+
+// One surface of a B-rep (model frame): an analytic one (plane, cylinder, cone, sphere, torus)
+// with all the faces that lie on it, so that a cylinder split into halves at its seam is one
+// cylinder; any other face on its own, by its centroid.
+struct Surface {
+  int kind = 0;  // GeomAbs_SurfaceType
+  double area = 0;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();       // plane: a point; axial kinds: the apex or
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // centre on the axis; free: centroid
+  double r1 = 0, r2 = 0;  // radius (cylinder, sphere), major and minor (torus), angle (cone)
+};
+
+// How far apart two surfaces of one kind are (mm), for a part `size` across: 0 for the same.
+double Apart(const Surface& a, const Surface& b, double size) {
+  const Eigen::Vector3d off = a.point - b.point;
+  const double cross = a.direction.cross(b.direction).norm();  // sine of the axes' angle
+  const double across = (off - off.dot(b.direction) * b.direction).norm();
+  switch (a.kind) {
+    case GeomAbs_Plane:
+      return std::abs(off.dot(b.direction)) + size * cross;
+    case GeomAbs_Cylinder:
+      return across + size * cross + std::abs(a.r1 - b.r1);
+    case GeomAbs_Cone:
+      return off.norm() + size * cross + size * std::abs(a.r1 - b.r1);
+    case GeomAbs_Sphere:
+      return off.norm() + std::abs(a.r1 - b.r1);
+    case GeomAbs_Torus:
+      return off.norm() + size * cross + std::abs(a.r1 - b.r1) + std::abs(a.r2 - b.r2);
+    default:
+      return off.norm();
+  }
+}
+
+}  // namespace
+
+void CompareBrepFaces(const Part& part, DetectedSymmetries* found) {
+  found->discrete_brep_mm.clear();
+  found->continuous_brep_mm.clear();
+  found->brep_faces_not_compared = 0;
+  if (part.brep.IsNull()) return;
+  const Eigen::Isometry3d model_from_cad = part.cad_from_model.inverse();
+  const double size = std::max(1e-9, part.mesh.Bounds().diagonal().norm());
+  const auto vec = [&](const gp_XYZ& v) {
+    return Eigen::Vector3d(model_from_cad.linear() * Eigen::Vector3d(v.X(), v.Y(), v.Z()));
+  };
+  const auto at = [&](const gp_Pnt& p) {
+    return Eigen::Vector3d(model_from_cad * Eigen::Vector3d(p.X(), p.Y(), p.Z()));
+  };
+  std::vector<Surface> surfaces;
+  try {
+    for (TopExp_Explorer e(OcctShape(part.brep), TopAbs_FACE); e.More(); e.Next()) {
+      const TopoDS_Face& face = TopoDS::Face(e.Current());
+      GProp_GProps props;
+      BRepGProp::SurfaceProperties(face, props);
+      if (!(props.Mass() > 0)) continue;
+      const BRepAdaptor_Surface adaptor(face, /*useTrsf=*/true);
+      Surface f;
+      f.kind = static_cast<int>(adaptor.GetType());
+      f.area = props.Mass();
+      switch (adaptor.GetType()) {
+        case GeomAbs_Plane:
+          f.point = at(adaptor.Plane().Location());
+          f.direction = vec(adaptor.Plane().Axis().Direction().XYZ());
+          break;
+        case GeomAbs_Cylinder:
+          f.point = at(adaptor.Cylinder().Location());
+          f.direction = vec(adaptor.Cylinder().Axis().Direction().XYZ());
+          f.r1 = adaptor.Cylinder().Radius();
+          break;
+        case GeomAbs_Cone:
+          f.point = at(adaptor.Cone().Apex());
+          f.direction = vec(adaptor.Cone().Axis().Direction().XYZ());
+          f.r1 = adaptor.Cone().SemiAngle();
+          break;
+        case GeomAbs_Sphere:
+          f.point = at(adaptor.Sphere().Location());
+          f.r1 = adaptor.Sphere().Radius();
+          break;
+        case GeomAbs_Torus:
+          f.point = at(adaptor.Torus().Location());
+          f.direction = vec(adaptor.Torus().Axis().Direction().XYZ());
+          f.r1 = adaptor.Torus().MajorRadius();
+          f.r2 = adaptor.Torus().MinorRadius();
+          break;
+        default:
+          f.point = at(props.CentreOfMass());
+          break;
+      }
+      // Faces on one analytic surface are that surface.
+      bool merged = false;
+      if (f.kind <= GeomAbs_Torus) {
+        for (Surface& known : surfaces) {
+          if (known.kind == f.kind && Apart(f, known, size) < 1e-7 * size) {
+            known.area += f.area;
+            merged = true;
+            break;
+          }
+        }
+      }
+      if (!merged) surfaces.push_back(f);
+    }
+  } catch (const Standard_Failure&) {
+    return;
+  }
+  if (surfaces.empty()) return;
+  std::stable_sort(surfaces.begin(), surfaces.end(),
+                   [](const Surface& a, const Surface& b) { return a.area < b.area; });
+  const double inf = std::numeric_limits<double>::infinity();
+  // The largest distance from a moved surface to the nearest one of its kind and area. A free-form
+  // face without a partner is counted, not failed: files split such faces where they please (an
+  // old writer's cylinder as two B-spline halves, which a turn maps onto no face).
+  int skipped = 0;
+  const auto mismatch = [&](const Eigen::Isometry3d& t) {
+    double worst = 0;
+    for (const Surface& s : surfaces) {
+      Surface moved = s;
+      moved.point = t * s.point;
+      moved.direction = t.linear() * s.direction;
+      double best = inf;
+      auto it = std::lower_bound(surfaces.begin(), surfaces.end(), s.area * (1 - 1e-3),
+                                 [](const Surface& x, double a) { return x.area < a; });
+      for (; it != surfaces.end() && it->area <= s.area * (1 + 1e-3); ++it) {
+        if (it->kind == s.kind) best = std::min(best, Apart(moved, *it, size));
+      }
+      // A partner lies within 0.1% of the part's size (an exact symmetry: microns); farther, there
+      // is none. A free-form face without one was split differently, an analytic surface
+      // without one is a detail that breaks the symmetry.
+      if (!(best < 1e-3 * size)) {
+        if (s.kind > GeomAbs_Torus) {
+          ++skipped;
+          continue;
+        }
+        best = inf;
+      }
+      worst = std::max(worst, best);
+      if (worst == inf) break;
+    }
+    return worst;
+  };
+  for (const Eigen::Isometry3d& t : found->symmetries.discrete)
+    found->discrete_brep_mm.push_back(mismatch(t));
+  // A continuous axis: the turns detection tests it with.
+  for (const Symmetries::Axis& axis : found->symmetries.continuous) {
+    double worst = 0;
+    for (const double angle : {0.70710678, 2.23606798, 4.12310563}) {
+      worst = std::max(worst, mismatch(Eigen::Translation3d(axis.offset) *
+                                       Eigen::AngleAxisd(angle, axis.direction.normalized()) *
+                                       Eigen::Translation3d(-axis.offset)));
+    }
+    found->continuous_brep_mm.push_back(worst);
+  }
+  found->brep_faces_not_compared = skipped;
 }
 
 SymmetryOptions PartSymmetryOptions(const Part& part, double tolerance_mm) {

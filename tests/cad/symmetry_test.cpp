@@ -196,6 +196,14 @@ TEST(Symmetry, FamilyPartsWrittenToStepAndReadBackKeepTheirSymmetries) {
     } else {
       EXPECT_EQ(d.symmetries.discrete.size(), c.order - 1 + c.flips) << c.family;
     }
+    // On the exact B-rep every surface finds its partner (to the mesh's refined angles).
+    DetectedSymmetries exact = d;
+    CompareBrepFaces(part, &exact);
+    ASSERT_EQ(exact.discrete_brep_mm.size(), d.symmetries.discrete.size());
+    ASSERT_EQ(exact.continuous_brep_mm.size(), d.symmetries.continuous.size());
+    for (double v : exact.discrete_brep_mm) EXPECT_LT(v, 0.05) << c.family;
+    for (double v : exact.continuous_brep_mm) EXPECT_LT(v, 0.05) << c.family;
+    EXPECT_EQ(exact.brep_faces_not_compared, 0) << c.family;
   }
 }
 
@@ -232,6 +240,18 @@ TEST(Symmetry, OneChamferedCornerBreaksThemOrShowsInTheDeviation) {
   // The half-turn about z moves the chamfered edge onto the sharp one diagonally opposite; the
   // other two move it onto edges as well: all three see it.
   EXPECT_EQ(broken, 3u);
+  // On the B-rep the chamfer's plane has no partner under any of them: named, not measured.
+  DetectedSymmetries exact = loose;
+  CompareBrepFaces(part, &exact);
+  ASSERT_EQ(exact.discrete_brep_mm.size(), 3u);
+  for (double v : exact.discrete_brep_mm) EXPECT_TRUE(std::isinf(v));
+  EXPECT_NE(DescribeSymmetries(exact).find("some B-rep surfaces have no match"), std::string::npos);
+  // The plain box's surfaces match exactly.
+  const Part plain_box = MakePart("plain_box", MakeBox(60, 40, 30), TessellationOptions{});
+  DetectedSymmetries plain = DetectSymmetries(plain_box.mesh, PartSymmetryOptions(plain_box));
+  CompareBrepFaces(plain_box, &plain);
+  ASSERT_EQ(plain.discrete_brep_mm.size(), 3u);
+  for (double v : plain.discrete_brep_mm) EXPECT_LT(v, 1e-9);
 }
 
 TEST(Symmetry, TheEightCylindersOfEightCylStpTurnFreelyAndFlip) {

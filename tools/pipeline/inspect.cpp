@@ -59,6 +59,7 @@ std::vector<Understood> Understand(const Assembly& a) {
     }
     try {
       out[i].symmetries = DetectSymmetries(p.mesh, PartSymmetryOptions(p));
+      CompareBrepFaces(p, &out[i].symmetries);
       out[i].gear = RecognizePartGear(p, out[i].symmetries);
     } catch (const Error& e) {
       out[i].error = e.what();
@@ -78,6 +79,19 @@ Assembly Read(const std::filesystem::path& path, ImportOptions options,
   Assembly assembly = ImportGuarded(path, options, reader, &warnings);
   for (const std::string& warning : warnings) Warn(warning);
   return assembly;
+}
+
+// The B-rep's face-to-face check: null without a B-rep; else whether every face found a match
+// under every symmetry, and the largest distance of a matched centroid.
+nlohmann::ordered_json BrepFacesJson(const DetectedSymmetries& d) {
+  if (d.discrete_brep_mm.empty() && d.continuous_brep_mm.empty()) return nullptr;
+  double worst = 0;
+  for (double v : d.discrete_brep_mm) worst = std::max(worst, v);
+  for (double v : d.continuous_brep_mm) worst = std::max(worst, v);
+  nlohmann::ordered_json j = {{"all_match", std::isfinite(worst)}};
+  j["largest_distance_mm"] = std::isfinite(worst) ? nlohmann::ordered_json(worst) : nullptr;
+  j["free_form_face_images_not_compared"] = d.brep_faces_not_compared;
+  return j;
 }
 
 }  // namespace
@@ -185,6 +199,7 @@ std::string InspectJson(const std::filesystem::path& path, const ImportOptions& 
                   {"axes", axes},
                   {"centre_mm", vec(u.symmetries.centre)},
                   {"largest_deviation_mm", worst},
+                  {"brep_faces", BrepFacesJson(u.symmetries)},
                   {"tolerance_mm", u.symmetries.tolerance_mm}};
     }
     Json gear;

@@ -537,6 +537,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         const SymmetryOptions options = PartSymmetryOptions(part, detect[k].tolerance_mm);
         if (detect[k].given == nullptr) {
           found[k] = DetectSymmetries(part.mesh, options);
+          CompareBrepFaces(part, &found[k]);
           return;
         }
         // The list is in the part's CAD frame; an axis without a point passes through the
@@ -566,6 +567,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
                                       one.continuous.end());
         }
         found[k] = MeasureSymmetries(part.mesh, all_given, options);
+        CompareBrepFaces(part, &found[k]);
       } catch (const Error& e) {
         failure[k] = e.what();  // reported below, in order
       }

@@ -110,7 +110,7 @@ void CompareBrepFaces(const Part& part, DetectedSymmetries* found) {
   found->discrete_brep_mm.clear();
   found->continuous_brep_mm.clear();
   found->brep_faces_not_compared = 0;
-  if (part.brep.IsNull()) return;
+  if (part.brep.IsNull() || found->symmetries.empty()) return;
   const Eigen::Isometry3d model_from_cad = part.cad_from_model.inverse();
   const double size = std::max(1e-9, part.mesh.Bounds().diagonal().norm());
   const auto vec = [&](const gp_XYZ& v) {

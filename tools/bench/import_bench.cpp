@@ -64,9 +64,9 @@ const char* const kAssemblies[] = {"step/assemblies/as1-oc-214.stp",
                                    "step/assemblies/digital_microscope_onshape.step",
                                    "step/assemblies/dm1-id-214.stp"};
 
-// Per part, as `generate` and `inspect` do it: DetectSymmetries with the B-rep's axes, then
-// RecognizePartGear. Counters: parts, the mean and the slowest part (ms), parts with symmetries,
-// gears recognised.
+// Per part, as `generate` and `inspect` do it: DetectSymmetries with the B-rep's axes, the
+// B-rep's surface-to-surface check, then RecognizePartGear. Counters: parts, the mean and the
+// slowest part (ms), parts with symmetries, gears recognised.
 void BM_SymmetriesAndGears(benchmark::State& state) {
   const std::filesystem::path file = DataDir() / kAssemblies[state.range(0)];
   if (!std::filesystem::exists(file)) {
@@ -82,8 +82,9 @@ void BM_SymmetriesAndGears(benchmark::State& state) {
     for (const cadsynth::Part& p : a.parts) {
       if (p.mesh.triangles.empty()) continue;
       const auto start = std::chrono::steady_clock::now();
-      const cadsynth::DetectedSymmetries d =
+      cadsynth::DetectedSymmetries d =
           cadsynth::DetectSymmetries(p.mesh, cadsynth::PartSymmetryOptions(p));
+      cadsynth::CompareBrepFaces(p, &d);
       gears += cadsynth::RecognizePartGear(p, d).has_value();
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)

@@ -140,7 +140,6 @@ std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions:
   }
   if (!(h_hi > h_lo) || !(r_max > 0)) return std::nullopt;
   const double step = 2 * M_PI * r_max / (4 * kBins);
-  const auto radius = [&](size_t i) { return local[i].head<2>().norm(); };
 
   // Per side (outer: external teeth; inner: internal), the section whose profile swings most
   // with 5 or more teeth; the side that swings more is tried first, then the other (a gear on
@@ -192,10 +191,12 @@ std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
     if (near(r, tip_s)) tip = internal ? std::min(tip, r) : std::max(tip, r);
   }
   if (!std::isfinite(tip)) return std::nullopt;
-  // The toothed band: the heights of the tips' vertices.
+  // The toothed band: the heights of the vertices on the teeth's outer half (from the tips to
+  // mid-depth: a chamfered or rounded tip is shorter than the tooth).
   double h0 = kInf, h1 = -kInf;
   for (size_t i = 0; i < local.size(); ++i) {
-    if (std::abs(radius(i) - tip) < 0.02 * depth_s)
+    const double into = internal ? radius(i) - tip : tip - radius(i);  // depth below the tip
+    if (into > -0.02 * depth_s && into < 0.5 * depth_s)
       h0 = std::min(h0, local[i].z()), h1 = std::max(h1, local[i].z());
   }
   if (!(h1 > h0)) return std::nullopt;

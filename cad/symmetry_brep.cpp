@@ -94,7 +94,8 @@ double Apart(const Surface& a, const Surface& b, double size) {
     case GeomAbs_Cylinder:
       return across + size * cross + std::abs(a.r1 - b.r1);
     case GeomAbs_Cone:
-      return off.norm() + size * cross + size * std::abs(a.r1 - b.r1);
+      // (A cone about -d with angle -a is the one about d with a.)
+      return off.norm() + size * cross + size * std::abs(std::abs(a.r1) - std::abs(b.r1));
     case GeomAbs_Sphere:
       return off.norm() + std::abs(a.r1 - b.r1);
     case GeomAbs_Torus:

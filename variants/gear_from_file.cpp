@@ -4,7 +4,6 @@
 #include <cmath>
 #include <sstream>
 
-#include <BRepAlgoAPI_Common.hxx>
 #include <BRepAlgoAPI_Cut.hxx>
 #include <BRepAlgoAPI_Fuse.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
@@ -102,9 +101,21 @@ Shape RebuildGear(const Part& part, const RecognizedGear& gear, const GearRebuil
     reach = std::max(reach, (d - h * z).norm());
   }
   lo -= 1, hi += 1;
-  // The file's toothed band in the gear frame.
-  const double band_lo = 0.5 * (o.face_width_mm - gear.face_width_mm);
-  const double band_hi = band_lo + gear.face_width_mm;
+  // The file's toothed band in the gear frame; where nothing of the part lies beyond an end
+  // (outside r_cut), the cut reaches 1 mm past it, so that no sliver of an old tooth stays on
+  // a plane the booleans would have to meet exactly. Next to a flange it stops at the band.
+  double band_lo = 0.5 * (o.face_width_mm - gear.face_width_mm);
+  double band_hi = band_lo + gear.face_width_mm;
+  bool below = false, above = false;
+  for (const Eigen::Vector3f& p : part.mesh.positions) {
+    const Eigen::Vector3d d = p.cast<double>() - model_from_gear.translation();
+    const double h = d.dot(z);
+    if ((d - h * z).norm() <= r_cut) continue;
+    below = below || h < band_lo - 1e-3;
+    above = above || h > band_hi + 1e-3;
+  }
+  if (!below) band_lo -= 1;
+  if (!above) band_hi += 1;
 
   try {
     const TopoDS_Shape& original = OcctShape(part.brep);

@@ -339,9 +339,10 @@ std::vector<StablePose> StablePoses(const ConvexHull& hull, const Eigen::Vector3
     }
     // With the body's symmetries known, faces at one height are one pose when one of them maps
     // one onto the other (a box 40 x 40 x 30 with a hole in one side rests on four sides at one
-    // height; two of them show the hole), or when they are neighbouring flats of one tessellated
-    // curve (a flange with 5 bolt holes rolls on its rim: its N rim flats, within 26 degrees of
-    // each other in turn, are one pose whatever N is).
+    // height; two of them show the hole), or when a chain of faces joins them whose normals are
+    // each within 26 degrees of the next: a tessellated curve or a many-sided hull it rolls on,
+    // not distinct poses (a flange with 5 bolt holes on its rim: its N rim flats are one pose
+    // whatever N is). Rims tessellated coarser than 26 degrees are not joined.
     if (symmetries != nullptr && !symmetries->empty()) {
       std::vector<std::vector<StablePose>> split;
       for (size_t g = first; g < groups.size(); ++g) {

@@ -144,6 +144,9 @@ TEST(Symmetry, EveryFamilysDeclaredSymmetriesAreMeasuredToHold) {
           MeasureSymmetries(part.mesh, part.symmetries, PartSymmetryOptions(part));
       ExpectWithinTolerance(d);
       CompareBrepFaces(part, &d);
+      ASSERT_EQ(d.discrete_brep_mm.size(), d.symmetries.discrete.size()) << family.name;
+      ASSERT_EQ(d.continuous_brep_mm.size(), d.symmetries.continuous.size()) << family.name;
+      EXPECT_EQ(d.brep_faces_not_compared, 0) << family.name << " " << part.name;
       for (double v : d.discrete_brep_mm) EXPECT_LT(v, 1e-6) << family.name << " " << part.name;
       for (double v : d.continuous_brep_mm) EXPECT_LT(v, 1e-6) << family.name << " " << part.name;
       ++measured;

@@ -81,8 +81,8 @@ Assembly Read(const std::filesystem::path& path, ImportOptions options,
   return assembly;
 }
 
-// The B-rep's face-to-face check: null without a B-rep; else whether every face found a match
-// under every symmetry, and the largest distance of a matched centroid.
+// The B-rep's surface-to-surface check: null without a B-rep; else whether every surface found a
+// partner under every symmetry, and the largest distance between a moved surface and its partner.
 nlohmann::ordered_json BrepFacesJson(const DetectedSymmetries& d) {
   if (d.discrete_brep_mm.empty() && d.continuous_brep_mm.empty()) return nullptr;
   double worst = 0;

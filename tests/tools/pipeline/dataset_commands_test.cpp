@@ -95,14 +95,19 @@ TEST(Eval, ShiftedTruthScoresAsWorkedOutByHand) {
     } else {
       EXPECT_NEAR(s.mean_error_mm, 10.0, 1e-3);  // ADD of a pure translation is its length
       EXPECT_NEAR(s.auc_add_or_s, 0.9, 1e-5);    // (100 - 10) / 100
-      EXPECT_NEAR(s.mean_mssd_mm, 10.0, 1e-3);   // and so is its MSSD
-      // BOP's recall: the thresholds 5% to 50% of the diameter that 10 mm is below.
-      int below = 0;
-      for (int k = 1; k <= 10; ++k) below += 10.0 + 1e-3 < 0.05 * k * s.diameter_mm;
-      EXPECT_NEAR(s.ar_mssd, below / 10.0 * s.estimated / s.instances, 1e-9);
     }
-    // The identity is among the symmetries: MSSD never exceeds the shift.
-    EXPECT_LE(s.mean_mssd_mm, 10.0 + 1e-3);
+    // MSSD of a pure shift t is |t| = 10 mm whatever the symmetries: the identity gives it, and
+    // any other symmetry S moves points by v = R (x - S x), which average to zero over an orbit,
+    // so the largest |t + v| is at least |t| (to the sampling of the model cloud).
+    EXPECT_NEAR(s.mean_mssd_mm, 10.0, 0.05);
+    // BOP's recall: the thresholds 5% to 50% of the diameter that 10 mm is below (none of them
+    // within the tolerance of 10 mm for these diameters).
+    int below = 0;
+    for (int k = 1; k <= 10; ++k) {
+      ASSERT_GT(std::abs(0.05 * k * s.diameter_mm - 10.0), 0.05) << k;
+      below += 10.0 < 0.05 * k * s.diameter_mm;
+    }
+    EXPECT_NEAR(s.ar_mssd, below / 10.0 * s.estimated / s.instances, 1e-9);
     // 10 mm passes the paper's test where the diameter exceeds 100 mm (ADD-S may pass more often).
     const double passes = s.diameter_mm * 0.1 > 10.0 ? double(s.estimated) / s.instances : 0.0;
     if (s.symmetric) {

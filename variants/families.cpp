@@ -105,8 +105,11 @@ ShapeAssembly GearFromFile(const ParamValues& v) {
       if (!wanted.empty()) throw Error("part '" + wanted + "' of " + file + " has no triangles");
       continue;
     }
-    const std::optional<RecognizedGear> gear =
-        RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
+    // The B-rep's axes of revolution (a bore, the tip cylinders) first; the symmetry's main axis
+    // only where they do not carry the gear (detection costs far more).
+    std::optional<RecognizedGear> gear = RecognizePartGear(part, DetectedSymmetries{});
+    if (!gear)
+      gear = RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
     if (!gear) {
       if (!wanted.empty()) throw Error("no gear recognised in part '" + wanted + "' of " + file);
       continue;

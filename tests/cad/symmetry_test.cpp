@@ -131,6 +131,13 @@ TEST(Symmetry, FamilyPartsGetTheirDeclaredSymmetriesBack) {
   }
 }
 
+// Fewer surface points (1,500): the same answers on these parts, a quarter of the time under the
+// sanitizers.
+SymmetryOptions Sparse(SymmetryOptions o) {
+  o.max_points = 1500;
+  return o;
+}
+
 // Every symmetry a family declares maps its default part's mesh onto itself within the default
 // tolerance, and its B-rep's surfaces onto each other: measured, not assumed.
 TEST(Symmetry, EveryFamilysDeclaredSymmetriesAreMeasuredToHold) {
@@ -141,7 +148,7 @@ TEST(Symmetry, EveryFamilysDeclaredSymmetriesAreMeasuredToHold) {
     for (const Part& part : a.parts) {
       if (part.symmetries.empty()) continue;
       DetectedSymmetries d =
-          MeasureSymmetries(part.mesh, part.symmetries, PartSymmetryOptions(part));
+          MeasureSymmetries(part.mesh, part.symmetries, Sparse(PartSymmetryOptions(part)));
       ExpectWithinTolerance(d);
       CompareBrepFaces(part, &d);
       ASSERT_EQ(d.discrete_brep_mm.size(), d.symmetries.discrete.size()) << family.name;
@@ -204,7 +211,7 @@ TEST(Symmetry, FamilyPartsWrittenToStepAndReadBackKeepTheirSymmetries) {
     const std::filesystem::path file = dir.path() / (c.family + ".step");
     WriteStep(file, c.family, {StepComponent{c.family, shapes.components.at(0).shape}});
     ImportOptions import;
-    import.tessellation = TessellationOptions{0.01, 0.2};
+    import.tessellation = TessellationOptions{0.03, 0.3};
     const Assembly back = ImportCad(file, import);
     ASSERT_EQ(back.parts.size(), 1u) << c.family;
     const Part& part = back.parts[0];

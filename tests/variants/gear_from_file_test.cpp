@@ -31,7 +31,7 @@ struct HubbedGear {
     o.hub_length_mm = 8.0;
     WriteStep(dir / "gear.step", "gear", {StepComponent{"my_gear", MakeGear(o)}});
     part = ImportCad(dir / "gear.step", ImportOptions{}).parts.at(0);
-    gear = RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
+    gear = RecognizePartGear(part, DetectedSymmetries{});  // the bore gives the axis
   }
   testing::ScratchDir dir;
   Part part;
@@ -40,7 +40,7 @@ struct HubbedGear {
 
 std::optional<RecognizedGear> Recognise(const Shape& shape) {
   const Part p = MakePart("rebuilt", shape, TessellationOptions{});
-  return RecognizePartGear(p, DetectSymmetries(p.mesh, PartSymmetryOptions(p)));
+  return RecognizePartGear(p, DetectedSymmetries{});  // the bore gives the axis
 }
 
 TEST(GearFromFile, RebuiltTeethAreRecognisedAndTheHubIsKept) {
@@ -93,8 +93,7 @@ TEST(GearFromFile, AFlangeBesideTheTeethIsKept) {
   o.hub_length_mm = 3.0;
   const Shape body = MakeGear(o);
   const Part part = MakePart("flanged", body, TessellationOptions{0.05, 0.3});
-  const std::optional<RecognizedGear> gear =
-      RecognizePartGear(part, DetectSymmetries(part.mesh, PartSymmetryOptions(part)));
+  const std::optional<RecognizedGear> gear = RecognizePartGear(part, DetectedSymmetries{});
   ASSERT_TRUE(gear.has_value());
   EXPECT_EQ(gear->teeth, 20);
   const Shape rebuilt = RebuildGear(part, *gear, GearRebuild{32, 0, 0});
@@ -106,8 +105,7 @@ TEST(GearFromFile, AFlangeBesideTheTeethIsKept) {
   EXPECT_NEAR(CommonVolume(body, identity, slab, identity), expected, 1e-3 * expected);
   EXPECT_NEAR(CommonVolume(rebuilt, identity, slab, identity), expected, 1e-3 * expected);
   const Part back = MakePart("back", rebuilt, TessellationOptions{0.05, 0.3});
-  const std::optional<RecognizedGear> g =
-      RecognizePartGear(back, DetectSymmetries(back.mesh, PartSymmetryOptions(back)));
+  const std::optional<RecognizedGear> g = RecognizePartGear(back, DetectedSymmetries{});
   ASSERT_TRUE(g.has_value());
   EXPECT_EQ(g->teeth, 32);
 }

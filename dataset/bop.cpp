@@ -111,6 +111,39 @@ std::string EncodePng(const cv::Mat& image, const std::filesystem::path& where) 
 
 }  // namespace
 
+std::string EncodeImagePng(const void* pixels, int width, int height, int channels, int bits) {
+  if (width <= 0 || height <= 0 || (channels != 1 && channels != 3) || (bits != 8 && bits != 16))
+    throw Error("PNG: an image must be 1 or 3 channels of 8 or 16 bits, " + std::to_string(width) +
+                " x " + std::to_string(height) + " x " + std::to_string(channels) + " x " +
+                std::to_string(bits) + " bits given");
+  const int type = CV_MAKETYPE(bits == 16 ? CV_16U : CV_8U, channels);
+  const cv::Mat image(height, width, type, const_cast<void*>(pixels));
+  if (channels == 1) return EncodePng(image, "image");
+  cv::Mat bgr;
+  cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
+  return EncodePng(bgr, "image");
+}
+
+DecodedImage ReadImageFile(const std::filesystem::path& path) {
+  const cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  if (image.empty()) throw Error(path.string() + ": not an image OpenCV can read");
+  const int depth = image.depth();
+  if ((depth != CV_8U && depth != CV_16U) || (image.channels() != 1 && image.channels() != 3))
+    throw Error(path.string() + ": not an 8- or 16-bit grey or colour image");
+  cv::Mat rgb = image;
+  if (image.channels() == 3) cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
+  DecodedImage out;
+  out.width = rgb.cols;
+  out.height = rgb.rows;
+  out.channels = rgb.channels();
+  out.bits = depth == CV_16U ? 16 : 8;
+  const size_t row = static_cast<size_t>(rgb.cols) * rgb.elemSize();
+  out.bytes.resize(row * static_cast<size_t>(rgb.rows));
+  for (int v = 0; v < rgb.rows; ++v)
+    std::memcpy(out.bytes.data() + row * static_cast<size_t>(v), rgb.ptr(v), row);
+  return out;
+}
+
 uint16_t EncodeDepth(float depth_mm, double depth_scale) {
   if (!(depth_mm > 0.0f)) return 0;
   const double units = depth_mm / depth_scale + 0.5;  // round half up (depths are positive)
@@ -584,14 +617,13 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     if (frame.gray.size() != static_cast<size_t>(w) * h)
       throw Error("bop: a grey camera's frame has no grey image");
     const bool deep = options_.gray_bits == 16;
-    const float scale = deep ? 65535.0f : 255.0f;
     image.create(h, w, deep ? CV_16UC1 : CV_8UC1);
     for (int v = 0; v < h; ++v) {
       for (int u = 0; u < w; ++u) {
-        const float g = std::clamp(frame.gray[static_cast<size_t>(v) * w + u], 0.0f, 1.0f);
-        const float value = g * scale + 0.5f;  // round half up
+        const uint16_t value =
+            EncodeGray(frame.gray[static_cast<size_t>(v) * w + u], options_.gray_bits);
         if (deep) {
-          image.at<uint16_t>(v, u) = static_cast<uint16_t>(value);
+          image.at<uint16_t>(v, u) = value;
         } else {
           image.at<uint8_t>(v, u) = static_cast<uint8_t>(value);
         }

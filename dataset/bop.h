@@ -275,6 +275,25 @@ class VisibleMasks {
 // Depth in mm to BOP's uint16 units; 0 where there is no return or the value does not fit.
 uint16_t EncodeDepth(float depth_mm, double depth_scale);
 
+// A grey camera's value (Frame::gray, in [0, 1]; clamped) as its 8- or 16-bit image holds it.
+inline uint16_t EncodeGray(float value, int bits) {
+  const float scale = bits == 16 ? 65535.0f : 255.0f;
+  const float clamped = value < 0.0f ? 0.0f : (value > 1.0f ? 1.0f : value);
+  return static_cast<uint16_t>(clamped * scale + 0.5f);  // round half up
+}
+
+// PNG bytes of an image, encoded as the dataset writers encode theirs: `channels` 1 or 3 (R, G, B
+// order), `bits` 8 or 16 per value, rows packed. Throws Error.
+std::string EncodeImagePng(const void* pixels, int width, int height, int channels, int bits);
+
+// An image file (PNG, JPEG) as the writers' images read back: 8 or 16 bits per value, 1 or 3
+// channels (R, G, B order), rows packed. Throws Error naming the file.
+struct DecodedImage {
+  int width = 0, height = 0, channels = 0, bits = 0;
+  std::vector<uint8_t> bytes;
+};
+DecodedImage ReadImageFile(const std::filesystem::path& path);
+
 // Writes the images of one scene as frames arrive (from any thread) and its JSON files at the end.
 class BopSceneWriter {
  public:

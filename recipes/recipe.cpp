@@ -1877,6 +1877,35 @@ std::vector<SceneSpec> DemoScenes() {
   return {planetary, crank, benchmark};
 }
 
+RunSpec Reseed(const RunSpec& spec, uint64_t stream) {
+  RunSpec out = spec;
+  if (stream == 0) return out;
+  out.reseed = stream;
+  // Each seed to a hash of itself and the stream (SplitMix64's finaliser), so that streams do
+  // not collide with each other's seeds or with the recipe's.
+  const auto move = [stream](uint64_t seed) {
+    uint64_t z = seed ^ (stream * 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  };
+  for (SceneSpec& scene : out.scenes) {
+    scene.arrangement.seed = move(scene.arrangement.seed);
+    if (scene.randomize) scene.randomize->draws.seed = move(scene.randomize->draws.seed);
+  }
+  out.randomize.draws.seed = move(out.randomize.draws.seed);
+  out.sampler.seed = move(out.sampler.seed);
+  // RenderOptions::seed is an int (a recipe value): kept non-negative.
+  out.render.seed = static_cast<int>(move(static_cast<uint64_t>(out.render.seed)) >> 33);
+  const auto move_sensor = [&](SensorOptions& sensor) {
+    sensor.imager.seed = move(sensor.imager.seed);
+    sensor.depth.seed = move(sensor.depth.seed);
+  };
+  move_sensor(out.sensor);
+  for (RigSensor& sensor : out.rig) move_sensor(sensor.sensor);
+  return out;
+}
+
 RunSpec DefaultRunSpec() {
   RunSpec spec;
   spec.scenes = DemoScenes();

@@ -208,7 +208,15 @@ struct RunSpec {
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides
   RunLimits limits;
+  // Reseed(): the stream the seeds were moved to (0: the recipe's own seeds).
+  uint64_t reseed = 0;
 };
+
+// The same run with every seed of what is drawn per run moved to stream `stream` (0: unchanged):
+// each scene's arrangement (random poses, piles), domain randomisation, the view sampler, the
+// path tracer's sampler and the sensors' noise. The parts and their grasps stay. For endless
+// streams of new scenes (the Python module's torch dataset): stream k always gives the same run.
+RunSpec Reseed(const RunSpec& spec, uint64_t stream);
 
 // The sensors a run renders: `spec.rig`, or the one unnamed camera (intrinsics, sensor) without a
 // rig.

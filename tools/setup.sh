@@ -2,8 +2,9 @@
 # Installs the Debian 12 packages cadsynth builds with, if any are missing. Run as root (or with
 # sudo available). Does nothing, and needs no network, when everything is already there.
 #   tools/setup.sh            what building and running cadsynth needs
-#   tools/setup.sh --tests    also Slurm and munge (a test starts a single-node Slurm cluster) and
-#                             clang-format (a test checks the formatting)
+#   tools/setup.sh --tests    also Slurm and munge (a test starts a single-node Slurm cluster),
+#                             clang-format (a test checks the formatting) and pytest (the Python
+#                             module's tests)
 set -euo pipefail
 
 packages=(
@@ -14,9 +15,10 @@ packages=(
   libyaml-cpp-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libmatio-dev zlib1g-dev
   libcli11-dev libxxhash-dev libbullet-dev libbullet-extras-dev libfcl-dev
   libhdf5-dev
+  pybind11-dev python3-dev python3-numpy python3-torch
 )
 case "${1:-}" in
-  --tests) packages+=(slurm-wlm munge clang-format) ;;
+  --tests) packages+=(slurm-wlm munge clang-format python3-pytest) ;;
   "") ;;
   *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
 esac

@@ -30,56 +30,9 @@ namespace cadsynth {
 
 namespace {
 
-// Every object's grasps in its model frame (grasps:), sampled in parallel, each object from its
-// own seed.
-struct RunGrasps {
-  std::vector<std::vector<ParallelJawGrasp>> jaw;  // per part
-  std::vector<std::vector<SuctionGrasp>> suction;  // per part; empty without a cup
-};
-
-RunGrasps SampleGrasps(const std::vector<Part>& parts, const GraspSpec& spec,
-                       const std::function<void(const std::string&)>& info) {
-  const auto start = std::chrono::steady_clock::now();
-  RunGrasps grasps;
-  grasps.jaw.resize(parts.size());
-  if (spec.suction) grasps.suction.resize(parts.size());
-  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
-    AntipodalOptions options = spec.sampling;
-    options.seed = Hash(spec.sampling.seed, p);
-    grasps.jaw[p] = SampleAntipodalGrasps(parts[p], spec.gripper, options);
-    if (spec.suction) {
-      SuctionOptions suction = spec.suction_sampling;
-      suction.seed = Hash(spec.suction_sampling.seed, p);
-      grasps.suction[p] = SampleSuctionGrasps(parts[p], spec.cup, suction);
-    }
-  });
-  if (spec.suction) {
-    for (const Part& part : parts) {
-      if (!(part.mass.volume_mm3 > 0))
-        Warn("grasps: '" + part.name +
-             "' has no known volume (an open mesh): its suction grasps are scored without its "
-             "weight");
-    }
-  }
-  if (info) {
-    std::ostringstream line;
-    line << "grasps (" << spec.gripper.name << ", mu " << spec.sampling.friction;
-    if (spec.suction) line << "; suction cup " << spec.cup.name;
-    line << "):";
-    for (size_t p = 0; p < parts.size(); ++p) {
-      line << " obj " << p + 1 << ": " << grasps.jaw[p].size();
-      if (spec.suction) line << " + " << grasps.suction[p].size() << " suction";
-    }
-    line << " (" << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
-         << " s)";
-    info(line.str());
-  }
-  return grasps;
-}
-
 // The objects' grasps as ACRONYM's per-object HDF5 files models/grasps/obj_OBJID.h5.
 void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>& parts,
-                     const GraspSpec& spec, const RunGrasps& grasps) {
+                     const GraspSpec& spec, const FrameSource& source) {
   std::filesystem::create_directories(root / "models" / "grasps");
   tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
     char id[16];
@@ -94,7 +47,7 @@ void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>&
     file.friction = spec.sampling.friction;
     file.volume_m3 = parts[p].mass.volume_mm3 * 1e-9;
     file.com_m = parts[p].mass.center_of_mass * 1e-3;
-    for (const ParallelJawGrasp& g : grasps.jaw[p]) {
+    for (const ParallelJawGrasp& g : source.ObjectJawGrasps()[p]) {
       file.model_from_gripper.push_back(g.model_from_gripper);
       file.width_mm.push_back(g.width_mm);
       file.quality.push_back(g.quality);
@@ -106,7 +59,7 @@ void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>&
       file.mass_kg = file.density * file.volume_m3;
       file.cup_diameter_mm = spec.cup.diameter_mm;
       file.cup_vacuum_kpa = spec.cup.vacuum_kpa;
-      for (const SuctionGrasp& g : grasps.suction[p]) {
+      for (const SuctionGrasp& g : source.ObjectSuctionGrasps()[p]) {
         file.suction_points_mm.push_back(g.point);
         file.suction_approaches.push_back(g.approach);
         file.suction_seal.push_back(g.seal);
@@ -115,34 +68,6 @@ void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>&
     }
     WriteAcronymFile(root / "models" / "grasps" / (std::string("obj_") + id + ".h5"), file);
   });
-}
-
-// One scene's grasps placed on its instances and filtered against its floor, fixtures and
-// instances, for the per-frame writer.
-SceneGrasps PlaceSceneGrasps(const std::vector<Part>& parts, const Scene& scene,
-                             const std::vector<int>& obj_ids, const GraspSpec& spec,
-                             const RunGrasps& grasps) {
-  GraspObstacles obstacles;
-  obstacles.floor = scene.floor;
-  for (const Scene::Fixture& fixture : scene.fixtures) obstacles.fixtures.push_back(&fixture.mesh);
-  SceneGrasps out;
-  for (const Instance& instance : scene.instances) {
-    obstacles.instances.push_back({&parts[static_cast<size_t>(instance.part)].mesh,
-                                   instance.world_from_model, instance.part});
-    out.part_of_instance.push_back(instance.part);
-  }
-  out.obj_id_of_instance = obj_ids;
-  out.gripper = spec.gripper;
-  out.cup = spec.cup;
-  if (spec.labels.graspnet) {
-    out.jaw = &grasps.jaw;
-    out.jaw_placed = PlaceParallelJawGrasps(obstacles, grasps.jaw, spec.gripper, spec.scene);
-  }
-  if (spec.labels.suctionnet) {
-    out.suction = &grasps.suction;
-    out.suction_placed = PlaceSuctionGrasps(obstacles, grasps.suction, spec.cup, spec.scene);
-  }
-  return out;
 }
 
 }  // namespace
@@ -162,18 +87,10 @@ std::string RandomizationRecord(const std::vector<Drawn>& record) {
   return json.dump();
 }
 
-GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  if (options.output.empty()) throw Error("no output folder given");
-  const std::filesystem::path output = std::filesystem::absolute(options.output).lexically_normal();
-  const std::optional<ShardSpec>& shard = options.shard;
-  std::error_code ec;
-  if (!shard && std::filesystem::exists(output, ec) && !options.overwrite) {
-    throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
-  }
-  if (shard && options.overwrite)
-    throw Error("--overwrite does not apply to shards (they share one folder)");
-  // The run's input files: --overwrite must never delete a folder that holds them.
+namespace {
+
+// The run's input files (recipe, CAD files), which --overwrite must never delete.
+std::vector<std::filesystem::path> RunInputs(const RunSpec& spec) {
   std::vector<std::filesystem::path> inputs;
   if (!spec.recipe.empty()) inputs.push_back(spec.recipe);
   for (const SceneSpec& scene : spec.scenes) {
@@ -186,34 +103,55 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       }
     }
   }
+  return inputs;
+}
+
+// The output folder, checked before any work: it must not exist unless replaced, and may not
+// hold the run's inputs.
+std::filesystem::path CheckOutput(const RunSpec& spec, const GenerateOptions& options) {
+  if (options.output.empty()) throw Error("no output folder given");
+  const std::filesystem::path output = std::filesystem::absolute(options.output).lexically_normal();
+  std::error_code ec;
+  if (!options.shard && std::filesystem::exists(output, ec) && !options.overwrite) {
+    throw Error(output.string() + ": already exists (pass --overwrite to replace it)");
+  }
+  if (options.shard && options.overwrite)
+    throw Error("--overwrite does not apply to shards (they share one folder)");
   // Checked before the work, and again when the new dataset replaces the old one.
-  if (!shard && options.overwrite) CheckReplaceable(output, inputs);
-  std::string why;
-  if (!spec.intrinsics.Check(&why)) throw Error("camera: " + why);
-  // The rig's sensors (one unnamed camera without a rig), each with its image kind.
-  const std::vector<RigSensor> sensors = RunSensors(spec);
+  if (!options.shard && options.overwrite) CheckReplaceable(output, RunInputs(spec));
+  return output;
+}
+
+}  // namespace
+
+GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  CheckOutput(spec, options);
+  FrameSourceOptions source_options;
+  source_options.info = options.info;
+  source_options.cache = options.cache;
+  source_options.reader = options.reader;
+  const FrameSource source(spec, source_options);
+  GenerateSummary summary = Generate(source, options);
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+GenerateSummary Generate(const FrameSource& source, const GenerateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const RunSpec& spec = source.spec();
+  const std::filesystem::path output = CheckOutput(spec, options);
+  const std::vector<std::filesystem::path> inputs = RunInputs(spec);
+  const std::optional<ShardSpec>& shard = options.shard;
+  const std::vector<RigSensor>& sensors = source.sensors();
   std::vector<BopSensor> bop_sensors;
   for (const RigSensor& sensor : sensors) {
-    if (!sensor.intrinsics.Check(&why)) throw Error("camera '" + sensor.name + "': " + why);
     bop_sensors.push_back(
         {sensor.name, spec.rig.empty() ? spec.bop.gray_bits : GrayBits(sensor.sensor.image)});
   }
-  if (!spec.sweep.Check(&why)) throw Error("sweep: " + why);
-  if (!spec.bop.Check(&why)) throw Error("output: " + why);
-  if (spec.grasps.enabled && spec.grasps.labels.suctionnet && !spec.grasps.suction)
-    throw Error("grasps: the suctionnet format needs a suction cup (grasps.suction)");
-  CheckLimits(spec);  // a RunSpec built in code has not been through the recipe reader
-
-  std::optional<PartCache> cache;
-  if (options.cache) cache.emplace(*options.cache, BuildId());
-  std::optional<ReaderProcess> reader;
-  if (!options.reader.empty()) reader = ReaderProcess{options.reader, spec.limits.read_timeout_s};
-  PreparedRun prepared =
-      Prepare(spec, options.info, cache ? &*cache : nullptr, reader ? &*reader : nullptr);
+  const PreparedRun& prepared = source.prepared();
   const std::vector<Part>& parts = prepared.parts;
-  std::string why_sampler;
-  if (!spec.sampler.Check(&why_sampler)) throw Error("sweep: " + why_sampler);
-  const std::vector<SweepView> views = SampleViews(spec.sampler, spec.sweep);
+  const std::vector<SweepView>& views = source.views();
   const bool common = !shard || shard->index == 0;  // writes the files every dataset has once
   if (common) {
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
@@ -238,8 +176,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   const std::string run_key = RunKey(spec, prepared, views);
   info("tracing with Embree's " + TracingIsa(spec.render.isa) + " kernels");
   // Grasps: every shard samples them (its frames need them); the common files write them.
-  RunGrasps run_grasps;
-  if (spec.grasps.enabled) run_grasps = SampleGrasps(parts, spec.grasps, options.info);
+  if (spec.grasps.enabled) source.ObjectJawGrasps();
   // A single run writes to a hidden staging folder beside the output, renamed into place at the
   // end. An interrupted run (killed, disk full) leaves it; the same run started again continues
   // from the frames it completed, if its run key (recipe text, parts, views, output options)
@@ -268,7 +205,7 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       WriteBopModels(root, parts, prepared.classes);
       WriteModelPoints(root, parts, spec.bop);
       if (spec.grasps.enabled && spec.grasps.acronym)
-        WriteGraspFiles(root, parts, spec.grasps, run_grasps);
+        WriteGraspFiles(root, parts, spec.grasps, source);
       WriteFileAtomic(root / "variants.json", prepared.variants_json);
     }
     std::vector<BopSceneWriter::CocoCategory> categories;
@@ -309,20 +246,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
       for (size_t i = 0; i < views.size() && !renders_here; ++i) renders_here = owns(s, i);
       if (spec.grasps.enabled && (spec.grasps.labels.graspnet || spec.grasps.labels.suctionnet) &&
           renders_here) {
-        const auto placing = std::chrono::steady_clock::now();
-        SceneGrasps scene_grasps = PlaceSceneGrasps(parts, prepared.scenes[s], prepared.obj_ids[s],
-                                                    spec.grasps, run_grasps);
-        std::ostringstream line;
-        line << "scene '" << spec.scenes[s].name
-             << "': grasps free of the scene: " << scene_grasps.jaw_placed.size();
-        if (spec.grasps.labels.suctionnet)
-          line << " + " << scene_grasps.suction_placed.size() << " suction";
-        line << " ("
-             << std::chrono::duration<double>(std::chrono::steady_clock::now() - placing).count()
-             << " s)";
-        info(line.str());
         grasp_writers[s] = std::make_unique<GraspLabelWriter>(
-            root, static_cast<int>(s), spec.grasps.labels, std::move(scene_grasps));
+            root, static_cast<int>(s), spec.grasps.labels, source.PlacedGrasps(s));
       }
       std::vector<int> earlier;
       for (int id : writer.WrittenFrames()) {
@@ -349,29 +274,12 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
     // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
     // showing too little of the scene are skipped (image ids keep their view index).
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      RenderOptions render = spec.render;
-      render.amodal_depth = spec.bop.visibility == BopOptions::Visibility::kBop19;
-      const Renderer renderer(parts, prepared.scenes[s], render);
-      // Domain randomisation: each frame's look and camera drawn around the scene's own, lights
-      // placed about the middle of its instances on the floor.
-      const Randomization& randomization = prepared.randomization[s];
-      const FrameLook base_look = randomization.changes_look() ? renderer.BaseLook() : FrameLook{};
-      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-      if (!prepared.scenes[s].instances.empty()) {
-        Eigen::AlignedBox3d box;
-        for (const Instance& instance : prepared.scenes[s].instances)
-          box.extend(instance.world_from_model.translation());
-        centre = box.center();
-        centre.z() = 0.0;
-      }
       RigSceneWriter& writer = *writers[s];
       std::vector<const FrameWriter*> formats = {papers[s].get()};
       if (grasp_writers[s]) formats.push_back(grasp_writers[s].get());
       size_t next = 0;
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
-      // One unit renders every sensor of the rig at view i: sensor k sits at
-      // world_from_rig * rig_from_cam and draws its noise from the key (view, k).
-      using FramePtr = std::shared_ptr<const std::vector<Frame>>;
+      using ViewPtr = std::shared_ptr<const RenderedView>;
       tbb::parallel_pipeline(
           tokens,
           tbb::make_filter<void, size_t>(
@@ -387,53 +295,23 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
                 }
                 return next++;
               }) &
-              tbb::make_filter<size_t, std::pair<size_t, FramePtr>>(
-                  tbb::filter_mode::parallel,
-                  [&](size_t i) {
-                    auto rig_frames = std::make_shared<std::vector<Frame>>();
-                    for (size_t k = 0; k < sensors.size(); ++k) {
-                      if (!randomization.active()) {
-                        const Camera camera{sensors[k].intrinsics,
-                                            views[i].world_from_cam * sensors[k].rig_from_cam};
-                        rig_frames->push_back(
-                            renderer.Render(camera, SensorFrameKey(i, k), sensors[k].sensor));
-                        continue;
-                      }
-                      // Every sensor of the rig draws the same numbers (the keys name
-                      // the scene, the view and the quantity, not the sensor).
-                      const FrameDraw draw =
-                          DrawFrame(randomization, base_look, views[i].world_from_cam,
-                                    sensors[k].sensor, centre, s, i);
-                      const Camera camera{sensors[k].intrinsics,
-                                          draw.world_from_cam * sensors[k].rig_from_cam};
-                      Frame frame =
-                          renderer.Render(camera, SensorFrameKey(i, k), draw.sensor,
-                                          randomization.changes_look() ? &draw.look : nullptr);
-                      frame.randomization = RandomizationRecord(draw.record);
-                      rig_frames->push_back(std::move(frame));
-                    }
-                    return std::make_pair(i, FramePtr(std::move(rig_frames)));
-                  }) &
-              tbb::make_filter<std::pair<size_t, FramePtr>, void>(
-                  tbb::filter_mode::parallel, [&](const std::pair<size_t, FramePtr>& item) {
-                    // A rig pose is kept when any of its sensors sees enough.
-                    int visible = 0;
-                    std::vector<const Frame*> rig_frames;
-                    for (const Frame& frame : *item.second) {
-                      int seen = 0;
-                      for (const Frame::InstanceTruth& t : frame.instances)
-                        seen += t.px_count_visib;
-                      visible = std::max(visible, seen);
-                      rig_frames.push_back(&frame);
-                    }
-                    if (spec.min_visible_pixels > 0 && visible < spec.min_visible_pixels) {
-                      ++(visible == 0 ? empty_views : sparse_views);
-                    } else {
-                      writer.WriteFrame(static_cast<int>(item.first), rig_frames, formats);
-                    }
-                    const size_t n = ++done;
-                    if (options.progress) options.progress(n, to_render);
-                  }));
+              tbb::make_filter<size_t, ViewPtr>(tbb::filter_mode::parallel,
+                                                [&](size_t i) {
+                                                  return std::make_shared<const RenderedView>(
+                                                      source.Render(s * views.size() + i));
+                                                }) &
+              tbb::make_filter<ViewPtr, void>(tbb::filter_mode::parallel, [&](const ViewPtr& view) {
+                if (!view->kept) {
+                  ++(view->visible_pixels == 0 ? empty_views : sparse_views);
+                } else {
+                  std::vector<const Frame*> rig_frames;
+                  for (const Frame& frame : view->frames) rig_frames.push_back(&frame);
+                  writer.WriteFrame(static_cast<int>(view->view), rig_frames, formats);
+                }
+                const size_t n = ++done;
+                if (options.progress) options.progress(n, to_render);
+              }));
+      source.ReleaseScene(s);
       for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
     }
     if (!shard) FinishDataset(root, spec.bop, writers, prepared.classes);

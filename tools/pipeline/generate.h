@@ -11,6 +11,7 @@
 #include "recipes/recipe.h"
 #include "render/randomize.h"
 #include "render/scene.h"
+#include "tools/pipeline/frames.h"
 #include "tools/pipeline/prepare.h"
 #include "tools/pipeline/shards.h"
 
@@ -54,6 +55,10 @@ struct GenerateSummary {
 // failed one completed (checked against their manifest entries). With options.shard, renders
 // that shard's units into `output` directly. Throws Error.
 GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options);
+// The same for a run already prepared (options.cache and options.reader are not used: the
+// source was prepared with its own). The source's scene renderers are released as each scene is
+// finished.
+GenerateSummary Generate(const FrameSource& source, const GenerateOptions& options);
 
 // A frame's domain randomisation record (render/randomize.h) as the compact JSON object the
 // dataset writes to scene_randomization.json: each draw under its name, in draw order; a number,

@@ -40,6 +40,7 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   key << "cadsynth run key 2\n";
   // The recipe as it was read (not read again: it may have changed, or be a pipe).
   if (!spec.recipe.empty()) key << "recipe\n" << spec.recipe_text << "\n";
+  if (spec.reseed != 0) key << "reseed " << spec.reseed << "\n";  // the seeds differ from the text
   // The bytes of every CAD file, not only its name: a file edited between a kill and the rerun
   // (or between two shards) would otherwise mix frames of two geometries.
   std::set<std::filesystem::path> files;

@@ -1,0 +1,183 @@
+"""Frames from Python are the frames `cadsynth generate` writes (README "Python")."""
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import cadsynth
+from conftest import CLI
+
+
+def read_json(path):
+    return json.loads(path.read_text())
+
+
+@pytest.fixture(scope="module")
+def cli_dataset(recipe_file, tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli") / "dataset"
+    subprocess.run([str(CLI), "generate", str(recipe_file), "-o", str(out), "--quiet"],
+                   check=True)
+    return out
+
+
+@pytest.fixture(scope="module")
+def run(recipe_file):
+    return cadsynth.Recipe.load(recipe_file).prepare()
+
+
+def test_frames_equal_the_files_the_cli_writes(run, cli_dataset):
+    frames = list(run.frames())
+    assert len(frames) == 6
+    assert [(f["scene_id"], f["im_id"]) for f in frames] == [(s, v) for s in (0, 1)
+                                                             for v in range(3)]
+    for f in frames:
+        scene = cli_dataset / "train" / f"{f['scene_id']:06d}"
+        im = f"{f['im_id']:06d}"
+        # The images, encoded as the writer encodes them, are the files' bytes.
+        assert cadsynth.encode_png(f["rgb"]) == (scene / "rgb" / f"{im}.png").read_bytes()
+        depth = cadsynth.encode_depth(f["depth"], f["depth_scale"])
+        assert cadsynth.encode_png(depth) == (scene / "depth" / f"{im}.png").read_bytes()
+        depth_gt = cadsynth.encode_depth(f["depth_gt"], f["depth_scale"])
+        assert cadsynth.encode_png(depth_gt) == (scene / "depth_gt" / f"{im}.png").read_bytes()
+        # The sensor's depth is not the exact one (noise, shadows), the exact one is exact.
+        assert not np.array_equal(f["depth"], f["depth_gt"])
+        # Masks, pixel for pixel.
+        for i in range(len(f["obj_id"])):
+            name = f"{im}_{i:06d}.png"
+            assert np.array_equal(cadsynth.read_image(scene / "mask" / name) == 255, f["mask"][i])
+            assert np.array_equal(cadsynth.read_image(scene / "mask_visib" / name) == 255,
+                                  f["mask_visib"][i])
+        # The visible ids and the visible masks agree (exact visibility, BOP's default here).
+        for i in range(len(f["obj_id"])):
+            assert np.array_equal(f["instance"] == i + 1, f["mask_visib"][i])
+        # Poses and boxes as scene_gt.json and scene_gt_info.json hold them.
+        gt = read_json(scene / "scene_gt.json")[str(f["im_id"])]
+        info = read_json(scene / "scene_gt_info.json")[str(f["im_id"])]
+        camera = read_json(scene / "scene_camera.json")[str(f["im_id"])]
+        assert f["K"].flatten().tolist() == camera["cam_K"]
+        assert f["cam_from_world"][:3, :3].flatten().tolist() == camera["cam_R_w2c"]
+        assert f["cam_from_world"][:3, 3].tolist() == camera["cam_t_w2c"]
+        for i, entry in enumerate(gt):
+            assert f["obj_id"][i] == entry["obj_id"]
+            assert f["cam_from_model"][i][:3, :3].flatten().tolist() == entry["cam_R_m2c"]
+            assert f["cam_from_model"][i][:3, 3].tolist() == entry["cam_t_m2c"]
+            assert f["bbox_obj"][i].tolist() == info[i]["bbox_obj"]
+            assert f["bbox_visib"][i].tolist() == info[i]["bbox_visib"]
+            assert f["px_count_visib"][i] == info[i]["px_count_visib"]
+            assert f["visib_fract"][i] == info[i]["visib_fract"]
+        # The split, as splits/ lists the image.
+        split = (cli_dataset / "splits" / f"{f['split']}.txt").read_text().split("\n")
+        assert f"{f['scene_id']:06d} {f['im_id']:06d}" in split
+        # Randomised lights: the draws the dataset records.
+        drawn = read_json(scene / "scene_randomization.json")[str(f["im_id"])]
+        assert json.loads(f["randomization"]) == drawn
+        # Grasp labels: the GraspNet rows of the frame's .npy files.
+        rows = np.load(cli_dataset / "graspnet" / f"{f['scene_id']:06d}" / f"{im}.npy")
+        labels = np.load(cli_dataset / "graspnet" / f"{f['scene_id']:06d}" /
+                         f"{im}_labels.npy")
+        assert np.array_equal(rows, f["graspnet"])
+        assert np.array_equal(labels, f["graspnet_labels"])
+    assert sum(len(f["graspnet"]) for f in frames) > 0
+
+
+def test_shards_together_are_the_whole_run(run):
+    whole = {(f["scene_id"], f["im_id"]): f["rgb"].tobytes() for f in run.frames(masks=False)}
+    parts = {}
+    for i in range(2):
+        for f in run.frames(shard=(i, 2), masks=False, threads=1):
+            assert (f["scene_id"] * run.views + f["im_id"]) % 2 == i
+            parts[(f["scene_id"], f["im_id"])] = f["rgb"].tobytes()
+    assert parts == whole
+
+
+def test_one_frame_and_the_run_object(run):
+    assert (run.scenes, run.views, run.units) == (2, 3, 6)
+    assert [o["obj_id"] for o in run.objects] == [1, 2, 3, 4]
+    f = run.frame(4, masks=False)
+    assert (f["scene_id"], f["im_id"], f["kept"]) == (1, 1, True)
+    assert "mask" not in f
+    assert f["rgb"].shape == (120, 160, 3) and f["rgb"].dtype == np.uint8
+    assert f["depth"].dtype == np.float32 and f["instance"].dtype == np.uint16
+    assert f["cam_from_model"].shape == (2, 4, 4)
+    # The pose puts the model's origin where the depth sees it: in front of the camera, at
+    # about the sweep's radius.
+    assert 250 < f["cam_from_model"][0][2, 3] < 450
+
+
+def test_a_run_writes_what_the_cli_writes(run, cli_dataset, tmp_path):
+    summary = run.write(tmp_path / "out")
+    assert summary["frames"] == 6
+    for name in ("train/000001/rgb/000002.png", "train/000000/scene_gt.json",
+                 "models/models_info.json", "graspnet/000001/000000.npy"):
+        assert (tmp_path / "out" / name).read_bytes() == (cli_dataset / name).read_bytes(), name
+
+
+def test_reseeded_runs_are_new_and_reproducible(recipe_file):
+    recipe = cadsynth.Recipe.load(recipe_file)
+    assert recipe.reseeded(0).stream == 0
+    first = recipe.reseeded(7).prepare().frame(0, masks=False)
+    again = recipe.reseeded(7).prepare().frame(0, masks=False)
+    own = recipe.prepare().frame(0, masks=False)
+    assert np.array_equal(first["rgb"], again["rgb"])
+    assert first["randomization"] == again["randomization"]
+    assert first["randomization"] != own["randomization"]
+
+
+def test_bad_recipes_raise_with_file_line_and_column(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("scenes:\n  - name: a\n    parts: [{family: round_peg}]\n    layout: gird\n")
+    with pytest.raises(cadsynth.Error, match=r"bad\.yaml:4:13: .*gird"):
+        cadsynth.Recipe.load(bad)
+    with pytest.raises(cadsynth.Error, match=r"^<string>:1:\d+: .*rendr"):
+        cadsynth.Recipe.from_yaml("rendr: {mode: pbr}")
+    with pytest.raises(cadsynth.Error, match=r"^<dict>:\d+:\d+: .*samples"):
+        cadsynth.Recipe.from_dict({"render": {"mode": "pbr", "samples": -3}})
+    with pytest.raises(cadsynth.Error, match="missing.yaml"):
+        cadsynth.Recipe.load(tmp_path / "missing.yaml")
+    # cadsynth.Error is a RuntimeError.
+    assert issubclass(cadsynth.Error, RuntimeError)
+
+
+def test_recipes_from_dicts_and_pickles():
+    import pickle
+    recipe = cadsynth.Recipe.from_dict({
+        "parts": [{"family": "round_peg"}],
+        "camera": {"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5},
+        "sweep": {"yaw": [0], "pitch": [60], "radius": ["0.3 m"]},
+    })
+    assert recipe.views == 1
+    copy = pickle.loads(pickle.dumps(recipe.reseeded(3)))
+    assert copy.stream == 3
+    a = recipe.reseeded(3).prepare(cache=False).frame(0, masks=False)
+    b = copy.prepare(cache=False).frame(0, masks=False)
+    assert np.array_equal(a["rgb"], b["rgb"])
+    assert a["rgb"].shape == (48, 64, 3)
+
+
+def test_a_rig_gives_every_sensors_frame_as_written(tmp_path):
+    recipe = tmp_path / "rig.yaml"
+    recipe.write_text("""\
+parts: [{family: hex_nut, params: {size: M12}}]
+cameras:
+  - {name: grey, width: 96, height: 72, fx: 90, fy: 90, cx: 47.5, cy: 35.5, image: gray16}
+  - {name: colour, width: 80, height: 60, fx: 70, fy: 70, cx: 39.5, cy: 29.5,
+     position: [40 mm, 0, 0], look_at: [0, 0, 300 mm]}
+sweep: {yaw: [0, 180], pitch: [60], radius: [0.3 m]}
+""")
+    out = tmp_path / "out"
+    subprocess.run([str(CLI), "generate", str(recipe), "-o", str(out), "--quiet"], check=True)
+    run = cadsynth.Recipe.load(recipe).prepare()
+    assert run.sensors == ["grey", "colour"]
+    for f in run.frames():
+        assert [s["sensor"] for s in f["sensors"]] == ["grey", "colour"]
+        assert f["sensor"] == "grey" and "sensors" not in f["sensors"][0]
+        grey, colour = f["sensors"]
+        assert grey["gray"].dtype == np.uint16 and grey["gray"].shape == (72, 96)
+        assert "rgb" not in grey and colour["rgb"].shape == (60, 80, 3)
+        scene = out / "train" / "000000"
+        im = f"{f['im_id']:06d}.png"
+        assert cadsynth.encode_png(grey["gray"]) == (scene / "gray_grey" / im).read_bytes()
+        assert cadsynth.encode_png(colour["rgb"]) == (scene / "rgb_colour" / im).read_bytes()
+        assert np.array_equal(f["gray"], grey["gray"])

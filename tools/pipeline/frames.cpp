@@ -1,0 +1,235 @@
+#include "tools/pipeline/frames.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+#include <tbb/parallel_for.h>
+
+#include "cad/error.h"
+#include "render/randomize.h"
+#include "render/renderer.h"
+#include "render/sampling.h"
+#include "tools/pipeline/generate.h"
+#include "tools/pipeline/journal.h"
+
+namespace cadsynth {
+
+// A scene ready to render: its renderer, and what domain randomisation draws around.
+struct FrameSource::SceneState {
+  std::unique_ptr<Renderer> renderer;
+  FrameLook base_look;
+  // The middle of its instances on the floor: randomised lights are placed about it.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+};
+
+struct FrameSource::Cache {
+  std::mutex mutex;
+  std::map<size_t, std::shared_ptr<const SceneState>> scenes;
+};
+
+struct FrameSource::GraspState {
+  std::once_flag sampled;
+  std::vector<std::vector<ParallelJawGrasp>> jaw;  // per part
+  std::vector<std::vector<SuctionGrasp>> suction;  // per part; empty without a cup
+  std::vector<std::once_flag> placed_once;         // per scene
+  std::vector<SceneGrasps> placed;                 // per scene
+};
+
+FrameSource::FrameSource(const RunSpec& spec, const FrameSourceOptions& options)
+    : spec_(spec), options_(options), cache_(std::make_unique<Cache>()) {
+  std::string why;
+  if (!spec_.intrinsics.Check(&why)) throw Error("camera: " + why);
+  sensors_ = RunSensors(spec_);
+  for (const RigSensor& sensor : sensors_) {
+    if (!sensor.intrinsics.Check(&why)) throw Error("camera '" + sensor.name + "': " + why);
+  }
+  if (!spec_.sweep.Check(&why)) throw Error("sweep: " + why);
+  if (!spec_.bop.Check(&why)) throw Error("output: " + why);
+  if (spec_.grasps.enabled && spec_.grasps.labels.suctionnet && !spec_.grasps.suction)
+    throw Error("grasps: the suctionnet format needs a suction cup (grasps.suction)");
+  CheckLimits(spec_);  // a RunSpec built in code has not been through the recipe reader
+
+  std::optional<PartCache> cache;
+  if (options_.cache) cache.emplace(*options_.cache, BuildId());
+  std::optional<ReaderProcess> reader;
+  if (!options_.reader.empty())
+    reader = ReaderProcess{options_.reader, spec_.limits.read_timeout_s};
+  prepared_ = Prepare(spec_, options_.info, cache ? &*cache : nullptr, reader ? &*reader : nullptr);
+  if (!spec_.sampler.Check(&why)) throw Error("sweep: " + why);
+  views_ = SampleViews(spec_.sampler, spec_.sweep);
+  if (spec_.grasps.enabled) {
+    grasps_ = std::make_unique<GraspState>();
+    grasps_->placed_once = std::vector<std::once_flag>(prepared_.scenes.size());
+    grasps_->placed.resize(prepared_.scenes.size());
+  }
+}
+
+FrameSource::~FrameSource() = default;
+
+std::shared_ptr<const FrameSource::SceneState> FrameSource::Scene(size_t s) const {
+  std::lock_guard<std::mutex> lock(cache_->mutex);
+  auto& slot = cache_->scenes[s];
+  if (slot) return slot;
+  // Built under the lock: concurrent first calls for one scene would build it twice, and the
+  // scenes are visited in order, so other scenes seldom wait.
+  auto state = std::make_shared<SceneState>();
+  RenderOptions render = spec_.render;
+  render.amodal_depth = spec_.bop.visibility == BopOptions::Visibility::kBop19;
+  const cadsynth::Scene& scene = prepared_.scenes[s];
+  state->renderer = std::make_unique<Renderer>(prepared_.parts, scene, render);
+  if (prepared_.randomization[s].changes_look()) state->base_look = state->renderer->BaseLook();
+  if (!scene.instances.empty()) {
+    Eigen::AlignedBox3d box;
+    for (const Instance& instance : scene.instances)
+      box.extend(instance.world_from_model.translation());
+    state->centre = box.center();
+    state->centre.z() = 0.0;
+  }
+  slot = state;
+  return slot;
+}
+
+void FrameSource::ReleaseScene(size_t scene) const {
+  std::lock_guard<std::mutex> lock(cache_->mutex);
+  cache_->scenes.erase(scene);
+}
+
+RenderedView FrameSource::Render(size_t unit) const {
+  if (views_.empty() || unit >= units())
+    throw Error("frame " + std::to_string(unit) + " of a run of " + std::to_string(units()));
+  RenderedView out;
+  out.scene = unit / views_.size();
+  out.view = unit % views_.size();
+  const size_t s = out.scene, i = out.view;
+  const std::shared_ptr<const SceneState> state = Scene(s);
+  const Randomization& randomization = prepared_.randomization[s];
+  // One unit renders every sensor of the rig at view i: sensor k sits at
+  // world_from_rig * rig_from_cam and draws its noise from the key (view, k).
+  for (size_t k = 0; k < sensors_.size(); ++k) {
+    if (!randomization.active()) {
+      const Camera camera{sensors_[k].intrinsics,
+                          views_[i].world_from_cam * sensors_[k].rig_from_cam};
+      out.frames.push_back(
+          state->renderer->Render(camera, SensorFrameKey(i, k), sensors_[k].sensor));
+      continue;
+    }
+    // Every sensor of the rig draws the same numbers (the keys name the scene, the view and the
+    // quantity, not the sensor).
+    const FrameDraw draw = DrawFrame(randomization, state->base_look, views_[i].world_from_cam,
+                                     sensors_[k].sensor, state->centre, s, i);
+    const Camera camera{sensors_[k].intrinsics, draw.world_from_cam * sensors_[k].rig_from_cam};
+    Frame frame = state->renderer->Render(camera, SensorFrameKey(i, k), draw.sensor,
+                                          randomization.changes_look() ? &draw.look : nullptr);
+    frame.randomization = RandomizationRecord(draw.record);
+    out.frames.push_back(std::move(frame));
+  }
+  // A rig pose is kept when any of its sensors sees enough.
+  for (const Frame& frame : out.frames) {
+    int seen = 0;
+    for (const Frame::InstanceTruth& t : frame.instances) seen += t.px_count_visib;
+    out.visible_pixels = std::max(out.visible_pixels, seen);
+  }
+  out.kept = spec_.min_visible_pixels <= 0 || out.visible_pixels >= spec_.min_visible_pixels;
+  return out;
+}
+
+void FrameSource::SampleGraspsOnce() const {
+  if (!grasps_) throw Error("the recipe asks for no grasps (grasps:)");
+  std::call_once(grasps_->sampled, [&] {
+    const auto start = std::chrono::steady_clock::now();
+    const GraspSpec& spec = spec_.grasps;
+    const std::vector<Part>& parts = prepared_.parts;
+    grasps_->jaw.resize(parts.size());
+    if (spec.suction) grasps_->suction.resize(parts.size());
+    // Every object from its own seed.
+    tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
+      AntipodalOptions options = spec.sampling;
+      options.seed = Hash(spec.sampling.seed, p);
+      grasps_->jaw[p] = SampleAntipodalGrasps(parts[p], spec.gripper, options);
+      if (spec.suction) {
+        SuctionOptions suction = spec.suction_sampling;
+        suction.seed = Hash(spec.suction_sampling.seed, p);
+        grasps_->suction[p] = SampleSuctionGrasps(parts[p], spec.cup, suction);
+      }
+    });
+    if (spec.suction) {
+      for (const Part& part : parts) {
+        if (!(part.mass.volume_mm3 > 0))
+          Warn("grasps: '" + part.name +
+               "' has no known volume (an open mesh): its suction grasps are scored without its "
+               "weight");
+      }
+    }
+    if (options_.info) {
+      std::ostringstream line;
+      line << "grasps (" << spec.gripper.name << ", mu " << spec.sampling.friction;
+      if (spec.suction) line << "; suction cup " << spec.cup.name;
+      line << "):";
+      for (size_t p = 0; p < parts.size(); ++p) {
+        line << " obj " << p + 1 << ": " << grasps_->jaw[p].size();
+        if (spec.suction) line << " + " << grasps_->suction[p].size() << " suction";
+      }
+      line << " ("
+           << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+           << " s)";
+      options_.info(line.str());
+    }
+  });
+}
+
+const std::vector<std::vector<ParallelJawGrasp>>& FrameSource::ObjectJawGrasps() const {
+  SampleGraspsOnce();
+  return grasps_->jaw;
+}
+
+const std::vector<std::vector<SuctionGrasp>>& FrameSource::ObjectSuctionGrasps() const {
+  SampleGraspsOnce();
+  return grasps_->suction;
+}
+
+const SceneGrasps& FrameSource::PlacedGrasps(size_t s) const {
+  SampleGraspsOnce();
+  if (s >= prepared_.scenes.size()) throw Error("no scene " + std::to_string(s));
+  std::call_once(grasps_->placed_once[s], [&] {
+    const auto placing = std::chrono::steady_clock::now();
+    const GraspSpec& spec = spec_.grasps;
+    const cadsynth::Scene& scene = prepared_.scenes[s];
+    GraspObstacles obstacles;
+    obstacles.floor = scene.floor;
+    for (const cadsynth::Scene::Fixture& fixture : scene.fixtures)
+      obstacles.fixtures.push_back(&fixture.mesh);
+    SceneGrasps& out = grasps_->placed[s];
+    for (const Instance& instance : scene.instances) {
+      obstacles.instances.push_back({&prepared_.parts[static_cast<size_t>(instance.part)].mesh,
+                                     instance.world_from_model, instance.part});
+      out.part_of_instance.push_back(instance.part);
+    }
+    out.obj_id_of_instance = prepared_.obj_ids[s];
+    out.gripper = spec.gripper;
+    out.cup = spec.cup;
+    if (spec.labels.graspnet) {
+      out.jaw = &grasps_->jaw;
+      out.jaw_placed = PlaceParallelJawGrasps(obstacles, grasps_->jaw, spec.gripper, spec.scene);
+    }
+    if (spec.labels.suctionnet) {
+      out.suction = &grasps_->suction;
+      out.suction_placed = PlaceSuctionGrasps(obstacles, grasps_->suction, spec.cup, spec.scene);
+    }
+    if (options_.info) {
+      std::ostringstream line;
+      line << "scene '" << spec_.scenes[s].name
+           << "': grasps free of the scene: " << out.jaw_placed.size();
+      if (spec.labels.suctionnet) line << " + " << out.suction_placed.size() << " suction";
+      line << " ("
+           << std::chrono::duration<double>(std::chrono::steady_clock::now() - placing).count()
+           << " s)";
+      options_.info(line.str());
+    }
+  });
+  return grasps_->placed[s];
+}
+
+}  // namespace cadsynth

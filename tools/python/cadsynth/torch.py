@@ -1,0 +1,118 @@
+"""cadsynth frames as a PyTorch IterableDataset (README "Python").
+
+    from torch.utils.data import DataLoader
+    from cadsynth.torch import FrameDataset, collate
+    loader = DataLoader(FrameDataset("recipes/bin_picking.yaml"), batch_size=8,
+                        num_workers=4, collate_fn=collate)
+
+Each DataLoader worker renders its own shard of the recipe's work units (unit g goes to worker
+g % workers), so the workers together produce exactly the frames one process would. With
+endless=True each worker instead walks its own streams of reseeded runs (stream k: Recipe.reseeded
+(k), new arrangements, piles, randomisation and views; worker w takes first_stream + w, + workers,
+...), for as long as training reads.
+
+Workers prepare their run themselves (parts, piles), after the DataLoader has started them, and
+render with cpu_count // workers threads each. uint16 arrays (the instance image, 16-bit grey)
+come as int32: torch has no uint16.
+"""
+
+import os
+
+import numpy as np
+import torch
+from torch.utils.data import IterableDataset, get_worker_info
+
+from ._cadsynth import Recipe
+
+__all__ = ["FrameDataset", "collate"]
+
+
+class FrameDataset(IterableDataset):
+    """The frames of a recipe, as dicts of numpy arrays (Run.frames), for a DataLoader.
+
+    recipe: a Recipe, or a recipe file's path.
+    shard: (i, n) to take only shard i of n of the run (a cluster job's share), split further
+        among the DataLoader's workers.
+    endless: walk reseeded runs without end instead of the recipe's own frames once.
+    first_stream: the first stream of an endless walk (0: the recipe's own seeds).
+    masks: False leaves out the N x H x W masks (the instance image stays).
+    transform: applied to each frame dict before it is yielded.
+    threads: rendering threads per worker (default: the cores divided among the workers).
+    cache: the part cache (True: the command line's; False; or a folder).
+    """
+
+    def __init__(self, recipe, *, shard=None, endless=False, first_stream=0, masks=True,
+                 transform=None, threads=None, cache=True):
+        super().__init__()
+        self.recipe = recipe if isinstance(recipe, Recipe) else Recipe.load(os.fspath(recipe))
+        if shard is not None:
+            shard = (int(shard[0]), int(shard[1]))
+            if not 0 <= shard[0] < shard[1]:
+                raise ValueError(f"shard {shard}: i must be in [0, n)")
+        self.shard = shard
+        self.endless = bool(endless)
+        self.first_stream = int(first_stream)
+        self.masks = bool(masks)
+        self.transform = transform
+        self.threads = threads
+        self.cache = cache
+
+    def _worker(self):
+        info = get_worker_info()
+        if info is None:
+            return 0, 1
+        return info.id, info.num_workers
+
+    def __iter__(self):
+        worker, workers = self._worker()
+        threads = self.threads or max(1, (os.cpu_count() or 1) // workers)
+        i, n = self.shard if self.shard is not None else (0, 1)
+        if not self.endless:
+            # Units g with g % n == i, dealt to the workers: g % (n * workers) == i + n * worker.
+            run = self.recipe.prepare(cache=self.cache, threads=threads)
+            yield from self._frames(run, (i + n * worker, n * workers), threads)
+            return
+        stream = self.first_stream + worker
+        while True:
+            run = self.recipe.reseeded(stream).prepare(cache=self.cache, threads=threads)
+            yield from self._frames(run, (i, n), threads)
+            stream += workers
+
+    def _frames(self, run, shard, threads):
+        frames = run.frames(shard=shard, masks=self.masks, threads=threads)
+        try:
+            for frame in frames:
+                frame = _torch_types(frame)
+                yield self.transform(frame) if self.transform else frame
+        finally:
+            frames.close()
+
+
+def _torch_types(frame):
+    """uint16 arrays (the instance image, 16-bit grey) as int32: torch has no uint16."""
+    for key, value in frame.items():
+        if isinstance(value, np.ndarray) and value.dtype == np.uint16:
+            frame[key] = value.astype(np.int32)
+        elif key == "sensors":
+            frame[key] = [_torch_types(f) for f in value]
+    return frame
+
+
+def collate(frames):
+    """A batch from frame dicts: arrays of equal shape under one key are stacked into a tensor;
+    per-instance arrays (their length varies with the scene) and other values become lists."""
+    batch = {}
+    for key in frames[0]:
+        values = [f[key] for f in frames]
+        if all(isinstance(v, np.ndarray) for v in values) and \
+                len({v.shape for v in values}) == 1 and \
+                key not in ("obj_id", "cam_from_model", "bbox_obj", "bbox_visib",
+                            "px_count_all", "px_count_valid", "px_count_visib",
+                            "visib_fract", "mask", "mask_visib", "graspnet",
+                            "graspnet_labels", "suctionnet", "suctionnet_labels"):
+            batch[key] = torch.from_numpy(np.stack(values))
+        elif all(isinstance(v, np.ndarray) for v in values):
+            batch[key] = [torch.from_numpy(v) for v in values]
+        else:
+            batch[key] = values
+    return batch

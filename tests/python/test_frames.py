@@ -181,3 +181,4 @@ sweep: {yaw: [0, 180], pitch: [60], radius: [0.3 m]}
         assert cadsynth.encode_png(grey["gray"]) == (scene / "gray_grey" / im).read_bytes()
         assert cadsynth.encode_png(colour["rgb"]) == (scene / "rgb_colour" / im).read_bytes()
         assert np.array_equal(f["gray"], grey["gray"])
+

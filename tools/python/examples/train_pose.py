@@ -21,7 +21,7 @@ cadsynth's frames, scored by `cadsynth eval` (README "Training a pose estimator"
 """
 
 import argparse
-import math
+import json
 import os
 import pathlib
 import time
@@ -186,10 +186,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="out/train_pose", help="folder for the test dataset "
                         "and the results files")
-    parser.add_argument("--streams", type=int, default=8, help="training runs of 200 views each")
+    parser.add_argument("--streams", type=int, default=8, help="training runs (reseeded)")
+    parser.add_argument("--views", type=int, default=200, help="views per training run")
     parser.add_argument("--minutes", type=float, default=8.0, help="training time")
+    parser.add_argument("--steps", type=int, default=0,
+                        help="stop after this many steps instead (0: train for --minutes)")
     parser.add_argument("--batch", type=int, default=64)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--report", help="also write both evaluations to this JSON file")
     args = parser.parse_args()
     started = time.perf_counter()
     torch.manual_seed(args.seed)
@@ -214,9 +218,9 @@ def main():
     log(f"test set: {dataset} ({test.views} views of {len(objects)} objects)")
 
     # 2. Training instances, straight from the iterator.
-    log(f"rendering {args.streams} training runs of {TRAIN_RECIPE['sweep']['count']} views")
-    samples, train_poses = collect(cadsynth.Recipe.from_dict(TRAIN_RECIPE), args.streams, rng,
-                                   log)
+    train_recipe = dict(TRAIN_RECIPE, sweep=dict(TRAIN_RECIPE["sweep"], count=args.views))
+    log(f"rendering {args.streams} training runs of {args.views} views")
+    samples, train_poses = collect(cadsynth.Recipe.from_dict(train_recipe), args.streams, rng, log)
 
     # 3. Training.
     model = PointNetPose(len(objects))
@@ -226,7 +230,7 @@ def main():
     train_start = time.perf_counter()
     lr_dropped = False
     model.train()
-    while time.perf_counter() < deadline:
+    while (step < args.steps) if args.steps > 0 else (time.perf_counter() < deadline):
         indices = rng.choice(len(samples), args.batch, replace=False)
         pts, obj, rot, off = batch_of(samples, indices, rng)
         rotation, offset = model(pts, obj)
@@ -236,7 +240,9 @@ def main():
         optimiser.step()
         running = loss.item() if running is None else 0.98 * running + 0.02 * loss.item()
         step += 1
-        if not lr_dropped and time.perf_counter() > train_start + 0.75 * 60.0 * args.minutes:
+        late = (step > 0.75 * args.steps if args.steps > 0 else
+                time.perf_counter() > train_start + 0.75 * 60.0 * args.minutes)
+        if not lr_dropped and late:
             for group in optimiser.param_groups:
                 group["lr"] = 1e-4
             lr_dropped = True
@@ -269,11 +275,14 @@ def main():
                     pose[:3, 3] = offset[0].numpy() * SCALE + mean
                 estimates.append(result_line(frame["scene_id"], frame["im_id"], obj, pose,
                                              time.perf_counter() - t0))
+    reports = {}
     for name, lines in (("pointnet", estimates), ("baseline", trivial)):
         path = out / f"results_{name}.csv"
         path.write_text("scene_id,im_id,obj_id,score,R,t,time\n" + "".join(lines))
-        table, report = cadsynth.evaluate(dataset, path)
-        print(f"\n{name} ({path}):\n{table}")
+        table, reports[name] = cadsynth.evaluate(dataset, path)
+        print(f"\n{name} ({path}; `cadsynth eval {dataset} {path}` prints the same):\n{table}")
+    if args.report:
+        pathlib.Path(args.report).write_text(json.dumps(reports, indent=2))
     log(f"done in {(time.perf_counter() - started) / 60:.1f} min")
 
 

@@ -12,8 +12,8 @@ RUN /src/cadsynth/tools/setup.sh \
  && cmake --build /src/build \
  && cmake --install /src/build --prefix /usr/local \
  && rm -rf /src/build /var/lib/apt/lists/*
-# The part cache where a mounted volume can keep it between runs.
-ENV CADSYNTH_CACHE=/cache
+# The part cache is ~/.cache/cadsynth (/root/.cache/cadsynth here; under Apptainer, the user's
+# own): mount a volume there to keep it between runs.
 WORKDIR /work
 ENTRYPOINT ["cadsynth"]
 CMD ["--help"]

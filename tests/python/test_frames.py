@@ -148,7 +148,7 @@ def test_recipes_from_dicts_and_pickles():
         "sweep": {"yaw": [0], "pitch": [60], "radius": ["0.3 m"]},
     })
     assert recipe.views == 1
-    copy = pickle.loads(pickle.dumps(recipe.reseeded(3)))
+    copy = pickle.loads(pickle.dumps(recipe.reseeded(5).reseeded(3)))  # streams do not compound
     assert copy.stream == 3
     a = recipe.reseeded(3).prepare(cache=False).frame(0, masks=False)
     b = copy.prepare(cache=False).frame(0, masks=False)

@@ -54,3 +54,18 @@ def test_a_shard_of_the_dataset_is_split_among_workers(recipe_file):
                         num_workers=2)
     units = sorted(f["scene_id"] * 3 + f["im_id"] for f in loader)
     assert units == [1, 3, 5]
+
+
+def test_spawned_workers_get_the_recipe_by_pickle(recipe_file):
+    loader = DataLoader(FrameDataset(cadsynth.Recipe.load(recipe_file), masks=False),
+                        batch_size=None, num_workers=2, multiprocessing_context="spawn")
+    assert sorted(key(f) for f in loader) == [(s, v) for s in (0, 1) for v in range(3)]
+
+
+def test_collate_keeps_keys_some_frames_lack():
+    a = {"im_id": 0, "rgb": np.zeros((2, 3, 3), np.uint8), "randomization": "{}"}
+    b = {"im_id": 1, "rgb": np.ones((2, 3, 3), np.uint8)}
+    batch = collate([a, b])
+    assert batch["rgb"].shape == (2, 2, 3, 3)
+    assert batch["randomization"] == ["{}", None]
+    assert batch["im_id"] == [0, 1]

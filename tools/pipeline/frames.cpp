@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "cad/error.h"
 #include "render/randomize.h"
@@ -25,9 +26,18 @@ struct FrameSource::SceneState {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
 };
 
+// Built scenes, at most kKeep of them (the most recently asked for; a renderer in use stays
+// alive through its shared_ptr). Each scene has its own slot and lock, so building one never
+// holds up another.
 struct FrameSource::Cache {
-  std::mutex mutex;
-  std::map<size_t, std::shared_ptr<const SceneState>> scenes;
+  static constexpr size_t kKeep = 2;
+  struct Slot {
+    std::mutex mutex;
+    std::shared_ptr<const SceneState> state;
+  };
+  std::mutex mutex;  // guards `slots` and `recent`
+  std::map<size_t, std::shared_ptr<Slot>> slots;
+  std::vector<size_t> recent;  // scenes with a built state, most recent last
 };
 
 struct FrameSource::GraspState {
@@ -70,31 +80,74 @@ FrameSource::FrameSource(const RunSpec& spec, const FrameSourceOptions& options)
 FrameSource::~FrameSource() = default;
 
 std::shared_ptr<const FrameSource::SceneState> FrameSource::Scene(size_t s) const {
-  std::lock_guard<std::mutex> lock(cache_->mutex);
-  auto& slot = cache_->scenes[s];
-  if (slot) return slot;
-  // Built under the lock: concurrent first calls for one scene would build it twice, and the
-  // scenes are visited in order, so other scenes seldom wait.
-  auto state = std::make_shared<SceneState>();
-  RenderOptions render = spec_.render;
-  render.amodal_depth = spec_.bop.visibility == BopOptions::Visibility::kBop19;
-  const cadsynth::Scene& scene = prepared_.scenes[s];
-  state->renderer = std::make_unique<Renderer>(prepared_.parts, scene, render);
-  if (prepared_.randomization[s].changes_look()) state->base_look = state->renderer->BaseLook();
-  if (!scene.instances.empty()) {
-    Eigen::AlignedBox3d box;
-    for (const Instance& instance : scene.instances)
-      box.extend(instance.world_from_model.translation());
-    state->centre = box.center();
-    state->centre.z() = 0.0;
+  std::shared_ptr<Cache::Slot> slot;
+  {
+    std::lock_guard<std::mutex> lock(cache_->mutex);
+    auto& entry = cache_->slots[s];
+    if (!entry) entry = std::make_shared<Cache::Slot>();
+    slot = entry;
   }
-  slot = state;
-  return slot;
+  std::shared_ptr<const SceneState> state;
+  {
+    std::lock_guard<std::mutex> lock(slot->mutex);
+    if (!slot->state) {
+      // Isolated: Embree's BVH build waits on TBB tasks, and a thread waiting outside isolation
+      // may pick up another frame of a pipeline, which would ask for this scene again and block
+      // on the lock it holds itself.
+      tbb::this_task_arena::isolate([&] {
+        auto built = std::make_shared<SceneState>();
+        RenderOptions render = spec_.render;
+        render.amodal_depth = spec_.bop.visibility == BopOptions::Visibility::kBop19;
+        const cadsynth::Scene& scene = prepared_.scenes[s];
+        built->renderer = std::make_unique<Renderer>(prepared_.parts, scene, render);
+        if (prepared_.randomization[s].changes_look())
+          built->base_look = built->renderer->BaseLook();
+        if (!scene.instances.empty()) {
+          Eigen::AlignedBox3d box;
+          for (const Instance& instance : scene.instances)
+            box.extend(instance.world_from_model.translation());
+          built->centre = box.center();
+          built->centre.z() = 0.0;
+        }
+        slot->state = std::move(built);
+      });
+    }
+    state = slot->state;
+  }
+  // The most recent scenes stay built; older ones are dropped (rebuilt if asked for again).
+  std::vector<std::shared_ptr<const SceneState>> dropped;  // freed outside the lock
+  {
+    std::lock_guard<std::mutex> lock(cache_->mutex);
+    auto& recent = cache_->recent;
+    recent.erase(std::remove(recent.begin(), recent.end(), s), recent.end());
+    recent.push_back(s);
+    while (recent.size() > Cache::kKeep) {
+      auto it = cache_->slots.find(recent.front());
+      if (it != cache_->slots.end()) {
+        std::lock_guard<std::mutex> slot_lock(it->second->mutex);
+        dropped.push_back(std::move(it->second->state));
+        it->second->state.reset();
+      }
+      recent.erase(recent.begin());
+    }
+  }
+  return state;
 }
 
+void FrameSource::BuildScene(size_t scene) const { Scene(scene); }
+
 void FrameSource::ReleaseScene(size_t scene) const {
+  std::shared_ptr<const SceneState> dropped;
   std::lock_guard<std::mutex> lock(cache_->mutex);
-  cache_->scenes.erase(scene);
+  auto it = cache_->slots.find(scene);
+  if (it == cache_->slots.end()) return;
+  {
+    std::lock_guard<std::mutex> slot_lock(it->second->mutex);
+    dropped = std::move(it->second->state);
+    it->second->state.reset();
+  }
+  auto& recent = cache_->recent;
+  recent.erase(std::remove(recent.begin(), recent.end(), scene), recent.end());
 }
 
 RenderedView FrameSource::Render(size_t unit) const {
@@ -201,7 +254,7 @@ const SceneGrasps& FrameSource::PlacedGrasps(size_t s) const {
     obstacles.floor = scene.floor;
     for (const cadsynth::Scene::Fixture& fixture : scene.fixtures)
       obstacles.fixtures.push_back(&fixture.mesh);
-    SceneGrasps& out = grasps_->placed[s];
+    SceneGrasps out;  // assigned at the end: a placement that throws leaves nothing behind
     for (const Instance& instance : scene.instances) {
       obstacles.instances.push_back({&prepared_.parts[static_cast<size_t>(instance.part)].mesh,
                                      instance.world_from_model, instance.part});
@@ -228,6 +281,7 @@ const SceneGrasps& FrameSource::PlacedGrasps(size_t s) const {
            << " s)";
       options_.info(line.str());
     }
+    grasps_->placed[s] = std::move(out);
   });
   return grasps_->placed[s];
 }

@@ -42,7 +42,8 @@ struct RenderedView {
 
 // Prepares a run (prepare.h) and renders its work units on demand. Unit g is view g % views() of
 // scene g / views(); a shard I/N owns the units with g % N == I. Render() may be called from many
-// threads; each scene's renderer is built on first use and kept until ReleaseScene().
+// threads; each scene's renderer is built on first use and kept until ReleaseScene() or until two
+// other scenes have been asked for since.
 class FrameSource {
  public:
   // Checks the camera, sweep and sampler options, prepares the parts and scenes (the slow part:
@@ -61,6 +62,8 @@ class FrameSource {
 
   // Renders unit `unit` (< units()) exactly as `generate` does.
   RenderedView Render(size_t unit) const;
+  // Builds scene `scene`'s renderer now (with every thread: call it outside parallel work).
+  void BuildScene(size_t scene) const;
   // Frees scene `scene`'s renderer (it is built again if asked for).
   void ReleaseScene(size_t scene) const;
 

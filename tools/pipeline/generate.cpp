@@ -279,6 +279,9 @@ GenerateSummary Generate(const FrameSource& source, const GenerateOptions& optio
       if (grasp_writers[s]) formats.push_back(grasp_writers[s].get());
       size_t next = 0;
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
+      // The scene's acceleration structures first, with every thread (as before FrameSource:
+      // also for a scene this shard renders no frame of, so the same errors surface).
+      source.BuildScene(s);
       using ViewPtr = std::shared_ptr<const RenderedView>;
       tbb::parallel_pipeline(
           tokens,

@@ -74,7 +74,8 @@ std::optional<ShardSpec> ShardOf(const py::object& shard) {
 // The run's recipe as Python holds it: the RunSpec, and what re-reads it in another process
 // (pickling, for DataLoader workers started by spawn).
 struct PyRecipe {
-  RunSpec spec;
+  RunSpec base;  // as read, with the recipe's own seeds
+  RunSpec spec;  // Reseed(base, stream)
   // How it was made: "file" (path), "text" (text, name, base_dir) or "default".
   std::string origin = "default";
   std::string text, name;
@@ -223,6 +224,7 @@ py::dict SensorDict(Frame&& frame, const FrameSource& source, size_t scene, size
   }
   // The camera's image: colour, or grey as the file holds it (8 or 16 bits).
   if (bop.gray_bits > 0) {
+    if (frame.gray.size() != pixels) throw Error("a grey camera's frame has no grey image");
     if (bop.gray_bits == 16) {
       std::vector<uint16_t> gray(pixels);
       for (size_t p = 0; p < pixels; ++p) gray[p] = EncodeGray(frame.gray[p], 16);
@@ -286,7 +288,15 @@ class FrameStream {
         threads_(threads > 0 ? threads : tbb::this_task_arena::max_concurrency()) {
     worker_ = std::thread([this] { Run(); });
   }
-  ~FrameStream() { Close(); }
+  ~FrameStream() {
+    // Dropped by Python (the GIL held): frames in flight finish without holding up other threads.
+    if (PyGILState_Check() != 0) {
+      py::gil_scoped_release release;
+      Close();
+    } else {
+      Close();
+    }
+  }
 
   // The next frame, or nullopt at the end. Throws the render's Error.
   std::optional<RenderedView> Next() {
@@ -340,7 +350,10 @@ class FrameStream {
                 tbb::make_filter<size_t, std::shared_ptr<RenderedView>>(
                     tbb::filter_mode::parallel,
                     [&](size_t unit) {
-                      return std::make_shared<RenderedView>(source_->Render(unit));
+                      auto view = std::make_shared<RenderedView>(source_->Render(unit));
+                      // The scene's grasps placed here, once, not later under the GIL.
+                      if (source_->spec().grasps.enabled) source_->PlacedGrasps(view->scene);
+                      return view;
                     }) &
                 tbb::make_filter<std::shared_ptr<RenderedView>, void>(
                     tbb::filter_mode::serial_in_order,
@@ -415,7 +428,8 @@ auto Released(int threads, F&& work) {
 PyRecipe FromText(const std::string& text, const std::string& name,
                   const std::filesystem::path& base_dir) {
   PyRecipe r;
-  r.spec = ParseRecipe(text, name, base_dir);
+  r.base = ParseRecipe(text, name, base_dir);
+  r.spec = r.base;
   r.origin = "text";
   r.text = text;
   r.name = name;
@@ -425,7 +439,8 @@ PyRecipe FromText(const std::string& text, const std::string& name,
 
 PyRecipe FromFile(const std::filesystem::path& path) {
   PyRecipe r;
-  r.spec = LoadRecipe(path);
+  r.base = LoadRecipe(path);
+  r.spec = r.base;
   r.origin = "file";
   r.name = path.string();
   return r;
@@ -468,7 +483,8 @@ built-in default job). A bad recipe raises cadsynth.Error "FILE:LINE:COLUMN: wha
           "default",
           [] {
             PyRecipe r;
-            r.spec = DefaultRunSpec();
+            r.base = DefaultRunSpec();
+            r.spec = r.base;
             return r;
           },
           "The built-in default job (what `cadsynth generate` runs without a recipe).")
@@ -477,12 +493,13 @@ built-in default job). A bad recipe raises cadsynth.Error "FILE:LINE:COLUMN: wha
           [](const PyRecipe& r, uint64_t stream) {
             PyRecipe out = r;
             out.stream = stream;
-            out.spec = Reseed(r.spec, stream);
+            out.spec = Reseed(r.base, stream);
             return out;
           },
           "stream"_a,
-          "The same recipe with every per-run seed (arrangement, piles, randomisation, views, "
-          "sampler, sensor noise) moved to stream `stream` (0: the recipe's own).")
+          "The recipe with every per-run seed (arrangement, piles, randomisation, views, sampler, "
+          "sensor noise) moved to stream `stream` of the recipe's own seeds (0: the recipe "
+          "itself; streams do not compound: r.reseeded(1).reseeded(2) is r.reseeded(2)).")
       .def_property_readonly("path",
                              [](const PyRecipe& r) -> py::object {
                                if (r.spec.recipe.empty()) return py::none();
@@ -546,10 +563,10 @@ threads: at most this many threads (0: all cores).)")
               r = FromText(t[1].cast<std::string>(), t[2].cast<std::string>(),
                            t[3].cast<std::filesystem::path>());
             } else {
-              r.spec = DefaultRunSpec();
+              r.base = DefaultRunSpec();
             }
             r.stream = t[4].cast<uint64_t>();
-            r.spec = Reseed(r.spec, r.stream);
+            r.spec = Reseed(r.base, r.stream);
             return r;
           }));
 

@@ -100,10 +100,12 @@ def _torch_types(frame):
 
 def collate(frames):
     """A batch from frame dicts: arrays of equal shape under one key are stacked into a tensor;
-    per-instance arrays (their length varies with the scene) and other values become lists."""
+    per-instance arrays (their length varies with the scene) and other values become lists (with
+    None for a frame without the key, e.g. 'randomization' in a scene that draws nothing)."""
     batch = {}
-    for key in frames[0]:
-        values = [f[key] for f in frames]
+    keys = list(dict.fromkeys(key for f in frames for key in f))  # every frame's, in order
+    for key in keys:
+        values = [f.get(key) for f in frames]  # None where a frame has no such key
         if all(isinstance(v, np.ndarray) for v in values) and \
                 len({v.shape for v in values}) == 1 and \
                 key not in ("obj_id", "cam_from_model", "bbox_obj", "bbox_visib",

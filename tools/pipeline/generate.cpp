@@ -124,6 +124,11 @@ std::filesystem::path CheckOutput(const RunSpec& spec, const GenerateOptions& op
 
 }  // namespace
 
+namespace {
+GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& options,
+                             std::chrono::steady_clock::time_point start);
+}  // namespace
+
 GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   CheckOutput(spec, options);
@@ -132,13 +137,17 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   source_options.cache = options.cache;
   source_options.reader = options.reader;
   const FrameSource source(spec, source_options);
-  GenerateSummary summary = Generate(source, options);
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return summary;
+  return GenerateFrom(source, options, start);  // its times count the preparation too
 }
 
 GenerateSummary Generate(const FrameSource& source, const GenerateOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+  return GenerateFrom(source, options, std::chrono::steady_clock::now());
+}
+
+namespace {
+
+GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& options,
+                             std::chrono::steady_clock::time_point start) {
   const RunSpec& spec = source.spec();
   const std::filesystem::path output = CheckOutput(spec, options);
   const std::vector<std::filesystem::path> inputs = RunInputs(spec);
@@ -352,5 +361,7 @@ GenerateSummary Generate(const FrameSource& source, const GenerateOptions& optio
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
+
+}  // namespace
 
 }  // namespace cadsynth

@@ -5,7 +5,11 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from conftest import SOURCE_DIR
+
+pytest.importorskip("torch")  # the example trains with it
 
 
 def test_the_training_example_beats_the_mean_pose(tmp_path):

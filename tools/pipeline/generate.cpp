@@ -23,7 +23,6 @@
 #include "dataset/paper_layout.h"
 #include "render/randomize.h"
 #include "render/renderer.h"
-#include "render/sampling.h"
 #include "tools/pipeline/journal.h"
 
 namespace cadsynth {

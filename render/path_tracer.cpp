@@ -46,6 +46,11 @@ struct PreparedLight {
   float cos_half_spot = -1, spot_smooth = 0;  // spot mask
   Eigen::Vector3f to_sun;                     // sun: unit, towards it
   float sun_cos_max = 1, sun_one_minus_cos = 0;
+  // The importance estimate (Importance below): the light's luminous strength (area-like:
+  // radiance times area, W/sr per 1e-6; delta: intensity; sun: irradiance) and the radius of a
+  // sphere around `position` that holds the whole light (mm).
+  float strength = 0, bound_radius = 0;
+  float sun_sin_half = 0;  // sun: sine of its angular radius
 
   // The spot's mask for light leaving its centre along unit direction `out`.
   float Spot(const Eigen::Vector3f& out) const {
@@ -75,6 +80,9 @@ PreparedLight Prepare(const LightSource& s) {
         l.delta = true;
         l.intensity = color * power * kMm2PerM2 / (4 * kPiF);
       }
+      l.strength = Luminance(l.delta ? l.intensity
+                                     : Eigen::Vector3f(l.radiance * kPiF * l.radius * l.radius));
+      l.bound_radius = l.radius;
       const double half = 0.5 * s.spot_size_rad;
       l.cos_half_spot = static_cast<float>(std::cos(half));
       l.spot_smooth = static_cast<float>((1 - std::cos(half)) * s.spot_blend);
@@ -102,6 +110,8 @@ PreparedLight Prepare(const LightSource& s) {
       }
       // A one-sided Lambertian emitter of power P: L = P / (pi A).
       l.radiance = color * power * kMm2PerM2 / (kPiF * l.area);
+      l.strength = Luminance(l.radiance) * l.area;
+      l.bound_radius = s.kind == K::kRect ? (l.axis_u + l.axis_v).norm() : l.radius;
       break;
     }
     case K::kSun: {
@@ -118,10 +128,42 @@ PreparedLight Prepare(const LightSource& s) {
         l.delta = true;
         l.intensity = color * power;
       }
+      l.strength = Luminance(color) * power;
+      l.sun_sin_half = static_cast<float>(std::sin(half));
       break;
     }
   }
   return l;
+}
+
+// A cosine that may reach cos(theta - alpha) over directions within alpha of the one at
+// cos(theta): min(1, cos(theta) + sin(alpha)) (an upper bound for theta up to 90 degrees), 0 at
+// or below 0.
+float CosBound(float cos_theta, float sin_alpha) {
+  return std::clamp(cos_theta + sin_alpha, 0.0f, 1.0f);
+}
+
+// An estimate of the irradiance (luminance, W/m^2) light `l` can give a surface at p with normal
+// n, from the light's bounding sphere: the cosines at both ends are loosened by the angle the
+// light covers (so a large panel low over a surface is not rated zero), and the distance is at
+// least the light's radius. Only the light selection uses it (any positive rating is unbiased).
+float Importance(const PreparedLight& l, const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
+  using K = LightSource::Kind;
+  if (l.kind == K::kSun) return l.strength * CosBound(n.dot(l.to_sun), l.sun_sin_half);
+  const Eigen::Vector3f d = l.position - p;
+  const float d2 = d.squaredNorm();
+  if (!(d2 > 0)) return l.strength;
+  const float inv_dist = 1.0f / std::sqrt(d2);
+  const float sin_alpha = std::min(1.0f, l.bound_radius * inv_dist);
+  const float cos_receiver = n.dot(d) * inv_dist;
+  float value = l.strength * CosBound(cos_receiver, sin_alpha) /
+                std::max(d2, l.bound_radius * l.bound_radius);
+  if (l.kind == K::kRect || l.kind == K::kDisc) {
+    value *= CosBound(-d.dot(l.normal) * inv_dist, sin_alpha);  // one-sided emitters
+  } else if (l.kind == K::kSpot) {
+    value *= l.Spot(-d * inv_dist);
+  }
+  return value;
 }
 
 struct LightSample {
@@ -285,8 +327,27 @@ class PreparedEnvironment {
              (e.kind == Environment::Kind::kSky && e.zenith.maxCoeff() <= 0 &&
               e.horizon.maxCoeff() <= 0 && e.ground.maxCoeff() <= 0) ||
              (e.kind == Environment::Kind::kImage && tables_->total <= 0);
+    if (e.kind == Environment::Kind::kImage) {
+      // sum of lum sin(theta) over pixels of (pi / h) x (2 pi / w), over 4 pi.
+      mean_luminance_ =
+          tables_->total * kPiF / (2.0f * image_->width * image_->height) * e.strength;
+    } else {
+      // Midpoints of 32 elevation bands, weighted by their solid angle (the sky varies with
+      // elevation only).
+      double sum = 0, weight = 0;
+      for (int i = 0; i < 32; ++i) {
+        const double theta = M_PI * (i + 0.5) / 32;
+        const Eigen::Vector3f d(static_cast<float>(std::sin(theta)), 0.0f,
+                                static_cast<float>(std::cos(theta)));
+        sum += std::sin(theta) * Luminance(Eval(d));
+        weight += std::sin(theta);
+      }
+      mean_luminance_ = static_cast<float>(sum / weight);
+    }
   }
   bool black() const { return black_; }
+  // The mean radiance's luminance over all directions (W/(m^2 sr)).
+  float MeanLuminance() const { return mean_luminance_; }
 
   Eigen::Vector3f Eval(const Eigen::Vector3f& d) const {
     switch (env_.kind) {
@@ -400,6 +461,7 @@ class PreparedEnvironment {
   std::shared_ptr<const LinearImage> image_;
   std::shared_ptr<const Tables> tables_;
   bool black_ = false;
+  float mean_luminance_ = 0;
 };
 
 }  // namespace
@@ -421,7 +483,8 @@ struct PathTracer::Impl {
   PathTracerScene scene;
   std::vector<PreparedLight> lights;
   std::optional<PreparedEnvironment> environment;  // absent when black
-  int num_strategies = 0;                          // lights + environment, chosen uniformly
+  int num_strategies = 0;                          // lights + environment
+  float environment_importance = 0;                // pi times its mean luminance (W/m^2)
   std::vector<std::shared_ptr<const LinearImage>> instance_images;
   std::shared_ptr<const LinearImage> floor_image;
   std::vector<std::shared_ptr<const LinearImage>> fixture_images;
@@ -436,6 +499,15 @@ struct PathTracer::Impl {
   // per mm; textures are filtered over its footprint on the surface.
   Surface Hit(const RTCRayHit16& rh, int j, const Eigen::Vector3f& dir, float width,
               float spread) const;
+
+  // Next-event estimation picks one strategy (a light, or the environment: index lights.size())
+  // per surface point, with probability pdf[k] for a point p with shading normal n: nine tenths in
+  // proportion to Importance (about the irradiance each could give there, so that bright and
+  // near lights get the samples), one tenth evenly (so that nothing that can light p is starved by
+  // a poor estimate). Evenly when more than kMaxRated strategies. The BSDF's sample leaving the
+  // same point reuses the numbers for its MIS weights when it finds a light or the sky.
+  static constexpr int kMaxRated = 32;
+  void SelectionPdfs(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float* pdf) const;
 
   // The BSDF's frame at a surface: the shading normal, and a tangent along the brushing
   // direction for anisotropic materials (any tangent otherwise).
@@ -468,6 +540,7 @@ PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
   const PreparedEnvironment env(im.scene.environment, before);
   if (!env.black()) im.environment.emplace(env);
   im.num_strategies = static_cast<int>(im.lights.size()) + (im.environment ? 1 : 0);
+  if (im.environment) im.environment_importance = kPiF * im.environment->MeanLuminance();
   const auto image_of = [](const Material& m) -> std::shared_ptr<const LinearImage> {
     if (m.texture.kind != Texture::Kind::kImage) return nullptr;
     return m.texture.pixels ? m.texture.pixels : LoadLinearImage(m.texture.image);
@@ -480,6 +553,25 @@ PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
 }
 
 PathTracer::~PathTracer() = default;
+
+void PathTracer::Impl::SelectionPdfs(const Eigen::Vector3f& p, const Eigen::Vector3f& n,
+                                     float* pdf) const {
+  const int count = num_strategies;
+  const int num_lights = static_cast<int>(lights.size());
+  float total = 0;
+  for (int k = 0; k < count; ++k) {
+    const float w = k < num_lights ? Importance(lights[k], p, n) : environment_importance;
+    pdf[k] = std::isfinite(w) ? std::max(0.0f, w) : 0.0f;
+    total += pdf[k];
+  }
+  const float even = 1.0f / static_cast<float>(count);
+  if (!(total > 0) || !std::isfinite(total)) {
+    for (int k = 0; k < count; ++k) pdf[k] = even;
+    return;
+  }
+  const float scale = 0.9f / total, floor = 0.1f * even;
+  for (int k = 0; k < count; ++k) pdf[k] = scale * pdf[k] + floor;
+}
 
 PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
                                                 const Eigen::Vector3f& dir, float width,
@@ -585,7 +677,8 @@ void PathTracer::ProjectorSignal(const RTCRayHit16& rh, const int valid[16],
 
 void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const ThinLens& lens,
                            const CameraMotion& motion, int u0, int v0, int samples,
-                           uint64_t frame_seed, Eigen::Vector3f out[16]) const {
+                           uint64_t frame_seed, Eigen::Vector3f out[16],
+                           TileFeatures* features) const {
   const Impl& im = *impl_;
   const Intrinsics& k = camera.intrinsics;
   const float aperture_radius = lens.active() ? static_cast<float>(0.5 * lens.aperture_mm()) : 0.0f;
@@ -594,14 +687,26 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
   const Eigen::Matrix3f rotation = camera.world_from_cam.linear().cast<float>();
   const Eigen::Vector3f origin = camera.world_from_cam.translation().cast<float>();
   const int bounces = im.scene.bounces;
-  const float select_pdf = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
+  const int num_lights = static_cast<int>(im.lights.size());
+  // Each lane's selection probabilities at its last vertex (its next-event estimation's), which
+  // the BSDF ray leaving that vertex needs again for its MIS weights when it finds a light.
+  const bool rated = im.num_strategies <= Impl::kMaxRated;
+  const float even = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
+  float selection[16][Impl::kMaxRated];
 
   Eigen::Vector3f sum[16];
   int paths[16] = {};  // per lane: the paths that had a ray
+  // Denoiser features: sums over the paths of the first surface's albedo and normal, and of each
+  // path's luminance and its square.
+  Eigen::Vector3f albedo_sum[16], normal_sum[16], before[16];
+  double luminance_sum[16] = {}, luminance_sq[16] = {};
+  alignas(64) int had_ray[16];
   uint64_t pixel_seed[16];
   alignas(64) int in_image[16];
   for (int j = 0; j < 16; ++j) {
     sum[j].setZero();
+    albedo_sum[j].setZero();
+    normal_sum[j].setZero();
     const int u = u0 + j % 4, v = v0 + j / 4;
     in_image[j] = (u < k.width && v < k.height) ? -1 : 0;
     pixel_seed[j] = Hash(frame_seed, static_cast<uint64_t>(v) * 65536u + static_cast<uint64_t>(u));
@@ -632,6 +737,8 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       Eigen::Vector2f xy = Eigen::Vector2f::Zero();
       if (active[j] && !rays.At(u, v, jitter.x(), jitter.y(), &xy)) active[j] = 0;
       paths[j] += active[j] != 0;
+      had_ray[j] = active[j];
+      before[j] = sum[j];
       Eigen::Vector3f o_cam = Eigen::Vector3f::Zero(), d_cam(xy.x(), xy.y(), 1.0f);
       if (aperture_radius > 0.0f) {
         // Through a point of the aperture to where the pixel's ray meets the plane of focus;
@@ -671,20 +778,23 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
                                                      .norm()
                                                : 1.0f)
                 : kInf;
-        for (const PreparedLight& l : im.lights) {
+        const auto select_pdf = [&](int k) { return rated ? selection[j][k] : even; };
+        for (int k = 0; k < num_lights; ++k) {
           Eigen::Vector3f le;
           float pdf;
-          if (!HitLight(l, o, dir[j], seg, &le, &pdf)) continue;
-          const float w = depth == 0 ? 1.0f : PowerHeuristic(prev_pdf[j], select_pdf * pdf);
+          if (!HitLight(im.lights[k], o, dir[j], seg, &le, &pdf)) continue;
+          const float w = depth == 0 ? 1.0f : PowerHeuristic(prev_pdf[j], select_pdf(k) * pdf);
           sum[j] += throughput[j].cwiseProduct(le) * w;
         }
         if (!hit) {
+          if (features != nullptr && depth == 0) albedo_sum[j] += Eigen::Vector3f::Ones();
           if (im.environment) {
             const Eigen::Vector3f le = im.environment->Eval(dir[j]);
             const float w =
-                depth == 0 ? 1.0f
-                           : PowerHeuristic(prev_pdf[j], select_pdf * im.environment->Pdf(
-                                                                          dir[j], prev_normal[j]));
+                depth == 0
+                    ? 1.0f
+                    : PowerHeuristic(prev_pdf[j], select_pdf(num_lights) *
+                                                      im.environment->Pdf(dir[j], prev_normal[j]));
             sum[j] += throughput[j].cwiseProduct(le) * w;
           }
           active[j] = 0;
@@ -706,6 +816,10 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
           continue;
         }
         const Impl::Surface surf = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
+        if (features != nullptr && depth == 0) {
+          albedo_sum[j] += surf.params.base_color;
+          normal_sum[j] += surf.ns;
+        }
         const Impl::ShadingFrame local(surf);
         const Eigen::Vector3f &t = local.t, &b = local.b;
         const auto to_local = [&](const Eigen::Vector3f& w) { return local.ToLocal(w); };
@@ -722,8 +836,19 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
         // Next-event estimation.
         SetRayLane(&shadow, j, p_off, Eigen::Vector3f::UnitZ(), 0, 0);
         if (im.num_strategies > 0) {
-          const int pick =
-              std::min(static_cast<int>(u_choice.x() * im.num_strategies), im.num_strategies - 1);
+          int pick = 0;
+          float select_pdf = even;
+          if (rated) {
+            float* select = selection[j];
+            im.SelectionPdfs(p_off, surf.ns, select);
+            for (float below = select[0]; pick + 1 < im.num_strategies && u_choice.x() >= below;
+                 below += select[++pick]) {
+            }
+            select_pdf = select[pick];
+          } else {
+            pick =
+                std::min(static_cast<int>(u_choice.x() * im.num_strategies), im.num_strategies - 1);
+          }
           const Eigen::Vector2f u_light = sampler.Get2D(dim + 1);
           LightSample ls;
           bool ok = false, delta = false;
@@ -799,6 +924,22 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       rtcInitIntersectContext(&context);
       rtcIntersect16(active, im.scene.world, &context, &rh);
     }
+    for (int j = 0; features != nullptr && j < 16; ++j) {
+      if (!had_ray[j]) continue;
+      const double l = Luminance(Eigen::Vector3f(sum[j] - before[j]));
+      luminance_sum[j] += l;
+      luminance_sq[j] += l * l;
+    }
+  }
+  for (int j = 0; features != nullptr && j < 16; ++j) {
+    const int n = paths[j];
+    features->albedo[j] = n > 0 ? Eigen::Vector3f(albedo_sum[j] / n) : Eigen::Vector3f::Ones();
+    features->normal[j] = n > 0 ? Eigen::Vector3f(normal_sum[j] / n) : Eigen::Vector3f::Zero();
+    // The variance of the mean; one path says nothing of its spread: as much as its value.
+    const double mean = n > 0 ? luminance_sum[j] / n : 0.0;
+    features->variance[j] =
+        n > 1 ? static_cast<float>(std::max(0.0, luminance_sq[j] - n * mean * mean) / (n - 1) / n)
+              : static_cast<float>(mean * mean);
   }
   // (Paths from points of the pixel without a ray, beyond a lens's fold, are left out.)
   for (int j = 0; j < 16; ++j) {

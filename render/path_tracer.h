@@ -54,6 +54,13 @@ struct PathTracerScene {
   float near_mm = 1.0f, far_mm = 1e7f;  // camera rays' clip (depth along the optical axis)
 };
 
+// What the denoiser (render/denoise.h) needs of a tile's pixels: means over each pixel's paths.
+struct TileFeatures {
+  Eigen::Vector3f albedo[16];  // the first surface's base colour after textures (1: no surface)
+  Eigen::Vector3f normal[16];  // the first surface's shading normal, world (0: no surface)
+  float variance[16];          // of the pixel's mean luminance (the paths' sample variance / n)
+};
+
 class PathTracer {
  public:
   // Loads the environment's and textures' images that are not loaded yet; throws Error naming the
@@ -68,10 +75,11 @@ class PathTracer {
   // Each path starts at a random point of its pixel (through `rays`, so lens distortion bends it
   // as it bends the labels' rays), of the thin lens's aperture when `lens` is active (depth of
   // field), and at a random time of the exposure when `motion` is active (the camera at
-  // camera.world_from_cam * motion.At(tau); motion blur).
+  // camera.world_from_cam * motion.At(tau); motion blur). `features`, when given, receives the
+  // denoiser's guides for the same pixels (the radiance does not depend on it).
   void TraceTile(const Camera& camera, const PixelRays& rays, const ThinLens& lens,
                  const CameraMotion& motion, int u0, int v0, int samples, uint64_t frame_seed,
-                 Eigen::Vector3f out[16]) const;
+                 Eigen::Vector3f out[16], TileFeatures* features = nullptr) const;
 
   // A depth sensor's projector return at the hits of a packet of camera rays traced in
   // scene.world (render/sensor.h): pi * luminance(f(wo, wi)) * cos(wi) with the hit's textured

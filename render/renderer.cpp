@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include "cad/error.h"
+#include "render/denoise.h"
 #include "render/image.h"
 #include "render/path_tracer.h"
 #include "render/pixel_rays.h"
@@ -887,6 +888,61 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
       IntersectFloor(valid, floor_half, im.floor_id, rh);
     }
   };
+  // A pixel's colour from its radiance (pbr) or Lambert colour (fast): the image sensor's reading,
+  // the display transform (pbr) and 8 bits, and the grey camera's value.
+  const auto finish = [&](int u, int v, Eigen::Vector3f radiance, Eigen::Vector3f color) {
+    const size_t pixel = static_cast<size_t>(v) * w + u;
+    const bool pbr_colour = pbr && o.shade;
+    // The linear value the image sensor reads (pbr: the exposed radiance; fast: the
+    // Lambert colour), then the display transform (pbr) and 8 bits.
+    Eigen::Vector2f centre;
+    rays->Centre(u, v, &centre);
+    const double vignette = imager.active() ? imager.Vignette(centre.x(), centre.y()) : 1.0;
+    // Noise draws: R, G, B and grey; a grey camera's colour image is not written, and
+    // gets no noise.
+    double normal[4] = {0.0, 0.0, 0.0, 0.0};
+    if (imager.full_well > 0.0) {
+      if (!gray) {
+        const Eigen::Vector2d rg = ImageNoisePair(noise_seed, pixel, 0);
+        normal[0] = rg.x(), normal[1] = rg.y();
+      }
+      const Eigen::Vector2d bk = ImageNoisePair(noise_seed, pixel, 1);
+      normal[2] = gray ? 0.0 : bk.x(), normal[3] = bk.y();
+    }
+    const auto read = [&](float linear, int channel) {
+      if (!imager.active()) return linear;
+      return static_cast<float>(imager.Read(linear, vignette, normal[channel]));
+    };
+    // The camera's white balance (domain randomisation) scales what the sensor reads.
+    if (pbr_colour && balanced) radiance = radiance.cwiseProduct(white_balance);
+    const Eigen::Vector3f linear = pbr_colour ? Eigen::Vector3f(exposure_scale * radiance) : color;
+    for (int c = 0; c < 3; ++c) {
+      const float value = read(linear[c], c);
+      color[c] = pbr_colour ? DisplayValue(value, filmic) : value;
+      frame.rgb[3 * pixel + c] = ToByte(color[c]);
+    }
+    if (o.hdr && !pbr) {
+      for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = color[c];
+    }
+    // A grey camera sees the luminance of the same linear value, with its own noise.
+    if (gray) {
+      // (pbr: exposure times luminance, in the order earlier versions computed it.)
+      const float value =
+          read(pbr_colour ? exposure_scale * Luminance(radiance) : Luminance(linear), 3);
+      frame.gray[pixel] = pbr_colour ? DisplayValue(value, filmic) : std::clamp(value, 0.0f, 1.0f);
+    }
+  };
+  // The denoiser (pbr) needs every pixel's radiance and guides first; the colour follows.
+  const bool denoising = pbr && o.shade && o.denoise;
+  std::vector<float> radiance_plane, albedo_plane, normal_plane, variance_plane;
+  std::vector<uint8_t> coloured;  // pixels with a colour to finish (a ray through the centre)
+  if (denoising) {
+    radiance_plane.assign(3 * num_pixels, 0.0f);
+    albedo_plane.assign(3 * num_pixels, 1.0f);
+    normal_plane.assign(3 * num_pixels, 0.0f);
+    variance_plane.assign(num_pixels, 0.0f);
+    coloured.assign(num_pixels, 0);
+  }
 
   tbb::parallel_for(
       tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
@@ -927,13 +983,22 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
           }
           Eigen::Vector3f radiance[16];
           if (pbr && o.shade) {
+            TileFeatures features;
             tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples,
-                              frame_seed, radiance);
+                              frame_seed, radiance, denoising ? &features : nullptr);
             for (int j = 0; j < 16; ++j) {
               if (!valid[j]) continue;
               const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
               if (o.hdr) {
                 for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[j][c];
+              }
+              if (denoising) {
+                for (int c = 0; c < 3; ++c) {
+                  radiance_plane[3 * pixel + c] = radiance[j][c];
+                  albedo_plane[3 * pixel + c] = features.albedo[j][c];
+                  normal_plane[3 * pixel + c] = features.normal[j][c];
+                }
+                variance_plane[pixel] = features.variance[j];
               }
             }
           }
@@ -963,52 +1028,38 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
           for (int j = 0; j < 16; ++j) {
             if (!centre_valid[j]) continue;
             const int u = u0 + j % kTile, v = v0 + j / kTile;
-            const size_t pixel = static_cast<size_t>(v) * w + u;
-            const bool pbr_colour = pbr && o.shade;
-            // The linear value the image sensor reads (pbr: the exposed radiance; fast: the
-            // Lambert colour), then the display transform (pbr) and 8 bits.
-            Eigen::Vector2f centre;
-            rays->Centre(u, v, &centre);
-            const double vignette = imager.active() ? imager.Vignette(centre.x(), centre.y()) : 1.0;
-            // Noise draws: R, G, B and grey; a grey camera's colour image is not written, and
-            // gets no noise.
-            double normal[4] = {0.0, 0.0, 0.0, 0.0};
-            if (imager.full_well > 0.0) {
-              if (!gray) {
-                const Eigen::Vector2d rg = ImageNoisePair(noise_seed, pixel, 0);
-                normal[0] = rg.x(), normal[1] = rg.y();
-              }
-              const Eigen::Vector2d bk = ImageNoisePair(noise_seed, pixel, 1);
-              normal[2] = gray ? 0.0 : bk.x(), normal[3] = bk.y();
+            if (denoising) {
+              coloured[static_cast<size_t>(v) * w + u] = 1;
+              continue;
             }
-            const auto read = [&](float linear, int channel) {
-              if (!imager.active()) return linear;
-              return static_cast<float>(imager.Read(linear, vignette, normal[channel]));
-            };
-            // The camera's white balance (domain randomisation) scales what the sensor reads.
-            if (pbr_colour && balanced) radiance[j] = radiance[j].cwiseProduct(white_balance);
-            const Eigen::Vector3f linear =
-                pbr_colour ? Eigen::Vector3f(exposure_scale * radiance[j]) : color[j];
-            for (int c = 0; c < 3; ++c) {
-              const float value = read(linear[c], c);
-              color[j][c] = pbr_colour ? DisplayValue(value, filmic) : value;
-              frame.rgb[3 * pixel + c] = ToByte(color[j][c]);
-            }
-            if (o.hdr && !pbr) {
-              for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = color[j][c];
-            }
-            // A grey camera sees the luminance of the same linear value, with its own noise.
-            if (gray) {
-              // (pbr: exposure times luminance, in the order earlier versions computed it.)
-              const float value =
-                  read(pbr_colour ? exposure_scale * Luminance(radiance[j]) : Luminance(linear), 3);
-              frame.gray[pixel] =
-                  pbr_colour ? DisplayValue(value, filmic) : std::clamp(value, 0.0f, 1.0f);
-            }
+            finish(u, v, radiance[j], color[j]);
           }
         }
       });
 
+  if (denoising) {
+    DenoiseInput input;
+    input.width = w;
+    input.height = h;
+    input.radiance = radiance_plane.data();
+    input.albedo = albedo_plane.data();
+    input.normal = normal_plane.data();
+    input.depth = frame.depth.data();
+    input.variance = variance_plane.data();
+    const std::vector<float> clean = Denoise(input);
+    tbb::parallel_for(0, h, [&](int v) {
+      for (int u = 0; u < w; ++u) {
+        const size_t pixel = static_cast<size_t>(v) * w + u;
+        if (!coloured[pixel]) continue;
+        const Eigen::Vector3f radiance(clean[3 * pixel], clean[3 * pixel + 1],
+                                       clean[3 * pixel + 2]);
+        if (o.hdr) {
+          for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[c];
+        }
+        finish(u, v, radiance, Eigen::Vector3f::Zero());
+      }
+    });
+  }
   for (size_t p = 0; p < num_pixels; ++p) {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }

@@ -51,6 +51,10 @@ struct RenderOptions {
   // Also keep the colour as floats (Frame::radiance, written as EXR): pbr, the linear radiance
   // before exposure; fast, the Lambert colour before it is rounded to bytes.
   bool hdr = false;
+  // pbr: filter the colour's sampling noise, guided by the first surfaces' albedo, normals and
+  // depth (render/denoise.h): fewer samples for a clean image, at the price of some blur of
+  // glossy reflections and soft shadows. Only the colour image (and its HDR) changes.
+  bool denoise = false;
 
   bool Check(std::string* why) const;
 
@@ -78,6 +82,8 @@ struct RenderOptions {
     visit(o.seed, Field{"seed", "integer", "pbr: sampler seed"});
     visit(o.hdr,
           Field{"hdr", "bool", "also write the colour as float EXR (rgb_hdr/; pbr: radiance)"});
+    visit(o.denoise, Field{"denoise", "bool",
+                           "pbr: edge-aware denoising guided by albedo, normals and depth"});
     visit(o.shade, Field{"", "bool", "profiling: shade the colour image", {}, true, "shade"});
     visit(o.amodal_masks,
           Field{"", "bool", "profiling: trace the full silhouettes", {}, true, "amodal_masks"});

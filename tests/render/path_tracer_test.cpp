@@ -206,6 +206,30 @@ TEST(PathTracer, IrradianceUnderADiscLightIsPiLSinSquared) {
   EXPECT_NEAR(sum / 16, view.Expected(), 0.002 * view.Expected());
 }
 
+TEST(PathTracer, SeveralLightsAddUpWhateverTheSelection) {
+  // The disc above, plus a point light 300 mm off to the side that gives the patch about ten
+  // times the disc's irradiance, plus a uniform sky of radiance 0.05: the floor's radiance is
+  // rho / pi * (pi L_disc sin^2(alpha) + I cos(theta) / r^2 + pi L_sky). Next-event estimation
+  // picks among the three by importance, and the disc is also found by BSDF rays (MIS): the sum
+  // must come out right whatever the probabilities.
+  DiscLightView view;
+  LightSource point;
+  point.kind = LightSource::Kind::kPoint;
+  point.power = 5000.0;
+  point.position = {300.0, 0.0, 400.0};
+  view.scene.light_sources.push_back(point);
+  view.scene.environment.color = Eigen::Vector3f::Constant(0.05f);
+  const double r_m = point.position.norm() / 1000.0, cos_theta = 400.0 / point.position.norm();
+  const double from_point = (point.power / (4 * kPi)) * cos_theta / (r_m * r_m) / kPi;
+  const double expected = view.Expected() + from_point + 0.05;
+  EXPECT_GT(from_point, 5 * view.Expected());
+  const Renderer renderer({}, view.scene, Pbr(4096, 0));
+  const Frame frame = renderer.Render(view.camera);
+  double sum = 0;
+  for (int i = 0; i < 16; ++i) sum += At(frame, i % 4, i / 4);
+  EXPECT_NEAR(sum / 16, expected, 0.003 * expected);
+}
+
 TEST(PathTracer, StratifiedSamplesConvergeFasterThanRandomOnes) {
   // The RMS error of the disc light's estimate over 16 pixels x 8 seeds: independent random
   // samples would fall as N^-1/2 (a factor 4 from 16 to 256 samples); Owen-scrambled Sobol points

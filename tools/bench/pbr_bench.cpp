@@ -6,11 +6,13 @@
 // in steel, aluminium and ABS on a wooden table under two light panels; CADSYNTH_BENCH_RECIPE
 // picks another recipe), 640x480, 3 bounces, six views of its sweep (two per scene).
 //
-//   BM_Pbr/S/T   ms per frame (real time) at S samples per pixel with T threads.
-//   BM_PbrError/S  with CADSYNTH_BENCH_ERROR=1: the RMS error at S samples per pixel against a
-//                4,096-sample render of the same pixels (the 160x120 centre crop of each view,
-//                where the parts are), in 8-bit display values (rmse_8bit) and relative to the
-//                mean linear radiance (rel_rmse). The reference takes minutes.
+//   BM_Pbr/S/T/D   ms per frame (real time) at S samples per pixel with T threads, denoised
+//                (render.denoise) when D is 1.
+//   BM_PbrError/S/D  with CADSYNTH_BENCH_ERROR=1: the RMS error at S samples per pixel (denoised
+//                when D is 1) against a 4,096-sample render of the same pixels (the 160x120
+//                centre crop of each view, where the parts are), in 8-bit display values
+//                (rmse_8bit) and relative to the mean linear radiance (rel_rmse). The reference
+//                takes minutes.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
@@ -39,8 +41,9 @@ struct Fixture {
     for (size_t i = 0; i < all.size() && views.size() < 6; i += step) views.push_back(all[i]);
   }
   size_t SceneFor(size_t i) const { return i % run.scenes.size(); }
-  std::unique_ptr<Renderer> Make(size_t scene, int samples) const {
+  std::unique_ptr<Renderer> Make(size_t scene, int samples, bool denoise = false) const {
     RenderOptions o = spec.render;
+    o.denoise = denoise;
     o.mode = RenderOptions::Mode::kPbr;
     o.samples = samples;
     o.bounces = 3;
@@ -69,7 +72,8 @@ void BM_Pbr(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(1));
   std::vector<std::unique_ptr<Renderer>> renderers;
-  for (size_t s = 0; s < f.run.scenes.size(); ++s) renderers.push_back(f.Make(s, samples));
+  const bool denoise = state.range(2) != 0;
+  for (size_t s = 0; s < f.run.scenes.size(); ++s) renderers.push_back(f.Make(s, samples, denoise));
   size_t frames = 0;
   for (auto _ : state) {
     for (size_t i = 0; i < f.views.size(); ++i) {
@@ -82,7 +86,7 @@ void BM_Pbr(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(frames) * 1e-3,
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.SetLabel(std::to_string(samples) + " spp, " + std::to_string(state.range(1)) +
-                 " thread(s), 640x480, 3 bounces");
+                 " thread(s), 640x480, 3 bounces" + (denoise ? ", denoised" : ""));
 }
 
 void BM_PbrError(benchmark::State& state) {
@@ -92,6 +96,7 @@ void BM_PbrError(benchmark::State& state) {
   }
   Fixture& f = Get();
   const int samples = static_cast<int>(state.range(0));
+  const bool denoise = state.range(1) != 0;
   static std::map<size_t, Frame> references;
   for (size_t i = 0; i < f.views.size(); ++i) {
     if (references.count(i) == 0) references[i] = f.Make(f.SceneFor(i), 4096)->Render(f.Crop(i), i);
@@ -101,7 +106,7 @@ void BM_PbrError(benchmark::State& state) {
   for (auto _ : state) {
     for (size_t i = 0; i < f.views.size(); ++i) {
       // Another view number: noise independent of the reference's.
-      const Frame frame = f.Make(f.SceneFor(i), samples)->Render(f.Crop(i), 1000 + i);
+      const Frame frame = f.Make(f.SceneFor(i), samples, denoise)->Render(f.Crop(i), 1000 + i);
       const Frame& ref = references[i];
       for (size_t p = 0; p < frame.rgb.size(); ++p) {
         const double d8 = static_cast<double>(frame.rgb[p]) - ref.rgb[p];
@@ -115,15 +120,18 @@ void BM_PbrError(benchmark::State& state) {
   }
   state.counters["rmse_8bit"] = std::sqrt(sq8 / n);
   state.counters["rel_rmse"] = std::sqrt(sq / n) / (mean / n);
-  state.SetLabel(std::to_string(samples) + " spp vs 4096 spp, 160x120 centre crops");
+  state.SetLabel(std::to_string(samples) + " spp" + (denoise ? " denoised" : "") +
+                 " vs 4096 spp, 160x120 centre crops");
 }
 
 BENCHMARK(BM_Pbr)
-    ->ArgsProduct({{4, 16, 64}, {1, 2}})
+    ->ArgsProduct({{4, 16, 64}, {1, 2}, {0}})
+    ->Args({4, 2, 1})
+    ->Args({16, 2, 1})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(1.0);
-BENCHMARK(BM_PbrError)->Arg(4)->Arg(16)->Arg(64)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_PbrError)->ArgsProduct({{4, 16, 64}, {0, 1}})->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace cadsynth

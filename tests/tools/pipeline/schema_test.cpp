@@ -73,7 +73,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
             19);
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
-            15);
+            16);
   // The camera's sensor: its image and, with a model other than ideal (an active image sensor),
   // every depth (image sensor) field; inactive, they leave earlier run keys alone.
   {

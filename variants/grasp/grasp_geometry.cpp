@@ -91,8 +91,8 @@ Eigen::Vector3d SurfaceSampler::Normal(size_t i) const {
       .normalized();
 }
 
-std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> FclMesh(const Mesh& mesh) {
-  auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+std::shared_ptr<fcl::BVHModel<fcl::OBBd>> FclMesh(const Mesh& mesh) {
+  auto model = std::make_shared<fcl::BVHModel<fcl::OBBd>>();
   std::vector<fcl::Vector3d> points;
   points.reserve(mesh.positions.size());
   for (const Eigen::Vector3f& p : mesh.positions) points.push_back(p.cast<double>());

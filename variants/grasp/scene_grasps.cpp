@@ -32,7 +32,7 @@ class SceneCollider {
       if (fixture != nullptr && !fixture->triangles.empty())
         Add(grasp_detail::FclMesh(*fixture), Eigen::Isometry3d::Identity(), 0);
     }
-    std::map<const Mesh*, std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>> models;
+    std::map<const Mesh*, std::shared_ptr<fcl::BVHModel<fcl::OBBd>>> models;
     for (size_t i = 0; i < scene.instances.size(); ++i) {
       const GraspObstacles::Body& body = scene.instances[i];
       if (body.mesh == nullptr || body.mesh->triangles.empty()) continue;

@@ -124,13 +124,16 @@ ToolShape Rod(double diameter, double z0, double z1) {
 std::vector<ToolShape> GripperShapes(const ParallelJawGripper& g, double opening_mm,
                                      double back_mm) {
   std::vector<ToolShape> shapes;
+  // The palm first: checks stop at the first shape that hits, and the palm, the largest, is the
+  // one that hits most often in a pile (placing a 60-bolt pile's grasps: 2.1 s fingers first,
+  // 0.6 s palm first; the same grasps either way).
+  if (g.palm_width_mm > 0 && g.palm_depth_mm > 0 && g.palm_height_mm + back_mm > 0) {
+    shapes.push_back(SlabBox(g.palm_width_mm, g.palm_depth_mm, -back_mm, g.palm_height_mm, 0.0));
+  }
   const double half = 0.5 * opening_mm;
   for (const double side : {-1.0, 1.0}) {
     shapes.push_back(SlabBox(g.finger_thickness_mm, g.finger_width_mm, g.palm_height_mm - back_mm,
                              g.tip_mm(), side * (half + 0.5 * g.finger_thickness_mm)));
-  }
-  if (g.palm_width_mm > 0 && g.palm_depth_mm > 0 && g.palm_height_mm + back_mm > 0) {
-    shapes.push_back(SlabBox(g.palm_width_mm, g.palm_depth_mm, -back_mm, g.palm_height_mm, 0.0));
   }
   return shapes;
 }

@@ -32,9 +32,14 @@ struct DenoiseInput {
 };
 
 struct DenoiseOptions {
-  int passes = 5;                // kernel holes 1, 2, 4, ... 2^(passes - 1) pixels
-  float depth_sigma = 1.0f;      // depth weight exp(-|dz| / (depth_sigma |slope . offset|))
-  float luminance_sigma = 4.0f;  // luminance weight exp(-|dl| / (luminance_sigma sigma_l))
+  int passes = 5;  // kernel holes 1, 2, 4, ... 2^(passes - 1) pixels (at most 16 passes)
+  // A tap's weight is kernel * (n_p . n_q)^128 * f(|dz| / tol_z + |dl| / (luminance_sigma sigma_l))
+  // with f(x) = (1 - x / 16)^16 (exp(-x) within 0.018), tol_z = depth_sigma times the depth change
+  // the local slope predicts over the offset (the sum of both axes' for a diagonal tap) plus a
+  // thousandth of the depth, dl the difference of the demodulated luminance and sigma_l the
+  // centre's remaining noise (standard deviation).
+  float depth_sigma = 1.0f;
+  float luminance_sigma = 4.0f;
 };
 
 // The filtered radiance, 3 per pixel.

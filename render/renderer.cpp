@@ -982,6 +982,7 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
                                projector_seen.data(), signal.data());
           }
           Eigen::Vector3f radiance[16];
+          for (Eigen::Vector3f& r : radiance) r.setZero();
           if (pbr && o.shade) {
             TileFeatures features;
             tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples,

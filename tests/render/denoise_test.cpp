@@ -95,7 +95,9 @@ TEST(Denoise, WhiteNoiseFallsByTheKernelsNorm) {
   const double mean = sum / n, deviation = std::sqrt(sq / n - mean * mean);
   EXPECT_NEAR(mean, 1.0, 0.002);
   const double expected = 0.1 * 21856.0 / 1048576.0;
-  EXPECT_NEAR(deviation, expected, 0.15 * expected);
+  // (The kernel spans 63 pixels: the 336 x 336 crop holds about 50 independent patches, so the
+  // measured deviation scatters by about 7 %; a kernel of four or six passes is off by 2x.)
+  EXPECT_NEAR(deviation, expected, 0.25 * expected);
 }
 
 TEST(Denoise, ConvergedPixelsAndTexturesStayExactly) {

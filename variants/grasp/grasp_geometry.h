@@ -51,7 +51,7 @@ class SurfaceSampler {
 // A mesh's triangles as an FCL bounding-volume hierarchy of oriented boxes, in the mesh's frame.
 // OBBs, not FCL's usual OBBRSS: collision tests use only the OBB either way, and FCL bounds a
 // box or cylinder tool in an OBB directly but fits an OBBRSS to its corners by an eigen
-// decomposition in every test (two thirds of the time of placing a pile's grasps).
+// decomposition in every test (half the time of placing a pile's grasps).
 std::shared_ptr<fcl::BVHModel<fcl::OBBd>> FclMesh(const Mesh& mesh);
 
 // A solid of a tool in the tool's frame.

@@ -557,6 +557,10 @@ PathTracer::~PathTracer() = default;
 void PathTracer::Impl::SelectionPdfs(const Eigen::Vector3f& p, const Eigen::Vector3f& n,
                                      float* pdf) const {
   const int count = num_strategies;
+  if (count == 1) {  // nothing to choose between: no estimate to compute at every vertex
+    pdf[0] = 1.0f;
+    return;
+  }
   const int num_lights = static_cast<int>(lights.size());
   float total = 0;
   for (int k = 0; k < count; ++k) {

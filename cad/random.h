@@ -8,7 +8,10 @@
 // written from it, and a test checks that names and ids are unique.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <string_view>
 
 namespace cadsynth {
@@ -121,7 +124,9 @@ inline constexpr RandomStream kSensorLateral{
     "a pixel's lateral shift, seeded by sensor.frame; index = (pixel << 1) + draw (Box-Muller: "
     "both axes from one pair)"};
 inline constexpr RandomStream kSensorAxial{
-    "sensor.axial", "a pixel's depth noise, seeded by sensor.frame; index = (pixel << 1) + draw"};
+    "sensor.axial",
+    "a pixel's depth noise, seeded by sensor.frame; index = ((pixel >> 1) << 1) + draw (one "
+    "Box-Muller pair for pixels 2k and 2k + 1: the cosine's number, then the sine's)"};
 inline constexpr RandomStream kSensorInfrared{
     "sensor.infrared",
     "active_stereo: an IR pixel's read noise, seeded by sensor.frame; index = (((pixel << 1) + "
@@ -138,7 +143,11 @@ inline constexpr RandomStream kImageFrame{
 inline constexpr RandomStream kImageNoise{
     "sensor.image",
     "a pixel's image noise, seeded by sensor.image_frame; index = (((pixel << 1) + pair) << 1) + "
-    "draw (Box-Muller pairs: R and G, then B and the grey image)"};
+    "draw (Box-Muller pairs: R and G, then B and the grey image of a colour camera)"};
+inline constexpr RandomStream kImageNoiseGrey{
+    "sensor.image_grey",
+    "a grey camera's image noise, seeded by sensor.image_frame; index = ((pixel >> 1) << 1) + "
+    "draw (one Box-Muller pair for pixels 2k and 2k + 1)"};
 // recipes: randomize.seed (domain randomisation, render/randomize.h)
 inline constexpr RandomStream kRandomizeFrame{
     "randomize.frame",
@@ -161,8 +170,9 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kDropSeed,       streams::kPilePhysics,    streams::kDistractorOrder,
     streams::kSensorFrame,    streams::kSensorLateral,  streams::kSensorAxial,
     streams::kSensorInfrared, streams::kSensorDots,     streams::kImageFrame,
-    streams::kImageNoise,     streams::kRandomizeFrame, streams::kRandomizeDraw,
-    streams::kGraspPoint,     streams::kGraspApproach,  streams::kSuctionPoint,
+    streams::kImageNoise,     streams::kImageNoiseGrey, streams::kRandomizeFrame,
+    streams::kRandomizeDraw,  streams::kGraspPoint,     streams::kGraspApproach,
+    streams::kSuctionPoint,
 };
 
 namespace random_detail {
@@ -180,6 +190,48 @@ inline double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
   return static_cast<double>(x >> 11) * 0x1.0p-53;
 }
 }  // namespace random_detail
+
+// Box-Muller: two independent standard normal numbers from two uniform numbers in [0, 1),
+//   z0 = r cos(2 pi u2), z1 = r sin(2 pi u2), r = sqrt(-2 ln(1 - u1)).
+// Short polynomials stand in for libm's log, cos and sin, which took a sixth of a bin-picking
+// run (sensor noise draws a pair or two per pixel): within 1e-10 of the formula through libm
+// (tests/cad/random_test.cpp), far below any sensor's noise, and the same bits whatever the libm.
+inline void NormalPair(double u1, double u2, double* z0, double* z1) {
+  // ln x for x = 1 - u1 in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), then
+  // ln m = 2 atanh(s) = 2 s (1 + s^2/3 + ... + s^10/11), s = (m - 1) / (m + 1), |s| < 0.172:
+  // the rest of the series is below 5e-11 of the sum.
+  const double x = 1.0 - u1;
+  uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  const int e = static_cast<int>((bits >> 52) & 0x7ff) - 1023;
+  bits = (bits & 0x000fffffffffffffull) | 0x3ff0000000000000ull;
+  double m;
+  std::memcpy(&m, &bits, sizeof m);
+  const bool high = m > 1.4142135623730951;  // selects, not branches: the draws are random
+  m *= high ? 0.5 : 1.0;
+  const double s = (m - 1.0) / (m + 1.0), s2 = s * s, s4 = s2 * s2;
+  // Estrin's scheme: short dependency chains.
+  const double atanh_over_s =
+      (1.0 + s2 * (1.0 / 3)) + s4 * ((1.0 / 5 + s2 * (1.0 / 7)) + s4 * (1.0 / 9 + s2 * (1.0 / 11)));
+  const double ln_x = (e + high) * 0.6931471805599453 + 2.0 * s * atanh_over_s;
+  const double r = std::sqrt(std::max(0.0, -2.0 * ln_x));
+  // 2 pi u2 = q pi/2 + t with q a whole number of quadrants and |t| <= pi/4; Taylor series of
+  // sin t to t^11 and cos t to t^12 (remainders below 7e-12 and 4e-13).
+  const double quarter = 4.0 * u2;
+  const int q = static_cast<int>(quarter + 0.5);
+  const double t = (quarter - q) * 1.5707963267948966, t2 = t * t, t4 = t2 * t2, t8 = t4 * t4;
+  const double sin_t = t * ((1.0 - t2 * (1.0 / 6)) + t4 * (1.0 / 120 - t2 * (1.0 / 5040)) +
+                            t8 * (1.0 / 362880 - t2 * (1.0 / 39916800)));
+  const double cos_t = (1.0 - t2 * (1.0 / 2)) + t4 * (1.0 / 24 - t2 * (1.0 / 720)) +
+                       t8 * ((1.0 / 40320 - t2 * (1.0 / 3628800)) + t4 * (1.0 / 479001600));
+  // cos and sin of q pi/2 + t: odd quadrants swap them, quadrants 1 and 2 negate the cosine,
+  // 2 and 3 the sine.
+  const bool odd = q & 1;
+  const double c = (odd ? sin_t : cos_t) * (((q + 1) & 2) ? -1.0 : 1.0);
+  const double sn = (odd ? cos_t : sin_t) * ((q & 2) ? -1.0 : 1.0);
+  *z0 = r * c;
+  *z1 = r * sn;
+}
 
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every
 // machine and compiler (std:: distributions are not). Inline, so that the stream's id (a hash of

@@ -353,10 +353,12 @@ std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options
     const Frame::InstanceTruth& truth = frame.instances[i];
     int a0 = w, b0 = h, a1 = -1, b1 = -1;
     if (!truth.amodal_mask.empty()) {
-      for (int v = std::max(0, truth.roi[1]); v < std::min(h, truth.roi[3]); ++v) {
-        for (int u = std::max(0, truth.roi[0]); u < std::min(w, truth.roi[2]); ++u) {
+      const std::array<int, 4> r = truth.Roi(w, h);
+      for (int v = r[1]; v < r[3]; ++v) {
+        const uint8_t* row = &truth.amodal_mask[static_cast<size_t>(v - r[1]) * (r[2] - r[0])];
+        for (int u = r[0]; u < r[2]; ++u) {
+          if (row[u - r[0]] == 0) continue;
           const size_t p = static_cast<size_t>(v) * w + u;
-          if (truth.amodal_mask[p] == 0) continue;
           ++info.px_count_all;
           // Valid: the written depth (the sensor's, where it has a model) has a value.
           const float written = frame.sensor_depth.empty() ? frame.depth[p] : frame.sensor_depth[p];
@@ -754,14 +756,13 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     const std::string name = im + "_" + Id6(static_cast<int>(i)) + ".png";
     // Masks are zero outside the full silhouette's rectangle: fill only inside. The in-image box
     // of the full silhouette (inclusive) is COCO's amodal box.
-    const int r0 = std::max(0, truth.roi[0]), r1 = std::max(0, truth.roi[1]);
-    const int r2 = std::min(w, truth.roi[2]), r3 = std::min(h, truth.roi[3]);
+    const auto [r0, r1, r2, r3] = truth.Roi(w, h);
     int full[4] = {w, h, -1, -1};
     for (int v = r1; v < r3 && !truth.amodal_mask.empty(); ++v) {
       auto* out = mask.ptr<uint8_t>(v);
-      const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v) * w];
+      const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v - r1) * (r2 - r0)];
       for (int u = r0; u < r2; ++u) {
-        if (in[u] == 0) continue;
+        if (in[u - r0] == 0) continue;
         out[u] = 255;
         full[0] = std::min(full[0], u), full[1] = std::min(full[1], v);
         full[2] = std::max(full[2], u), full[3] = std::max(full[3], v);

@@ -1,6 +1,7 @@
 // The rendered images and per-instance ground truth of one camera view.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -40,11 +41,23 @@ struct Frame {
 
   struct InstanceTruth {
     Eigen::Isometry3d cam_from_model = Eigen::Isometry3d::Identity();
-    // Full silhouette, also where other instances hide it: 1 = covered. Same size as the image.
+    // Full silhouette, also where other instances hide it: 1 = covered, 0 outside the pixel
+    // rectangle [roi[0], roi[2]) x [roi[1], roi[3]) (clamped to the image; the default is the whole
+    // image). Stored for that rectangle only, row-major like amodal_depth (Covers reads it): a
+    // whole image per instance was 93 MB per frame for 60 instances at 1440 x 1080.
     std::vector<uint8_t> amodal_mask;
-    // The mask is zero outside the pixel rectangle [roi[0], roi[2]) x [roi[1], roi[3]) (clamped
-    // to the image; the default is the whole image).
     int roi[4] = {0, 0, 1 << 30, 1 << 30};
+    // roi clamped to a width x height image.
+    std::array<int, 4> Roi(int width, int height) const {
+      return {std::clamp(roi[0], 0, width), std::clamp(roi[1], 0, height),
+              std::clamp(roi[2], 0, width), std::clamp(roi[3], 0, height)};
+    }
+    // Whether the full silhouette covers pixel (u, v) of a width x height image.
+    bool Covers(int u, int v, int width, int height) const {
+      const std::array<int, 4> r = Roi(width, height);
+      if (amodal_mask.empty() || u < r[0] || v < r[1] || u >= r[2] || v >= r[3]) return false;
+      return amodal_mask[static_cast<size_t>(v - r[1]) * (r[2] - r[0]) + (u - r[0])] != 0;
+    }
     // RenderOptions::amodal_depth: the depth (mm) of the instance rendered alone, 0 where it is
     // not hit, inside the rectangle roi (clamped to the image), row-major: pixel (u, v) at
     // (v - roi[1]) * (roi[2] - roi[0]) + (u - roi[0]). Empty otherwise.

@@ -888,6 +888,9 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
       IntersectFloor(valid, floor_half, im.floor_id, rh);
     }
   };
+  const std::vector<float> grey_noise = gray && imager.full_well > 0.0
+                                            ? GreyImageNoise(noise_seed, num_pixels)
+                                            : std::vector<float>();
   // A pixel's colour from its radiance (pbr) or Lambert colour (fast): the image sensor's reading,
   // the display transform (pbr) and 8 bits, and the grey camera's value.
   const auto finish = [&](int u, int v, Eigen::Vector3f radiance, Eigen::Vector3f color) {
@@ -902,12 +905,13 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
     // gets no noise.
     double normal[4] = {0.0, 0.0, 0.0, 0.0};
     if (imager.full_well > 0.0) {
-      if (!gray) {
+      if (gray) {
+        normal[3] = grey_noise[pixel];
+      } else {
         const Eigen::Vector2d rg = ImageNoisePair(noise_seed, pixel, 0);
-        normal[0] = rg.x(), normal[1] = rg.y();
+        const Eigen::Vector2d bk = ImageNoisePair(noise_seed, pixel, 1);
+        normal[0] = rg.x(), normal[1] = rg.y(), normal[2] = bk.x(), normal[3] = bk.y();
       }
-      const Eigen::Vector2d bk = ImageNoisePair(noise_seed, pixel, 1);
-      normal[2] = gray ? 0.0 : bk.x(), normal[3] = bk.y();
     }
     const auto read = [&](float linear, int channel) {
       if (!imager.active()) return linear;
@@ -1138,7 +1142,6 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   const PixelRect canvas{-w, -h, 2 * w, 2 * h};
   tbb::parallel_for(size_t{0}, im.scene.instances.size(), [&](size_t i) {
     Frame::InstanceTruth& truth = frame.instances[i];
-    truth.amodal_mask.assign(num_pixels, 0);
     const PixelRect r =
         ImageRect(*rays, im.model_bounds[im.scene.instances[i].part], truth.cam_from_model, canvas);
     truth.roi[0] = std::clamp(r.u0, 0, w);
@@ -1146,8 +1149,9 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
     truth.roi[2] = std::clamp(r.u1, 0, w);
     truth.roi[3] = std::clamp(r.v1, 0, h);
     const int roi_w = truth.roi[2] - truth.roi[0];
-    if (o.amodal_depth)
-      truth.amodal_depth.assign(static_cast<size_t>(roi_w) * (truth.roi[3] - truth.roi[1]), 0.0f);
+    const size_t roi_pixels = static_cast<size_t>(roi_w) * (truth.roi[3] - truth.roi[1]);
+    truth.amodal_mask.assign(roi_pixels, 0);
+    if (o.amodal_depth) truth.amodal_depth.assign(roi_pixels, 0.0f);
     int count = 0, canvas_count = 0;
     int box[4] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(),
                   std::numeric_limits<int>::min(), std::numeric_limits<int>::min()};
@@ -1166,11 +1170,9 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
           box[0] = std::min(box[0], u), box[1] = std::min(box[1], v);
           box[2] = std::max(box[2], u), box[3] = std::max(box[3], v);
           if (u < 0 || v < 0 || u >= w || v >= h) continue;
-          truth.amodal_mask[static_cast<size_t>(v) * w + u] = 1;
-          if (o.amodal_depth) {
-            truth.amodal_depth[static_cast<size_t>(v - truth.roi[1]) * roi_w + (u - truth.roi[0])] =
-                rh.ray.tfar[j];
-          }
+          const size_t in_roi = static_cast<size_t>(v - truth.roi[1]) * roi_w + (u - truth.roi[0]);
+          truth.amodal_mask[in_roi] = 1;
+          if (o.amodal_depth) truth.amodal_depth[in_roi] = rh.ray.tfar[j];
           ++count;
         }
       }

@@ -136,16 +136,33 @@ namespace {
 
 // Two independent standard normal numbers from two uniform draws (Box-Muller).
 Eigen::Vector2d GaussianPair(uint64_t seed, const RandomStream& stream, uint64_t index) {
-  const double u1 = UniformDraw(seed, stream, 2 * index);
-  const double u2 = UniformDraw(seed, stream, 2 * index + 1);
-  const double r = std::sqrt(-2.0 * std::log(1.0 - u1));
-  return Eigen::Vector2d(r * std::cos(2.0 * M_PI * u2), r * std::sin(2.0 * M_PI * u2));
+  Eigen::Vector2d z;
+  NormalPair(UniformDraw(seed, stream, 2 * index), UniformDraw(seed, stream, 2 * index + 1), &z.x(),
+             &z.y());
+  return z;
 }
 
 // One standard normal number: the first of the pair.
 double Gaussian(uint64_t seed, const RandomStream& stream, uint64_t index) {
   return GaussianPair(seed, stream, index).x();
 }
+
+// Standard normal number `index` of a stream, numbers 2k and 2k + 1 from Box-Muller pair k: a
+// loop over consecutive indices (a row of pixels) draws one pair for every two numbers.
+class PairedNormals {
+ public:
+  PairedNormals(uint64_t seed, const RandomStream& stream) : seed_(seed), stream_(stream) {}
+  double operator()(uint64_t index) {
+    if (index >> 1 != pair_) pair_ = index >> 1, z_ = GaussianPair(seed_, stream_, pair_);
+    return z_[index & 1];
+  }
+
+ private:
+  uint64_t seed_;
+  const RandomStream& stream_;
+  uint64_t pair_ = ~uint64_t{0};
+  Eigen::Vector2d z_;
+};
 
 // cos of the angle between the surface and the camera ray of pixel (u, v).
 float CosIncidence(const DepthSensorInput& in, int u, int v, size_t p) {
@@ -266,6 +283,20 @@ Eigen::Vector2d ImageNoisePair(uint64_t frame_seed, uint64_t pixel, int pair) {
   return GaussianPair(frame_seed, streams::kImageNoise, (pixel << 1) + static_cast<uint64_t>(pair));
 }
 
+std::vector<float> GreyImageNoise(uint64_t frame_seed, size_t pixels) {
+  std::vector<float> noise(pixels);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, (pixels + 1) / 2, 4096),
+                    [&](const tbb::blocked_range<size_t>& pairs) {
+                      for (size_t k = pairs.begin(); k < pairs.end(); ++k) {
+                        const Eigen::Vector2d z =
+                            GaussianPair(frame_seed, streams::kImageNoiseGrey, k);
+                        noise[2 * k] = static_cast<float>(z.x());
+                        if (2 * k + 1 < pixels) noise[2 * k + 1] = static_cast<float>(z.y());
+                      }
+                    });
+  return noise;
+}
+
 float DotPattern(const DepthModel& m, double fx, double x, double y) {
   const double pitch = m.dot_spacing_px / fx;
   const double gx = x / pitch, gy = y / pitch;
@@ -342,6 +373,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
     const double fb = m.focal_px * std::abs(m.baseline_mm);
     const double step = m.disparity_step_px;
     tbb::parallel_for(0, h, [&](int v) {
+      PairedNormals axial(frame_seed, streams::kSensorAxial);
       for (int u = 0; u < w; ++u) {
         const size_t p = static_cast<size_t>(v) * w + u;
         // Lateral noise: the pixel reads the depth of a neighbour, further on oblique surfaces.
@@ -363,7 +395,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
         const double q = z * z / fb * step;  // the depth step of one disparity quantum at z
         const double sigma = KinectV1AxialSigma(z);
         const double added = std::sqrt(std::max(0.0, sigma * sigma - q * q / 12.0));
-        const double noisy = z + added * Gaussian(frame_seed, streams::kSensorAxial, p);
+        const double noisy = z + added * axial(p);
         if (!(noisy > 0.0)) continue;
         const double levels = std::round(fb / noisy / step);
         if (!(levels > 0.0)) continue;
@@ -378,6 +410,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
     // and from dark colour.
     std::vector<float> noisy(n, 0.0f);
     tbb::parallel_for(0, h, [&](int v) {
+      PairedNormals axial(frame_seed, streams::kSensorAxial);
       for (int u = 0; u < w; ++u) {
         const size_t p = static_cast<size_t>(v) * w + u;
         double x = u, y = v;
@@ -397,7 +430,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
         double z = (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x1, y0)) +
                    fy * ((1 - fx) * at(x0, y1) + fx * at(x1, y1));
         if (!(z > 0.0)) continue;
-        z += AzureKinectSigma(z) * Gaussian(frame_seed, streams::kSensorAxial, p);
+        z += AzureKinectSigma(z) * axial(p);
         noisy[p] = static_cast<float>(std::max(z, 0.0));
       }
     });
@@ -420,12 +453,13 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
 
   // Structured light: exact where camera and projector both see the point, small noise.
   tbb::parallel_for(0, h, [&](int v) {
+    PairedNormals axial(frame_seed, streams::kSensorAxial);
     for (int u = 0; u < w; ++u) {
       const size_t p = static_cast<size_t>(v) * w + u;
       if (!Returns(m, in, u, v, p)) continue;
       const double z = in.depth[p];
       const double sigma = m.noise_mm * (z / 1000.0) * (z / 1000.0);
-      const double noisy = z + sigma * Gaussian(frame_seed, streams::kSensorAxial, p);
+      const double noisy = z + sigma * axial(p);
       out[p] = static_cast<float>(std::max(noisy, 0.0));
     }
   });

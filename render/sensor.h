@@ -190,6 +190,9 @@ struct ImageSensor {
 // grey} (pair 1).
 uint64_t ImageNoiseSeed(const ImageSensor& sensor, uint64_t view);
 Eigen::Vector2d ImageNoisePair(uint64_t frame_seed, uint64_t pixel, int pair);
+// A grey camera's noise (stream sensor.image_grey): one standard normal number per pixel, the
+// Box-Muller pair k giving pixels 2k and 2k + 1 (half the draws of a pair per pixel).
+std::vector<float> GreyImageNoise(uint64_t frame_seed, size_t pixels);
 
 // What one camera measures: its image (colour, or grey as industrial and IR cameras give), the
 // image sensor's noise and vignetting, and its depth model.

@@ -128,7 +128,7 @@ Comparison CompareEveryPixel(const Renderer& renderer, const ReferenceCaster& re
       const size_t p = static_cast<size_t>(v) * w + u;
       ++c.pixels;
       const Hit got{frame.instance[p], frame.depth[p]};
-      if (got.owner > 0 && frame.instances[got.owner - 1].amodal_mask[p] == 0)
+      if (got.owner > 0 && !frame.instances[got.owner - 1].Covers(u, v, w, h))
         ++c.mask_outside_amodal;
       const Hit want = reference.Cast(camera, u + 0.5, v + 0.5);
       if (Same(got, want, kDepthTolMm)) continue;

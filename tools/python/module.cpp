@@ -180,15 +180,13 @@ py::dict SensorDict(Frame&& frame, const FrameSource& source, size_t scene, size
     const VisibleMasks visible(frame, bop);
     for (size_t i = 0; i < n; ++i) {
       const Frame::InstanceTruth& truth = frame.instances[i];
-      const int r0 = std::max(0, truth.roi[0]), r1 = std::max(0, truth.roi[1]);
-      const int r2 = std::min(static_cast<int>(w), truth.roi[2]);
-      const int r3 = std::min(static_cast<int>(h), truth.roi[3]);
+      const auto [r0, r1, r2, r3] = truth.Roi(static_cast<int>(w), static_cast<int>(h));
       bool* out = f + i * pixels;
       for (int y = r1; y < r3 && !truth.amodal_mask.empty(); ++y) {
-        for (int x = r0; x < r2; ++x) {
-          const size_t p = static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x);
-          out[p] = truth.amodal_mask[p] != 0;
-        }
+        const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(y - r1) * (r2 - r0)];
+        for (int x = r0; x < r2; ++x)
+          out[static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)] =
+              in[x - r0] != 0;
       }
       const int* b = infos[i].bbox_visib;
       if (infos[i].px_count_visib == 0) continue;

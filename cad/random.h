@@ -143,7 +143,7 @@ inline constexpr RandomStream kImageFrame{
 inline constexpr RandomStream kImageNoise{
     "sensor.image",
     "a pixel's image noise, seeded by sensor.image_frame; index = (((pixel << 1) + pair) << 1) + "
-    "draw (Box-Muller pairs: R and G, then B and the grey image of a colour camera)"};
+    "draw (a colour camera's Box-Muller pairs: R and G, then B and an unused number)"};
 inline constexpr RandomStream kImageNoiseGrey{
     "sensor.image_grey",
     "a grey camera's image noise, seeded by sensor.image_frame; index = ((pixel >> 1) << 1) + "
@@ -193,13 +193,15 @@ inline double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
 
 // Box-Muller: two independent standard normal numbers from two uniform numbers in [0, 1),
 //   z0 = r cos(2 pi u2), z1 = r sin(2 pi u2), r = sqrt(-2 ln(1 - u1)).
-// Short polynomials stand in for libm's log, cos and sin, which took a sixth of a bin-picking
-// run (sensor noise draws a pair or two per pixel): within 1e-10 of the formula through libm
-// (tests/cad/random_test.cpp), far below any sensor's noise, and the same bits whatever the libm.
+// u1 and u2 must lie in [0, 1) (UniformDraw's range). Short polynomials stand in for libm's log,
+// cos and sin, which took a sixth of a bin-picking run (sensor noise draws a pair or two per
+// pixel): within 1e-10 of the formula through libm (tests/cad/random_test.cpp), far below any
+// sensor's noise, and independent of the libm (as everything else, they depend on the compiler's
+// floating-point contraction: one build gives one set of bytes).
 inline void NormalPair(double u1, double u2, double* z0, double* z1) {
-  // ln x for x = 1 - u1 in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), then
-  // ln m = 2 atanh(s) = 2 s (1 + s^2/3 + ... + s^10/11), s = (m - 1) / (m + 1), |s| < 0.172:
-  // the rest of the series is below 5e-11 of the sum.
+  // ln x for x = 1 - u1 in (0, 1]: x = m 2^e with m in (sqrt(1/2), sqrt(2)], then
+  // ln m = 2 atanh(s) = 2 s (1 + s^2/3 + ... + s^10/11), s = (m - 1) / (m + 1), |s| <= 0.172:
+  // the rest of the series is at most 5.1e-11 of the sum.
   const double x = 1.0 - u1;
   uint64_t bits;
   std::memcpy(&bits, &x, sizeof bits);

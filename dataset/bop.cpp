@@ -354,6 +354,8 @@ std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options
     int a0 = w, b0 = h, a1 = -1, b1 = -1;
     if (!truth.amodal_mask.empty()) {
       const std::array<int, 4> r = truth.Roi(w, h);
+      if (truth.amodal_mask.size() != static_cast<size_t>(r[2] - r[0]) * (r[3] - r[1]))
+        throw Error("bop: an instance's full silhouette does not cover its rectangle (roi)");
       for (int v = r[1]; v < r[3]; ++v) {
         const uint8_t* row = &truth.amodal_mask[static_cast<size_t>(v - r[1]) * (r[2] - r[0])];
         for (int u = r[0]; u < r[2]; ++u) {

@@ -151,15 +151,20 @@ double Gaussian(uint64_t seed, const RandomStream& stream, uint64_t index) {
 // loop over consecutive indices (a row of pixels) draws one pair for every two numbers.
 class PairedNormals {
  public:
-  PairedNormals(uint64_t seed, const RandomStream& stream) : seed_(seed), stream_(stream) {}
+  // The stream's id is kept (hashed once), not the stream.
+  PairedNormals(uint64_t seed, const RandomStream& stream) : seed_(seed), stream_id_(stream.id()) {}
   double operator()(uint64_t index) {
-    if (index >> 1 != pair_) pair_ = index >> 1, z_ = GaussianPair(seed_, stream_, pair_);
+    if (index >> 1 != pair_) {
+      pair_ = index >> 1;
+      NormalPair(random_detail::Draw(seed_, stream_id_, 2 * pair_),
+                 random_detail::Draw(seed_, stream_id_, 2 * pair_ + 1), &z_.x(), &z_.y());
+    }
     return z_[index & 1];
   }
 
  private:
   uint64_t seed_;
-  const RandomStream& stream_;
+  uint64_t stream_id_;
   uint64_t pair_ = ~uint64_t{0};
   Eigen::Vector2d z_;
 };

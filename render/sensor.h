@@ -186,8 +186,8 @@ struct ImageSensor {
 };
 
 // The image sensor's noise in frame `view` (streams sensor.image_frame, sensor.image): the frame's
-// seed, then per pixel two Box-Muller pairs of standard normal draws, {R, G} (pair 0) and {B,
-// grey} (pair 1).
+// seed, then per pixel of a colour camera two Box-Muller pairs of standard normal draws, {R, G}
+// (pair 0) and {B, unused} (pair 1). Grey cameras draw from GreyImageNoise instead.
 uint64_t ImageNoiseSeed(const ImageSensor& sensor, uint64_t view);
 Eigen::Vector2d ImageNoisePair(uint64_t frame_seed, uint64_t pixel, int pair);
 // A grey camera's noise (stream sensor.image_grey): one standard normal number per pixel, the

@@ -403,6 +403,37 @@ TEST(ImageSensor, NoiseHasThePoissonGaussianVariance) {
   EXPECT_NE(renderer.Render(camera, 5, colour).rgb, renderer.Render(camera, 6, colour).rgb);
 }
 
+// A grey camera's noise takes both numbers of a Box-Muller pair, for pixels 2k and 2k + 1: still
+// standard normal and uncorrelated between neighbours (the cosine's and the sine's numbers of one
+// pair are independent), and unlike the colour camera's draws.
+TEST(ImageSensor, GreyNoiseIsStandardNormalAndNeighboursAreIndependent) {
+  const size_t n = 400001;  // odd: the last pixel takes half a pair
+  const std::vector<float> z = GreyImageNoise(12345, n);
+  ASSERT_EQ(z.size(), n);
+  double sum = 0, squares = 0, pairs = 0, across = 0, beyond = 0;
+  for (size_t p = 0; p < n; ++p) {
+    sum += z[p];
+    squares += double{z[p]} * z[p];
+    beyond += std::abs(z[p]) > 2.0;
+    if (p + 1 < n) (p % 2 == 0 ? pairs : across) += double{z[p]} * z[p + 1];
+  }
+  // Standard errors: mean 1/sqrt(n) = 0.0016, variance sqrt(2/n) = 0.0022, products
+  // 1/sqrt(n/2) = 0.0022; bounds at about 5 of them.
+  EXPECT_NEAR(sum / n, 0.0, 0.008);
+  EXPECT_NEAR(squares / n, 1.0, 0.011);
+  EXPECT_NEAR(pairs / (n / 2), 0.0, 0.011);   // 2k with 2k + 1: one pair
+  EXPECT_NEAR(across / (n / 2), 0.0, 0.011);  // 2k + 1 with 2k + 2: two pairs
+  EXPECT_NEAR(beyond / n, 0.0455, 0.0017);    // P(|z| > 2) of the normal distribution
+  // Not the colour camera's numbers for the same pixel, nor another frame's.
+  int same = 0;
+  const std::vector<float> other = GreyImageNoise(12346, 1000);
+  for (size_t p = 0; p < 1000; ++p) {
+    same += z[p] == static_cast<float>(ImageNoisePair(12345, p, 1).y());
+    same += z[p] == other[p];
+  }
+  EXPECT_EQ(same, 0);
+}
+
 TEST(ImageSensor, ChecksItsParameters) {
   std::string why;
   ImageSensor s;

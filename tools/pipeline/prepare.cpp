@@ -694,7 +694,18 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   std::vector<bool> used_rules(spec.material_rules.size(), false);
   std::vector<bool> used_randomize_rules(spec.randomize.part_rules.size(), false);
   bool recipe_randomize_used = false;
-  for (size_t s = 0; s < spec.scenes.size(); ++s) {
+  // Each scene's placement, every scene at once: a pile or a drop simulates one Bullet world on
+  // one thread, so two piles take the time of one on two cores. Messages and errors follow in
+  // scene order.
+  struct Placement {
+    Arrangement arranged;
+    std::vector<Drawn> distractor_record;
+    size_t first_distractor = 0;
+    std::vector<std::pair<bool, std::string>> messages;  // (a warning?, the text)
+    std::string error;
+  };
+  std::vector<Placement> placements(spec.scenes.size());
+  tbb::parallel_for(size_t{0}, spec.scenes.size(), [&](size_t s) {
     std::vector<Instance> instances;
     std::vector<int> groups;
     for (size_t i = 0; i < all.instances.size(); ++i) {
@@ -704,10 +715,14 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     }
     SceneRun& run = runs[s];
     run.scene = spec.look;
-    std::vector<Drawn> distractor_record;
-    size_t first_distractor = 0;
+    Placement& placement = placements[s];
+    std::vector<Drawn>& distractor_record = placement.distractor_record;
+    size_t& first_distractor = placement.first_distractor;
     const SceneSpec& scene_spec = spec.scenes[s];
-    Arrangement arranged;
+    Arrangement& arranged = placement.arranged;
+    const auto say = [&](bool warning, std::string text) {
+      placement.messages.emplace_back(warning, std::move(text));
+    };
     try {
       const bool pile = scene_spec.arrangement.layout == Layout::kPile;
       const bool dropped = !pile && scene_spec.arrangement.pose == PoseMode::kDropped;
@@ -832,7 +847,7 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
             << scene_spec.arrangement.settle_time_s
             << " s, simulated): raise settle_time; each is put on the stable face nearest its "
                "last pose (or left as it was, tilted more than 5 degrees from any)";
-          Warn(m.str());
+          say(true, m.str());
         }
       } else if (pile) {
         arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
@@ -841,16 +856,16 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
           << " parts dropped; ";
         if (arranged.restless.empty()) {
           m << "at rest after " << arranged.settle_seconds << " s (simulated)";
-          info(m.str());
+          say(false, m.str());
         } else {
           m << arranged.restless.size() << " still moving after settle_time ("
             << scene_spec.arrangement.settle_time_s
             << " s, simulated): raise settle_time, or drop fewer parts";
-          Warn(m.str());
+          say(true, m.str());
         }
         if (!arranged.escaped.empty()) {
-          Warn("scene '" + scene_spec.name + "': " + std::to_string(arranged.escaped.size()) +
-               " parts bounced out of the tote (they are kept where they landed)");
+          say(true, "scene '" + scene_spec.name + "': " + std::to_string(arranged.escaped.size()) +
+                        " parts bounced out of the tote (they are kept where they landed)");
         }
         const Mesh tote = MakeContainerMesh(arrangement.container);
         if (!tote.empty()) {
@@ -894,23 +909,33 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         m << "scene '" << scene_spec.name << "': " << arranged.distractors.size()
           << " distractors dropped among the parts in " << arranged.distractor_seconds
           << " s (simulated)";
-        info(m.str());
+        say(false, m.str());
       }
       if (!arranged.escaped_distractors.empty()) {
-        Warn("scene '" + scene_spec.name +
-             "': " + std::to_string(arranged.escaped_distractors.size()) +
-             " distractors bounced out of the tote (they are kept where they landed)");
+        say(true, "scene '" + scene_spec.name +
+                      "': " + std::to_string(arranged.escaped_distractors.size()) +
+                      " distractors bounced out of the tote (they are kept where they landed)");
       }
       if (!arranged.restless_distractors.empty()) {
-        Warn("scene '" + scene_spec.name +
-             "': " + std::to_string(arranged.restless_distractors.size()) +
-             " distractors still moving after settle_time (" +
-             std::to_string(scene_spec.arrangement.settle_time_s) +
-             " s, simulated): they are kept where they were");
+        say(true, "scene '" + scene_spec.name +
+                      "': " + std::to_string(arranged.restless_distractors.size()) +
+                      " distractors still moving after settle_time (" +
+                      std::to_string(scene_spec.arrangement.settle_time_s) +
+                      " s, simulated): they are kept where they were");
       }
     } catch (const Error& e) {
-      throw Error("scene '" + scene_spec.name + "': " + e.what());
+      placement.error = "scene '" + scene_spec.name + "': " + e.what();
     }
+  });
+  for (size_t s = 0; s < spec.scenes.size(); ++s) {
+    Placement& placement = placements[s];
+    for (const auto& [warning, text] : placement.messages) warning ? Warn(text) : info(text);
+    if (!placement.error.empty()) throw Error(placement.error);
+    SceneRun& run = runs[s];
+    const SceneSpec& scene_spec = spec.scenes[s];
+    const Arrangement& arranged = placement.arranged;
+    std::vector<Drawn>& distractor_record = placement.distractor_record;
+    const size_t first_distractor = placement.first_distractor;
     run.scene.instances = arranged.instances;
     // The pbr mode's materials: the first rule matching the part's name, family and file.
     run.scene.materials.clear();

@@ -200,16 +200,16 @@ bool Jump(const float* depth, int w, int h, int u, int v, double jump) {
 }
 
 // The checks every model with a projector makes at pixel p: is there a return at all?
-bool Returns(const DepthModel& m, const DepthSensorInput& in, int u, int v, size_t p) {
+// `min_cos`: cos(m.max_incidence_rad), worked out once per frame.
+bool Returns(const DepthModel& m, const DepthSensorInput& in, int u, int v, size_t p,
+             float min_cos) {
   const int w = in.intrinsics.width, h = in.intrinsics.height;
   if (!(in.depth[p] > 0.0f)) return false;
   if (in.projector_seen != nullptr && !in.projector_seen[p]) return false;
   const float signal = in.signal != nullptr ? in.signal[p] : 1.0f;
   if (signal < m.min_signal) return false;
   if (m.max_signal > 0.0 && signal > m.max_signal) return false;
-  if (m.max_incidence_rad > 0.0 &&
-      CosIncidence(in, u, v, p) < static_cast<float>(std::cos(m.max_incidence_rad)))
-    return false;
+  if (m.max_incidence_rad > 0.0 && CosIncidence(in, u, v, p) < min_cos) return false;
   if (m.jump_mm > 0.0 && Jump(in.depth, w, h, u, v, m.jump_mm)) return false;
   return true;
 }
@@ -370,6 +370,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
     return StereoDepth(m, in);
   }
   std::vector<float> out(n, 0.0f);
+  const auto min_cos = static_cast<float>(std::cos(m.max_incidence_rad));
   // One seed per frame: draws are indexed by pixel (and axis), never by thread or order.
   const auto frame_seed =
       static_cast<uint64_t>(UniformDraw(m.seed, streams::kSensorFrame, view) * 9007199254740992.0);
@@ -394,7 +395,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
           sv = std::clamp(v + static_cast<int>(std::lround(std::clamp(dv, -8.0, 8.0))), 0, h - 1);
         }
         const size_t sp = static_cast<size_t>(sv) * w + su;
-        if (!Returns(m, in, su, sv, sp)) continue;
+        if (!Returns(m, in, su, sv, sp, min_cos)) continue;
         const double z = in.depth[sp];
         // Axial noise: the formula's total, less what the quantisation below adds.
         const double q = z * z / fb * step;  // the depth step of one disparity quantum at z
@@ -461,7 +462,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
     PairedNormals axial(frame_seed, streams::kSensorAxial);
     for (int u = 0; u < w; ++u) {
       const size_t p = static_cast<size_t>(v) * w + u;
-      if (!Returns(m, in, u, v, p)) continue;
+      if (!Returns(m, in, u, v, p, min_cos)) continue;
       const double z = in.depth[p];
       const double sigma = m.noise_mm * (z / 1000.0) * (z / 1000.0);
       const double noisy = z + sigma * axial(p);

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cctype>
 #include <cmath>
+#include <exception>
 #include <map>
 #include <mutex>
 #include <set>
@@ -694,15 +695,40 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   std::vector<bool> used_rules(spec.material_rules.size(), false);
   std::vector<bool> used_randomize_rules(spec.randomize.part_rules.size(), false);
   bool recipe_randomize_used = false;
+  // The collision shapes of the parts that piles and drops use, each made once (two piles of one
+  // part would otherwise both decompose it on a cold cache); a shape's warnings surface with the
+  // first scene that drops the part, its failure with every such scene.
+  std::vector<CollisionShape> part_shapes(parts.size());
+  std::vector<std::exception_ptr> shape_failures(parts.size());
+  std::vector<std::vector<std::string>> shape_warnings(parts.size());
+  std::vector<int> first_dropping(parts.size(), -1);
+  for (size_t i = 0; i < all.instances.size(); ++i) {
+    const int s = jobs[job_of_instance[i]].scene;
+    const ArrangementOptions& a = spec.scenes[s].arrangement;
+    if (a.layout != Layout::kPile && a.pose != PoseMode::kDropped) continue;
+    int& first = first_dropping[all.instances[i].part];
+    if (first < 0 || s < first) first = s;
+  }
+  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
+    if (first_dropping[p] < 0) return;
+    WarningCapture capture;
+    try {
+      part_shapes[p] = PartCollisionShape(parts[p], cache);
+    } catch (...) {
+      shape_failures[p] = std::current_exception();
+    }
+    shape_warnings[p] = capture.Take();
+  });
   // Each scene's placement, every scene at once: a pile or a drop simulates one Bullet world on
-  // one thread, so two piles take the time of one on two cores. Messages and errors follow in
-  // scene order.
+  // one thread, so two piles take the time of one on two cores. Messages (the scene's own and the
+  // warnings of what it calls, captured), errors and other exceptions follow in scene order.
   struct Placement {
     Arrangement arranged;
     std::vector<Drawn> distractor_record;
     size_t first_distractor = 0;
     std::vector<std::pair<bool, std::string>> messages;  // (a warning?, the text)
     std::string error;
+    std::exception_ptr exception;  // anything else thrown
   };
   std::vector<Placement> placements(spec.scenes.size());
   tbb::parallel_for(size_t{0}, spec.scenes.size(), [&](size_t s) {
@@ -720,8 +746,21 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
     size_t& first_distractor = placement.first_distractor;
     const SceneSpec& scene_spec = spec.scenes[s];
     Arrangement& arranged = placement.arranged;
+    // Warnings of what the scene calls (Warn) are captured, and kept in order with its own.
+    WarningCapture capture;
+    const auto flush = [&] {
+      for (std::string& w : capture.Take()) placement.messages.emplace_back(true, std::move(w));
+    };
     const auto say = [&](bool warning, std::string text) {
+      flush();
       placement.messages.emplace_back(warning, std::move(text));
+    };
+    // Warnings of the items of an inner parallel loop (captured per item, on whichever thread
+    // ran it), in item order.
+    const auto replay = [](const std::vector<std::vector<std::string>>& warnings) {
+      for (const auto& item : warnings) {
+        for (const std::string& w : item) Warn(w);
+      }
     };
     try {
       const bool pile = scene_spec.arrangement.layout == Layout::kPile;
@@ -735,9 +774,13 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
           used.push_back(static_cast<size_t>(instance.part));
         std::sort(used.begin(), used.end());
         used.erase(std::unique(used.begin(), used.end()), used.end());
-        tbb::parallel_for(size_t{0}, used.size(), [&](size_t k) {
-          shapes[used[k]] = PartCollisionShape(parts[used[k]], cache);
-        });
+        for (size_t p : used) {
+          if (first_dropping[p] == static_cast<int>(s)) {
+            for (const std::string& w : shape_warnings[p]) Warn(w);
+          }
+          if (shape_failures[p]) std::rethrow_exception(shape_failures[p]);
+          shapes[p] = part_shapes[p];
+        }
       }
       ArrangementOptions arrangement = scene_spec.arrangement;
       if (scene_spec.container_file) arrangement.container.mesh = container_mesh[s];
@@ -764,7 +807,9 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       if (!picks.empty()) {
         with_distractors = parts;
         std::vector<Part> made(picks.size());
+        std::vector<std::vector<std::string>> made_warnings(picks.size());
         tbb::parallel_for(size_t{0}, picks.size(), [&](size_t k) {
+          WarningCapture made_capture;
           const DistractorCandidate& c = distractor_candidates[s][picks[k].object];
           const Eigen::Vector3d& size = picks[k].size_mm;
           const std::string name = "distractor " + std::to_string(k) + " (" + c.name + ")";
@@ -783,7 +828,9 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
               made[k].name = name;
               break;
           }
+          made_warnings[k] = made_capture.Take();
         });
+        replay(made_warnings);
         shapes.resize(parts.size() + picks.size());
         for (size_t k = 0; k < picks.size(); ++k) {
           arrangement.distractors.push_back(static_cast<int>(with_distractors.size()));
@@ -807,14 +854,18 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
         need.erase(std::unique(need.begin(), need.end()), need.end());
         // A flat part (no volume) has no shape: distractors do not land on it.
         std::vector<std::string> errors(need.size());
+        std::vector<std::vector<std::string>> need_warnings(need.size());
         tbb::parallel_for(size_t{0}, need.size(), [&](size_t k) {
           if (!shapes[need[k]].pieces.empty()) return;
+          WarningCapture need_capture;
           try {
             shapes[need[k]] = PartCollisionShape(with_distractors[need[k]], cache);
           } catch (const Error& e) {
             errors[k] = e.what();
           }
+          need_warnings[k] = need_capture.Take();
         });
+        replay(need_warnings);
         for (size_t k = 0; k < need.size(); ++k) {
           if (!errors[k].empty() && need[k] >= parts.size()) throw Error(errors[k]);
         }
@@ -925,12 +976,16 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
       }
     } catch (const Error& e) {
       placement.error = "scene '" + scene_spec.name + "': " + e.what();
+    } catch (...) {
+      placement.exception = std::current_exception();
     }
+    flush();
   });
   for (size_t s = 0; s < spec.scenes.size(); ++s) {
     Placement& placement = placements[s];
     for (const auto& [warning, text] : placement.messages) warning ? Warn(text) : info(text);
     if (!placement.error.empty()) throw Error(placement.error);
+    if (placement.exception) std::rethrow_exception(placement.exception);
     SceneRun& run = runs[s];
     const SceneSpec& scene_spec = spec.scenes[s];
     const Arrangement& arranged = placement.arranged;

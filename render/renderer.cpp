@@ -901,8 +901,9 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
     Eigen::Vector2f centre;
     rays->Centre(u, v, &centre);
     const double vignette = imager.active() ? imager.Vignette(centre.x(), centre.y()) : 1.0;
-    // Noise draws: R, G, B and grey; a grey camera's colour image is not written, and
-    // gets no noise.
+    // Noise draws: a colour camera's R, G and B (two pairs of sensor.image per pixel); a grey
+    // camera's one number per pixel (GreyImageNoise, worked out for the frame above; its colour
+    // image is not written and gets no noise).
     double normal[4] = {0.0, 0.0, 0.0, 0.0};
     if (imager.full_well > 0.0) {
       if (gray) {

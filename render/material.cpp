@@ -113,14 +113,33 @@ float Smooth(float t) { return t * t * t * (t * (t * 6 - 15) + 10); }  // quinti
 // A value in [0, 1) per lattice point: the coordinates folded into one word by odd multipliers,
 // then a 32-bit finaliser with good avalanche (Wellons' lowbias32), cheap enough for the eight
 // corners of every noise evaluation.
-float Lattice(uint32_t x, uint32_t y, uint32_t z, uint32_t seed) {
-  uint32_t h = seed ^ (x * 0x8DA6B343u) ^ (y * 0xD8163841u) ^ (z * 0xCB1AB31Fu);
+constexpr uint32_t kLatticeX = 0x8DA6B343u, kLatticeY = 0xD8163841u, kLatticeZ = 0xCB1AB31Fu;
+
+template <typename Word>
+Word LowBias32(Word h) {
   h ^= h >> 16;
   h *= 0x7FEB352Du;
   h ^= h >> 15;
   h *= 0x846CA68Bu;
   h ^= h >> 16;
-  return UnitFloat(h);
+  return h;
+}
+
+float Lattice(uint32_t x, uint32_t y, uint32_t z, uint32_t seed) {
+  return UnitFloat(LowBias32(seed ^ (x * kLatticeX) ^ (y * kLatticeY) ^ (z * kLatticeZ)));
+}
+
+// Four lanes of 32-bit words or floats (GCC's and Clang's vector extensions: SSE2 on the baseline
+// x86-64 instruction set, plain code elsewhere).
+typedef uint32_t U32x4 __attribute__((vector_size(16)));
+typedef int32_t I32x4 __attribute__((vector_size(16)));
+typedef float F32x4 __attribute__((vector_size(16)));
+
+// Lattice() of four folded words: UnitFloat(LowBias32(h)) lane by lane (below 2^24, so the
+// signed conversion is exact).
+F32x4 LatticeUnit(U32x4 h) {
+  const I32x4 top = reinterpret_cast<I32x4>(LowBias32(h) >> 8);
+  return __builtin_convertvector(top, F32x4) * (1.0f / 16777216.0f);
 }
 
 // floor() for the textures' inner loops (a library call on the baseline x86-64 instruction set):
@@ -272,15 +291,17 @@ float ValueNoise(const Eigen::Vector3f& p, uint64_t seed) {
                  z = static_cast<uint32_t>(static_cast<int32_t>(fz));
   const uint32_t s = static_cast<uint32_t>(seed ^ (seed >> 32));
   const float tx = Smooth(p.x() - fx), ty = Smooth(p.y() - fy), tz = Smooth(p.z() - fz);
-  float c[2][2];
-  for (uint32_t dz = 0; dz < 2; ++dz) {
-    for (uint32_t dy = 0; dy < 2; ++dy) {
-      const float a = Lattice(x, y + dy, z + dz, s), b = Lattice(x + 1, y + dy, z + dz, s);
-      c[dz][dy] = a + tx * (b - a);
-    }
-  }
-  const float near = c[0][0] + ty * (c[0][1] - c[0][0]);
-  const float far = c[1][0] + ty * (c[1][1] - c[1][0]);
+  // Lattice() of the eight corners, four at a time: lanes (dy, dz) = (0, 0), (1, 0), (0, 1),
+  // (1, 1), at x (a) and x + 1 (b). (y + 1) k = y k + k modulo 2^32, so the corners' words need
+  // no vector multiply; the integer and float operations are Lattice()'s and the scalar
+  // interpolation's, lane by lane, so the value is the same to the bit.
+  const uint32_t kx = x * kLatticeX, ky = y * kLatticeY, kz = z * kLatticeZ;
+  const U32x4 corner = {s ^ ky ^ kz, s ^ (ky + kLatticeY) ^ kz, s ^ ky ^ (kz + kLatticeZ),
+                        s ^ (ky + kLatticeY) ^ (kz + kLatticeZ)};
+  const F32x4 a = LatticeUnit(corner ^ kx), b = LatticeUnit(corner ^ (kx + kLatticeX));
+  const F32x4 c = a + tx * (b - a);
+  const float near = c[0] + ty * (c[1] - c[0]);
+  const float far = c[2] + ty * (c[3] - c[2]);
   return near + tz * (far - near);
 }
 

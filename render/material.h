@@ -92,7 +92,11 @@ TextureSample EvalTexture(const Texture& texture, const Eigen::Vector3f& p,
 // Applies a texture sample to a surface: the modulated parameters, clamped to their ranges.
 PrincipledParams ApplyTexture(const PrincipledParams& surface, const TextureSample& sample);
 
-// 3D value noise in [0, 1], smooth (C1), period-free; `seed` picks the pattern.
+// 3D value noise in [0, 1], smooth (C2), period-free; `seed` picks the pattern. The value at a
+// lattice point (x, y, z) (integers, 32-bit wrap-around) is the top 24 bits of Wellons' lowbias32
+// of s ^ 0x8DA6B343 x ^ 0xD8163841 y ^ 0xCB1AB31F z over 2^24, s = the low word of
+// seed ^ (seed >> 32); between lattice points, trilinear in the quintic fade of each coordinate's
+// fraction (x first, then y, then z).
 float ValueNoise(const Eigen::Vector3f& p, uint64_t seed);
 // Fractal sum of `octaves` value noises, each twice the frequency and half the amplitude, in
 // [0, 1]. Octaves whose cells (1, 1/2, 1/4, ... in p's units) are smaller than `footprint` (same

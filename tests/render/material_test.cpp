@@ -53,6 +53,54 @@ TEST(Material, ValueNoiseIsSmoothBoundedAndSeeded) {
   EXPECT_NE(ValueNoise({0.5f, 0.5f, 0.5f}, 1), ValueNoise({0.5f, 0.5f, 0.5f}, 2));
 }
 
+// ValueNoise as render/material.h specifies it, one corner at a time (the library evaluates four
+// corners at once with vector instructions; it must give the same bits).
+float SpecifiedValueNoise(const Eigen::Vector3f& p, uint64_t seed) {
+  const auto lattice = [&](int32_t x, int32_t y, int32_t z) {
+    uint32_t h =
+        static_cast<uint32_t>(seed ^ (seed >> 32)) ^ (static_cast<uint32_t>(x) * 0x8DA6B343u) ^
+        (static_cast<uint32_t>(y) * 0xD8163841u) ^ (static_cast<uint32_t>(z) * 0xCB1AB31Fu);
+    h ^= h >> 16;
+    h *= 0x7FEB352Du;
+    h ^= h >> 15;
+    h *= 0x846CA68Bu;
+    h ^= h >> 16;
+    return static_cast<float>(h >> 8) / 16777216.0f;
+  };
+  const auto fade = [](float t) { return t * t * t * (t * (t * 6 - 15) + 10); };
+  const Eigen::Vector3f f(std::floor(p.x()), std::floor(p.y()), std::floor(p.z()));
+  const int32_t x = static_cast<int32_t>(f.x()), y = static_cast<int32_t>(f.y()),
+                z = static_cast<int32_t>(f.z());
+  const float tx = fade(p.x() - f.x()), ty = fade(p.y() - f.y()), tz = fade(p.z() - f.z());
+  float c[2][2];
+  for (int dz = 0; dz < 2; ++dz) {
+    for (int dy = 0; dy < 2; ++dy) {
+      const float a = lattice(x, y + dy, z + dz), b = lattice(x + 1, y + dy, z + dz);
+      c[dz][dy] = a + tx * (b - a);
+    }
+  }
+  const float near = c[0][0] + ty * (c[0][1] - c[0][0]);
+  const float far = c[1][0] + ty * (c[1][1] - c[1][0]);
+  return near + tz * (far - near);
+}
+
+TEST(Material, ValueNoiseIsItsSpecificationToTheBit) {
+  int different = 0;
+  for (int i = 0; i < 100000; ++i) {
+    // Both signs, cell boundaries (every 64th point is on the lattice) and large coordinates.
+    const float scale = i % 3 == 0 ? 1.0f : (i % 3 == 1 ? 37.0f : 5000.0f);
+    Eigen::Vector3f p(std::sin(0.7f * i) * scale, std::cos(1.3f * i) * scale,
+                      std::sin(2.9f * i + 1) * scale);
+    if (i % 64 == 0) p = p.array().round().matrix();
+    const uint64_t seed = 0x9E3779B97F4A7C15ull * static_cast<uint64_t>(i % 7 + 1);
+    different += ValueNoise(p, seed) != SpecifiedValueNoise(p, seed);
+  }
+  EXPECT_EQ(different, 0);
+  // On a lattice point the noise is that point's value.
+  EXPECT_EQ(ValueNoise(Eigen::Vector3f(-3, 7, 2), 11),
+            SpecifiedValueNoise(Eigen::Vector3f(-3, 7, 2), 11));
+}
+
 TEST(Material, NoiseFinerThanTheFootprintAveragesToItsMean) {
   const Eigen::Vector3f p(1.3f, -2.7f, 0.4f);
   // Every octave finer than the footprint: the mean, exactly.

@@ -306,12 +306,16 @@ float ValueNoise(const Eigen::Vector3f& p, uint64_t seed) {
 }
 
 float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed, float footprint) {
+  // Octave o's seed is Hash(seed, o) = Mix64(seed ^ Mix64(o)); the inner half is a constant.
+  static constexpr uint64_t kOctave[8] = {Mix64(0), Mix64(1), Mix64(2), Mix64(3),
+                                          Mix64(4), Mix64(5), Mix64(6), Mix64(7)};
   float sum = 0, amplitude = 0.5f, total = 0, cell = 1;
   Eigen::Vector3f q = p;
   for (int o = 0; o < octaves; ++o) {
     // An octave whose cells are smaller than the footprint counts as its mean.
-    sum +=
-        amplitude * (cell < footprint ? 0.5f : ValueNoise(q, Hash(seed, static_cast<uint64_t>(o))));
+    const uint64_t octave_seed =
+        o < 8 ? Mix64(seed ^ kOctave[o]) : Hash(seed, static_cast<uint64_t>(o));
+    sum += amplitude * (cell < footprint ? 0.5f : ValueNoise(q, octave_seed));
     total += amplitude;
     amplitude *= 0.5f;
     cell *= 0.5f;

@@ -13,7 +13,7 @@ inline constexpr float kPiF = 3.14159265358979323846f;
 
 // SplitMix64's finaliser: a bijection of 64-bit words whose output bits all depend on every input
 // bit. Hash(a, b) chains it.
-inline uint64_t Mix64(uint64_t x) {
+constexpr uint64_t Mix64(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
   x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
   x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;

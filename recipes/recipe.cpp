@@ -1039,20 +1039,17 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
       m.base_from_part = false;
     }
   }
-  const auto unit = [&](const char* k, float* value, bool open_top = false) {
+  const auto unit = [&](const char* k, float* value) {
     if (!node[k]) return;
     const double v = r.Number(node[k], key + "." + k);
-    if (v < 0 || v > 1 || (open_top && v >= 1)) {
-      r.Fail(
-          node[k], key + "." + k,
-          std::string("must lie in [0, 1") + (open_top ? ")" : "]") + ", got " + node[k].Scalar());
-    }
+    if (!(v >= 0 && v <= 1))
+      r.Fail(node[k], key + "." + k, "must lie in [0, 1], got " + node[k].Scalar());
     *value = static_cast<float>(v);
   };
   unit("metallic", &m.surface.metallic);
   unit("roughness", &m.surface.roughness);
   unit("specular", &m.surface.specular);
-  unit("anisotropic", &m.surface.anisotropic, true);
+  unit("anisotropic", &m.surface.anisotropic);
   unit("clearcoat", &m.surface.clearcoat);
   unit("clearcoat_roughness", &m.surface.clearcoat_roughness);
   if (const YAML::Node t = node["texture"]) {

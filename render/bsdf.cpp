@@ -138,7 +138,7 @@ float GgxAlbedo(float mu, float alpha, float f0) {
 
 PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params) {
   const float alpha = params.roughness * params.roughness;
-  const float aspect = std::sqrt(1 - 0.9f * std::clamp(params.anisotropic, 0.0f, 0.99f));
+  const float aspect = std::sqrt(1 - 0.9f * std::clamp(params.anisotropic, 0.0f, 1.0f));
   alpha_x_ = std::max(kMinAlpha, alpha / aspect);
   alpha_y_ = std::max(kMinAlpha, alpha * aspect);
   dielectric_f0_ = 0.08f * params.specular;

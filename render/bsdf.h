@@ -23,9 +23,11 @@ namespace cadsynth {
 struct PrincipledParams {
   Eigen::Vector3f base_color = Eigen::Vector3f::Constant(0.8f);  // linear RGB in [0, 1]
   float metallic = 0.0f;                                         // [0, 1]
-  float roughness = 0.5f;    // [0, 1], perceptual: GGX alpha = roughness^2 (as Blender)
-  float specular = 0.5f;     // [0, 1]: dielectric F0 = 0.08 specular (0.5: IOR 1.5); 0: no layer
-  float anisotropic = 0.0f;  // [0, 1): longer highlights along the tangent (brushed metal)
+  float roughness = 0.5f;  // [0, 1], perceptual: GGX alpha = roughness^2 (as Blender)
+  float specular = 0.5f;   // [0, 1]: dielectric F0 = 0.08 specular (0.5: IOR 1.5); 0: no layer
+  // [0, 1]: longer highlights along the tangent (brushed metal); alpha_x = alpha / a,
+  // alpha_y = alpha a with a = sqrt(1 - 0.9 anisotropic), as Blender's.
+  float anisotropic = 0.0f;
   // A clear coat over everything (paint, lacquer): weight [0, 1] and its own roughness, a GGX
   // dielectric of IOR 1.5 (Blender's Coat Weight and Coat Roughness, default 0.03).
   float clearcoat = 0.0f;

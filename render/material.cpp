@@ -21,8 +21,8 @@ bool Material::Check(std::string* why) const {
     *why = "roughness must lie in [0, 1]";
   } else if (!unit(s.specular)) {
     *why = "specular must lie in [0, 1]";
-  } else if (!(s.anisotropic >= 0.0f && s.anisotropic < 1.0f)) {
-    *why = "anisotropic must lie in [0, 1)";
+  } else if (!(s.anisotropic >= 0.0f && s.anisotropic <= 1.0f)) {
+    *why = "anisotropic must lie in [0, 1]";
   } else if (!unit(s.clearcoat) || !unit(s.clearcoat_roughness)) {
     *why = "clearcoat and clearcoat_roughness must lie in [0, 1]";
   } else if (!(texture.scale_mm > 0) || !std::isfinite(texture.scale_mm)) {
@@ -335,6 +335,7 @@ TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eige
       // Image rows run downwards, v upwards.
       out.color_mix = ImageAt(*image, uv->x(), 1.0f - uv->y());
       out.mix = 1.0f;
+      out.mix_is_coating = false;
       return out;
     }
     // Triplanar: three projections along the axes, weighted by the normal's components^4.
@@ -347,6 +348,7 @@ TextureSample EvalTexture(const Texture& t, const Eigen::Vector3f& p, const Eige
                               sum;
     out.color_mix = c;
     out.mix = 1.0f;
+    out.mix_is_coating = false;
     return out;
   }
   const uint64_t seed = Hash(streams::kTexturePattern.id(), t.seed);
@@ -396,8 +398,8 @@ PrincipledParams ApplyTexture(const PrincipledParams& surface, const TextureSamp
                   sample.mix * sample.color_mix)
                      .cwiseMax(0.0f)
                      .cwiseMin(1.0f);
-  // What is blended in (rust, paint, a wood or image colour) is not metal.
-  p.metallic = surface.metallic * (1 - sample.mix);
+  // A coating blended in (rust, a checker's paint, wood) is not metal; an image is the base colour.
+  p.metallic = sample.mix_is_coating ? surface.metallic * (1 - sample.mix) : surface.metallic;
   p.roughness = std::clamp(surface.roughness + sample.roughness_offset, 0.0f, 1.0f);
   return p;
 }

@@ -74,6 +74,10 @@ struct TextureSample {
   Eigen::Vector3f color_scale = Eigen::Vector3f::Ones();
   Eigen::Vector3f color_mix = Eigen::Vector3f::Zero();  // blended in by `mix`
   float mix = 0.0f;
+  // Whether what `mix` blends in is a coating that is not metal (rust, paint, wood: the metallic
+  // weight falls with `mix`) or only the base colour (an image: metallic stays, as with an image
+  // on Blender's Base Color input).
+  bool mix_is_coating = true;
   float roughness_offset = 0.0f;
   Eigen::Vector3f normal_offset = Eigen::Vector3f::Zero();
 };

@@ -358,11 +358,8 @@ class PreparedEnvironment {
         const float t = std::sqrt(std::min(1.0f, d.z()));
         return ((1 - t) * env_.horizon + t * env_.zenith) * env_.strength;
       }
-      case Environment::Kind::kImage: {
-        const auto [x, y] = Pixel(d);
-        const float* c = image_->at(x, y);
-        return Eigen::Vector3f(c[0], c[1], c[2]) * env_.strength;
-      }
+      case Environment::Kind::kImage:
+        return Bilinear(d) * env_.strength;
     }
     return Eigen::Vector3f::Zero();
   }
@@ -394,7 +391,7 @@ class PreparedEnvironment {
     const float fx = std::clamp((u.x() * row_total - col_lo) / (cdf[x] - col_lo), 0.0f, 1.0f);
     const float theta = kPiF * (y + fy) / h;
     const float uu = (x + fx) / w;
-    const float phi = 2 * kPiF * (0.5f - uu) + static_cast<float>(env_.rotation_rad);
+    const float phi = 2 * kPiF * (0.5f - uu) - static_cast<float>(env_.rotation_rad);
     const Eigen::Vector3f d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
                             std::cos(theta));
     *pdf = Pdf(d, n);
@@ -414,14 +411,40 @@ class PreparedEnvironment {
   }
 
  private:
-  std::pair<int, int> Pixel(const Eigen::Vector3f& d) const {
-    const float phi = std::atan2(d.y(), d.x()) - static_cast<float>(env_.rotation_rad);
+  // The image's (u, v) in [0, 1) x [0, 1] of direction d: the image is looked up at d turned by
+  // `rotation` about z (Blender's Mapping node rotation before an Environment Texture;
+  // BlenderProc's rotation_euler z), so its content turns by -rotation.
+  Eigen::Vector2f Uv(const Eigen::Vector3f& d) const {
+    const float phi = std::atan2(d.y(), d.x()) + static_cast<float>(env_.rotation_rad);
     float u = 0.5f - phi / (2 * kPiF);
     u -= std::floor(u);
-    const float v = std::acos(std::clamp(d.z(), -1.0f, 1.0f)) / kPiF;
-    const int x = std::clamp(static_cast<int>(u * image_->width), 0, image_->width - 1);
-    const int y = std::clamp(static_cast<int>(v * image_->height), 0, image_->height - 1);
+    return {u, std::acos(std::clamp(d.z(), -1.0f, 1.0f)) / kPiF};
+  }
+  // The pixel holding direction d (the sampling tables' cell).
+  std::pair<int, int> Pixel(const Eigen::Vector3f& d) const {
+    const Eigen::Vector2f uv = Uv(d);
+    const int x = std::clamp(static_cast<int>(uv.x() * image_->width), 0, image_->width - 1);
+    const int y = std::clamp(static_cast<int>(uv.y() * image_->height), 0, image_->height - 1);
     return {x, y};
+  }
+  // The radiance along d, interpolated between pixel centres (Blender's Linear interpolation),
+  // wrapping around in u. Sampling still picks pixels by their own values: any density that is
+  // positive wherever the radiance is keeps the estimate unbiased.
+  Eigen::Vector3f Bilinear(const Eigen::Vector3f& d) const {
+    const int w = image_->width, h = image_->height;
+    const Eigen::Vector2f uv = Uv(d);
+    const float x = uv.x() * w - 0.5f;
+    const float y = std::clamp(uv.y() * h - 0.5f, 0.0f, static_cast<float>(h - 1));
+    const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(y);
+    const int y1 = std::min(y0 + 1, h - 1);
+    const float fx = x - x0, fy = y - y0;
+    const int xa = (x0 % w + w) % w, xb = ((x0 + 1) % w + w) % w;
+    const auto at = [&](int xi, int yi) {
+      const float* c = image_->at(xi, yi);
+      return Eigen::Vector3f(c[0], c[1], c[2]);
+    };
+    return (1 - fy) * ((1 - fx) * at(xa, y0) + fx * at(xb, y0)) +
+           fy * ((1 - fx) * at(xa, y1) + fx * at(xb, y1));
   }
 
   void BuildDistribution() {

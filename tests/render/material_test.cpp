@@ -207,6 +207,13 @@ TEST(Material, ImagesAreLinearAndBadOnesAreNamed) {
   const TextureSample s = EvalTexture(t, {1, -1, 0}, Eigen::Vector3f::UnitZ(), image.get());
   EXPECT_EQ(s.mix, 1.0f);
   EXPECT_NEAR(s.color_mix[0], 0.2158f, 1e-4);
+  // An image is the base colour (Blender's Base Color input): a metal stays a metal under it, where
+  // a checker's paint is not metal (CheckerAndRustBlendAndRustIsNotMetal).
+  PrincipledParams steel;
+  steel.metallic = 1;
+  const PrincipledParams imaged = ApplyTexture(steel, s);
+  EXPECT_EQ(imaged.metallic, 1.0f);
+  EXPECT_NEAR(imaged.base_color[0], 0.2158f, 1e-4);
 }
 
 }  // namespace

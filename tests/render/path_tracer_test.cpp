@@ -446,6 +446,61 @@ TEST(PathTracer, DisplayTransforms) {
   EXPECT_NEAR(SrgbToLinear(LinearToSrgb(0.3f)), 0.3f, 1e-6);
 }
 
+// An equirectangular world of 64 x 32 pixels: red 2 over the upper hemisphere (rows 0-15) and 0
+// below; green the column's u = (x + 0.5) / 64, blue 0.
+Environment HalfSkyImage(double rotation_rad) {
+  auto image = std::make_shared<LinearImage>();
+  image->width = 64;
+  image->height = 32;
+  for (int y = 0; y < 32; ++y) {
+    for (int x = 0; x < 64; ++x)
+      image->rgb.insert(image->rgb.end(), {y < 16 ? 2.0f : 0.0f, (x + 0.5f) / 64, 0.0f});
+  }
+  Environment e;
+  e.kind = Environment::Kind::kImage;
+  e.pixels = image;
+  e.image = "half_sky";
+  e.strength = 1.0;
+  e.rotation_rad = rotation_rad;
+  return e;
+}
+
+TEST(PathTracer, ImageWorldIsMappedAndLightsAsBlendersIs) {
+  // Blender's mapping: looking along +x one sees the image's centre column (u = 0.5); a rotation of
+  // 90 degrees (a Mapping node's Z, BlenderProc's rotation_euler) looks the image up at the
+  // direction turned by 90 degrees, +y, whose column is u = 0.25. Between pixel centres the image
+  // is interpolated, so green reads u itself.
+  for (const double degrees : {0.0, 90.0}) {
+    Scene scene = Dark();
+    scene.floor = false;
+    scene.environment = HalfSkyImage(degrees * kPi / 180);
+    Camera camera;
+    camera.intrinsics = Intrinsics::FromFov(9, 9, 0.001);
+    camera.world_from_cam.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;  // optical axis along +x
+    const Frame frame = Renderer({}, scene, Pbr(4, 0)).Render(camera);
+    const size_t centre = 4 * 9 + 4;
+    EXPECT_NEAR(frame.radiance[3 * centre + 1], degrees == 0 ? 0.5f : 0.25f, 1e-3) << degrees;
+    EXPECT_NEAR(frame.radiance[3 * centre], 1.0f, 0.05f) << degrees;  // the horizon: half way
+  }
+  // A white Lambert floor under radiance L over the upper hemisphere (and none below) reflects L,
+  // whatever the rotation: the image is sampled by its pixels' luminance, BSDF rays by the cosine,
+  // and MIS weighs the two.
+  for (const double degrees : {0.0, 90.0}) {
+    Scene scene = Dark();
+    scene.floor_material = Lambert(1.0f);
+    scene.environment = HalfSkyImage(degrees * kPi / 180);
+    Camera camera;
+    camera.intrinsics = Intrinsics::FromFov(16, 16, 0.2);
+    camera.world_from_cam = LookingDown({0, 0, 300});
+    const Frame frame = Renderer({}, scene, Pbr(64, 1)).Render(camera);
+    double sum = 0;
+    for (int v = 0; v < 16; ++v) {
+      for (int u = 0; u < 16; ++u) sum += At(frame, u, v);
+    }
+    EXPECT_NEAR(sum / 256, 2.0, 0.03) << degrees;
+  }
+}
+
 TEST(PathTracer, BadScenesAreRefused) {
   Scene scene = Dark();
   LightSource light;

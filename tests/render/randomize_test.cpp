@@ -304,8 +304,12 @@ TEST(DrawFrame, EnvironmentImagesAndBackgroundsArePickedEquallyOften) {
     env_a += ea;
     bg_a += ba;
     for (const Drawn& x : d.record) {
-      if (x.key == "environment.image") EXPECT_EQ(x.text, ea ? "a.png" : "b.png");
-      if (x.key == "background") EXPECT_EQ(x.text, ba ? "a.png" : "b.png");
+      if (x.key == "environment.image") {
+        EXPECT_EQ(x.text, ea ? "a.png" : "b.png");
+      }
+      if (x.key == "background") {
+        EXPECT_EQ(x.text, ba ? "a.png" : "b.png");
+      }
     }
   }
   for (const int a : {env_a, bg_a}) {

@@ -684,7 +684,7 @@ TEST(Generate, CameraRigWritesBopMultiSensorLayout) {
             << modality << "_" << sensor << "/" << id;
       }
       for (size_t i = 0; i < instances.size(); ++i) {
-        char name[32];
+        char name[64];
         std::snprintf(name, sizeof(name), "%s_%06zu.png", id.c_str(), i);
         EXPECT_TRUE(std::filesystem::exists(scene / ("mask_" + sensor) / name));
         EXPECT_TRUE(std::filesystem::exists(scene / ("mask_visib_" + sensor) / name));

@@ -1013,7 +1013,7 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
                       std::vector<std::string> other) {
   for (const char* k : {"preset", "base_color", "metallic", "roughness", "specular", "anisotropic",
-                        "clearcoat", "clearcoat_roughness", "texture"}) {
+                        "clearcoat", "clearcoat_roughness", "distribution", "texture"}) {
     other.emplace_back(k);
   }
   r.ExpectMap(node, key, other);
@@ -1052,6 +1052,14 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
   unit("anisotropic", &m.surface.anisotropic);
   unit("clearcoat", &m.surface.clearcoat);
   unit("clearcoat_roughness", &m.surface.clearcoat_roughness);
+  if (const YAML::Node d = node["distribution"]) {
+    // Blender's names for the Principled BSDF's microfacet distribution.
+    const std::string name = r.Scalar(d, key + ".distribution");
+    if (name != "ggx" && name != "multiscatter_ggx") {
+      r.Fail(d, key + ".distribution", "expected 'ggx' or 'multiscatter_ggx', got '" + name + "'");
+    }
+    m.surface.multiscatter = name == "multiscatter_ggx";
+  }
   if (const YAML::Node t = node["texture"]) {
     const std::string tkey = key + ".texture";
     if (t.IsScalar() && t.Scalar() == "none") {

@@ -65,7 +65,8 @@ std::string RecipeReference() {
       out, "render",
       "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors (the "
       "fast mode's look); mode: pbr reads the materials: {floor, default, assign: [{name|family|"
-      "file, preset, base_color, metallic, roughness, specular, anisotropic, texture}]} and "
+      "file, preset, base_color, metallic, roughness, specular, anisotropic, clearcoat, "
+      "clearcoat_roughness, distribution: ggx|multiscatter_ggx, texture}]} and "
       "lighting: {lights: [{type: point|spot|rect|disc|sun, ...}], environment: {type: "
       "uniform|sky|image, ...}} sections (README, \"Physically based mode\")");
   Section<DepthModel>(

@@ -48,6 +48,9 @@ constexpr int kTable = 32;
 struct AlbedoTable {
   std::array<float, kTable * kTable> a{}, b{};
   std::array<float, kTable> a_avg{}, b_avg{};  // 2 * integral of A(mu) mu over mu, per roughness
+  // 2 * integral of A(mu) M(mu) mu and of B(mu) M(mu) mu, M = (1 - E1) / E1 and E1 = A + B (the
+  // multiscatter compensation's share, which multiplies the layer's albedo by 1 + F_avg M).
+  std::array<float, kTable> am_avg{}, bm_avg{};
 };
 
 const AlbedoTable& Table() {
@@ -82,14 +85,24 @@ const AlbedoTable& Table() {
         t.b[r * kTable + j] = static_cast<float>(b / (kStrataT * kStrataV));
       }
       // Cosine-weighted averages by the trapezoid rule on the mu grid.
-      double a_avg = 0, b_avg = 0;
+      const auto missing = [&](int j) {
+        const double e1 = static_cast<double>(t.a[r * kTable + j]) + t.b[r * kTable + j];
+        return (1 - e1) / std::max(e1, 1e-6);
+      };
+      double a_avg = 0, b_avg = 0, am_avg = 0, bm_avg = 0;
       for (int j = 0; j + 1 < kTable; ++j) {
         const double m0 = static_cast<double>(j) / (kTable - 1), m1 = (j + 1.0) / (kTable - 1);
-        a_avg += (t.a[r * kTable + j] * m0 + t.a[r * kTable + j + 1] * m1) * (m1 - m0);
-        b_avg += (t.b[r * kTable + j] * m0 + t.b[r * kTable + j + 1] * m1) * (m1 - m0);
+        const double a0 = t.a[r * kTable + j], a1 = t.a[r * kTable + j + 1];
+        const double b0 = t.b[r * kTable + j], b1 = t.b[r * kTable + j + 1];
+        a_avg += (a0 * m0 + a1 * m1) * (m1 - m0);
+        b_avg += (b0 * m0 + b1 * m1) * (m1 - m0);
+        am_avg += (a0 * missing(j) * m0 + a1 * missing(j + 1) * m1) * (m1 - m0);
+        bm_avg += (b0 * missing(j) * m0 + b1 * missing(j + 1) * m1) * (m1 - m0);
       }
       t.a_avg[r] = static_cast<float>(a_avg);  // 2 * integral with the trapezoid's 1/2
       t.b_avg[r] = static_cast<float>(b_avg);
+      t.am_avg[r] = static_cast<float>(am_avg);
+      t.bm_avg[r] = static_cast<float>(bm_avg);
     }
     return t;
   }();
@@ -145,6 +158,14 @@ PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params)
   const AlbedoTable& t = Table();
   r_ = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));  // isotropic equivalent
   e_avg_ = dielectric_f0_ * LookupAverage(t.a_avg, r_) + LookupAverage(t.b_avg, r_);
+  if (params.multiscatter) {
+    // Schlick's F = F0 + (1 - F0) (1 - mu)^5 has the cosine-weighted mean F0 + (1 - F0) / 21.
+    dielectric_favg_ = (20 * dielectric_f0_ + 1) / 21;
+    metal_favg_ = (20 * params.base_color + Eigen::Vector3f::Ones()) / 21;
+    // The compensated layer's albedo (F0 A + B)(1 + F_avg M), averaged over mu like E itself.
+    e_avg_ += dielectric_favg_ *
+              (dielectric_f0_ * LookupAverage(t.am_avg, r_) + LookupAverage(t.bm_avg, r_));
+  }
   coat_ = std::clamp(params.clearcoat, 0.0f, 1.0f);
   coat_r_ = std::clamp(params.clearcoat_roughness, 0.0f, 1.0f);
   coat_alpha_ = std::max(kMinAlpha, coat_r_ * coat_r_);
@@ -155,6 +176,14 @@ float PrincipledBsdf::CoatAlbedo(float mu) const {
   return kCoatF0 * Lookup(t.a, coat_r_, mu) + Lookup(t.b, coat_r_, mu);
 }
 
+float PrincipledBsdf::DielectricAlbedo(float a, float b) const {
+  if (params_.specular <= 0) return 0;
+  const float e = dielectric_f0_ * a + b;
+  if (!params_.multiscatter) return e;
+  const float e1 = a + b;
+  return e * (1 + dielectric_favg_ * (1 - e1) / std::max(e1, 1e-6f));
+}
+
 const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo) const {
   if (wo == view_.wo) return view_;
   view_.wo = wo;
@@ -162,15 +191,19 @@ const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo)
   view_.lambda_o = GgxLambda(wo, alpha_x_, alpha_y_);
   const AlbedoTable& t = Table();
   const float a = Lookup(t.a, r_, mu_o), b = Lookup(t.b, r_, mu_o);
-  const float e_dielectric = params_.specular > 0 ? dielectric_f0_ * a + b : 0;
+  view_.missing = params_.multiscatter ? (1 - (a + b)) / std::max(a + b, 1e-6f) : 0.0f;
+  const float e_dielectric = DielectricAlbedo(a, b);
   view_.e_dielectric = e_dielectric;
+  // The metal's albedo (by its luminance), compensated when asked.
+  const float metal_albedo =
+      (Luminance(params_.base_color) * a + b) * (1 + Luminance(metal_favg_) * view_.missing);
   if (params_.specular <= 0 && params_.metallic <= 0) {
     view_.p_specular = 0;
   } else if (params_.metallic >= 1) {
     view_.p_specular = 1;
   } else {
     const float m = params_.metallic;
-    const float specular = m * (Luminance(params_.base_color) * a + b) + (1 - m) * e_dielectric;
+    const float specular = m * metal_albedo + (1 - m) * e_dielectric;
     const float diffuse = (1 - m) * Luminance(params_.base_color) * (1 - e_dielectric);
     view_.p_specular =
         specular + diffuse <= 0 ? 0.5f : std::clamp(specular / (specular + diffuse), 0.1f, 0.9f);
@@ -181,9 +214,8 @@ const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo)
     view_.e_coat = coat_ * CoatAlbedo(mu_o);
     // The coat's share of what is reflected, against an estimate of what the base reflects.
     const float m = params_.metallic;
-    const float base =
-        m * (Luminance(params_.base_color) * a + b) +
-        (1 - m) * (e_dielectric + Luminance(params_.base_color) * (1 - e_dielectric));
+    const float base = m * metal_albedo + (1 - m) * (e_dielectric + Luminance(params_.base_color) *
+                                                                        (1 - e_dielectric));
     const float under = (1 - view_.e_coat) * base;
     view_.p_coat = std::clamp(view_.e_coat / std::max(1e-6f, view_.e_coat + under), 0.05f, 0.95f);
   }
@@ -193,7 +225,7 @@ const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo)
 float PrincipledBsdf::DiffuseScale(const ViewTerms& view, float mu_i) const {
   if (params_.specular <= 0) return 1;  // no dielectric layer above the diffuse one
   const AlbedoTable& t = Table();
-  const float e_i = dielectric_f0_ * Lookup(t.a, r_, mu_i) + Lookup(t.b, r_, mu_i);
+  const float e_i = DielectricAlbedo(Lookup(t.a, r_, mu_i), Lookup(t.b, r_, mu_i));
   return (1 - view.e_dielectric) * (1 - e_i) / std::max(1e-6f, 1 - e_avg_);
 }
 
@@ -212,9 +244,13 @@ Eigen::Vector3f PrincipledBsdf::EvalWithPdf(const Eigen::Vector3f& wo, const Eig
     const float c5 = Pow5(1 - std::clamp(o_h, 0.0f, 1.0f));
     // Schlick's Fresnel of the metal and, when there is one, of the dielectric layer.
     const float m = params_.metallic;
-    const Eigen::Vector3f metal =
+    Eigen::Vector3f metal =
         params_.base_color + (Eigen::Vector3f::Ones() - params_.base_color) * c5;
-    const float dielectric = params_.specular > 0 ? dielectric_f0_ + (1 - dielectric_f0_) * c5 : 0;
+    float dielectric = params_.specular > 0 ? dielectric_f0_ + (1 - dielectric_f0_) * c5 : 0;
+    if (params_.multiscatter) {  // what single scattering loses, given back along the same lobe
+      metal = metal.cwiseProduct(Eigen::Vector3f::Ones() + metal_favg_ * view.missing);
+      dielectric *= 1 + dielectric_favg_ * view.missing;
+    }
     f = (m * metal + Eigen::Vector3f::Constant((1 - m) * dielectric)) *
         (d * g2 / (4 * wo.z() * wi.z()));
     // Visible normals, D_wo(h) = G1(wo) (wo.h) D(h) / wo.z, reflected: / (4 wo.h).

@@ -32,6 +32,14 @@ struct PrincipledParams {
   // dielectric of IOR 1.5 (Blender's Coat Weight and Coat Roughness, default 0.03).
   float clearcoat = 0.0f;
   float clearcoat_roughness = 0.03f;
+  // Blender's Multiscatter GGX (its default distribution; false: GGX): the light single
+  // scattering loses between microfacets is given back by scaling each specular lobe (metal and
+  // dielectric; not the coat) by 1 + F_avg (1 - E(mu_o)) / E(mu_o) (Turquin 2019, as Cycles 4),
+  // E the lobe's albedo with F = 1 and F_avg Schlick's cosine-weighted mean, (20 F0 + 1) / 21. A
+  // white metal then reflects all light at every roughness; the diffuse layer is coupled to the
+  // compensated albedo, so a white dielectric still does. Like Cycles', the scale depends on the
+  // viewing direction only: f(wo, wi) is no longer reciprocal.
+  bool multiscatter = false;
 };
 
 class PrincipledBsdf {
@@ -66,6 +74,7 @@ class PrincipledBsdf {
     Eigen::Vector3f wo = Eigen::Vector3f::Zero();
     float lambda_o = 0;       // Smith's Lambda(wo)
     float e_dielectric = 0;   // the dielectric layer's directional albedo E(mu_o)
+    float missing = 0;        // multiscatter: (1 - E1(mu_o)) / E1(mu_o), E1 the albedo at F = 1
     float p_specular = 0;     // probability of sampling the specular lobe (of the base)
     float lambda_coat_o = 0;  // the coat's Lambda(wo)
     float e_coat = 0;         // the coat's weight times its directional albedo at wo
@@ -74,6 +83,9 @@ class PrincipledBsdf {
   const ViewTerms& View(const Eigen::Vector3f& wo) const;
   // The diffuse layer's share: (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg), 1 without a layer.
   float DiffuseScale(const ViewTerms& view, float mu_i) const;
+  // The dielectric layer's directional albedo at mu from the table's A and B there (compensated
+  // for multiple scattering when asked).
+  float DielectricAlbedo(float a, float b) const;
 
   PrincipledParams params_;
   float alpha_x_, alpha_y_;
@@ -81,8 +93,10 @@ class PrincipledBsdf {
   mutable ViewTerms view_;
   float dielectric_f0_;  // 0.08 specular; specular 0: no dielectric layer at all (pure Lambert)
   float e_avg_;          // cosine-weighted average of the dielectric layer's albedo E(mu)
-  float coat_ = 0, coat_r_ = 0, coat_alpha_ = 1;  // clear coat weight, roughness and alpha
-  float CoatAlbedo(float mu) const;               // the coat's directional albedo (F0 0.04)
+  float dielectric_favg_ = 0;  // multiscatter: Schlick's mean Fresnel of the dielectric layer
+  Eigen::Vector3f metal_favg_ = Eigen::Vector3f::Zero();  // and of the metal, per channel
+  float coat_ = 0, coat_r_ = 0, coat_alpha_ = 1;          // clear coat weight, roughness and alpha
+  float CoatAlbedo(float mu) const;                       // the coat's directional albedo (F0 0.04)
 };
 
 // The GGX pieces, exposed for tests: the distribution of normals D(m) (1/sr), Smith's Lambda(w)

@@ -769,6 +769,14 @@ TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
             "'steel'?)");
   EXPECT_EQ(ErrorOf("materials:\n  floor: {roughness: 1.5}\n"),
             "r.yaml:2:22: materials.floor.roughness: must lie in [0, 1], got 1.5");
+  EXPECT_EQ(ErrorOf("materials:\n  floor: {distribution: beckmann}\n"),
+            "r.yaml:2:25: materials.floor.distribution: expected 'ggx' or 'multiscatter_ggx', got "
+            "'beckmann'");
+  const RunSpec multi = ParseRecipe(
+      "materials:\n  floor: {preset: steel, distribution: multiscatter_ggx, anisotropic: 1}\n",
+      "r.yaml", ".");
+  EXPECT_TRUE(multi.look.floor_material.surface.multiscatter);
+  EXPECT_EQ(multi.look.floor_material.surface.anisotropic, 1.0f);  // Blender's range, [0, 1]
   EXPECT_EQ(ErrorOf("materials:\n  floor: {texture: {type: image, file: no_such.png}}\n"),
             "r.yaml:2:40: materials.floor.texture.file: no_such.png: no such file");
   EXPECT_EQ(ErrorOf("lighting:\n  lights: [{type: point, position: [0, 0, 1 m], power: -5}]\n"),

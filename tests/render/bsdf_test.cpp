@@ -171,6 +171,44 @@ TEST(PrincipledBsdf, RoughMetalLosesWhatSingleScatteringLoses) {
   EXPECT_NEAR(previous, 1 - std::log(2.0), 2e-3);
 }
 
+TEST(PrincipledBsdf, MultiscatterGgxGivesBackWhatSingleScatteringLoses) {
+  // Blender's Multiscatter GGX (Turquin's compensation): a white metal reflects all light at every
+  // roughness and angle, where single scattering lost up to 1 - ln 2 straight on at roughness 1.
+  for (const float roughness : {0.0f, 0.4f, 0.7f, 1.0f}) {
+    PrincipledParams p = Params(1, 1, roughness);
+    p.multiscatter = true;
+    const PrincipledBsdf bsdf(p);
+    for (const float mu : {1.0f, 0.5f, 0.2f}) {
+      const Eigen::Vector3f wo = Direction(mu, 0.4);
+      EXPECT_NEAR(SampledAlbedo(bsdf, wo)[0], 1.0, 0.01) << roughness << " " << mu;
+      if (roughness >= 0.4f) {
+        EXPECT_NEAR(QuadratureAlbedo(bsdf, wo, 0)[0], 1.0, 0.01) << roughness << " " << mu;
+      }
+    }
+  }
+  // A white dielectric (diffuse under a specular layer) still reflects all light: the diffuse
+  // layer is coupled to the compensated layer's albedo.
+  for (const float roughness : {0.3f, 0.7f, 1.0f}) {
+    PrincipledParams p = Params(1, 0, roughness);
+    p.multiscatter = true;
+    const PrincipledBsdf bsdf(p);
+    for (const float mu : {1.0f, 0.5f, 0.15f}) {
+      EXPECT_NEAR(SampledAlbedo(bsdf, Direction(mu, 0))[0], 1.0, 0.01) << roughness << " " << mu;
+    }
+  }
+  // A grey metal of F0 = 0.5 gains less, by F_avg = (20 F0 + 1) / 21 of what white metal gains:
+  // E = E(F0) (1 + F_avg (1 - E1) / E1), E1 the single-scattering albedo at F = 1 (worked out by
+  // hand at roughness 1 straight on: E1 = 1 - ln 2, and E(F0) by the quadrature of the single
+  // scattering lobe).
+  PrincipledParams single = Params(0.5f, 1, 1.0f), multi = single;
+  multi.multiscatter = true;
+  const Eigen::Vector3f up = Direction(1, 0);
+  const double e_single = QuadratureAlbedo(PrincipledBsdf(single), up, 0)[0];
+  const double e1 = 1 - std::log(2.0), favg = (20 * 0.5 + 1) / 21.0;
+  EXPECT_NEAR(QuadratureAlbedo(PrincipledBsdf(multi), up, 0)[0],
+              e_single * (1 + favg * (1 - e1) / e1), 0.01);
+}
+
 TEST(PrincipledBsdf, NothingReflectsMoreThanItReceives) {
   for (const float metallic : {0.0f, 0.5f, 1.0f}) {
     for (const float roughness : {0.0f, 0.2f, 0.5f, 1.0f}) {
@@ -179,6 +217,7 @@ TEST(PrincipledBsdf, NothingReflectsMoreThanItReceives) {
         p.anisotropic = 0.5f;
         p.clearcoat = specular;  // with and without a coat
         p.clearcoat_roughness = roughness;
+        p.multiscatter = specular == 1.0f;  // and with multiple scattering given back
         const PrincipledBsdf bsdf(p);
         for (const float mu : {0.1f, 0.5f, 1.0f}) {
           const double albedo = SampledAlbedo(bsdf, Direction(mu, 0.7), 64)[0];

@@ -132,6 +132,17 @@ TEST(PathTracer, RoughWhiteMetalLosesWhatSingleScatteringGgxLoses) {
     for (int u = 0; u < 8; ++u) sum += At(frame, u, v);
   }
   EXPECT_NEAR(sum / 64, 1 - std::log(2.0), 0.01);
+  // Blender's Multiscatter GGX gives that light back: the white furnace again.
+  Material multi = Metal(1.0f);
+  multi.surface.multiscatter = true;
+  SphereView again(multi, 1.0f);
+  again.camera = view.camera;
+  const Frame back = Renderer(again.parts, again.scene, Pbr(1024, 0)).Render(again.camera);
+  sum = 0;
+  for (int v = 0; v < 8; ++v) {
+    for (int u = 0; u < 8; ++u) sum += At(back, u, v);
+  }
+  EXPECT_NEAR(sum / 64, 1.0, 0.015);
 }
 
 TEST(PathTracer, LambertPlaneUnderAPointLightFollowsTheInverseSquareLaw) {

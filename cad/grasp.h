@@ -73,6 +73,9 @@ struct ParallelJawGrasp {
   double width_mm = 0;    // the distance between the contacts along x
   double opening_mm = 0;  // the fingers' opening the grasp was checked with
   double depth_mm = 0;    // the fingertips' reach past the contacts along the approach
+  // Whether the hand is also free of the part fully open (max_opening_mm), as ACRONYM's grasps
+  // are tried: its files mark the others as failures.
+  bool free_when_open = false;
   Eigen::Vector3d contacts[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};  // model, mm
   Eigen::Vector3d normals[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};   // outward
   // The force-closure margin: 1 - angle / atan(mu), the angle between the closing axis (from the

@@ -99,7 +99,10 @@ std::vector<float> GraspNetRows(const Frame& frame, const SceneGrasps& grasps,
     graspnet.col(2) = r.col(2).cross(r.col(0));
     const Eigen::Vector3d c0 = cam_from_model * g.contacts[0];
     const Eigen::Vector3d c1 = cam_from_model * g.contacts[1];
-    const Eigen::Vector3d t = 0.5e-3 * (c0 + c1);
+    // graspnetAPI closes the jaws `depth` along the approach beyond the translation (its
+    // evaluator's contact line is at translation + depth * approach): the translation is that far
+    // back from the contacts' midpoint.
+    const Eigen::Vector3d t = 0.5e-3 * (c0 + c1) - 1e-3 * g.depth_mm * graspnet.col(0);
     rows.push_back(static_cast<float>(g.quality));
     rows.push_back(static_cast<float>(1e-3 * g.opening_mm));
     rows.push_back(static_cast<float>(1e-3 * grasps.gripper.finger_width_mm));
@@ -138,6 +141,7 @@ std::vector<float> SuctionNetRows(const Frame& frame, const SceneGrasps& grasps,
     rows.push_back(static_cast<float>(g.quality()));
     for (int i = 0; i < 3; ++i) rows.push_back(static_cast<float>(direction[i]));
     for (int i = 0; i < 3; ++i) rows.push_back(static_cast<float>(1e-3 * point[i]));
+    rows.push_back(static_cast<float>(ObjId(grasps, placed->instance)));
     labels->insert(
         labels->end(),
         {static_cast<float>(placed->instance), static_cast<float>(ObjId(grasps, placed->instance)),
@@ -178,7 +182,7 @@ void GraspLabelWriter::WriteFrame(int image_id, const Frame& frame, const BopFra
   }
   if (options_.suctionnet) {
     const std::vector<float> rows = SuctionNetRows(frame, grasps_, options_, &labels);
-    write(suctionnet_dir_ / (im + ".npy"), EncodeNpy(rows.data(), rows.size() / 7, 7));
+    write(suctionnet_dir_ / (im + ".npy"), EncodeNpy(rows.data(), rows.size() / 8, 8));
     write(suctionnet_dir_ / (im + "_labels.npy"), EncodeNpy(labels.data(), labels.size() / 6, 6));
   }
 }

@@ -46,17 +46,19 @@ bool PointSeen(const Frame& frame, int instance, const Eigen::Vector3d& p, doubl
 // force-closure margin), width (m, the fingers' opening the grasp was checked free with: the
 // contacts' distance plus the clearance on each side), height (m, the finger's width), depth
 // (m, the contacts to the fingertips, the grasp's depth), the rotation row-major (columns:
-// approach, closing direction, their cross product, in the camera frame), the translation (m, the
-// contacts' midpoint, camera frame) and the BOP obj_id. `labels` gets 6 per row: instance index
+// approach, closing direction, their cross product, in the camera frame), the translation (m,
+// camera frame: `depth` back along the approach from the contacts' midpoint, so that
+// translation + depth * approach is where graspnetAPI's evaluator closes the jaws) and the BOP
+// obj_id. `labels` gets 6 per row: instance index
 // (BOP scene_gt order), obj_id, approach blocked (0/1), first and second contact seen (0/1), the
 // grasp's index in its object's ACRONYM file. Visible instances only (in instance order).
 std::vector<float> GraspNetRows(const Frame& frame, const SceneGrasps& grasps,
                                 const GraspLabelOptions& options, std::vector<float>* labels);
 
-// The frame's suction rows, SuctionNet's SuctionGroup layout, 7 float32 each: score (seal x
+// The frame's suction rows, SuctionNet's SuctionGroup layout, 8 float32 each: score (seal x
 // wrench), the direction (unit, camera frame: the outward surface normal, along which the cup
-// comes in backwards), the contact point (m, camera frame). `labels` gets 6 per row: instance
-// index, obj_id, approach blocked, contact seen, seal score, wrench score.
+// comes in backwards), the contact point (m, camera frame), the BOP obj_id. `labels` gets 6 per
+// row: instance index, obj_id, approach blocked, contact seen, seal score, wrench score.
 std::vector<float> SuctionNetRows(const Frame& frame, const SceneGrasps& grasps,
                                   const GraspLabelOptions& options, std::vector<float>* labels);
 
@@ -65,7 +67,7 @@ class GraspLabelWriter : public FrameWriter {
   GraspLabelWriter(const std::filesystem::path& root, int scene_id, GraspLabelOptions options,
                    SceneGrasps grasps);
   // DIR/graspnet/SCENE/IMAGE.npy (N, 17) and IMAGE_labels.npy (N, 6); the same under
-  // DIR/suctionnet/ with (N, 7) and (N, 6).
+  // DIR/suctionnet/ with (N, 8) and (N, 6).
   void WriteFrame(int image_id, const Frame& frame, const BopFrameFiles& bop,
                   FileLog* files) const override;
 

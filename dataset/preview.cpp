@@ -126,18 +126,20 @@ void DrawGrasps(const fs::path& dataset, int scene, int im, const Intrinsics& k,
   std::vector<float> rows, labels;
   for (const float* g : BestGrasps(dataset / "graspnet" / Id6(scene) / (Id6(im) + ".npy"), count,
                                    17, &rows, &labels)) {
-    // GraspNet's frame: columns approach, closing, height; the contacts' midpoint t.
+    // GraspNet's frame: columns approach, closing, height; the contacts' midpoint t lies `depth`
+    // along the approach from the row's translation.
     Eigen::Matrix3d r;
     for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = g[4 + i];
-    const Eigen::Vector3d a = r.col(0), c = r.col(1), t(g[13], g[14], g[15]);
     const double half = 0.5 * g[1], depth = g[3], back = 0.02;
+    const Eigen::Vector3d a = r.col(0), c = r.col(1),
+                          t = Eigen::Vector3d(g[13], g[14], g[15]) + depth * a;
     const Eigen::Vector3d base = t - back * a;
     line({t + half * c + depth * a, base + half * c, base - half * c, t - half * c + depth * a},
          colour(g[0]));
     line({base, base - 2 * back * a}, colour(g[0]));
   }
   for (const float* g : BestGrasps(dataset / "suctionnet" / Id6(scene) / (Id6(im) + ".npy"), count,
-                                   7, &rows, &labels)) {
+                                   8, &rows, &labels)) {
     // The rim (10 mm radius drawn) about the point, perpendicular to the direction, and the axis.
     const Eigen::Vector3d n(g[1], g[2], g[3]), p(g[4], g[5], g[6]);
     const Eigen::Vector3d helper =

@@ -79,9 +79,13 @@ TEST(GraspLabels, GraspNetRowsAreTheGraspInTheCameraFrame) {
                Eigen::Vector3d(0, 0, 500))
                   .norm(),
               0.0, 1e-9);
+  // GraspNet's translation lies `depth` back along the approach (camera -z) from the midpoint:
+  // graspnetAPI's evaluator closes the jaws at translation + depth * approach = the contacts.
   EXPECT_NEAR(rows[13], 0.0, 1e-7);
   EXPECT_NEAR(rows[14], 0.0, 1e-7);
-  EXPECT_NEAR(rows[15], 0.5, 1e-7);
+  EXPECT_NEAR(rows[15], 0.5088, 1e-7);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(rows[13 + i] + rows[3] * rows[4 + 3 * i], i == 2 ? 0.5 : 0.0, 1e-7);
   EXPECT_FLOAT_EQ(rows[16], 7.0f);
   // Labels: instance 0, obj 7, blocked, contacts (camera (0, -20, 500) and (0, 20, 500)) seen on
   // the plane z = 500, grasp index 1.
@@ -134,20 +138,21 @@ TEST(GraspLabels, SuctionRowsAndNpyFiles) {
   scene.suction_placed = {{0, 0, false}};
   std::vector<float> labels;
   const std::vector<float> rows = SuctionNetRows(frame, scene, GraspLabelOptions{}, &labels);
-  ASSERT_EQ(rows.size(), 7u);
-  const float expected[7] = {0.4f, 0, 0, -1, 0, 0, 0.48f};  // score, outward normal, point (m)
-  for (int k = 0; k < 7; ++k) EXPECT_NEAR(rows[k], expected[k], 1e-6) << k;
+  ASSERT_EQ(rows.size(), 8u);  // suctionnetAPI's SUCTION_ARRAY_LEN
+  // Score, outward normal, point (m), obj_id.
+  const float expected[8] = {0.4f, 0, 0, -1, 0, 0, 0.48f, 3};
+  for (int k = 0; k < 8; ++k) EXPECT_NEAR(rows[k], expected[k], 1e-6) << k;
   // Seen? The depth image says 500 mm there, the point lies at 480: not within 3 mm.
   const float first[6] = {0, 3, 0, 0, 0.8f, 0.5f};
   for (int k = 0; k < 6; ++k) EXPECT_FLOAT_EQ(labels[k], first[k]) << k;
   // The .npy encoding: header, then the rows as little-endian float32.
-  const std::string npy = EncodeNpy(rows.data(), 1, 7);
+  const std::string npy = EncodeNpy(rows.data(), 1, 8);
   EXPECT_EQ(npy.substr(0, 8), std::string("\x93NUMPY\x01\x00", 8));
-  EXPECT_NE(npy.find("'shape': (1, 7)"), std::string::npos);
-  EXPECT_EQ(npy.size() % 64, 28u);  // a 64-byte aligned header, then 28 bytes of data
-  float back[7];
-  std::memcpy(back, npy.data() + npy.size() - 28, 28);
-  for (int k = 0; k < 7; ++k) EXPECT_EQ(back[k], rows[k]);
+  EXPECT_NE(npy.find("'shape': (1, 8)"), std::string::npos);
+  EXPECT_EQ(npy.size() % 64, 32u);  // a 64-byte aligned header, then 32 bytes of data
+  float back[8];
+  std::memcpy(back, npy.data() + npy.size() - 32, 32);
+  for (int k = 0; k < 8; ++k) EXPECT_EQ(back[k], rows[k]);
 }
 
 }  // namespace

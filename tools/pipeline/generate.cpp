@@ -50,7 +50,9 @@ void WriteGraspFiles(const std::filesystem::path& root, const std::vector<Part>&
       file.model_from_gripper.push_back(g.model_from_gripper);
       file.width_mm.push_back(g.width_mm);
       file.quality.push_back(g.quality);
-      file.success.push_back(1);
+      // ACRONYM tries its grasps with the hand fully open (gripper/configuration): a grasp that
+      // is free only at the narrower opening it was checked with is a failure there.
+      file.success.push_back(g.free_when_open ? 1 : 0);
     }
     if (spec.suction) {
       // The suction wrench assumed this density: the mass is known.

@@ -215,8 +215,8 @@ py::dict SensorDict(Frame&& frame, const FrameSource& source, size_t scene, size
     if (spec.grasps.labels.suctionnet) {
       std::vector<float> labels;
       std::vector<float> rows = SuctionNetRows(frame, grasps, spec.grasps.labels, &labels);
-      const auto m = static_cast<py::ssize_t>(rows.size() / 7);
-      d["suctionnet"] = Own(std::move(rows), {m, 7});
+      const auto m = static_cast<py::ssize_t>(rows.size() / 8);
+      d["suctionnet"] = Own(std::move(rows), {m, 8});
       d["suctionnet_labels"] = Own(std::move(labels), {m, 6});
     }
   }

@@ -108,6 +108,8 @@ std::vector<ParallelJawGrasp> SampleAntipodalGrasps(const Part& part,
         g.model_from_gripper.linear().col(2) = z;
         g.model_from_gripper.translation() = centre - (gripper.tip_mm() - depth) * z;
         if (collides(g.model_from_gripper, opening)) continue;
+        g.free_when_open = opening >= gripper.max_opening_mm ||
+                           !collides(g.model_from_gripper, gripper.max_opening_mm);
         g.width_mm = width;
         g.opening_mm = opening;
         g.depth_mm = depth;

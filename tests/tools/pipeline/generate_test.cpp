@@ -576,7 +576,7 @@ TEST(Generate, GraspsAreWrittenPerObjectAndPerFrame) {
     }
     if (name.rfind("suctionnet/000000/", 0) == 0 && name.find("_labels") == std::string::npos) {
       const auto [n, cols] = NpyShape(bytes);
-      EXPECT_EQ(cols, 7u) << name;
+      EXPECT_EQ(cols, 8u) << name;  // suctionnetAPI's SUCTION_ARRAY_LEN
       suction_rows += n;
     }
   }

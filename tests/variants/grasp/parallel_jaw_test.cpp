@@ -75,6 +75,7 @@ TEST(AntipodalGrasps, CubeGraspsAre40mmWideAlongAFaceNormal) {
     EXPECT_NEAR(c.z(), franka.tip_mm() - franka.pad_mm, 1e-6);
     EXPECT_NEAR(c.head<2>().norm(), 0.0, 1e-6);
     EXPECT_FALSE(InsideGripper(points, franka, g.model_from_gripper, 1e-6));
+    EXPECT_TRUE(g.free_when_open);  // the fully open hand: InsideGripper's
   }
   // Same seed, same grasps.
   const auto again = SampleAntipodalGrasps(cube, franka, o);
@@ -128,6 +129,48 @@ TEST(AntipodalGrasps, CylinderAcrossItsAxisIsItsDiameterAndCollisionsAreRejected
     EXPECT_LE(reach, franka.finger_length_mm - franka.pad_mm + 1.0) << c;  // 15 tan(2.6 deg)
   }
   EXPECT_GT(along, 0);
+}
+
+TEST(AntipodalGrasps, FreeWhenOpenIsWhatTheFullyOpenHandClears) {
+  // Two plates 10 x 40 x 40 mm, x in [0, 10] and [40, 50] (one part). Across a plate (closing
+  // along x, 10 mm wide) the hand is checked at 20 mm open, its fingers' inner faces 10 mm from the
+  // plate's middle and 25 mm short of the other plate: kept. Fully open (80 mm) a finger reaches
+  // 45 mm from that middle, into the other plate: not free when open, as ACRONYM would try it.
+  // Across the 40 mm of a plate (closing along y or z) the fingers stay 10 mm either side of the
+  // plate along x, and fully open they are 40 mm off its middle: free either way.
+  Mesh plates = Tessellate(MakeBox(10, 40, 40), TessellationOptions{});
+  const Mesh other = Tessellate(
+      Transformed(MakeBox(10, 40, 40), Eigen::Isometry3d(Eigen::Translation3d(40, 0, 0))),
+      TessellationOptions{});
+  const auto base = static_cast<uint32_t>(plates.positions.size());
+  plates.positions.insert(plates.positions.end(), other.positions.begin(), other.positions.end());
+  for (const auto& t : other.triangles)
+    plates.triangles.emplace_back(t[0] + base, t[1] + base, t[2] + base);
+  Part part;
+  part.name = "plates";
+  part.mesh = plates;
+  const ParallelJawGripper franka = ParallelJawGripper::Franka();
+  AntipodalOptions o;
+  o.samples = 400;
+  const std::vector<ParallelJawGrasp> grasps = SampleAntipodalGrasps(part, franka, o);
+  const std::vector<Eigen::Vector3d> points = SurfacePoints(plates);
+  int across = 0, along = 0;
+  for (const ParallelJawGrasp& g : grasps) {
+    const Eigen::Vector3d x = g.model_from_gripper.linear().col(0);
+    if (std::abs(x.x()) > 0.999) {
+      ++across;
+      EXPECT_NEAR(g.width_mm, 10.0, 1e-4);
+      EXPECT_FALSE(g.free_when_open);
+      EXPECT_TRUE(InsideGripper(points, franka, g.model_from_gripper, 0.5));  // point test
+    } else {
+      ++along;
+      EXPECT_NEAR(g.width_mm, 40.0, 1e-4);
+      EXPECT_TRUE(g.free_when_open);
+      EXPECT_FALSE(InsideGripper(points, franka, g.model_from_gripper, 1e-6));
+    }
+  }
+  EXPECT_GT(across, 10);
+  EXPECT_GT(along, 10);
 }
 
 TEST(AntipodalGrasps, ImpossibleOptionsAreRefused) {

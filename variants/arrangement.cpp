@@ -174,6 +174,7 @@ bool Drop(const std::vector<Part>& parts, const std::vector<CollisionShape>& sha
   pile.drop_height_mm = o.drop_height_mm;
   pile.max_seconds = o.settle_time_s;
   pile.time_step_s = o.time_step_s;
+  pile.confirm_seconds = o.confirm_rest ? 1.0 : 0.0;
   pile.seed = static_cast<uint64_t>(UniformDraw(o.seed, streams::kDropSeed, index) * 0x1p53);
   pile.bodies = {0};
   // A group's parts fall with its first part's material.
@@ -269,6 +270,7 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
     pile.drop_height_mm = o.drop_height_mm;
     pile.max_seconds = o.settle_time_s;
     pile.time_step_s = o.time_step_s;
+    pile.confirm_seconds = o.confirm_rest ? 1.0 : 0.0;
     pile.seed = o.seed;
     if (o.container.kind == Container::Kind::kFloor) {
       const double side = std::sqrt(M_PI) * o.clutter_radius_mm;  // the clutter disc's area
@@ -549,6 +551,7 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
   pile.drop_height_mm = o.drop_height_mm;
   pile.max_seconds = o.settle_time_s;
   pile.time_step_s = o.time_step_s;
+  pile.confirm_seconds = o.confirm_rest ? 1.0 : 0.0;
   pile.seed = o.distractor_seed;
   pile.bodies = o.distractors;
   for (size_t p = 0; p < parts.size(); ++p)

@@ -393,22 +393,74 @@ struct Simulation {
     }
     out->world_from_model.clear();
     for (size_t i = 0; i < bodies.size(); ++i) out->world_from_model.push_back(Pose(i));
-    if (o.container.kind == Container::Kind::kTote) {
-      const double a = 0.5 * o.container.inner_mm.x(), b = 0.5 * o.container.inner_mm.y();
-      for (size_t i = 0; i < bodies.size(); ++i) {
-        const Eigen::Vector3d c = FromBtTransform(bodies[i]->getWorldTransform()).translation();
+  }
+
+  // The bodies at `poses` whose centre of mass lies outside the tote (or beside a mesh container's
+  // bounding box).
+  std::vector<int> Escaped(const PileOptions& o,
+                           const std::vector<Eigen::Isometry3d>& poses) const {
+    std::vector<int> escaped;
+    for (size_t i = 0; i < poses.size(); ++i) {
+      const Eigen::Vector3d c = poses[i] * models[part_of[i]].model_from_body.translation();
+      if (o.container.kind == Container::Kind::kTote) {
+        const double a = 0.5 * o.container.inner_mm.x(), b = 0.5 * o.container.inner_mm.y();
         if (std::abs(c.x()) > a || std::abs(c.y()) > b || c.z() < o.container.floor_mm - 1)
-          out->escaped.push_back(static_cast<int>(i));
-      }
-    } else if (o.container.kind == Container::Kind::kMesh) {
-      const Eigen::AlignedBox3d box = o.container.mesh.Bounds();
-      for (size_t i = 0; i < bodies.size(); ++i) {
-        const Eigen::Vector3d c = FromBtTransform(bodies[i]->getWorldTransform()).translation();
+          escaped.push_back(static_cast<int>(i));
+      } else if (o.container.kind == Container::Kind::kMesh) {
+        const Eigen::AlignedBox3d box = o.container.mesh.Bounds();
         if (c.x() < box.min().x() || c.x() > box.max().x() || c.y() < box.min().y() ||
             c.y() > box.max().y())
-          out->escaped.push_back(static_cast<int>(i));
+          escaped.push_back(static_cast<int>(i));
       }
     }
+    return escaped;
+  }
+};
+
+// A new world with the bodies of `o` at `poses`, awake and never put to sleep, with the
+// confirmation's solver iterations: how a settled pile is checked (ContinuePile), and where it
+// goes on when the check finds it still moving.
+struct Restart {
+  PileOptions options;
+  Simulation sim;
+  std::vector<Eigen::Isometry3d> start;
+
+  static PileOptions WithConfirmationSolver(PileOptions o) {
+    o.solver_iterations = o.confirm_iterations;
+    return o;
+  }
+  Restart(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+          const PileOptions& o, const std::vector<Eigen::Isometry3d>& poses)
+      : options(WithConfirmationSolver(o)), sim(parts, shapes, options), start(poses) {
+    for (size_t i = 0; i < poses.size(); ++i) {
+      sim.AddBody(o.bodies[i], poses[i], options);
+      sim.bodies.back()->setActivationState(DISABLE_DEACTIVATION);
+    }
+  }
+  // Steps for `seconds`; returns the steps taken.
+  int Step(double seconds) {
+    const int steps = static_cast<int>(std::ceil(seconds / options.time_step_s - 1e-9));
+    for (int k = 0; k < steps; ++k)
+      sim.world.world.stepSimulation(options.time_step_s, 1, options.time_step_s);
+    return steps;
+  }
+  std::vector<Eigen::Isometry3d> Poses() const {
+    std::vector<Eigen::Isometry3d> poses;
+    for (size_t i = 0; i < start.size(); ++i) poses.push_back(sim.Pose(i));
+    return poses;
+  }
+  // How far each body moved from its start: the largest displacement of a corner of its
+  // collision pieces (mm).
+  std::vector<double> Drift() const {
+    std::vector<double> drift;
+    for (size_t i = 0; i < start.size(); ++i) {
+      const Eigen::Isometry3d now = sim.Pose(i);
+      double d = 0;
+      for (const Eigen::Vector3d& corner : sim.models[sim.part_of[i]].corners_in_model)
+        d = std::max(d, (now * corner - start[i] * corner).norm());
+      drift.push_back(d);
+    }
+    return drift;
   }
 };
 
@@ -497,6 +549,9 @@ bool PileOptions::Check(std::string* why) const {
     *why = "calm_after must not be negative";
   } else if (!(rest_speed_mm_s > 0) || !(rest_angular_rad_s > 0) || !(rest_seconds > 0)) {
     *why = "rest thresholds must be positive";
+  } else if (!(confirm_seconds >= 0 && confirm_seconds <= 60) || !(confirm_drift_mm > 0) ||
+             confirm_iterations < 1 || confirm_iterations > 1000) {
+    *why = "the rest's confirmation needs 0 to 60 s, a positive drift and 1 to 1000 iterations";
   } else {
     for (const PhysicsMaterial& m : materials) {
       if (!m.Check(why)) return false;
@@ -615,6 +670,40 @@ PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionS
   }
   PileResult result;
   sim.Run(o, &result);
+  if (result.restless.empty() && o.confirm_seconds > 0) {
+    // Confirm the rest in a new world (see PileOptions::confirm_seconds). Where it fails, that
+    // world goes on until it rests again (its bodies keep their motion), then a new confirmation.
+    std::vector<Eigen::Isometry3d> poses = result.world_from_model;
+    while (true) {
+      Restart check(parts, shapes, o, poses);
+      const int steps = check.Step(o.confirm_seconds);
+      result.steps += steps;
+      result.seconds += steps * o.time_step_s;
+      const std::vector<double> drift = check.Drift();
+      result.drift_mm = *std::max_element(drift.begin(), drift.end());
+      if (result.drift_mm <= o.confirm_drift_mm) break;  // `poses` held: they are the pile
+      PileOptions more = check.options;
+      more.max_seconds = o.max_seconds - result.seconds;
+      if (!(more.max_seconds > 0)) {
+        for (size_t i = 0; i < drift.size(); ++i) {
+          if (drift[i] > o.confirm_drift_mm) result.restless.push_back(static_cast<int>(i));
+        }
+        poses = check.Poses();
+        break;
+      }
+      PileResult settled;
+      check.sim.Run(more, &settled);
+      result.steps += settled.steps;
+      result.seconds += settled.seconds;
+      poses = settled.world_from_model;
+      if (!settled.restless.empty()) {
+        result.restless = settled.restless;
+        break;
+      }
+    }
+    result.world_from_model = poses;
+  }
+  result.escaped = sim.Escaped(o, result.world_from_model);
   return result;
 }
 
@@ -624,22 +713,13 @@ PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<Collis
   CheckInputs(parts, shapes, o);
   if (poses.size() != o.bodies.size()) throw Error("pile: one pose per body needed");
   if (!(seconds > 0 && seconds <= 600)) throw Error("pile: simulate 0 to 600 s");
-  Simulation sim(parts, shapes, o);
-  for (size_t i = 0; i < poses.size(); ++i) {
-    sim.AddBody(o.bodies[i], poses[i], o);
-    sim.bodies.back()->setActivationState(DISABLE_DEACTIVATION);
-  }
-  const int steps = static_cast<int>(std::ceil(seconds / o.time_step_s));
-  for (int k = 0; k < steps; ++k) sim.world.world.stepSimulation(o.time_step_s, 1, o.time_step_s);
+  Restart again(parts, shapes, o, poses);
   PileResult result;
-  result.steps = steps;
-  result.seconds = steps * o.time_step_s;
-  for (size_t i = 0; i < poses.size(); ++i) {
-    result.world_from_model.push_back(sim.Pose(i));
-    for (const Eigen::Vector3d& corner : sim.models[sim.part_of[i]].corners_in_model)
-      result.drift_mm =
-          std::max(result.drift_mm, (sim.Pose(i) * corner - poses[i] * corner).norm());
-  }
+  result.steps = again.Step(seconds);
+  result.seconds = result.steps * o.time_step_s;
+  result.world_from_model = again.Poses();
+  const std::vector<double> drift = again.Drift();
+  result.drift_mm = *std::max_element(drift.begin(), drift.end());
   return result;
 }
 

@@ -180,7 +180,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   EXPECT_EQ(
       ForEachChange<ArrangementOptions>(
           spec, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; }, check),
-      9);
+      10);
 }
 
 // The scene keys, read from a recipe with parts (a scene section needs them).
@@ -209,7 +209,8 @@ TEST(Schema, EverySceneKeyIsRead) {
         all(changed.scenes[0].arrangement, &want);
         EXPECT_EQ(got, want) << name;
       });
-  EXPECT_EQ(n, 9);  // layout, pose, gap, copies, radius, seed, drop_height, settle_time, time_step
+  // layout, pose, gap, copies, radius, seed, drop_height, settle_time, time_step, confirm_rest
+  EXPECT_EQ(n, 10);
 }
 
 TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {

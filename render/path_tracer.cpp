@@ -428,8 +428,8 @@ class PreparedEnvironment {
     return {x, y};
   }
   // The radiance along d, interpolated between pixel centres (Blender's Linear interpolation),
-  // wrapping around in u. Sampling still picks pixels by their own values: any density that is
-  // positive wherever the radiance is keeps the estimate unbiased.
+  // wrapping around in u. The sampling tables weigh each pixel by this function's integral over
+  // it, so the density is positive wherever the radiance is.
   Eigen::Vector3f Bilinear(const Eigen::Vector3f& d) const {
     const int w = image_->width, h = image_->height;
     const Eigen::Vector2f uv = Uv(d);
@@ -455,15 +455,35 @@ class PreparedEnvironment {
     weight.resize(static_cast<size_t>(w) * h);
     col_cdf.resize(weight.size());
     row_cdf.resize(h);
+    // Each pixel's weight is the integral over it of the image as Bilinear() interpolates it: the
+    // luminances filtered by [1/8, 3/4, 1/8] along both axes (wrapping around in x, the edge rows
+    // repeated in y), so that a dark pixel beside a small bright sun, which the interpolation
+    // lights, is sampled too.
+    std::vector<float> lum(static_cast<size_t>(w) * h), across(lum.size());
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const float* c = image_->at(x, y);
+        lum[static_cast<size_t>(y) * w + x] =
+            std::max(0.0f, Luminance(Eigen::Vector3f(c[0], c[1], c[2])));
+      }
+    }
+    for (int y = 0; y < h; ++y) {
+      const float* row = &lum[static_cast<size_t>(y) * w];
+      for (int x = 0; x < w; ++x) {
+        across[static_cast<size_t>(y) * w + x] =
+            0.125f * row[(x + w - 1) % w] + 0.75f * row[x] + 0.125f * row[(x + 1) % w];
+      }
+    }
     double total = 0;
     for (int y = 0; y < h; ++y) {
       const float sin_theta = std::sin(kPiF * (y + 0.5f) / h);
+      const float* up = &across[static_cast<size_t>(std::max(y - 1, 0)) * w];
+      const float* mid = &across[static_cast<size_t>(y) * w];
+      const float* down = &across[static_cast<size_t>(std::min(y + 1, h - 1)) * w];
       double row = 0;
       for (int x = 0; x < w; ++x) {
-        const float* c = image_->at(x, y);
-        const float lum = std::max(0.0f, Luminance(Eigen::Vector3f(c[0], c[1], c[2])));
         const size_t i = static_cast<size_t>(y) * w + x;
-        weight[i] = lum * sin_theta;
+        weight[i] = (0.125f * up[x] + 0.75f * mid[x] + 0.125f * down[x]) * sin_theta;
         row += weight[i];
         col_cdf[i] = static_cast<float>(row);
       }

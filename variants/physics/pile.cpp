@@ -400,6 +400,9 @@ struct Simulation {
   std::vector<int> Escaped(const PileOptions& o,
                            const std::vector<Eigen::Isometry3d>& poses) const {
     std::vector<int> escaped;
+    const Eigen::AlignedBox3d box = o.container.kind == Container::Kind::kMesh
+                                        ? o.container.mesh.Bounds()
+                                        : Eigen::AlignedBox3d();
     for (size_t i = 0; i < poses.size(); ++i) {
       const Eigen::Vector3d c = poses[i] * models[part_of[i]].model_from_body.translation();
       if (o.container.kind == Container::Kind::kTote) {
@@ -407,7 +410,6 @@ struct Simulation {
         if (std::abs(c.x()) > a || std::abs(c.y()) > b || c.z() < o.container.floor_mm - 1)
           escaped.push_back(static_cast<int>(i));
       } else if (o.container.kind == Container::Kind::kMesh) {
-        const Eigen::AlignedBox3d box = o.container.mesh.Bounds();
         if (c.x() < box.min().x() || c.x() > box.max().x() || c.y() < box.min().y() ||
             c.y() > box.max().y())
           escaped.push_back(static_cast<int>(i));

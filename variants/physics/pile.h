@@ -114,7 +114,9 @@ struct PileResult {
   std::vector<int> restless;                        // bodies still moving when max_seconds ran out
   std::vector<int> escaped;  // bodies that ended outside the tote (bounced out; for a mesh
                              // container: beside its bounding box)
-  double seconds = 0;        // simulated time until rest (or max_seconds), confirmation included
+  // Simulated time until rest (or max_seconds), confirmations included: a rest found just before
+  // max_seconds is still confirmed, so this may pass it by up to confirm_seconds.
+  double seconds = 0;
   int steps = 0;
   // ContinuePile: the largest displacement of a point of a part; DropPile: that of its last
   // confirmation (0 without one).

@@ -257,24 +257,18 @@ TEST(Pile, MeshContainerHoldsItsPileLikeAnyTote) {
   EXPECT_THROW(DropPile(parts, shapes, o), Error);
 }
 
-// Bin picking's usual pile, copies of one part: settled, it is an equilibrium. A new world with
-// every body awake at its settled pose and nothing holding it but its contacts, simulated for one
-// more second, moves no point of any part by more than 0.5 mm. Bolts are the hard case: lying
-// across each other they creep (the solver's sequential impulses) or balance on an edge until a
-// restart tips them over; before the rest was confirmed (PileOptions::confirm_seconds), 4 of 8
-// bolt piles moved 0.5-6 mm here.
+// Bin picking's usual pile, 40 copies of one part: settled, it is an equilibrium. A new world
+// with every body awake at its settled pose and nothing holding it but its contacts, simulated
+// for one more second, moves no point of any part by more than 0.5 mm (the rest test alone).
 TEST(Pile, SettledPileStaysPutWhenSimulatedAgain) {
-  const std::vector<Part> parts = {
-      FamilyPart("hex_bolt", {{"size", std::string("M12")}, {"length", 40.0}})};
+  const std::vector<Part> parts = {FamilyPart("hex_nut", {{"size", std::string("M12")}})};
   const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
-  PileOptions o = ToteOptions(std::vector<int>(30, 0), 1);
-  o.container.inner_mm = {160, 120};
-  o.confirm_seconds = 1.0;  // recipes: confirm_rest: true
+  PileOptions o = ToteOptions(std::vector<int>(40, 0), 3);
+  o.container.inner_mm = {130, 100};
   const PileResult r = DropPile(parts, shapes, o);
   ASSERT_TRUE(r.restless.empty());
-  EXPECT_LT(r.seconds, 10.0);
-  EXPECT_LE(r.drift_mm, o.confirm_drift_mm);
-  // A pile, not a layer: some bolts rest on others (their lowest point above the tote's floor).
+  EXPECT_LT(r.seconds, 5.0);
+  // A pile, not a layer: some nuts rest on others (their lowest point above the tote's floor).
   int above = 0;
   for (const Eigen::Isometry3d& pose : r.world_from_model) {
     double lowest = 1e9;
@@ -285,6 +279,40 @@ TEST(Pile, SettledPileStaysPutWhenSimulatedAgain) {
   EXPECT_GT(above, 3);
   const PileResult later = ContinuePile(parts, shapes, o, r.world_from_model, 1.0);
   EXPECT_LT(later.drift_mm, 0.5);
+}
+
+// Bolts are the hard case: lying across each other they creep (the solver's sequential impulses)
+// or balance on an edge until a restart tips them over; without a confirmed rest 4 of 8 60-bolt
+// piles moved 0.5-6 mm in a second's resimulation. With one (confirm_rest), the resimulation is
+// the confirmation's world again, so it holds by construction; what is checked here besides is
+// that the confirmed pile is found in time, is a pile, and that no two bolts overlap by more than
+// 0.5 mm by the exact mesh test (CGAL), which does not trust the physics engine.
+TEST(Pile, ConfirmedBoltPileStaysPutAndDoesNotOverlap) {
+  const std::vector<Part> parts = {
+      FamilyPart("hex_bolt", {{"size", std::string("M12")}, {"length", 40.0}})};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
+  PileOptions o = ToteOptions(std::vector<int>(30, 0), 1);
+  o.container.inner_mm = {160, 120};
+  o.confirm_seconds = 1.0;  // recipes: confirm_rest: true
+  const PileResult r = DropPile(parts, shapes, o);
+  ASSERT_TRUE(r.restless.empty());
+  EXPECT_LT(r.seconds, 10.0);
+  EXPECT_LE(r.drift_mm, o.confirm_drift_mm);
+  EXPECT_LT(ContinuePile(parts, shapes, o, r.world_from_model, 1.0).drift_mm, 0.5);
+  std::vector<Placed> placed;
+  int above = 0;
+  for (const Eigen::Isometry3d& pose : r.world_from_model) {
+    placed.push_back(Place(parts[0], pose));
+    above += placed.back().box.min().z() > o.container.floor_mm + 1;
+  }
+  EXPECT_GT(above, 3);  // a pile, not a layer
+  double deepest = 0;
+  for (size_t a = 0; a < placed.size(); ++a) {
+    for (size_t b = 0; b < placed.size(); ++b) {
+      if (a != b) deepest = std::max(deepest, Penetration(placed[a], placed[b]));
+    }
+  }
+  EXPECT_LT(deepest, 0.5);
 }
 
 // Fixed parts (what distractors fall onto in a laid-out scene) do not move and carry what lands
@@ -373,36 +401,5 @@ TEST(Pile, ToteMeshIsClosedAndMatchesItsSize) {
   EXPECT_TRUE(MakeContainerMesh(floor_only).empty());
 }
 
-}  // namespace
-}  // namespace cadsynth
-namespace cadsynth {
-namespace {
-TEST(Pile, DISABLED_BoltStudy) {
-  const std::vector<Part> parts = {
-      FamilyPart("hex_bolt", {{"size", std::string("M16")}, {"length", 60.0}})};
-  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
-  double worst = 0;
-  const int first = std::getenv("FIRST") ? std::atoi(std::getenv("FIRST")) : 1;
-  const int last = std::getenv("LAST") ? std::atoi(std::getenv("LAST")) : 8;
-  for (int seed = first; seed <= last; ++seed) {
-    PileOptions o;
-    o.bodies = std::vector<int>(60, 0);
-    o.container.kind = Container::Kind::kTote;
-    o.container.inner_mm = {355, 265};
-    o.container.height_mm = 150;
-    o.seed = static_cast<uint64_t>(seed);
-    const auto t0 = std::chrono::steady_clock::now();
-    PileResult r = DropPile(parts, shapes, o);
-    const double wall =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const PileResult later = ContinuePile(parts, shapes, o, r.world_from_model, 1.0);
-    worst = std::max(worst, later.drift_mm);
-    std::printf(
-        "seed %d: rest after %.2f s (%zu restless, %zu escaped) in %.2f s wall; confirm drift "
-        "%.3f; 1 s later %.3f\n",
-        seed, r.seconds, r.restless.size(), r.escaped.size(), wall, r.drift_mm, later.drift_mm);
-  }
-  std::printf("worst %.3f\n", worst);
-}
 }  // namespace
 }  // namespace cadsynth

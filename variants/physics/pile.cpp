@@ -419,21 +419,21 @@ struct Simulation {
   }
 };
 
-// A new world with the bodies of `o` at `poses`, awake and never put to sleep, with the
-// confirmation's solver iterations: how a settled pile is checked (ContinuePile), and where it
-// goes on when the check finds it still moving.
+// A new world with the bodies of `o` at `poses`, awake and never put to sleep, whose solver
+// runs `iterations` iterations: how a settled pile is checked (ContinuePile, the confirmation),
+// and where it goes on when the confirmation finds it still moving.
 struct Restart {
   PileOptions options;
   Simulation sim;
   std::vector<Eigen::Isometry3d> start;
 
-  static PileOptions WithConfirmationSolver(PileOptions o) {
-    o.solver_iterations = o.confirm_iterations;
+  static PileOptions WithSolver(PileOptions o, int iterations) {
+    o.solver_iterations = iterations;
     return o;
   }
   Restart(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
-          const PileOptions& o, const std::vector<Eigen::Isometry3d>& poses)
-      : options(WithConfirmationSolver(o)), sim(parts, shapes, options), start(poses) {
+          const PileOptions& o, const std::vector<Eigen::Isometry3d>& poses, int iterations)
+      : options(WithSolver(o, iterations)), sim(parts, shapes, options), start(poses) {
     for (size_t i = 0; i < poses.size(); ++i) {
       sim.AddBody(o.bodies[i], poses[i], options);
       sim.bodies.back()->setActivationState(DISABLE_DEACTIVATION);
@@ -677,7 +677,7 @@ PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionS
     // world goes on until it rests again (its bodies keep their motion), then a new confirmation.
     std::vector<Eigen::Isometry3d> poses = result.world_from_model;
     while (true) {
-      Restart check(parts, shapes, o, poses);
+      Restart check(parts, shapes, o, poses, o.confirm_iterations);
       const int steps = check.Step(o.confirm_seconds);
       result.steps += steps;
       result.seconds += steps * o.time_step_s;
@@ -715,7 +715,9 @@ PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<Collis
   CheckInputs(parts, shapes, o);
   if (poses.size() != o.bodies.size()) throw Error("pile: one pose per body needed");
   if (!(seconds > 0 && seconds <= 600)) throw Error("pile: simulate 0 to 600 s");
-  Restart again(parts, shapes, o, poses);
+  // The physics the pile rested under: the confirmation's solver when it had one.
+  Restart again(parts, shapes, o, poses,
+                o.confirm_seconds > 0 ? o.confirm_iterations : o.solver_iterations);
   PileResult result;
   result.steps = again.Step(seconds);
   result.seconds = result.steps * o.time_step_s;

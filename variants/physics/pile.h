@@ -129,7 +129,8 @@ PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionS
                     const PileOptions& options);
 
 // A new world with the bodies in `poses`, at rest and awake (never put to sleep), simulated for
-// `seconds` with options.confirm_iterations solver iterations (the confirmation's physics): how far
+// `seconds` with the solver the pile rested under (options.confirm_iterations iterations when its
+// rest was confirmed, else solver_iterations): how far
 // a settled pile moves when nothing holds it still but its contacts, which is what a pile at rest
 // must survive (PileResult::drift_mm says the largest move of a point).
 PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,

@@ -176,6 +176,8 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
     check(changed, "a material rule");
     changed.material_rules.back().material.surface.clearcoat = 0.5f;
     check(changed, "a rule's clear coat");
+    changed.material_rules.back().material.surface.multiscatter = true;
+    check(changed, "a rule's distribution");
   }
   EXPECT_EQ(
       ForEachChange<ArrangementOptions>(

@@ -116,6 +116,25 @@ class Reader {
     return c;
   }
 
+  // A colour of the physically based mode, as Blender's Python and its colour fields take it:
+  // [r, g, b] is linear (scene-linear Rec. 709, what bpy's default_value and BlenderProc's
+  // set_principled_shader_value hold), "#RRGGBB" is sRGB-encoded (Blender's Hex field, a web or
+  // paint colour) and is decoded to linear.
+  Eigen::Vector3f LinearColor(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) return Color(node, key);
+    const std::string text = node.Scalar();
+    const bool hex = text.size() == 7 && text[0] == '#' &&
+                     text.find_first_not_of("0123456789abcdefABCDEF", 1) == std::string::npos;
+    if (!hex)
+      Fail(node, key, "expected linear [r, g, b] in 0..1 or an sRGB hex colour \"#RRGGBB\"");
+    Eigen::Vector3f c;
+    for (int i = 0; i < 3; ++i) {
+      const int byte = std::stoi(text.substr(1 + 2 * i, 2), nullptr, 16);
+      c[i] = SrgbToLinear(static_cast<float>(byte) / 255.0f);
+    }
+    return c;
+  }
+
   // One value, a list, or an inclusive range {from, to, step}; `parse` reads one value.
   template <typename Parse>
   std::vector<double> Series(const YAML::Node& node, const std::string& key, Parse parse) const {
@@ -1033,9 +1052,7 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
     if (c.IsScalar() && c.Scalar() == "cad") {
       m.base_from_part = true;
     } else {
-      // Recipe colours are what a colour picker shows (sRGB), as Blender's are.
-      const Eigen::Vector3f srgb = r.Color(c, key + ".base_color");
-      for (int i = 0; i < 3; ++i) m.surface.base_color[i] = SrgbToLinear(srgb[i]);
+      m.surface.base_color = r.LinearColor(c, key + ".base_color");
       m.base_from_part = false;
     }
   }
@@ -1102,10 +1119,7 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
       tunit("amount", &m.texture.amount);
       tunit("roughness", &m.texture.roughness_amount);
       tunit("bump", &m.texture.bump);
-      if (t["color"]) {
-        const Eigen::Vector3f srgb = r.Color(t["color"], tkey + ".color");
-        for (int i = 0; i < 3; ++i) m.texture.color[i] = SrgbToLinear(srgb[i]);
-      }
+      if (t["color"]) m.texture.color = r.LinearColor(t["color"], tkey + ".color");
       if (t["seed"]) m.texture.seed = static_cast<uint64_t>(r.Integer(t["seed"], tkey + ".seed"));
       if (m.texture.kind == Texture::Kind::kImage) {
         if (!t["file"]) r.Fail(t, tkey, "an image texture needs a 'file'");
@@ -1218,7 +1232,7 @@ LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::
   if (l.kind != K::kSun && node["strength"])
     r.Fail(node["strength"], key + ".strength", "this light's is 'power' (W, as Blender's)");
   r.ExpectMap(node, key, keys);
-  if (node["color"]) l.color = r.Color(node["color"], key + ".color");
+  if (node["color"]) l.color = r.LinearColor(node["color"], key + ".color");
   if (node["position"]) l.position = Triple(r, node["position"], key + ".position", true);
   if (l.kind != K::kPoint) l.direction = ReadAim(r, node, key, l.position, l.direction);
   const char* amount = l.kind == K::kSun ? "strength" : "power";
@@ -1284,10 +1298,10 @@ void ReadLighting(const Reader& r, const YAML::Node& node, RunSpec* spec) {
              "unknown environment '" + type + "' (known: uniform, sky, image)");
     }
     // Environment colours are linear radiance multipliers (Blender's world colour).
-    if (env["color"]) e.color = r.Color(env["color"], key + ".color");
-    if (env["zenith"]) e.zenith = r.Color(env["zenith"], key + ".zenith");
-    if (env["horizon"]) e.horizon = r.Color(env["horizon"], key + ".horizon");
-    if (env["ground"]) e.ground = r.Color(env["ground"], key + ".ground");
+    if (env["color"]) e.color = r.LinearColor(env["color"], key + ".color");
+    if (env["zenith"]) e.zenith = r.LinearColor(env["zenith"], key + ".zenith");
+    if (env["horizon"]) e.horizon = r.LinearColor(env["horizon"], key + ".horizon");
+    if (env["ground"]) e.ground = r.LinearColor(env["ground"], key + ".ground");
     if (env["strength"]) {
       e.strength = static_cast<float>(r.Number(env["strength"], key + ".strength"));
       if (e.strength < 0) r.Fail(env["strength"], key + ".strength", "must not be negative");

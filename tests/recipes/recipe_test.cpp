@@ -650,7 +650,7 @@ TEST(Recipe, PhysicallyBasedMaterialsAndLights) {
   EXPECT_FLOAT_EQ(spec.material_rules[0].material.surface.roughness, 0.2f);
   EXPECT_EQ(spec.material_rules[1].material.texture.kind, Texture::Kind::kNone);
   EXPECT_EQ(spec.material_rules[2].file, "*.stl");
-  EXPECT_FLOAT_EQ(spec.material_rules[2].material.surface.base_color[0], 1.0f);  // sRGB 1 = 1
+  EXPECT_FLOAT_EQ(spec.material_rules[2].material.surface.base_color[0], 1.0f);
   EXPECT_EQ(spec.material_rules[2].material.texture.kind, Texture::Kind::kChecker);
   EXPECT_DOUBLE_EQ(spec.material_rules[2].material.texture.scale_mm, 5.0);
   ASSERT_EQ(spec.look.light_sources.size(), 3u);
@@ -660,6 +660,37 @@ TEST(Recipe, PhysicallyBasedMaterialsAndLights) {
   EXPECT_NEAR(spec.look.light_sources[1].spot_size_rad, 30 * M_PI / 180, 1e-12);
   EXPECT_DOUBLE_EQ(spec.look.light_sources[2].power, 2.0);  // the sun's W/m2
   EXPECT_EQ(spec.look.environment.kind, Environment::Kind::kSky);
+}
+
+// Numbers are linear, as Blender's Python and BlenderProc take them (a Principled BSDF's default
+// Base Color 0.8 is 0.8 here too); "#RRGGBB" is sRGB, as Blender's Hex field (0.8 shows as E7).
+TEST(Recipe, PhysicallyBasedColoursAreLinearAndHexIsSrgb) {
+  const RunSpec spec = ParseRecipe(
+      "render: {mode: pbr}\n"
+      "materials:\n"
+      "  floor: {base_color: '#E7E7E7', texture: {type: wood, color: [0.2, 0.1, 0.05]}}\n"
+      "  assign: [{name: '*', base_color: [0.8, 0.5, 0.2]}]\n"
+      "lighting:\n"
+      "  lights: [{type: point, position: [0, 0, 1 m], power: 10, color: '#FF8000'}]\n"
+      "  environment: {type: uniform, color: [0.35, 0.35, 0.35]}\n",
+      "r.yaml", ".");
+  const Eigen::Vector3f& rule = spec.material_rules.at(0).material.surface.base_color;
+  EXPECT_FLOAT_EQ(rule[0], 0.8f);
+  EXPECT_FLOAT_EQ(rule[1], 0.5f);
+  EXPECT_FLOAT_EQ(rule[2], 0.2f);
+  // sRGB 231/255 = 0.9059: ((0.9059 + 0.055) / 1.055)^2.4 = 0.7991.
+  EXPECT_NEAR(spec.look.floor_material.surface.base_color[0], 0.7991f, 1e-4f);
+  EXPECT_FLOAT_EQ(spec.look.floor_material.texture.color[1], 0.1f);
+  const Eigen::Vector3f& light = spec.look.light_sources.at(0).color;
+  EXPECT_FLOAT_EQ(light[0], 1.0f);
+  EXPECT_NEAR(light[1], 0.2159f, 1e-4f);  // sRGB 128/255 = 0.502
+  EXPECT_FLOAT_EQ(light[2], 0.0f);
+  EXPECT_FLOAT_EQ(spec.look.environment.color[0], 0.35f);
+  EXPECT_EQ(ErrorOf("materials: {assign: [{name: '*', base_color: '#E7E7G7'}]}\n"),
+            "r.yaml:1:46: materials.assign[0].base_color: expected linear [r, g, b] in 0..1 or an "
+            "sRGB hex colour \"#RRGGBB\"");
+  EXPECT_NE(ErrorOf("materials: {assign: [{name: '*', base_color: [1.5, 0, 0]}]}\n").find("0..1"),
+            std::string::npos);
 }
 
 TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {

@@ -6,8 +6,9 @@
 //   spot   a point light masked to a cone: same intensity as the point light of the same power
 //          inside the cone (Blender: the cone does not concentrate the power), a smooth edge of
 //          width `blend` (smoothstep over (1 - cos(size / 2)) blend of the cosine).
-//   rect,  one-sided area lights facing `direction`, radiance L = P / (pi A) (a Lambertian emitter
-//   disc   of area A radiating P watts).
+//   rect,  one-sided area lights facing `direction`, radiance L = P / (4 A) over their area A, as
+//   disc   Cycles has it (0.25 / area): a Lambertian emitter of pi P / 4 watts, Blender's "W" for
+//          area lights (a physical P watts would be P / (pi A), 4 / pi = 1.27x brighter).
 //   sun    irradiance E (W/m^2) on a surface facing it; a disc of angular diameter `angle` on the
 //          sky of radiance E / (pi sin^2(angle / 2)) (0: a perfectly parallel light).
 //   environment  radiance colour * strength from every direction (Blender's world colour and

@@ -108,8 +108,9 @@ PreparedLight Prepare(const LightSource& s) {
         l.radius = static_cast<float>(s.radius_mm);
         l.area = kPiF * l.radius * l.radius;
       }
-      // A one-sided Lambertian emitter of power P: L = P / (pi A).
-      l.radiance = color * power * kMm2PerM2 / (kPiF * l.area);
+      // Blender's area light of power P: radiance L = P / (4 A) (Cycles' 0.25 / area), so that it
+      // emits pi P / 4 watts, not P: Blender's Watt for area lights, which its scenes are lit by.
+      l.radiance = color * power * kMm2PerM2 / (4 * l.area);
       l.strength = Luminance(l.radiance) * l.area;
       l.bound_radius = s.kind == K::kRect ? (l.axis_u + l.axis_v).norm() : l.radius;
       break;

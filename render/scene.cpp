@@ -29,7 +29,7 @@ std::vector<LightSource> Scene::DefaultLightSources() {
   ceiling.position = {0.0, 0.0, 2000.0};
   ceiling.direction = {0.0, 0.0, -1.0};
   ceiling.size_x_mm = ceiling.size_y_mm = 1000.0;
-  ceiling.power = 40.0;
+  ceiling.power = 51.0;
   return {ceiling};
 }
 

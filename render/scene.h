@@ -61,8 +61,9 @@ struct Scene {
   // A dielectric of base colour `srgb` (CAD colours are sRGB), roughness 0.45, specular 0.5.
   static Material DefaultMaterial(const Eigen::Vector3f& srgb);
   static Material DefaultFloorMaterial(const Eigen::Vector3f& srgb);
-  // A work cell's ceiling light: a 1 m x 1 m rect light 2 m above the origin facing down, 40 W
-  // (the floor under it receives about 40 / (pi 2^2) = 3.2 W/m2).
+  // A work cell's ceiling light: a 1 m x 1 m rect light 2 m above the origin facing down, 51 W
+  // (Blender's area-light watts: radiance 51 / 4 = 12.75 W/(m2 sr); the floor under it receives
+  // about 12.75 x 1 / 2^2 = 3.2 W/m2).
   static std::vector<LightSource> DefaultLightSources();
 };
 

@@ -183,7 +183,8 @@ TEST(PathTracer, LambertPlaneUnderAPointLightFollowsTheInverseSquareLaw) {
 
 // A white Lambert floor under a disc light of radius R at height h facing down, seen through a
 // tiny patch of floor straight under its centre: the irradiance there is pi L sin^2(alpha), with
-// L = P / (pi A) and sin^2(alpha) = R^2 / (R^2 + h^2); the floor's radiance is E / pi.
+// L = P / (4 A) (Blender's area light) and sin^2(alpha) = R^2 / (R^2 + h^2); the floor's radiance
+// is E / pi.
 struct DiscLightView {
   double radius = 200.0, height = 300.0, power = 50.0;
   Scene scene = Dark();
@@ -202,7 +203,7 @@ struct DiscLightView {
   }
   double Expected() const {
     const double area_m2 = kPi * radius * radius * 1e-6;
-    const double l = power / (kPi * area_m2);
+    const double l = power / (4 * area_m2);
     const double sin2 = radius * radius / (radius * radius + height * height);
     return kPi * l * sin2 / kPi;
   }

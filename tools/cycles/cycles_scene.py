@@ -1,0 +1,279 @@
+# Rebuilds one frame of a cadsynth dataset in Blender Cycles and renders its linear radiance, so
+# that cadsynth's physically based mode can be compared with an independent renderer. Run inside
+# Blender (Debian's `blender` package, 3.4):
+#
+#   blender -b --factory-startup --python tools/cycles/cycles_scene.py -- SPEC.json
+#
+# SPEC.json (written by tools/cycles/compare_with_cycles.py) names the dataset, the frame, the
+# materials, lights and world in SI units (metres, W, W/m^2) and Cycles' settings; the geometry and
+# poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
+# normals), scene_gt_world.json and scene_camera.json. Cycles is set up as README's "Comparing with
+# Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
+# threshold, no denoising or adaptive sampling, the same bounces. The result is written as a
+# 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).
+import json
+import math
+import struct
+import sys
+
+import bpy
+import mathutils
+import numpy as np
+
+
+def read_ply(path):
+    """cadsynth's binary PLY: float x y z nx ny nz per vertex, uchar-counted int faces (mm)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode("ascii").splitlines()
+    vertices = faces = 0
+    props = []
+    for line in header:
+        words = line.split()
+        if words[:2] == ["element", "vertex"]:
+            vertices = int(words[2])
+        elif words[:2] == ["element", "face"]:
+            faces = int(words[2])
+        elif words[:1] == ["property"] and words[1] == "float":
+            props.append(words[2])
+    if props[:6] != ["x", "y", "z", "nx", "ny", "nz"] or len(props) != 6:
+        raise SystemExit(f"{path}: expected x y z nx ny nz floats, found {props}")
+    v = np.frombuffer(data, dtype="<f4", count=6 * vertices, offset=end).reshape(-1, 6)
+    f = np.frombuffer(data, dtype=np.dtype([("n", "u1"), ("i", "<i4", 3)]), count=faces,
+                      offset=end + 24 * vertices)
+    if np.any(f["n"] != 3):
+        raise SystemExit(f"{path}: only triangles are expected")
+    return v[:, :3].astype(np.float64), v[:, 3:].astype(np.float64), f["i"].astype(np.int64)
+
+
+def matrix(r, t):
+    m = mathutils.Matrix.Identity(4)
+    for i in range(3):
+        for j in range(3):
+            m[i][j] = r[3 * i + j]
+        m[i][3] = t[i]
+    return m
+
+
+def principled(name, m):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    out = nodes["Material Output"]
+    for n in list(nodes):
+        if n != out:
+            nodes.remove(n)
+    c = (*m["base_color"], 1.0)
+    if m.get("lambert"):
+        # metallic 0, specular 0: cadsynth's lobe is then Lambert exactly; so is Diffuse BSDF at
+        # roughness 0 (Principled's diffuse in 3.4 is Disney's, with its grazing retro-reflection).
+        bsdf = nodes.new("ShaderNodeBsdfDiffuse")
+        bsdf.inputs["Color"].default_value = c
+        bsdf.inputs["Roughness"].default_value = 0.0
+        mat.node_tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+        return mat
+    bsdf = nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.distribution = "MULTI_GGX" if m.get("multiscatter") else "GGX"
+    bsdf.inputs["Base Color"].default_value = c
+    bsdf.inputs["Metallic"].default_value = m["metallic"]
+    bsdf.inputs["Roughness"].default_value = m["roughness"]
+    bsdf.inputs["Specular"].default_value = m["specular"]
+    bsdf.inputs["Anisotropic"].default_value = m.get("anisotropic", 0.0)
+    bsdf.inputs["Clearcoat"].default_value = m.get("clearcoat", 0.0)
+    bsdf.inputs["Clearcoat Roughness"].default_value = m.get("clearcoat_roughness", 0.03)
+    bsdf.inputs["Sheen Tint"].default_value = 0.0
+    mat.node_tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    return mat
+
+
+def orient(obj, direction, x_axis=(1.0, 0.0, 0.0)):
+    """Turns a light so that its -Z points along `direction` and its X along x_axis's projection."""
+    z = -mathutils.Vector(direction).normalized()
+    x = mathutils.Vector(x_axis)
+    x = x - x.dot(z) * z
+    if x.length < 1e-6:
+        x = mathutils.Vector((0.0, 1.0, 0.0))
+        x = x - x.dot(z) * z
+    x.normalize()
+    y = z.cross(x)
+    obj.matrix_world = mathutils.Matrix.Translation(obj.location) @ mathutils.Matrix(
+        ((x[0], y[0], z[0]), (x[1], y[1], z[1]), (x[2], y[2], z[2]))).to_4x4()
+
+
+def add_light(i, l):
+    kind = l["type"]
+    blender_type = {"point": "POINT", "spot": "SPOT", "rect": "AREA", "disc": "AREA",
+                    "sun": "SUN"}[kind]
+    data = bpy.data.lights.new(f"light{i}", blender_type)
+    data.color = l.get("color", (1.0, 1.0, 1.0))
+    data.cycles.cast_shadow = True
+    if kind == "sun":
+        data.energy = l["strength"]
+        data.angle = l["angle_rad"]
+    else:
+        data.energy = l["power"]
+    if kind in ("point", "spot"):
+        data.shadow_soft_size = l.get("radius_m", 0.0)
+    if kind == "spot":
+        data.spot_size = l["spot_size_rad"]
+        data.spot_blend = l["spot_blend"]
+    if kind == "rect":
+        data.shape = "RECTANGLE"
+        data.size, data.size_y = l["size_m"]
+    if kind == "disc":
+        data.shape = "DISK"
+        data.size = 2 * l["radius_m"]
+    obj = bpy.data.objects.new(f"light{i}", data)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.location = l.get("position_m", (0.0, 0.0, 0.0))
+    orient(obj, l["direction"], l.get("x_axis", (1.0, 0.0, 0.0)))
+
+
+def main():
+    spec = json.load(open(sys.argv[sys.argv.index("--") + 1]))
+    scene = bpy.context.scene
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj, do_unlink=True)
+    scene.render.engine = "CYCLES"
+    cy = scene.cycles
+    cy.device = "CPU"
+    cy.samples = spec["samples"]
+    cy.use_adaptive_sampling = False
+    cy.use_denoising = False
+    cy.seed = spec.get("seed", 0)
+    cy.max_bounces = spec["bounces"]
+    cy.diffuse_bounces = cy.glossy_bounces = cy.transmission_bounces = spec["bounces"]
+    cy.transparent_max_bounces = 0
+    cy.sample_clamp_direct = 0.0
+    cy.sample_clamp_indirect = 0.0
+    cy.blur_glossy = 0.0
+    cy.light_sampling_threshold = 0.0
+    cy.caustics_reflective = cy.caustics_refractive = True
+    cy.pixel_filter_type = "BOX"
+    cy.filter_width = 1.0
+    cy.film_exposure = 1.0
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+
+    root = spec["dataset"]
+    sid, im = spec["scene_id"], spec["im_id"]
+    folder = f"{root}/train/{sid:06d}"
+    camera = json.load(open(f"{folder}/scene_camera.json"))[str(im)]
+    placed = json.load(open(f"{folder}/scene_gt_world.json"))
+
+    # Camera: OpenCV's frame (x right, y down, z ahead) to Blender's (x right, y up, -z ahead).
+    k = camera["cam_K"]
+    width, height = spec["width"], spec["height"]
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
+    cam_data = bpy.data.cameras.new("camera")
+    cam_data.sensor_fit = "HORIZONTAL"
+    cam_data.sensor_width = 36.0
+    cam_data.lens = k[0] * 36.0 / width
+    if abs(k[0] - k[4]) > 1e-6 * k[0]:
+        raise SystemExit("fx != fy: Blender's pixels are square")
+    # Shifts in units of the larger side. cadsynth's (and bop_toolkit's) pixel u spans [u, u + 1)
+    # with K's principal point in those coordinates; Blender's optical axis meets the image at its
+    # centre, (width / 2, height / 2) there, with y up.
+    side = max(width, height)
+    cam_data.shift_x = (width / 2 - k[2]) / side
+    cam_data.shift_y = (k[5] - height / 2) / side
+    cam_data.clip_start = 0.001
+    cam_data.clip_end = 1000.0
+    cam = bpy.data.objects.new("camera", cam_data)
+    scene.collection.objects.link(cam)
+    w2c = matrix(camera["cam_R_w2c"], [t * 1e-3 for t in camera["cam_t_w2c"]])
+    cam.matrix_world = w2c.inverted() @ mathutils.Matrix.Diagonal((1.0, -1.0, -1.0, 1.0))
+    scene.camera = cam
+
+    materials = {}
+    for p in placed:
+        obj_id = p["obj_id"]
+        if obj_id not in materials:
+            materials[obj_id] = principled(f"part{obj_id}", spec["part_material"])
+        v, n, f = read_ply(f"{root}/models/obj_{obj_id:06d}.ply")
+        mesh = bpy.data.meshes.new(f"obj{obj_id}")
+        mesh.from_pydata((v * 1e-3).tolist(), [], f.tolist())
+        mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
+        mesh.use_auto_smooth = True
+        # cadsynth's own normals, per face corner (its PLY has a vertex per corner).
+        mesh.normals_split_custom_set([tuple(n[i]) for poly in mesh.polygons
+                                       for i in poly.vertices])
+        mesh.materials.append(materials[obj_id])
+        obj = bpy.data.objects.new(f"obj{obj_id}", mesh)
+        scene.collection.objects.link(obj)
+        obj.matrix_world = matrix(p["world_R_m2w"], [t * 1e-3 for t in p["world_t_m2w"]])
+
+    if spec.get("floor", True):
+        half = spec.get("floor_half_size_m", 10.0)
+        mesh = bpy.data.meshes.new("floor")
+        mesh.from_pydata([(-half, -half, 0), (half, -half, 0), (half, half, 0), (-half, half, 0)],
+                         [], [(0, 1, 2, 3)])
+        mesh.materials.append(principled("floor", spec["floor_material"]))
+        floor = bpy.data.objects.new("floor", mesh)
+        scene.collection.objects.link(floor)
+
+    for i, l in enumerate(spec["lights"]):
+        add_light(i, l)
+
+    world = bpy.data.worlds.new("world")
+    world.use_nodes = True
+    background = world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (*spec["world"]["color"], 1.0)
+    background.inputs["Strength"].default_value = spec["world"]["strength"]
+    world.cycles.sampling_method = "AUTOMATIC"
+    scene.world = world
+
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.image_settings.exr_codec = "ZIP"
+    scene.render.filepath = spec["output"]
+    scene.render.use_file_extension = False
+    scene.render.threads_mode = "AUTO"
+    bpy.ops.render.render(write_still=True)
+    if "compare" in spec:
+        compare(spec["compare"], spec["output"], spec["stats"])
+
+
+def load_exr(path):
+    """Linear RGB, rows top down (Blender stores images bottom up)."""
+    image = bpy.data.images.load(path)
+    w, h = image.size
+    pixels = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    return pixels.reshape(h, w, 4)[::-1, :, :3].astype(np.float64)
+
+
+def compare(c, cycles_path, stats_path):
+    """Mean radiance of both renders over the part's pixels, the floor's and all, and how 8 x 8
+    blocks of pixels differ (relative to Cycles), written as JSON."""
+    ours = load_exr(c["cadsynth"])
+    theirs = load_exr(cycles_path)
+    part = load_exr(c["mask"])[:, :, 0] > 0.5
+    h, w = part.shape
+    regions = {"all": np.ones_like(part), "part": part, "floor": ~part}
+    out = {}
+    for name, m in regions.items():
+        if m.sum() == 0:
+            continue
+        a = ours[m].mean(axis=0)
+        b = theirs[m].mean(axis=0)
+        out[name] = {"cadsynth": a.tolist(), "cycles": b.tolist(),
+                     "ratio": float(a.sum() / max(b.sum(), 1e-12)), "pixels": int(m.sum())}
+    la, lb = ours.mean(axis=2), theirs.mean(axis=2)
+    bh, bw = h // 8, w // 8
+    block_a = la[:8 * bh, :8 * bw].reshape(bh, 8, bw, 8).mean(axis=(1, 3))
+    block_b = lb[:8 * bh, :8 * bw].reshape(bh, 8, bw, 8).mean(axis=(1, 3))
+    lit = block_b > 0.02 * block_b.max()
+    rel = np.abs(block_a - block_b)[lit] / block_b[lit]
+    out["blocks"] = {"count": int(lit.sum()), "median_rel_diff": float(np.median(rel)),
+                     "p90_rel_diff": float(np.percentile(rel, 90)),
+                     "max_rel_diff": float(rel.max())}
+    json.dump(out, open(stats_path, "w"), indent=1)
+
+
+main()

@@ -45,8 +45,10 @@ SUN = {"type": "sun", "direction": [-0.4, 0.3, -1], "strength": 3, "angle_deg": 
 
 # name: (sphere material, lights (SI units, Blender's), world, strict, note). Strict cases use only
 # what cadsynth and Cycles 3.4 model alike (every light's units, Lambert, GGX with F = 1, the
-# world, bounces) and must agree within --tolerance; the others show where Blender 3.4's models
-# differ from Blender 4's, which cadsynth follows, and are reported only.
+# world, bounces, the lens) and must agree within --tolerance (a number instead of True: their own
+# block tolerance; the lens's blur moves the blocks' p99 by 0.03 against 0.002-0.005 between the
+# renderers); the others show where Blender 3.4's models differ from Blender 4's, which cadsynth
+# follows, and are reported only.
 CASES = {
     "point": (LAMBERT, [{"type": "point", "position_m": [0.2, -0.1, 0.6], "power": 100}],
               BLACK_WORLD, True, "point light 100 W; Lambert"),
@@ -63,6 +65,9 @@ CASES = {
               "equirectangular world image (a sun-like patch: the sphere's shadow); white metal"),
     "image90": (WHITE_METAL, [], {"image": "sky.hdr", "strength": 1.0, "rotation_deg": 90}, True,
                 "the same image turned 90 deg (Mapping node's Z, BlenderProc's rotation_euler)"),
+    "lens": (LAMBERT, [{"type": "point", "position_m": [0.2, -0.1, 0.6], "power": 100}],
+             {"color": [0.1, 0.1, 0.1], "strength": 1.0, "lens": [1.4, 0.25]}, 0.015,
+             "thin lens f/1.4 focused at 0.25 m (the sphere 0.5 m away: 5 px blur); Lambert"),
     "spot": (LAMBERT, [{"type": "spot", "position_m": [0.1, 0.1, 0.7], "target_m": [0, 0, 0],
                         "power": 300, "spot_size_deg": 40, "spot_blend": 0.3}],
              BLACK_WORLD, False,
@@ -136,6 +141,15 @@ def yaml_list(values, unit=""):
     return "[" + ", ".join(f"{v:g}{unit}" for v in values) + "]"
 
 
+FX, WIDTH = 131.25, 160
+
+
+def lens_mm():
+    """The focal length Blender's camera gets (a 36 mm wide sensor), which cadsynth's lens is given
+    too: it sets the aperture, focal_length / f_number, in both."""
+    return FX * 36.0 / WIDTH
+
+
 def recipe(material, lights, world, samples):
     def mat(m):
         return (f"{{base_color: {yaml_list(m['base_color'])}, metallic: {m['metallic']}, "
@@ -143,7 +157,10 @@ def recipe(material, lights, world, samples):
                 + (", distribution: multiscatter_ggx" if m.get("multiscatter") else "") + "}")
     out = ["parts: [{file: sphere.obj, unit: mm}]",
            "scene: {layout: row}",
-           "camera: {width: 160, height: 120, fx: 131.25, fy: 131.25, cx: 79.5, cy: 59.5}",
+           "camera: {width: 160, height: 120, fx: 131.25, fy: 131.25, cx: 79.5, cy: 59.5"
+           + (f", lens: {{focal_length: {lens_mm():.6f} mm, f_number: {world['lens'][0]}, "
+              f"focus_distance: {1000 * world['lens'][1]:g} mm}}" if "lens" in world else "")
+           + "}",
            "sweep: {yaw: [30], pitch: [40], radius: [0.5 m]}",
            f"render: {{mode: pbr, samples: {samples}, bounces: 3, hdr: true, view: standard}}",
            "materials:",
@@ -276,8 +293,9 @@ def main():
               f"{s['all']['ratio']:7.3f} {s['blocks']['median_rel_diff']:10.3f} "
               f"{s['blocks']['p90_rel_diff']:6.3f} {s['blocks']['p99_rel_diff']:6.3f} "
               f"{ours:6.1f} {theirs:6.1f}  {note}")
+        block_tolerance = args.block_tolerance if strict is True else strict
         if strict and (any(abs(r - 1) > args.tolerance for r in ratios) or
-                       s["blocks"]["p99_rel_diff"] > args.block_tolerance):
+                       s["blocks"]["p99_rel_diff"] > block_tolerance):
             failed.append(name)
     if failed:
         print("outside the tolerance:", ", ".join(failed))

@@ -182,6 +182,14 @@ def main():
     side = max(width, height)
     cam_data.shift_x = (width / 2 - k[2]) / side
     cam_data.shift_y = (k[5] - height / 2) / side
+    if "lens" in spec["world"]:
+        # A thin lens as cadsynth's: aperture diameter = lens / f-number, focused at a distance
+        # along the optical axis.
+        f_number, focus_m = spec["world"]["lens"]
+        cam_data.dof.use_dof = True
+        cam_data.dof.aperture_fstop = f_number
+        cam_data.dof.focus_distance = focus_m
+        cam_data.dof.aperture_blades = 0
     cam_data.clip_start = 0.001
     cam_data.clip_end = 1000.0
     cam = bpy.data.objects.new("camera", cam_data)

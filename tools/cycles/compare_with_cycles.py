@@ -14,7 +14,7 @@ poses and camera) and the case's lights and materials in Blender's units, render
 samples and bounces and compares: the ratio of mean radiance cadsynth / Cycles over the sphere's
 pixels, the floor's and all, and the relative difference of 8 x 8 pixel blocks (median, 90th
 and 99th percentile), and the seconds each took (cadsynth's whole run; Cycles' render without starting
-Blender). Exit status 1 when a strict case's ratio leaves [1 - tol, 1 + tol] (--tolerance, 0.03)
+Blender); OUT/CASE_sheet.png shows cadsynth | Cycles | |difference| x 10. Exit status 1 when a strict case's ratio leaves [1 - tol, 1 + tol] (--tolerance, 0.03)
 or its blocks' 99th percentile exceeds --block-tolerance (0.1: a shadow in the wrong place).
 """
 import argparse
@@ -38,6 +38,20 @@ WHITE_METAL = {"base_color": [1.0, 1.0, 1.0], "metallic": 1.0, "roughness": 0.3,
 WHITE_ROUGH_METAL = dict(WHITE_METAL, roughness=0.8)
 PLASTIC = {"base_color": [0.2, 0.4, 0.8], "metallic": 0.0, "roughness": 0.4, "specular": 0.5}
 BLACK_WORLD = {"color": [0.0, 0.0, 0.0], "strength": 0.0}
+
+# What a case shows: the parts (a recipe's parts and scene), the camera (width, height, f) and
+# its view (yaw, pitch in degrees, radius in m).
+SPHERE = {"parts": "[{file: sphere.obj, unit: mm}]", "scene": "{layout: row}",
+          "camera": (160, 120, 131.25), "view": (30, 40, 0.5)}
+WORKCELL = {"parts": "\n  - {family: spur_gear, params: {teeth: 24, module: 2, face_width: 12 mm, "
+                     "bore: 10 mm}}\n  - {family: hex_bolt, params: {size: M12, length: 50 mm}}"
+                     "\n  - {family: hex_nut, params: {size: M16}}\n  - {family: round_peg, "
+                     "params: {diameter: 20 mm, length: 50 mm}}\n  - {family: washer, params: "
+                     "{size: M16}}",
+            "scene": "{layout: clutter, pose: random, copies: 1, radius: 70 mm, gap: 5 mm, "
+                     "seed: 3}",
+            "camera": (320, 240, 300.0), "view": (30, 55, 0.4)}
+
 
 RECT = {"type": "rect", "position_m": [-0.2, 0.1, 0.5], "target_m": [0, 0, 0],
         "size_m": [0.4, 0.2], "power": 60}
@@ -68,6 +82,18 @@ CASES = {
     "lens": (LAMBERT, [{"type": "point", "position_m": [0.2, -0.1, 0.6], "power": 100}],
              {"color": [0.1, 0.1, 0.1], "strength": 1.0, "lens": [1.4, 0.25]}, 0.015,
              "thin lens f/1.4 focused at 0.25 m (the sphere 0.5 m away: 5 px blur); Lambert"),
+    "workcell": ([("spur_gear*", {"base_color": [0.56, 0.57, 0.58], "metallic": 1.0,
+                                  "roughness": 0.35, "specular": 0.5}),
+                  ("hex_bolt*", {"base_color": [0.25, 0.25, 0.27], "metallic": 1.0,
+                                 "roughness": 0.45, "specular": 0.5}),
+                  ("hex_nut*", {"base_color": [0.91, 0.92, 0.92], "metallic": 1.0,
+                                "roughness": 0.25, "specular": 0.5}),
+                  ("*", dict(LAMBERT, base_color=[0.6, 0.15, 0.08]))],
+                 [dict(RECT, power=80), {"type": "disc", "position_m": [0.3, 0.25, 0.6],
+                                         "target_m": [0, 0, 0], "radius_m": 0.1, "power": 30}],
+                 {"color": [0.08, 0.08, 0.08], "strength": 1.0}, True,
+                 "gear, bolt, nut (steel, dark and bright metal), peg and washer (Lambert), two "
+                 "area lights and a grey world: inter-reflections between parts", WORKCELL),
     "spot": (LAMBERT, [{"type": "spot", "position_m": [0.1, 0.1, 0.7], "target_m": [0, 0, 0],
                         "power": 300, "spot_size_deg": 40, "spot_blend": 0.3}],
              BLACK_WORLD, False,
@@ -141,32 +167,40 @@ def yaml_list(values, unit=""):
     return "[" + ", ".join(f"{v:g}{unit}" for v in values) + "]"
 
 
-FX, WIDTH = 131.25, 160
-
-
-def lens_mm():
+def lens_mm(shown):
     """The focal length Blender's camera gets (a 36 mm wide sensor), which cadsynth's lens is given
     too: it sets the aperture, focal_length / f_number, in both."""
-    return FX * 36.0 / WIDTH
+    width, _, f = shown["camera"]
+    return f * 36.0 / width
 
 
-def recipe(material, lights, world, samples):
+def rules(material):
+    """A case's materials as (name glob, material) pairs: one material is every part's."""
+    return material if isinstance(material, list) else [("*", material)]
+
+
+def recipe(material, lights, world, samples, shown):
     def mat(m):
         return (f"{{base_color: {yaml_list(m['base_color'])}, metallic: {m['metallic']}, "
                 f"roughness: {m['roughness']}, specular: {m['specular']}"
                 + (", distribution: multiscatter_ggx" if m.get("multiscatter") else "") + "}")
-    out = ["parts: [{file: sphere.obj, unit: mm}]",
-           "scene: {layout: row}",
-           "camera: {width: 160, height: 120, fx: 131.25, fy: 131.25, cx: 79.5, cy: 59.5"
-           + (f", lens: {{focal_length: {lens_mm():.6f} mm, f_number: {world['lens'][0]}, "
+    width, height, f = shown["camera"]
+    yaw, pitch, radius = shown["view"]
+    out = [f"parts: {shown['parts']}",
+           f"scene: {shown['scene']}",
+           f"camera: {{width: {width}, height: {height}, fx: {f}, fy: {f}, cx: {width / 2 - 0.5}, "
+           f"cy: {height / 2 - 0.5}"
+           + (f", lens: {{focal_length: {lens_mm(shown):.6f} mm, f_number: {world['lens'][0]}, "
               f"focus_distance: {1000 * world['lens'][1]:g} mm}}" if "lens" in world else "")
            + "}",
-           "sweep: {yaw: [30], pitch: [40], radius: [0.5 m]}",
+           f"sweep: {{yaw: [{yaw}], pitch: [{pitch}], radius: [{radius} m]}}",
            f"render: {{mode: pbr, samples: {samples}, bounces: 3, hdr: true, view: standard}}",
            "materials:",
            f"  floor: {mat(LAMBERT)}",
-           f"  assign: [{{name: '*', texture: none, {mat(material)[1:-1]}}}]",
-           "lighting:",
+           "  assign:"]
+    out += [f"    - {{name: '{glob}', texture: none, {mat(m)[1:-1]}}}"
+            for glob, m in rules(material)]
+    out += ["lighting:",
            "  lights:" if lights else "  lights: []"]
     for l in lights:
         keys = [f"type: {l['type']}"]
@@ -232,6 +266,8 @@ def main():
     parser.add_argument("--block-tolerance", type=float, default=0.1,
                         help="strict cases: largest 99th percentile of the blocks' differences")
     parser.add_argument("--strict", action="store_true", help="only the strict cases")
+    parser.add_argument("--scale", type=int, default=1,
+                        help="render N times the cases' width and height (for timing)")
     parser.add_argument("--skip-without-blender", action="store_true",
                         help="exit 77 (a skipped test) when Blender is not installed")
     args = parser.parse_args()
@@ -255,24 +291,29 @@ def main():
           f"{'p90':>6s} {'p99':>6s} {'ours s':>6s} {'Cycles':>6s}  (ratios cadsynth / Cycles, "
           f"{args.samples} spp, 3 bounces)")
     for name in names:
-        material, lights, world, strict, note = CASES[name]
+        material, lights, world, strict, note = CASES[name][:5]
+        shown = dict(CASES[name][5] if len(CASES[name]) > 5 else SPHERE)
+        shown["camera"] = tuple(args.scale * v for v in shown["camera"])
         with open(os.path.join(out, f"{name}.yaml"), "w") as f:
-            f.write(recipe(material, lights, world, args.samples))
+            f.write(recipe(material, lights, world, args.samples, shown))
         dataset = os.path.join(out, name)
         start = time.monotonic()
         subprocess.run([args.cadsynth, "generate", os.path.join(out, f"{name}.yaml"), "-o",
                         dataset, "--overwrite", "--quiet", "--no-cache"], check=True)
         ours = time.monotonic() - start
         frame = os.path.join(dataset, "train", "000000")
-        spec = {"dataset": dataset, "scene_id": 0, "im_id": 0, "width": 160, "height": 120,
-                "samples": args.samples, "bounces": 3,
+        masks = sorted(os.path.join(frame, "mask_visib", m)
+                       for m in os.listdir(os.path.join(frame, "mask_visib")))
+        spec = {"dataset": dataset, "scene_id": 0, "im_id": 0, "width": shown["camera"][0],
+                "height": shown["camera"][1], "samples": args.samples, "bounces": 3,
                 "output": os.path.join(out, f"{name}_cycles.exr"),
-                "part_material": material, "floor_material": LAMBERT,
+                "part_materials": rules(material), "floor_material": LAMBERT,
                 "lights": [blender_light(l) for l in lights],
                 "world": dict(world, image=os.path.join(out, world["image"]))
                 if "image" in world else world,
                 "compare": {"cadsynth": os.path.join(frame, "rgb_hdr", "000000.exr"),
-                            "mask": os.path.join(frame, "mask_visib", "000000_000000.png")},
+                            "masks": masks,
+                            "sheet": os.path.join(out, f"{name}_sheet.png")},
                 "stats": os.path.join(out, f"{name}_stats.json")}
         with open(os.path.join(out, f"{name}_spec.json"), "w") as f:
             json.dump(spec, f, indent=1)

@@ -11,6 +11,7 @@
 # Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
 # threshold, no denoising or adaptive sampling, the same bounces. The result is written as a
 # 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).
+import fnmatch
 import json
 import math
 import struct
@@ -202,7 +203,12 @@ def main():
     for p in placed:
         obj_id = p["obj_id"]
         if obj_id not in materials:
-            materials[obj_id] = principled(f"part{obj_id}", spec["part_material"])
+            # The first rule whose glob matches the part's name, as cadsynth's materials.assign.
+            rule = next((m for glob, m in spec["part_materials"]
+                         if fnmatch.fnmatch(p["name"].lower(), glob.lower())), None)
+            if rule is None:
+                raise SystemExit(f"no material rule matches part '{p['name']}'")
+            materials[obj_id] = principled(f"part{obj_id}", rule)
         v, n, f = read_ply(f"{root}/models/obj_{obj_id:06d}.ply")
         mesh = bpy.data.meshes.new(f"obj{obj_id}")
         mesh.from_pydata((v * 1e-3).tolist(), [], f.tolist())
@@ -277,7 +283,9 @@ def compare(c, cycles_path, stats_path):
     blocks of pixels differ (relative to Cycles), written as JSON."""
     ours = load_exr(c["cadsynth"])
     theirs = load_exr(cycles_path)
-    part = load_exr(c["mask"])[:, :, 0] > 0.5
+    part = np.zeros(ours.shape[:2], dtype=bool)
+    for mask in c["masks"]:
+        part |= load_exr(mask)[:, :, 0] > 0.5
     h, w = part.shape
     regions = {"all": np.ones_like(part), "part": part, "floor": ~part}
     out = {}
@@ -299,6 +307,26 @@ def compare(c, cycles_path, stats_path):
                      "p99_rel_diff": float(np.percentile(rel, 99)),
                      "max_rel_diff": float(rel.max())}
     json.dump(out, open(stats_path, "w"), indent=1)
+    if "sheet" in c:
+        write_sheet(c["sheet"], ours, theirs)
+
+
+def write_sheet(path, ours, theirs):
+    """cadsynth | Cycles | |difference| x 10, exposed so that Cycles' 99th percentile is white,
+    clipped and sRGB-encoded (Blender's Standard view), as a PNG."""
+    scale = 1.0 / max(np.percentile(theirs.mean(axis=2), 99), 1e-6)
+    panels = [ours * scale, theirs * scale, np.abs(ours - theirs) * scale * 10]
+    linear = np.clip(np.concatenate(panels, axis=1), 0.0, 1.0)
+    srgb = np.where(linear <= 0.0031308, 12.92 * linear,
+                    1.055 * np.power(linear, 1 / 2.4) - 0.055)
+    h, w = srgb.shape[:2]
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[:, :, :3] = srgb[::-1]  # Blender's rows run bottom up
+    image = bpy.data.images.new("sheet", w, h, alpha=False, float_buffer=False)
+    image.pixels.foreach_set(rgba.ravel())
+    image.filepath_raw = path
+    image.file_format = "PNG"
+    image.save()
 
 
 main()

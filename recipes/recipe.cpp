@@ -1032,7 +1032,7 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
                       std::vector<std::string> other) {
   for (const char* k : {"preset", "base_color", "metallic", "roughness", "specular", "anisotropic",
-                        "clearcoat", "clearcoat_roughness", "distribution", "texture"}) {
+                        "clearcoat", "clearcoat_roughness", "distribution", "tangent", "texture"}) {
     other.emplace_back(k);
   }
   r.ExpectMap(node, key, other);
@@ -1076,6 +1076,13 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
       r.Fail(d, key + ".distribution", "expected 'ggx' or 'multiscatter_ggx', got '" + name + "'");
     }
     m.surface.multiscatter = name == "multiscatter_ggx";
+  }
+  if (const YAML::Node t = node["tangent"]) {
+    // Where anisotropic highlights stretch: Blender's default (radial) or the model's x axis.
+    const std::string name = r.Scalar(t, key + ".tangent");
+    if (name != "radial" && name != "x")
+      r.Fail(t, key + ".tangent", "expected 'radial' or 'x', got '" + name + "'");
+    m.tangent = name == "x" ? Material::Tangent::kModelX : Material::Tangent::kRadial;
   }
   if (const YAML::Node t = node["texture"]) {
     const std::string tkey = key + ".texture";

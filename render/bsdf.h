@@ -9,8 +9,8 @@
 // reflects all light at every angle and roughness (its white furnace test), a metal loses what
 // single-scattering GGX loses at high roughness, and nothing ever reflects more than it receives.
 //
-// Directions are unit vectors in the local shading frame: normal +z, tangent +x (the brushing
-// direction of anisotropic metal). All colours are linear RGB.
+// Directions are unit vectors in the local shading frame: normal +z, tangent +x (where
+// anisotropic highlights stretch: Material::tangent). All colours are linear RGB.
 #pragma once
 
 #include <optional>

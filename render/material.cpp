@@ -74,8 +74,10 @@ const std::map<std::string, Material>& Presets() {
     p["steel"].texture = Tex(K::kNoise, 6.0, 0.05f, 0.08f);
     p["stainless"] = Make({0.67f, 0.64f, 0.60f}, 1.0f, 0.30f, 0.5f, 0.6f);
     p["stainless"].texture = Tex(K::kBrushed, 4.0, 0.06f, 0.10f, 0.05f);
+    p["stainless"].tangent = Material::Tangent::kModelX;  // along the brushed streaks
     p["aluminium"] = Make({0.91f, 0.92f, 0.92f}, 1.0f, 0.32f, 0.5f, 0.4f);
     p["aluminium"].texture = Tex(K::kBrushed, 6.0, 0.04f, 0.06f);
+    p["aluminium"].tangent = Material::Tangent::kModelX;
     p["brass"] = Make({0.91f, 0.78f, 0.42f}, 1.0f, 0.28f);
     p["brass"].texture = Tex(K::kNoise, 8.0, 0.08f, 0.10f);
     p["cast_iron"] = Make({0.42f, 0.41f, 0.40f}, 1.0f, 0.62f);

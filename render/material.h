@@ -57,6 +57,13 @@ struct Material {
   // The base colour comes from the part's CAD colour (or the palette) rather than `surface`:
   // presets of paints and plastics do, metals do not (their colour is the metal's).
   bool base_from_part = false;
+  // The direction anisotropic highlights stretch along (the BSDF's tangent). kRadial is Blender's
+  // default when a Principled BSDF's Tangent is not connected: around the object's z axis through
+  // the centre of its bounding box, in box-normalised coordinates (Cycles' tangent from Generated
+  // coordinates), so a turned part shines in rings; kModelX runs along the model's x axis (the
+  // `brushed` texture's streaks; the presets stainless and aluminium).
+  enum class Tangent { kRadial, kModelX };
+  Tangent tangent = Tangent::kRadial;
 
   bool Check(std::string* why) const;
 };

@@ -137,6 +137,19 @@ PreparedLight Prepare(const LightSource& s) {
   return l;
 }
 
+// The direction of anisotropic highlights at point p of an object (its own frame: the model's,
+// or the world's for fixtures and the floor) whose bounding box has `centre` and `size`
+// (Material::Tangent). Radial: Cycles' default tangent, (-y, x, 0) of the box-normalised
+// coordinates about the centre, which the shading frame then projects onto the surface; near the
+// axis, where it vanishes, the frame picks any tangent.
+Eigen::Vector3f TangentAt(const Material& m, const Eigen::Vector3f& p,
+                          const Eigen::Vector3f& centre, const Eigen::Vector3f& size) {
+  if (m.tangent == Material::Tangent::kModelX) return Eigen::Vector3f::UnitX();
+  const float gx = (p.x() - centre.x()) / std::max(size.x(), 1e-6f);
+  const float gy = (p.y() - centre.y()) / std::max(size.y(), 1e-6f);
+  return Eigen::Vector3f(-gy, gx, 0.0f);
+}
+
 // A cosine that may reach cos(theta - alpha) over directions within alpha of the one at
 // cos(theta): min(1, cos(theta) + sin(alpha)) (an upper bound for theta up to 90 degrees), 0 at
 // or below 0.
@@ -644,11 +657,11 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
     s.ns = (ti.rotation *
             (b0 * ti.normals[tri[0]] + b1 * ti.normals[tri[1]] + b2 * ti.normals[tri[2]]))
                .normalized();
-    s.tangent = ti.rotation.col(0);  // brushing runs along the model's x axis
     material = &ti.material;
     image = instance_images[inst].get();
     tex_p = ti.rotation.transpose() * (s.p - ti.translation);
     tex_n = ti.rotation.transpose() * s.ns;
+    s.tangent = ti.rotation * TangentAt(*material, tex_p, ti.box_centre, ti.box_size);
     if (ti.uvs != nullptr) {
       uv = b0 * ti.uvs[tri[0]] + b1 * ti.uvs[tri[1]] + b2 * ti.uvs[tri[2]];
       has_uv = true;
@@ -663,15 +676,16 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
     s.ng = Eigen::Vector3f(rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]).normalized();
     s.ns =
         (b0 * tf.normals[tri[0]] + b1 * tf.normals[tri[1]] + b2 * tf.normals[tri[2]]).normalized();
-    s.tangent = Eigen::Vector3f::UnitX();
     material = &tf.material;
+    s.tangent = TangentAt(*material, s.p, tf.box_centre, tf.box_size);
     image = fixture_images[f].get();
     tex_p = s.p;
     tex_n = s.ns;
   } else {
     s.ng = s.ns = Eigen::Vector3f::UnitZ();
-    s.tangent = Eigen::Vector3f::UnitX();
     material = &scene.floor;
+    // The floor is a square centred on the origin.
+    s.tangent = TangentAt(*material, s.p, Eigen::Vector3f::Zero(), Eigen::Vector3f::Ones());
     image = floor_image.get();
     tex_p = s.p;
     tex_n = s.ns;

@@ -31,6 +31,8 @@ struct TracedInstance {
   const Eigen::Vector2f* uvs = nullptr;                    // per vertex, or none
   Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();  // world_from_model
   Eigen::Vector3f translation = Eigen::Vector3f::Zero();
+  // The mesh's bounding box in the model frame (Material::Tangent::kRadial).
+  Eigen::Vector3f box_centre = Eigen::Vector3f::Zero(), box_size = Eigen::Vector3f::Ones();
   Material material;  // base colour already resolved
 };
 
@@ -38,6 +40,8 @@ struct TracedInstance {
 struct TracedFixture {
   const uint32_t* indices = nullptr;
   const Eigen::Vector3f* normals = nullptr;  // per vertex, world frame
+  // The fixture's bounding box, world frame (Material::Tangent::kRadial).
+  Eigen::Vector3f box_centre = Eigen::Vector3f::Zero(), box_size = Eigen::Vector3f::Ones();
   Material material;
 };
 

@@ -94,6 +94,7 @@ struct PartBuffers {
   std::vector<uint32_t> indices;  // 3 per triangle
   std::vector<Eigen::Vector3f> normals;
   std::vector<Eigen::Vector2f> uvs;  // per vertex, or empty
+  Eigen::Vector3f box_centre = Eigen::Vector3f::Zero(), box_size = Eigen::Vector3f::Ones();
 };
 
 constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
@@ -102,8 +103,14 @@ constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
 PartBuffers MakeBuffers(const Mesh& mesh) {
   PartBuffers buffers;
   buffers.positions.reserve(3 * mesh.num_vertices() + 1);
+  Eigen::AlignedBox3f box;
   for (const Eigen::Vector3f& p : mesh.positions) {
     buffers.positions.insert(buffers.positions.end(), {p.x(), p.y(), p.z()});
+    box.extend(p);
+  }
+  if (!box.isEmpty()) {
+    buffers.box_centre = box.center();
+    buffers.box_size = box.sizes();
   }
   buffers.positions.push_back(0.0f);
   buffers.indices.reserve(3 * mesh.num_triangles());
@@ -344,6 +351,8 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
       TracedFixture tf;
       tf.indices = im.fixtures[f].indices.data();
       tf.normals = im.fixtures[f].normals.data();
+      tf.box_centre = im.fixtures[f].box_centre;
+      tf.box_size = im.fixtures[f].box_size;
       tf.material = scene.fixtures[f].material;
       pts.fixtures.push_back(std::move(tf));
     }
@@ -358,6 +367,8 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
       ti.uvs = buffers.uvs.empty() ? nullptr : buffers.uvs.data();
       ti.rotation = im.instance_rotation[i];
       ti.translation = instance.world_from_model.translation().cast<float>();
+      ti.box_centre = buffers.box_centre;
+      ti.box_size = buffers.box_size;
       const int m = i < scene.instance_material.size() ? scene.instance_material[i] : -1;
       if (m >= static_cast<int>(scene.materials.size()))
         throw Error("renderer: instance '" + instance.name + "' refers to a missing material");

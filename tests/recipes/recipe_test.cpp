@@ -686,6 +686,17 @@ TEST(Recipe, PhysicallyBasedColoursAreLinearAndHexIsSrgb) {
   EXPECT_NEAR(light[1], 0.2159f, 1e-4f);  // sRGB 128/255 = 0.502
   EXPECT_FLOAT_EQ(light[2], 0.0f);
   EXPECT_FLOAT_EQ(spec.look.environment.color[0], 0.35f);
+  // Anisotropy's tangent: Blender's default (radial) unless a preset or the rule says x.
+  EXPECT_EQ(spec.material_rules.at(0).material.tangent, Material::Tangent::kRadial);
+  const RunSpec brushed = ParseRecipe(
+      "materials: {assign: [{name: a, preset: stainless}, {name: b, preset: steel, anisotropic: "
+      "0.5}, {name: c, preset: steel, tangent: x}]}\n",
+      "r.yaml", ".");
+  EXPECT_EQ(brushed.material_rules[0].material.tangent, Material::Tangent::kModelX);
+  EXPECT_EQ(brushed.material_rules[1].material.tangent, Material::Tangent::kRadial);
+  EXPECT_EQ(brushed.material_rules[2].material.tangent, Material::Tangent::kModelX);
+  EXPECT_EQ(ErrorOf("materials: {assign: [{name: a, tangent: along}]}\n"),
+            "r.yaml:1:41: materials.assign[0].tangent: expected 'radial' or 'x', got 'along'");
   EXPECT_EQ(ErrorOf("materials: {assign: [{name: '*', base_color: '#E7E7G7'}]}\n"),
             "r.yaml:1:46: materials.assign[0].base_color: expected linear [r, g, b] in 0..1 or an "
             "sRGB hex colour \"#RRGGBB\"");

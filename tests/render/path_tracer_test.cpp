@@ -477,6 +477,58 @@ Environment HalfSkyImage(double rotation_rad) {
   return e;
 }
 
+// An anisotropic metal floor (roughness 0.3, anisotropic 0.9: GGX alphas 0.206 along the tangent
+// and 0.039 across it) under a point light 300 mm above a floor point, seen from 600 mm straight
+// above it: the highlight stretches along the tangent, where the microfacet normals spread
+// 5.3x wider. The radiance-weighted spread of the highlight's floor points along x and y.
+Eigen::Vector2d HighlightSpread(Material::Tangent tangent, const Eigen::Vector3d& at) {
+  Scene scene = Dark();
+  scene.floor_material.surface.base_color = Eigen::Vector3f::Ones();
+  scene.floor_material.surface.metallic = 1;
+  scene.floor_material.surface.roughness = 0.3f;
+  scene.floor_material.surface.anisotropic = 0.9f;
+  scene.floor_material.texture = Texture{};
+  scene.floor_material.tangent = tangent;
+  LightSource point;
+  point.kind = LightSource::Kind::kPoint;
+  point.power = 100;
+  point.position = at + Eigen::Vector3d(0, 0, 300);
+  scene.light_sources = {point};
+  Camera camera;
+  camera.intrinsics = Intrinsics::FromFov(64, 64, 2 * std::atan(150.0 / 600.0));
+  camera.world_from_cam = LookingDown(at + Eigen::Vector3d(0, 0, 600));
+  const Frame frame = Renderer({}, scene, Pbr(64, 0)).Render(camera);
+  double w = 0;
+  Eigen::Vector2d m2 = Eigen::Vector2d::Zero();
+  for (int v = 0; v < 64; ++v) {
+    for (int u = 0; u < 64; ++u) {
+      const Eigen::Vector3d d =
+          camera.world_from_cam.linear() *
+          Eigen::Vector3d((u + 0.5 - camera.intrinsics.cx) / camera.intrinsics.fx,
+                          (v + 0.5 - camera.intrinsics.cy) / camera.intrinsics.fy, 1.0);
+      const Eigen::Vector3d p = camera.world_from_cam.translation() +
+                                d * (-camera.world_from_cam.translation().z() / d.z());
+      const double l = At(frame, u, v);
+      w += l;
+      m2 += l * Eigen::Vector2d((p - at).x() * (p - at).x(), (p - at).y() * (p - at).y());
+    }
+  }
+  return (m2 / w).cwiseSqrt();
+}
+
+TEST(PathTracer, AnisotropicHighlightsStretchAlongBlendersDefaultTangent) {
+  // x: along the model's (here the world's) x axis wherever the point is.
+  const Eigen::Vector2d x = HighlightSpread(Material::Tangent::kModelX, {1000, 0, 0});
+  EXPECT_GT(x.x(), 2.5 * x.y()) << x.transpose();
+  // Radial (Blender's default, Cycles' tangent from Generated coordinates): around the floor's
+  // centre, so along y at (1000, 0) and along x at (0, 1000) (far enough from the centre that the
+  // tangent turns by under 5 degrees over the highlight).
+  const Eigen::Vector2d on_x = HighlightSpread(Material::Tangent::kRadial, {1000, 0, 0});
+  EXPECT_GT(on_x.y(), 2.5 * on_x.x()) << on_x.transpose();
+  const Eigen::Vector2d on_y = HighlightSpread(Material::Tangent::kRadial, {0, 1000, 0});
+  EXPECT_GT(on_y.x(), 2.5 * on_y.y()) << on_y.transpose();
+}
+
 TEST(PathTracer, ImageWorldIsMappedAndLightsAsBlendersIs) {
   // Blender's mapping: looking along +x one sees the image's centre column (u = 0.5); a rotation of
   // 90 degrees (a Mapping node's Z, BlenderProc's rotation_euler) looks the image up at the

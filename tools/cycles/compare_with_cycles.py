@@ -59,9 +59,10 @@ SUN = {"type": "sun", "direction": [-0.4, 0.3, -1], "strength": 3, "angle_deg": 
 
 # name: (sphere material, lights (SI units, Blender's), world, strict, note). Strict cases use only
 # what cadsynth and Cycles 3.4 model alike (every light's units, Lambert, GGX with F = 1, the
-# world, bounces, the lens) and must agree within --tolerance (a number instead of True: their own
-# block tolerance; the lens's blur moves the blocks' p99 by 0.03 against 0.002-0.005 between the
-# renderers); the others show where Blender 3.4's models differ from Blender 4's, which cadsynth
+# world, bounces, the lens, the default tangent) and must agree within --tolerance (a number
+# instead of True: their own block tolerance; the lens's blur moves the blocks' p99 by 0.03
+# against 0.002-0.005 between the renderers, a tangent along x instead of Blender's default to
+# 0.19 against 0.03 at 128 samples); the others show where Blender 3.4's models differ from Blender 4's, which cadsynth
 # follows, and are reported only.
 CASES = {
     "point": (LAMBERT, [{"type": "point", "position_m": [0.2, -0.1, 0.6], "power": 100}],
@@ -82,6 +83,10 @@ CASES = {
     "lens": (LAMBERT, [{"type": "point", "position_m": [0.2, -0.1, 0.6], "power": 100}],
              {"color": [0.1, 0.1, 0.1], "strength": 1.0, "lens": [1.4, 0.25]}, 0.015,
              "thin lens f/1.4 focused at 0.25 m (the sphere 0.5 m away: 5 px blur); Lambert"),
+    "brushed": (dict(WHITE_METAL, anisotropic=0.8), [RECT], {"color": [0.05, 0.05, 0.05],
+                                                             "strength": 1.0}, 0.08,
+                "white metal, roughness 0.3, anisotropic 0.8 along Blender's default tangent "
+                "(around the part's z axis); from 0.25 m", dict(SPHERE, view=(30, 40, 0.25))),
     "workcell": ([("spur_gear*", {"base_color": [0.56, 0.57, 0.58], "metallic": 1.0,
                                   "roughness": 0.35, "specular": 0.5}),
                   ("hex_bolt*", {"base_color": [0.25, 0.25, 0.27], "metallic": 1.0,
@@ -183,7 +188,8 @@ def recipe(material, lights, world, samples, shown):
     def mat(m):
         return (f"{{base_color: {yaml_list(m['base_color'])}, metallic: {m['metallic']}, "
                 f"roughness: {m['roughness']}, specular: {m['specular']}"
-                + (", distribution: multiscatter_ggx" if m.get("multiscatter") else "") + "}")
+                + (", distribution: multiscatter_ggx" if m.get("multiscatter") else "")
+                + (f", anisotropic: {m['anisotropic']}" if m.get("anisotropic") else "") + "}")
     width, height, f = shown["camera"]
     yaw, pitch, radius = shown["view"]
     out = [f"parts: {shown['parts']}",

@@ -168,10 +168,10 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
     const Texture& t = m.texture;
     key << what << " " << p.base_color.transpose() << " " << p.metallic << " " << p.roughness << " "
         << p.specular << " " << p.anisotropic << " " << p.clearcoat << " " << p.clearcoat_roughness
-        << " " << p.multiscatter << " " << m.base_from_part << " texture "
-        << static_cast<int>(t.kind) << " " << t.scale_mm << " " << t.amount << " "
-        << t.roughness_amount << " " << t.bump << " " << t.color.transpose() << " " << t.seed << " "
-        << t.image.string();
+        << " " << p.multiscatter << " " << m.base_from_part << " tangent "
+        << static_cast<int>(m.tangent) << " texture " << static_cast<int>(t.kind) << " "
+        << t.scale_mm << " " << t.amount << " " << t.roughness_amount << " " << t.bump << " "
+        << t.color.transpose() << " " << t.seed << " " << t.image.string();
     if (t.kind == Texture::Kind::kImage) key << " projection " << static_cast<int>(t.projection);
     key << "\n";
     if (!t.image.empty()) images.insert(t.image);

@@ -178,6 +178,8 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
     check(changed, "a rule's clear coat");
     changed.material_rules.back().material.surface.multiscatter = true;
     check(changed, "a rule's distribution");
+    changed.material_rules.back().material.tangent = Material::Tangent::kModelX;
+    check(changed, "a rule's tangent");
   }
   EXPECT_EQ(
       ForEachChange<ArrangementOptions>(

@@ -547,7 +547,8 @@ struct PathTracer::Impl {
   std::vector<std::shared_ptr<const LinearImage>> fixture_images;
 
   struct Surface {
-    Eigen::Vector3f p, ng, ns, tangent;
+    Eigen::Vector3f p, ng, ns;
+    Eigen::Vector3f tangent = Eigen::Vector3f::UnitX();  // set for anisotropic materials only
     PrincipledParams params;
     float cone_width = 0;  // mm: the width of the ray cone at p
   };
@@ -571,7 +572,7 @@ struct PathTracer::Impl {
   struct ShadingFrame {
     Eigen::Vector3f t, b, n;
     explicit ShadingFrame(const Surface& surf) : n(surf.ns) {
-      t = surf.tangent - surf.tangent.dot(n) * n;
+      if (surf.params.anisotropic > 0) t = surf.tangent - surf.tangent.dot(n) * n;
       if (surf.params.anisotropic > 0 && t.squaredNorm() > 1e-6f) {
         t.normalize();
         b = n.cross(t);
@@ -661,7 +662,8 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
     image = instance_images[inst].get();
     tex_p = ti.rotation.transpose() * (s.p - ti.translation);
     tex_n = ti.rotation.transpose() * s.ns;
-    s.tangent = ti.rotation * TangentAt(*material, tex_p, ti.box_centre, ti.box_size);
+    if (material->surface.anisotropic > 0)
+      s.tangent = ti.rotation * TangentAt(*material, tex_p, ti.box_centre, ti.box_size);
     if (ti.uvs != nullptr) {
       uv = b0 * ti.uvs[tri[0]] + b1 * ti.uvs[tri[1]] + b2 * ti.uvs[tri[2]];
       has_uv = true;
@@ -677,7 +679,8 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
     s.ns =
         (b0 * tf.normals[tri[0]] + b1 * tf.normals[tri[1]] + b2 * tf.normals[tri[2]]).normalized();
     material = &tf.material;
-    s.tangent = TangentAt(*material, s.p, tf.box_centre, tf.box_size);
+    if (material->surface.anisotropic > 0)
+      s.tangent = TangentAt(*material, s.p, tf.box_centre, tf.box_size);
     image = fixture_images[f].get();
     tex_p = s.p;
     tex_n = s.ns;
@@ -685,7 +688,8 @@ PathTracer::Impl::Surface PathTracer::Impl::Hit(const RTCRayHit16& rh, int j,
     s.ng = s.ns = Eigen::Vector3f::UnitZ();
     material = &scene.floor;
     // The floor is a square centred on the origin.
-    s.tangent = TangentAt(*material, s.p, Eigen::Vector3f::Zero(), Eigen::Vector3f::Ones());
+    if (material->surface.anisotropic > 0)
+      s.tangent = TangentAt(*material, s.p, Eigen::Vector3f::Zero(), Eigen::Vector3f::Ones());
     image = floor_image.get();
     tex_p = s.p;
     tex_n = s.ns;

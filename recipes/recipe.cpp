@@ -121,6 +121,8 @@ class Reader {
   // set_principled_shader_value hold), "#RRGGBB" is sRGB-encoded (Blender's Hex field, a web or
   // paint colour) and is decoded to linear.
   Eigen::Vector3f LinearColor(const YAML::Node& node, const std::string& key) const {
+    if (node.IsNull())  // `color: #E7E7E7` unquoted: YAML reads a comment
+      Fail(node, key, "no colour; quote a hex colour (\"#RRGGBB\"), or give [r, g, b]");
     if (!node.IsScalar()) return Color(node, key);
     const std::string text = node.Scalar();
     const bool hex = text.size() == 7 && text[0] == '#' &&

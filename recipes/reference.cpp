@@ -66,7 +66,8 @@ std::string RecipeReference() {
       "ray casting; also background, floor, floor_color, ambient, lights, shadows, colors (the "
       "fast mode's look); mode: pbr reads the materials: {floor, default, assign: [{name|family|"
       "file, preset, base_color, metallic, roughness, specular, anisotropic, clearcoat, "
-      "clearcoat_roughness, distribution: ggx|multiscatter_ggx, texture}]} and "
+      "clearcoat_roughness, distribution: ggx|multiscatter_ggx, tangent: radial|x, texture}]} "
+      "(colours linear [r, g, b] or sRGB \"#RRGGBB\") and "
       "lighting: {lights: [{type: point|spot|rect|disc|sun, ...}], environment: {type: "
       "uniform|sky|image, ...}} sections (README, \"Physically based mode\")");
   Section<DepthModel>(

@@ -702,6 +702,9 @@ TEST(Recipe, PhysicallyBasedColoursAreLinearAndHexIsSrgb) {
             "sRGB hex colour \"#RRGGBB\"");
   EXPECT_NE(ErrorOf("materials: {assign: [{name: '*', base_color: [1.5, 0, 0]}]}\n").find("0..1"),
             std::string::npos);
+  // Unquoted, YAML reads the hex colour as a comment: the key is there, its value is not.
+  EXPECT_NE(ErrorOf("materials:\n  floor:\n    base_color: #E7E7E7\n").find("quote a hex colour"),
+            std::string::npos);
 }
 
 TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {

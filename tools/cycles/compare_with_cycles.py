@@ -6,8 +6,9 @@ renderer (issue 15). Needs Debian's `blender` package (3.4), which cadsynth itse
     apt-get install blender
     tools/cycles/compare_with_cycles.py [--samples 1024] [--cases point,spot,...] [--out DIR]
 
-Each case is a 40 mm sphere (a mesh this script writes) resting on the floor, seen from 0.5 m,
-160 x 120 pixels, lit by one kind of light or the world, with one material on the sphere and a
+Most cases are a sphere of 40 mm radius (a mesh this script writes) resting on the floor, seen
+from 0.5 m, 160 x 120 pixels (its row layout rests it tilted, so its model z axis, about which
+Blender's default tangent turns, is not the world's), lit by one kind of light or the world, with one material on the sphere and a
 Lambert floor (albedo 0.8). cadsynth renders it (`render.hdr`), then tools/cycles/cycles_scene.py
 rebuilds that very frame in Cycles from the dataset (the mesh cadsynth traced, its normals, its
 poses and camera) and the case's lights and materials in Blender's units, renders it at the same
@@ -69,11 +70,10 @@ CASES = {
               BLACK_WORLD, True, "point light 100 W; Lambert"),
     "rect": (WHITE_METAL, [RECT], BLACK_WORLD, True,
              "rect light 0.4 x 0.2 m, 60 W; white metal (F = 1: GGX alone), roughness 0.3"),
-    "disc": (WHITE_ROUGH_METAL, [{"type": "disc", "position_m": [0.15, 0.2, 0.45],
-                                  "target_m": [0, 0, 0], "radius_m": 0.15, "power": 40}],
-             BLACK_WORLD, True, "disc light r 0.15 m, 40 W; white metal, roughness 0.8"),
-    "sun": (WHITE_ROUGH_METAL, [SUN], BLACK_WORLD, True,
-            "sun 3 W/m2, 5 deg; white metal, roughness 0.8"),
+    "disc": (WHITE_METAL, [{"type": "disc", "position_m": [0.15, 0.2, 0.45],
+                            "target_m": [0, 0, 0], "radius_m": 0.15, "power": 40}],
+             BLACK_WORLD, True, "disc light r 0.15 m, 40 W; white metal, roughness 0.3"),
+    "sun": (WHITE_METAL, [SUN], BLACK_WORLD, True, "sun 3 W/m2, 5 deg; white metal, roughness 0.3"),
     "world": (LAMBERT, [], {"color": [0.5, 0.6, 0.7], "strength": 1.0}, True,
               "uniform world only; Lambert (occlusion, inter-reflection)"),
     "image": (WHITE_METAL, [], {"image": "sky.hdr", "strength": 1.0, "rotation_deg": 0}, True,
@@ -105,7 +105,9 @@ CASES = {
              "spot 300 W, 40 deg, blend 0.3; Blender 3 also multiplies by cos to the axis"),
     "metal": (METAL, [RECT], BLACK_WORLD, False,
               "coloured metal, 0.3; Blender 3's metal Fresnel is not Schlick's (Blender 4's)"),
-    "rough": (ROUGH_METAL, [SUN], BLACK_WORLD, False, "grey metal, 0.8; the same Fresnel"),
+    "rough": (ROUGH_METAL, [SUN], BLACK_WORLD, False,
+              "grey metal, 0.8; Blender 3 multiplies the two Smith masking terms, Blender 4 and "
+              "cadsynth use the height-correlated form"),
     "multiscatter": (dict(WHITE_ROUGH_METAL, roughness=1.0, multiscatter=True), [SUN],
                      BLACK_WORLD, False, "white metal, 1.0, Multiscatter GGX: Blender 3's is "
                      "Heitz's random walk, cadsynth's Turquin's (Blender 4's)"),
@@ -329,6 +331,9 @@ def main():
                                    "1", "--python", os.path.join(HERE, "cycles_scene.py"), "--",
                                    os.path.join(out, f"{name}_spec.json")], stdout=f, stderr=f,
                                   env=blender_env())
+        if done.returncode == 77:
+            print(f"{args.blender}: not Blender 3 (see {log}); the scripts use Blender 3's API")
+            sys.exit(77 if args.skip_without_blender else 2)
         if done.returncode != 0 or not os.path.exists(spec["stats"]):
             sys.exit(f"blender failed on case '{name}': see {log}")
         # Cycles' own render time (its log's last "Time:"), without starting Blender.

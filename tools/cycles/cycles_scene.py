@@ -7,8 +7,8 @@
 # SPEC.json (written by tools/cycles/compare_with_cycles.py) names the dataset, the frame, the
 # materials, lights and world in SI units (metres, W, W/m^2) and Cycles' settings; the geometry and
 # poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
-# normals), scene_gt_world.json and scene_camera.json. Cycles is set up as README's "Comparing with
-# Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
+# normals), scene_gt_world.json and scene_camera.json. Cycles is set up as README's "Checked
+# against Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
 # threshold, no denoising or adaptive sampling, the same bounces. The result is written as a
 # 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).
 import fnmatch
@@ -132,6 +132,11 @@ def add_light(i, l):
 
 
 def main():
+    if bpy.app.version[0] != 3:
+        # Blender 4 renamed the Principled BSDF's inputs (Specular, Clearcoat) and dropped
+        # use_auto_smooth: this script speaks Blender 3's API (Debian 12's 3.4).
+        print(f"Blender {bpy.app.version_string}: this script needs Blender 3")
+        sys.exit(77)
     spec = json.load(open(sys.argv[sys.argv.index("--") + 1]))
     scene = bpy.context.scene
     for obj in list(bpy.data.objects):
@@ -177,12 +182,11 @@ def main():
     cam_data.lens = k[0] * 36.0 / width
     if abs(k[0] - k[4]) > 1e-6 * k[0]:
         raise SystemExit("fx != fy: Blender's pixels are square")
-    # Shifts in units of the larger side. cadsynth's (and bop_toolkit's) pixel u spans [u, u + 1)
-    # with K's principal point in those coordinates; Blender's optical axis meets the image at its
-    # centre, (width / 2, height / 2) there, with y up.
-    side = max(width, height)
-    cam_data.shift_x = (width / 2 - k[2]) / side
-    cam_data.shift_y = (k[5] - height / 2) / side
+    # Shifts in units of the fitted side (the width here). cadsynth's (and bop_toolkit's) pixel u
+    # spans [u, u + 1) with K's principal point in those coordinates; Blender's optical axis meets
+    # the image at its centre, (width / 2, height / 2) there, with y up.
+    cam_data.shift_x = (width / 2 - k[2]) / width
+    cam_data.shift_y = (k[5] - height / 2) / width
     if "lens" in spec["world"]:
         # A thin lens as cadsynth's: aperture diameter = lens / f-number, focused at a distance
         # along the optical axis.

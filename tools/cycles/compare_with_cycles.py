@@ -15,8 +15,11 @@ poses and camera) and the case's lights and materials in Blender's units, render
 samples and bounces and compares: the ratio of mean radiance cadsynth / Cycles over the sphere's
 pixels, the floor's and all, and the relative difference of 8 x 8 pixel blocks (median, 90th
 and 99th percentile), and the seconds each took (cadsynth's whole run; Cycles' render without starting
-Blender); OUT/CASE_sheet.png shows cadsynth | Cycles | |difference| x 10. Exit status 1 when a strict case's ratio leaves [1 - tol, 1 + tol] (--tolerance, 0.03)
-or its blocks' 99th percentile exceeds --block-tolerance (0.1: a shadow in the wrong place).
+Blender), and the sub-pixel shift that best carries Cycles' image onto cadsynth's (a
+Lucas-Kanade step: 0.01 px when both see the same rays, 0.5 px for a half-pixel convention
+error); OUT/CASE_sheet.png shows cadsynth | Cycles | |difference| x 10. Exit status 1 when a strict case's ratio leaves [1 - tol, 1 + tol] (--tolerance, 0.03)
+or its blocks' 99th percentile exceeds --block-tolerance (0.1: a shadow in the wrong place) or
+its shift exceeds --shift-tolerance (0.1 px).
 """
 import argparse
 import json
@@ -273,6 +276,8 @@ def main():
                         help="strict cases: largest |ratio - 1| of the mean radiances")
     parser.add_argument("--block-tolerance", type=float, default=0.1,
                         help="strict cases: largest 99th percentile of the blocks' differences")
+    parser.add_argument("--shift-tolerance", type=float, default=0.1,
+                        help="strict cases: largest sub-pixel shift between the images (px)")
     parser.add_argument("--strict", action="store_true", help="only the strict cases")
     parser.add_argument("--scale", type=int, default=1,
                         help="render N times the cases' width and height (for timing)")
@@ -296,7 +301,8 @@ def main():
     sky_hdr(os.path.join(out, "sky.hdr"))
     failed = []
     print(f"{'case':9s} {'part':>7s} {'floor':>7s} {'all':>7s} {'blocks p50':>10s} "
-          f"{'p90':>6s} {'p99':>6s} {'ours s':>6s} {'Cycles':>6s}  (ratios cadsynth / Cycles, "
+          f"{'p90':>6s} {'p99':>6s} {'shift':>5s} {'ours s':>6s} {'Cycles':>6s}  (ratios "
+          f"cadsynth / Cycles, shift in px, "
           f"{args.samples} spp, 3 bounces)")
     for name in names:
         material, lights, world, strict, note = CASES[name][:5]
@@ -340,14 +346,16 @@ def main():
         times = re.findall(r"Time: (\d+):(\d+\.\d+)", open(log).read())
         theirs = 60 * int(times[-1][0]) + float(times[-1][1]) if times else float("nan")
         s = json.load(open(spec["stats"]))
+        shift = math.hypot(*s["shift_px"])
         ratios = [s[r]["ratio"] for r in ("part", "floor", "all") if r in s]
         print(f"{name:9s} {s['part']['ratio']:7.3f} {s['floor']['ratio']:7.3f} "
               f"{s['all']['ratio']:7.3f} {s['blocks']['median_rel_diff']:10.3f} "
               f"{s['blocks']['p90_rel_diff']:6.3f} {s['blocks']['p99_rel_diff']:6.3f} "
-              f"{ours:6.1f} {theirs:6.1f}  {note}")
+              f"{shift:5.2f} {ours:6.1f} {theirs:6.1f}  {note}")
         block_tolerance = args.block_tolerance if strict is True else strict
         if strict and (any(abs(r - 1) > args.tolerance for r in ratios) or
-                       s["blocks"]["p99_rel_diff"] > block_tolerance):
+                       s["blocks"]["p99_rel_diff"] > block_tolerance or
+                       shift > args.shift_tolerance):
             failed.append(name)
     if failed:
         print("outside the tolerance:", ", ".join(failed))

@@ -310,9 +310,23 @@ def compare(c, cycles_path, stats_path):
                      "p90_rel_diff": float(np.percentile(rel, 90)),
                      "p99_rel_diff": float(np.percentile(rel, 99)),
                      "max_rel_diff": float(rel.max())}
+    out["shift_px"] = [float(v) for v in image_shift(la, lb)]
     json.dump(out, open(stats_path, "w"), indent=1)
     if "sheet" in c:
         write_sheet(c["sheet"], ours, theirs)
+
+
+def image_shift(a, b):
+    """The sub-pixel translation (x, y) that best carries image b onto image a: one Lucas-Kanade
+    step on b's gradients, a(p) = b(p - d) to first order. Both renderers' pixels seeing the same
+    rays give (0, 0); a camera or pixel-centre convention off by half a pixel gives about 0.5."""
+    gy, gx = np.gradient(b)
+    diff = a - b
+    inner = (slice(2, -2), slice(2, -2))  # central differences need both neighbours
+    jx, jy, r = gx[inner].ravel(), gy[inner].ravel(), diff[inner].ravel()
+    m = np.array([[jx @ jx, jx @ jy], [jx @ jy, jy @ jy]])
+    rhs = -np.array([jx @ r, jy @ r])
+    return np.linalg.solve(m, rhs)
 
 
 def write_sheet(path, ours, theirs):

@@ -215,18 +215,15 @@ def recipe(material, lights, world, samples, shown):
            "  lights:" if lights else "  lights: []"]
     for l in lights:
         keys = [f"type: {l['type']}"]
-        if "position_m" in l:
-            keys.append(f"position: {yaml_list([1000 * v for v in l['position_m']], ' mm')}")
-        if "target_m" in l:
-            keys.append(f"target: {yaml_list([1000 * v for v in l['target_m']], ' mm')}")
+        # Lengths in metres here, in mm in the recipe (lists of them).
+        keys += [f"{k[:-2]}: {yaml_list([1000 * v for v in l[k]], ' mm')}"
+                 for k in ("position_m", "target_m", "size_m") if k in l]
         if "direction" in l:
             keys.append(f"direction: {yaml_list(l['direction'])}")
         if "power" in l:
             keys.append(f"power: {l['power']}")
         if "strength" in l:
             keys.append(f"strength: {l['strength']}, angle: {l['angle_deg']}")
-        if "size_m" in l:
-            keys.append(f"size: {yaml_list([1000 * v for v in l['size_m']], ' mm')}")
         if "radius_m" in l:
             keys.append(f"radius: {1000 * l['radius_m']:g} mm")
         if "spot_size_deg" in l:

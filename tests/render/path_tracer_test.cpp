@@ -481,14 +481,28 @@ Environment HalfSkyImage(double rotation_rad) {
 // and 0.039 across it) under a point light 300 mm above a floor point, seen from 600 mm straight
 // above it: the highlight stretches along the tangent, where the microfacet normals spread
 // 5.3x wider. The radiance-weighted spread of the highlight's floor points along x and y.
-Eigen::Vector2d HighlightSpread(Material::Tangent tangent, const Eigen::Vector3d& at) {
+// With `plate`, the surface is instead the top of a 2.4 m square plate part, 2 mm thick (its model
+// frame centred on its box, as MakePart makes it), turned 90 degrees about z at the world origin.
+Eigen::Vector2d HighlightSpread(Material::Tangent tangent, const Eigen::Vector3d& at,
+                                bool plate = false) {
   Scene scene = Dark();
-  scene.floor_material.surface.base_color = Eigen::Vector3f::Ones();
-  scene.floor_material.surface.metallic = 1;
-  scene.floor_material.surface.roughness = 0.3f;
-  scene.floor_material.surface.anisotropic = 0.9f;
-  scene.floor_material.texture = Texture{};
-  scene.floor_material.tangent = tangent;
+  Material metal;
+  metal.surface.base_color = Eigen::Vector3f::Ones();
+  metal.surface.metallic = 1;
+  metal.surface.roughness = 0.3f;
+  metal.surface.anisotropic = 0.9f;
+  metal.tangent = tangent;
+  scene.floor_material = metal;
+  std::vector<Part> parts;
+  if (plate) {
+    parts = {MakePart("plate", MakeBox(2400, 2400, 2), TessellationOptions{})};
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::AngleAxisd(kPi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    scene.floor = false;
+    scene.instances = {Instance{0, "plate", pose}};
+    scene.materials = {metal};
+    scene.instance_material = {0};
+  }
   LightSource point;
   point.kind = LightSource::Kind::kPoint;
   point.power = 100;
@@ -497,7 +511,7 @@ Eigen::Vector2d HighlightSpread(Material::Tangent tangent, const Eigen::Vector3d
   Camera camera;
   camera.intrinsics = Intrinsics::FromFov(64, 64, 2 * std::atan(150.0 / 600.0));
   camera.world_from_cam = LookingDown(at + Eigen::Vector3d(0, 0, 600));
-  const Frame frame = Renderer({}, scene, Pbr(64, 0)).Render(camera);
+  const Frame frame = Renderer(parts, scene, Pbr(64, 0)).Render(camera);
   double w = 0;
   Eigen::Vector2d m2 = Eigen::Vector2d::Zero();
   for (int v = 0; v < 64; ++v) {
@@ -507,7 +521,7 @@ Eigen::Vector2d HighlightSpread(Material::Tangent tangent, const Eigen::Vector3d
           Eigen::Vector3d((u + 0.5 - camera.intrinsics.cx) / camera.intrinsics.fx,
                           (v + 0.5 - camera.intrinsics.cy) / camera.intrinsics.fy, 1.0);
       const Eigen::Vector3d p = camera.world_from_cam.translation() +
-                                d * (-camera.world_from_cam.translation().z() / d.z());
+                                d * ((at.z() - camera.world_from_cam.translation().z()) / d.z());
       const double l = At(frame, u, v);
       w += l;
       m2 += l * Eigen::Vector2d((p - at).x() * (p - at).x(), (p - at).y() * (p - at).y());
@@ -527,6 +541,14 @@ TEST(PathTracer, AnisotropicHighlightsStretchAlongBlendersDefaultTangent) {
   EXPECT_GT(on_x.y(), 2.5 * on_x.x()) << on_x.transpose();
   const Eigen::Vector2d on_y = HighlightSpread(Material::Tangent::kRadial, {0, 1000, 0});
   EXPECT_GT(on_y.x(), 2.5 * on_y.y()) << on_y.transpose();
+  // A part's tangent turns with the part: at world (0, 1000) on the turned plate, model point
+  // (1000, 0) from its box's centre, where the radial tangent is model y, which the turn makes
+  // world -x. (Taking the model's tangent for the world's would give y.)
+  const Eigen::Vector2d part = HighlightSpread(Material::Tangent::kRadial, {0, 1000, 1}, true);
+  EXPECT_GT(part.x(), 2.5 * part.y()) << part.transpose();
+  // Along the model's x axis, which the turn makes world y.
+  const Eigen::Vector2d part_x = HighlightSpread(Material::Tangent::kModelX, {0, 1000, 1}, true);
+  EXPECT_GT(part_x.y(), 2.5 * part_x.x()) << part_x.transpose();
 }
 
 TEST(PathTracer, ImageWorldIsMappedAndLightsAsBlendersIs) {

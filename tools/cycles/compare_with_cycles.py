@@ -309,8 +309,9 @@ def main():
             f.write(recipe(material, lights, world, args.samples, shown))
         dataset = os.path.join(out, name)
         start = time.monotonic()
-        subprocess.run([args.cadsynth, "generate", os.path.join(out, f"{name}.yaml"), "-o",
-                        dataset, "--overwrite", "--quiet", "--no-cache"], check=True)
+        if subprocess.run([args.cadsynth, "generate", os.path.join(out, f"{name}.yaml"), "-o",
+                           dataset, "--overwrite", "--quiet", "--no-cache"]).returncode != 0:
+            sys.exit(f"cadsynth failed on case '{name}' ({os.path.join(out, name + '.yaml')})")
         ours = time.monotonic() - start
         frame = os.path.join(dataset, "train", "000000")
         masks = sorted(os.path.join(frame, "mask_visib", m)

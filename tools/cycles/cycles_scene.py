@@ -14,7 +14,6 @@
 import fnmatch
 import json
 import math
-import struct
 import sys
 
 import bpy

@@ -1,4 +1,4 @@
-# cadsynth in a container (README, "Docker and Apptainer"): Debian 12, the project's own setup
+# cadsynth in a container (docs/install.md, "Docker and Apptainer"): Debian 12, the project's own setup
 # script, a Release build installed to /usr/local (the executable, the Python module, the shipped
 # recipes in /usr/local/share/cadsynth/recipes).
 #   docker build -t cadsynth .

@@ -15,7 +15,7 @@
 #include <CGAL/Simple_cartesian.h>
 #include <Eigen/Eigenvalues>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/part_cache.h"
 
 namespace cadsynth {

@@ -95,7 +95,7 @@ struct SuctionGrasp {
   double seal = 0;
   // Wrench against gravity with the approach vertical (the part hanging under the cup):
   // 1 - (m g + 2 M / a) / V, M the moment of the weight about the contact, a the cup's radius;
-  // above 0 the rim stays pressed all round (see README, "Suction").
+  // above 0 the rim stays pressed all round (see docs/formats.md, "Grasp labels").
   double wrench = 0;
   // The rim's highest point above `point` towards the cup (mm; 0 on a flat face): the cup's body
   // clears the part from there up.

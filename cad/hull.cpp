@@ -11,7 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 namespace {

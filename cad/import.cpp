@@ -19,10 +19,10 @@
 #include <XCAFApp_Application.hxx>
 
 #include "cad/assembly.h"
-#include "cad/error.h"
+#include "cad/core/error.h"
+#include "cad/core/units.h"
 #include "cad/occt_shape.h"
 #include "cad/step.h"
-#include "cad/units.h"
 #include "cad/xde.h"
 
 namespace cadsynth {

@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 

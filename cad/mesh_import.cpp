@@ -9,11 +9,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
+#include "cad/core/units.h"
 #include "cad/import.h"
 #include "cad/mesh_analysis.h"
 #include "cad/mesh_formats.h"
-#include "cad/units.h"
 #include "cad/xde.h"
 
 namespace cadsynth {

@@ -15,7 +15,7 @@
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/occt_shape.h"
 
 namespace cadsynth {

@@ -29,7 +29,7 @@
 #include <gp_GTrsf.hxx>
 #include <gp_Trsf.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/mesh_analysis.h"
 #include "cad/occt_shape.h"
 #include "cad/xde.h"

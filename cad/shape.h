@@ -8,9 +8,9 @@
 #include <Eigen/Geometry>
 
 #include "cad/brep.h"
+#include "cad/core/schema.h"
 #include "cad/mesh.h"
 #include "cad/part.h"
-#include "cad/schema.h"
 
 namespace cadsynth {
 
@@ -30,7 +30,7 @@ struct TessellationOptions {
   // False, with a reason, when a value is out of range.
   bool Check(std::string* why) const;
 
-  // Every field, once (cad/schema.h): the recipe's `tessellation:` section, the run key.
+  // Every field, once (cad/core/schema.h): the recipe's `tessellation:` section, the run key.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
     visit(o.linear_deflection_mm,

@@ -24,10 +24,10 @@
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XSControl_WorkSession.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
+#include "cad/core/units.h"
 #include "cad/occt_shape.h"
 #include "cad/step_tessellated.h"
-#include "cad/units.h"
 #include "cad/xde.h"
 
 namespace cadsynth {

@@ -8,7 +8,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/mesh_analysis.h"
 
 namespace cadsynth::internal {

@@ -13,7 +13,7 @@
 #include <CGAL/Simple_cartesian.h>
 #include <Eigen/Eigenvalues>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 

@@ -28,7 +28,7 @@
 #include <XCAFDoc_ShapeTool.hxx>
 #include <gp_Trsf.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/mesh_analysis.h"
 #include "cad/occt_shape.h"
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 

@@ -20,9 +20,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "cad/error.h"
-#include "cad/random.h"
-#include "cad/util.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
+#include "cad/core/util.h"
 #include "dataset/bop_read.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"

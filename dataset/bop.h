@@ -38,8 +38,8 @@
 #include <string>
 #include <vector>
 
+#include "cad/core/schema.h"
 #include "cad/part.h"
-#include "cad/schema.h"
 #include "dataset/file_io.h"
 #include "dataset/frame_writer.h"
 #include "render/camera.h"
@@ -101,7 +101,8 @@ struct BopOptions {
   bool Check(std::string* why) const;
   bool IsTest(int index, int count) const;  // index-th of `count` images of a scene
 
-  // Every field, once (cad/schema.h): the recipe's `output:` section, the run key, the shard file.
+  // Every field, once (cad/core/schema.h): the recipe's `output:` section, the run key, the shard
+  // file.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
     visit(o.depth_scale, Field{"depth_scale", "number",

@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 

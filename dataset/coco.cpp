@@ -1,6 +1,6 @@
 #include "dataset/coco.h"
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 

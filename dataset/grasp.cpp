@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 #include "dataset/bop.h"
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <functional>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/file_io.h"
 #include "dataset/grasp.h"
 

@@ -8,7 +8,7 @@
 
 #include <zlib.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 

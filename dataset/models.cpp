@@ -6,7 +6,7 @@
 #include <iterator>
 #include <vector>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/hull.h"
 
 namespace cadsynth {

@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/file_io.h"
 #include "dataset/grasp.h"
 

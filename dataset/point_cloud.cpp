@@ -6,9 +6,9 @@
 #include <limits>
 #include <sstream>
 
-#include "cad/error.h"
-#include "cad/random.h"
-#include "cad/util.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
+#include "cad/core/util.h"
 
 namespace cadsynth {
 

@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/bop.h"
 #include "dataset/bop_read.h"
 #include "dataset/file_io.h"

@@ -10,12 +10,13 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "cad/error.h"
-#include "cad/random.h"
-#include "cad/schema.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
+#include "cad/core/schema.h"
+#include "cad/core/units.h"
+#include "cad/core/util.h"
 #include "cad/step.h"
-#include "cad/units.h"
-#include "cad/util.h"
+#include "recipes/recipe_schema.h"
 #include "recipes/units.h"
 #include "render/image.h"
 #include "variants/families.h"
@@ -58,6 +59,37 @@ class Reader {
       std::string what = "unknown key '" + (key.empty() ? k : key + "." + k) + "'";
       if (!best.empty()) what += " (did you mean '" + best + "'?)";
       throw Error(Where(it->first) + ": " + what);
+    }
+  }
+
+  // A mapping whose keys are all keys of the described section `schema` (recipes/recipe_schema.h);
+  // in a section with a tag (a light's `type`), a key that goes with other values of it is
+  // refused too.
+  void ExpectKeys(const YAML::Node& node, const std::string& key, const Key& schema) const {
+    if (!node.IsMap()) Fail(node, key, "expected a mapping of keys to values");
+    std::string tag_value = schema.tag_default;
+    if (!schema.tag.empty() && node[schema.tag] && node[schema.tag].IsScalar())
+      tag_value = node[schema.tag].Scalar();
+    std::vector<std::string> allowed;
+    for (const Key& k : schema.keys) allowed.push_back(k.name);
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const std::string k = it->first.as<std::string>();
+      const Key* known = schema.Find(k);
+      const std::string at = key.empty() ? k : key + "." + k;
+      if (known == nullptr) {
+        const std::string best = NearestName(k, allowed);
+        std::string what = "unknown key '" + at + "'";
+        if (!best.empty()) what += " (did you mean '" + best + "'?)";
+        throw Error(Where(it->first) + ": " + what);
+      }
+      if (!known->only_with.empty() && !tag_value.empty() &&
+          std::find(known->only_with.begin(), known->only_with.end(), tag_value) ==
+              known->only_with.end()) {
+        std::string with;
+        for (const std::string& t : known->only_with) with += (with.empty() ? "" : " or ") + t;
+        throw Error(Where(it->first) + ": " + at + ": goes with " + schema.tag + ": " + with +
+                    ", not " + tag_value);
+      }
     }
   }
 
@@ -300,7 +332,7 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
     }
   } else if (item["random"]) {
     const YAML::Node random = item["random"];
-    r.ExpectMap(random, key + ".random", {"count", "seed", "params"});
+    r.ExpectKeys(random, key + ".random", SchemaAt("parts[].random"));
     if (!random["count"] || !random["params"])
       r.Fail(random, key + ".random", "give 'count' and 'params'");
     const int count = r.Integer(random["count"], key + ".random.count");
@@ -314,7 +346,7 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
     // Each parameter draws from its own stream (its index in the family), variant by variant.
     struct Draw {
       const FamilyParam* param;
-      std::string stream;               // family.param.NAME (cad/random.h)
+      std::string stream;               // family.param.NAME (cad/core/random.h)
       std::vector<ParamValue> choices;  // a list: pick one
       double from = 0, to = 0;          // a range
     };
@@ -418,9 +450,7 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
   for (size_t i = 0; i < node.size(); ++i) {
     const YAML::Node item = node[i];
     const std::string key = where + "[" + std::to_string(i) + "]";
-    r.ExpectMap(item, key,
-                {"file", "unit", "encoding", "family", "params", "grid", "random", "class", "up",
-                 "symmetry", "symmetry_tolerance"});
+    r.ExpectKeys(item, key, SchemaAt("parts[]"));
     if (!item["file"] == !item["family"])
       r.Fail(item, key, "give exactly one of 'file' or 'family'");
     PartSource source;
@@ -432,7 +462,7 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
       for (size_t k = 0; k < n.size(); ++k) {
         const YAML::Node e = n[k];
         const std::string at = key + ".symmetry[" + std::to_string(k) + "]";
-        r.ExpectMap(e, at, {"axis", "order", "continuous", "through"});
+        r.ExpectKeys(e, at, SchemaAt("parts[].symmetry[]"));
         if (!e["axis"]) r.Fail(e, at, "give the 'axis' to turn about, e.g. [0, 0, 1]");
         PartSource::GivenSymmetry g;
         g.where = r.Where(e);
@@ -479,7 +509,7 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
 }
 
 void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "classes", {"by", "groups"});
+  r.ExpectKeys(node, "classes", SchemaAt("classes"));
   if (node["by"]) {
     const std::string by = r.Scalar(node["by"], "classes.by");
     if (by == "part") {
@@ -511,7 +541,7 @@ void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   }
 }
 
-// One described field (cad/schema.h) from the recipe, by its kind.
+// One described field (cad/core/schema.h) from the recipe, by its kind.
 template <typename T>
 void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field,
                T* value) {
@@ -549,14 +579,12 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
 }
 
 // Every described field of `options` that the recipe section `node` gives, except those read by
-// hand; checks that every key of the section is a described field or in `by_hand`.
+// hand; checks that every key of the section is a key of its `schema` (the described fields and
+// the section's other keys, read elsewhere).
 template <typename Options>
 void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section,
-                Options* options, std::vector<std::string> by_hand) {
-  Options::Fields(*options, [&](const auto&, const Field& field) {
-    if (!field.key.empty()) by_hand.emplace_back(field.key);
-  });
-  r.ExpectMap(node, section, by_hand);
+                Options* options, const Key& schema) {
+  r.ExpectKeys(node, section, schema);
   Options::Fields(*options, [&](auto& value, const Field& field) {
     if (field.key.empty() || field.by_hand || !node[std::string(field.key)]) return;
     ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field,
@@ -565,7 +593,7 @@ void ReadFields(const Reader& r, const YAML::Node& node, const std::string& sect
 }
 
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
-                      std::vector<std::string> other = {});
+                      const Key& schema);
 
 // Which parts a rule is for (MaterialRule, PhysicsRule): `name`, `family` and `file` patterns, at
 // least one given; a family without glob characters must exist.
@@ -590,9 +618,8 @@ void ReadPartPatterns(const Reader& r, const YAML::Node& item, const std::string
 // How a part or a container behaves in contact: density (kg/m3), friction, restitution; each a
 // number or, where `ranges`, [low, high] drawn per scene.
 void ReadPhysics(const Reader& r, const YAML::Node& node, const std::string& key, PhysicsDraw* d,
-                 std::vector<std::string> allowed, bool ranges) {
-  for (const char* k : {"density", "friction", "restitution"}) allowed.push_back(k);
-  r.ExpectMap(node, key, allowed);
+                 const Key& schema, bool ranges) {
+  r.ExpectKeys(node, key, schema);
   const auto value = [&](const char* k, double PhysicsMaterial::*field) {
     const YAML::Node v = node[k];
     if (!v) return;
@@ -620,12 +647,9 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
                    SceneSpec* scene) {
   Container& c = scene->arrangement.container;
   PhysicsDraw material(c.material);
-  ReadPhysics(r, node, key, &material,
-              {"type", "inner", "height", "wall", "floor", "corner_radius", "file", "unit",
-               "encoding", "up", "color", "material"},
-              false);
-  c.material = material.low;
   if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote, floor or file");
+  ReadPhysics(r, node, key, &material, SchemaAt("scene.container"), false);
+  c.material = material.low;
   const std::string type = r.Scalar(node["type"], key + ".type");
   if (type == "tote") {
     c.kind = Container::Kind::kTote;
@@ -668,7 +692,8 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
   length("corner_radius", &c.corner_radius_mm);
   if (node["color"]) scene->container_color = r.Color(node["color"], key + ".color");
   if (node["material"])
-    scene->container_material = ReadMaterial(r, node["material"], key + ".material");
+    scene->container_material =
+        ReadMaterial(r, node["material"], key + ".material", SchemaAt("scene.container.material"));
   std::string why;
   if (!(c.kind == Container::Kind::kMesh ? c.material.Check(&why) : c.Check(&why)))
     r.Fail(node, key, why);
@@ -677,10 +702,8 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
 // A scene's arrangement keys (ArrangementOptions::Fields) besides `other` keys read elsewhere,
 // and a pile's `container` and `physics`.
 void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, SceneSpec* scene,
-                std::vector<std::string> other) {
-  other.push_back("container");
-  other.push_back("physics");
-  ReadFields(r, node, key, &scene->arrangement, std::move(other));
+                const Key& schema) {
+  ReadFields(r, node, key, &scene->arrangement, schema);
   const bool pile = scene->arrangement.layout == Layout::kPile;
   const bool dropped = pile || scene->arrangement.pose == PoseMode::kDropped;
   if (node["container"] && !pile)
@@ -697,29 +720,36 @@ void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
       PhysicsRule rule;
       rule.where = r.Where(physics[i]);
       rule.physics = scene->arrangement.physics;
-      ReadPhysics(r, physics[i], at, &rule.physics, {"name", "family", "file"}, true);
+      ReadPhysics(r, physics[i], at, &rule.physics, SchemaAt("scene.physics"), true);
       ReadPartPatterns(r, physics[i], at, &rule);
       scene->physics_rules.push_back(std::move(rule));
     }
   } else if (physics) {
-    ReadPhysics(r, physics, key + ".physics", &scene->arrangement.physics, {}, true);
+    // One map for every part: rules (name, family, file) go in a list.
+    for (const char* k : {"name", "family", "file"}) {
+      if (physics.IsMap() && physics[k])
+        r.Fail(physics[k], key + ".physics." + k,
+               "a rule's pattern: give the rules as a list, [{" + std::string(k) + ": ..., ...}]");
+    }
+    ReadPhysics(r, physics, key + ".physics", &scene->arrangement.physics,
+                SchemaAt("scene.physics"), true);
   }
   r.Check(scene->arrangement, node, key);
 }
 
 SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::string& key) {
-  if (!node.IsMap()) r.ExpectMap(node, key, {"name", "parts"});
+  r.ExpectKeys(node, key, SchemaAt("scenes[]"));
   if (!node["parts"]) r.Fail(node, key, "a scene needs 'parts'");
   SceneSpec scene;
   // (`randomize` is read once the recipe's own is known.)
-  ReadLayout(r, node, key, &scene, {"name", "parts", "randomize"});
+  ReadLayout(r, node, key, &scene, SchemaAt("scenes[]"));
   scene.name = node["name"] ? r.Scalar(node["name"], key + ".name") : key;
   scene.sources = ReadParts(r, node["parts"], key + ".parts");
   return scene;
 }
 
 void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  ReadFields(r, node, "tessellation", &spec->tessellation, {"crease_angle"});
+  ReadFields(r, node, "tessellation", &spec->tessellation, SchemaAt("tessellation"));
   if (node["crease_angle"]) {
     spec->crease_angle_rad = r.Angle(node["crease_angle"], "tessellation.crease_angle");
     if (spec->crease_angle_rad < 0.0 || spec->crease_angle_rad > M_PI) {
@@ -740,11 +770,8 @@ Eigen::Vector3d Triple(const Reader& r, const YAML::Node& node, const std::strin
 
 // A camera's keys (`camera:`, or an entry of `cameras:` with its `other` keys read elsewhere).
 void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key, Intrinsics* kp,
-                SensorOptions* sensor, std::vector<std::string> other = {}) {
-  for (const char* known : {"preset", "width", "height", "fx", "fy", "cx", "cy", "hfov", "image",
-                            "imager", "depth", "distortion", "lens", "motion"})
-    other.push_back(known);
-  r.ExpectMap(node, key, other);
+                SensorOptions* sensor, const Key& schema) {
+  r.ExpectKeys(node, key, schema);
   Intrinsics& k = *kp;
   if (node["preset"]) {
     const std::string preset = r.Scalar(node["preset"], key + ".preset");
@@ -774,12 +801,12 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
   if (node["cx"]) k.cx = r.Number(node["cx"], key + ".cx");
   if (node["cy"]) k.cy = r.Number(node["cy"], key + ".cy");
   if (const YAML::Node distortion = node["distortion"]) {
-    ReadFields(r, distortion, key + ".distortion", &k.distortion, {});
+    ReadFields(r, distortion, key + ".distortion", &k.distortion, SchemaAt("camera.distortion"));
     r.Check(k, distortion, key + ".distortion");
   }
   r.Check(k, node, key);
   if (const YAML::Node lens = node["lens"]) {
-    ReadFields(r, lens, key + ".lens", &sensor->lens, {});
+    ReadFields(r, lens, key + ".lens", &sensor->lens, SchemaAt("camera.lens"));
     if (!lens["focal_length"])
       r.Fail(lens, key + ".lens", "give the lens's 'focal_length' (with f_number: the aperture)");
     r.Check(sensor->lens, lens, key + ".lens");
@@ -787,7 +814,7 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
   // motion: the camera's velocities in its own frame while the shutter is open.
   if (const YAML::Node motion = node["motion"]) {
     const std::string at = key + ".motion";
-    r.ExpectMap(motion, at, {"velocity_mm_s", "angular_velocity_deg_s", "exposure_ms"});
+    r.ExpectKeys(motion, at, SchemaAt("camera.motion"));
     CameraMotion& m = sensor->motion;
     if (!motion["exposure_ms"])
       r.Fail(motion, at, "give 'exposure_ms', how long the shutter is open");
@@ -814,7 +841,7 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
     }
   }
   if (const YAML::Node imager = node["imager"]) {
-    ReadFields(r, imager, key + ".imager", &sensor->imager, {});
+    ReadFields(r, imager, key + ".imager", &sensor->imager, SchemaAt("camera.imager"));
     r.Check(sensor->imager, imager, key + ".imager");
   }
   // depth: a model's name, or {model: NAME, KEY: VALUE...} overriding the model's defaults.
@@ -829,16 +856,14 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
       }
     });
     m = DepthModel::Defaults(m.kind);
-    if (depth.IsMap()) ReadFields(r, depth, key + ".depth", &m, {});
+    if (depth.IsMap()) ReadFields(r, depth, key + ".depth", &m, SchemaAt("camera.depth"));
     r.Check(m, depth, key + ".depth");
     sensor->depth = m;
   }
 }
 
 void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "sweep",
-              {"yaw", "pitch", "radius", "target", "sampler", "count", "seed", "roll_jitter",
-               "target_jitter", "min_visible_pixels"});
+  r.ExpectKeys(node, "sweep", SchemaAt("sweep"));
   const auto angle = [&](const YAML::Node& n, const std::string& k) { return r.Angle(n, k); };
   const auto length = [&](const YAML::Node& n, const std::string& k) { return r.Length(n, k); };
   SweepOptions& s = spec->sweep;
@@ -898,8 +923,7 @@ void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     const std::string key = "cameras[" + std::to_string(i) + "]";
     RigSensor sensor;
     sensor.where = r.Where(entry);
-    ReadCamera(r, entry, key, &sensor.intrinsics, &sensor.sensor,
-               {"name", "position", "look_at", "rotation"});
+    ReadCamera(r, entry, key, &sensor.intrinsics, &sensor.sensor, SchemaAt("cameras[]"));
     if (i > 0 && entry["motion"]) {
       r.Fail(entry["motion"], key + ".motion",
              "the rig moves as one: give its motion on the first camera (the rig's frame)");
@@ -982,8 +1006,7 @@ void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 }
 
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  ReadFields(r, node, "render", &spec->render,
-             {"background", "floor", "floor_color", "ambient", "lights", "shadows", "colors"});
+  ReadFields(r, node, "render", &spec->render, SchemaAt("render"));
   Scene& look = spec->look;
   if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
   if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
@@ -1000,7 +1023,7 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     look.lights.clear();
     for (size_t i = 0; i < lights.size(); ++i) {
       const std::string key = "render.lights[" + std::to_string(i) + "]";
-      r.ExpectMap(lights[i], key, {"direction", "position", "intensity"});
+      r.ExpectKeys(lights[i], key, SchemaAt("render.lights[]"));
       if (!lights[i]["direction"] == !lights[i]["position"])
         r.Fail(lights[i], key, "give a direction or a position");
       Scene::Light light;
@@ -1032,12 +1055,8 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 // A material: a preset and/or its parameters, and a texture.
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
-                      std::vector<std::string> other) {
-  for (const char* k : {"preset", "base_color", "metallic", "roughness", "specular", "anisotropic",
-                        "clearcoat", "clearcoat_roughness", "distribution", "tangent", "texture"}) {
-    other.emplace_back(k);
-  }
-  r.ExpectMap(node, key, other);
+                      const Key& schema) {
+  r.ExpectKeys(node, key, schema);
   Material m;
   if (node["preset"]) {
     const std::string name = r.Scalar(node["preset"], key + ".preset");
@@ -1091,10 +1110,8 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
     if (t.IsScalar() && t.Scalar() == "none") {
       m.texture = Texture{};
     } else {
-      r.ExpectMap(
-          t, tkey,
-          {"type", "scale", "amount", "roughness", "bump", "color", "seed", "file", "projection"});
-      if (!t["type"]) r.Fail(t, tkey, "a texture needs a 'type'");
+      if (!t.IsMap() || !t["type"]) r.Fail(t, tkey, "a texture needs a 'type'");
+      r.ExpectKeys(t, tkey, SchemaAt("materials.floor.texture"));
       static const std::vector<std::pair<std::string, Texture::Kind>> kinds = {
           {"noise", Texture::Kind::kNoise},         {"brushed", Texture::Kind::kBrushed},
           {"turned", Texture::Kind::kTurned},       {"checker", Texture::Kind::kChecker},
@@ -1165,15 +1182,17 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
 }
 
 void ReadMaterials(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "materials", {"floor", "default", "assign"});
+  r.ExpectKeys(node, "materials", SchemaAt("materials"));
   if (node["floor"]) {
-    spec->look.floor_material = ReadMaterial(r, node["floor"], "materials.floor");
+    spec->look.floor_material =
+        ReadMaterial(r, node["floor"], "materials.floor", SchemaAt("materials.floor"));
     if (spec->look.floor_material.texture.projection == Texture::Projection::kUv)
       r.Fail(node["floor"], "materials.floor",
              "the floor has no texture coordinates: use projection 'triplanar' (or 'auto')");
   }
   if (node["default"])
-    spec->default_material = ReadMaterial(r, node["default"], "materials.default");
+    spec->default_material =
+        ReadMaterial(r, node["default"], "materials.default", SchemaAt("materials.default"));
   if (const YAML::Node assign = node["assign"]) {
     if (!assign.IsSequence())
       r.Fail(assign, "materials.assign",
@@ -1181,10 +1200,9 @@ void ReadMaterials(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     for (size_t i = 0; i < assign.size(); ++i) {
       const std::string key = "materials.assign[" + std::to_string(i) + "]";
       const YAML::Node item = assign[i];
-      if (!item.IsMap()) r.ExpectMap(item, key, {});
       MaterialRule rule;
       rule.where = r.Where(item);
-      rule.material = ReadMaterial(r, item, key, {"name", "family", "file"});
+      rule.material = ReadMaterial(r, item, key, SchemaAt("materials.assign[]"));
       ReadPartPatterns(r, item, key, &rule);
       spec->material_rules.push_back(std::move(rule));
     }
@@ -1210,28 +1228,17 @@ Eigen::Vector3d ReadAim(const Reader& r, const YAML::Node& node, const std::stri
 }
 
 LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::string& key) {
-  if (!node.IsMap()) r.ExpectMap(node, key, {});
+  if (!node.IsMap()) r.Fail(node, key, "expected a mapping of keys to values");
   if (!node["type"]) r.Fail(node, key, "a light needs a 'type': point, spot, rect, disc or sun");
   const std::string type = r.Scalar(node["type"], key + ".type");
   LightSource l;
   using K = LightSource::Kind;
-  std::vector<std::string> keys = {"type", "color"};
   if (type == "point" || type == "spot") {
     l.kind = type == "point" ? K::kPoint : K::kSpot;
-    keys.insert(keys.end(), {"position", "power", "radius"});
-    if (l.kind == K::kSpot)
-      keys.insert(keys.end(), {"direction", "target", "spot_size", "spot_blend"});
   } else if (type == "rect" || type == "disc") {
     l.kind = type == "rect" ? K::kRect : K::kDisc;
-    keys.insert(keys.end(), {"position", "power", "direction", "target"});
-    if (l.kind == K::kRect) {
-      keys.insert(keys.end(), {"size", "x_axis"});
-    } else {
-      keys.emplace_back("radius");
-    }
   } else if (type == "sun") {
     l.kind = K::kSun;
-    keys.insert(keys.end(), {"strength", "direction", "angle"});
   } else {
     r.Fail(node["type"], key + ".type",
            "unknown light '" + type + "' (known: point, spot, rect, disc, sun)");
@@ -1240,7 +1247,7 @@ LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::
     r.Fail(node["power"], key + ".power", "a sun's is 'strength' (irradiance, W/m2, as Blender's)");
   if (l.kind != K::kSun && node["strength"])
     r.Fail(node["strength"], key + ".strength", "this light's is 'power' (W, as Blender's)");
-  r.ExpectMap(node, key, keys);
+  r.ExpectKeys(node, key, SchemaAt("lighting.lights[]"));
   if (node["color"]) l.color = r.LinearColor(node["color"], key + ".color");
   if (node["position"]) l.position = Triple(r, node["position"], key + ".position", true);
   if (l.kind != K::kPoint) l.direction = ReadAim(r, node, key, l.position, l.direction);
@@ -1277,7 +1284,7 @@ LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::
 }
 
 void ReadLighting(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectMap(node, "lighting", {"lights", "environment"});
+  r.ExpectKeys(node, "lighting", SchemaAt("lighting"));
   if (const YAML::Node lights = node["lights"]) {
     if (!lights.IsSequence())
       r.Fail(lights, "lighting.lights", "expected a list of {type: point|spot|rect|disc|sun, ...}");
@@ -1290,22 +1297,21 @@ void ReadLighting(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (const YAML::Node env = node["environment"]) {
     const std::string key = "lighting.environment";
     Environment& e = spec->look.environment;
-    if (!env.IsMap()) r.ExpectMap(env, key, {});
+    if (!env.IsMap()) r.Fail(env, key, "expected a mapping of keys to values");
     const std::string type = env["type"] ? r.Scalar(env["type"], key + ".type") : "uniform";
     if (type == "uniform") {
       e.kind = Environment::Kind::kUniform;
-      r.ExpectMap(env, key, {"type", "color", "strength"});
     } else if (type == "sky") {
       e.kind = Environment::Kind::kSky;
-      r.ExpectMap(env, key, {"type", "zenith", "horizon", "ground", "strength"});
     } else if (type == "image") {
       e.kind = Environment::Kind::kImage;
-      r.ExpectMap(env, key, {"type", "file", "strength", "rotation"});
-      if (!env["file"]) r.Fail(env, key, "an image environment needs a 'file' (HDR, EXR, ...)");
     } else {
       r.Fail(env["type"], key + ".type",
              "unknown environment '" + type + "' (known: uniform, sky, image)");
     }
+    r.ExpectKeys(env, key, SchemaAt("lighting.environment"));
+    if (e.kind == Environment::Kind::kImage && !env["file"])
+      r.Fail(env, key, "an image environment needs a 'file' (HDR, EXR, ...)");
     // Environment colours are linear radiance multipliers (Blender's world colour).
     if (env["color"]) e.color = r.LinearColor(env["color"], key + ".color");
     if (env["zenith"]) e.zenith = r.LinearColor(env["zenith"], key + ".zenith");
@@ -1439,13 +1445,9 @@ ImageChoice ReadImageFolder(const Reader& r, const YAML::Node& node, const std::
 }
 
 MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Node& node,
-                                                const std::string& key,
-                                                std::vector<std::string> other, DrawPer* per) {
-  for (const char* k : {"preset", "textures", "hue", "saturation", "value", "metallic", "roughness",
-                        "specular", "texture_scale", "per"}) {
-    other.emplace_back(k);
-  }
-  r.ExpectMap(node, key, other);
+                                                const std::string& key, const Key& schema,
+                                                DrawPer* per) {
+  r.ExpectKeys(node, key, schema);
   MaterialRandomization m;
   const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
   if (const YAML::Node p = node["preset"]) {
@@ -1465,7 +1467,7 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
     // Every image in a folder, projected triplanarly in tiles of `scale` (meshes with texture
     // coordinates use them).
     const std::string at = key + ".textures";
-    r.ExpectMap(t, at, {"folder", "scale"});
+    r.ExpectKeys(t, at, SchemaAt("randomize.floor.textures"));
     if (!t["folder"]) r.Fail(t, at, "give the 'folder' of images to pick from");
     const ImageChoice images = ReadImageFolder(r, t["folder"], at + ".folder");
     Texture texture;
@@ -1502,14 +1504,16 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
 // their materials.
 void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at,
                      RandomizeSpec* spec) {
-  r.ExpectMap(n, at, {"count", "objects", "size", "material"});
+  r.ExpectKeys(n, at, SchemaAt("randomize.distractors"));
   DistractorRandomization d;
   const auto number = [&r](const YAML::Node& v, const std::string& k) { return r.Number(v, k); };
   const auto length = [&r](const YAML::Node& v, const std::string& k) { return r.Length(v, k); };
   if (n["count"]) d.count = ReadDistribution(r, n["count"], at + ".count", number);
   if (n["size"]) d.size_mm = ReadDistribution(r, n["size"], at + ".size", length);
   if (n["material"]) {
-    d.material = ReadMaterialRandomization(r, n["material"], at + ".material", {}, &d.material_per);
+    d.material =
+        ReadMaterialRandomization(r, n["material"], at + ".material",
+                                  SchemaAt("randomize.distractors.material"), &d.material_per);
   }
   std::vector<DistractorObject> objects;
   if (const YAML::Node list = n["objects"]) {
@@ -1529,7 +1533,11 @@ void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at
       object.where = r.Where(item);
       if (item.IsScalar() || item["primitive"]) {
         const YAML::Node name_node = item.IsScalar() ? item : item["primitive"];
-        if (!item.IsScalar()) r.ExpectMap(item, key, {"primitive"});
+        if (!item.IsScalar()) {
+          r.ExpectKeys(item, key, SchemaAt("randomize.distractors.objects[]"));
+          if (item.size() > 1)
+            r.Fail(item, key, "a primitive is all a distractor object then says: no other keys");
+        }
         const std::string name = r.Scalar(name_node, key);
         const auto it = std::find_if(primitives.begin(), primitives.end(),
                                      [&](const auto& p) { return p.first == name; });
@@ -1543,8 +1551,7 @@ void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at
         objects.push_back(std::move(object));
         continue;
       }
-      r.ExpectMap(item, key,
-                  {"primitive", "file", "folder", "unit", "family", "params", "grid", "random"});
+      r.ExpectKeys(item, key, SchemaAt("randomize.distractors.objects[]"));
       if ((item["file"] ? 1 : 0) + (item["folder"] ? 1 : 0) + (item["family"] ? 1 : 0) != 1)
         r.Fail(item, key, "give one of 'primitive', 'file', 'folder' or 'family'");
       object.kind = DistractorObject::Kind::kSource;  // (no `up`: distractors fall at random)
@@ -1622,9 +1629,7 @@ void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at
 // `randomize:` (or a scene's, which replaces the groups it gives of `base`).
 RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::string& key,
                             const RandomizeSpec& base) {
-  r.ExpectMap(node, key,
-              {"seed", "parts", "floor", "fixtures", "lights", "environment", "camera",
-               "distractors", "background"});
+  r.ExpectKeys(node, key, SchemaAt("randomize"));
   RandomizeSpec spec = base;
   Randomization& d = spec.draws;
   const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
@@ -1638,11 +1643,9 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
     for (size_t i = 0; i < parts.size(); ++i) {
       const std::string at = key + ".parts[" + std::to_string(i) + "]";
       const YAML::Node item = parts[i];
-      if (!item.IsMap()) r.ExpectMap(item, at, {});
       PartRandomization p;
       p.where = r.Where(item);
-      p.material =
-          ReadMaterialRandomization(r, item, at, {"name", "family", "file", "each"}, &p.per);
+      p.material = ReadMaterialRandomization(r, item, at, SchemaAt("randomize.parts[]"), &p.per);
       if (const YAML::Node each = item["each"]) {
         const std::string e = r.Scalar(each, at + ".each");
         if (e != "part" && e != "instance")
@@ -1657,16 +1660,15 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
     }
   }
   if (node["floor"])
-    d.floor = ReadMaterialRandomization(r, node["floor"], key + ".floor", {}, &d.floor_per);
+    d.floor = ReadMaterialRandomization(r, node["floor"], key + ".floor",
+                                        SchemaAt("randomize.floor"), &d.floor_per);
   if (node["fixtures"]) {
-    d.fixtures =
-        ReadMaterialRandomization(r, node["fixtures"], key + ".fixtures", {}, &d.fixtures_per);
+    d.fixtures = ReadMaterialRandomization(r, node["fixtures"], key + ".fixtures",
+                                           SchemaAt("randomize.fixtures"), &d.fixtures_per);
   }
   if (const YAML::Node n = node["lights"]) {
     const std::string at = key + ".lights";
-    r.ExpectMap(n, at,
-                {"count", "type", "elevation", "azimuth", "distance", "power", "temperature",
-                 "size", "keep", "per"});
+    r.ExpectKeys(n, at, SchemaAt("randomize.lights"));
     LightRandomization l;
     if (n["count"]) l.count = ReadDistribution(r, n["count"], at + ".count", number);
     if (n["type"]) {
@@ -1701,10 +1703,10 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
   }
   if (const YAML::Node n = node["environment"]) {
     const std::string at = key + ".environment";
-    r.ExpectMap(n, at, {"images", "strength", "rotation", "temperature", "per"});
+    r.ExpectKeys(n, at, SchemaAt("randomize.environment"));
     EnvironmentRandomization e;
     if (const YAML::Node images = n["images"]) {
-      r.ExpectMap(images, at + ".images", {"folder"});
+      r.ExpectKeys(images, at + ".images", SchemaAt("randomize.environment.images"));
       if (!images["folder"])
         r.Fail(images, at + ".images", "give the 'folder' of equirectangular images to pick from");
       e.images = ReadImageFolder(r, images["folder"], at + ".images.folder");
@@ -1721,9 +1723,7 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
   }
   if (const YAML::Node n = node["camera"]) {
     const std::string at = key + ".camera";
-    r.ExpectMap(n, at,
-                {"exposure", "white_balance", "noise_gain", "focus_distance", "f_number",
-                 "rotation", "translation"});
+    r.ExpectKeys(n, at, SchemaAt("randomize.camera"));
     CameraRandomization c;
     const auto read = [&](const char* k, std::optional<Distribution>* dist, auto parse) {
       if (n[k]) *dist = ReadDistribution(r, n[k], at + "." + k, parse);
@@ -1742,7 +1742,7 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
   if (node["distractors"]) ReadDistractors(r, node["distractors"], key + ".distractors", &spec);
   if (const YAML::Node n = node["background"]) {
     const std::string at = key + ".background";
-    r.ExpectMap(n, at, {"folder", "per"});
+    r.ExpectKeys(n, at, SchemaAt("randomize.background"));
     if (!n["folder"]) r.Fail(n, at, "give the 'folder' of photos to pick from");
     BackgroundRandomization b;
     b.images = ReadImageFolder(r, n["folder"], at + ".folder");
@@ -1818,7 +1818,7 @@ void CheckRandomize(const Reader& r, const YAML::Node& node, const std::string& 
 }
 
 void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  ReadFields(r, node, "output", &spec->bop, {"dir", "formats", "rgb"});
+  ReadFields(r, node, "output", &spec->bop, SchemaAt("output"));
   // Keys that depend on others.
   if (node["visibility_delta"]) {
     if (spec->bop.visibility != BopOptions::Visibility::kBop19) {
@@ -1971,10 +1971,7 @@ namespace {
 
 // `grasps:` (see GraspSpec).
 GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
-  r.ExpectMap(
-      g, "grasps",
-      {"gripper", "friction", "samples", "per_part", "approaches", "clearance", "depths", "seed",
-       "suction", "approach_distance", "per_instance", "visibility_tolerance", "formats"});
+  r.ExpectKeys(g, "grasps", SchemaAt("grasps"));
   GraspSpec grasps;
   grasps.enabled = true;
   std::string why;
@@ -1986,9 +1983,7 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
       r.Fail(n, key, "unknown gripper '" + name + "' (known: franka, robotiq_2f85)");
     };
     if (node.IsMap()) {
-      r.ExpectMap(node, "grasps.gripper",
-                  {"preset", "name", "max_opening", "finger_width", "finger_thickness",
-                   "finger_length", "palm_height", "palm_width", "palm_depth", "pad"});
+      r.ExpectKeys(node, "grasps.gripper", SchemaAt("grasps.gripper"));
       ParallelJawGripper& p = grasps.gripper;
       if (node["preset"]) p = preset(node["preset"], "grasps.gripper.preset");
       if (node["name"]) p.name = r.Scalar(node["name"], "grasps.gripper.name");
@@ -2039,9 +2034,7 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
       grasps.suction = r.Bool(node, "grasps.suction");  // true: the default cup
     } else {
       grasps.suction = true;
-      r.ExpectMap(node, "grasps.suction",
-                  {"name", "diameter", "ring_points", "compliance", "stretch", "vacuum",
-                   "cup_length", "shaft_diameter", "shaft_length", "samples", "density"});
+      r.ExpectKeys(node, "grasps.suction", SchemaAt("grasps.suction"));
       SuctionCup& c = grasps.cup;
       if (node["name"]) c.name = r.Scalar(node["name"], "grasps.suction.name");
       const std::pair<const char*, double*> lengths[] = {{"diameter", &c.diameter_mm},
@@ -2119,10 +2112,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
   const Reader r(name, base_dir);
   RunSpec spec = DefaultRunSpec();
   try {
-    r.ExpectMap(
-        root, "",
-        {"parts", "scene", "scenes", "classes", "tessellation", "camera", "cameras", "sweep",
-         "render", "materials", "lighting", "randomize", "grasps", "output", "limits"});
+    r.ExpectKeys(root, "", RecipeSchema());
     if (root["scenes"] && (root["parts"] || root["scene"])) {
       r.Fail(root["scenes"], "scenes", "give either 'scenes' or 'parts' (with 'scene'), not both");
     }
@@ -2131,7 +2121,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
       scene.name = "scene";
       scene.sources = ReadParts(r, root["parts"], "parts");
       if (root["scene"]) {
-        ReadLayout(r, root["scene"], "scene", &scene, {});
+        ReadLayout(r, root["scene"], "scene", &scene, SchemaAt("scene"));
       }
       spec.scenes = {scene};
     } else if (root["scene"]) {
@@ -2157,7 +2147,8 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
       r.Fail(root["cameras"], "cameras",
              "give 'camera' (one camera) or 'cameras' (a rig of named cameras), not both");
     }
-    if (root["camera"]) ReadCamera(r, root["camera"], "camera", &spec.intrinsics, &spec.sensor);
+    if (root["camera"])
+      ReadCamera(r, root["camera"], "camera", &spec.intrinsics, &spec.sensor, SchemaAt("camera"));
     if (root["cameras"]) ReadCameras(r, root["cameras"], &spec);
     if (root["sweep"]) ReadSweep(r, root["sweep"], &spec);
     if (root["render"]) ReadRender(r, root["render"], &spec);
@@ -2226,7 +2217,7 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
     }
     if (const YAML::Node g = root["grasps"]) spec.grasps = ReadGrasps(r, g);
     if (root["limits"]) {
-      ReadFields(r, root["limits"], "limits", &spec.limits, {});
+      ReadFields(r, root["limits"], "limits", &spec.limits, SchemaAt("limits"));
       r.Check(spec.limits, root["limits"], "limits");
     }
     CheckLimits(spec, name);

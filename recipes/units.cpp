@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "cad/units.h"
+#include "cad/core/units.h"
 
 namespace cadsynth {
 namespace {

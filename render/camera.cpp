@@ -1,7 +1,7 @@
 #include "render/camera.h"
 
-#include "cad/random.h"
-#include "cad/util.h"
+#include "cad/core/random.h"
+#include "cad/core/util.h"
 
 #include <algorithm>
 #include <cmath>

@@ -14,7 +14,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "cad/schema.h"
+#include "cad/core/schema.h"
 
 namespace cadsynth {
 

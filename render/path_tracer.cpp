@@ -5,8 +5,8 @@
 #include <limits>
 #include <optional>
 
-#include "cad/error.h"
-#include "cad/random.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
 #include "render/bsdf.h"
 #include "render/image.h"
 #include "render/ray_packet.h"

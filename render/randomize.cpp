@@ -4,8 +4,8 @@
 #include <cmath>
 #include <set>
 
-#include "cad/error.h"
-#include "cad/random.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
 #include "render/image.h"
 #include "render/sampling.h"
 

@@ -43,8 +43,8 @@ struct Distribution {
   static Distribution Fixed(double v) { return {Kind::kFixed, v, v, {}}; }
   static Distribution Uniform(double lo, double hi) { return {Kind::kUniform, lo, hi, {}}; }
   bool Check(std::string* why) const;
-  // The draw of stream `stream` (cad/random.h UniformDraw) for `seed`: uniform, log-uniform and
-  // choice by the inverse CDF of draw 0, normal by Box-Muller from draws 0 and 1.
+  // The draw of stream `stream` (cad/core/random.h UniformDraw) for `seed`: uniform, log-uniform
+  // and choice by the inverse CDF of draw 0, normal by Box-Muller from draws 0 and 1.
   double Draw(uint64_t seed, const std::string& stream) const;
   // The smallest and largest value a draw can take; a normal's mean (where a quantity has a
   // range, the tails of a normal are clipped to it).

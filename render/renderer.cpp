@@ -10,7 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "render/denoise.h"
 #include "render/image.h"
 #include "render/path_tracer.h"

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "cad/core/schema.h"
 #include "cad/part.h"
-#include "cad/schema.h"
 #include "render/camera.h"
 #include "render/frame.h"
 #include "render/scene.h"
@@ -58,7 +58,8 @@ struct RenderOptions {
 
   bool Check(std::string* why) const;
 
-  // Every field, once (cad/schema.h): the recipe's `render:` section, the run key, the shard file.
+  // Every field, once (cad/core/schema.h): the recipe's `render:` section, the run key, the shard
+  // file.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
     visit(o.near_mm,

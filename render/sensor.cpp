@@ -13,7 +13,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "cad/random.h"
+#include "cad/core/random.h"
 
 namespace cadsynth {
 

@@ -66,7 +66,7 @@
 
 #include <Eigen/Core>
 
-#include "cad/schema.h"
+#include "cad/core/schema.h"
 #include "render/camera.h"
 
 namespace cadsynth {
@@ -96,12 +96,12 @@ struct DepthModel {
   double min_texture = 0.0;     // holes where the left window's grey sd is lower (0-255)
   uint64_t seed = 0;
 
-  // The published defaults of `kind` (the table in README's "Depth sensors").
+  // The published defaults of `kind` (the table in docs/sensors.md).
   static DepthModel Defaults(Kind kind);
   bool Check(std::string* why) const;
   bool needs_projector() const { return kind == Kind::kKinectV1 || kind == Kind::kStructuredLight; }
 
-  // Every field, once (cad/schema.h): the recipe's `camera.depth` section, the run key.
+  // Every field, once (cad/core/schema.h): the recipe's `camera.depth` section, the run key.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
     visit(o.kind, Field{"model",

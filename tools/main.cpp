@@ -15,12 +15,12 @@
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/part_cache.h"
 #include "dataset/file_io.h"
 #include "dataset/preview.h"
 #include "recipes/recipe.h"
-#include "recipes/reference.h"
+#include "recipes/recipe_schema.h"
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/export.h"
 #include "tools/pipeline/generate.h"
@@ -109,7 +109,8 @@ std::string Shortened(const std::string& message) {
 struct Args {
   // generate
   std::string recipe, output, shard, progress = "auto", cache;
-  bool overwrite = false, quiet = false, help_recipe = false, no_cache = false;
+  bool overwrite = false, quiet = false, help_recipe = false, recipe_schema = false,
+       no_cache = false;
   int threads = 0;
   // merge, preview
   std::string dir;
@@ -139,6 +140,10 @@ std::filesystem::path SelfExecutable() {
 int RunGenerate(const Args& a) {
   if (a.help_recipe) {
     std::cout << cadsynth::RecipeReference();
+    return 0;
+  }
+  if (a.recipe_schema) {
+    std::cout << cadsynth::RecipeJsonSchema();
     return 0;
   }
   std::optional<cadsynth::ShardSpec> shard;
@@ -334,8 +339,9 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
                 "read and analyse every part afresh (the output is the same bytes either way)")
       ->excludes(cache);
   gen->add_flag("--help-recipe", a.help_recipe,
-                "print the recipe keys of the output, render, tessellation and scene sections with "
-                "their defaults");
+                "print every recipe key, section by section, with its kind, default and meaning");
+  gen->add_flag("--recipe-schema", a.recipe_schema,
+                "print the recipe's JSON Schema (for editors and checkers; docs/recipes.md)");
 
   CLI::App* merge = add(
       "merge",

@@ -18,7 +18,7 @@ packages=(
   pybind11-dev python3-dev python3-numpy python3-torch
 )
 case "${1:-}" in
-  --tests) packages+=(slurm-wlm munge clang-format python3-pytest) ;;
+  --tests) packages+=(slurm-wlm munge clang-format python3-pytest python3-jsonschema) ;;
   "") ;;
   *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
 esac

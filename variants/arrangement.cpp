@@ -5,9 +5,9 @@
 #include <map>
 #include <sstream>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
 #include "cad/mesh_analysis.h"
-#include "cad/random.h"
 #include "variants/families.h"
 #include "variants/stable_pose.h"
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "cad/core/schema.h"
 #include "cad/part.h"
-#include "cad/schema.h"
 #include "variants/physics/pile.h"
 
 namespace cadsynth {
@@ -75,7 +75,8 @@ struct ArrangementOptions {
 
   bool Check(std::string* why) const;
 
-  // The recipe keys of a scene (the root `scene:` section or an entry of `scenes:`); cad/schema.h.
+  // The recipe keys of a scene (the root `scene:` section or an entry of `scenes:`);
+  // cad/core/schema.h.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
     visit(o.layout, Field{"layout",

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <sstream>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
+#include "cad/core/util.h"
 #include "cad/gear_recognition.h"
 #include "cad/mesh_analysis.h"
 #include "cad/symmetry.h"
-#include "cad/util.h"
 #include "variants/gear.h"
 #include "variants/gear_from_file.h"
 #include "variants/standard_parts.h"

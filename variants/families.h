@@ -8,9 +8,9 @@
 #include <variant>
 #include <vector>
 
+#include "cad/core/util.h"
 #include "cad/import.h"
 #include "cad/part.h"
-#include "cad/util.h"
 #include "variants/mechanisms.h"
 
 namespace cadsynth {

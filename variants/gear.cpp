@@ -27,7 +27,7 @@
 #include <gp_Trsf.hxx>
 #include <gp_Vec.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/occt_shape.h"
 
 namespace cadsynth {

@@ -11,7 +11,7 @@
 #include <ShapeUpgrade_UnifySameDomain.hxx>
 #include <gp_Ax2.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/occt_shape.h"
 #include "variants/gear.h"
 

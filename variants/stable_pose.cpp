@@ -5,7 +5,7 @@
 #include <map>
 #include <optional>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 namespace {

@@ -21,7 +21,7 @@
 #include <gp_Ax2.hxx>
 #include <gp_Circ.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/occt_shape.h"
 
 namespace cadsynth {

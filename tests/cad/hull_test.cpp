@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 namespace {

@@ -12,7 +12,7 @@
 #include <Standard_DomainError.hxx>
 #include <Standard_OutOfRange.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/occt_shape.h"
 #include "cad/step.h"
 #include "cad/step_tessellated.h"

@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/import.h"
 #include "cad/mesh_formats.h"
 #include "tests/test_support.h"

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 #include "tests/test_support.h"
 

@@ -8,7 +8,7 @@
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Solid.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/mesh_analysis.h"
 #include "cad/occt_shape.h"
 

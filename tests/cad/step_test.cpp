@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {

@@ -11,7 +11,7 @@
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/import.h"
 #include "cad/occt_shape.h"
 #include "cad/shape.h"

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 #include "dataset/coco.h"
 #include "render/renderer.h"

@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 namespace {

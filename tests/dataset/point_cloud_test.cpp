@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "cad/assembly.h"
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 
 namespace cadsynth {

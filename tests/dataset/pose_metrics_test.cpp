@@ -1,6 +1,6 @@
 #include "dataset/pose_metrics.h"
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/bop_read.h"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-"""Frames from Python are the frames `cadsynth generate` writes (README "Python")."""
+"""Frames from Python are the frames `cadsynth generate` writes (docs/python.md)."""
 
 import json
 import subprocess

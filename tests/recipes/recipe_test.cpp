@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "tests/test_support.h"
 
 namespace cadsynth {
@@ -863,8 +863,7 @@ TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
             "r.yaml:2:64: materials.default.texture.projection: unknown projection 'cylinder' "
             "(known: auto, triplanar, uv)");
   EXPECT_EQ(ErrorOf("materials:\n  default: {texture: {type: noise, projection: uv}}\n"),
-            "r.yaml:2:48: materials.default.texture.projection: only an image texture is projected "
-            "(procedural ones are solid)");
+            "r.yaml:2:36: materials.default.texture.projection: goes with type: image, not noise");
   const RunSpec uv = ParseRecipe(
       "materials:\n  assign: [{file: '*.obj', texture: {type: image, file: tile.png, projection: "
       "uv}}]\n",

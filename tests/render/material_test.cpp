@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "render/image.h"
 #include "tests/test_support.h"
 

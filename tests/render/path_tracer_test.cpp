@@ -11,7 +11,7 @@
 
 #include "tests/render/render_support.h"
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 #include "render/image.h"
 #include "render/renderer.h"

@@ -11,8 +11,8 @@
 
 #include "tests/render/render_support.h"
 
-#include "cad/error.h"
-#include "cad/random.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
 #include "cad/shape.h"
 #include "render/renderer.h"
 #include "render/sampling.h"

@@ -6,7 +6,7 @@
 
 #include "tests/render/render_support.h"
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 
 namespace cadsynth {

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 
 namespace cadsynth {

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "cad/assembly.h"
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 namespace cadsynth {
 namespace {

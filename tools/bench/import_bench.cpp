@@ -13,7 +13,7 @@
 
 #include <chrono>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/gear_recognition.h"
 #include "cad/import.h"
 #include "cad/symmetry.h"

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Frames per second through the Python iterator (no files written) against `cadsynth generate`
-writing the same recipe (README "Benchmarks"). Both read the parts from a warm part cache.
+writing the same recipe (docs/benchmarks.md). Both read the parts from a warm part cache.
 
     PYTHONPATH=build/python python3 tools/bench/python_throughput.py [RECIPE] [--cli build/tools/cadsynth]
 

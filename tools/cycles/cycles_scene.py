@@ -7,7 +7,7 @@
 # SPEC.json (written by tools/cycles/compare_with_cycles.py) names the dataset, the frame, the
 # materials, lights and world in SI units (metres, W, W/m^2) and Cycles' settings; the geometry and
 # poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
-# normals), scene_gt_world.json and scene_camera.json. Cycles is set up as README's "Checked
+# normals), scene_gt_world.json and scene_camera.json. Cycles is set up as docs/testing.md's "Checked
 # against Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
 # threshold, no denoising or adaptive sampling, the same bounces. The result is written as a
 # 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).

@@ -1,5 +1,5 @@
 // The libFuzzer entry point of one target of tools/fuzz/targets.h, chosen at compile time
-// (CADSYNTH_FUZZ_TARGET). Build with -DCADSYNTH_FUZZ=ON and clang; README, "Sanitizers and
+// (CADSYNTH_FUZZ_TARGET). Build with -DCADSYNTH_FUZZ=ON and clang; docs/testing.md, "Sanitizers and
 // fuzzing".
 #include "tools/fuzz/targets.h"
 

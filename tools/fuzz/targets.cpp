@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/hull.h"
 #include "cad/import.h"
 #include "cad/mesh_analysis.h"

@@ -11,7 +11,7 @@
 #include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/bop.h"
 #include "dataset/bop_read.h"
 #include "dataset/file_io.h"

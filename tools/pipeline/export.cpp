@@ -7,7 +7,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/step.h"
 #include "variants/families.h"
 

@@ -9,7 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "render/randomize.h"
 #include "render/renderer.h"
 #include "render/sampling.h"

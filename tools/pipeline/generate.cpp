@@ -15,7 +15,7 @@
 #include <tbb/task_arena.h>
 #include <nlohmann/json.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/acronym.h"
 #include "dataset/bop.h"
 #include "dataset/file_io.h"

@@ -14,7 +14,7 @@
 #include <cstring>
 #include <iostream>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/mesh_formats.h"
 #include "cad/part_cache.h"
 

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/gear_recognition.h"
 #include "cad/symmetry.h"
 

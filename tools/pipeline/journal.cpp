@@ -12,7 +12,7 @@
 #include <sstream>
 #include <system_error>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/part_cache.h"
 #include "dataset/file_io.h"
 #include "render/renderer.h"
@@ -65,7 +65,7 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   const Intrinsics& k = spec.intrinsics;
   key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " "
       << k.cy << "\n";
-  // Every described option (cad/schema.h), by name.
+  // Every described option (cad/core/schema.h), by name.
   const auto fields = [&key](const char* section, const auto& options) {
     key << section;
     std::decay_t<decltype(options)>::Fields(options, [&key](const auto& value, const Field& field) {

@@ -24,7 +24,7 @@ const std::string& BuildId();
 
 // What must match for a run to continue an interrupted one (and for shards to join): the recipe
 // file's text, the CAD files' bytes, the parts and their variants, every view, the image size,
-// every output and render option (each by its described name, cad/schema.h), the kernels and
+// every output and render option (each by its described name, cad/core/schema.h), the kernels and
 // this build of cadsynth.
 std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
                    const std::vector<SweepView>& views);

@@ -16,11 +16,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cad/assembly.h"
-#include "cad/error.h"
+#include "cad/core/error.h"
+#include "cad/core/schema.h"
 #include "cad/hull.h"
 #include "cad/import.h"
 #include "cad/part_cache.h"
-#include "cad/schema.h"
 #include "cad/shape.h"
 #include "cad/symmetry.h"
 #include "dataset/file_io.h"

@@ -19,7 +19,7 @@
 #include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/file_io.h"
 #include "tools/pipeline/journal.h"
 
@@ -34,7 +34,7 @@ std::string ShardFile(int index, int count, const char* ext) {
   return std::to_string(index) + "-of-" + std::to_string(count) + ext;
 }
 
-// The output options by their described names (cad/schema.h); enums and choice bools by name.
+// The output options by their described names (cad/core/schema.h); enums and choice bools by name.
 Json OptionsJson(const BopOptions& b) {
   Json j = Json::object();
   BopOptions::Fields(b, [&j](const auto& value, const Field& field) {

@@ -21,7 +21,7 @@
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/part_cache.h"
 #include "dataset/bop.h"
 #include "dataset/grasp_labels.h"
@@ -452,7 +452,7 @@ PYBIND11_MODULE(_cadsynth, m) {
   m.doc() = "cadsynth: CAD to labelled RGB-D frames (the compiled part; import cadsynth)";
   py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
 
-  py::class_<PyRecipe>(m, "Recipe", R"(A run's recipe (README "Recipes"), read and checked.
+  py::class_<PyRecipe>(m, "Recipe", R"(A run's recipe (docs/recipes.md), read and checked.
 
 Recipe.load(path), Recipe.from_yaml(text), Recipe.from_dict(dict) or Recipe.default() (the
 built-in default job). A bad recipe raises cadsynth.Error "FILE:LINE:COLUMN: what".)")
@@ -630,7 +630,7 @@ threads: at most this many threads (0: all cores).)")
           "shard"_a = py::none(), "masks"_a = true, "skip"_a = true, "threads"_a = 0,
           R"(Iterates over the run's frames (in unit order: scene-major, then view), each a dict
 of numpy arrays: rgb (or gray), depth (mm), instance, mask and mask_visib (N x H x W), obj_id,
-cam_from_model (N x 4 x 4), bbox_obj, bbox_visib, visib_fract, K, ... (README "Python").
+cam_from_model (N x 4 x 4), bbox_obj, bbox_visib, visib_fract, K, ... (docs/python.md).
 
 shard: (i, n) or "i/n": only the units g with g % n == i (as `generate --shard`).
 masks: False leaves out the N x H x W masks.

@@ -9,8 +9,8 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/collision_object.h>
 
-#include "cad/error.h"
-#include "cad/random.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
 #include "variants/grasp/grasp_geometry.h"
 
 namespace cadsynth {

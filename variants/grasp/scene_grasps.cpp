@@ -10,7 +10,7 @@
 #include <fcl/narrowphase/collision_object.h>
 #include <tbb/parallel_for.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "variants/grasp/grasp_geometry.h"
 
 namespace cadsynth {

@@ -10,7 +10,7 @@
 
 #include <HACD/hacdHACD.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/hull.h"
 #include "cad/part_cache.h"
 

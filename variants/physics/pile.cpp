@@ -8,9 +8,9 @@
 #include <btBulletDynamicsCommon.h>
 #include <Eigen/Eigenvalues>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
+#include "cad/core/random.h"
 #include "cad/mesh_analysis.h"
-#include "cad/random.h"
 
 namespace cadsynth {
 

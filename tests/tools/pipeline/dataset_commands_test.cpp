@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "dataset/preview.h"
 #include "tests/json_support.h"
 #include "tests/test_support.h"

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/import.h"
 #include "tests/test_support.h"
 #include "variants/families.h"

@@ -13,7 +13,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 #include "cad/step.h"
 #include "dataset/acronym.h"

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/part_cache.h"
 #include "tests/test_support.h"
 

@@ -1,6 +1,6 @@
-// Every described option (cad/schema.h) reaches everything that must know it: a change of any one
-// changes the run key, survives the shard file, is read from its recipe key, and is listed in the
-// recipe reference and README.
+// Every described option (cad/core/schema.h) reaches everything that must know it: a change of any
+// one changes the run key, survives the shard file, is read from its recipe key, and is listed in
+// the recipe reference and docs/recipes.md.
 #include <fstream>
 #include <functional>
 #include <set>
@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
-#include "recipes/reference.h"
+#include "cad/core/error.h"
+#include "recipes/recipe_schema.h"
 #include "tools/pipeline/generate.h"
 #include "tools/pipeline/journal.h"
 #include "tools/pipeline/shards.h"
@@ -271,21 +271,22 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   EXPECT_GT(read, 100);
 }
 
-// `cadsynth generate --help-recipe` and README list every recipe key of the described sections.
+// `cadsynth generate --help-recipe` and docs/recipes.md list every recipe key of the described
+// sections.
 TEST(Schema, ReferenceAndReadmeListEveryKey) {
   const std::string reference = RecipeReference();
-  std::ifstream in(std::string(CADSYNTH_SOURCE_DIR) + "/README.md");
+  std::ifstream in(std::string(CADSYNTH_SOURCE_DIR) + "/docs/recipes.md");
   std::stringstream readme;
   readme << in.rdbuf();
   const auto expect_key = [&](const std::string& section, const Field& field) {
     if (field.key.empty()) return;
     const std::string line = "  " + std::string(field.key) + ":";
-    EXPECT_NE(reference.find(section + ":"), std::string::npos) << section;
+    EXPECT_NE(SchemaAt(section).Find(field.key), nullptr) << section << "." << field.key;
     EXPECT_NE(reference.find(line), std::string::npos) << section << "." << field.key;
-    // README's recipe example lists it, set or commented out.
+    // docs/recipes.md's recipe example lists it, set or commented out.
     EXPECT_TRUE(readme.str().find(line) != std::string::npos ||
                 readme.str().find("  # " + std::string(field.key) + ":") != std::string::npos)
-        << "README lacks " << section << "." << field.key;
+        << "docs/recipes.md lacks " << section << "." << field.key;
   };
   const BopOptions bop;
   const RenderOptions render;

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/shape.h"
 #include "variants/grasp/parallel_jaw.h"
 #include "variants/grasp/suction.h"

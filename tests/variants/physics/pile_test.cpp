@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cad/error.h"
+#include "cad/core/error.h"
 #include "cad/import.h"
 #include "cad/shape.h"
 #include "variants/families.h"

@@ -1,4 +1,4 @@
-"""cadsynth: CAD to labelled RGB-D frames, straight into Python (README "Python").
+"""cadsynth: CAD to labelled RGB-D frames, straight into Python (docs/python.md).
 
     import cadsynth
     run = cadsynth.Recipe.load("recipes/bin_picking.yaml").prepare()

@@ -1,4 +1,4 @@
-"""cadsynth frames as a PyTorch IterableDataset (README "Python").
+"""cadsynth frames as a PyTorch IterableDataset (docs/python.md, "PyTorch").
 
     from torch.utils.data import DataLoader
     from cadsynth.torch import FrameDataset, collate

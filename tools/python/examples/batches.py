@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Batches of cadsynth frames from a torch DataLoader, and how fast they come (README "Python").
+"""Batches of cadsynth frames from a torch DataLoader, and how fast they come (docs/python.md, "PyTorch").
 
     PYTHONPATH=build/python python3 tools/python/examples/batches.py recipes/bin_picking.yaml \
         --workers 2 --batch 4 --batches 10

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The reference paper's loop, closed: a small pose estimator trained on CPU straight from
-cadsynth's frames, scored by `cadsynth eval` (README "Training a pose estimator").
+cadsynth's frames, scored by `cadsynth eval` (docs/python.md, "Training a pose estimator").
 
     PYTHONPATH=build/python python3 tools/python/examples/train_pose.py --out out/train_pose
 

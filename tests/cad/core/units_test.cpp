@@ -1,4 +1,4 @@
-#include "cad/units.h"
+#include "cad/core/units.h"
 
 #include <gtest/gtest.h>
 

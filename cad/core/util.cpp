@@ -1,4 +1,4 @@
-#include "cad/util.h"
+#include "cad/core/util.h"
 
 #include <algorithm>
 

@@ -4,8 +4,8 @@
 //
 // A stream's id is the 64-bit FNV-1a hash of its name, so streams never share draws (two magic
 // numbers could), adding a stream moves no other, and a draw can be named in documentation and
-// in a bug report. kRandomStreams lists every stream once; README's "Random streams" table is
-// written from it, and a test checks that names and ids are unique.
+// in a bug report. kRandomStreams lists every stream once; docs/recipes.md's "Random streams" table
+// is written from it, and a test checks that names and ids are unique.
 #pragma once
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Small utilities every module may use: name suggestions. Seeded draws: cad/random.h.
+// Small utilities every module may use: name suggestions. Seeded draws: cad/core/random.h.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "cad/error.h"
+#include "cad/core/error.h"
 
 #include <string>
 #include <vector>

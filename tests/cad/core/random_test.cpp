@@ -1,4 +1,4 @@
-#include "cad/random.h"
+#include "cad/core/random.h"
 
 #include <algorithm>
 #include <cmath>
@@ -28,9 +28,9 @@ TEST(RandomStreams, NamesAndIdsAreUniqueAndFnv1aIsTheStandardOne) {
   EXPECT_GE(names.size(), 14u);
 }
 
-// README's table of streams lists exactly these, in this order.
+// docs/recipes.md's table of streams lists exactly these, in this order.
 TEST(RandomStreams, ReadmeListsEveryStream) {
-  std::ifstream in(std::string(CADSYNTH_SOURCE_DIR) + "/README.md");
+  std::ifstream in(std::string(CADSYNTH_SOURCE_DIR) + "/docs/recipes.md");
   ASSERT_TRUE(in);
   std::vector<std::string> listed;
   bool inside = false;

@@ -1,4 +1,4 @@
-#include "cad/random.h"
+#include "cad/core/random.h"
 
 namespace cadsynth {
 

@@ -1,0 +1,740 @@
+#include "recipes/recipe_schema.h"
+
+#include <algorithm>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "cad/shape.h"
+#include "dataset/bop.h"
+#include "recipes/recipe.h"
+#include "render/camera.h"
+#include "render/material.h"
+#include "render/renderer.h"
+#include "render/sensor.h"
+#include "variants/arrangement.h"
+#include "variants/families.h"
+
+namespace cadsynth {
+namespace {
+
+// Builders that keep the tree below readable.
+Key Value(std::string name, std::string kind, std::string doc, std::string default_text = {}) {
+  Key key{std::move(name), std::move(kind), std::move(doc)};
+  key.default_text = std::move(default_text);
+  return key;
+}
+Key Choice(std::string name, std::vector<std::string> choices, std::string doc,
+           std::string default_text = {}) {
+  Key key = Value(std::move(name), "choice", std::move(doc), std::move(default_text));
+  key.choices = std::move(choices);
+  return key;
+}
+Key Section(std::string name, std::string doc, std::vector<Key> keys) {
+  Key key{std::move(name), "section", std::move(doc)};
+  key.keys = std::move(keys);
+  return key;
+}
+Key List(std::string name, std::string doc, std::vector<Key> keys) {
+  Key key = Section(std::move(name), std::move(doc), std::move(keys));
+  key.kind = "list";
+  return key;
+}
+Key Required(Key key) {
+  key.required = true;
+  return key;
+}
+Key OnlyWith(Key key, std::vector<std::string> tags) {
+  key.only_with = std::move(tags);
+  return key;
+}
+// `keys` followed by `more`.
+std::vector<Key> Join(std::vector<Key> keys, const std::vector<Key>& more) {
+  keys.insert(keys.end(), more.begin(), more.end());
+  return keys;
+}
+
+std::vector<std::string> FamilyNames() {
+  std::vector<std::string> names;
+  for (const FamilyInfo& f : Families()) names.push_back(f.name);
+  return names;
+}
+
+std::vector<std::string> CameraPresetNames() {
+  std::vector<std::string> names;
+  for (const CameraPreset& p : CameraPresets()) names.emplace_back(p.name);
+  return names;
+}
+
+const std::vector<std::string> kAxes = {"x", "y", "z", "-x", "-y", "-z"};
+
+// Which parts a rule is for: shell globs, case-insensitive, at least one.
+std::vector<Key> PartPatterns() {
+  return {Value("name", "text", "parts whose name matches this glob"),
+          Value("family", "text", "parts the family of this name (or glob) built"),
+          Value("file", "text", "parts read from files matching this glob")};
+}
+
+// A family's variants: params, grid or random, and whether the variants are one class.
+std::vector<Key> FamilyKeys() {
+  return {Choice("family", FamilyNames(), "a parametric family (docs/parts.md)"),
+          Value("params", "any", "the family's parameters: {name: value}"),
+          Value("grid", "any",
+                "variants: {parameter: a value, a list or {from, to, step}}, every combination"),
+          Section("random", "seeded random variants",
+                  {Required(Value("count", "integer", "how many variants (1-100000)")),
+                   Value("seed", "integer", "the draws' seed", "0"),
+                   Required(Value("params", "any",
+                                  "{parameter: {from, to} or [choices]}: what each draws"))})};
+}
+
+// An entry of `parts:` (a file or a family).
+std::vector<Key> PartKeys() {
+  Key symmetry =
+      List("symmetry",
+           "auto (find them), none, or a list measured on the mesh: [{axis: [0, 0, 1], order: 20}]",
+           {Required(Value("axis", "vector3", "the axis to turn about, in the part's CAD frame")),
+            Value("order", "integer", "n-fold (0: continuous)"),
+            Value("continuous", "bool", "a continuous rotation (order 0)"),
+            Value("through", "length3", "a point on the axis (default: the surface's centroid)")});
+  symmetry.scalar_kind = "choice";
+  symmetry.scalar_choices = {"auto", "none"};
+  symmetry.default_text = "auto";
+  return Join(
+      {Value("file", "path", "a STEP, IGES, BREP or mesh file (relative to the recipe)"),
+       Value("unit", "text", "the unit the file's numbers are in (mm, m, in, ...), not the file's"),
+       Value("encoding", "text", "STEP: the code page of raw-byte names (e.g. cp1251)")},
+      Join(FamilyKeys(),
+           {Choice("class", {"variant", "family"},
+                   "a family's variants: each its own class, or all one class", "variant"),
+            Choice("up", kAxes, "the axis the designer drew as up, turned to +z", "z"), symmetry,
+            Value("symmetry_tolerance", "length",
+                  "a moved surface point lands this near the surface (default: automatic)")}));
+}
+
+// A material of the physically based mode: a preset and/or its parameters, and a texture.
+std::vector<Key> MaterialKeys() {
+  Key base = Value("base_color", "linear_color",
+                   "linear [r, g, b], sRGB \"#RRGGBB\", or cad (the part's own colour)");
+  base.scalar_kind = "text";
+  Key texture =
+      Section("texture", "a procedural or image texture (none: no texture)",
+              {Required(Choice("type",
+                               {"noise", "brushed", "turned", "checker", "concrete", "wood", "rust",
+                                "scratches", "image", "none"},
+                               "the pattern")),
+               Value("scale", "length", "the pattern's size"),
+               Value("amount", "number", "how strongly it changes the colour (0-1)"),
+               Value("roughness", "number", "how strongly it changes the roughness (0-1)"),
+               Value("bump", "number", "how strongly it bumps the normal (0-1)"),
+               Value("color", "linear_color", "the pattern's second colour"),
+               Value("seed", "integer", "the pattern's seed"),
+               OnlyWith(Value("file", "path", "the image (PNG, JPEG, EXR, HDR)"), {"image"}),
+               OnlyWith(Choice("projection", {"auto", "triplanar", "uv"},
+                               "how the image is laid on the part", "auto"),
+                        {"image"})});
+  texture.tag = "type";
+  texture.scalar_kind = "choice";
+  texture.scalar_choices = {"none"};
+  std::vector<std::string> presets = MaterialPresetNames();
+  return {Choice("preset", presets, "a preset the other keys then change"),
+          base,
+          Value("metallic", "number", "0 (dielectric) to 1 (metal)"),
+          Value("roughness", "number", "microfacet roughness (0-1)"),
+          Value("specular", "number", "dielectric specular level (0-1; 0.5 is IOR 1.5)"),
+          Value("anisotropic", "number", "stretch of highlights along the tangent (0-1)"),
+          Value("clearcoat", "number", "a clear coat's weight (0-1)"),
+          Value("clearcoat_roughness", "number", "the clear coat's roughness (0-1)"),
+          Choice("distribution", {"ggx", "multiscatter_ggx"}, "Blender's microfacet distribution",
+                 "ggx"),
+          Choice("tangent", {"radial", "x"},
+                 "where anisotropic highlights stretch: Blender's radial default or the model's x",
+                 "radial"),
+          texture};
+}
+
+// Physics of parts in contact: each a number or, drawn per scene, a range [low, high].
+std::vector<Key> PhysicsKeys() {
+  return {Value("density", "number_range", "kg/m3"),
+          Value("friction", "number_range", "Coulomb's mu"),
+          Value("restitution", "number_range", "bounciness (0-1)")};
+}
+
+// The keys of a scene: its arrangement, a pile's container and the physics.
+std::vector<Key> SceneKeys() {
+  Key container = Section(
+      "container", "a pile's container",
+      Join({Required(Choice("type", {"tote", "floor", "file"},
+                            "a tote made here, the bare floor, or a CAD or mesh file")),
+            OnlyWith(Value("inner", "lengths", "inner size [length, width]"), {"tote"}),
+            OnlyWith(Value("height", "length", "wall height"), {"tote"}),
+            OnlyWith(Value("wall", "length", "wall thickness"), {"tote"}),
+            OnlyWith(Value("floor", "length", "floor thickness"), {"tote"}),
+            OnlyWith(Value("corner_radius", "length", "inner corner radius"), {"tote"}),
+            OnlyWith(Value("file", "path", "the container's CAD or mesh file"), {"file"}),
+            OnlyWith(Value("unit", "text", "the file's unit"), {"file"}),
+            OnlyWith(Value("encoding", "text", "STEP: code page of raw-byte names"), {"file"}),
+            OnlyWith(Choice("up", kAxes, "the file's up axis", "z"), {"file"}),
+            Value("color", "color", "its colour in the fast mode (sRGB [r, g, b])"),
+            Section("material", "its material in the pbr mode", MaterialKeys())},
+           {Value("density", "number", "kg/m3"), Value("friction", "number", "Coulomb's mu"),
+            Value("restitution", "number", "bounciness (0-1)")}));
+  container.tag = "type";
+  Key physics = Section(
+      "physics",
+      "a pile's (or dropped parts') physics: one map for all parts, or a list of rules {name | "
+      "family | file, density, friction, restitution}, the first match wins",
+      Join(PhysicsKeys(), PartPatterns()));
+  physics.scalar_kind = "list";  // (the rules' form)
+  return Join(KeysOf<ArrangementOptions>(), {container, physics});
+}
+
+// A camera's keys (`camera:`, or each entry of `cameras:`).
+std::vector<Key> CameraKeys() {
+  Key depth = Section("depth",
+                      "the depth sensor: a model's name, or {model, and keys overriding the "
+                      "model's published defaults} (docs/sensors.md)",
+                      KeysOf<DepthModel>());
+  depth.scalar_kind = "choice";
+  depth.scalar_choices = depth.keys.front().choices;
+  depth.default_text = "ideal";
+  return {
+      Choice("preset", CameraPresetNames(), "a camera's intrinsics (docs/sensors.md)", "kinect_v1"),
+      Value("width", "integer", "image width (px)", "640"),
+      Value("height", "integer", "image height (px)", "480"),
+      Value("fx", "number", "focal length along x (px)"),
+      Value("fy", "number", "focal length along y (px)"),
+      Value("cx", "number", "principal point x (px)"),
+      Value("cy", "number", "principal point y (px)"),
+      Value("hfov", "angle", "horizontal field of view instead of fx, fy, cx, cy"),
+      Choice("image", {"rgb", "gray", "gray16"}, "a colour or a grey camera", "rgb"),
+      Section("imager", "the image sensor: shot and read noise, vignetting", KeysOf<ImageSensor>()),
+      depth,
+      Section("distortion", "OpenCV's lens distortion", KeysOf<Distortion>()),
+      Section("lens", "pbr: depth of field through a thin lens", KeysOf<ThinLens>()),
+      Section("motion", "pbr: motion blur, the camera's velocities in its own frame",
+              {Value("velocity_mm_s", "vector3", "mm/s along the camera's axes"),
+               Value("angular_velocity_deg_s", "vector3", "degrees/s about its axes"),
+               Required(Value("exposure_ms", "number", "how long the shutter is open"))})};
+}
+
+// A material's randomisation (parts, floor, fixtures, distractors).
+std::vector<Key> MaterialDrawKeys() {
+  return {Value("preset", "names", "presets to pick from"),
+          Section("textures", "an image from a folder, projected triplanarly",
+                  {Required(Value("folder", "folder", "the images to pick from")),
+                   Value("scale", "length", "the tile size")}),
+          Value("hue", "distribution", "hue shift (turns)"),
+          Value("saturation", "distribution", "saturation factor"),
+          Value("value", "distribution", "value (brightness) factor"),
+          Value("metallic", "distribution", "metallic (0-1)"),
+          Value("roughness", "distribution", "roughness (0-1)"),
+          Value("specular", "distribution", "specular (0-1)"),
+          Value("texture_scale", "distribution", "factor on the texture's scale"),
+          Choice("per", {"frame", "scene"}, "how often it is drawn", "frame")};
+}
+
+std::vector<Key> RandomizeKeys() {
+  Key objects =
+      List("objects", "what distractors are: box, cylinder, sphere, {file}, {folder}, {family}",
+           Join({Choice("primitive", {"box", "cylinder", "sphere"}, "a primitive"),
+                 Value("file", "path", "a CAD or mesh file"),
+                 Value("folder", "folder", "every CAD or mesh file of a folder"),
+                 Value("unit", "text", "the files' unit")},
+                FamilyKeys()));
+  objects.scalar_kind = "choice";
+  objects.scalar_choices = {"box", "cylinder", "sphere"};
+  return {Value("seed", "integer", "the draws' seed", "0"),
+          List("parts", "parts' materials: the first rule matching a part draws it",
+               Join(Join(PartPatterns(), {Choice("each", {"part", "instance"},
+                                                 "one draw per part or per instance", "part")}),
+                    MaterialDrawKeys())),
+          Section("floor", "the floor's material", MaterialDrawKeys()),
+          Section("fixtures", "totes' and containers' materials", MaterialDrawKeys()),
+          Section("lights", "light sources placed around the scene",
+                  {Value("count", "distribution", "how many"),
+                   Value("type", "names", "point, spot, rect, disc"),
+                   Value("elevation", "distribution", "degrees above the floor"),
+                   Value("azimuth", "distribution", "degrees about the vertical"),
+                   Value("distance", "distribution_length", "from the scene's centre"),
+                   Value("power", "distribution", "W, as Blender's"),
+                   Value("temperature", "distribution", "colour temperature (K)"),
+                   Value("size", "distribution_length", "area lights' size"),
+                   Value("keep", "bool", "keep the recipe's own lights too", "false"),
+                   Choice("per", {"frame", "scene"}, "how often they are drawn", "frame")}),
+          Section("environment", "the world's light",
+                  {Section("images", "a world image per draw",
+                           {Required(Value("folder", "folder", "equirectangular images"))}),
+                   Value("strength", "distribution", "factor on the world's strength"),
+                   Value("rotation", "distribution", "degrees about the vertical"),
+                   Value("temperature", "distribution", "colour temperature (K)"),
+                   Choice("per", {"frame", "scene"}, "how often it is drawn", "frame")}),
+          Section("camera", "the camera's settings and pose jitter, per frame",
+                  {Value("exposure", "distribution", "stops"),
+                   Value("white_balance", "distribution", "K"),
+                   Value("noise_gain", "distribution", "factor on the image noise"),
+                   Value("focus_distance", "distribution_length", "the lens's focus"),
+                   Value("f_number", "distribution", "the lens's aperture"),
+                   Value("rotation", "distribution", "degrees of pose jitter"),
+                   Value("translation", "distribution_length", "pose jitter")}),
+          Section("distractors", "objects dropped among the parts, per scene, never labelled",
+                  {Value("count", "distribution", "how many"), objects,
+                   Value("size", "distribution_length", "their size"),
+                   Section("material", "their materials", MaterialDrawKeys())}),
+          Section("background", "photos pasted where nothing is hit (render.floor: false)",
+                  {Required(Value("folder", "folder", "the photos to pick from")),
+                   Choice("per", {"frame", "scene"}, "how often it is drawn", "frame")})};
+}
+
+std::vector<Key> GraspKeys() {
+  Key gripper =
+      Section("gripper", "the parallel-jaw gripper: a preset, or a map of its sizes",
+              {Choice("preset", {"franka", "robotiq_2f85"}, "the sizes to start from", "franka"),
+               Value("name", "text", "its name in the files"),
+               Value("max_opening", "length", "the widest opening"),
+               Value("finger_width", "length", "finger size across the closing direction"),
+               Value("finger_thickness", "length", "finger size along the closing direction"),
+               Value("finger_length", "length", "finger length"),
+               Value("palm_height", "length", "palm size along the approach"),
+               Value("palm_width", "length", "palm size along the closing direction"),
+               Value("palm_depth", "length", "palm size across"),
+               Value("pad", "length", "the pads' length at the fingertips")});
+  gripper.scalar_kind = "choice";
+  gripper.scalar_choices = {"franka", "robotiq_2f85"};
+  Key suction =
+      Section("suction", "a suction cup (true: the default cup)",
+              {Value("name", "text", "its name in the files"),
+               Value("diameter", "length", "the cup's diameter"),
+               Value("ring_points", "integer", "points on the seal's ring"),
+               Value("compliance", "length", "how far the lip gives"),
+               Value("stretch", "number", "how much the lip stretches"),
+               Value("vacuum", "number", "kPa"), Value("cup_length", "length", "the cup's length"),
+               Value("shaft_diameter", "length", "the shaft's diameter"),
+               Value("shaft_length", "length", "the shaft's length"),
+               Value("samples", "integer", "surface points tried per object"),
+               Value("density", "number", "kg/m3, for the weight the cup must hold")});
+  suction.scalar_kind = "bool";
+  Key formats = Value("formats", "choices", "the grasp files written");
+  formats.choices = {"acronym", "graspnet", "suctionnet"};
+  return {gripper,
+          Value("friction", "number", "Coulomb's mu at the contacts", "0.5"),
+          Value("samples", "integer", "surface points tried per object", "2000"),
+          Value("per_part", "integer", "keep at most this many grasps per object (0: all)", "0"),
+          Value("approaches", "integer", "approach directions about each contact pair's axis", "8"),
+          Value("clearance", "length", "fingers open to the width plus this on each side"),
+          Value("depths", "lengths", "fingertips' reach past the contacts"),
+          Value("seed", "integer", "the sampling's seed", "0"),
+          suction,
+          Value("approach_distance", "length", "the tool swept back this far must be free"),
+          Value("per_instance", "integer", "per frame and visible instance, the best this many"),
+          Value("visibility_tolerance", "length",
+                "a contact is seen when its instance shows within this depth"),
+          formats};
+}
+
+Key BuildSchema() {
+  Key parts = List("parts", "the parts of the one scene: files and families", PartKeys());
+  Key scenes =
+      List("scenes", "several BOP scenes, each {name, parts, the scene keys, randomize}",
+           Join({Value("name", "text", "the scene's name"),
+                 List("parts", "the scene's parts", PartKeys()),
+                 Section("randomize", "this scene's own randomisation groups", RandomizeKeys())},
+                SceneKeys()));
+  scenes.scalar_kind = "choice";
+  scenes.scalar_choices = {"default"};
+  Key rig = List("cameras", "a rig of named cameras moved together; the first is the rig's frame",
+                 Join({Required(Value("name", "text", "lower-case letters and digits (rgb_NAME/)")),
+                       Value("position", "length3", "in the rig's frame"),
+                       Value("look_at", "length3", "the point it looks at, in the rig's frame"),
+                       Value("rotation", "numbers", "rig_R_cam, 9 numbers row-major")},
+                      CameraKeys()));
+  Key lights = List("lights", "fast mode: directional or point lights (Lambert)",
+                    {Value("direction", "vector3", "directional: the way the light travels"),
+                     Value("position", "length3", "a point light (no fall-off)"),
+                     Value("intensity", "number", "its weight", "1")});
+  Key sources = List(
+      "lights", "light sources, Blender's units",
+      {Required(Choice("type", {"point", "spot", "rect", "disc", "sun"}, "the kind of light")),
+       Value("color", "linear_color", "its colour"),
+       OnlyWith(Value("position", "length3", "where it is"), {"point", "spot", "rect", "disc"}),
+       OnlyWith(Value("power", "number", "W, as Blender's"), {"point", "spot", "rect", "disc"}),
+       OnlyWith(Value("radius", "length", "its radius (soft shadows)"), {"point", "spot", "disc"}),
+       OnlyWith(Value("direction", "vector3", "the way it shines"),
+                {"spot", "rect", "disc", "sun"}),
+       OnlyWith(Value("target", "length3", "the point it shines at"), {"spot", "rect", "disc"}),
+       OnlyWith(Value("spot_size", "angle", "the cone's full angle"), {"spot"}),
+       OnlyWith(Value("spot_blend", "number", "the cone edge's softness (0-1)"), {"spot"}),
+       OnlyWith(Value("size", "length_or_pair", "a length, or [x, y]"), {"rect"}),
+       OnlyWith(Value("x_axis", "vector3", "the rectangle's x direction"), {"rect"}),
+       OnlyWith(Value("strength", "number", "irradiance, W/m2, as Blender's"), {"sun"}),
+       OnlyWith(Value("angle", "angle", "the sun's angular diameter"), {"sun"})});
+  sources.tag = "type";
+  Key environment =
+      Section("environment", "the world's light",
+              {Choice("type", {"uniform", "sky", "image"}, "the kind of world", "uniform"),
+               OnlyWith(Value("color", "linear_color", "its colour"), {"uniform"}),
+               Value("strength", "number", "a factor on its radiance", "1"),
+               OnlyWith(Value("zenith", "linear_color", "the sky's colour overhead"), {"sky"}),
+               OnlyWith(Value("horizon", "linear_color", "at the horizon"), {"sky"}),
+               OnlyWith(Value("ground", "linear_color", "below the horizon"), {"sky"}),
+               OnlyWith(Value("file", "path", "an equirectangular HDR or EXR image"), {"image"}),
+               OnlyWith(Value("rotation", "angle", "about the vertical, as a Mapping node's z"),
+                        {"image"})});
+  environment.tag = "type";
+  environment.tag_default = "uniform";
+  Key output_formats = Value("formats", "choices", "bop (always) plus any of the others");
+  output_formats.choices = {"bop", "coco", "paper", "pvn3d", "grasp"};
+  Key classes = Section(
+      "classes", "what one object class is",
+      {Choice("by", {"part", "assembly"}, "each distinct part, or each file's assembly", "part"),
+       Value("groups", "any", "{class name: a name glob or a list of globs}, in order")});
+
+  Key root = Section(
+      "", "a cadsynth recipe",
+      {parts, Section("scene", "how the parts of `parts` lie on the floor", SceneKeys()), scenes,
+       classes,
+       Section("tessellation", "how B-rep surfaces become triangles",
+               Join(KeysOf<TessellationOptions>(),
+                    {Value("crease_angle", "angle",
+                           "meshes: sharper edges keep their own normals (0: faceted)", "30")})),
+       Section("camera", "the one camera", CameraKeys()), rig,
+       Section(
+           "sweep", "the camera views: each axis a value, a list or {from, to, step}",
+           {Value("yaw", "series_angle", "about the vertical"),
+            Value("pitch", "series_angle", "elevation above the floor; 90: straight down"),
+            Value("radius", "series_length", "distance to the target"),
+            Value("target", "length3", "the point the camera looks at", "[0, 0, 0]"),
+            Choice("sampler", {"grid", "fibonacci", "random"}, "how views are placed", "grid"),
+            Value("count", "integer", "fibonacci, random: how many views"),
+            Value("seed", "integer", "random views and jitter", "0"),
+            Value("roll_jitter", "angle", "each view rolls about its axis by up to this", "0"),
+            Value("target_jitter", "length", "each view aims within this of the target", "0 mm"),
+            Value("min_visible_pixels", "integer", "skip views with fewer object pixels", "0")}),
+       Section("render", "ray casting and shading",
+               Join(KeysOf<RenderOptions>(),
+                    {Value("background", "color", "fast: where nothing is hit (sRGB)"),
+                     Value("floor", "bool", "a floor under the parts", "true"),
+                     Value("floor_color", "color", "the floor's colour (sRGB)"),
+                     Value("ambient", "number", "fast: ambient light", "0.3"), lights,
+                     Value("shadows", "bool", "fast: hard shadows", "true"),
+                     Choice("colors", {"cad", "palette"},
+                            "colours from the CAD files where they have them, or the palette",
+                            "cad")})),
+       Section("materials", "pbr: the materials of the floor and the parts",
+               {Section("floor", "the floor's material", MaterialKeys()),
+                Section("default", "parts no rule matches", MaterialKeys()),
+                List("assign", "rules: the first whose patterns match a part gives its material",
+                     Join(PartPatterns(), MaterialKeys()))}),
+       Section("lighting", "pbr: light sources and the world", {sources, environment}),
+       Section("randomize", "domain randomisation (docs/rendering.md)", RandomizeKeys()),
+       Section("grasps", "grasp labels per object and per frame", GraspKeys()),
+       Section("output", "the dataset's layout and formats",
+               Join(KeysOf<BopOptions>(),
+                    {Value("dir", "text", "the output folder (-o wins)"), output_formats,
+                     Choice("rgb", {"png", "jpg", "jpeg"}, "the colour images' format", "png")})),
+       Section("limits", "how much work a recipe may ask for (raise them if you mean it)",
+               KeysOf<RunLimits>())});
+  return root;
+}
+
+// --- The reference --------------------------------------------------------------------------
+
+std::string KindText(const Key& key) {
+  std::string text = key.kind;
+  if (!key.choices.empty()) {
+    text += " (";
+    for (size_t i = 0; i < key.choices.size(); ++i) text += (i ? " | " : "") + key.choices[i];
+    text += ")";
+  }
+  if (!key.scalar_kind.empty() && key.scalar_kind != "list") {
+    text += ", or " + key.scalar_kind;
+    if (!key.scalar_choices.empty()) {
+      text += " (";
+      for (size_t i = 0; i < key.scalar_choices.size(); ++i)
+        text += (i ? " | " : "") + key.scalar_choices[i];
+      text += ")";
+    }
+  }
+  return text;
+}
+
+void WriteReference(std::ostringstream& out, const Key& key, int depth) {
+  const std::string indent(2 * depth, ' ');
+  std::string line = indent + key.name + ":";
+  if (key.kind != "section" && key.kind != "list" && !key.default_text.empty())
+    line += " " + key.default_text;
+  line.resize(std::max<size_t>(line.size() + 1, 36), ' ');
+  std::string note = KindText(key);
+  if (key.required) note += ", required";
+  if (!key.only_with.empty()) {
+    std::string with;
+    for (const std::string& t : key.only_with) with += (with.empty() ? "" : " | ") + t;
+    note += " (" + with + " only)";
+  }
+  out << line << "# " << note << ": " << key.doc << "\n";
+  for (const Key& child : key.keys)
+    WriteReference(out, child, depth + (key.kind == "list" ? 2 : 1));
+}
+
+// --- The JSON Schema -------------------------------------------------------------------------
+
+using Json = nlohmann::ordered_json;
+
+Json NumberOrText() { return Json{{"type", Json::array({"number", "string"})}}; }
+
+Json Triple(const Json& item) {
+  return Json{{"type", "array"}, {"items", item}, {"minItems", 3}, {"maxItems", 3}};
+}
+
+// A value of `kind` (not a section or list).
+Json ValueSchema(const std::string& kind, const std::vector<std::string>& choices) {
+  const Json number = Json{{"type", "number"}};
+  const Json length = NumberOrText();  // 30, "30 mm", "0.5 m"
+  const Json hex = Json{{"type", "string"}, {"pattern", "^#[0-9a-fA-F]{6}$"}};
+  if (kind == "length" || kind == "angle") return length;
+  if (kind == "number") return number;
+  if (kind == "integer") return Json{{"type", "integer"}};
+  if (kind == "bool") return Json{{"type", "boolean"}};
+  if (kind == "text" || kind == "path" || kind == "folder") return Json{{"type", "string"}};
+  if (kind == "choice") {
+    Json e = Json::array();
+    for (const std::string& c : choices) {
+      // A YAML loader reads `true`, `false` and numbers as such: accept them as the names.
+      e.push_back(c);
+      if (c == "true" || c == "false") e.push_back(c == "true");
+    }
+    return Json{{"enum", e}};
+  }
+  if (kind == "choices") return Json{{"type", "array"}, {"items", ValueSchema("choice", choices)}};
+  if (kind == "color") return Triple(number);
+  if (kind == "linear_color") return Json{{"anyOf", Json::array({Triple(number), hex})}};
+  if (kind == "vector3") return Triple(number);
+  if (kind == "length3") return Triple(length);
+  if (kind == "lengths") return Json{{"type", "array"}, {"items", length}};
+  if (kind == "numbers") return Json{{"type", "array"}, {"items", number}};
+  if (kind == "length_or_pair") {
+    return Json{{"anyOf", Json::array({length, Json{{"type", "array"},
+                                                    {"items", length},
+                                                    {"minItems", 2},
+                                                    {"maxItems", 2}}})}};
+  }
+  if (kind == "number_range") {
+    return Json{{"anyOf", Json::array({number, Json{{"type", "array"},
+                                                    {"items", number},
+                                                    {"minItems", 2},
+                                                    {"maxItems", 2}}})}};
+  }
+  if (kind == "series_angle" || kind == "series_length") {
+    Json range = {{"type", "object"},
+                  {"properties", {{"from", length}, {"to", length}, {"step", length}}},
+                  {"required", Json::array({"from", "to", "step"})},
+                  {"additionalProperties", false}};
+    return Json{
+        {"anyOf", Json::array({length, Json{{"type", "array"}, {"items", length}}, range})}};
+  }
+  if (kind == "distribution" || kind == "distribution_length") {
+    Json anyOf = Json::array({length});
+    for (const char* d : {"uniform", "normal", "log_uniform", "choice"}) {
+      Json list = {{"type", "array"}, {"items", length}};
+      if (std::string(d) != "choice") list["minItems"] = list["maxItems"] = 2;
+      anyOf.push_back(Json{{"type", "object"},
+                           {"properties", {{d, list}}},
+                           {"required", Json::array({d})},
+                           {"additionalProperties", false}});
+    }
+    return Json{{"anyOf", anyOf}};
+  }
+  if (kind == "names") {
+    const Json text = {{"type", "string"}};
+    return Json{
+        {"anyOf",
+         Json::array({text, Json{{"type", "array"}, {"items", text}},
+                      Json{{"type", "object"},
+                           {"properties", {{"choice", {{"type", "array"}, {"items", text}}}}},
+                           {"required", Json::array({"choice"})},
+                           {"additionalProperties", false}}})}};
+  }
+  if (kind == "any") return Json::object();
+  throw std::logic_error("recipe schema: no JSON Schema for kind '" + kind + "'");
+}
+
+Json KeySchema(const Key& key);
+
+// A section's mapping: its keys, none other, the required ones, and the tag's rules.
+Json SectionSchema(const Key& key) {
+  Json properties = Json::object();
+  Json required = Json::array();
+  for (const Key& child : key.keys) {
+    properties[child.name] = KeySchema(child);
+    if (child.required) required.push_back(child.name);
+  }
+  Json schema = {{"type", "object"}, {"properties", properties}, {"additionalProperties", false}};
+  if (!required.empty()) schema["required"] = required;
+  if (!key.tag.empty()) {
+    // Each tag value: the keys that do not go with it are absent.
+    const Key* tag = key.Find(key.tag);
+    Json rules = Json::array();
+    for (const std::string& value : tag->choices) {
+      Json absent = Json::array();
+      for (const Key& child : key.keys) {
+        if (child.only_with.empty()) continue;
+        if (std::find(child.only_with.begin(), child.only_with.end(), value) !=
+            child.only_with.end())
+          continue;
+        absent.push_back(Json{{"required", Json::array({child.name})}});
+      }
+      if (absent.empty()) continue;
+      Json condition = {{"properties", {{key.tag, {{"const", value}}}}}};
+      if (value == key.tag_default) {
+        condition =
+            Json{{"anyOf",
+                  Json::array({condition, Json{{"not", {{"required", Json::array({key.tag})}}}}})}};
+      } else {
+        condition["required"] = Json::array({key.tag});
+      }
+      rules.push_back(Json{{"if", condition}, {"then", {{"not", {{"anyOf", absent}}}}}});
+    }
+    if (!rules.empty()) schema["allOf"] = rules;
+  }
+  return schema;
+}
+
+Json KeySchema(const Key& key) {
+  Json schema;
+  if (key.kind == "section") {
+    schema = SectionSchema(key);
+  } else if (key.kind == "list") {
+    schema = Json{{"type", "array"}, {"items", SectionSchema(key)}};
+  } else {
+    schema = ValueSchema(key.kind, key.choices);
+  }
+  if (!key.scalar_kind.empty()) {
+    Json other;
+    if (key.scalar_kind == "list") {
+      other = Json{{"type", "array"}, {"items", SectionSchema(key)}};
+    } else if (key.kind == "list") {
+      // A list whose items may be single values (objects: [box, {file: a.stl}]), or the list
+      // written as one value (symmetry: auto).
+      const Json one = ValueSchema(key.scalar_kind, key.scalar_choices);
+      schema["items"] = Json{{"anyOf", Json::array({schema["items"], one})}};
+      other = one;
+    } else {
+      other = ValueSchema(key.scalar_kind, key.scalar_choices);
+    }
+    schema = Json{{"anyOf", Json::array({schema, other})}};
+  }
+  schema["description"] =
+      key.doc + (key.default_text.empty() ? "" : " (default: " + key.default_text + ")");
+  return schema;
+}
+
+// Sections written more than once (a material in five places, a camera in two) once, in $defs,
+// each use a $ref to it: the schema stays small enough to read and to ship.
+// A section's schema as text, without its description (the same section is described per use).
+std::string SectionText(const Json& node) {
+  Json bare = node;
+  bare.erase("description");
+  return bare.dump();
+}
+
+void CountSections(const Json& node, std::map<std::string, int>* counts) {
+  if (node.is_object()) {
+    if (node.contains("properties") && node.value("type", "") == "object")
+      ++(*counts)[SectionText(node)];
+    for (const auto& item : node.items()) CountSections(item.value(), counts);
+  } else if (node.is_array()) {
+    for (const Json& item : node) CountSections(item, counts);
+  }
+}
+
+void ShareSections(Json* node, const std::string& name, const std::map<std::string, int>& counts,
+                   Json* defs, std::map<std::string, std::string>* names) {
+  if (node->is_object()) {
+    if (node->contains("properties") && node->value("type", "") == "object") {
+      const std::string text = SectionText(*node);
+      if (counts.at(text) > 1) {
+        auto [it, added] = names->emplace(text, name);
+        if (added) {
+          // A name of its own: the key it was first seen under, numbered if taken.
+          for (int n = 2; defs->contains(it->second); ++n) it->second = name + std::to_string(n);
+          Json shared = *node;
+          shared.erase("description");
+          (*defs)[it->second] = Json::object();
+          for (auto& item : shared["properties"].items())
+            ShareSections(&item.value(), item.key(), counts, defs, names);
+          (*defs)[it->second] = shared;
+        }
+        Json ref = {{"$ref", "#/$defs/" + it->second}};
+        if (node->contains("description")) ref["description"] = (*node)["description"];
+        *node = ref;
+        return;
+      }
+    }
+    for (auto& item : node->items()) {
+      const bool key = node->contains("properties") && item.key() == "properties";
+      if (key) {
+        for (auto& property : item.value().items())
+          ShareSections(&property.value(), property.key(), counts, defs, names);
+      } else {
+        ShareSections(&item.value(), name, counts, defs, names);
+      }
+    }
+  } else if (node->is_array()) {
+    for (Json& item : *node) ShareSections(&item, name, counts, defs, names);
+  }
+}
+
+}  // namespace
+
+const Key& RecipeSchema() {
+  static const Key root = BuildSchema();
+  return root;
+}
+
+const Key& SchemaAt(std::string_view path) {
+  const Key* key = &RecipeSchema();
+  std::string_view rest = path;
+  while (!rest.empty()) {
+    const size_t dot = rest.find('.');
+    std::string_view part = rest.substr(0, dot);
+    rest = dot == std::string_view::npos ? std::string_view() : rest.substr(dot + 1);
+    if (part.size() > 2 && part.substr(part.size() - 2) == "[]") part.remove_suffix(2);
+    key = key->Find(part);
+    if (key == nullptr)
+      throw std::logic_error("recipe schema: no section '" + std::string(path) + "'");
+  }
+  return *key;
+}
+
+std::string RecipeReference() {
+  std::ostringstream out;
+  out << "# Every recipe key, section by section: its default, kind and meaning. Lengths take a "
+         "unit\n"
+         "# (mm, cm, m, in; a bare number is mm), angles are degrees (or take rad). A list's "
+         "items are\n"
+         "# shown under it. docs/recipes.md has examples.\n";
+  for (const Key& section : RecipeSchema().keys) WriteReference(out, section, 0);
+  return out.str();
+}
+
+std::string RecipeJsonSchema() {
+  Json schema = SectionSchema(RecipeSchema());
+  std::map<std::string, int> counts;
+  CountSections(schema, &counts);
+  Json defs = Json::object();
+  std::map<std::string, std::string> names;
+  for (auto& item : schema["properties"].items())
+    ShareSections(&item.value(), item.key(), counts, &defs, &names);
+  Json root = {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
+               {"title", "cadsynth recipe"},
+               {"description",
+                "A cadsynth recipe (cadsynth generate RECIPE.yaml); written by cadsynth generate "
+                "--recipe-schema from the same description the reader uses."}};
+  root.update(schema);
+  if (!defs.empty()) root["$defs"] = defs;
+  return root.dump(2) + "\n";
+}
+
+}  // namespace cadsynth

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include "cad/core/schema.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -34,6 +35,22 @@ struct ParallelJawGripper {
   bool operator==(const ParallelJawGripper&) const = default;
   double tip_mm() const { return palm_height_mm + finger_length_mm; }
 
+  // Every field, once (cad/core/schema.h): the recipe's `grasps.gripper` section, the run key.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.name, Field{"name", "text", "its name in the grasp files"});
+    visit(o.max_opening_mm, Field{"max_opening", "length", "the widest opening of the jaws"});
+    visit(o.finger_width_mm,
+          Field{"finger_width", "length", "finger size across the closing direction"});
+    visit(o.finger_thickness_mm,
+          Field{"finger_thickness", "length", "finger size along the closing direction"});
+    visit(o.finger_length_mm, Field{"finger_length", "length", "finger length"});
+    visit(o.palm_height_mm, Field{"palm_height", "length", "palm size along the approach"});
+    visit(o.palm_width_mm, Field{"palm_width", "length", "palm size along the closing direction"});
+    visit(o.palm_depth_mm, Field{"palm_depth", "length", "palm size across"});
+    visit(o.pad_mm, Field{"pad", "length", "the pads' length at the fingertips"});
+  }
+
   // The Franka Emika hand of ACRONYM and 6-DOF GraspNet (NVlabs/acronym's gripper marker and
   // collision mesh: fingers at x = +-41 mm from z = 66 to 112.2 mm, the hand +-102 x +-31.6 mm;
   // Contact-GraspNet's control points put the pad centre at z = 103.4 mm), 80 mm opening.
@@ -63,6 +80,21 @@ struct SuctionCup {
 
   bool Check(std::string* why) const;
   double radius_mm() const { return 0.5 * diameter_mm; }
+
+  // Every field, once (cad/core/schema.h): the recipe's `grasps.suction` section, the run key.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.name, Field{"name", "text", "its name in the grasp files"});
+    visit(o.diameter_mm, Field{"diameter", "length", "the cup's rim diameter"});
+    visit(o.ring_points, Field{"ring_points", "integer", "contacts on the rim (3-360)"});
+    visit(o.compliance_mm, Field{"compliance", "length",
+                                 "the bellows' give: the rim's largest distance off a plane"});
+    visit(o.stretch, Field{"stretch", "number", "the rim springs' largest relative stretch"});
+    visit(o.vacuum_kpa, Field{"vacuum", "number", "the pressure difference held (kPa)"});
+    visit(o.cup_length_mm, Field{"cup_length", "length", "the cup's length"});
+    visit(o.shaft_diameter_mm, Field{"shaft_diameter", "length", "the shaft's diameter"});
+    visit(o.shaft_length_mm, Field{"shaft_length", "length", "the shaft's length"});
+  }
   // The vacuum's pull, V = dP pi a^2, in newtons.
   double vacuum_force_n() const;
 };

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "cad/core/schema.h"
 #include "cad/grasp.h"
 #include "dataset/frame_writer.h"
 #include "render/frame.h"
@@ -24,6 +25,17 @@ struct GraspLabelOptions {
   // with a depth within this of the contact's.
   double visibility_mm = 3.0;
   bool Check(std::string* why) const;
+
+  // Every field, once (cad/core/schema.h): keys of the recipe's `grasps` section, the run key.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.graspnet, Field{"", "bool", "grasps.formats: graspnet", {}, true, "graspnet"});
+    visit(o.suctionnet, Field{"", "bool", "grasps.formats: suctionnet", {}, true, "suctionnet"});
+    visit(o.max_per_instance,
+          Field{"per_instance", "integer", "per frame and visible instance, the best this many"});
+    visit(o.visibility_mm, Field{"visibility_tolerance", "length",
+                                 "a contact is seen when its instance shows within this depth"});
+  }
 };
 
 // One scene's grasps, as the writer reads them. The pointers must outlive the writer.

@@ -565,6 +565,11 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
     }
   } else if constexpr (std::is_same_v<T, std::string>) {
     *value = r.Scalar(node, key);
+  } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+    if (!node.IsSequence() || node.size() == 0) r.Fail(node, key, "expected a list of values");
+    value->clear();
+    for (const YAML::Node& item : node)
+      value->push_back(field.kind == "lengths" ? r.Length(item, key) : r.Number(item, key));
   } else if constexpr (std::is_floating_point_v<T>) {
     *value = static_cast<T>(field.kind == "length"  ? r.Length(node, key)
                             : field.kind == "angle" ? r.Angle(node, key)
@@ -579,17 +584,23 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
 }
 
 // Every described field of `options` that the recipe section `node` gives, except those read by
-// hand; checks that every key of the section is a key of its `schema` (the described fields and
-// the section's other keys, read elsewhere).
+// hand (a section may hold the fields of several structs, and keys read elsewhere).
 template <typename Options>
-void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section,
-                Options* options, const Key& schema) {
-  r.ExpectKeys(node, section, schema);
+void ReadDescribed(const Reader& r, const YAML::Node& node, const std::string& section,
+                   Options* options) {
   Options::Fields(*options, [&](auto& value, const Field& field) {
     if (field.key.empty() || field.by_hand || !node[std::string(field.key)]) return;
     ReadField(r, node[std::string(field.key)], section + "." + std::string(field.key), field,
               &value);
   });
+}
+
+// The same, after checking that every key of the section is a key of its `schema`.
+template <typename Options>
+void ReadFields(const Reader& r, const YAML::Node& node, const std::string& section,
+                Options* options, const Key& schema) {
+  r.ExpectKeys(node, section, schema);
+  ReadDescribed(r, node, section, options);
 }
 
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
@@ -1984,33 +1995,16 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
     };
     if (node.IsMap()) {
       r.ExpectKeys(node, "grasps.gripper", SchemaAt("grasps.gripper"));
-      ParallelJawGripper& p = grasps.gripper;
-      if (node["preset"]) p = preset(node["preset"], "grasps.gripper.preset");
-      if (node["name"]) p.name = r.Scalar(node["name"], "grasps.gripper.name");
-      const std::pair<const char*, double*> lengths[] = {
-          {"max_opening", &p.max_opening_mm},
-          {"finger_width", &p.finger_width_mm},
-          {"finger_thickness", &p.finger_thickness_mm},
-          {"finger_length", &p.finger_length_mm},
-          {"palm_height", &p.palm_height_mm},
-          {"palm_width", &p.palm_width_mm},
-          {"palm_depth", &p.palm_depth_mm},
-          {"pad", &p.pad_mm}};
-      for (const auto& [key, value] : lengths) {
-        if (node[key]) *value = r.Length(node[key], std::string("grasps.gripper.") + key);
-      }
-      if (!p.Check(&why)) r.Fail(node, "grasps.gripper", why);
+      if (node["preset"]) grasps.gripper = preset(node["preset"], "grasps.gripper.preset");
+      ReadDescribed(r, node, "grasps.gripper", &grasps.gripper);
+      if (!grasps.gripper.Check(&why)) r.Fail(node, "grasps.gripper", why);
     } else {
       grasps.gripper = preset(node, "grasps.gripper");
     }
   }
   AntipodalOptions& s = grasps.sampling;
-  if (g["friction"]) s.friction = r.Number(g["friction"], "grasps.friction");
-  if (g["samples"]) s.samples = r.Integer(g["samples"], "grasps.samples");
-  if (g["per_part"]) s.max_grasps = r.Integer(g["per_part"], "grasps.per_part");
-  if (g["approaches"]) s.approaches = r.Integer(g["approaches"], "grasps.approaches");
-  if (g["clearance"]) s.clearance_mm = r.Length(g["clearance"], "grasps.clearance");
-  if (const YAML::Node depths = g["depths"]) {
+  ReadDescribed(r, g, "grasps", &s);
+  if (const YAML::Node depths = g["depths"]) {  // on the fingers of the gripper given
     if (!depths.IsSequence() || depths.size() == 0)
       r.Fail(depths, "grasps.depths", "expected a list of lengths");
     for (const YAML::Node& item : depths) {
@@ -2023,11 +2017,6 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
       s.depths_mm.push_back(depth);
     }
   }
-  if (g["seed"]) {
-    const int seed = r.Integer(g["seed"], "grasps.seed");
-    if (seed < 0) r.Fail(g["seed"], "grasps.seed", "must not be negative");
-    s.seed = static_cast<uint64_t>(seed);
-  }
   if (!s.Check(&why)) r.Fail(g, "grasps", why);
   if (const YAML::Node node = g["suction"]) {
     if (node.IsScalar()) {
@@ -2035,41 +2024,21 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
     } else {
       grasps.suction = true;
       r.ExpectKeys(node, "grasps.suction", SchemaAt("grasps.suction"));
-      SuctionCup& c = grasps.cup;
-      if (node["name"]) c.name = r.Scalar(node["name"], "grasps.suction.name");
-      const std::pair<const char*, double*> lengths[] = {{"diameter", &c.diameter_mm},
-                                                         {"compliance", &c.compliance_mm},
-                                                         {"cup_length", &c.cup_length_mm},
-                                                         {"shaft_diameter", &c.shaft_diameter_mm},
-                                                         {"shaft_length", &c.shaft_length_mm}};
-      for (const auto& [key, value] : lengths) {
-        if (node[key]) *value = r.Length(node[key], std::string("grasps.suction.") + key);
-      }
-      if (node["ring_points"])
-        c.ring_points = r.Integer(node["ring_points"], "grasps.suction.ring_points");
-      if (node["stretch"]) c.stretch = r.Number(node["stretch"], "grasps.suction.stretch");
-      if (node["vacuum"]) c.vacuum_kpa = r.Number(node["vacuum"], "grasps.suction.vacuum");
-      if (!c.Check(&why)) r.Fail(node, "grasps.suction", why);
-      SuctionOptions& o = grasps.suction_sampling;
-      if (node["samples"]) o.samples = r.Integer(node["samples"], "grasps.suction.samples");
-      if (node["density"]) o.density_kg_m3 = r.Number(node["density"], "grasps.suction.density");
-      if (!o.Check(&why)) r.Fail(node, "grasps.suction", why);
+      ReadDescribed(r, node, "grasps.suction", &grasps.cup);
+      if (!grasps.cup.Check(&why)) r.Fail(node, "grasps.suction", why);
+      ReadDescribed(r, node, "grasps.suction", &grasps.suction_sampling);
+      if (!grasps.suction_sampling.Check(&why)) r.Fail(node, "grasps.suction", why);
     }
   }
   grasps.suction_sampling.seed = s.seed;
   grasps.suction_sampling.max_grasps = s.max_grasps;
-  if (g["approach_distance"])
-    grasps.scene.approach_mm = r.Length(g["approach_distance"], "grasps.approach_distance");
+  ReadDescribed(r, g, "grasps", &grasps.scene);
   if (!grasps.scene.Check(&why)) r.Fail(g["approach_distance"], "grasps.approach_distance", why);
   GraspLabelOptions& labels = grasps.labels;
-  if (const YAML::Node n = g["per_instance"]) {
-    labels.max_per_instance = r.Integer(n, "grasps.per_instance");
-    if (!labels.Check(&why)) r.Fail(n, "grasps.per_instance", why);
-  }
-  if (const YAML::Node n = g["visibility_tolerance"]) {
-    labels.visibility_mm = r.Length(n, "grasps.visibility_tolerance");
-    if (!labels.Check(&why)) r.Fail(n, "grasps.visibility_tolerance", why);
-  }
+  ReadDescribed(r, g, "grasps", &labels);
+  if (!labels.Check(&why))
+    r.Fail(g["per_instance"] ? g["per_instance"] : g["visibility_tolerance"],
+           g["per_instance"] ? "grasps.per_instance" : "grasps.visibility_tolerance", why);
   labels.graspnet = true;
   labels.suctionnet = grasps.suction;
   if (const YAML::Node formats = g["formats"]) {

@@ -9,6 +9,7 @@
 
 #include "cad/shape.h"
 #include "dataset/bop.h"
+#include "dataset/grasp_labels.h"
 #include "recipes/recipe.h"
 #include "render/camera.h"
 #include "render/material.h"
@@ -16,6 +17,9 @@
 #include "render/sensor.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
+#include "variants/grasp/parallel_jaw.h"
+#include "variants/grasp/scene_grasps.h"
+#include "variants/grasp/suction.h"
 
 namespace cadsynth {
 namespace {
@@ -289,49 +293,22 @@ std::vector<Key> RandomizeKeys() {
 }
 
 std::vector<Key> GraspKeys() {
-  Key gripper =
-      Section("gripper", "the parallel-jaw gripper: a preset, or a map of its sizes",
-              {Choice("preset", {"franka", "robotiq_2f85"}, "the sizes to start from", "franka"),
-               Value("name", "text", "its name in the files"),
-               Value("max_opening", "length", "the widest opening"),
-               Value("finger_width", "length", "finger size across the closing direction"),
-               Value("finger_thickness", "length", "finger size along the closing direction"),
-               Value("finger_length", "length", "finger length"),
-               Value("palm_height", "length", "palm size along the approach"),
-               Value("palm_width", "length", "palm size along the closing direction"),
-               Value("palm_depth", "length", "palm size across"),
-               Value("pad", "length", "the pads' length at the fingertips")});
+  Key gripper = Section(
+      "gripper", "the parallel-jaw gripper: a preset, or a map of its sizes",
+      Join({Choice("preset", {"franka", "robotiq_2f85"}, "the sizes to start from", "franka")},
+           KeysOf<ParallelJawGripper>(ParallelJawGripper::Franka())));
   gripper.scalar_kind = "choice";
   gripper.scalar_choices = {"franka", "robotiq_2f85"};
-  Key suction =
-      Section("suction", "a suction cup (true: the default cup)",
-              {Value("name", "text", "its name in the files"),
-               Value("diameter", "length", "the cup's diameter"),
-               Value("ring_points", "integer", "points on the seal's ring"),
-               Value("compliance", "length", "how far the lip gives"),
-               Value("stretch", "number", "how much the lip stretches"),
-               Value("vacuum", "number", "kPa"), Value("cup_length", "length", "the cup's length"),
-               Value("shaft_diameter", "length", "the shaft's diameter"),
-               Value("shaft_length", "length", "the shaft's length"),
-               Value("samples", "integer", "surface points tried per object"),
-               Value("density", "number", "kg/m3, for the weight the cup must hold")});
+  Key suction = Section("suction", "a suction cup (true: the default cup)",
+                        Join(KeysOf<SuctionCup>(), KeysOf<SuctionOptions>()));
   suction.scalar_kind = "bool";
-  Key formats = Value("formats", "choices", "the grasp files written");
+  Key formats = Value("formats", "choices",
+                      "the grasp files written (default: acronym, graspnet, and suctionnet with a "
+                      "cup)");
   formats.choices = {"acronym", "graspnet", "suctionnet"};
-  return {gripper,
-          Value("friction", "number", "Coulomb's mu at the contacts", "0.5"),
-          Value("samples", "integer", "surface points tried per object", "2000"),
-          Value("per_part", "integer", "keep at most this many grasps per object (0: all)", "0"),
-          Value("approaches", "integer", "approach directions about each contact pair's axis", "8"),
-          Value("clearance", "length", "fingers open to the width plus this on each side"),
-          Value("depths", "lengths", "fingertips' reach past the contacts"),
-          Value("seed", "integer", "the sampling's seed", "0"),
-          suction,
-          Value("approach_distance", "length", "the tool swept back this far must be free"),
-          Value("per_instance", "integer", "per frame and visible instance, the best this many"),
-          Value("visibility_tolerance", "length",
-                "a contact is seen when its instance shows within this depth"),
-          formats};
+  return Join(Join(Join({gripper}, KeysOf<AntipodalOptions>()),
+                   Join({suction}, KeysOf<SceneGraspOptions>())),
+              Join(KeysOf<GraspLabelOptions>(), {formats}));
 }
 
 Key BuildSchema() {

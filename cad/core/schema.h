@@ -50,8 +50,17 @@ struct Field {
 // The value of a field as text, for the run key and the reference: numbers exactly (the shortest
 // text that reads back the same), bools as true/false, enums and choice bools by their choice name.
 template <typename T>
+struct IsVector : std::false_type {};
+template <typename T>
+struct IsVector<std::vector<T>> : std::true_type {};
+
+template <typename T>
 std::string FieldText(const T& value, const Field& field) {
-  if constexpr (std::is_enum_v<T>) {
+  if constexpr (IsVector<T>::value) {  // a list: [a, b, c]
+    std::string text = "[";
+    for (size_t i = 0; i < value.size(); ++i) text += (i ? ", " : "") + FieldText(value[i], field);
+    return text + "]";
+  } else if constexpr (std::is_enum_v<T>) {
     const auto i = static_cast<size_t>(value);
     return i < field.choices.size() ? std::string(field.choices[i]) : std::to_string(i);
   } else if constexpr (std::is_same_v<T, bool>) {
@@ -110,11 +119,17 @@ struct Key {
 // The recipe text of a described field's default value: lengths in mm, angles in degrees.
 template <typename T>
 std::string DefaultText(const T& value, const Field& field) {
-  if constexpr (std::is_floating_point_v<T>) {
+  if constexpr (IsVector<T>::value) {
+    std::string text = "[";
+    for (size_t i = 0; i < value.size(); ++i)
+      text += (i ? ", " : "") + DefaultText(value[i], field);
+    return text + "]";
+  } else if constexpr (std::is_floating_point_v<T>) {
     if (field.kind == "angle") {
       return FieldText(std::round(static_cast<double>(value) * 180.0 / M_PI * 1e6) / 1e6, field);
     }
-    return FieldText(value, field) + (field.kind == "length" ? " mm" : "");
+    return FieldText(value, field) +
+           (field.kind == "length" || field.kind == "lengths" ? " mm" : "");
   } else {
     return FieldText(value, field);
   }

@@ -106,7 +106,7 @@ std::vector<Hostile> MakeCorpus(const ScratchDir& dir) {
   corpus.push_back(
       {"tiny.stl",
        BinaryStl(2, {{0, 0, 0, 1e-30f, 0, 0, 0, 1e-30f, 0}, {0, 0, 0, 0, 1e-30f, 0, 0, 0, 1e-30f}}),
-       -1, ""});
+       0, ""});  // read, with warnings: not closed, an implausible size
   corpus.push_back({"point.stl",
                     BinaryStl(2, {{1, 1, 1, 1, 1, 1, 1, 1, 1}, {1, 1, 1, 1, 1, 1, 1, 1, 1}}), 1,
                     "the mesh has no area"});
@@ -131,12 +131,12 @@ std::vector<Hostile> MakeCorpus(const ScratchDir& dir) {
        R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}],)"
        R"("bufferViews":[{"buffer":0,"byteLength":12}],"accessors":[{"bufferView":0,"componentType":5126,"count":1000,"type":"VEC3"}],)"
        R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})",
-       -1, ""});
+       1, "out of range"});
   corpus.push_back({"noise.3mf", "PK\x03\x04" + Noise(3000, 1), 1, ""});
   // 3 kB of noise named .3mf kept assimp busy for more than 10 minutes.
   corpus.push_back({"noise_nozip.3mf", Noise(3000, 6), 1, "not a 3MF file"});
   corpus.push_back({"noise.dae", Noise(3000, 7), 1, "not a COLLADA file"});
-  corpus.push_back({"noise.gltf", Noise(3000, 8), -1, ""});
+  corpus.push_back({"noise.gltf", Noise(3000, 8), 1, "not a glTF file"});
   corpus.push_back({"cut.dae",
                     "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/"
                     "COLLADASchema\" version=\"1.4.1\"><asset><unit meter=\"0.001\"/></asset>"
@@ -164,29 +164,29 @@ std::vector<Hostile> MakeCorpus(const ScratchDir& dir) {
     const size_t first_ref = self.find('#', entity);
     const size_t end_ref = self.find_first_of(",)", first_ref);
     self.replace(first_ref, end_ref - first_ref, id);
-    corpus.push_back({"self_axis.step", self, -1, ""});
+    corpus.push_back({"self_axis.step", self, 1, ""});
   }
   corpus.push_back({"deep.step",
                     "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=A(" + std::string(200000, '(') +
                         std::string(200000, ')') + ");\nENDSEC;\nEND-ISO-10303-21;\n",
                     1, ""});
-  corpus.push_back({"cut.step", Head(step, 0.5), -1, ""});
+  corpus.push_back({"cut.step", Head(step, 0.5), 1, "not a readable STEP file"});
   corpus.push_back({"noise.step", "ISO-10303-21;\nHEADER;\n" + Noise(4000, 3), 1, ""});
   {
     IGESControl_Writer writer("MM", 0);
     writer.AddShape(OcctShape(MakeBox(30, 20, 10)));
     writer.ComputeModel();
     writer.Write((dir / "box.igs").string().c_str());
-    corpus.push_back({"cut.igs", Head(testing::ReadFile(dir / "box.igs"), 0.5), -1, ""});
+    corpus.push_back({"cut.igs", Head(testing::ReadFile(dir / "box.igs"), 0.5), 1, ""});
   }
   corpus.push_back({"noise.igs", Noise(4000, 4), 1, ""});
   BRepTools::Write(OcctShape(MakeBox(30, 20, 10)), (dir / "box.brep").string().c_str());
   const std::string brep = testing::ReadFile(dir / "box.brep");
-  corpus.push_back({"cut.brep", Head(brep, 0.5), -1, ""});
+  corpus.push_back({"cut.brep", Head(brep, 0.5), 1, "truncated"});
   // Cut inside the shape list: OpenCASCADE's reader looped for ever.
   corpus.push_back({"cut_shapes.brep", brep.substr(0, brep.rfind('*')), 1, "truncated"});
   corpus.push_back(
-      {"noise.brep", "CASCADE Topology V1, (c) Matra-Datavision\n" + Noise(3000, 5), -1, ""});
+      {"noise.brep", "CASCADE Topology V1, (c) Matra-Datavision\n" + Noise(3000, 5), 1, ""});
   for (const Hostile& h : corpus) {
     std::ofstream(dir / h.name, std::ios::binary) << h.bytes;
   }

@@ -306,25 +306,14 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   }
   if (spec.grasps.enabled) {
     const GraspSpec& grasps = spec.grasps;
-    const ParallelJawGripper& g = grasps.gripper;
-    const AntipodalOptions& a = grasps.sampling;
-    key << "grasps " << g.name << " " << g.max_opening_mm << " " << g.finger_width_mm << " "
-        << g.finger_thickness_mm << " " << g.finger_length_mm << " " << g.palm_height_mm << " "
-        << g.palm_width_mm << " " << g.palm_depth_mm << " " << g.pad_mm << " " << a.friction << " "
-        << a.samples << " " << a.max_grasps << " " << a.approaches << " " << a.clearance_mm << " "
-        << a.seed << " " << grasps.acronym << " " << grasps.scene.approach_mm << " "
-        << grasps.labels.graspnet << " " << grasps.labels.suctionnet << " "
-        << grasps.labels.max_per_instance << " " << grasps.labels.visibility_mm << " depths";
-    for (const double depth : a.depths_mm) key << " " << depth;
-    key << "\n";
+    fields("gripper", grasps.gripper);
+    fields("grasp_sampling", grasps.sampling);
+    fields("grasp_scene", grasps.scene);
+    fields("grasp_labels", grasps.labels);
+    key << "acronym " << grasps.acronym << "\n";
     if (grasps.suction) {
-      const SuctionCup& c = grasps.cup;
-      const SuctionOptions& o = grasps.suction_sampling;
-      key << "suction " << c.name << " " << c.diameter_mm << " " << c.ring_points << " "
-          << c.compliance_mm << " " << c.stretch << " " << c.vacuum_kpa << " " << c.cup_length_mm
-          << " " << c.shaft_diameter_mm << " " << c.shaft_length_mm << " " << o.samples << " "
-          << o.density_kg_m3 << " " << o.gravity_m_s2 << " " << o.max_grasps << " " << o.seed
-          << "\n";
+      fields("cup", grasps.cup);
+      fields("suction_sampling", grasps.suction_sampling);
     }
   }
   // The bytes of every image a material above reads.

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "cad/core/schema.h"
 #include "cad/grasp.h"
 #include "cad/part.h"
 
@@ -28,6 +29,25 @@ struct AntipodalOptions {
   uint64_t seed = 0;
 
   bool Check(std::string* why) const;
+
+  // Every field, once (cad/core/schema.h): keys of the recipe's `grasps` section, the run key.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.friction, Field{"friction", "number", "Coulomb's mu at the contacts"});
+    visit(o.samples, Field{"samples", "integer", "surface points tried per object"});
+    visit(o.max_grasps, Field{"per_part", "integer",
+                              "keep at most this many grasps per object and cup (0: all)"});
+    visit(o.approaches,
+          Field{"approaches", "integer", "approach directions about each contact pair's axis"});
+    visit(o.clearance_mm,
+          Field{"clearance", "length", "fingers open to the grasp's width plus this on each side"});
+    visit(o.depths_mm, Field{"depths",
+                             "lengths",
+                             "fingertips' reach past the contacts (default: the gripper's pad)",
+                             {},
+                             true});
+    visit(o.seed, Field{"seed", "integer", "the sampling's seed"});
+  }
 };
 
 // Samples antipodal grasps of `part` (a closed, outward-wound mesh): a surface point drawn by

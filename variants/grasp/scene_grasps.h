@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "cad/core/schema.h"
 #include "cad/grasp.h"
 #include "cad/mesh.h"
 
@@ -29,6 +30,13 @@ struct SceneGraspOptions {
   // (its own instance included) marks the grasp's approach blocked.
   double approach_mm = 100.0;
   bool Check(std::string* why) const;
+
+  // Every field, once (cad/core/schema.h): keys of the recipe's `grasps` section, the run key.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.approach_mm, Field{"approach_distance", "length",
+                               "the tool swept back this far must be free, else approach blocked"});
+  }
 };
 
 // Every instance's parallel-jaw grasps (part_grasps[part]) that leave the open gripper free of

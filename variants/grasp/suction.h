@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "cad/core/schema.h"
 #include "cad/grasp.h"
 #include "cad/part.h"
 
@@ -19,6 +20,18 @@ struct SuctionOptions {
   uint64_t seed = 0;
 
   bool Check(std::string* why) const;
+
+  // Every field, once (cad/core/schema.h): keys of `grasps.suction`, the run key. The limit and
+  // the seed are the parallel-jaw sampling's (grasps.per_part, grasps.seed).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.samples, Field{"samples", "integer", "surface points tried per object"});
+    visit(o.density_kg_m3,
+          Field{"density", "number", "kg/m3, for the weight the cup must hold (steel: 7850)"});
+    visit(o.gravity_m_s2, Field{"", "number", "gravity (m/s2)", {}, true, "gravity"});
+    visit(o.max_grasps, Field{"", "integer", "grasps.per_part", {}, true, "max_grasps"});
+    visit(o.seed, Field{"", "integer", "grasps.seed", {}, true, "seed"});
+  }
 };
 
 // Samples suction grasps of `part` (a closed, outward-wound mesh), in the order drawn: a surface

@@ -447,7 +447,8 @@ TEST(Prepare, ContainerFromAFileHoldsThePile) {
               "file, file: tray.obj, wall: 3 mm}}\n",
               "r.yaml", dir.path());
         } catch (const Error& e) {
-          EXPECT_STREQ(e.what(), "r.yaml:2:94: scenes[0].container.wall: goes with type: tote");
+          EXPECT_STREQ(e.what(),
+                       "r.yaml:2:88: scenes[0].container.wall: goes with type: tote, not file");
           throw;
         }
       },

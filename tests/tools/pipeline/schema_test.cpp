@@ -22,7 +22,11 @@ namespace {
 // A value other than `value` that the options still accept where possible.
 template <typename T>
 T Changed(const T& value, const Field& field) {
-  if constexpr (std::is_enum_v<T>) {
+  if constexpr (std::is_same_v<T, std::vector<double>>) {
+    T longer = value;
+    longer.push_back(1.5);
+    return longer;
+  } else if constexpr (std::is_enum_v<T>) {
     return static_cast<T>((static_cast<size_t>(value) + 1) %
                           std::max<size_t>(2, field.choices.size()));
   } else if constexpr (std::is_same_v<T, bool>) {
@@ -156,6 +160,33 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
       s.sensor.motion.exposure_s = 0.01;
       s.sensor.motion.angular_velocity_rad_s.z() = 1;
     });
+    // Grasp labels: with grasps on, every field of the gripper, the sampling, the scene filter,
+    // the labels and (with a cup) the cup and its sampling.
+    RunSpec grasping = spec;
+    grasping.grasps.enabled = true;
+    grasping.grasps.suction = true;
+    check(grasping, "grasps");
+    EXPECT_EQ(each_field(ParallelJawGripper{}, grasping,
+                         [](RunSpec& s) -> ParallelJawGripper& { return s.grasps.gripper; }),
+              9);
+    EXPECT_EQ(each_field(AntipodalOptions{}, grasping,
+                         [](RunSpec& s) -> AntipodalOptions& { return s.grasps.sampling; }),
+              7);
+    EXPECT_EQ(each_field(SceneGraspOptions{}, grasping,
+                         [](RunSpec& s) -> SceneGraspOptions& { return s.grasps.scene; }),
+              1);
+    EXPECT_EQ(each_field(GraspLabelOptions{}, grasping,
+                         [](RunSpec& s) -> GraspLabelOptions& { return s.grasps.labels; }),
+              4);
+    EXPECT_EQ(
+        each_field(SuctionCup{}, grasping, [](RunSpec& s) -> SuctionCup& { return s.grasps.cup; }),
+        9);
+    EXPECT_EQ(each_field(SuctionOptions{}, grasping,
+                         [](RunSpec& s) -> SuctionOptions& { return s.grasps.suction_sampling; }),
+              5);
+    RunSpec no_acronym = grasping;
+    no_acronym.grasps.acronym = false;
+    check(no_acronym, "grasps.formats: acronym");
   }
   // The physically based look, read by hand from materials: and lighting:.
   {
@@ -241,34 +272,47 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   const auto section = [&](const char* name, auto select) {
     using Options = std::decay_t<decltype(select(std::declval<RunSpec&>()))>;
     ForEachChange<Options>(RunSpec{}, select, [&](const RunSpec& changed, const std::string&) {
-      Options::Fields(
-          select(const_cast<RunSpec&>(changed)), [&](const auto& value, const Field& field) {
-            using T = std::decay_t<decltype(value)>;
-            if (field.key.empty() || field.by_hand) return;
-            T expected = value;
-            std::string text = FieldText(value, field);
-            if (field.kind == "length") text += " mm";
-            if (field.kind == "angle") text += " rad";
-            const RunSpec parsed = ParseRecipe(
-                std::string(name) + ":\n  " + std::string(field.key) + ": " + text + "\n", "r.yaml",
-                ".");
-            Options::Fields(select(const_cast<RunSpec&>(parsed)),
-                            [&](const auto& got, const Field& other) {
-                              if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
-                                if (other.Name() == field.Name()) {
-                                  EXPECT_EQ(got, expected) << name << "." << field.key;
-                                }
-                              }
-                            });
-            ++read;
-          });
+      Options::Fields(select(const_cast<RunSpec&>(changed)), [&](const auto& value,
+                                                                 const Field& field) {
+        using T = std::decay_t<decltype(value)>;
+        if (field.key.empty() || field.by_hand) return;
+        T expected = value;
+        std::string text = FieldText(value, field);
+        if (field.kind == "length") text += " mm";
+        if (field.kind == "angle") text += " rad";
+        // The section at its path ("grasps.gripper": nested), the one key in it.
+        std::string yaml, indent;
+        std::string path = name;
+        for (size_t dot; (dot = path.find('.')) != std::string::npos; indent += "  ") {
+          yaml += indent + path.substr(0, dot) + ":\n";
+          path = path.substr(dot + 1);
+        }
+        yaml += indent + path + ":\n" + indent + "  " + std::string(field.key) + ": " + text + "\n";
+        const RunSpec parsed = ParseRecipe(yaml, "r.yaml", ".");
+        Options::Fields(select(const_cast<RunSpec&>(parsed)),
+                        [&](const auto& got, const Field& other) {
+                          if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
+                            if (other.Name() == field.Name()) {
+                              EXPECT_EQ(got, expected) << name << "." << field.key;
+                            }
+                          }
+                        });
+        ++read;
+      });
     });
   };
   section("output", [](RunSpec& s) -> BopOptions& { return s.bop; });
   section("render", [](RunSpec& s) -> RenderOptions& { return s.render; });
   section("tessellation", [](RunSpec& s) -> TessellationOptions& { return s.tessellation; });
   section("limits", [](RunSpec& s) -> RunLimits& { return s.limits; });
-  EXPECT_GT(read, 100);
+  section("grasps.gripper", [](RunSpec& s) -> ParallelJawGripper& { return s.grasps.gripper; });
+  section("grasps", [](RunSpec& s) -> AntipodalOptions& { return s.grasps.sampling; });
+  section("grasps", [](RunSpec& s) -> SceneGraspOptions& { return s.grasps.scene; });
+  section("grasps", [](RunSpec& s) -> GraspLabelOptions& { return s.grasps.labels; });
+  section("grasps.suction", [](RunSpec& s) -> SuctionCup& { return s.grasps.cup; });
+  section("grasps.suction",
+          [](RunSpec& s) -> SuctionOptions& { return s.grasps.suction_sampling; });
+  EXPECT_GT(read, 120);
 }
 
 // `cadsynth generate --help-recipe` and docs/recipes.md list every recipe key of the described

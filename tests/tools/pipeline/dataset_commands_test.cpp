@@ -13,6 +13,7 @@
 #include "dataset/preview.h"
 #include "tests/json_support.h"
 #include "tests/test_support.h"
+#include "tests/tools/pipeline/small_job.h"
 #include "tools/pipeline/generate.h"
 
 namespace cadsynth {
@@ -25,11 +26,7 @@ using testing::ReadJson;
 
 // The default job (the paper's three demo sets) at 160 x 120, 2 views, every image a test image.
 std::filesystem::path SmallDataset(const ScratchDir& dir) {
-  RunSpec spec = DefaultRunSpec();
-  spec.intrinsics = Intrinsics{160, 120, 131.25, 131.25, 79.5, 59.5};
-  spec.sweep.yaw_rad = {0.0, 2.0};
-  spec.sweep.pitch_rad = {0.6};
-  spec.sweep.radius_mm = {700.0};
+  RunSpec spec = testing::SmallJob();
   spec.bop.test_every = 1;
   spec.bop.model_points = 500;
   GenerateOptions options;

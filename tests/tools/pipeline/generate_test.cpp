@@ -20,6 +20,7 @@
 #include "dataset/preview.h"
 #include "tests/json_support.h"
 #include "tests/test_support.h"
+#include "tests/tools/pipeline/small_job.h"
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/journal.h"
 #include "variants/families.h"
@@ -32,14 +33,7 @@ using testing::ReadTree;
 using testing::ScratchDir;
 
 // The default job at a small size: 2 views of 160x120.
-RunSpec SmallDefault() {
-  RunSpec spec = DefaultRunSpec();
-  spec.intrinsics = Intrinsics{160, 120, 131.25, 131.25, 79.5, 59.5};
-  spec.sweep.yaw_rad = {0.0, 2.0};
-  spec.sweep.pitch_rad = {0.6};
-  spec.sweep.radius_mm = {700.0};
-  return spec;
-}
+RunSpec SmallDefault() { return testing::SmallJob(); }
 
 // A family entry with the given variants (parameters completed with the family's defaults).
 PartSource Family(const std::string& name, const std::vector<ParamValues>& variants,

@@ -16,6 +16,7 @@
 
 #include "cad/core/error.h"
 #include "tests/test_support.h"
+#include "tests/tools/pipeline/small_job.h"
 #include "tools/pipeline/generate.h"
 
 namespace cadsynth {
@@ -26,11 +27,7 @@ using testing::ScratchDir;
 
 // The default job (three scenes) at 160x120, four views each (12 units), every output format.
 RunSpec SmallFarmSpec() {
-  RunSpec spec = DefaultRunSpec();
-  spec.intrinsics = Intrinsics{160, 120, 131.25, 131.25, 79.5, 59.5};
-  spec.sweep.yaw_rad = {0.0, 1.5, 3.0, 4.5};
-  spec.sweep.pitch_rad = {0.6};
-  spec.sweep.radius_mm = {700.0};
+  RunSpec spec = testing::SmallJob({0.0, 1.5, 3.0, 4.5});
   spec.bop.paper_layout = spec.bop.pvn3d_meta = spec.bop.grasp_points = true;
   spec.bop.model_points = 200;
   return spec;

@@ -1,0 +1,21 @@
+// The small job most pipeline tests run: the default job (the reference paper's three demo sets)
+// at 160 x 120 (Kinect v1's K scaled by 1/4), with the given yaws at pitch 0.6 rad and radius
+// 700 mm: a few seconds for the whole pipeline, every module exercised.
+#pragma once
+
+#include <vector>
+
+#include "recipes/recipe.h"
+
+namespace cadsynth::testing {
+
+inline RunSpec SmallJob(std::vector<double> yaws_rad = {0.0, 2.0}) {
+  RunSpec spec = DefaultRunSpec();
+  spec.intrinsics = Intrinsics{160, 120, 131.25, 131.25, 79.5, 59.5};
+  spec.sweep.yaw_rad = std::move(yaws_rad);
+  spec.sweep.pitch_rad = {0.6};
+  spec.sweep.radius_mm = {700.0};
+  return spec;
+}
+
+}  // namespace cadsynth::testing

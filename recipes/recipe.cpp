@@ -44,21 +44,16 @@ class Reader {
     throw Error(Where(node) + ": " + (key.empty() ? "" : key + ": ") + what);
   }
 
-  // A mapping whose keys must all be in `allowed`.
+  // A mapping whose keys must all be in `allowed`: the syntax of a kind of value ({from, to,
+  // step}, {choice: [...]}); a section's keys come from the recipe's tree (ExpectKeys).
   void ExpectMap(const YAML::Node& node, const std::string& key,
                  std::initializer_list<const char*> allowed) const {
-    ExpectMap(node, key, std::vector<std::string>(allowed.begin(), allowed.end()));
-  }
-  void ExpectMap(const YAML::Node& node, const std::string& key,
-                 const std::vector<std::string>& allowed) const {
     if (!node.IsMap()) Fail(node, key, "expected a mapping of keys to values");
+    const std::vector<std::string> names(allowed.begin(), allowed.end());
     for (auto it = node.begin(); it != node.end(); ++it) {
       const std::string k = it->first.as<std::string>();
-      if (std::find(allowed.begin(), allowed.end(), k) != allowed.end()) continue;
-      const std::string best = NearestName(k, allowed);
-      std::string what = "unknown key '" + (key.empty() ? k : key + "." + k) + "'";
-      if (!best.empty()) what += " (did you mean '" + best + "'?)";
-      throw Error(Where(it->first) + ": " + what);
+      if (std::find(names.begin(), names.end(), k) == names.end())
+        FailUnknownKey(it->first, key, k, names);
     }
   }
 
@@ -70,17 +65,14 @@ class Reader {
     std::string tag_value = schema.tag_default;
     if (!schema.tag.empty() && node[schema.tag] && node[schema.tag].IsScalar())
       tag_value = node[schema.tag].Scalar();
-    std::vector<std::string> allowed;
-    for (const Key& k : schema.keys) allowed.push_back(k.name);
     for (auto it = node.begin(); it != node.end(); ++it) {
       const std::string k = it->first.as<std::string>();
       const Key* known = schema.Find(k);
       const std::string at = key.empty() ? k : key + "." + k;
       if (known == nullptr) {
-        const std::string best = NearestName(k, allowed);
-        std::string what = "unknown key '" + at + "'";
-        if (!best.empty()) what += " (did you mean '" + best + "'?)";
-        throw Error(Where(it->first) + ": " + what);
+        std::vector<std::string> names;
+        for (const Key& child : schema.keys) names.push_back(child.name);
+        FailUnknownKey(it->first, key, k, names);
       }
       if (!known->only_with.empty() && !tag_value.empty() &&
           std::find(known->only_with.begin(), known->only_with.end(), tag_value) ==
@@ -91,6 +83,16 @@ class Reader {
                     ", not " + tag_value);
       }
     }
+  }
+
+  // "unknown key 'SECTION.KEY' (did you mean 'NEAREST'?)" at the key.
+  [[noreturn]] void FailUnknownKey(const YAML::Node& at, const std::string& section,
+                                   const std::string& k,
+                                   const std::vector<std::string>& names) const {
+    const std::string best = NearestName(k, names);
+    std::string what = "unknown key '" + (section.empty() ? k : section + "." + k) + "'";
+    if (!best.empty()) what += " (did you mean '" + best + "'?)";
+    throw Error(Where(at) + ": " + what);
   }
 
   std::string Scalar(const YAML::Node& node, const std::string& key) const {
@@ -565,7 +567,7 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
     }
   } else if constexpr (std::is_same_v<T, std::string>) {
     *value = r.Scalar(node, key);
-  } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+  } else if constexpr (std::is_same_v<T, std::vector<double>>) {  // "lengths" or numbers
     if (!node.IsSequence() || node.size() == 0) r.Fail(node, key, "expected a list of values");
     value->clear();
     for (const YAML::Node& item : node)
@@ -658,9 +660,9 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
                    SceneSpec* scene) {
   Container& c = scene->arrangement.container;
   PhysicsDraw material(c.material);
-  if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote, floor or file");
-  ReadPhysics(r, node, key, &material, SchemaAt("scene.container"), false);
+  ReadPhysics(r, node, key, &material, SchemaAt("scene.container"), false);  // a mapping
   c.material = material.low;
+  if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote, floor or file");
   const std::string type = r.Scalar(node["type"], key + ".type");
   if (type == "tote") {
     c.kind = Container::Kind::kTote;
@@ -710,8 +712,9 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
     r.Fail(node, key, why);
 }
 
-// A scene's arrangement keys (ArrangementOptions::Fields) besides `other` keys read elsewhere,
-// and a pile's `container` and `physics`.
+// A scene's arrangement keys (ArrangementOptions::Fields) and a pile's `container` and
+// `physics`; `schema` is the section's (the root `scene`, or an entry of `scenes` with its own
+// keys, read elsewhere).
 void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, SceneSpec* scene,
                 const Key& schema) {
   ReadFields(r, node, key, &scene->arrangement, schema);
@@ -2036,9 +2039,14 @@ GraspSpec ReadGrasps(const Reader& r, const YAML::Node& g) {
   if (!grasps.scene.Check(&why)) r.Fail(g["approach_distance"], "grasps.approach_distance", why);
   GraspLabelOptions& labels = grasps.labels;
   ReadDescribed(r, g, "grasps", &labels);
-  if (!labels.Check(&why))
-    r.Fail(g["per_instance"] ? g["per_instance"] : g["visibility_tolerance"],
-           g["per_instance"] ? "grasps.per_instance" : "grasps.visibility_tolerance", why);
+  if (!labels.Check(&why)) {
+    // At the key at fault: the count alone (with the default tolerance) passes or not.
+    GraspLabelOptions count;
+    count.max_per_instance = labels.max_per_instance;
+    std::string count_why;
+    const char* bad = count.Check(&count_why) ? "visibility_tolerance" : "per_instance";
+    r.Fail(g[bad], std::string("grasps.") + bad, why);
+  }
   labels.graspnet = true;
   labels.suctionnet = grasps.suction;
   if (const YAML::Node formats = g["formats"]) {

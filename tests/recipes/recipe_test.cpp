@@ -739,6 +739,8 @@ TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {
   EXPECT_DOUBLE_EQ(s.arrangement.physics.low.restitution, 0.2);
   EXPECT_TRUE(s.physics_rules.empty());
 
+  EXPECT_EQ(ErrorOf("parts: [{family: hex_nut}]\nscene: {layout: pile, container: tote}\n"),
+            "r.yaml:2:34: scene.container: expected a mapping of keys to values");
   EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], container: {type: tote}}\n"),
             "r.yaml:2:45: scenes[0].container: only a pile (layout: pile) has one");
   EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: "
@@ -1100,6 +1102,10 @@ TEST(Recipe, GraspsSectionReadsGrippersCupsAndFormats) {
             "the tip)");
   EXPECT_EQ(ErrorOf("grasps: {per_instance: -1}\n"),
             "r.yaml:1:24: grasps.per_instance: per_instance must be 0 (all) to 1,000,000");
+  // With both label keys given, the error points at the one at fault.
+  EXPECT_EQ(ErrorOf("grasps: {per_instance: 5, visibility_tolerance: 0}\n"),
+            "r.yaml:1:49: grasps.visibility_tolerance: visibility tolerance must lie in (0, 1000] "
+            "mm");
 }
 
 TEST(Recipe, RandomizeErrorsPointAtTheKey) {

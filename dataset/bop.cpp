@@ -1,20 +1,22 @@
+// BOP encoding: the options' checks, images (colour, grey, depth, masks), visibility and the
+// ground-truth statistics, BopSceneWriter's frames and scene files, the splits. The rest of
+// dataset/bop.h is defined by concern: bop_fragment.cpp (the scene's journal: fragments and the
+// resume half), bop_rig.cpp (rigs, multi-view targets), bop_classes.cpp (object classes),
+// models.cpp (the models/ folder), coco.cpp (the merged COCO).
 #include "dataset/bop.h"
 
-#include <fnmatch.h>
-
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iterator>
+#include <functional>
 #include <limits>
 #include <map>
 #include <set>
 #include <system_error>
 
-#include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -22,17 +24,23 @@
 
 #include "cad/core/error.h"
 #include "cad/core/random.h"
-#include "cad/core/util.h"
+#include "dataset/bop_fragment.h"
+#include "dataset/bop_internal.h"
 #include "dataset/bop_read.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"
 #include "dataset/mask_png.h"
-#include "dataset/models.h"
-#include "dataset/point_cloud.h"
 
 namespace cadsynth {
 
-using Json = nlohmann::ordered_json;
+using bop_internal::DistCoeffs;
+using bop_internal::Fragment;
+using bop_internal::FragmentText;
+using bop_internal::Json;
+using bop_internal::ReadFragment;
+using bop_internal::RowMajor;
+using bop_internal::Vec;
+using bop_internal::WriteJson;
 
 bool BopOptions::Check(std::string* why) const {
   if (!(depth_scale > 0.0) || !std::isfinite(depth_scale)) {
@@ -85,23 +93,6 @@ bool BopOptions::IsTest(int index, int count) const {
 }
 
 namespace {
-
-// OpenCV's distortion coefficients in its order: [k1, k2, p1, p2, k3].
-Json DistCoeffs(const Distortion& d) { return Json::array({d.k1, d.k2, d.p1, d.p2, d.k3}); }
-
-Json RowMajor(const Eigen::Matrix3d& r) {
-  Json out = Json::array();
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) out.push_back(r(i, j));
-  }
-  return out;
-}
-
-Json Vec(const Eigen::Vector3d& t) { return Json::array({t.x(), t.y(), t.z()}); }
-
-void WriteJson(const std::filesystem::path& path, const Json& json) {
-  WriteFileAtomic(path, json.dump(2) + "\n");
-}
 
 std::string EncodePng(const cv::Mat& image, const std::filesystem::path& where) {
   std::vector<uchar> bytes;
@@ -203,112 +194,6 @@ bool VisibleMasks::operator()(size_t i, int u, int v) const {
 
 namespace {
 
-// A frame's fragment (.fragments/NNNNNN.json, written by WriteFrame): five lines of JSON, the
-// scene_camera, scene_gt and scene_gt_info entries, the COCO entry and the manifest, and a sixth
-// with the frame's randomisation record when it has one. Every line's shape is checked here, so
-// Finish and CheckFrame never meet a value of the wrong type in a damaged or hand-edited fragment.
-struct Fragment {
-  Json camera, gt, gt_info, coco;
-  std::vector<FileRecord> files;
-  Json randomization;  // null when the frame has none
-};
-
-Fragment ParseFragmentText(const std::string& text, const std::string& origin) {
-  std::vector<std::string> lines;
-  size_t start = 0;
-  while (start < text.size() && lines.size() < 6) {
-    const size_t end = text.find('\n', start);
-    if (end == std::string::npos) break;
-    lines.push_back(text.substr(start, end - start));
-    start = end + 1;
-  }
-  if (lines.size() < 5)
-    throw Error(origin + ": incomplete fragment (" + std::to_string(lines.size()) + " of 5 lines)");
-  Json parsed[5];
-  for (int i = 0; i < 5; ++i) {
-    try {
-      parsed[i] = Json::parse(lines[i]);
-    } catch (const Json::exception&) {
-      throw Error(origin + ":" + std::to_string(i + 1) + ": not valid JSON");
-    }
-  }
-  const auto fail = [&](int line, const std::string& what) {
-    throw Error(origin + ":" + std::to_string(line) + ": " + what);
-  };
-  const auto is_id = [](const Json& v) {
-    return v.is_number_integer() && v.get<int64_t>() >= 0 && v.get<int64_t>() <= 2147483647;
-  };
-  Fragment f;
-  f.camera = std::move(parsed[0]);
-  if (!f.camera.is_object()) fail(1, "the camera entry is not an object");
-  f.gt = std::move(parsed[1]);
-  if (!f.gt.is_array()) fail(2, "the ground-truth entry is not a list");
-  for (const Json& g : f.gt) {
-    if (!g.is_object() || !g.contains("obj_id") || !is_id(g["obj_id"]))
-      fail(2, "an instance without an obj_id");
-  }
-  f.gt_info = std::move(parsed[2]);
-  if (!f.gt_info.is_array()) fail(3, "the visibility entry is not a list");
-  for (const Json& g : f.gt_info) {
-    if (!g.is_object() || !g.contains("visib_fract") || !g["visib_fract"].is_number())
-      fail(3, "an instance without a visib_fract number");
-  }
-  f.coco = std::move(parsed[3]);
-  if (!f.coco.is_object() || !f.coco.contains("width") || !is_id(f.coco["width"]) ||
-      !f.coco.contains("height") || !is_id(f.coco["height"]) || !f.coco.contains("annotations") ||
-      !f.coco["annotations"].is_array()) {
-    fail(4, "the COCO entry lacks width, height or annotations");
-  }
-  for (const Json& a : f.coco["annotations"]) {
-    if (!a.is_object()) fail(4, "an annotation is not an object");
-    for (const char* key : {"inst_id", "obj_id", "area"}) {
-      if (!a.contains(key) || !is_id(a[key])) fail(4, std::string("an annotation without ") + key);
-    }
-    if (!a.contains("bbox") || !a["bbox"].is_array() || !a.contains("ignore") ||
-        !a["ignore"].is_boolean() || !a.contains("counts") || !a["counts"].is_string()) {
-      fail(4, "an annotation without bbox, ignore or counts");
-    }
-  }
-  const Json& manifest = parsed[4];
-  if (!manifest.is_object() || !manifest.contains("files") || !manifest["files"].is_array())
-    fail(5, "the manifest has no file list");
-  for (const Json& file : manifest["files"]) {
-    if (!file.is_array() || file.size() != 3 || !file[0].is_string() ||
-        !file[1].is_number_unsigned() || !file[2].is_number_unsigned() ||
-        file[2].get<uint64_t>() > 0xffffffffu) {
-      fail(5, "a manifest record is not [path, size, crc32]");
-    }
-    const std::string path = file[0].get<std::string>();
-    if (path.empty() || path[0] == '/' || path.find("..") != std::string::npos)
-      fail(5, "a manifest path leaves the dataset: " + path.substr(0, 80));
-    f.files.push_back({path, file[1].get<uint64_t>(), file[2].get<uint32_t>()});
-  }
-  if (lines.size() == 6) {
-    try {
-      f.randomization = Json::parse(lines[5]);
-    } catch (const Json::exception&) {
-      fail(6, "not valid JSON");
-    }
-    if (!f.randomization.is_object()) fail(6, "the randomisation record is not an object");
-  }
-  return f;
-}
-
-Fragment ReadFragment(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return ParseFragmentText(text, path.string());
-}
-
-}  // namespace
-
-void CheckFragmentText(const std::string& text, const std::string& origin) {
-  ParseFragmentText(text, origin);
-}
-
-namespace {
-
 std::vector<GtInfo> ComputeGtInfos(const Frame& frame, const BopOptions& options,
                                    const VisibleMasks& visible) {
   const int w = frame.width(), h = frame.height();
@@ -400,132 +285,6 @@ GtInfo ComputeGtInfo(const Frame& frame, int instance, const BopOptions& options
   return ComputeGtInfos(frame, options).at(static_cast<size_t>(instance));
 }
 
-std::vector<ObjectClass> AssignClasses(
-    const std::vector<std::string>& part_names, const std::vector<std::string>& labels,
-    const std::vector<std::pair<std::string, std::vector<std::string>>>& groups,
-    std::vector<std::string>* empty_groups) {
-  std::vector<ObjectClass> classes(part_names.size());
-  std::vector<bool> used(groups.size(), false);
-  int next_id = static_cast<int>(groups.size()) + 1;
-  std::map<std::string, int> label_ids;
-  for (size_t i = 0; i < part_names.size(); ++i) {
-    if (i < labels.size() && !labels[i].empty()) {
-      auto [it, inserted] = label_ids.emplace(labels[i], next_id);
-      if (inserted) ++next_id;
-      classes[i] = {it->second, labels[i]};
-      continue;
-    }
-    for (size_t g = 0; g < groups.size() && classes[i].id == 0; ++g) {
-      for (const std::string& pattern : groups[g].second) {
-        if (fnmatch(pattern.c_str(), part_names[i].c_str(), FNM_CASEFOLD) == 0) {
-          classes[i] = {static_cast<int>(g) + 1, groups[g].first};
-          used[g] = true;
-          break;
-        }
-      }
-    }
-    if (classes[i].id == 0) classes[i] = {next_id++, part_names[i]};
-  }
-  empty_groups->clear();
-  for (size_t g = 0; g < groups.size(); ++g) {
-    if (!used[g]) empty_groups->push_back(groups[g].first);
-  }
-  return classes;
-}
-
-void WriteBopModels(const std::filesystem::path& root, const std::vector<Part>& parts,
-                    const std::vector<ObjectClass>& classes) {
-  if (!classes.empty() && classes.size() != parts.size()) {
-    throw Error("bop: " + std::to_string(classes.size()) + " classes for " +
-                std::to_string(parts.size()) + " parts");
-  }
-  const std::filesystem::path dir = root / "models";
-  CreateFolder(dir);
-  std::vector<double> diameters(parts.size());
-  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
-    diameters[i] = PartDiameter(parts[i]);
-    WriteFileAtomic(dir / ("obj_" + Id6(static_cast<int>(i) + 1) + ".ply"),
-                    EncodePly(parts[i].mesh));
-  });
-  Json info = Json::object();
-  Json cad = Json::object();
-  for (size_t i = 0; i < parts.size(); ++i) {
-    const Eigen::AlignedBox3d box = parts[i].mesh.Bounds();
-    const std::string key = std::to_string(i + 1);
-    info[key] = {{"diameter", diameters[i]},  {"min_x", box.min().x()},
-                 {"min_y", box.min().y()},    {"min_z", box.min().z()},
-                 {"size_x", box.sizes().x()}, {"size_y", box.sizes().y()},
-                 {"size_z", box.sizes().z()}};
-    // Symmetries as bop_toolkit reads them: 4x4 row-major transforms, and axes with offsets.
-    const Symmetries& sym = parts[i].symmetries;
-    if (!sym.discrete.empty()) {
-      Json discrete = Json::array();
-      for (const Eigen::Isometry3d& t : sym.discrete) {
-        Json m = Json::array();
-        for (int r = 0; r < 4; ++r) {
-          for (int c = 0; c < 4; ++c)
-            m.push_back(std::abs(t.matrix()(r, c)) < 1e-12 ? 0.0 : t.matrix()(r, c));
-        }
-        discrete.push_back(m);
-      }
-      info[key]["symmetries_discrete"] = discrete;
-    }
-    if (!sym.continuous.empty()) {
-      Json continuous = Json::array();
-      for (const Symmetries::Axis& a : sym.continuous) {
-        continuous.push_back({{"axis", Vec(a.direction)}, {"offset", Vec(a.offset)}});
-      }
-      info[key]["symmetries_continuous"] = continuous;
-    }
-    Json cad_from_model = Json::array();
-    for (int r = 0; r < 4; ++r) {
-      for (int c = 0; c < 4; ++c) cad_from_model.push_back(parts[i].cad_from_model.matrix()(r, c));
-    }
-    const ObjectClass object_class =
-        classes.empty() ? ObjectClass{static_cast<int>(i) + 1, parts[i].name} : classes[i];
-    cad[key] = {{"name", parts[i].name},
-                {"class_id", object_class.id},
-                {"class_name", object_class.name},
-                {"cad_from_model", cad_from_model},
-                {"volume_mm3", parts[i].mass.volume_mm3},
-                {"center_of_mass", Vec(parts[i].mass.center_of_mass)},
-                {"mass_from_brep", parts[i].mass_from_brep},
-                {"triangles", parts[i].mesh.num_triangles()}};
-  }
-  WriteJson(dir / "models_info.json", info);
-  WriteJson(dir / "models_cad.json", cad);
-}
-
-void WriteModelPoints(const std::filesystem::path& root, const std::vector<Part>& parts,
-                      const BopOptions& options) {
-  if (options.model_points <= 0) return;
-  CreateFolder(root / "models" / "points");
-  std::vector<Keypoints> keypoints(parts.size());
-  tbb::parallel_for(size_t{0}, parts.size(), [&](size_t i) {
-    const std::vector<Eigen::Vector3f> points =
-        options.even_points
-            ? SampleEvenly(parts[i].mesh, options.model_points, options.point_seed + i)
-            : SampleSurface(parts[i].mesh, options.model_points, options.point_seed + i);
-    WriteFileAtomic(root / "models" / "points" / ("obj_" + Id6(static_cast<int>(i) + 1) + ".ply"),
-                    EncodePointPly(points));
-    keypoints[i] = ComputeKeypoints(parts[i].mesh, points);
-  });
-  const auto list = [](const auto& points) {
-    Json out = Json::array();
-    for (const Eigen::Vector3f& p : points) out.push_back({p.x(), p.y(), p.z()});
-    return out;
-  };
-  Json all = Json::object();
-  for (size_t i = 0; i < parts.size(); ++i) {
-    const Keypoints& k = keypoints[i];
-    all[std::to_string(i + 1)] = {{"fps8", list(k.fps8)},
-                                  {"fps16", list(k.fps16)},
-                                  {"center", {k.center.x(), k.center.y(), k.center.z()}},
-                                  {"corners", list(k.corners)}};
-  }
-  WriteJson(root / "models" / "keypoints.json", all);
-}
-
 void WriteBopCamera(const std::filesystem::path& root, const Intrinsics& k,
                     const BopOptions& options, const std::string& sensor) {
   CreateFolder(root);
@@ -552,80 +311,33 @@ BopSceneWriter::BopSceneWriter(const std::filesystem::path& root, int scene_id,
                                  std::string("mask_visib"), std::string(".fragments")})
     CreateFolder(Folder(sub));
   // Frames of an interrupted run: complete where the fragment (written last) exists.
-  for (const auto& entry : std::filesystem::directory_iterator(Folder(".fragments"))) {
-    const std::string name = entry.path().filename().string();
-    if (name.size() != 11 || name.substr(6) != ".json") continue;
-    if (const auto id = ParseBopId(name.substr(0, 6))) image_ids_.push_back(*id);
-  }
+  image_ids_ = bop_internal::FragmentIds(Folder(".fragments"));
 }
 
-std::filesystem::path BopSceneWriter::FragmentPath(int image_id) const {
-  return Folder(".fragments") / (Id6(image_id) + ".json");
-}
+namespace {
 
-bool BopSceneWriter::HasFrame(int image_id) const {
-  return std::filesystem::exists(FragmentPath(image_id));
-}
+// Where WriteFrame's helpers write one frame's files: the folder of each kind of image (with the
+// sensor's suffix, BopSceneWriter::Folder), the image's file stem and the frame's manifest entry.
+struct FrameOut {
+  std::function<std::filesystem::path(const std::string&)> folder;
+  std::string im;  // Id6(image_id)
+  FileLog* files;
+};
 
-std::vector<int> BopSceneWriter::WrittenFrames() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::vector<int> ids = image_ids_;
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  return ids;
-}
-
-std::string BopSceneWriter::CheckFrame(int image_id) const {
-  const std::filesystem::path path = FragmentPath(image_id);
-  Fragment fragment;
-  try {
-    fragment = ReadFragment(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  for (const FileRecord& record : fragment.files) {
-    const std::string problem = CheckFile(root_, record);
-    if (!problem.empty()) return (root_ / record.path).string() + ": " + problem;
-  }
-  return {};
-}
-
-void BopSceneWriter::ForgetFrame(int image_id) {
-  std::error_code ec;
-  std::filesystem::remove(FragmentPath(image_id), ec);
-  if (ec)
-    throw Error(Folder(".fragments").string() + ": cannot remove the record of image " +
-                std::to_string(image_id) + ": " + ec.message());
-  std::lock_guard<std::mutex> lock(mutex_);
-  image_ids_.erase(std::remove(image_ids_.begin(), image_ids_.end(), image_id), image_ids_.end());
-}
-
-void BopSceneWriter::RemoveFragments() {
-  std::error_code ec;
-  std::filesystem::remove_all(Folder(".fragments"), ec);
-}
-
-void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
-                                const std::vector<const FrameWriter*>& formats) {
-  if (frame.instances.size() != obj_ids_.size()) {
-    throw Error("bop: frame has " + std::to_string(frame.instances.size()) +
-                " instances, the scene " + std::to_string(obj_ids_.size()));
-  }
+// The camera's image: colour, or grey (8 or 16 bits) for a grey camera. Returns its path.
+std::filesystem::path WriteCameraImage(const Frame& frame, const BopOptions& options,
+                                       const FrameOut& out) {
   const int w = frame.width(), h = frame.height();
-  const std::string im = Id6(image_id);
-  FileLog files(root_);
-
-  // The camera's image: colour, or grey (8 or 16 bits) for a grey camera.
   cv::Mat image;
-  if (options_.gray_bits > 0) {
+  if (options.gray_bits > 0) {
     if (frame.gray.size() != static_cast<size_t>(w) * h)
       throw Error("bop: a grey camera's frame has no grey image");
-    const bool deep = options_.gray_bits == 16;
+    const bool deep = options.gray_bits == 16;
     image.create(h, w, deep ? CV_16UC1 : CV_8UC1);
     for (int v = 0; v < h; ++v) {
       for (int u = 0; u < w; ++u) {
         const uint16_t value =
-            EncodeGray(frame.gray[static_cast<size_t>(v) * w + u], options_.gray_bits);
+            EncodeGray(frame.gray[static_cast<size_t>(v) * w + u], options.gray_bits);
         if (deep) {
           image.at<uint16_t>(v, u) = value;
         } else {
@@ -638,52 +350,60 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     cv::cvtColor(rgb, image, cv::COLOR_RGB2BGR);
   }
   const std::filesystem::path rgb_path =
-      Folder(options_.ImageFolder()) / (im + options_.RgbExtension());
-  if (options_.jpeg_quality > 0) {
+      out.folder(options.ImageFolder()) / (out.im + options.RgbExtension());
+  if (options.jpeg_quality > 0) {
     std::vector<uchar> bytes;
-    if (!cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
+    if (!cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality})) {
       throw Error(rgb_path.string() + ": JPEG encoding failed");
     }
-    files.Write(rgb_path,
-                std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    out.files->Write(rgb_path,
+                     std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
   } else {
-    files.Write(rgb_path, EncodePng(image, rgb_path));
+    out.files->Write(rgb_path, EncodePng(image, rgb_path));
   }
+  return rgb_path;
+}
 
-  // depth/: what the sensor returns; with a depth model other than ideal, depth_gt/ holds the
-  // exact depth every label comes from.
+// depth/: what the sensor returns; with a depth model other than ideal, depth_gt/ holds the
+// exact depth every label comes from.
+void WriteDepthImages(const Frame& frame, const BopOptions& options, const FrameOut& out) {
+  const int w = frame.width(), h = frame.height();
   const auto write_depth = [&](const std::vector<float>& values, const char* folder) {
     cv::Mat depth(h, w, CV_16UC1);
     for (int v = 0; v < h; ++v) {
       auto* row = depth.ptr<uint16_t>(v);
       for (int u = 0; u < w; ++u) {
-        row[u] = EncodeDepth(values[static_cast<size_t>(v) * w + u], options_.depth_scale);
+        row[u] = EncodeDepth(values[static_cast<size_t>(v) * w + u], options.depth_scale);
       }
     }
-    const std::filesystem::path depth_path = Folder(folder) / (im + ".png");
-    files.Write(depth_path, EncodePng(depth, depth_path));
+    const std::filesystem::path depth_path = out.folder(folder) / (out.im + ".png");
+    out.files->Write(depth_path, EncodePng(depth, depth_path));
   };
   if (frame.sensor_depth.empty()) {
     write_depth(frame.depth, "depth");
   } else {
-    CreateFolder(Folder("depth_gt"));
+    CreateFolder(out.folder("depth_gt"));
     write_depth(frame.sensor_depth, "depth");
     write_depth(frame.depth, "depth_gt");
   }
+}
 
+// The images a frame has only with some cameras and render settings: ir/, normal/, rgb_hdr/.
+void WriteExtraImages(const Frame& frame, const BopOptions& options, const FrameOut& out) {
+  const int w = frame.width(), h = frame.height();
   // ir/: the IR camera's image (active_stereo's left IR image, the projector's dots in it).
-  if (options_.infrared && !frame.infrared.empty()) {
+  if (options.infrared && !frame.infrared.empty()) {
     if (frame.infrared.size() != static_cast<size_t>(w) * h)
       throw Error("bop: the frame's IR image has the wrong size");
-    CreateFolder(Folder("ir"));
+    CreateFolder(out.folder("ir"));
     const cv::Mat ir(h, w, CV_8UC1, const_cast<uint8_t*>(frame.infrared.data()));
-    const std::filesystem::path ir_path = Folder("ir") / (im + ".png");
-    files.Write(ir_path, EncodePng(ir, ir_path));
+    const std::filesystem::path ir_path = out.folder("ir") / (out.im + ".png");
+    out.files->Write(ir_path, EncodePng(ir, ir_path));
   }
 
-  if (!frame.normals
-           .empty()) {  // camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none
-    CreateFolder(Folder("normal"));
+  // Camera-frame normals as 8-bit RGB: (n + 1) / 2 * 255; (0, 0, 0) = none.
+  if (!frame.normals.empty()) {
+    CreateFolder(out.folder("normal"));
     cv::Mat normals(h, w, CV_8UC3, cv::Scalar(0, 0, 0));
     for (int v = 0; v < h; ++v) {
       auto* row = normals.ptr<cv::Vec3b>(v);
@@ -696,12 +416,12 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         }
       }
     }
-    const std::filesystem::path normal_path = Folder("normal") / (im + ".png");
-    files.Write(normal_path, EncodePng(normals, normal_path));
+    const std::filesystem::path normal_path = out.folder("normal") / (out.im + ".png");
+    out.files->Write(normal_path, EncodePng(normals, normal_path));
   }
 
   if (!frame.radiance.empty()) {  // pbr with hdr: linear radiance as 32-bit float EXR
-    CreateFolder(Folder("rgb_hdr"));
+    CreateFolder(out.folder("rgb_hdr"));
     cv::Mat radiance(h, w, CV_32FC3);
     for (int v = 0; v < h; ++v) {
       auto* row = radiance.ptr<cv::Vec3f>(v);
@@ -710,15 +430,18 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
         row[u] = cv::Vec3f(c[2], c[1], c[0]);  // BGR
       }
     }
-    const std::filesystem::path hdr_path = Folder("rgb_hdr") / (im + ".exr");
+    const std::filesystem::path hdr_path = out.folder("rgb_hdr") / (out.im + ".exr");
     std::vector<uchar> bytes;
     if (!cv::imencode(".exr", radiance, bytes, {cv::IMWRITE_EXR_TYPE, cv::IMWRITE_EXR_TYPE_FLOAT}))
       throw Error(hdr_path.string() + ": EXR encoding failed");
-    files.Write(hdr_path,
-                std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    out.files->Write(hdr_path,
+                     std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
   }
+}
 
-  Json camera_entry, gt_entry = Json::array(), gt_info_entry = Json::array();
+// The frame's scene_camera.json entry.
+Json CameraEntry(const Frame& frame, const BopOptions& options) {
+  Json camera_entry;
   const Eigen::Isometry3d cam_from_world = frame.camera.world_from_cam.inverse();
   Json k = Json::array();
   const Eigen::Matrix3d kmat = frame.camera.intrinsics.K();
@@ -726,27 +449,73 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
     for (int c = 0; c < 3; ++c) k.push_back(kmat(r, c));
   }
   camera_entry = {{"cam_K", k},
-                  {"depth_scale", options_.depth_scale},
+                  {"depth_scale", options.depth_scale},
                   {"cam_R_w2c", RowMajor(cam_from_world.linear())},
                   {"cam_t_w2c", Vec(cam_from_world.translation())}};
   // Beside cam_K, in OpenCV's order; only for a camera with lens distortion (BOP's images have
   // none: its readers ignore the key).
   if (frame.camera.intrinsics.distortion.active())
     camera_entry["cam_dist_coeffs"] = DistCoeffs(frame.camera.intrinsics.distortion);
+  return camera_entry;
+}
 
-  const VisibleMasks visible(frame, options_);
-  const std::vector<GtInfo> infos = ComputeGtInfos(frame, options_, visible);
+// Writes instance i's mask/ and mask_visib/ images (IMID_GTID.png) through `mask`, an all-zero
+// image that is zero again on return, and returns the in-image box of its full silhouette
+// (inclusive; {w, h, -1, -1} when it has no pixel in the image): COCO's amodal box.
+std::array<int, 4> WriteMasks(const Frame& frame, size_t i, const GtInfo& info,
+                              const VisibleMasks& visible, const FrameOut& out, cv::Mat* mask) {
+  const int w = frame.width(), h = frame.height();
+  const Frame::InstanceTruth& truth = frame.instances[i];
+  const std::string name = out.im + "_" + Id6(static_cast<int>(i)) + ".png";
+  // Masks are zero outside the full silhouette's rectangle: fill only inside.
+  const auto [r0, r1, r2, r3] = truth.Roi(w, h);
+  std::array<int, 4> full = {w, h, -1, -1};
+  for (int v = r1; v < r3 && !truth.amodal_mask.empty(); ++v) {
+    auto* row = mask->ptr<uint8_t>(v);
+    const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v - r1) * (r2 - r0)];
+    for (int u = r0; u < r2; ++u) {
+      if (in[u - r0] == 0) continue;
+      row[u] = 255;
+      full[0] = std::min(full[0], u), full[1] = std::min(full[1], v);
+      full[2] = std::max(full[2], u), full[3] = std::max(full[3], v);
+    }
+  }
+  out.files->Write(out.folder("mask") / name, EncodeMaskPng(mask->data, mask->step, w, h, r1, r3));
+  const int* b = info.bbox_visib;  // inclusive: [b0, b0 + b2] x [b1, b1 + b3]
+  const int visib_end = info.px_count_visib > 0 ? b[1] + b[3] + 1 : b[1];
+  for (int v = r1; v < r3; ++v) std::memset(mask->ptr<uint8_t>(v), 0, w);
+  for (int v = b[1]; v < visib_end; ++v) {
+    auto* row = mask->ptr<uint8_t>(v);
+    for (int u = b[0]; u <= b[0] + b[2]; ++u) row[u] = visible(i, u, v) ? 255 : 0;
+  }
+  out.files->Write(out.folder("mask_visib") / name,
+                   EncodeMaskPng(mask->data, mask->step, w, h, b[1], visib_end));
+  for (int v = b[1]; v < visib_end; ++v) std::memset(mask->ptr<uint8_t>(v), 0, w);
+  return full;
+}
+
+// A frame's per-instance entries of scene_gt.json, scene_gt_info.json and scene_gt_coco.json.
+struct InstanceEntries {
+  Json gt = Json::array(), gt_info = Json::array(), coco = Json::array();
+};
+
+// Writes every instance's masks, in instance order, and returns its entries.
+InstanceEntries WriteInstances(const Frame& frame, const BopOptions& options,
+                               const std::vector<int>& obj_ids, const FrameOut& out) {
+  const int w = frame.width(), h = frame.height();
+  InstanceEntries entries;
+  const VisibleMasks visible(frame, options);
+  const std::vector<GtInfo> infos = ComputeGtInfos(frame, options, visible);
   // Each instance's masks are written into the rows they cover and cleared after: the rest of
   // the image stays zero, and only the band of rows that may not be is compressed.
   cv::Mat mask = cv::Mat::zeros(h, w, CV_8UC1);
-  Json coco_entry = Json::array();
   for (size_t i = 0; i < frame.instances.size(); ++i) {
     const Frame::InstanceTruth& truth = frame.instances[i];
-    gt_entry.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
-                        {"cam_t_m2c", Vec(truth.cam_from_model.translation())},
-                        {"obj_id", obj_ids_[i]}});
+    entries.gt.push_back({{"cam_R_m2c", RowMajor(truth.cam_from_model.linear())},
+                          {"cam_t_m2c", Vec(truth.cam_from_model.translation())},
+                          {"obj_id", obj_ids[i]}});
     const GtInfo& info = infos[i];
-    gt_info_entry.push_back(
+    entries.gt_info.push_back(
         {{"bbox_obj", {info.bbox_obj[0], info.bbox_obj[1], info.bbox_obj[2], info.bbox_obj[3]}},
          {"bbox_visib",
           {info.bbox_visib[0], info.bbox_visib[1], info.bbox_visib[2], info.bbox_visib[3]}},
@@ -755,63 +524,53 @@ void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
          {"px_count_visib", info.px_count_visib},
          {"visib_fract", info.visib_fract}});
 
-    const std::string name = im + "_" + Id6(static_cast<int>(i)) + ".png";
-    // Masks are zero outside the full silhouette's rectangle: fill only inside. The in-image box
-    // of the full silhouette (inclusive) is COCO's amodal box.
-    const auto [r0, r1, r2, r3] = truth.Roi(w, h);
-    int full[4] = {w, h, -1, -1};
-    for (int v = r1; v < r3 && !truth.amodal_mask.empty(); ++v) {
-      auto* out = mask.ptr<uint8_t>(v);
-      const uint8_t* in = &truth.amodal_mask[static_cast<size_t>(v - r1) * (r2 - r0)];
-      for (int u = r0; u < r2; ++u) {
-        if (in[u - r0] == 0) continue;
-        out[u] = 255;
-        full[0] = std::min(full[0], u), full[1] = std::min(full[1], v);
-        full[2] = std::max(full[2], u), full[3] = std::max(full[3], v);
-      }
-    }
-    files.Write(Folder("mask") / name, EncodeMaskPng(mask.data, mask.step, w, h, r1, r3));
-    const int* b = info.bbox_visib;  // inclusive: [b0, b0 + b2] x [b1, b1 + b3]
-    const int visib_end = info.px_count_visib > 0 ? b[1] + b[3] + 1 : b[1];
-    for (int v = r1; v < r3; ++v) std::memset(mask.ptr<uint8_t>(v), 0, w);
-    for (int v = b[1]; v < visib_end; ++v) {
-      auto* out = mask.ptr<uint8_t>(v);
-      for (int u = b[0]; u <= b[0] + b[2]; ++u) out[u] = visible(i, u, v) ? 255 : 0;
-    }
-    files.Write(Folder("mask_visib") / name,
-                EncodeMaskPng(mask.data, mask.step, w, h, b[1], visib_end));
-    for (int v = b[1]; v < visib_end; ++v) std::memset(mask.ptr<uint8_t>(v), 0, w);
+    const std::array<int, 4> full = WriteMasks(frame, i, info, visible, out, &mask);
 
     // COCO, as bop_toolkit's calc_gt_coco.py: every instance with a visible pixel, its visible
     // mask as compressed RLE, the amodal (or modal) box with COCO's width max - min + 1, and
     // "ignore" below 10% visibility.
-    if (!options_.coco || info.px_count_visib == 0 || (options_.coco_amodal_bbox && full[2] < 0))
+    if (!options.coco || info.px_count_visib == 0 || (options.coco_amodal_bbox && full[2] < 0))
       continue;
+    const int* b = info.bbox_visib;
     const RleMask rle = EncodeRle(w, h, b[0], b[1], b[0] + b[2] + 1, b[1] + b[3] + 1,
                                   [&](size_t p) { return visible.AtPixel(i, p); });
-    const Json coco_box = options_.coco_amodal_bbox
+    const Json coco_box = options.coco_amodal_bbox
                               ? Json{full[0], full[1], full[2] - full[0] + 1, full[3] - full[1] + 1}
                               : Json{b[0], b[1], b[2] + 1, b[3] + 1};
-    coco_entry.push_back({{"inst_id", i},
-                          {"obj_id", obj_ids_[i]},
-                          {"area", info.px_count_visib},
-                          {"bbox", coco_box},
-                          {"ignore", info.visib_fract < 0.1},
-                          {"counts", CompressRleCounts(rle.counts)}});
+    entries.coco.push_back({{"inst_id", i},
+                            {"obj_id", obj_ids[i]},
+                            {"area", info.px_count_visib},
+                            {"bbox", coco_box},
+                            {"ignore", info.visib_fract < 0.1},
+                            {"counts", CompressRleCounts(rle.counts)}});
   }
-  const BopFrameFiles bop{rgb_path, Folder("depth") / (im + ".png")};
+  return entries;
+}
+
+}  // namespace
+
+void BopSceneWriter::WriteFrame(int image_id, const Frame& frame,
+                                const std::vector<const FrameWriter*>& formats) {
+  if (frame.instances.size() != obj_ids_.size()) {
+    throw Error("bop: frame has " + std::to_string(frame.instances.size()) +
+                " instances, the scene " + std::to_string(obj_ids_.size()));
+  }
+  FileLog files(root_);
+  const FrameOut out{[this](const std::string& name) { return Folder(name); }, Id6(image_id),
+                     &files};
+  const std::filesystem::path rgb_path = WriteCameraImage(frame, options_, out);
+  WriteDepthImages(frame, options_, out);
+  WriteExtraImages(frame, options_, out);
+  const Json camera_entry = CameraEntry(frame, options_);
+  const InstanceEntries entries = WriteInstances(frame, options_, obj_ids_, out);
+  const BopFrameFiles bop{rgb_path, Folder("depth") / (out.im + ".png")};
   for (const FrameWriter* format : formats) format->WriteFrame(image_id, frame, bop, &files);
-  // One fragment per frame, written last: four lines of compact JSON read back in order by
-  // Finish(), and the frame's manifest entry: every file it wrote with size and CRC-32.
-  Json manifest = Json::array();
-  for (const FileRecord& r : files.records()) manifest.push_back({r.path, r.size, r.crc32});
-  WriteFileAtomic(
-      FragmentPath(image_id),
-      camera_entry.dump() + "\n" + gt_entry.dump() + "\n" + gt_info_entry.dump() + "\n" +
-          Json{{"width", w}, {"height", h}, {"annotations", coco_entry}}.dump() + "\n" +
-          Json{{"files", manifest}}.dump() + "\n" +
-          (frame.randomization.empty() ? std::string()
-                                       : Json::parse(frame.randomization).dump() + "\n"));
+  // One fragment per frame, written last (dataset/bop_fragment.h): five lines of compact JSON
+  // read back in order by Finish(), the manifest entry among them (every file the frame wrote
+  // with size and CRC-32).
+  WriteFileAtomic(FragmentPath(image_id),
+                  FragmentText(camera_entry, entries.gt, entries.gt_info, frame.width(),
+                               frame.height(), entries.coco, files.records(), frame.randomization));
   std::lock_guard<std::mutex> lock(mutex_);
   image_ids_.push_back(image_id);
 }
@@ -965,215 +724,6 @@ void WriteSplits(const std::filesystem::path& root, const std::vector<SceneSplit
   WriteFileAtomic(root / "splits" / "train.txt", train);
   WriteFileAtomic(root / "splits" / "test.txt", test);
   WriteFileAtomic(root / "test_targets_bop19.json", targets.dump(2) + "\n");
-}
-
-void WriteMergedCoco(const std::filesystem::path& root, const BopOptions& options,
-                     const std::vector<SceneSplit>& scenes, const std::vector<ObjectClass>& classes,
-                     const BopSensor& sensor) {
-  if (!options.coco) return;
-  const std::string sfx = sensor.Suffix();
-  CreateFolder(root / "coco");
-  Json categories = Json::array();
-  std::map<int, std::string> class_names;
-  for (const ObjectClass& c : classes) class_names[c.id] = c.name;
-  for (const auto& [id, name] : class_names)
-    categories.push_back({{"id", id}, {"name", name}, {"supercategory", "cadsynth"}});
-  // Streamed, so that memory does not grow with the dataset: the scene files are read as
-  // Finish() writes them (one annotation per line, the image list on one line), annotations in
-  // a first pass over the scenes and images in a second. Images are numbered from 1 in scene
-  // order, then image order; an image's number is its rank in its scene's (sorted) split list.
-  const auto scene_file = [&](size_t s) {
-    return root / options.split / Id6(static_cast<int>(s)) / ("scene_gt_coco" + sfx + ".json");
-  };
-  const auto strip = [](std::string line) {  // "    {...}," -> "{...}"
-    const size_t begin = line.find_first_not_of(' ');
-    while (!line.empty() && (line.back() == ',' || line.back() == '\r')) line.pop_back();
-    return begin == std::string::npos ? std::string() : line.substr(begin);
-  };
-  for (const bool test : {false, true}) {
-    const std::filesystem::path path =
-        root / "coco" / (std::string(test ? "test" : "train") + sfx + ".json");
-    const std::string temporary = path.string() + ".tmp";
-    std::ofstream out(temporary, std::ios::binary);
-    if (!out) throw Error(path.string() + ": cannot create file");
-    out << "{\"annotations\":[";
-    size_t annotation_count = 0, image_base = 0;
-    for (size_t s = 0; s < scenes.size(); ++s) {
-      const std::vector<int>& wanted = test ? scenes[s].test : scenes[s].train;
-      if (wanted.empty()) continue;
-      std::ifstream in(scene_file(s), std::ios::binary);
-      if (!in) throw Error(scene_file(s).string() + ": cannot open");
-      std::string line;
-      bool in_annotations = false;
-      while (std::getline(in, line)) {
-        if (line.rfind("  \"annotations\": [", 0) == 0) {
-          in_annotations = true;
-          continue;
-        }
-        if (!in_annotations) continue;
-        if (line.rfind("  ]", 0) == 0 || line.rfind("  \"", 0) == 0) break;
-        const std::string text = strip(line);
-        if (text.empty()) continue;
-        Json a;
-        try {
-          a = Json::parse(text);
-        } catch (const Json::exception& e) {
-          throw Error(scene_file(s).string() + ": unreadable annotation: " + e.what());
-        }
-        const int im = a["image_id"];
-        const auto found = std::lower_bound(wanted.begin(), wanted.end(), im);
-        if (found == wanted.end() || *found != im) continue;
-        const int obj = a["category_id"];
-        a["id"] = static_cast<int>(++annotation_count);
-        a["image_id"] = static_cast<int>(image_base + (found - wanted.begin()) + 1);
-        a["category_id"] =
-            obj >= 1 && obj <= static_cast<int>(classes.size()) ? classes[obj - 1].id : obj;
-        a["obj_id"] = obj;
-        a["scene_id"] = s;
-        a["im_id"] = im;
-        out << (annotation_count == 1 ? "" : ",") << a.dump();
-      }
-      image_base += wanted.size();
-    }
-    out << "],\"categories\":" << categories.dump() << ",\"images\":[";
-    size_t image_count = 0;
-    for (size_t s = 0; s < scenes.size(); ++s) {
-      const std::vector<int>& wanted = test ? scenes[s].test : scenes[s].train;
-      if (wanted.empty()) continue;
-      std::ifstream in(scene_file(s), std::ios::binary);
-      std::string line;
-      Json images;
-      while (std::getline(in, line)) {
-        if (line.rfind("  \"images\": ", 0) != 0) continue;
-        images = Json::parse(strip(line.substr(12)), nullptr, false);
-        break;
-      }
-      if (!images.is_array()) throw Error(scene_file(s).string() + ": no readable image list");
-      const std::string scene_folder = options.split + "/" + Id6(static_cast<int>(s));
-      size_t listed = 0;
-      for (const Json& image : images) {
-        const int im = image["id"];
-        if (!std::binary_search(wanted.begin(), wanted.end(), im)) continue;
-        ++listed;
-        out << (image_count++ == 0 ? "" : ",")
-            << Json{{"id", image_count},
-                    {"file_name", scene_folder + "/" + image["file_name"].get<std::string>()},
-                    {"width", image["width"]},
-                    {"height", image["height"]},
-                    {"scene_id", s},
-                    {"im_id", im}}
-                   .dump();
-      }
-      if (listed != wanted.size()) {
-        throw Error(scene_file(s).string() + ": lists " + std::to_string(listed) + " of the " +
-                    std::to_string(wanted.size()) + " images of its split");
-      }
-    }
-    out << "],\"info\":"
-        << Json{{"description", test ? "cadsynth test split" : "cadsynth train split"}}.dump()
-        << ",\"licenses\":[]}\n";
-    out.close();
-    if (!out) throw Error(path.string() + ": cannot write file (disk full?)");
-    std::error_code ec;
-    std::filesystem::rename(temporary, path, ec);
-    if (ec) throw Error(path.string() + ": cannot move file into place: " + ec.message());
-  }
-}
-
-RigSceneWriter::RigSceneWriter(const std::filesystem::path& root, int scene_id,
-                               const BopOptions& options,
-                               const std::vector<int>& obj_id_of_instance,
-                               const std::vector<BopSensor>& sensors) {
-  if (sensors.empty()) throw Error("bop: a rig needs at least one sensor");
-  for (const BopSensor& sensor : sensors) {
-    if (sensors.size() > 1 && sensor.name.empty()) throw Error("bop: a rig's sensors need names");
-    sensors_.push_back(
-        std::make_unique<BopSceneWriter>(root, scene_id, options, obj_id_of_instance, sensor));
-  }
-}
-
-void RigSceneWriter::WriteFrame(int image_id, const std::vector<const Frame*>& frames,
-                                const std::vector<const FrameWriter*>& formats) {
-  if (frames.size() != sensors_.size()) {
-    throw Error("bop: " + std::to_string(frames.size()) + " frames for a rig of " +
-                std::to_string(sensors_.size()) + " sensors");
-  }
-  for (size_t k = 0; k < sensors_.size(); ++k) {
-    sensors_[k]->WriteFrame(image_id, *frames[k],
-                            k == 0 ? formats : std::vector<const FrameWriter*>{});
-  }
-}
-
-bool RigSceneWriter::HasFrame(int image_id) const {
-  for (const auto& sensor : sensors_) {
-    if (!sensor->HasFrame(image_id)) return false;
-  }
-  return true;
-}
-
-std::vector<int> RigSceneWriter::WrittenFrames() const {
-  std::vector<int> ids = sensors_[0]->WrittenFrames();
-  for (size_t k = 1; k < sensors_.size(); ++k) {
-    const std::vector<int> other = sensors_[k]->WrittenFrames();
-    std::vector<int> both;
-    std::set_intersection(ids.begin(), ids.end(), other.begin(), other.end(),
-                          std::back_inserter(both));
-    ids = std::move(both);
-  }
-  return ids;
-}
-
-std::string RigSceneWriter::CheckFrame(int image_id) const {
-  for (const auto& sensor : sensors_) {
-    std::string problem = sensor->CheckFrame(image_id);
-    if (!problem.empty()) return problem;
-  }
-  return {};
-}
-
-void RigSceneWriter::ForgetFrame(int image_id) {
-  for (const auto& sensor : sensors_) sensor->ForgetFrame(image_id);
-}
-
-std::vector<SceneSplit> RigSceneWriter::Finish() {
-  // A frame one sensor wrote and another did not (a run stopped between them) is not complete:
-  // it is rendered again before any finish, so here every sensor holds the same frames.
-  const std::vector<int> complete = WrittenFrames();
-  std::vector<SceneSplit> splits;
-  for (const auto& sensor : sensors_) {
-    if (sensor->WrittenFrames() != complete) {
-      throw Error(sensor->scene_dir().string() + ": sensor '" + sensor->sensor().name +
-                  "' holds frames the rig's other sensors lack");
-    }
-    splits.push_back(sensor->Finish());
-  }
-  return splits;
-}
-
-void RigSceneWriter::RemoveFragments() {
-  for (const auto& sensor : sensors_) sensor->RemoveFragments();
-}
-
-void RigSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
-  sensors_[0]->WriteWorldPoses(instances);
-}
-
-void RigSceneWriter::SetCocoCategories(
-    const std::vector<BopSceneWriter::CocoCategory>& categories) {
-  for (const auto& sensor : sensors_) sensor->SetCocoCategories(categories);
-}
-
-void WriteMultiviewTargets(const std::filesystem::path& root, const std::vector<SceneSplit>& scenes,
-                           const std::vector<BopSensor>& sensors) {
-  Json targets = Json::array();
-  for (size_t s = 0; s < scenes.size(); ++s) {
-    for (int im : scenes[s].test) {
-      Json views = Json::array();
-      for (const BopSensor& sensor : sensors) views.push_back(Json::array({sensor.name, im}));
-      targets.push_back({{"scene_id", s}, {"im_id", views}});
-    }
-  }
-  WriteFileAtomic(root / "test_targets_multiview_bop25.json", targets.dump(2) + "\n");
 }
 
 std::filesystem::path FindSceneFolder(const std::filesystem::path& dataset,

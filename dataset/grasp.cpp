@@ -7,6 +7,7 @@
 #include "cad/core/error.h"
 
 #include "dataset/bop.h"
+#include "dataset/output_formats.h"
 
 namespace cadsynth {
 
@@ -90,6 +91,41 @@ std::string EncodeNpy(const std::vector<Eigen::Vector3f>& points) {
   values.reserve(points.size() * 3);
   for (const Eigen::Vector3f& p : points) values.insert(values.end(), {p.x(), p.y(), p.z()});
   return EncodeNpy(values.data(), points.size(), 3);
+}
+
+namespace {
+
+// The `grasp` format: ROOT/grasp/SCENEID/IMID_INST.npy per visible instance.
+class GraspPointsWriter : public FrameWriter {
+ public:
+  explicit GraspPointsWriter(const FormatScene& scene)
+      : root_(scene.root),
+        dir_(scene.root / "grasp" / Id6(scene.scene_id)),
+        depth_scale_(scene.options.depth_scale) {
+    CreateFolder(dir_);
+  }
+
+  void WriteFrame(int image_id, const Frame& frame, const BopFrameFiles&,
+                  FileLog* files_or_null) const override {
+    FileLog own(root_);
+    FileLog& files = files_or_null != nullptr ? *files_or_null : own;
+    const std::string im = Id6(image_id);
+    for (size_t i = 0; i < frame.instances.size(); ++i) {
+      if (frame.instances[i].px_count_visib == 0) continue;
+      const auto points = BackProjectInstance(frame, static_cast<int>(i), depth_scale_);
+      files.Write(dir_ / (im + "_" + Id6(static_cast<int>(i)) + ".npy"), EncodeNpy(points));
+    }
+  }
+
+ private:
+  std::filesystem::path root_, dir_;
+  double depth_scale_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameWriter> MakeGraspPointsWriter(const FormatScene& scene) {
+  return std::make_unique<GraspPointsWriter>(scene);
 }
 
 }  // namespace cadsynth

@@ -1,4 +1,7 @@
-// Grasp-detector input: an object's points seen by the depth camera, as NumPy arrays.
+// Grasp-detector input: an object's points seen by the depth camera, as NumPy arrays; the
+// `grasp` output format (dataset/output_formats.h) writes them per visible instance:
+//
+//   ROOT/grasp/SCENEID/IMID_INST.npy      visible points of each instance, camera frame, m
 #pragma once
 
 #include <string>

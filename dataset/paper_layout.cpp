@@ -10,7 +10,7 @@
 
 #include "cad/core/error.h"
 #include "dataset/file_io.h"
-#include "dataset/grasp.h"
+#include "dataset/output_formats.h"
 
 namespace cadsynth {
 namespace {
@@ -101,31 +101,39 @@ void WritePvn3dMeta(const std::filesystem::path& path, const Frame& frame,
   if (ec) throw Error(path.string() + ": cannot move file into place: " + ec.message());
 }
 
-PaperSceneWriter::PaperSceneWriter(const std::filesystem::path& root, int scene_id,
-                                   const BopOptions& options, std::vector<PaperInstance> instances)
-    : root_(root),
-      paper_dir_(root / "paper" / Id6(scene_id)),
-      grasp_dir_(root / "grasp" / Id6(scene_id)),
-      options_(options),
-      instances_(std::move(instances)) {
-  if (options_.paper_layout || options_.pvn3d_meta) {
-    for (const char* sub : {"rgb", "depth", "mask", "meta"}) CreateFolder(paper_dir_ / sub);
-  }
-  if (options_.grasp_points) CreateFolder(grasp_dir_);
+namespace {
+
+// Each instance's obj_id: its grey value in the paper's mask and its PVN3D class index.
+std::vector<int> ObjIds(const std::vector<FormatInstance>& instances) {
+  std::vector<int> labels;
+  for (const FormatInstance& p : instances) labels.push_back(p.obj_id);
+  return labels;
 }
 
-void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const BopFrameFiles& bop,
-                                  FileLog* files_or_null) const {
-  FileLog own(root_);
-  FileLog& files = files_or_null != nullptr ? *files_or_null : own;
-  if (frame.instances.size() != instances_.size()) {
+void CheckInstances(const Frame& frame, const std::vector<FormatInstance>& instances) {
+  if (frame.instances.size() != instances.size()) {
     throw Error("paper layout: frame has " + std::to_string(frame.instances.size()) +
-                " instances, the scene " + std::to_string(instances_.size()));
+                " instances, the scene " + std::to_string(instances.size()));
   }
-  const std::string im = Id6(image_id);
-  std::vector<int> labels;
-  for (const PaperInstance& p : instances_) labels.push_back(p.obj_id);
-  if (options_.paper_layout || options_.pvn3d_meta) {
+}
+
+class PaperLayoutWriter : public FrameWriter {
+ public:
+  explicit PaperLayoutWriter(const FormatScene& scene)
+      : root_(scene.root),
+        paper_dir_(scene.root / "paper" / Id6(scene.scene_id)),
+        options_(scene.options),
+        instances_(scene.instances) {
+    for (const char* sub : {"rgb", "depth", "mask", "meta"}) CreateFolder(paper_dir_ / sub);
+  }
+
+  void WriteFrame(int image_id, const Frame& frame, const BopFrameFiles& bop,
+                  FileLog* files_or_null) const override {
+    FileLog own(root_);
+    FileLog& files = files_or_null != nullptr ? *files_or_null : own;
+    CheckInstances(frame, instances_);
+    const std::string im = Id6(image_id);
+    const std::vector<int> labels = ObjIds(instances_);
     const std::string rgb = im + options_.RgbExtension();
     files.Link(bop.image, paper_dir_ / "rgb" / rgb);
     files.Link(bop.depth, paper_dir_ / "depth" / (im + ".png"));
@@ -148,11 +156,14 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const BopFra
     const std::filesystem::path mask_path = paper_dir_ / "mask" / (im + ".png");
     if (!cv::imencode(".png", mask, png)) throw Error(mask_path.string() + ": PNG encoding failed");
     files.Write(mask_path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+    files.Write(paper_dir_ / "meta" / (im + ".json"), Meta(frame).dump(2) + "\n");
+  }
 
-    const Eigen::Isometry3d& world_from_cam = frame.camera.world_from_cam;
+ private:
+  Json Meta(const Frame& frame) const {
     Json objects = Json::array();
     for (size_t i = 0; i < instances_.size(); ++i) {
-      const PaperInstance& p = instances_[i];
+      const FormatInstance& p = instances_[i];
       objects.push_back({{"inst_id", i},
                          {"obj_id", p.obj_id},
                          {"class_id", p.object_class.id},
@@ -168,26 +179,55 @@ void PaperSceneWriter::WriteFrame(int image_id, const Frame& frame, const BopFra
         {"K",
          {{k(0, 0), k(0, 1), k(0, 2)}, {k(1, 0), k(1, 1), k(1, 2)}, {k(2, 0), k(2, 1), k(2, 2)}}},
         {"depth_scale", options_.depth_scale},
-        {"width", w},
-        {"height", h},
-        {"T_C_W", Matrix4(world_from_cam)},
+        {"width", frame.width()},
+        {"height", frame.height()},
+        {"T_C_W", Matrix4(frame.camera.world_from_cam)},
         {"objects", objects}};
     const Distortion& d = frame.camera.intrinsics.distortion;
     if (d.active()) meta["dist_coeffs"] = {d.k1, d.k2, d.p1, d.p2, d.k3};  // OpenCV's order
-    files.Write(paper_dir_ / "meta" / (im + ".json"), meta.dump(2) + "\n");
-    if (options_.pvn3d_meta) {
-      const std::filesystem::path mat = paper_dir_ / "meta" / (im + "-meta.mat");
-      WritePvn3dMeta(mat, frame, labels, options_.depth_scale);
-      files.Add(mat);
-    }
+    return meta;
   }
-  if (options_.grasp_points) {
-    for (size_t i = 0; i < instances_.size(); ++i) {
-      if (frame.instances[i].px_count_visib == 0) continue;
-      const auto points = BackProjectInstance(frame, static_cast<int>(i), options_.depth_scale);
-      files.Write(grasp_dir_ / (im + "_" + Id6(static_cast<int>(i)) + ".npy"), EncodeNpy(points));
-    }
+
+  std::filesystem::path root_, paper_dir_;
+  BopOptions options_;
+  std::vector<FormatInstance> instances_;
+};
+
+// Runs after PaperLayoutWriter (OutputFormats() order), whose meta/ folder it writes into.
+class Pvn3dWriter : public FrameWriter {
+ public:
+  explicit Pvn3dWriter(const FormatScene& scene)
+      : root_(scene.root),
+        meta_dir_(scene.root / "paper" / Id6(scene.scene_id) / "meta"),
+        depth_scale_(scene.options.depth_scale),
+        instances_(scene.instances) {
+    CreateFolder(meta_dir_);
   }
+
+  void WriteFrame(int image_id, const Frame& frame, const BopFrameFiles&,
+                  FileLog* files_or_null) const override {
+    FileLog own(root_);
+    FileLog& files = files_or_null != nullptr ? *files_or_null : own;
+    CheckInstances(frame, instances_);
+    const std::filesystem::path mat = meta_dir_ / (Id6(image_id) + "-meta.mat");
+    WritePvn3dMeta(mat, frame, ObjIds(instances_), depth_scale_);
+    files.Add(mat);
+  }
+
+ private:
+  std::filesystem::path root_, meta_dir_;
+  double depth_scale_;
+  std::vector<FormatInstance> instances_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameWriter> MakePaperLayoutWriter(const FormatScene& scene) {
+  return std::make_unique<PaperLayoutWriter>(scene);
+}
+
+std::unique_ptr<FrameWriter> MakePvn3dWriter(const FormatScene& scene) {
+  return std::make_unique<Pvn3dWriter>(scene);
 }
 
 }  // namespace cadsynth

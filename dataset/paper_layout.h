@@ -8,46 +8,17 @@
 //                                         (4 x 4, row-major lists, mm), obj_id, class
 //   ROOT/paper/SCENEID/meta/IMID-meta.mat (pvn3d) cls_indexes, poses, intrinsic_matrix,
 //                                         factor_depth, center, rotation_translation_matrix
-//   ROOT/grasp/SCENEID/IMID_INST.npy      (grasp) visible points of each instance, camera frame, m
+//
+// Their writers are the `paper` and `pvn3d` rows of dataset/output_formats.cpp (pvn3d turns the
+// paper layout on: its meta files belong beside those images).
 #pragma once
 
 #include <filesystem>
-#include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-
-#include "dataset/bop.h"
-#include "dataset/frame_writer.h"
 #include "render/frame.h"
 
 namespace cadsynth {
-
-struct PaperInstance {
-  int obj_id = 0;
-  ObjectClass object_class;
-  std::string name;
-  Eigen::Isometry3d world_from_model = Eigen::Isometry3d::Identity();
-};
-
-class PaperSceneWriter : public FrameWriter {
- public:
-  // `instances` in Scene::instances order. Writes the formats `options` asks for
-  // (paper_layout, pvn3d_meta, grasp_points).
-  PaperSceneWriter(const std::filesystem::path& root, int scene_id, const BopOptions& options,
-                   std::vector<PaperInstance> instances);
-
-  // Call after BopSceneWriter::WriteFrame of the same image: links its colour and depth images
-  // (`bop`). Thread-safe for different images.
-  // Every file goes through `files` (the frame's manifest entry; null: not recorded).
-  void WriteFrame(int image_id, const Frame& frame, const BopFrameFiles& bop,
-                  FileLog* files = nullptr) const override;
-
- private:
-  std::filesystem::path root_, paper_dir_, grasp_dir_;
-  BopOptions options_;
-  std::vector<PaperInstance> instances_;
-};
 
 // Writes a MATLAB v5 .mat file of PVN3D / YCB-Video meta data (through libmatio): cls_indexes
 // (N x 1), poses (3 x 4 x N, [R | t] model to camera, t in metres), intrinsic_matrix (3 x 3),

@@ -171,6 +171,179 @@ std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k,
 
 namespace {
 
+// A split's scenes: every (scene, image) pair in order, to choose from, and each scene's
+// scene_camera and scene_gt files by scene id.
+struct Scenes {
+  std::vector<std::pair<int, int>> all;
+  std::map<int, Json> cameras, gts;
+};
+
+Scenes ReadScenes(const fs::path& split_dir, const std::string& sfx) {
+  Scenes scenes;
+  std::vector<fs::path> scene_dirs;
+  for (const auto& e : fs::directory_iterator(split_dir)) {
+    if (fs::exists(e.path() / ("scene_gt" + sfx + ".json"))) scene_dirs.push_back(e.path());
+  }
+  std::sort(scene_dirs.begin(), scene_dirs.end());
+  for (const fs::path& dir : scene_dirs) {
+    const auto id = ParseBopId(dir.filename().string());
+    if (!id) continue;  // not a scene folder
+    const int scene = *id;
+    scenes.cameras[scene] = ReadJsonFile(dir / ("scene_camera" + sfx + ".json"));
+    scenes.gts[scene] = ReadJsonFile(dir / ("scene_gt" + sfx + ".json"));
+    std::vector<int> ims;
+    for (const auto& [key, value] : scenes.gts[scene].items()) {
+      const auto im = ParseBopId(key);
+      if (!im)
+        throw Error((dir / ("scene_gt" + sfx + ".json")).string() + ": image id '" +
+                    key.substr(0, 40) + "' is not a whole number");
+      ims.push_back(*im);
+    }
+    std::sort(ims.begin(), ims.end());
+    for (int im : ims) scenes.all.push_back({scene, im});
+  }
+  return scenes;
+}
+
+// Colour against colour: `rgb` and the same image of the other dataset (options.versus, its image
+// folder `other_dir`), labelled with the folders.
+cv::Mat VersusRow(const fs::path& dataset, const PreviewOptions& options, const cv::Mat& rgb,
+                  const fs::path& other_dir, const std::string& name, const std::string& where) {
+  fs::path other_path = other_dir / (name + ".png");
+  if (!fs::exists(other_path)) other_path = other_dir / (name + ".jpg");
+  std::vector<cv::Mat> panels = {rgb, ReadImage(other_path, cv::IMREAD_COLOR)};
+  const double scale = static_cast<double>(options.panel_width) / rgb.cols;
+  const cv::Size size(options.panel_width, std::max(1, cvRound(rgb.rows * scale)));
+  const std::string labels[2] = {dataset.filename().string(), options.versus.filename().string()};
+  for (int p = 0; p < 2; ++p) {
+    cv::resize(panels[p], panels[p], size, 0, 0, cv::INTER_AREA);
+    cv::putText(panels[p], labels[p] + ", " + where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX,
+                0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  }
+  cv::Mat row;
+  cv::hconcat(panels, row);
+  return row;
+}
+
+// Boxes and axes (x red, y green, z blue) of the instances `gt` lists (models_info.json: `info`)
+// on the colour image.
+void DrawBoxes(const Json& gt, const Json& info, const Intrinsics& k, int thickness, cv::Mat* rgb) {
+  for (size_t i = 0; i < gt.size(); ++i) {
+    const Json& g = gt[i];
+    const Json& m = info.at(std::to_string(g.at("obj_id").get<int>()));
+    const Eigen::Vector3d lo(m.at("min_x"), m.at("min_y"), m.at("min_z"));
+    const Eigen::Vector3d size(m.at("size_x"), m.at("size_y"), m.at("size_z"));
+    Eigen::Isometry3d m2c = Eigen::Isometry3d::Identity();
+    m2c.linear() = Matrix3(g.at("cam_R_m2c"));
+    m2c.translation() =
+        Eigen::Vector3d(g.at("cam_t_m2c")[0], g.at("cam_t_m2c")[1], g.at("cam_t_m2c")[2]);
+    if (m2c.translation().z() <= 0) continue;
+    // Corners the camera does not image (behind it, beyond the lens's fold) draw no edges.
+    std::vector<Eigen::Vector2d> c(8);
+    bool imaged[8];
+    for (int a = 0; a < 8; ++a) {
+      const Eigen::Vector3d p = m2c * Eigen::AlignedBox3d(lo, lo + size)
+                                          .corner(static_cast<Eigen::AlignedBox3d::CornerType>(a));
+      imaged[a] = k.Project(p, &c[a]);
+    }
+    const auto pt = [](const Eigen::Vector2d& p) {
+      return cv::Point(cvRound(p.x()), cvRound(p.y()));
+    };
+    for (int a = 0; a < 8; ++a) {
+      for (int b = a + 1; b < 8; ++b) {
+        const int diff = a ^ b;  // corners differ in one coordinate: an edge
+        if ((diff == 1 || diff == 2 || diff == 4) && imaged[a] && imaged[b])
+          cv::line(*rgb, pt(c[a]), pt(c[b]), InstanceColour(i), thickness, cv::LINE_AA);
+      }
+    }
+    const double axis = 0.5 * size.maxCoeff();
+    Eigen::Vector2d o, tip;
+    const bool origin = k.Project(m2c.translation(), &o);
+    for (int a = 0; a < 3; ++a) {
+      if (!origin || !k.Project(m2c * (axis * Eigen::Vector3d::Unit(a)), &tip)) continue;
+      cv::line(*rgb, pt(o), pt(tip),
+               a == 0   ? cv::Scalar(0, 0, 255)
+               : a == 1 ? cv::Scalar(0, 200, 0)
+                        : cv::Scalar(255, 0, 0),
+               thickness, cv::LINE_AA);
+    }
+  }
+}
+
+// One frame's row of panels: colour with boxes and axes, depth (exact and the sensor's), visible
+// masks, grasps; or, with options.versus, the two colour images.
+cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const fs::path& split_dir,
+                 const std::string& sfx, const Json& info, const Scenes& scenes, int scene,
+                 int im) {
+  const std::string where = "scene " + std::to_string(scene) + " image " + std::to_string(im);
+  if (!scenes.gts.count(scene) || !scenes.gts.at(scene).contains(std::to_string(im)))
+    throw Error("preview: no " + where + " in " + split_dir.string());
+  const fs::path dir = split_dir / Id6(scene);
+  const std::string name = Id6(im);
+  // The camera's image: rgb/, or gray/ for a grey camera.
+  const fs::path image_dir =
+      fs::exists(dir / ("rgb" + sfx)) ? dir / ("rgb" + sfx) : dir / ("gray" + sfx);
+  fs::path rgb_path = image_dir / (name + ".png");
+  if (!fs::exists(rgb_path)) rgb_path = image_dir / (name + ".jpg");
+  cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
+  if (!options.versus.empty()) {
+    return VersusRow(dataset, options, rgb,
+                     options.versus / split_dir.filename() / Id6(scene) / ("rgb" + sfx), name,
+                     where);
+  }
+  const cv::Mat depth = ReadImage(dir / ("depth" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
+  const Json& gt = scenes.gts.at(scene).at(std::to_string(im));
+  const Json& camera = scenes.cameras.at(scene).at(std::to_string(im));
+  const Eigen::Matrix3d kmat = Matrix3(camera.at("cam_K"));
+  // The lens's distortion, when the camera has one, bends the drawn points as it bends the image.
+  Intrinsics k;
+  k.fx = kmat(0, 0), k.fy = kmat(1, 1), k.cx = kmat(0, 2), k.cy = kmat(1, 2);
+  if (camera.contains("cam_dist_coeffs")) {
+    const Json& d = camera.at("cam_dist_coeffs");
+    k.distortion = Distortion{d.at(0), d.at(1), d.at(2), d.at(3), d.at(4)};
+  }
+
+  cv::Mat masks = rgb * 0.35;
+  for (size_t i = 0; i < gt.size(); ++i) {
+    const fs::path mask_path =
+        dir / ("mask_visib" + sfx) / (name + "_" + Id6(static_cast<int>(i)) + ".png");
+    const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_GRAYSCALE);
+    masks.setTo(InstanceColour(i), mask > 0);
+  }
+  // Grasp labels on a copy of the colour image, the last panel.
+  const int thickness = std::max(1, rgb.cols / 320);
+  cv::Mat grasps;
+  if (options.grasps > 0 && options.sensor.empty() &&
+      (fs::exists(dataset / "graspnet" / Id6(scene)) ||
+       fs::exists(dataset / "suctionnet" / Id6(scene)))) {
+    grasps = rgb.clone();
+    DrawGrasps(dataset, scene, im, k, options.grasps, thickness, &grasps);
+  }
+  DrawBoxes(gt, info, k, thickness, &rgb);
+  // With a depth sensor model: the exact depth, then the sensor's, coloured over the same range.
+  std::vector<cv::Mat> panels = {rgb};
+  if (fs::exists(dir / ("depth_gt" + sfx))) {
+    const cv::Mat exact =
+        ReadImage(dir / ("depth_gt" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
+    panels.push_back(ColourDepth(exact));
+    panels.push_back(ColourDepth(depth, exact));
+  } else {
+    panels.push_back(ColourDepth(depth));
+  }
+  panels.push_back(masks);
+  if (!grasps.empty()) panels.push_back(grasps);
+  const double scale = static_cast<double>(options.panel_width) / rgb.cols;
+  for (cv::Mat& p : panels) {
+    cv::resize(p, p, cv::Size(options.panel_width, std::max(1, cvRound(rgb.rows * scale))), 0, 0,
+               cv::INTER_AREA);
+  }
+  cv::putText(panels[0], where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  cv::Mat row;
+  cv::hconcat(panels, row);
+  return row;
+}
+
 std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions& options,
                                    std::vector<std::pair<int, int>>* shown) {
   if (options.panel_width < 32 || options.panel_width > 4096)
@@ -181,31 +354,8 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
   if (!fs::is_directory(split_dir)) throw Error(split_dir.string() + ": no such folder");
   const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
 
-  // All (scene, image) pairs, in order, to choose from.
-  std::vector<std::pair<int, int>> all;
-  std::vector<fs::path> scene_dirs;
-  for (const auto& e : fs::directory_iterator(split_dir)) {
-    if (fs::exists(e.path() / ("scene_gt" + sfx + ".json"))) scene_dirs.push_back(e.path());
-  }
-  std::sort(scene_dirs.begin(), scene_dirs.end());
-  std::map<int, Json> cameras, gts;
-  for (const fs::path& dir : scene_dirs) {
-    const auto id = ParseBopId(dir.filename().string());
-    if (!id) continue;  // not a scene folder
-    const int scene = *id;
-    cameras[scene] = ReadJsonFile(dir / ("scene_camera" + sfx + ".json"));
-    gts[scene] = ReadJsonFile(dir / ("scene_gt" + sfx + ".json"));
-    std::vector<int> ims;
-    for (const auto& [key, value] : gts[scene].items()) {
-      const auto im = ParseBopId(key);
-      if (!im)
-        throw Error((dir / ("scene_gt" + sfx + ".json")).string() + ": image id '" +
-                    key.substr(0, 40) + "' is not a whole number");
-      ims.push_back(*im);
-    }
-    std::sort(ims.begin(), ims.end());
-    for (int im : ims) all.push_back({scene, im});
-  }
+  const Scenes scenes = ReadScenes(split_dir, sfx);
+  const std::vector<std::pair<int, int>>& all = scenes.all;
   if (all.empty()) throw Error(split_dir.string() + ": no images");
   std::vector<std::pair<int, int>> chosen = options.frames;
   if (chosen.empty()) {
@@ -215,131 +365,8 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
   if (shown) *shown = chosen;
 
   std::vector<cv::Mat> rows;
-  for (const auto& [scene, im] : chosen) {
-    const std::string where = "scene " + std::to_string(scene) + " image " + std::to_string(im);
-    if (!gts.count(scene) || !gts[scene].contains(std::to_string(im)))
-      throw Error("preview: no " + where + " in " + split_dir.string());
-    const fs::path dir = split_dir / Id6(scene);
-    const std::string name = Id6(im);
-    // The camera's image: rgb/, or gray/ for a grey camera.
-    const fs::path image_dir =
-        fs::exists(dir / ("rgb" + sfx)) ? dir / ("rgb" + sfx) : dir / ("gray" + sfx);
-    fs::path rgb_path = image_dir / (name + ".png");
-    if (!fs::exists(rgb_path)) rgb_path = image_dir / (name + ".jpg");
-    cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
-    if (!options.versus.empty()) {
-      // Colour against colour: the same image of the other dataset, labelled with the folders.
-      const fs::path other_dir = options.versus / split_dir.filename() / Id6(scene) / ("rgb" + sfx);
-      fs::path other_path = other_dir / (name + ".png");
-      if (!fs::exists(other_path)) other_path = other_dir / (name + ".jpg");
-      std::vector<cv::Mat> panels = {rgb, ReadImage(other_path, cv::IMREAD_COLOR)};
-      const double scale = static_cast<double>(options.panel_width) / rgb.cols;
-      const cv::Size size(options.panel_width, std::max(1, cvRound(rgb.rows * scale)));
-      const std::string labels[2] = {dataset.filename().string(),
-                                     options.versus.filename().string()};
-      for (int p = 0; p < 2; ++p) {
-        cv::resize(panels[p], panels[p], size, 0, 0, cv::INTER_AREA);
-        cv::putText(panels[p], labels[p] + ", " + where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX,
-                    0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-      }
-      cv::Mat row;
-      cv::hconcat(panels, row);
-      rows.push_back(row);
-      continue;
-    }
-    const cv::Mat depth = ReadImage(dir / ("depth" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
-    const Json& gt = gts[scene][std::to_string(im)];
-    const Json& camera = cameras[scene].at(std::to_string(im));
-    const Eigen::Matrix3d kmat = Matrix3(camera.at("cam_K"));
-    // The lens's distortion, when the camera has one, bends the drawn points as it bends the image.
-    Intrinsics k;
-    k.fx = kmat(0, 0), k.fy = kmat(1, 1), k.cx = kmat(0, 2), k.cy = kmat(1, 2);
-    if (camera.contains("cam_dist_coeffs")) {
-      const Json& d = camera.at("cam_dist_coeffs");
-      k.distortion = Distortion{d.at(0), d.at(1), d.at(2), d.at(3), d.at(4)};
-    }
-
-    cv::Mat masks = rgb * 0.35;
-    for (size_t i = 0; i < gt.size(); ++i) {
-      const fs::path mask_path =
-          dir / ("mask_visib" + sfx) / (name + "_" + Id6(static_cast<int>(i)) + ".png");
-      const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_GRAYSCALE);
-      masks.setTo(InstanceColour(i), mask > 0);
-    }
-    // Grasp labels on a copy of the colour image, the last panel.
-    const int thickness = std::max(1, rgb.cols / 320);
-    cv::Mat grasps;
-    if (options.grasps > 0 && options.sensor.empty() &&
-        (fs::exists(dataset / "graspnet" / Id6(scene)) ||
-         fs::exists(dataset / "suctionnet" / Id6(scene)))) {
-      grasps = rgb.clone();
-      DrawGrasps(dataset, scene, im, k, options.grasps, thickness, &grasps);
-    }
-    // Boxes and axes (x red, y green, z blue) on the colour image.
-    for (size_t i = 0; i < gt.size(); ++i) {
-      const Json& g = gt[i];
-      const Json& m = info.at(std::to_string(g.at("obj_id").get<int>()));
-      const Eigen::Vector3d lo(m.at("min_x"), m.at("min_y"), m.at("min_z"));
-      const Eigen::Vector3d size(m.at("size_x"), m.at("size_y"), m.at("size_z"));
-      Eigen::Isometry3d m2c = Eigen::Isometry3d::Identity();
-      m2c.linear() = Matrix3(g.at("cam_R_m2c"));
-      m2c.translation() =
-          Eigen::Vector3d(g.at("cam_t_m2c")[0], g.at("cam_t_m2c")[1], g.at("cam_t_m2c")[2]);
-      if (m2c.translation().z() <= 0) continue;
-      // Corners the camera does not image (behind it, beyond the lens's fold) draw no edges.
-      std::vector<Eigen::Vector2d> c(8);
-      bool imaged[8];
-      for (int a = 0; a < 8; ++a) {
-        const Eigen::Vector3d p =
-            m2c * Eigen::AlignedBox3d(lo, lo + size)
-                      .corner(static_cast<Eigen::AlignedBox3d::CornerType>(a));
-        imaged[a] = k.Project(p, &c[a]);
-      }
-      const auto pt = [](const Eigen::Vector2d& p) {
-        return cv::Point(cvRound(p.x()), cvRound(p.y()));
-      };
-      for (int a = 0; a < 8; ++a) {
-        for (int b = a + 1; b < 8; ++b) {
-          const int diff = a ^ b;  // corners differ in one coordinate: an edge
-          if ((diff == 1 || diff == 2 || diff == 4) && imaged[a] && imaged[b])
-            cv::line(rgb, pt(c[a]), pt(c[b]), InstanceColour(i), thickness, cv::LINE_AA);
-        }
-      }
-      const double axis = 0.5 * size.maxCoeff();
-      Eigen::Vector2d o, tip;
-      const bool origin = k.Project(m2c.translation(), &o);
-      for (int a = 0; a < 3; ++a) {
-        if (!origin || !k.Project(m2c * (axis * Eigen::Vector3d::Unit(a)), &tip)) continue;
-        cv::line(rgb, pt(o), pt(tip),
-                 a == 0   ? cv::Scalar(0, 0, 255)
-                 : a == 1 ? cv::Scalar(0, 200, 0)
-                          : cv::Scalar(255, 0, 0),
-                 thickness, cv::LINE_AA);
-      }
-    }
-    // With a depth sensor model: the exact depth, then the sensor's, coloured over the same range.
-    std::vector<cv::Mat> panels = {rgb};
-    if (fs::exists(dir / ("depth_gt" + sfx))) {
-      const cv::Mat exact =
-          ReadImage(dir / ("depth_gt" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
-      panels.push_back(ColourDepth(exact));
-      panels.push_back(ColourDepth(depth, exact));
-    } else {
-      panels.push_back(ColourDepth(depth));
-    }
-    panels.push_back(masks);
-    if (!grasps.empty()) panels.push_back(grasps);
-    const double scale = static_cast<double>(options.panel_width) / rgb.cols;
-    for (cv::Mat& p : panels) {
-      cv::resize(p, p, cv::Size(options.panel_width, std::max(1, cvRound(rgb.rows * scale))), 0, 0,
-                 cv::INTER_AREA);
-    }
-    cv::putText(panels[0], where, cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-    cv::Mat row;
-    cv::hconcat(panels, row);
-    rows.push_back(row);
-  }
+  for (const auto& [scene, im] : chosen)
+    rows.push_back(FrameRow(dataset, options, split_dir, sfx, info, scenes, scene, im));
   // Rows of 3 to 5 panels, heights may differ: narrower rows are padded on the right.
   int width = 0;
   for (const cv::Mat& row : rows) width = std::max(width, row.cols);

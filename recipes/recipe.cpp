@@ -16,6 +16,7 @@
 #include "cad/core/units.h"
 #include "cad/core/util.h"
 #include "cad/step.h"
+#include "dataset/output_formats.h"
 #include "recipes/recipe_schema.h"
 #include "recipes/units.h"
 #include "render/image.h"
@@ -1860,23 +1861,22 @@ void ReadOutput(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   if (const YAML::Node formats = node["formats"]) {
     if (!formats.IsSequence())
       r.Fail(formats, "output.formats", "expected a list, e.g. [bop, coco, paper]");
-    spec->bop.coco = spec->bop.paper_layout = spec->bop.pvn3d_meta = spec->bop.grasp_points = false;
+    // Each format of dataset/output_formats.cpp is off unless listed.
+    for (const OutputFormat& format : OutputFormats()) {
+      if (format.enabled != nullptr) spec->bop.*format.enabled = false;
+    }
     bool bop = false;
     for (const YAML::Node& f : formats) {
       const std::string name = r.Scalar(f, "output.formats");
-      if (name == "bop") {
-        bop = true;
-      } else if (name == "coco") {
-        spec->bop.coco = true;
-      } else if (name == "paper") {
-        spec->bop.paper_layout = true;
-      } else if (name == "pvn3d") {
-        spec->bop.pvn3d_meta = true;
-      } else if (name == "grasp") {
-        spec->bop.grasp_points = true;
-      } else {
+      const OutputFormat* format = FindOutputFormat(name);
+      if (format == nullptr) {
         r.Fail(f, "output.formats",
-               "unknown format '" + name + "' (known: bop, coco, paper, pvn3d, grasp)");
+               "unknown format '" + name + "' (known: " + JoinNames(OutputFormatNames()) + ")");
+      }
+      if (format->enabled == nullptr) {
+        bop = true;
+      } else {
+        spec->bop.*format->enabled = true;
       }
     }
     if (!bop)
@@ -2142,10 +2142,18 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
     const auto image_node = [&](const YAML::Node& camera) {
       return camera && camera["image"] ? YAML::Node(camera["image"]) : camera;
     };
-    if (spec.sensor.image != SensorOptions::Image::kRgb &&
-        (spec.bop.paper_layout || spec.bop.pvn3d_meta)) {
-      r.Fail(image_node(first), first_key + ".image",
-             "the paper and pvn3d formats need colour images (image: rgb)");
+    if (spec.sensor.image != SensorOptions::Image::kRgb) {
+      std::vector<std::string> rgb_only;
+      for (const OutputFormat& format : OutputFormats()) {
+        if (format.needs_rgb && format.enabled != nullptr) rgb_only.push_back(format.name);
+      }
+      for (const OutputFormat& format : OutputFormats()) {
+        if (format.needs_rgb && format.enabled != nullptr && spec.bop.*format.enabled) {
+          r.Fail(
+              image_node(first), first_key + ".image",
+              "the " + JoinNames(rgb_only, " and ") + " formats need colour images (image: rgb)");
+        }
+      }
     }
     spec.bop.gray_bits = GrayBits(spec.sensor.image);
     // Depth of field and motion blur come from the path tracer's samples; distorted IR images

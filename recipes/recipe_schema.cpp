@@ -10,6 +10,7 @@
 #include "cad/shape.h"
 #include "dataset/bop.h"
 #include "dataset/grasp_labels.h"
+#include "dataset/output_formats.h"
 #include "recipes/recipe.h"
 #include "render/camera.h"
 #include "render/material.h"
@@ -362,7 +363,7 @@ Key BuildSchema() {
   environment.tag = "type";
   environment.tag_default = "uniform";
   Key output_formats = Value("formats", "choices", "bop (always) plus any of the others");
-  output_formats.choices = {"bop", "coco", "paper", "pvn3d", "grasp"};
+  output_formats.choices = OutputFormatNames();
   Key classes = Section(
       "classes", "what one object class is",
       {Choice("by", {"part", "assembly"}, "each distinct part, or each file's assembly", "part"),

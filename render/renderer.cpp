@@ -217,6 +217,21 @@ struct Renderer::Impl {
     rtcCommitGeometry(geometry);
     return geometry;
   }
+
+  // The constructor's stages, in the order it runs them.
+  void BuildParts(const std::vector<Part>& from);
+  void BuildWorld();
+  void AddFloor();
+  void AddFixtures();
+  void PrepareLights();
+  void BuildSolo();
+  void BuildTracer();
+
+  // The path tracer a frame is shaded with (Renderer::Render): for a frame with a look of its
+  // own, one over the same geometry, kept in `own`; else the renderer's (null in the fast mode).
+  const PathTracer* TracerFor(const FrameLook* look, std::unique_ptr<PathTracer>* own) const;
+  // One frame's state and passes (Renderer::Render).
+  struct FramePasses;
 };
 
 Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const RenderOptions& options)
@@ -240,19 +255,29 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
   if (im.device == nullptr) throw Error("renderer: could not create an Embree device");
   rtcSetDeviceErrorFunction(im.device, OnEmbreeError, &im.errors);
 
-  // One bottom-level scene per part, in the part's model frame.
-  for (const Part& part : parts) {
-    im.parts.push_back(MakeBuffers(part.mesh));
-    im.model_bounds.push_back(part.mesh.Bounds());
+  im.BuildParts(parts);
+  im.ThrowIfFailed("building part geometry");
+  im.BuildWorld();
+  im.PrepareLights();
+  im.BuildSolo();
+  im.ThrowIfFailed("building the scene");
+  if (options.mode == RenderOptions::Mode::kPbr) im.BuildTracer();
+}
+
+// One bottom-level scene per part, in the part's model frame.
+void Renderer::Impl::BuildParts(const std::vector<Part>& from) {
+  for (const Part& part : from) {
+    parts.push_back(MakeBuffers(part.mesh));
+    model_bounds.push_back(part.mesh.Bounds());
   }
-  for (PartBuffers& buffers : im.parts) {
-    RTCScene part_scene = rtcNewScene(im.device);
+  for (PartBuffers& buffers : parts) {
+    RTCScene part_scene = rtcNewScene(device);
     // Built once per run and traced for thousands of frames: spend the build time.
     rtcSetSceneBuildQuality(part_scene, RTC_BUILD_QUALITY_HIGH);
     // Watertight triangle tests and conservative traversal: without them a ray that lands exactly
     // on an edge shared by two triangles can miss both and show the surface behind.
     rtcSetSceneFlags(part_scene, RTC_SCENE_FLAG_ROBUST);
-    RTCGeometry mesh = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    RTCGeometry mesh = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     const size_t num_vertices = (buffers.positions.size() - 1) / 3;
     rtcSetSharedGeometryBuffer(mesh, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                buffers.positions.data(), 0, 3 * sizeof(float), num_vertices);
@@ -263,44 +288,52 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     rtcAttachGeometryByID(part_scene, mesh, 0);
     rtcReleaseGeometry(mesh);
     rtcCommitScene(part_scene);
-    im.part_scenes.push_back(part_scene);
+    part_scenes.push_back(part_scene);
   }
-  im.ThrowIfFailed("building part geometry");
+}
 
-  // The world: instance i has geometry id i; the floor comes after them.
-  im.world = rtcNewScene(im.device);
+// The world: instance i has geometry id i; the floor comes after them.
+void Renderer::Impl::BuildWorld() {
+  world = rtcNewScene(device);
   // Not robust: its traversal decides only which instances a ray enters, and a ray can be lost
   // there only where it grazes an instance's bounding box, at the silhouette. Robust traversal of
   // this level cost a third of the tracing speed.
-  rtcSetSceneBuildQuality(im.world, RTC_BUILD_QUALITY_HIGH);
+  rtcSetSceneBuildQuality(world, RTC_BUILD_QUALITY_HIGH);
   for (size_t i = 0; i < scene.instances.size(); ++i) {
-    RTCGeometry geometry = im.NewInstance(static_cast<int>(i));
-    rtcAttachGeometryByID(im.world, geometry, static_cast<unsigned>(i));
+    RTCGeometry geometry = NewInstance(static_cast<int>(i));
+    rtcAttachGeometryByID(world, geometry, static_cast<unsigned>(i));
     rtcReleaseGeometry(geometry);
-    im.instance_rotation.push_back(scene.instances[i].world_from_model.linear().cast<float>());
+    instance_rotation.push_back(scene.instances[i].world_from_model.linear().cast<float>());
     const Instance& instance = scene.instances[i];
     const size_t part = static_cast<size_t>(instance.part);
-    im.albedo_of.push_back(instance.color                    ? *instance.color
-                           : part < scene.part_colors.size() ? scene.part_colors[part]
-                                                             : Eigen::Vector3f(0.7f, 0.7f, 0.7f));
+    albedo_of.push_back(instance.color                    ? *instance.color
+                        : part < scene.part_colors.size() ? scene.part_colors[part]
+                                                          : Eigen::Vector3f(0.7f, 0.7f, 0.7f));
   }
-  if (scene.floor) {
-    const float h = static_cast<float>(scene.floor_half_size_mm);
-    RTCGeometry floor = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(floor, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                          RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
-    const float corners[12] = {-h, -h, 0, h, -h, 0, h, h, 0, -h, h, 0};
-    std::copy(corners, corners + 12, v);
-    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-        floor, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), 2));
-    const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
-    std::copy(tris, tris + 6, idx);
-    rtcCommitGeometry(floor);
-    im.floor_id = static_cast<unsigned>(scene.instances.size());
-    rtcAttachGeometryByID(im.world, floor, im.floor_id);
-    rtcReleaseGeometry(floor);
-  }
-  im.first_fixture_id = static_cast<unsigned>(scene.instances.size()) + 1;
+  if (scene.floor) AddFloor();
+  AddFixtures();
+  rtcCommitScene(world);
+}
+
+void Renderer::Impl::AddFloor() {
+  const float h = static_cast<float>(scene.floor_half_size_mm);
+  RTCGeometry floor = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(floor, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                        RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
+  const float corners[12] = {-h, -h, 0, h, -h, 0, h, h, 0, -h, h, 0};
+  std::copy(corners, corners + 12, v);
+  auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+      floor, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), 2));
+  const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
+  std::copy(tris, tris + 6, idx);
+  rtcCommitGeometry(floor);
+  floor_id = static_cast<unsigned>(scene.instances.size());
+  rtcAttachGeometryByID(world, floor, floor_id);
+  rtcReleaseGeometry(floor);
+}
+
+void Renderer::Impl::AddFixtures() {
+  first_fixture_id = static_cast<unsigned>(scene.instances.size()) + 1;
   for (size_t f = 0; f < scene.fixtures.size(); ++f) {
     const Mesh& mesh = scene.fixtures[f].mesh;
     if (mesh.empty()) throw Error("renderer: fixture '" + scene.fixtures[f].name + "' is empty");
@@ -308,95 +341,99 @@ Renderer::Renderer(const std::vector<Part>& parts, const Scene& scene, const Ren
     if (buffers.normals.size() != mesh.positions.size()) {
       throw Error("renderer: fixture '" + scene.fixtures[f].name + "' needs one normal per vertex");
     }
-    im.fixtures.push_back(std::move(buffers));
-    const PartBuffers& b = im.fixtures.back();
-    RTCGeometry geometry = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    fixtures.push_back(std::move(buffers));
+    const PartBuffers& b = fixtures.back();
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                b.positions.data(), 0, 3 * sizeof(float), mesh.positions.size());
     rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                b.indices.data(), 0, 3 * sizeof(uint32_t), mesh.triangles.size());
     rtcCommitGeometry(geometry);
-    rtcAttachGeometryByID(im.world, geometry, im.first_fixture_id + static_cast<unsigned>(f));
+    rtcAttachGeometryByID(world, geometry, first_fixture_id + static_cast<unsigned>(f));
     rtcReleaseGeometry(geometry);
-    im.fixture_albedo.push_back(scene.fixtures[f].color);
+    fixture_albedo.push_back(scene.fixtures[f].color);
   }
-  rtcCommitScene(im.world);
+}
+
+void Renderer::Impl::PrepareLights() {
   for (const Scene::Light& light : scene.lights) {
     if (light.kind == Scene::Light::Kind::kDirectional && light.direction.norm() == 0) {
       throw Error("renderer: a directional light needs a direction");
     }
-    im.light_dirs.push_back(light.direction.normalized().cast<float>());
-  }
-
-  for (size_t i = 0; i < scene.instances.size(); ++i) {
-    RTCScene alone = rtcNewScene(im.device);
-    RTCGeometry geometry = im.NewInstance(static_cast<int>(i));
-    rtcAttachGeometryByID(alone, geometry, 0);
-    rtcReleaseGeometry(geometry);
-    rtcCommitScene(alone);
-    im.solo.push_back(alone);
-  }
-  im.ThrowIfFailed("building the scene");
-
-  if (options.mode == RenderOptions::Mode::kPbr) {
-    PathTracerScene pts;
-    pts.world = im.world;
-    pts.floor_id = im.floor_id;
-    pts.bounces = options.bounces;
-    pts.near_mm = static_cast<float>(options.near_mm);
-    pts.far_mm = static_cast<float>(options.far_mm);
-    pts.floor = scene.floor_material;
-    pts.first_fixture_id = im.first_fixture_id;
-    for (size_t f = 0; f < im.fixtures.size(); ++f) {
-      TracedFixture tf;
-      tf.indices = im.fixtures[f].indices.data();
-      tf.normals = im.fixtures[f].normals.data();
-      tf.box_centre = im.fixtures[f].box_centre;
-      tf.box_size = im.fixtures[f].box_size;
-      tf.material = scene.fixtures[f].material;
-      pts.fixtures.push_back(std::move(tf));
-    }
-    pts.lights = scene.light_sources;
-    pts.environment = scene.environment;
-    for (size_t i = 0; i < scene.instances.size(); ++i) {
-      const Instance& instance = scene.instances[i];
-      const PartBuffers& buffers = im.parts[static_cast<size_t>(instance.part)];
-      TracedInstance ti;
-      ti.indices = buffers.indices.data();
-      ti.normals = buffers.normals.data();
-      ti.uvs = buffers.uvs.empty() ? nullptr : buffers.uvs.data();
-      ti.rotation = im.instance_rotation[i];
-      ti.translation = instance.world_from_model.translation().cast<float>();
-      ti.box_centre = buffers.box_centre;
-      ti.box_size = buffers.box_size;
-      const int m = i < scene.instance_material.size() ? scene.instance_material[i] : -1;
-      if (m >= static_cast<int>(scene.materials.size()))
-        throw Error("renderer: instance '" + instance.name + "' refers to a missing material");
-      // Part colours are sRGB (CAD files and the palette); materials take linear colours.
-      ti.material = m < 0 ? Scene::DefaultMaterial(im.albedo_of[i]) : scene.materials[m];
-      Eigen::Vector3f linear;
-      for (int c = 0; c < 3; ++c) linear[c] = SrgbToLinear(im.albedo_of[i][c]);
-      im.instance_linear.push_back(linear);
-      if (ti.material.base_from_part) ti.material.surface.base_color = linear;
-      pts.instances.push_back(std::move(ti));
-    }
-    std::string why;
-    for (const Material& m : scene.materials) {
-      if (!m.Check(&why)) throw Error("renderer: material: " + why);
-    }
-    if (!scene.floor_material.Check(&why)) throw Error("renderer: floor material: " + why);
-    for (const Scene::Fixture& f : scene.fixtures) {
-      if (!f.material.Check(&why)) throw Error("renderer: fixture '" + f.name + "': " + why);
-    }
-    for (const LightSource& l : scene.light_sources) {
-      if (!l.Check(&why)) throw Error("renderer: light: " + why);
-    }
-    if (!scene.environment.Check(&why)) throw Error("renderer: environment: " + why);
-    im.traced = pts;
-    im.tracer = std::make_unique<PathTracer>(std::move(pts));
+    light_dirs.push_back(light.direction.normalized().cast<float>());
   }
 }
 
+// Each instance alone, for its amodal mask.
+void Renderer::Impl::BuildSolo() {
+  for (size_t i = 0; i < scene.instances.size(); ++i) {
+    RTCScene alone = rtcNewScene(device);
+    RTCGeometry geometry = NewInstance(static_cast<int>(i));
+    rtcAttachGeometryByID(alone, geometry, 0);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(alone);
+    solo.push_back(alone);
+  }
+}
+
+// The pbr mode's path tracer: the scene's materials, lights and environment over the world.
+void Renderer::Impl::BuildTracer() {
+  PathTracerScene pts;
+  pts.world = world;
+  pts.floor_id = floor_id;
+  pts.bounces = options.bounces;
+  pts.near_mm = static_cast<float>(options.near_mm);
+  pts.far_mm = static_cast<float>(options.far_mm);
+  pts.floor = scene.floor_material;
+  pts.first_fixture_id = first_fixture_id;
+  for (size_t f = 0; f < fixtures.size(); ++f) {
+    TracedFixture tf;
+    tf.indices = fixtures[f].indices.data();
+    tf.normals = fixtures[f].normals.data();
+    tf.box_centre = fixtures[f].box_centre;
+    tf.box_size = fixtures[f].box_size;
+    tf.material = scene.fixtures[f].material;
+    pts.fixtures.push_back(std::move(tf));
+  }
+  pts.lights = scene.light_sources;
+  pts.environment = scene.environment;
+  for (size_t i = 0; i < scene.instances.size(); ++i) {
+    const Instance& instance = scene.instances[i];
+    const PartBuffers& buffers = parts[static_cast<size_t>(instance.part)];
+    TracedInstance ti;
+    ti.indices = buffers.indices.data();
+    ti.normals = buffers.normals.data();
+    ti.uvs = buffers.uvs.empty() ? nullptr : buffers.uvs.data();
+    ti.rotation = instance_rotation[i];
+    ti.translation = instance.world_from_model.translation().cast<float>();
+    ti.box_centre = buffers.box_centre;
+    ti.box_size = buffers.box_size;
+    const int m = i < scene.instance_material.size() ? scene.instance_material[i] : -1;
+    if (m >= static_cast<int>(scene.materials.size()))
+      throw Error("renderer: instance '" + instance.name + "' refers to a missing material");
+    // Part colours are sRGB (CAD files and the palette); materials take linear colours.
+    ti.material = m < 0 ? Scene::DefaultMaterial(albedo_of[i]) : scene.materials[m];
+    Eigen::Vector3f linear;
+    for (int c = 0; c < 3; ++c) linear[c] = SrgbToLinear(albedo_of[i][c]);
+    instance_linear.push_back(linear);
+    if (ti.material.base_from_part) ti.material.surface.base_color = linear;
+    pts.instances.push_back(std::move(ti));
+  }
+  std::string why;
+  for (const Material& m : scene.materials) {
+    if (!m.Check(&why)) throw Error("renderer: material: " + why);
+  }
+  if (!scene.floor_material.Check(&why)) throw Error("renderer: floor material: " + why);
+  for (const Scene::Fixture& f : scene.fixtures) {
+    if (!f.material.Check(&why)) throw Error("renderer: fixture '" + f.name + "': " + why);
+  }
+  for (const LightSource& l : scene.light_sources) {
+    if (!l.Check(&why)) throw Error("renderer: light: " + why);
+  }
+  if (!scene.environment.Check(&why)) throw Error("renderer: environment: " + why);
+  traced = pts;
+  tracer = std::make_unique<PathTracer>(std::move(pts));
+}
 FrameLook Renderer::BaseLook() const {
   const Impl& im = *impl_;
   FrameLook look;
@@ -757,121 +794,239 @@ std::vector<float> Renderer::Impl::InfraredPass(const PathTracer* tracer, const 
   return out;
 }
 
-Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions& sensor,
-                       const FrameLook* look) const {
-  const Impl& im = *impl_;
-  // A frame's own look: a path tracer of its own over the same geometry.
-  std::unique_ptr<PathTracer> own;
-  const PathTracer* tracer = im.tracer.get();
-  if (look != nullptr) {
-    if (tracer == nullptr) throw Error("renderer: a frame's own look needs render.mode: pbr");
-    if (look->instance_materials.size() != im.traced.instances.size() ||
-        look->fixture_materials.size() != im.traced.fixtures.size()) {
-      throw Error("renderer: the frame's look has materials for another scene");
-    }
-    std::string why;
-    for (const Material& m : look->instance_materials) {
-      if (!m.Check(&why)) throw Error("renderer: material: " + why);
-    }
-    for (const Material& m : look->fixture_materials) {
-      if (!m.Check(&why)) throw Error("renderer: fixture material: " + why);
-    }
-    if (!look->floor.Check(&why)) throw Error("renderer: floor material: " + why);
-    for (const LightSource& l : look->lights) {
-      if (!l.Check(&why)) throw Error("renderer: light: " + why);
-    }
-    if (!look->environment.Check(&why)) throw Error("renderer: environment: " + why);
-    PathTracerScene pts = im.traced;
-    for (size_t i = 0; i < pts.instances.size(); ++i)
-      pts.instances[i].material = look->instance_materials[i];
-    for (size_t f = 0; f < pts.fixtures.size(); ++f)
-      pts.fixtures[f].material = look->fixture_materials[f];
-    pts.floor = look->floor;
-    pts.lights = look->lights;
-    pts.environment = look->environment;
-    own = std::make_unique<PathTracer>(std::move(pts), tracer);
-    tracer = own.get();
-  }
-  const Intrinsics& k = camera.intrinsics;
+namespace {
+
+// The camera and sensor settings a frame can be rendered with (`pbr`: the mode has a path tracer).
+void CheckCamera(const Intrinsics& k, const SensorOptions& sensor, bool pbr) {
   std::string why;
   if (!k.Check(&why)) throw Error("camera: " + why);
   if (!sensor.depth.Check(&why)) throw Error("camera.depth: " + why);
   if (!sensor.Check(&why)) throw Error("camera: " + why);
-  if (tracer == nullptr && (sensor.lens.active() || sensor.motion.active()))
+  if (!pbr && (sensor.lens.active() || sensor.motion.active()))
     throw Error("camera: depth of field and motion blur need render.mode: pbr");
   if (k.distortion.active() && sensor.depth.kind == DepthModel::Kind::kActiveStereo) {
     throw Error(
         "camera: active_stereo matches rectified IR images; give the lens distortion to another "
         "camera of the rig");
   }
-  const int w = k.width, h = k.height;
-  const size_t num_pixels = static_cast<size_t>(w) * h;
-  const RenderOptions& o = im.options;
+}
 
-  Frame frame;
+}  // namespace
+
+const PathTracer* Renderer::Impl::TracerFor(const FrameLook* look,
+                                            std::unique_ptr<PathTracer>* own) const {
+  if (look == nullptr) return tracer.get();
+  if (tracer == nullptr) throw Error("renderer: a frame's own look needs render.mode: pbr");
+  if (look->instance_materials.size() != traced.instances.size() ||
+      look->fixture_materials.size() != traced.fixtures.size()) {
+    throw Error("renderer: the frame's look has materials for another scene");
+  }
+  std::string why;
+  for (const Material& m : look->instance_materials) {
+    if (!m.Check(&why)) throw Error("renderer: material: " + why);
+  }
+  for (const Material& m : look->fixture_materials) {
+    if (!m.Check(&why)) throw Error("renderer: fixture material: " + why);
+  }
+  if (!look->floor.Check(&why)) throw Error("renderer: floor material: " + why);
+  for (const LightSource& l : look->lights) {
+    if (!l.Check(&why)) throw Error("renderer: light: " + why);
+  }
+  if (!look->environment.Check(&why)) throw Error("renderer: environment: " + why);
+  PathTracerScene pts = traced;
+  for (size_t i = 0; i < pts.instances.size(); ++i)
+    pts.instances[i].material = look->instance_materials[i];
+  for (size_t f = 0; f < pts.fixtures.size(); ++f)
+    pts.fixtures[f].material = look->fixture_materials[f];
+  pts.floor = look->floor;
+  pts.lights = look->lights;
+  pts.environment = look->environment;
+  *own = std::make_unique<PathTracer>(std::move(pts), tracer.get());
+  return own->get();
+}
+
+// One frame of Renderer::Render: what its passes share (the options as this frame resolves them,
+// the camera's rays, the planes the passes fill besides the frame's own) and the passes, in the
+// order Render runs them. Labels and colour come from one traversal of the image's 4 x 4 tiles, in
+// stages per tile (CastLabels, Shade, SenseAndDisplay) that share the tile's packet of centre rays.
+struct Renderer::Impl::FramePasses {
+  FramePasses(const Impl& im, const Camera& camera, uint64_t view, const SensorOptions& sensor,
+              const FrameLook* look, const PathTracer* tracer, Frame* out);
+
+  // Every tile: its labels, its colour, and that colour as the image sensor reads it and the
+  // display shows it (with the denoiser, only marks the pixels DenoiseColour finishes).
+  void TraceTiles();
+  // pbr with the denoiser: the filtered radiance of every pixel, then its reading and display.
+  void DenoiseColour();
+  // Each instance's visible pixels.
+  void CountVisible();
+  // A depth model other than the ideal: the depth the sensor returns, and its IR images.
+  void SimulateSensorDepth();
+  // The look's background photo where the centre ray hit nothing.
+  void PasteBackground();
+  // Each instance's full silhouette (the instance traced alone): mask, counts, boxes.
+  void TraceAmodalMasks();
+
+  // A thread's packet in TraceTiles, reused by each tile's centre rays and supersamples.
+  struct TilePacket {
+    RTCIntersectContext context;
+    RTCRayHit16 rh;
+    alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
+    Shaded shaded[16];
+  };
+  // The stages of a tile at pixel (u0, v0), and the first hits of a packet of camera rays. All are
+  // declared inline: the library is compiled position-independent, where a member that is not
+  // could be replaced at link time and is never inlined. CastLabels and Shade are forced inline:
+  // they are the body of the tile loop, split for reading only.
+  [[gnu::always_inline]] inline void CastLabels(int tile, int u0, int v0, TilePacket* p,
+                                                int centre_valid[16]);
+  [[gnu::always_inline]] inline void Shade(int tile, int u0, int v0, TilePacket* p,
+                                           Eigen::Vector3f radiance[16], Eigen::Vector3f color[16]);
+  inline void SenseAndDisplay(int u, int v, Eigen::Vector3f radiance, Eigen::Vector3f color);
+  inline void Trace(int tile, RTCIntersectContext* context, const int* valid,
+                    RTCRayHit16* rh) const;
+  void MarkReachableTiles();
+
+  const Impl& im;
+  const Camera& camera;
+  const uint64_t view;
+  const SensorOptions& sensor;
+  const FrameLook* look;
+  const PathTracer* tracer;  // pbr: this frame's (Impl::TracerFor)
+  Frame& frame;
+  const RenderOptions& o;
+  const Intrinsics& k;
+  const int w, h;
+  const size_t num_pixels;
+
+  const DepthModel& depth_model;
+  const bool noisy_depth;
+  const bool projector;
+  // Normals also for the depth model (incidence angles), kept in the frame only when asked for.
+  const bool need_normals;
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<uint8_t> projector_seen;
+  std::vector<float> signal;
+  const Eigen::Vector3f projector_world;
+  const float pixel_spread;
+
+  const bool gray;
+  const ImageSensor& imager;
+  const uint64_t noise_seed;
+  std::vector<float> grey_noise;
+  const bool pbr;
+  const uint64_t frame_seed;
+  const float exposure_scale;
+  const Eigen::Vector3f white_balance;
+  const bool balanced;
+  const bool filmic;
+
+  const std::shared_ptr<const PixelRays> rays;
+  const bool distorted;
+  const RayGen gen;
+  std::vector<float> xs, ys;  // pixel centres (pinhole)
+  // Supersampling offsets (sx + 0.5) / ss, tabulated per sample (pinhole).
+  std::vector<std::vector<float>> sample_xs, sample_ys;
+  const Eigen::Matrix3f cam_from_world_rotation;
+  const int tiles_x, tiles_y;
+  const float tnear, tfar;
+  const int ss;
+  const Eigen::Isometry3d cam_from_world;
+  std::vector<uint8_t> reachable;  // per tile (MarkReachableTiles)
+  const float floor_half;
+
+  // The denoiser (pbr) needs every pixel's radiance and guides first; the colour follows.
+  const bool denoising;
+  std::vector<float> radiance_plane, albedo_plane, normal_plane, variance_plane;
+  std::vector<uint8_t> coloured;  // pixels with a colour to finish (a ray through the centre)
+};
+
+Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, uint64_t view,
+                                         const SensorOptions& sensor, const FrameLook* look,
+                                         const PathTracer* tracer, Frame* out)
+    : im(im),
+      camera(camera),
+      view(view),
+      sensor(sensor),
+      look(look),
+      tracer(tracer),
+      frame(*out),
+      o(im.options),
+      k(camera.intrinsics),
+      w(k.width),
+      h(k.height),
+      num_pixels(static_cast<size_t>(w) * h),
+      depth_model(sensor.depth),
+      noisy_depth(depth_model.kind != DepthModel::Kind::kIdeal),
+      projector(depth_model.needs_projector()),
+      need_normals(o.normals || noisy_depth),
+      projector_world((camera.world_from_cam * Eigen::Vector3d(depth_model.baseline_mm, 0.0, 0.0))
+                          .cast<float>()),
+      pixel_spread(static_cast<float>(1.0 / std::min(k.fx, k.fy))),
+      gray(sensor.image != SensorOptions::Image::kRgb),
+      imager(sensor.imager),
+      noise_seed(ImageNoiseSeed(imager, view)),
+      pbr(tracer != nullptr),
+      frame_seed(FrameSeed(o.seed, view)),
+      exposure_scale(
+          static_cast<float>(std::exp2(o.exposure + (look != nullptr ? look->exposure : 0.0)))),
+      white_balance(look != nullptr ? look->white_balance : Eigen::Vector3f::Ones()),
+      balanced(white_balance != Eigen::Vector3f::Ones()),
+      filmic(o.view == RenderOptions::View::kFilmic),
+      rays(im.RaysOf(k)),
+      distorted(rays->distorted()),
+      gen(camera.world_from_cam.linear().cast<float>(),
+          camera.world_from_cam.translation().cast<float>(), rays.get()),
+      cam_from_world_rotation(gen.rotation.transpose()),
+      tiles_x((w + kTile - 1) / kTile),
+      tiles_y((h + kTile - 1) / kTile),
+      tnear(static_cast<float>(o.near_mm)),
+      tfar(static_cast<float>(o.far_mm)),
+      ss(o.supersampling),
+      cam_from_world(camera.world_from_cam.inverse()),
+      floor_half(static_cast<float>(im.scene.floor_half_size_mm)),
+      denoising(pbr && o.shade && o.denoise) {
   frame.camera = camera;
   frame.rgb.assign(3 * num_pixels, 0);
   frame.depth.assign(num_pixels, 0.0f);
   frame.instance.assign(num_pixels, 0);
-  const DepthModel& depth_model = sensor.depth;
-  const bool noisy_depth = depth_model.kind != DepthModel::Kind::kIdeal;
-  const bool projector = depth_model.needs_projector();
-  // Normals also for the depth model (incidence angles), kept in the frame only when asked for.
-  const bool need_normals = o.normals || noisy_depth;
-  std::vector<Eigen::Vector3f> normals;
   if (need_normals) normals.assign(num_pixels, Eigen::Vector3f::Zero());
-  std::vector<uint8_t> projector_seen;
-  std::vector<float> signal;
   if (projector) projector_seen.assign(num_pixels, 0), signal.assign(num_pixels, 0.0f);
-  const Eigen::Vector3f projector_world =
-      (camera.world_from_cam * Eigen::Vector3d(depth_model.baseline_mm, 0.0, 0.0)).cast<float>();
-  const float pixel_spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
-  const bool gray = sensor.image != SensorOptions::Image::kRgb;
-  const ImageSensor& imager = sensor.imager;
-  const uint64_t noise_seed = ImageNoiseSeed(imager, view);
   if (gray) frame.gray.assign(num_pixels, 0.0f);
-  const bool pbr = tracer != nullptr;
   if (o.hdr) frame.radiance.assign(3 * num_pixels, 0.0f);
-  const uint64_t frame_seed = FrameSeed(o.seed, view);
-  const float exposure_scale =
-      static_cast<float>(std::exp2(o.exposure + (look != nullptr ? look->exposure : 0.0)));
-  const Eigen::Vector3f white_balance =
-      look != nullptr ? look->white_balance : Eigen::Vector3f::Ones();
-  const bool balanced = white_balance != Eigen::Vector3f::Ones();
-  const bool filmic = o.view == RenderOptions::View::kFilmic;
 
-  const std::shared_ptr<const PixelRays> rays = im.RaysOf(k);
-  const bool distorted = rays->distorted();
-  const RayGen gen(camera.world_from_cam.linear().cast<float>(),
-                   camera.world_from_cam.translation().cast<float>(), rays.get());
-  std::vector<float> xs, ys;  // pixel centres (pinhole)
   if (!distorted) rays->Tabulate(0.5, 0.5, kTile, &xs, &ys);
-  // Supersampling offsets (sx + 0.5) / ss, tabulated per sample (pinhole).
-  std::vector<std::vector<float>> sample_xs, sample_ys;
-  for (int sy = 0; sy < im.options.supersampling && im.options.supersampling > 1; ++sy) {
-    for (int sx = 0; sx < im.options.supersampling; ++sx) {
+  for (int sy = 0; sy < o.supersampling && o.supersampling > 1; ++sy) {
+    for (int sx = 0; sx < o.supersampling; ++sx) {
       sample_xs.emplace_back();
       sample_ys.emplace_back();
-      const double n = im.options.supersampling;
+      const double n = o.supersampling;
       if (!distorted)
         rays->Tabulate((sx + 0.5) / n, (sy + 0.5) / n, kTile, &sample_xs.back(), &sample_ys.back());
     }
   }
-  const Eigen::Matrix3f cam_from_world_rotation = gen.rotation.transpose();
-  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
-  const float tnear = static_cast<float>(o.near_mm), tfar = static_cast<float>(o.far_mm);
-  const int ss = o.supersampling;
 
   // Per-instance truth: pose, amodal silhouette (the instance traced alone), pixel counts.
-  const Eigen::Isometry3d cam_from_world = camera.world_from_cam.inverse();
   frame.instances.resize(im.scene.instances.size());
   for (size_t i = 0; i < im.scene.instances.size(); ++i) {
     frame.instances[i].cam_from_model = cam_from_world * im.scene.instances[i].world_from_model;
   }
-  // Tiles that no instance can reach (outside the projected rectangles of every instance's model
-  // box) see the floor or nothing, and skip the scene's traversal. Exact: the rectangle of a box's
-  // projected corners holds its whole projection, with a pixel of margin.
-  std::vector<uint8_t> reachable(static_cast<size_t>(tiles_x) * tiles_y, 0);
+  MarkReachableTiles();
+  if (gray && imager.full_well > 0.0) grey_noise = GreyImageNoise(noise_seed, num_pixels);
+  if (denoising) {
+    radiance_plane.assign(3 * num_pixels, 0.0f);
+    albedo_plane.assign(3 * num_pixels, 1.0f);
+    normal_plane.assign(3 * num_pixels, 0.0f);
+    variance_plane.assign(num_pixels, 0.0f);
+    coloured.assign(num_pixels, 0);
+  }
+}
+
+// Tiles that no instance can reach (outside the projected rectangles of every instance's model
+// box) see the floor or nothing, and skip the scene's traversal. Exact: the rectangle of a box's
+// projected corners holds its whole projection, with a pixel of margin.
+void Renderer::Impl::FramePasses::MarkReachableTiles() {
+  reachable.assign(static_cast<size_t>(tiles_x) * tiles_y, 0);
   for (size_t i = 0; i < im.scene.instances.size(); ++i) {
     const PixelRect r = ImageRect(*rays, im.model_bounds[im.scene.instances[i].part],
                                   frame.instances[i].cam_from_model, PixelRect{0, 0, w, h});
@@ -888,160 +1043,170 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
         reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
     }
   }
-  const float floor_half = static_cast<float>(im.scene.floor_half_size_mm);
-  // The first hits of a packet of camera rays.
-  const auto trace = [&](int tile, RTCIntersectContext* context, const int* valid,
-                         RTCRayHit16* rh) {
-    if (reachable[tile]) {
-      rtcInitIntersectContext(context);
-      rtcIntersect16(valid, im.world, context, rh);
-    } else if (im.floor_id != kInvalid) {
-      IntersectFloor(valid, floor_half, im.floor_id, rh);
+}
+
+void Renderer::Impl::FramePasses::Trace(int tile, RTCIntersectContext* context, const int* valid,
+                                        RTCRayHit16* rh) const {
+  if (reachable[tile]) {
+    rtcInitIntersectContext(context);
+    rtcIntersect16(valid, im.world, context, rh);
+  } else if (im.floor_id != kInvalid) {
+    IntersectFloor(valid, floor_half, im.floor_id, rh);
+  }
+}
+
+// The labels from a tile's pixel centres: depth, instance, normals (through the Lambert shading,
+// which also gives the fast mode's colour without supersampling) and what the depth sensor's
+// projector sees. `centre_valid`: the pixels with a centre ray.
+void Renderer::Impl::FramePasses::CastLabels(int tile, int u0, int v0, TilePacket* p,
+                                             int centre_valid[16]) {
+  RTCRayHit16& rh = p->rh;
+  int* valid = p->valid;
+  Shaded* shaded = p->shaded;
+  // The pixel centres: depth, instance, normal, and (without supersampling) colour.
+  InitPacket(gen, u0, v0, w, h, distorted ? nullptr : &xs, distorted ? nullptr : &ys, 0.5f, 0.5f,
+             tnear, tfar, &rh, valid);
+  // Incoherent packet traversal: Embree's coherent mode
+  // (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) lost parts near the image centre of straight-down
+  // views, also with robust scenes.
+  Trace(tile, &p->context, valid, &rh);
+  std::copy(valid, valid + 16, centre_valid);
+  // The fast mode's colour needs the lights; normals, albedo and points (for the sensor)
+  // do not.
+  const bool fast_colour = o.shade && ss == 1 && !pbr;
+  if (fast_colour || need_normals) im.ShadePacket(rh, valid, shaded, fast_colour);
+  for (int j = 0; j < 16; ++j) {
+    if (!valid[j]) continue;
+    const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+    if (rh.hit.geomID[j] != kInvalid) {
+      frame.depth[pixel] = rh.ray.tfar[j];
+      const unsigned inst = rh.hit.instID[0][j];
+      if (inst != kInvalid) frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
+      if (need_normals) normals[pixel] = cam_from_world_rotation * shaded[j].normal;
     }
-  };
-  const std::vector<float> grey_noise = gray && imager.full_well > 0.0
-                                            ? GreyImageNoise(noise_seed, num_pixels)
-                                            : std::vector<float>();
-  // A pixel's colour from its radiance (pbr) or Lambert colour (fast): the image sensor's reading,
-  // the display transform (pbr) and 8 bits, and the grey camera's value.
-  const auto finish = [&](int u, int v, Eigen::Vector3f radiance, Eigen::Vector3f color) {
-    const size_t pixel = static_cast<size_t>(v) * w + u;
-    const bool pbr_colour = pbr && o.shade;
-    // The linear value the image sensor reads (pbr: the exposed radiance; fast: the
-    // Lambert colour), then the display transform (pbr) and 8 bits.
-    Eigen::Vector2f centre;
-    rays->Centre(u, v, &centre);
-    const double vignette = imager.active() ? imager.Vignette(centre.x(), centre.y()) : 1.0;
-    // Noise draws: a colour camera's R, G and B (two pairs of sensor.image per pixel); a grey
-    // camera's one number per pixel (GreyImageNoise, worked out for the frame above; its colour
-    // image is not written and gets no noise).
-    double normal[4] = {0.0, 0.0, 0.0, 0.0};
-    if (imager.full_well > 0.0) {
-      if (gray) {
-        normal[3] = grey_noise[pixel];
-      } else {
-        const Eigen::Vector2d rg = ImageNoisePair(noise_seed, pixel, 0);
-        const Eigen::Vector2d bk = ImageNoisePair(noise_seed, pixel, 1);
-        normal[0] = rg.x(), normal[1] = rg.y(), normal[2] = bk.x(), normal[3] = bk.y();
+  }
+  if (projector) {
+    im.ProjectorPacket(tracer, rh, valid, shaded, projector_world, pixel_spread, u0, v0, w,
+                       projector_seen.data(), signal.data());
+  }
+}
+
+// The colour of a tile's pixels after CastLabels (whose packet it reuses): the fast mode's
+// Lambert colour at the centre or the mean of a grid of supersamples; pbr, the path tracer's
+// radiance, also kept for the HDR image and the denoiser.
+void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
+                                        Eigen::Vector3f radiance[16], Eigen::Vector3f color[16]) {
+  RTCRayHit16& rh = p->rh;
+  int* valid = p->valid;
+  Shaded* shaded = p->shaded;
+  for (int j = 0; j < 16; ++j) {
+    if (!valid[j]) continue;
+    color[j] = (ss == 1 && o.shade && !pbr) ? shaded[j].color : Eigen::Vector3f::Zero();
+  }
+  for (int j = 0; j < 16; ++j) radiance[j].setZero();
+  if (pbr && o.shade) {
+    TileFeatures features;
+    tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples, frame_seed,
+                      radiance, denoising ? &features : nullptr);
+    for (int j = 0; j < 16; ++j) {
+      if (!valid[j]) continue;
+      const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+      if (o.hdr) {
+        for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[j][c];
+      }
+      if (denoising) {
+        for (int c = 0; c < 3; ++c) {
+          radiance_plane[3 * pixel + c] = radiance[j][c];
+          albedo_plane[3 * pixel + c] = features.albedo[j][c];
+          normal_plane[3 * pixel + c] = features.normal[j][c];
+        }
+        variance_plane[pixel] = features.variance[j];
       }
     }
-    const auto read = [&](float linear, int channel) {
-      if (!imager.active()) return linear;
-      return static_cast<float>(imager.Read(linear, vignette, normal[channel]));
-    };
-    // The camera's white balance (domain randomisation) scales what the sensor reads.
-    if (pbr_colour && balanced) radiance = radiance.cwiseProduct(white_balance);
-    const Eigen::Vector3f linear = pbr_colour ? Eigen::Vector3f(exposure_scale * radiance) : color;
-    for (int c = 0; c < 3; ++c) {
-      const float value = read(linear[c], c);
-      color[c] = pbr_colour ? DisplayValue(value, filmic) : value;
-      frame.rgb[3 * pixel + c] = ToByte(color[c]);
-    }
-    if (o.hdr && !pbr) {
-      for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = color[c];
-    }
-    // A grey camera sees the luminance of the same linear value, with its own noise.
-    if (gray) {
-      // (pbr: exposure times luminance, in the order earlier versions computed it.)
-      const float value =
-          read(pbr_colour ? exposure_scale * Luminance(radiance) : Luminance(linear), 3);
-      frame.gray[pixel] = pbr_colour ? DisplayValue(value, filmic) : std::clamp(value, 0.0f, 1.0f);
-    }
-  };
-  // The denoiser (pbr) needs every pixel's radiance and guides first; the colour follows.
-  const bool denoising = pbr && o.shade && o.denoise;
-  std::vector<float> radiance_plane, albedo_plane, normal_plane, variance_plane;
-  std::vector<uint8_t> coloured;  // pixels with a colour to finish (a ray through the centre)
-  if (denoising) {
-    radiance_plane.assign(3 * num_pixels, 0.0f);
-    albedo_plane.assign(3 * num_pixels, 1.0f);
-    normal_plane.assign(3 * num_pixels, 0.0f);
-    variance_plane.assign(num_pixels, 0.0f);
-    coloured.assign(num_pixels, 0);
   }
+  // Supersampled colour: a regular grid of samples in each pixel.
+  // (Points of a pixel without a ray, beyond a lens's fold, are left out of its mean.)
+  int counted[16];
+  std::fill(counted, counted + 16, 0);
+  for (int sy = 0; o.shade && ss > 1 && sy < ss; ++sy) {
+    for (int sx = 0; sx < ss; ++sx) {
+      const size_t n = static_cast<size_t>(sy * ss + sx);
+      InitPacket(gen, u0, v0, w, h, distorted ? nullptr : &sample_xs[n],
+                 distorted ? nullptr : &sample_ys[n], (sx + 0.5f) / ss, (sy + 0.5f) / ss, tnear,
+                 tfar, &rh, valid);
+      Trace(tile, &p->context, valid, &rh);
+      im.ShadePacket(rh, valid, shaded);
+      for (int j = 0; j < 16; ++j) {
+        if (!valid[j]) continue;
+        color[j] += shaded[j].color / float(ss * ss);
+        ++counted[j];
+      }
+    }
+  }
+  for (int j = 0; o.shade && ss > 1 && j < 16; ++j) {
+    if (counted[j] > 0 && counted[j] < ss * ss)
+      color[j] *= static_cast<float>(ss * ss) / static_cast<float>(counted[j]);
+  }
+}
 
+// A pixel's colour from its radiance (pbr) or Lambert colour (fast): the image sensor's reading,
+// the display transform (pbr) and 8 bits, and the grey camera's value.
+void Renderer::Impl::FramePasses::SenseAndDisplay(int u, int v, Eigen::Vector3f radiance,
+                                                  Eigen::Vector3f color) {
+  const size_t pixel = static_cast<size_t>(v) * w + u;
+  const bool pbr_colour = pbr && o.shade;
+  // The linear value the image sensor reads (pbr: the exposed radiance; fast: the
+  // Lambert colour), then the display transform (pbr) and 8 bits.
+  Eigen::Vector2f centre;
+  rays->Centre(u, v, &centre);
+  const double vignette = imager.active() ? imager.Vignette(centre.x(), centre.y()) : 1.0;
+  // Noise draws: a colour camera's R, G and B (two pairs of sensor.image per pixel); a grey
+  // camera's one number per pixel (GreyImageNoise, worked out for the frame above; its colour
+  // image is not written and gets no noise).
+  double normal[4] = {0.0, 0.0, 0.0, 0.0};
+  if (imager.full_well > 0.0) {
+    if (gray) {
+      normal[3] = grey_noise[pixel];
+    } else {
+      const Eigen::Vector2d rg = ImageNoisePair(noise_seed, pixel, 0);
+      const Eigen::Vector2d bk = ImageNoisePair(noise_seed, pixel, 1);
+      normal[0] = rg.x(), normal[1] = rg.y(), normal[2] = bk.x(), normal[3] = bk.y();
+    }
+  }
+  const auto read = [&](float linear, int channel) {
+    if (!imager.active()) return linear;
+    return static_cast<float>(imager.Read(linear, vignette, normal[channel]));
+  };
+  // The camera's white balance (domain randomisation) scales what the sensor reads.
+  if (pbr_colour && balanced) radiance = radiance.cwiseProduct(white_balance);
+  const Eigen::Vector3f linear = pbr_colour ? Eigen::Vector3f(exposure_scale * radiance) : color;
+  for (int c = 0; c < 3; ++c) {
+    const float value = read(linear[c], c);
+    color[c] = pbr_colour ? DisplayValue(value, filmic) : value;
+    frame.rgb[3 * pixel + c] = ToByte(color[c]);
+  }
+  if (o.hdr && !pbr) {
+    for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = color[c];
+  }
+  // A grey camera sees the luminance of the same linear value, with its own noise.
+  if (gray) {
+    // (pbr: exposure times luminance, in the order earlier versions computed it.)
+    const float value =
+        read(pbr_colour ? exposure_scale * Luminance(radiance) : Luminance(linear), 3);
+    frame.gray[pixel] = pbr_colour ? DisplayValue(value, filmic) : std::clamp(value, 0.0f, 1.0f);
+  }
+}
+
+void Renderer::Impl::FramePasses::TraceTiles() {
   tbb::parallel_for(
       tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
-        RTCIntersectContext context;
-        RTCRayHit16 rh;
-        alignas(64) int valid[16];  // Embree reads packet masks as aligned vectors
-        Impl::Shaded shaded[16];
+        TilePacket packet;
         for (int tile = range.begin(); tile < range.end(); ++tile) {
           const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
-          // The pixel centres: depth, instance, normal, and (without supersampling) colour.
-          InitPacket(gen, u0, v0, w, h, distorted ? nullptr : &xs, distorted ? nullptr : &ys, 0.5f,
-                     0.5f, tnear, tfar, &rh, valid);
-          // Incoherent packet traversal: Embree's coherent mode
-          // (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) lost parts near the image centre of straight-down
-          // views, also with robust scenes.
-          trace(tile, &context, valid, &rh);
-          alignas(64) int centre_valid[16];  // the pixels (supersamples reuse `valid`)
-          std::copy(valid, valid + 16, centre_valid);
-          Eigen::Vector3f color[16];
-          // The fast mode's colour needs the lights; normals, albedo and points (for the sensor)
-          // do not.
-          const bool fast_colour = o.shade && ss == 1 && !pbr;
-          if (fast_colour || need_normals) im.ShadePacket(rh, valid, shaded, fast_colour);
-          for (int j = 0; j < 16; ++j) {
-            if (!valid[j]) continue;
-            const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
-            if (rh.hit.geomID[j] != kInvalid) {
-              frame.depth[pixel] = rh.ray.tfar[j];
-              const unsigned inst = rh.hit.instID[0][j];
-              if (inst != kInvalid) frame.instance[pixel] = static_cast<uint16_t>(inst + 1);
-              if (need_normals) normals[pixel] = cam_from_world_rotation * shaded[j].normal;
-            }
-            color[j] = (ss == 1 && o.shade && !pbr) ? shaded[j].color : Eigen::Vector3f::Zero();
-          }
-          if (projector) {
-            im.ProjectorPacket(tracer, rh, valid, shaded, projector_world, pixel_spread, u0, v0, w,
-                               projector_seen.data(), signal.data());
-          }
-          Eigen::Vector3f radiance[16];
-          for (Eigen::Vector3f& r : radiance) r.setZero();
-          if (pbr && o.shade) {
-            TileFeatures features;
-            tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples,
-                              frame_seed, radiance, denoising ? &features : nullptr);
-            for (int j = 0; j < 16; ++j) {
-              if (!valid[j]) continue;
-              const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
-              if (o.hdr) {
-                for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[j][c];
-              }
-              if (denoising) {
-                for (int c = 0; c < 3; ++c) {
-                  radiance_plane[3 * pixel + c] = radiance[j][c];
-                  albedo_plane[3 * pixel + c] = features.albedo[j][c];
-                  normal_plane[3 * pixel + c] = features.normal[j][c];
-                }
-                variance_plane[pixel] = features.variance[j];
-              }
-            }
-          }
-          // Supersampled colour: a regular grid of samples in each pixel.
-          // (Points of a pixel without a ray, beyond a lens's fold, are left out of its mean.)
-          int counted[16];
-          std::fill(counted, counted + 16, 0);
-          for (int sy = 0; o.shade && ss > 1 && sy < ss; ++sy) {
-            for (int sx = 0; sx < ss; ++sx) {
-              const size_t n = static_cast<size_t>(sy * ss + sx);
-              InitPacket(gen, u0, v0, w, h, distorted ? nullptr : &sample_xs[n],
-                         distorted ? nullptr : &sample_ys[n], (sx + 0.5f) / ss, (sy + 0.5f) / ss,
-                         tnear, tfar, &rh, valid);
-              trace(tile, &context, valid, &rh);
-              im.ShadePacket(rh, valid, shaded);
-              for (int j = 0; j < 16; ++j) {
-                if (!valid[j]) continue;
-                color[j] += shaded[j].color / float(ss * ss);
-                ++counted[j];
-              }
-            }
-          }
-          for (int j = 0; o.shade && ss > 1 && j < 16; ++j) {
-            if (counted[j] > 0 && counted[j] < ss * ss)
-              color[j] *= static_cast<float>(ss * ss) / static_cast<float>(counted[j]);
-          }
+          alignas(64) int centre_valid[16];  // the pixels (supersamples reuse the packet's mask)
+          CastLabels(tile, u0, v0, &packet, centre_valid);
+          Eigen::Vector3f radiance[16], color[16];
+          Shade(tile, u0, v0, &packet, radiance, color);
           for (int j = 0; j < 16; ++j) {
             if (!centre_valid[j]) continue;
             const int u = u0 + j % kTile, v = v0 + j / kTile;
@@ -1049,105 +1214,108 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
               coloured[static_cast<size_t>(v) * w + u] = 1;
               continue;
             }
-            finish(u, v, radiance[j], color[j]);
+            SenseAndDisplay(u, v, radiance[j], color[j]);
           }
         }
       });
+}
 
-  if (denoising) {
-    DenoiseInput input;
-    input.width = w;
-    input.height = h;
-    input.radiance = radiance_plane.data();
-    input.albedo = albedo_plane.data();
-    input.normal = normal_plane.data();
-    input.depth = frame.depth.data();
-    input.variance = variance_plane.data();
-    const std::vector<float> clean = Denoise(input);
-    tbb::parallel_for(0, h, [&](int v) {
-      for (int u = 0; u < w; ++u) {
-        const size_t pixel = static_cast<size_t>(v) * w + u;
-        if (!coloured[pixel]) continue;
-        const Eigen::Vector3f radiance(clean[3 * pixel], clean[3 * pixel + 1],
-                                       clean[3 * pixel + 2]);
-        if (o.hdr) {
-          for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[c];
-        }
-        finish(u, v, radiance, Eigen::Vector3f::Zero());
+void Renderer::Impl::FramePasses::DenoiseColour() {
+  DenoiseInput input;
+  input.width = w;
+  input.height = h;
+  input.radiance = radiance_plane.data();
+  input.albedo = albedo_plane.data();
+  input.normal = normal_plane.data();
+  input.depth = frame.depth.data();
+  input.variance = variance_plane.data();
+  const std::vector<float> clean = Denoise(input);
+  tbb::parallel_for(0, h, [&](int v) {
+    for (int u = 0; u < w; ++u) {
+      const size_t pixel = static_cast<size_t>(v) * w + u;
+      if (!coloured[pixel]) continue;
+      const Eigen::Vector3f radiance(clean[3 * pixel], clean[3 * pixel + 1], clean[3 * pixel + 2]);
+      if (o.hdr) {
+        for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[c];
       }
-    });
-  }
+      SenseAndDisplay(u, v, radiance, Eigen::Vector3f::Zero());
+    }
+  });
+}
+
+void Renderer::Impl::FramePasses::CountVisible() {
   for (size_t p = 0; p < num_pixels; ++p) {
     if (frame.instance[p] != 0) ++frame.instances[frame.instance[p] - 1].px_count_visib;
   }
-  if (noisy_depth) {
-    DepthSensorInput input;
-    input.intrinsics = k;
-    input.rays = rays.get();
-    input.depth = frame.depth.data();
-    input.normals = normals.data();
-    input.projector_seen = projector ? projector_seen.data() : nullptr;
-    input.signal = projector ? signal.data() : nullptr;
-    input.rgb = frame.rgb.data();
-    std::vector<uint8_t> ir_left, ir_right;
-    if (depth_model.kind == DepthModel::Kind::kActiveStereo) {
-      // The left IR camera is the camera; the right one and the projector sit on its x axis.
-      Camera right = camera;
-      right.world_from_cam =
-          camera.world_from_cam * Eigen::Translation3d(depth_model.baseline_mm, 0, 0);
-      const Eigen::Vector3f dots =
-          (camera.world_from_cam * Eigen::Vector3d(0.5 * depth_model.baseline_mm, 0.0, 0.0))
-              .cast<float>();
-      const std::vector<float> left = im.InfraredPass(tracer, camera, depth_model, dots);
-      const double gain = InfraredGain(left);
-      ir_left = InfraredImage(depth_model, view, 0, left, gain);
-      ir_right = InfraredImage(depth_model, view, 1,
-                               im.InfraredPass(tracer, right, depth_model, dots), gain);
-      input.ir_left = ir_left.data();
-      input.ir_right = ir_right.data();
-    }
-    frame.sensor_depth = SimulateDepth(depth_model, input, view);
-    frame.infrared = std::move(ir_left);
+}
+
+void Renderer::Impl::FramePasses::SimulateSensorDepth() {
+  DepthSensorInput input;
+  input.intrinsics = k;
+  input.rays = rays.get();
+  input.depth = frame.depth.data();
+  input.normals = normals.data();
+  input.projector_seen = projector ? projector_seen.data() : nullptr;
+  input.signal = projector ? signal.data() : nullptr;
+  input.rgb = frame.rgb.data();
+  std::vector<uint8_t> ir_left, ir_right;
+  if (depth_model.kind == DepthModel::Kind::kActiveStereo) {
+    // The left IR camera is the camera; the right one and the projector sit on its x axis.
+    Camera right = camera;
+    right.world_from_cam =
+        camera.world_from_cam * Eigen::Translation3d(depth_model.baseline_mm, 0, 0);
+    const Eigen::Vector3f dots =
+        (camera.world_from_cam * Eigen::Vector3d(0.5 * depth_model.baseline_mm, 0.0, 0.0))
+            .cast<float>();
+    const std::vector<float> left = im.InfraredPass(tracer, camera, depth_model, dots);
+    const double gain = InfraredGain(left);
+    ir_left = InfraredImage(depth_model, view, 0, left, gain);
+    ir_right = InfraredImage(depth_model, view, 1,
+                             im.InfraredPass(tracer, right, depth_model, dots), gain);
+    input.ir_left = ir_left.data();
+    input.ir_right = ir_right.data();
   }
-  if (look != nullptr && look->background && o.shade) {
-    // The photo where the centre ray hit nothing: scaled to cover the image, centred, sampled
-    // bilinearly (linear values), shown as the display shows them; after the depth model, which
-    // reads the rendered colour only (the photo is not in the scene).
-    const LinearImage& photo = *look->background;
-    if (photo.width <= 0 || photo.height <= 0 ||
-        photo.rgb.size() != 3u * photo.width * photo.height)
-      throw Error("renderer: the background photo has no pixels");
-    const double scale =
-        std::max(static_cast<double>(w) / photo.width, static_cast<double>(h) / photo.height);
-    for (int v = 0; v < h; ++v) {
-      for (int u = 0; u < w; ++u) {
-        const size_t pixel = static_cast<size_t>(v) * w + u;
-        if (frame.depth[pixel] != 0.0f) continue;
-        const double x = (u + 0.5 - 0.5 * w) / scale + 0.5 * photo.width - 0.5;
-        const double y = (v + 0.5 - 0.5 * h) / scale + 0.5 * photo.height - 0.5;
-        const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, photo.width - 1);
-        const int y0 = std::clamp(static_cast<int>(std::floor(y)), 0, photo.height - 1);
-        const int x1 = std::min(x0 + 1, photo.width - 1), y1 = std::min(y0 + 1, photo.height - 1);
-        const float fx = static_cast<float>(std::clamp(x - x0, 0.0, 1.0));
-        const float fy = static_cast<float>(std::clamp(y - y0, 0.0, 1.0));
-        Eigen::Vector3f linear;
-        for (int c = 0; c < 3; ++c) {
-          linear[c] = (1 - fy) * ((1 - fx) * photo.at(x0, y0)[c] + fx * photo.at(x1, y0)[c]) +
-                      fy * ((1 - fx) * photo.at(x0, y1)[c] + fx * photo.at(x1, y1)[c]);
-          frame.rgb[3 * pixel + c] = ToByte(LinearToSrgb(linear[c]));
-          if (o.hdr) {
-            // The scene radiance that would show as the photo (before exposure and white balance).
-            frame.radiance[3 * pixel + c] =
-                pbr ? linear[c] / (exposure_scale * (balanced ? white_balance[c] : 1.0f))
-                    : linear[c];
-          }
+  frame.sensor_depth = SimulateDepth(depth_model, input, view);
+  frame.infrared = std::move(ir_left);
+}
+
+void Renderer::Impl::FramePasses::PasteBackground() {
+  // The photo where the centre ray hit nothing: scaled to cover the image, centred, sampled
+  // bilinearly (linear values), shown as the display shows them; after the depth model, which
+  // reads the rendered colour only (the photo is not in the scene).
+  const LinearImage& photo = *look->background;
+  if (photo.width <= 0 || photo.height <= 0 || photo.rgb.size() != 3u * photo.width * photo.height)
+    throw Error("renderer: the background photo has no pixels");
+  const double scale =
+      std::max(static_cast<double>(w) / photo.width, static_cast<double>(h) / photo.height);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const size_t pixel = static_cast<size_t>(v) * w + u;
+      if (frame.depth[pixel] != 0.0f) continue;
+      const double x = (u + 0.5 - 0.5 * w) / scale + 0.5 * photo.width - 0.5;
+      const double y = (v + 0.5 - 0.5 * h) / scale + 0.5 * photo.height - 0.5;
+      const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, photo.width - 1);
+      const int y0 = std::clamp(static_cast<int>(std::floor(y)), 0, photo.height - 1);
+      const int x1 = std::min(x0 + 1, photo.width - 1), y1 = std::min(y0 + 1, photo.height - 1);
+      const float fx = static_cast<float>(std::clamp(x - x0, 0.0, 1.0));
+      const float fy = static_cast<float>(std::clamp(y - y0, 0.0, 1.0));
+      Eigen::Vector3f linear;
+      for (int c = 0; c < 3; ++c) {
+        linear[c] = (1 - fy) * ((1 - fx) * photo.at(x0, y0)[c] + fx * photo.at(x1, y0)[c]) +
+                    fy * ((1 - fx) * photo.at(x0, y1)[c] + fx * photo.at(x1, y1)[c]);
+        frame.rgb[3 * pixel + c] = ToByte(LinearToSrgb(linear[c]));
+        if (o.hdr) {
+          // The scene radiance that would show as the photo (before exposure and white balance).
+          frame.radiance[3 * pixel + c] =
+              pbr ? linear[c] / (exposure_scale * (balanced ? white_balance[c] : 1.0f)) : linear[c];
         }
-        if (gray) frame.gray[pixel] = LinearToSrgb(Luminance(linear));
       }
+      if (gray) frame.gray[pixel] = LinearToSrgb(Luminance(linear));
     }
   }
-  if (o.normals) frame.normals = std::move(normals);
-  if (!o.amodal_masks) return frame;
+}
+
+void Renderer::Impl::FramePasses::TraceAmodalMasks() {
   // The silhouette is traced on bop_toolkit's canvas of three times the image size, [-w, 2w) x
   // [-h, 2h), so that counts and boxes of truncated instances include their parts outside the
   // image.
@@ -1193,6 +1361,28 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
     truth.px_count_canvas = canvas_count;
     if (canvas_count > 0) std::copy(box, box + 4, truth.bbox_canvas);
   });
+}
+
+// The passes in order: labels and colour (sensor reading and display included) tile by tile, the
+// denoiser, the visible counts, the depth sensor (which reads the finished colour), the
+// background photo (after it: the photo is not in the scene), the amodal masks.
+Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions& sensor,
+                       const FrameLook* look) const {
+  const Impl& im = *impl_;
+  std::unique_ptr<PathTracer> own;  // a frame's own look: a path tracer of its own
+  const PathTracer* tracer = im.TracerFor(look, &own);
+  CheckCamera(camera.intrinsics, sensor, tracer != nullptr);
+  const RenderOptions& o = im.options;
+
+  Frame frame;
+  Impl::FramePasses passes(im, camera, view, sensor, look, tracer, &frame);
+  passes.TraceTiles();
+  if (passes.denoising) passes.DenoiseColour();
+  passes.CountVisible();
+  if (passes.noisy_depth) passes.SimulateSensorDepth();
+  if (look != nullptr && look->background && o.shade) passes.PasteBackground();
+  if (o.normals) frame.normals = std::move(passes.normals);
+  if (o.amodal_masks) passes.TraceAmodalMasks();
   return frame;
 }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the generated parts of the documentation from the program's own descriptions, or checks
 them (--check): docs/cli.md's block from `cadsynth --help` and every subcommand's --help,
-docs/recipes.md's block from `cadsynth generate --help-recipe`, and recipes/recipe.schema.json
+docs/recipes.md's block from `cadsynth generate --help-recipe`, docs/parts.md's family table
+from `cadsynth variants --families` (variants/families.cpp's rows), and recipes/recipe.schema.json
 from `cadsynth generate --recipe-schema`. The CLI11 texts and the recipe tree are the one
 description; these files are copies a reader finds without running the program, and the ctest
 `docs_generated` fails when they drift.
@@ -46,6 +47,10 @@ def recipe_block(cadsynth):
     return "```yaml\n" + run(cadsynth, "generate", "--help-recipe") + "```\n"
 
 
+def families_block(cadsynth):
+    return run(cadsynth, "variants", "--families")
+
+
 def replace_block(text, block, path):
     if BEGIN not in text or END not in text:
         sys.exit(f"{path}: no {BEGIN} ... {END} block")
@@ -61,7 +66,8 @@ def main():
     args = parser.parse_args()
     wanted = {}
     for rel, block in (("docs/cli.md", cli_block(args.cadsynth)),
-                       ("docs/recipes.md", recipe_block(args.cadsynth))):
+                       ("docs/recipes.md", recipe_block(args.cadsynth)),
+                       ("docs/parts.md", families_block(args.cadsynth))):
         path = ROOT / rel
         wanted[path] = replace_block(path.read_text(), block, rel)
     wanted[ROOT / "recipes/recipe.schema.json"] = run(args.cadsynth, "generate", "--recipe-schema")

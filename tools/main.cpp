@@ -31,68 +31,6 @@
 
 namespace {
 
-constexpr const char* kUsage = R"(cadsynth: CAD in, labelled RGB-D training data out.
-
-usage:
-  cadsynth generate [RECIPE.yaml] [-o DIR] [--overwrite] [--shard I/N] [--threads N] [--progress=MODE] [--quiet]
-                    [--cache DIR | --no-cache]
-  cadsynth merge DIR
-  cadsynth inspect FILE [--json] [--unit UNIT] [--encoding CODEPAGE] [--deflection MM]
-  cadsynth variants RECIPE.yaml [--export-step DIR] [--overwrite]
-  cadsynth eval DATASET RESULTS.csv [--json FILE] [--sensor NAME]
-  cadsynth preview DATASET [-o FILE.png] [--count N | --frames S/I,...] [--width PX]
-                   [--versus DATASET2] [--sensor NAME]
-  cadsynth --help | --version
-  cadsynth COMMAND --help       every option of one command
-
-generate   Renders every view of the recipe's camera sweep and writes a BOP dataset to DIR.
-           Without a recipe it runs the built-in default job (no input files needed).
-  -o DIR       output folder (default: the recipe's output.dir, else ./cadsynth_dataset)
-  --overwrite  replace DIR if it exists (the old one stays until the new one is complete)
-  --shard I/N  render only shard I of N (0 <= I < N) into DIR, beside the other shards; join
-               them with 'cadsynth merge DIR' once all have finished (tools/slurm/ runs both)
-  --threads N  worker threads (default: all cores); results do not depend on it
-  --progress=MODE  auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON
-               line every 5 s (done, total, seconds, frames_per_s, eta_s) for cluster logs
-  --quiet      no progress or info lines, only warnings and errors (--progress=json still prints)
-  --cache DIR  the part cache (imported parts, hulls, repeated shapes; shared by runs and shards;
-               default $CADSYNTH_CACHE, else $XDG_CACHE_HOME/cadsynth or ~/.cache/cadsynth)
-  --no-cache   read and analyse every part afresh (the output is the same bytes either way)
-
-           A killed or failed run continues where it stopped when started again (same command).
-
-merge      Joins the shards in DIR (written by generate --shard) into one dataset, byte for byte
-           the one a single process writes; refuses, naming them, while shards are unfinished,
-           and checks every frame's files against the manifest (size and CRC-32).
-
-inspect    Reads a STEP, IGES, BREP or mesh file (.stl .obj .ply .dae .gltf .glb .3mf .off) and
-           prints what cadsynth sees: format, declared unit, parts with instance counts, size in
-           mm, triangles, colour, volume and whether the mesh is closed, and every instance.
-  --json           machine-readable output
-  --unit UNIT      the unit the file's numbers are really in (overrides the file; meshes: mm)
-  --encoding CP    STEP names written as raw bytes of a code page: cp1251, cp1252, sjis, ...
-  --deflection MM  tessellation tolerance (default 0.1 mm)
-
-variants   Lists every variant of the recipe's part families (id and parameters, as in
-           variants.json); with --export-step writes each as DIR/<id>.step (exact B-rep, mm).
-
-eval       Scores pose estimates in the BOP results format (scene_id,im_id,obj_id,score,R,t,time)
-           against DATASET's test split: ADD, ADD-S (for symmetric parts), the share within 10%
-           of the diameter and the AUC of accuracy up to 0.1 m, per object and overall.
-  --json FILE  also write the scores as JSON
-
-preview    Writes a contact sheet PNG: per frame the colour image with every object's projected
-           3D box and axes (x red, y green, z blue), the coloured depth and the visible masks.
-  -o FILE        output (default: DATASET/preview.png)
-  --count N      frames spread evenly over the dataset (default 4)
-  --frames LIST  exactly these frames, as scene/image pairs: 0/0,2/17
-  --width PX     width of each of the three panels (default 320)
-  --versus DATASET2  another dataset of the same views (e.g. the same recipe with
-                 render.mode: pbr): each row shows the two colour images side by side
-  --grasps N     with grasp labels (recipe grasps:), each frame's N best grasps whose way in
-                 is free: jaws red (score 0) to green (1), suction cups as rims (default 10)
-)";
-
 struct UsageError {
   std::string what;
 };
@@ -120,6 +58,7 @@ struct Args {
   bool json = false;
   // variants
   std::string export_dir;
+  bool families = false;
   // eval
   std::string results, json_file;
   // preview
@@ -227,6 +166,10 @@ int RunInspect(const Args& a) {
 }
 
 int RunVariants(const Args& a) {
+  if (a.families) {
+    std::cout << cadsynth::FamilyTable();
+    return 0;
+  }
   const cadsynth::RunSpec spec =
       !a.recipe.empty() ? cadsynth::LoadRecipe(a.recipe) : cadsynth::DefaultRunSpec();
   if (a.export_dir.empty()) {
@@ -381,6 +324,8 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   variants->add_option("--export-step", a.export_dir, "write each variant as DIR/<id>.step")
       ->type_name("DIR");
   variants->add_flag("--overwrite", a.overwrite, "replace existing STEP files");
+  variants->add_flag("--families", a.families,
+                     "list every part family with its parameters and defaults (Markdown) instead");
 
   CLI::App* eval =
       add("eval",
@@ -431,11 +376,50 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   return commands;
 }
 
+// `cadsynth --help`: a usage line and the description of each command, from the same CLI11
+// descriptions as each command's own --help (docs/cli.md is generated from both).
+std::string TopLevelHelp(const CLI::App& app, const std::vector<Command>& commands) {
+  std::ostringstream out;
+  out << app.get_description() << "\n\nusage:\n";
+  for (const Command& c : commands) {
+    out << "  cadsynth " << c.app->get_name();
+    bool options = false;
+    for (const CLI::Option* o : c.app->get_options()) {
+      if (o->get_positional()) {
+        const std::string name = o->get_name();
+        out << " " << (o->get_required() ? name : "[" + name + "]");
+      } else if (o != c.app->get_help_ptr()) {
+        options = true;
+      }
+    }
+    out << (options ? " [OPTIONS]" : "") << "\n";
+  }
+  out << "  cadsynth --help | --version\n"
+         "  cadsynth COMMAND --help       every option of one command\n";
+  for (const Command& c : commands) {
+    // The description wrapped at 100 columns beside the command's name.
+    std::istringstream words(c.app->get_description());
+    std::string word, line = c.app->get_name();
+    line.resize(10, ' ');
+    const size_t start = line.size();
+    out << "\n";
+    while (words >> word) {
+      if (line.size() > start && line.size() + 1 + word.size() > 100) {
+        out << line << "\n";
+        line.assign(start, ' ');
+      }
+      line += (line.size() > start ? " " : "") + word;
+    }
+    out << line << "\n";
+  }
+  return out.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"cadsynth: CAD in, labelled RGB-D training data out.", "cadsynth"};
-  app.set_help_flag();  // the top-level help is the curated usage text below
+  app.set_help_flag();  // the top-level help lists the commands: TopLevelHelp
   app.set_version_flag("--version", std::string("cadsynth ") + CADSYNTH_VERSION);
   app.require_subcommand(0, 1);
   app.get_formatter()->column_width(24);
@@ -445,7 +429,7 @@ int main(int argc, char** argv) {
   // The child of a guarded read (tools/pipeline/guarded_import.h): not a user command.
   if (first == "__read-part") return cadsynth::ReadPartMain({argv + 2, argv + argc});
   if (argc < 2 || first == "--help" || first == "-h" || first == "help") {
-    std::cout << kUsage;
+    std::cout << TopLevelHelp(app, commands);
     return argc < 2 ? 2 : 0;
   }
   const auto usage_error = [&](const std::string& what, const std::string& command) {

@@ -134,6 +134,55 @@ ShapeAssembly GearFromFile(const ParamValues& v) {
   throw Error("no gear recognised in " + file);
 }
 
+// The builders of the parametric families (Families() names each with its parameters).
+ShapeAssembly BuildGear(const std::string& f, const ParamValues& v) {
+  GearOptions g = GearFrom(v);
+  g.internal = f == "ring_gear";
+  if (g.internal) {
+    g.rim_width_mm = Num(v, "rim_width");
+  } else {
+    g.bore_diameter_mm = Num(v, "bore");
+    g.hub_diameter_mm = Num(v, "hub_diameter");
+    g.hub_length_mm = Num(v, "hub_length");
+  }
+  return Single(f, {f + "_z" + std::to_string(g.teeth), MakeGear(g), GearSymmetries(g)});
+}
+
+ShapeAssembly BuildGearPair(const std::string&, const ParamValues& v) {
+  GearPairOptions o;
+  o.first = GearFrom(v, "_1");
+  o.second = GearFrom(v, "_2");
+  o.second.helix_angle_rad = -o.first.helix_angle_rad;
+  o.first.bore_diameter_mm = o.second.bore_diameter_mm = Num(v, "bore");
+  return MakeGearPair(o);
+}
+
+ShapeAssembly BuildPlanetary(const std::string&, const ParamValues& v) {
+  PlanetaryOptions o;
+  o.sun_teeth = Int(v, "sun_teeth");
+  o.planet_teeth = Int(v, "planet_teeth");
+  o.planets = Int(v, "planets");
+  o.module_mm = Num(v, "module");
+  o.face_width_mm = Num(v, "face_width");
+  o.backlash_mm = Num(v, "backlash");
+  o.pin_diameter_mm = Num(v, "pin_diameter");
+  o.carrier_thickness_mm = Num(v, "carrier_thickness");
+  o.sun_bore_mm = Num(v, "sun_bore");
+  return MakePlanetary(o);
+}
+
+ShapeAssembly BuildSliderCrank(const std::string&, const ParamValues& v) {
+  SliderCrankOptions o;
+  o.crank_mm = Num(v, "crank");
+  o.rod_mm = Num(v, "rod");
+  o.crank_angle_rad = Num(v, "crank_angle");
+  o.link_width_mm = Num(v, "link_width");
+  o.link_thickness_mm = Num(v, "link_thickness");
+  o.pin_diameter_mm = Num(v, "pin_diameter");
+  o.slider_mm = Num(v, "slider");
+  return MakeSliderCrank(o);
+}
+
 }  // namespace
 
 const FamilyParam* FamilyInfo::Find(const std::string& param) const {
@@ -150,10 +199,10 @@ const std::vector<FamilyInfo>& Families() {
     spur.push_back(Length("bore", 0.0, "centre hole diameter (0: none)"));
     spur.push_back(Length("hub_diameter", 0.0, "hub below the gear (0: none)"));
     spur.push_back(Length("hub_length", 0.0, "hub length"));
-    f.push_back({"spur_gear", "an involute spur or helical gear", spur});
+    f.push_back({"spur_gear", "an involute spur or helical gear", spur, BuildGear});
     std::vector<FamilyParam> ring = GearParams(60);
     ring.push_back(Length("rim_width", 0.0, "ring wall beyond the root circle (0: 2.5 modules)"));
-    f.push_back({"ring_gear", "an internal (ring) gear", ring});
+    f.push_back({"ring_gear", "an internal (ring) gear", ring, BuildGear});
     f.push_back({"gear_pair",
                  "two external gears in mesh at the working centre distance",
                  {Count("teeth_1", 14, "teeth of the first gear"),
@@ -164,7 +213,8 @@ const std::vector<FamilyInfo>& Families() {
                   Number("profile_shift_2", 0.0, "profile shift of the second gear"),
                   Length("backlash", 0.05, "tooth thinning per gear"),
                   Angle("helix_angle", 0.0, "first gear's helix (the second is opposite)"),
-                  Length("bore", 6.0, "bore of both gears")}});
+                  Length("bore", 6.0, "bore of both gears")},
+                 BuildGearPair});
     f.push_back(
         {"planetary",
          "sun, planets, ring (z_ring = z_sun + 2 z_planet) and carrier",
@@ -173,44 +223,80 @@ const std::vector<FamilyInfo>& Families() {
           Length("face_width", 10.0, "tooth width"),
           Length("backlash", 0.05, "tooth thinning per gear"),
           Length("pin_diameter", 6.0, "carrier pins"),
-          Length("carrier_thickness", 4.0, "carrier plate"), Length("sun_bore", 6.0, "sun bore")}});
+          Length("carrier_thickness", 4.0, "carrier plate"), Length("sun_bore", 6.0, "sun bore")},
+         BuildPlanetary});
     f.push_back(
         {"slider_crank",
          "base, crank, connecting rod and slider at a crank angle",
          {Length("crank", 40.0, "crank radius"), Length("rod", 120.0, "connecting rod length"),
           Angle("crank_angle", 35.0, "crank angle"), Length("link_width", 16.0, "link width"),
           Length("link_thickness", 6.0, "link thickness"), Length("pin_diameter", 6.0, "pin holes"),
-          Length("slider", 30.0, "slider block length")}});
+          Length("slider", 30.0, "slider block length")},
+         BuildSliderCrank});
     f.push_back({"round_peg",
                  "a cylinder",
-                 {Length("diameter", 20.0, "diameter"), Length("length", 50.0, "length")}});
+                 {Length("diameter", 20.0, "diameter"), Length("length", 50.0, "length")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeRoundPeg(Num(v, "diameter"), Num(v, "length")));
+                 }});
     f.push_back({"square_peg",
                  "a square prism",
-                 {Length("side", 20.0, "side"), Length("length", 50.0, "length")}});
+                 {Length("side", 20.0, "side"), Length("length", 50.0, "length")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeSquarePeg(Num(v, "side"), Num(v, "length")));
+                 }});
     f.push_back(
         {"faceplate",
          "a plate with a grid of holes",
          {Length("width", 120.0, "x size"), Length("height", 80.0, "y size"),
           Length("thickness", 8.0, "z size"), Count("rows", 2, "hole rows"),
           Count("columns", 3, "hole columns"), Length("hole_diameter", 10.0, "hole diameter"),
-          Length("margin", 15.0, "edge to outer hole centres")}});
+          Length("margin", 15.0, "edge to outer hole centres")},
+         [](const std::string& f, const ParamValues& v) {
+           return Single(f, MakeFaceplate(Num(v, "width"), Num(v, "height"), Num(v, "thickness"),
+                                          Int(v, "rows"), Int(v, "columns"),
+                                          Num(v, "hole_diameter"), Num(v, "margin")));
+         }});
     f.push_back({"stepped_shaft",
                  "cylinders one after another",
-                 {Text("sections", "16x20, 24x50, 16x20", "diameter x length pairs, mm")}});
+                 {Text("sections", "16x20, 24x50, 16x20", "diameter x length pairs, mm")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeSteppedShaft(ParseSections(Str(v, "sections"))));
+                 }});
     f.push_back({"shoulder_bolt",
                  "ISO 7379 shoulder bolt",
                  {Length("shoulder_diameter", 10.0, "6, 8, 10, 12, 16 or 20 mm"),
-                  Length("shoulder_length", 30.0, "shoulder length")}});
-    f.push_back(
-        {"hex_bolt",
-         "ISO 4017 hex bolt (thread as a plain shank)",
-         {Text("size", "M8", "M3 to M24"), Length("length", 30.0, "length under the head")}});
-    f.push_back({"hex_nut", "ISO 4032 hex nut", {Text("size", "M8", "M3 to M24")}});
-    f.push_back({"washer", "ISO 7089 plain washer", {Text("size", "M8", "M3 to M24")}});
+                  Length("shoulder_length", 30.0, "shoulder length")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(
+                       f, MakeShoulderBolt(Num(v, "shoulder_diameter"), Num(v, "shoulder_length")));
+                 }});
+    f.push_back({"hex_bolt",
+                 "ISO 4017 hex bolt (thread as a plain shank)",
+                 {Text("size", "M8", "M3 to M24"), Length("length", 30.0, "length under the head")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeHexBolt(Str(v, "size"), Num(v, "length")));
+                 }});
+    f.push_back({"hex_nut",
+                 "ISO 4032 hex nut",
+                 {Text("size", "M8", "M3 to M24")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeHexNut(Str(v, "size")));
+                 }});
+    f.push_back({"washer",
+                 "ISO 7089 plain washer",
+                 {Text("size", "M8", "M3 to M24")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeWasher(Str(v, "size")));
+                 }});
     f.push_back({"ball_bearing",
                  "deep-groove ball bearing",
                  {Length("bore", 20.0, "bore"), Length("outer_diameter", 47.0, "outer diameter"),
-                  Length("width", 14.0, "width")}});
+                  Length("width", 14.0, "width")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeBallBearing(Num(v, "bore"), Num(v, "outer_diameter"),
+                                                    Num(v, "width")));
+                 }});
     f.push_back(
         {"scaled",
          "any CAD or mesh file, scaled",
@@ -227,8 +313,8 @@ const std::vector<FamilyInfo>& Families() {
           Text("part", "", "which part (by name; empty: the first recognised as a gear)"),
           Count("teeth", 0, "number of teeth (0: as the file has it)"),
           Length("module", 0.0, "normal module (0: as the file has it)"),
-          Length("face_width", 0.0,
-                 "tooth width, centred on the file's (0: as the file has it)")}});
+          Length("face_width", 0.0, "tooth width, centred on the file's (0: as the file has it)")},
+         [](const std::string&, const ParamValues& v) { return GearFromFile(v); }});
     return f;
   }();
   return families;
@@ -268,72 +354,14 @@ ParamValues CompleteParams(const FamilyInfo& family, const ParamValues& values) 
 }
 
 ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& v) {
-  const std::string& f = family.name;
-  try {
-    if (f == "spur_gear" || f == "ring_gear") {
-      GearOptions g = GearFrom(v);
-      g.internal = f == "ring_gear";
-      if (g.internal) {
-        g.rim_width_mm = Num(v, "rim_width");
-      } else {
-        g.bore_diameter_mm = Num(v, "bore");
-        g.hub_diameter_mm = Num(v, "hub_diameter");
-        g.hub_length_mm = Num(v, "hub_length");
-      }
-      return Single(f, {f + "_z" + std::to_string(g.teeth), MakeGear(g), GearSymmetries(g)});
-    }
-    if (f == "gear_pair") {
-      GearPairOptions o;
-      o.first = GearFrom(v, "_1");
-      o.second = GearFrom(v, "_2");
-      o.second.helix_angle_rad = -o.first.helix_angle_rad;
-      o.first.bore_diameter_mm = o.second.bore_diameter_mm = Num(v, "bore");
-      return MakeGearPair(o);
-    }
-    if (f == "planetary") {
-      PlanetaryOptions o;
-      o.sun_teeth = Int(v, "sun_teeth");
-      o.planet_teeth = Int(v, "planet_teeth");
-      o.planets = Int(v, "planets");
-      o.module_mm = Num(v, "module");
-      o.face_width_mm = Num(v, "face_width");
-      o.backlash_mm = Num(v, "backlash");
-      o.pin_diameter_mm = Num(v, "pin_diameter");
-      o.carrier_thickness_mm = Num(v, "carrier_thickness");
-      o.sun_bore_mm = Num(v, "sun_bore");
-      return MakePlanetary(o);
-    }
-    if (f == "slider_crank") {
-      SliderCrankOptions o;
-      o.crank_mm = Num(v, "crank");
-      o.rod_mm = Num(v, "rod");
-      o.crank_angle_rad = Num(v, "crank_angle");
-      o.link_width_mm = Num(v, "link_width");
-      o.link_thickness_mm = Num(v, "link_thickness");
-      o.pin_diameter_mm = Num(v, "pin_diameter");
-      o.slider_mm = Num(v, "slider");
-      return MakeSliderCrank(o);
-    }
-    if (f == "round_peg") return Single(f, MakeRoundPeg(Num(v, "diameter"), Num(v, "length")));
-    if (f == "square_peg") return Single(f, MakeSquarePeg(Num(v, "side"), Num(v, "length")));
-    if (f == "faceplate") {
-      return Single(
-          f, MakeFaceplate(Num(v, "width"), Num(v, "height"), Num(v, "thickness"), Int(v, "rows"),
-                           Int(v, "columns"), Num(v, "hole_diameter"), Num(v, "margin")));
-    }
-    if (f == "stepped_shaft") return Single(f, MakeSteppedShaft(ParseSections(Str(v, "sections"))));
-    if (f == "shoulder_bolt")
-      return Single(f, MakeShoulderBolt(Num(v, "shoulder_diameter"), Num(v, "shoulder_length")));
-    if (f == "hex_bolt") return Single(f, MakeHexBolt(Str(v, "size"), Num(v, "length")));
-    if (f == "hex_nut") return Single(f, MakeHexNut(Str(v, "size")));
-    if (f == "washer") return Single(f, MakeWasher(Str(v, "size")));
-    if (f == "ball_bearing")
-      return Single(f, MakeBallBearing(Num(v, "bore"), Num(v, "outer_diameter"), Num(v, "width")));
-    if (f == "from_file") return GearFromFile(v);
-  } catch (const Error& e) {
-    throw Error(f + ": " + e.what());
+  if (family.build == nullptr) {
+    throw Error("family '" + family.name + "' is not parametric (it scales a file)");
   }
-  throw Error("family '" + f + "' is not parametric (it scales a file)");
+  try {
+    return family.build(family.name, v);
+  } catch (const Error& e) {
+    throw Error(family.name + ": " + e.what());
+  }
 }
 
 Assembly BuildVariant(const FamilyInfo& family, const ParamValues& v,
@@ -371,6 +399,38 @@ std::string DescribeParams(const ParamValues& values, const FamilyInfo* family) 
       out << std::get<std::string>(value);
     }
     first = false;
+  }
+  return out.str();
+}
+
+std::string FamilyTable() {
+  std::ostringstream out;
+  out.precision(6);
+  out << "| family | what | parameters (default) |\n|---|---|---|\n";
+  for (const FamilyInfo& family : Families()) {
+    out << "| `" << family.name << "` | " << family.help << " | ";
+    bool first = true;
+    for (const FamilyParam& p : family.params) {
+      out << (first ? "" : "; ") << "`" << p.name << "` (";
+      switch (p.kind) {
+        case Kind::kLength:
+          out << p.default_number << " mm";
+          break;
+        case Kind::kAngle:
+          out << p.default_number / kDeg << " deg";
+          break;
+        case Kind::kCount:
+        case Kind::kNumber:
+          out << p.default_number;
+          break;
+        case Kind::kText:
+          out << '"' << p.default_text << '"';
+          break;
+      }
+      out << "): " << p.help;
+      first = false;
+    }
+    out << " |\n";
   }
   return out.str();
 }

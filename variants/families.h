@@ -24,20 +24,26 @@ struct FamilyParam {
   std::string help;
 };
 
+// One value: a number (mm, radians, count) or a text (an ISO size, a file path, shaft sections).
+using ParamValue = std::variant<double, std::string>;
+using ParamValues = std::map<std::string, ParamValue>;  // sorted by name: stable output
+
+// A family is one row of Families() (variants/families.cpp): its name, help, typed parameters
+// with defaults, and the builder of a variant's B-rep parts from complete values. A new family is
+// that row plus its geometry (variants/standard_parts.h, gear.h, mechanisms.h); `cadsynth
+// families` and docs/parts.md's table come from the rows.
 struct FamilyInfo {
+  using Builder = ShapeAssembly (*)(const std::string& family, const ParamValues& values);
   std::string name;
   std::string help;
   std::vector<FamilyParam> params;
+  Builder build = nullptr;  // null: not parametric ('scaled' scales a file: BuildVariant)
   const FamilyParam* Find(const std::string& param) const;
 };
 
 // Every family cadsynth knows, in a fixed order.
 const std::vector<FamilyInfo>& Families();
 const FamilyInfo* FindFamily(const std::string& name);
-
-// One value: a number (mm, radians, count) or a text (an ISO size, a file path, shaft sections).
-using ParamValue = std::variant<double, std::string>;
-using ParamValues = std::map<std::string, ParamValue>;  // sorted by name: stable output
 
 // The family's defaults overlaid with `values`. Throws Error for an unknown parameter (with the
 // nearest known one) or a value of the wrong kind.
@@ -54,6 +60,11 @@ ShapeAssembly BuildVariantShapes(const FamilyInfo& family, const ParamValues& va
 // "name=value, ..." for messages and listings; with the family, angles in degrees as recipes
 // write them ("pressure_angle=20 deg"), else every number as stored (radians).
 std::string DescribeParams(const ParamValues& values, const FamilyInfo* family = nullptr);
+
+// Every family as a Markdown table: name, help, and each parameter with its default (lengths in
+// mm, angles in degrees) and help. `cadsynth variants --families` prints it; docs/parts.md holds
+// it (tools/docs.py, checked by the docs_generated test).
+std::string FamilyTable();
 
 // Every length of `assembly` scaled by (sx, sy, sz) in its root frame. Uniform scales keep
 // instances; otherwise each instance becomes a part of its own (a turned part scales

@@ -29,4 +29,10 @@ std::string NearestName(const std::string& name, const std::vector<std::string>&
   return best;
 }
 
+std::string JoinNames(const std::vector<std::string>& names, const std::string& separator) {
+  std::string out;
+  for (const std::string& name : names) out += (out.empty() ? "" : separator) + name;
+  return out;
+}
+
 }  // namespace cadsynth

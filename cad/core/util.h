@@ -1,4 +1,5 @@
-// Small utilities every module may use: name suggestions. Seeded draws: cad/core/random.h.
+// Small utilities every module may use: name suggestions and lists. Seeded draws:
+// cad/core/random.h.
 #pragma once
 
 #include <cstdint>
@@ -12,5 +13,8 @@ size_t EditDistance(const std::string& a, const std::string& b);
 
 // The candidate closest to `name` within 2 edits, or empty: for "did you mean ...?".
 std::string NearestName(const std::string& name, const std::vector<std::string>& candidates);
+
+// "a, b, c": names for a message ("known: ..."), `separator` between them.
+std::string JoinNames(const std::vector<std::string>& names, const std::string& separator = ", ");
 
 }  // namespace cadsynth

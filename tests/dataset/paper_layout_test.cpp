@@ -3,6 +3,7 @@
 #include <matio.h>
 
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 
 #include "cad/shape.h"
 #include "dataset/grasp.h"
+#include "dataset/output_formats.h"
 #include "render/renderer.h"
 #include "tests/test_support.h"
 
@@ -90,21 +92,25 @@ TEST(PaperLayout, MaskMetaAndPvn3dMatchTheFrame) {
   testing::ScratchDir dir;
   const TwoParts s;
   BopOptions options;
-  options.paper_layout = options.pvn3d_meta = true;
+  options.pvn3d_meta = true;  // turns the paper layout on: its meta files sit beside its images
   BopSceneWriter bop(dir.path(), 0, options, {1, 2});
   bop.WriteFrame(5, s.frame);
-  std::vector<PaperInstance> instances(2);
+  FormatScene scene{dir.path(), 0, options, std::vector<FormatInstance>(2)};
   for (int i = 0; i < 2; ++i) {
-    instances[i].obj_id = i + 1;
-    instances[i].object_class.id = 1;
-    instances[i].object_class.name = "block";
-    instances[i].name = s.scene.instances[i].name;
-    instances[i].world_from_model = s.scene.instances[i].world_from_model;
+    scene.instances[i].obj_id = i + 1;
+    scene.instances[i].object_class.id = 1;
+    scene.instances[i].object_class.name = "block";
+    scene.instances[i].name = s.scene.instances[i].name;
+    scene.instances[i].world_from_model = s.scene.instances[i].world_from_model;
   }
-  const PaperSceneWriter paper(dir.path(), 0, options, instances);
-  paper.WriteFrame(
-      5, s.frame,
-      {bop.scene_dir() / "rgb" / "000005.png", bop.scene_dir() / "depth" / "000005.png"});
+  const std::vector<std::unique_ptr<FrameWriter>> writers = MakeFrameWriters(scene);
+  ASSERT_EQ(writers.size(), 2u);  // the paper layout, then pvn3d's meta files
+  for (const auto& writer : writers) {
+    writer->WriteFrame(
+        5, s.frame,
+        {bop.scene_dir() / "rgb" / "000005.png", bop.scene_dir() / "depth" / "000005.png"},
+        nullptr);
+  }
   const auto root = dir / "paper" / "000000";
 
   // Colour and depth are BOP's files (linked, not re-encoded).
@@ -146,6 +152,21 @@ TEST(PaperLayout, MaskMetaAndPvn3dMatchTheFrame) {
   ReadMat(mat, "center", &dims);
   EXPECT_EQ(dims, (std::vector<size_t>{2, 2}));
   Mat_Close(mat);
+}
+
+TEST(OutputFormats, EveryFormatIsOneRowWithAUniqueNameAndAFlag) {
+  std::set<std::string> names;
+  for (const OutputFormat& format : OutputFormats()) {
+    EXPECT_TRUE(names.insert(format.name).second) << format.name;
+    // Only bop is unconditional; every other format has its BopOptions flag.
+    EXPECT_EQ(format.enabled == nullptr, std::string(format.name) == "bop") << format.name;
+    if (format.implies != nullptr) EXPECT_NE(FindOutputFormat(format.implies), nullptr);
+  }
+  EXPECT_EQ(FindOutputFormat("dexnet"), nullptr);
+  // No flag, no writer: a dataset of BOP and COCO alone has no derived writers.
+  BopOptions options;
+  options.coco = true;
+  EXPECT_TRUE(MakeFrameWriters({"/nonexistent", 0, options, {}}).empty());
 }
 
 }  // namespace

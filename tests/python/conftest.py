@@ -1,16 +1,23 @@
 """Shared set-up of the Python module's tests: ctest runs them with PYTHONPATH pointing at the
 build tree's package (build/python) and CADSYNTH_BUILD_DIR / CADSYNTH_SOURCE_DIR set."""
 
+import ast
 import os
 import pathlib
+import re
 
 import pytest
+
+from cadsynth import _cadsynth
 
 BUILD_DIR = pathlib.Path(os.environ.get("CADSYNTH_BUILD_DIR",
                                         pathlib.Path(__file__).resolve().parents[2] / "build"))
 SOURCE_DIR = pathlib.Path(os.environ.get("CADSYNTH_SOURCE_DIR",
                                          pathlib.Path(__file__).resolve().parents[2]))
 CLI = BUILD_DIR / "tools" / "cadsynth"
+# The type stub installed beside the compiled module: its class Frame is the one list of a frame's
+# keys (docs/python.md).
+STUB = pathlib.Path(_cadsynth.__file__).with_name("_cadsynth.pyi")
 
 # Two scenes of three views each at 160 x 120, path-traced, with randomised lights, a
 # structured-light depth sensor and grasp labels: a gear and a bolt, a nut and a washer.
@@ -53,3 +60,27 @@ def recipe_file(tmp_path_factory):
     path = tmp_path_factory.mktemp("recipe") / "small.yaml"
     path.write_text(RECIPE)
     return path
+
+
+def stub_frame_keys():
+    """class Frame of the stub: {key: (required, annotation, numpy dtype names, shape)}, the shape
+    a tuple of dims ('H', 'W', 'N', '3', ...) from the key's docstring, None for a non-array."""
+    tree = ast.parse(STUB.read_text())
+    body = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Frame").body
+    keys = {}
+    for node, doc in zip(body, body[1:] + [None]):
+        if not isinstance(node, ast.AnnAssign):
+            continue
+        annotation, required = node.annotation, True
+        if isinstance(annotation, ast.Subscript) and ast.unparse(annotation.value) == "NotRequired":
+            annotation, required = annotation.slice, False
+        dtypes = {n.attr for n in ast.walk(annotation)
+                  if isinstance(n, ast.Attribute) and ast.unparse(n.value) == "np"}
+        text = doc.value.value if isinstance(doc, ast.Expr) else ""
+        shape = re.match(r"\(([^)]*)\)", text)
+        if dtypes:
+            assert shape, f"{node.target.id}: the docstring starts with no shape"
+            shape = tuple(d.strip() for d in shape.group(1).split(",") if d.strip())
+        keys[node.target.id] = (required, ast.unparse(annotation), dtypes,
+                                shape if dtypes else None)
+    return keys

@@ -1,13 +1,16 @@
 """Frames from Python are the frames `cadsynth generate` writes (docs/python.md)."""
 
+import ast
 import json
+import re
 import subprocess
 
 import numpy as np
 import pytest
 
 import cadsynth
-from conftest import CLI
+from cadsynth import _cadsynth
+from conftest import CLI, STUB, stub_frame_keys
 
 
 def read_json(path):
@@ -182,3 +185,93 @@ sweep: {yaw: [0, 180], pitch: [60], radius: [0.3 m]}
         assert cadsynth.encode_png(colour["rgb"]) == (scene / "rgb_colour" / im).read_bytes()
         assert np.array_equal(f["gray"], grey["gray"])
 
+
+
+def check_frame(frame, keys, seen):
+    """The frame (and a rig's every sensor's) holds what the stub says; its keys go into `seen`."""
+    assert set(frame) <= set(keys), f"keys not in the stub: {set(frame) - set(keys)}"
+    missing = {k for k, (required, *_) in keys.items() if required} - set(frame)
+    assert not missing, f"required keys missing: {missing}"
+    seen.update(frame)
+    # Letters stand for the frame's sizes: H, W and N fixed, the others (grasp rows) taken from
+    # their first key.
+    dims = {"H": frame["height"], "W": frame["width"], "N": len(frame["obj_id"])}
+    for key, value in frame.items():
+        _, annotation, dtypes, shape = keys[key]
+        if dtypes:
+            assert isinstance(value, np.ndarray), key
+            assert value.dtype.type.__name__ in dtypes, (key, value.dtype, dtypes)
+            assert value.ndim == len(shape), (key, value.shape, shape)
+            for dim, size in zip(shape, value.shape):
+                assert size == (int(dim) if dim.isdigit() else dims.setdefault(dim, size)), \
+                    (key, value.shape, shape)
+        elif annotation == "list[Frame]":
+            for sensor in value:
+                check_frame(sensor, keys, seen)
+        else:
+            expected = {"int": int, "float": float, "str": str, "bool": bool}[annotation]
+            assert type(value) is expected, (key, type(value), annotation)
+
+
+def test_frames_hold_the_keys_the_stub_documents(run, tmp_path):
+    keys = stub_frame_keys()
+    seen = set()
+    for f in run.frames():  # colour, a depth model, grasp rows, randomised lights
+        check_frame(f, keys, seen)
+    check_frame(run.frame(4, masks=False), keys, seen)
+    # What the small recipe lacks: a rig of two grey cameras (8 and 16 bits), the first an active
+    # stereo sensor (IR), normals, HDR radiance and suction rows.
+    recipe = tmp_path / "everything.yaml"
+    recipe.write_text("""\
+parts: [{family: hex_nut, params: {size: M12}}]
+cameras:
+  - {name: ir, width: 64, height: 48, fx: 60, fy: 60, cx: 31.5, cy: 23.5, image: gray,
+     depth: active_stereo}
+  - {name: deep, width: 48, height: 36, fx: 45, fy: 45, cx: 23.5, cy: 17.5, image: gray16,
+     position: [40 mm, 0, 0], look_at: [0, 0, 300 mm]}
+sweep: {yaw: [0, 180], pitch: [60], radius: [0.3 m]}
+render: {normals: true, hdr: true}
+grasps: {gripper: franka, samples: 200, suction: true}
+""")
+    for f in cadsynth.Recipe.load(recipe).prepare(cache=False).frames():
+        check_frame(f, keys, seen)
+    assert seen == set(keys), f"documented but never produced: {set(keys) - seen}"
+
+
+def test_the_stub_names_what_the_module_has():
+    """Every public class, function and method of the compiled module is in the stub, with its
+    parameters' names and defaults as pybind11's signatures give them, and nothing else is."""
+    tree = ast.parse(STUB.read_text())
+    typed_dicts = {n.name for n in tree.body if isinstance(n, ast.ClassDef) and
+                   any(ast.unparse(b) == "TypedDict" for b in n.bases)}  # for checkers only
+    names = {n.name for n in tree.body if isinstance(n, (ast.ClassDef, ast.FunctionDef))}
+    assert names - typed_dicts == {n for n in dir(_cadsynth) if not n.startswith("_")}
+
+    def parameters(function):  # [(name, default)] without self
+        args = function.args.args
+        defaults = [None] * (len(args) - len(function.args.defaults)) + [
+            ast.literal_eval(d) for d in function.args.defaults]
+        return [(a.arg, d) for a, d in zip(args, defaults) if a.arg != "self"]
+
+    def signature(routine):  # pybind11's first docstring line: name(a: T, b: T = default) -> R
+        inside = re.match(r"\w+\((.*)\) ->", routine.__doc__.split("\n")[0]).group(1)
+        out = []
+        for part in re.split(r", (?![^\[]*\])", inside) if inside else []:
+            name, _, default = part.partition(" = ")
+            name = name.split(":")[0]
+            if name != "self":
+                out.append((name, ast.literal_eval(default) if default else None))
+        return out
+
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            assert parameters(node) == signature(getattr(_cadsynth, node.name)), node.name
+        if not isinstance(node, ast.ClassDef) or node.name in typed_dicts:
+            continue
+        cls = getattr(_cadsynth, node.name)
+        methods = {n.name: n for n in node.body if isinstance(n, ast.FunctionDef)}
+        assert {n for n in methods if not n.startswith("_")} == \
+            {n for n in vars(cls) if not n.startswith("_")}, node.name
+        for name, method in methods.items():
+            if not any(ast.unparse(d) == "property" for d in method.decorator_list):
+                assert parameters(method) == signature(getattr(cls, name)), f"{node.name}.{name}"

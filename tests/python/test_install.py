@@ -33,6 +33,9 @@ def test_installed_tree_runs_and_imports(tmp_path):
     # The installed module, in a fresh interpreter that sees only the prefix.
     site = (prefix / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" /
             "dist-packages")
+    # The type stub and its marker beside the module, for editors (PEP 561).
+    assert (site / "cadsynth" / "_cadsynth.pyi").is_file()
+    assert (site / "cadsynth" / "py.typed").is_file()
     code = ("import cadsynth, sys; "
             f"assert cadsynth.__file__.startswith({str(site)!r}), cadsynth.__file__; "
             f"run = cadsynth.Recipe.load({str(recipe)!r}).prepare(cache=False); "

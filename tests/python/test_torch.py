@@ -7,7 +7,8 @@ torch = pytest.importorskip("torch")
 from torch.utils.data import DataLoader  # noqa: E402
 
 import cadsynth  # noqa: E402
-from cadsynth.torch import FrameDataset, collate  # noqa: E402
+from cadsynth.torch import _RAGGED, FrameDataset, collate  # noqa: E402
+from conftest import stub_frame_keys  # noqa: E402
 
 
 def key(frame):
@@ -69,3 +70,11 @@ def test_collate_keeps_keys_some_frames_lack():
     assert batch["rgb"].shape == (2, 2, 3, 3)
     assert batch["randomization"] == ["{}", None]
     assert batch["im_id"] == [0, 1]
+
+
+def test_collate_lists_the_keys_the_stub_gives_rows_per_instance_or_grasp():
+    # Frame's arrays whose first dimension is a count (N instances, M or S grasp rows), not the
+    # image's height or a fixed size.
+    ragged = {key for key, (*_, shape) in stub_frame_keys().items()
+              if shape and not shape[0].isdigit() and shape[0] != "H"}
+    assert set(_RAGGED) == ragged

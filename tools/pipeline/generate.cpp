@@ -20,7 +20,7 @@
 #include "dataset/bop.h"
 #include "dataset/file_io.h"
 #include "dataset/grasp_labels.h"
-#include "dataset/paper_layout.h"
+#include "dataset/output_formats.h"
 #include "render/randomize.h"
 #include "render/renderer.h"
 #include "tools/pipeline/journal.h"
@@ -236,22 +236,21 @@ GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& o
 
     // Every scene's writers first: frames of an interrupted attempt count when every file still
     // matches their manifest entry; the others are rendered (again).
-    std::vector<std::unique_ptr<PaperSceneWriter>> papers;
+    std::vector<std::vector<std::unique_ptr<FrameWriter>>> format_writers;
     std::vector<std::unique_ptr<GraspLabelWriter>> grasp_writers(prepared.scenes.size());
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
       auto& writer = *writers.emplace_back(std::make_unique<RigSceneWriter>(
           root, static_cast<int>(s), spec.bop, prepared.obj_ids[s], bop_sensors));
       if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
       writer.SetCocoCategories(categories);
-      std::vector<PaperInstance> paper_instances;
+      FormatScene format_scene{root, static_cast<int>(s), spec.bop, {}};
       for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
         const Instance& instance = prepared.scenes[s].instances[i];
-        paper_instances.push_back({prepared.obj_ids[s][i],
-                                   prepared.classes[static_cast<size_t>(instance.part)],
-                                   instance.name, instance.world_from_model});
+        format_scene.instances.push_back({prepared.obj_ids[s][i],
+                                          prepared.classes[static_cast<size_t>(instance.part)],
+                                          instance.name, instance.world_from_model});
       }
-      papers.push_back(std::make_unique<PaperSceneWriter>(root, static_cast<int>(s), spec.bop,
-                                                          std::move(paper_instances)));
+      format_writers.push_back(MakeFrameWriters(format_scene));
       bool renders_here = false;  // a shard places only the grasps of scenes it renders frames of
       for (size_t i = 0; i < views.size() && !renders_here; ++i) renders_here = owns(s, i);
       if (spec.grasps.enabled && (spec.grasps.labels.graspnet || spec.grasps.labels.suctionnet) &&
@@ -285,7 +284,8 @@ GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& o
     // showing too little of the scene are skipped (image ids keep their view index).
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
       RigSceneWriter& writer = *writers[s];
-      std::vector<const FrameWriter*> formats = {papers[s].get()};
+      std::vector<const FrameWriter*> formats;
+      for (const auto& format : format_writers[s]) formats.push_back(format.get());
       if (grasp_writers[s]) formats.push_back(grasp_writers[s].get());
       size_t next = 0;
       const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());

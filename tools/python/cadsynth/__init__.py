@@ -2,7 +2,7 @@
 
     import cadsynth
     run = cadsynth.Recipe.load("recipes/bin_picking.yaml").prepare()
-    for frame in run.frames():  # dicts of numpy arrays: rgb, depth, mask_visib, cam_from_model...
+    for frame in run.frames():  # dicts of numpy arrays, keys as class Frame in _cadsynth.pyi
         ...
 
 Recipe reads and checks a recipe (a bad one raises cadsynth.Error "FILE:LINE:COLUMN: what");

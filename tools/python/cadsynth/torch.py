@@ -16,7 +16,10 @@ render with cpu_count // workers threads each. uint16 arrays (the instance image
 come as int32: torch has no uint16.
 """
 
+from __future__ import annotations
+
 import os
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
 import numpy as np
 import torch
@@ -24,7 +27,17 @@ from torch.utils.data import IterableDataset, get_worker_info
 
 from ._cadsynth import Recipe
 
+if TYPE_CHECKING:
+    from ._cadsynth import Run
+
 __all__ = ["FrameDataset", "collate"]
+
+# The keys whose arrays have a row per instance or per grasp (N, M and S in class Frame of
+# _cadsynth.pyi; a test holds the two together): their length varies from frame to frame, so
+# collate keeps them as lists.
+_RAGGED = ("obj_id", "cam_from_model", "bbox_obj", "bbox_visib", "px_count_all", "px_count_valid",
+           "px_count_visib", "visib_fract", "mask", "mask_visib", "graspnet", "graspnet_labels",
+           "suctionnet", "suctionnet_labels")
 
 
 class FrameDataset(IterableDataset):
@@ -41,8 +54,12 @@ class FrameDataset(IterableDataset):
     cache: the part cache (True: the command line's; False; or a folder).
     """
 
-    def __init__(self, recipe, *, shard=None, endless=False, first_stream=0, masks=True,
-                 transform=None, threads=None, cache=True):
+    def __init__(self, recipe: Recipe | str | os.PathLike[str], *,
+                 shard: tuple[int, int] | None = None, endless: bool = False,
+                 first_stream: int = 0, masks: bool = True,
+                 transform: Callable[[dict[str, Any]], Any] | None = None,
+                 threads: int | None = None,
+                 cache: bool | str | os.PathLike[str] | None = True) -> None:
         super().__init__()
         self.recipe = recipe if isinstance(recipe, Recipe) else Recipe.load(os.fspath(recipe))
         if shard is not None:
@@ -57,13 +74,13 @@ class FrameDataset(IterableDataset):
         self.threads = threads
         self.cache = cache
 
-    def _worker(self):
+    def _worker(self) -> tuple[int, int]:
         info = get_worker_info()
         if info is None:
             return 0, 1
         return info.id, info.num_workers
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Any]:
         worker, workers = self._worker()
         threads = self.threads or max(1, (os.cpu_count() or 1) // workers)
         i, n = self.shard if self.shard is not None else (0, 1)
@@ -78,7 +95,7 @@ class FrameDataset(IterableDataset):
             yield from self._frames(run, (i, n), threads)
             stream += workers
 
-    def _frames(self, run, shard, threads):
+    def _frames(self, run: Run, shard: tuple[int, int], threads: int) -> Iterator[Any]:
         frames = run.frames(shard=shard, masks=self.masks, threads=threads)
         try:
             for frame in frames:
@@ -88,7 +105,7 @@ class FrameDataset(IterableDataset):
             frames.close()
 
 
-def _torch_types(frame):
+def _torch_types(frame: dict[str, Any]) -> dict[str, Any]:
     """uint16 arrays (the instance image, 16-bit grey) as int32: torch has no uint16."""
     for key, value in frame.items():
         if isinstance(value, np.ndarray) and value.dtype == np.uint16:
@@ -98,7 +115,7 @@ def _torch_types(frame):
     return frame
 
 
-def collate(frames):
+def collate(frames: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """A batch from frame dicts: arrays of equal shape under one key are stacked into a tensor;
     per-instance arrays (their length varies with the scene) and other values become lists (with
     None for a frame without the key, e.g. 'randomization' in a scene that draws nothing)."""
@@ -107,11 +124,7 @@ def collate(frames):
     for key in keys:
         values = [f.get(key) for f in frames]  # None where a frame has no such key
         if all(isinstance(v, np.ndarray) for v in values) and \
-                len({v.shape for v in values}) == 1 and \
-                key not in ("obj_id", "cam_from_model", "bbox_obj", "bbox_visib",
-                            "px_count_all", "px_count_valid", "px_count_visib",
-                            "visib_fract", "mask", "mask_visib", "graspnet",
-                            "graspnet_labels", "suctionnet", "suctionnet_labels"):
+                len({v.shape for v in values}) == 1 and key not in _RAGGED:
             batch[key] = torch.from_numpy(np.stack(values))
         elif all(isinstance(v, np.ndarray) for v in values):
             batch[key] = [torch.from_numpy(v) for v in values]

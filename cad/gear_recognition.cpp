@@ -172,13 +172,33 @@ std::optional<RecognizedGear> AboutAxis(const Mesh& mesh, const SymmetryOptions:
   return std::nullopt;
 }
 
-// The gear on one side of the profile with z teeth, measured from the section at h_best.
-std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
-                                      const std::vector<Eigen::Vector3d>& local, double step,
-                                      bool internal, int z, double h_best) {
-  const auto radius = [&](size_t i) { return local[i].head<2>().norm(); };
-  const Profile first = Section(mesh, local, h_best, step);
-  const std::vector<double>& q0 = internal ? first.inner : first.outer;
+// What measuring one side's gear shares: the mesh in the axis's cylindrical coordinates, the
+// sections' sampling step, the side (internal: the inner outline's teeth) and the tooth count.
+struct GearSide {
+  const Mesh& mesh;
+  const std::vector<Eigen::Vector3d>& local;
+  double step;
+  bool internal;
+  int z;
+
+  double Radius(size_t i) const { return local[i].head<2>().norm(); }
+  Profile SectionAt(double h) const { return Section(mesh, local, h, step); }
+  const std::vector<double>& Outline(const Profile& p) const {
+    return internal ? p.inner : p.outer;
+  }
+};
+
+// The toothed band: tip and root radii, the teeth's depth and the heights they span.
+struct Band {
+  double tip = 0, root = 0, depth = 0, h0 = 0, h1 = 0;
+};
+
+// The band measured from the section at h_best, if its teeth are as deep as a gear's.
+std::optional<Band> FindBand(const GearSide& s, double h_best) {
+  const bool internal = s.internal;
+  const std::vector<Eigen::Vector3d>& local = s.local;
+  const Profile first = s.SectionAt(h_best);
+  const std::vector<double>& q0 = s.Outline(first);
   const auto [lo0, hi0] = std::minmax_element(q0.begin(), q0.end());
   // Tip and root as the section samples them (between vertices a chord cuts in), then exactly:
   // the outline's vertices lie on the surface.
@@ -187,7 +207,7 @@ std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
   const auto near = [&](double r, double target) { return std::abs(r - target) < 0.1 * depth_s; };
   double tip = internal ? kInf : -kInf;
   for (size_t i = 0; i < local.size(); ++i) {
-    const double r = radius(i);
+    const double r = s.Radius(i);
     if (near(r, tip_s)) tip = internal ? std::min(tip, r) : std::max(tip, r);
   }
   if (!std::isfinite(tip)) return std::nullopt;
@@ -195,36 +215,63 @@ std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
   // mid-depth: a chamfered or rounded tip is shorter than the tooth).
   double h0 = kInf, h1 = -kInf;
   for (size_t i = 0; i < local.size(); ++i) {
-    const double into = internal ? radius(i) - tip : tip - radius(i);  // depth below the tip
+    const double into = internal ? s.Radius(i) - tip : tip - s.Radius(i);  // depth below the tip
     if (into > -0.02 * depth_s && into < 0.5 * depth_s)
       h0 = std::min(h0, local[i].z()), h1 = std::max(h1, local[i].z());
   }
   if (!(h1 > h0)) return std::nullopt;
   double root = internal ? -kInf : kInf;
   for (size_t i = 0; i < local.size(); ++i) {
-    const double r = radius(i);
+    const double r = s.Radius(i);
     if (local[i].z() >= h0 && local[i].z() <= h1 && near(r, root_s))
       root = internal ? std::max(root, r) : std::min(root, r);
   }
   if (!std::isfinite(root)) return std::nullopt;
   const double depth = std::abs(tip - root);
   // A gear's teeth are about as deep as 0.7 of their pitch; a hexagon's corners are not.
-  const double pitch_at_tip = 2 * M_PI * tip / z;
+  const double pitch_at_tip = 2 * M_PI * tip / s.z;
   if (!(depth > 0.3 * pitch_at_tip && depth < 1.2 * pitch_at_tip)) return std::nullopt;
+  return Band{tip, root, depth, h0, h1};
+}
 
-  RecognizedGear g;
-  g.teeth = z;
-  g.internal = internal;
-  g.tip_radius_mm = tip;
-  g.root_radius_mm = root;
-  g.face_width_mm = h1 - h0;
-  g.module_mm = depth / 2.25;
+// Least squares phase = phi0 + twist * shape(h); returns the residual sum of squares.
+template <typename Shape>
+double FitPhase(const std::vector<double>& hs, const std::vector<double>& phases,
+                const Shape& shape, double* phi0, double* twist) {
+  double mh = 0, mp = 0;
+  for (size_t i = 0; i < hs.size(); ++i)
+    mh += shape(hs[i]) / hs.size(), mp += phases[i] / hs.size();
+  double shh = 0, shp = 0;
+  for (size_t i = 0; i < hs.size(); ++i)
+    shh += (shape(hs[i]) - mh) * (shape(hs[i]) - mh), shp += (shape(hs[i]) - mh) * (phases[i] - mp);
+  *twist = shh > 0 ? shp / shh : 0;
+  *phi0 = mp - *twist * mh;
+  double sse = 0;
+  for (size_t i = 0; i < hs.size(); ++i) {
+    const double res = phases[i] - *phi0 - *twist * shape(hs[i]);
+    sse += res * res;
+  }
+  return sse;
+}
 
-  // The teeth's phase along the band: a straight line in h (a helix's twist), or a V with its
-  // apex at mid-face (a double helical, herringbone gear).
+// The teeth's phase along the band (h from its bottom): phi0 + twist * h, or for a herringbone
+// phi0 + twist * (apex - |h - apex|).
+struct Twist {
+  double phi0 = 0, twist = 0, apex = 0;
+  bool herringbone = false;
+
+  double Vee(double h) const { return apex - std::abs(h - apex); }
+  double Turn(double h) const { return twist * (herringbone ? Vee(h) : h); }
+};
+
+// The teeth's phase along the band: a straight line in h (a helix's twist), or a V with its
+// apex at mid-face (a double helical, herringbone gear).
+std::optional<Twist> FitTwist(const GearSide& s, const Band& band) {
+  const int z = s.z;
+  const double h0 = band.h0, h1 = band.h1;
   // Between neighbouring sections the teeth must turn less than half a pitch (else the phase
   // wraps unseen): a helix of up to 50 degrees turns b tan(50) / r_p over the band.
-  const double r_pitch = 0.5 * (tip + root);
+  const double r_pitch = 0.5 * (band.tip + band.root);
   const int slices =
       std::clamp(1 + static_cast<int>(std::ceil(4 * (h1 - h0) * std::tan(50 * M_PI / 180) /
                                                 r_pitch * z / (2 * M_PI))),
@@ -232,43 +279,153 @@ std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
   std::vector<double> hs, phases;
   for (int k = 0; k < slices; ++k) {
     const double h = h0 + (0.04 + 0.92 * k / (slices - 1)) * (h1 - h0);
-    const Profile p = Section(mesh, local, h, step);
+    const Profile p = s.SectionAt(h);
     if (!p.ok) continue;
-    double phi = Phase(internal ? p.inner : p.outer, z);
+    double phi = Phase(s.Outline(p), z);
     if (!phases.empty()) phi += (2 * M_PI / z) * std::round((phases.back() - phi) / (2 * M_PI / z));
     hs.push_back(h - h0);
     phases.push_back(phi);
   }
   if (hs.size() < 3) return std::nullopt;
-  const double apex = 0.5 * (h1 - h0);
-  // Least squares phase = phi0 + twist * shape(h); returns the residual sum of squares.
-  const auto fit_phase = [&](const auto& shape, double* phi0, double* twist) {
-    double mh = 0, mp = 0;
-    for (size_t i = 0; i < hs.size(); ++i)
-      mh += shape(hs[i]) / hs.size(), mp += phases[i] / hs.size();
-    double shh = 0, shp = 0;
-    for (size_t i = 0; i < hs.size(); ++i)
-      shh += (shape(hs[i]) - mh) * (shape(hs[i]) - mh),
-          shp += (shape(hs[i]) - mh) * (phases[i] - mp);
-    *twist = shh > 0 ? shp / shh : 0;
-    *phi0 = mp - *twist * mh;
-    double sse = 0;
-    for (size_t i = 0; i < hs.size(); ++i) {
-      const double res = phases[i] - *phi0 - *twist * shape(hs[i]);
-      sse += res * res;
-    }
-    return sse;
-  };
+  Twist t;
+  t.apex = 0.5 * (h1 - h0);
   const auto straight = [](double h) { return h; };
-  const auto vee = [apex](double h) { return apex - std::abs(h - apex); };
-  double phi0 = 0, twist = 0, phi0_v = 0, twist_v = 0;
-  const double sse = fit_phase(straight, &phi0, &twist);
-  const double sse_v = fit_phase(vee, &phi0_v, &twist_v);
+  const auto vee = [&t](double h) { return t.Vee(h); };
+  double phi0_v = 0, twist_v = 0;
+  const double sse = FitPhase(hs, phases, straight, &t.phi0, &t.twist);
+  const double sse_v = FitPhase(hs, phases, vee, &phi0_v, &twist_v);
   // A V fits far better than a line only where the teeth really turn back.
-  g.herringbone = sse_v < 0.1 * sse && std::abs(twist_v) * apex > 1e-3 * (2 * M_PI / z);
-  if (g.herringbone) phi0 = phi0_v, twist = twist_v;
-  const auto turn = [&](double h) { return twist * (g.herringbone ? vee(h) : h); };
-  const double sin_helix = twist * z * g.module_mm / 2;
+  t.herringbone = sse_v < 0.1 * sse && std::abs(twist_v) * t.apex > 1e-3 * (2 * M_PI / z);
+  if (t.herringbone) t.phi0 = phi0_v, t.twist = twist_v;
+  return t;
+}
+
+// A flank vertex: its radius, its angle from the middle of its tooth (internal: of its tooth
+// space) and the side of the middle it lies on (+1 or -1).
+struct FlankPoint {
+  double r, y, side;
+};
+
+// The band's vertices between radii r_lo and r_hi, at their angles from their teeth's middles.
+std::vector<FlankPoint> FlankPoints(const GearSide& s, const Band& band, const Twist& twist,
+                                    double r_lo, double r_hi) {
+  const std::vector<Eigen::Vector3d>& local = s.local;
+  const double h0 = band.h0, h1 = band.h1;
+  std::vector<FlankPoint> flank;
+  const double period = 2 * M_PI / s.z;
+  for (size_t i = 0; i < local.size(); ++i) {
+    const double r = s.Radius(i), h = local[i].z();
+    if (r < r_lo || r > r_hi || h < h0 || h > h1) continue;
+    const double delta =
+        Wrap(std::atan2(local[i].y(), local[i].x()) - twist.phi0 - twist.Turn(h - h0), period);
+    flank.push_back({r, std::abs(delta), delta >= 0 ? 1.0 : -1.0});
+  }
+  return flank;
+}
+
+// An involute flank fit: base radius rb, the tooth's half angle psi at the base circle, a phase
+// correction e, and the residual sum of squares.
+struct InvoluteFit {
+  double rb = 0, psi = 0, e = 0, sse = kInf;
+};
+
+// The best psi and e for base radius rb: least squares for y + inv = psi + side e.
+InvoluteFit FitAtBase(const std::vector<FlankPoint>& flank, double rb) {
+  double n = 0, s = 0, ss = 0, t = 0, st = 0;
+  for (const FlankPoint& p : flank) {
+    const double target = p.y + Involute(std::acos(std::min(1.0, rb / p.r)));
+    n += 1, s += p.side, ss += p.side * p.side, t += target, st += p.side * target;
+  }
+  InvoluteFit f;
+  f.rb = rb;
+  const double det = n * ss - s * s;
+  if (!(std::abs(det) > 0)) return f;
+  f.psi = (ss * t - s * st) / det;
+  f.e = (n * st - s * t) / det;
+  f.sse = 0;
+  for (const FlankPoint& p : flank) {
+    const double target = p.y + Involute(std::acos(std::min(1.0, rb / p.r)));
+    const double res = target - f.psi - p.side * f.e;
+    f.sse += res * res;
+  }
+  return f;
+}
+
+// The base radius in [a, b] fitting best: golden-section search.
+InvoluteFit FitInvolute(const std::vector<FlankPoint>& flank, double a, double b) {
+  const auto fit = [&](double rb) { return FitAtBase(flank, rb); };
+  const double golden = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
+  InvoluteFit f1 = fit(x1), f2 = fit(x2);
+  for (int it = 0; it < 80; ++it) {
+    if (f1.sse < f2.sse) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - golden * (b - a), f1 = fit(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + golden * (b - a), f2 = fit(x2);
+    }
+  }
+  return f1.sse < f2.sse ? f1 : f2;
+}
+
+// The flanks' rms distance from the fitted involute (mm along the surface's normal); *worst
+// gets the largest.
+double FlankDeviation(const std::vector<FlankPoint>& flank, const InvoluteFit& fit, double* worst) {
+  double sum = 0;
+  *worst = 0;
+  for (const FlankPoint& p : flank) {
+    const double alpha = std::acos(std::min(1.0, fit.rb / p.r));
+    const double res = p.y + Involute(alpha) - fit.psi - p.side * fit.e;
+    const double mm = std::abs(res) * p.r * std::cos(alpha);
+    *worst = std::max(*worst, mm);
+    sum += mm * mm;
+  }
+  return std::sqrt(sum / flank.size());
+}
+
+// A round bore at mid-face: the inner outline, when most of it lies on one circle well inside
+// the root (a key way may cut the rest), measured on its vertices.
+std::optional<double> BoreDiameter(const GearSide& s, const Band& band) {
+  const std::vector<Eigen::Vector3d>& local = s.local;
+  const double h0 = band.h0, h1 = band.h1;
+  const Profile mid = s.SectionAt(0.5 * (h0 + h1));
+  std::vector<double> inner = mid.inner;
+  std::nth_element(inner.begin(), inner.begin() + kBins / 2, inner.end());
+  const double median = inner[kBins / 2];
+  int round = 0;
+  for (double r : mid.inner) round += std::abs(r - median) < 0.02 * median;
+  if (!(mid.ok && median < band.root - 0.25 * band.depth && round > 0.75 * kBins))
+    return std::nullopt;
+  std::vector<double> on;
+  for (size_t i = 0; i < local.size(); ++i) {
+    const double r = s.Radius(i);
+    if (local[i].z() >= h0 && local[i].z() <= h1 && std::abs(r - median) < 0.02 * median)
+      on.push_back(r);
+  }
+  if (on.empty()) return std::nullopt;
+  std::nth_element(on.begin(), on.begin() + on.size() / 2, on.end());
+  return 2 * on[on.size() / 2];
+}
+
+// The gear on one side of the profile with z teeth, measured from the section at h_best.
+std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
+                                      const std::vector<Eigen::Vector3d>& local, double step,
+                                      bool internal, int z, double h_best) {
+  const GearSide side{mesh, local, step, internal, z};
+  const std::optional<Band> band = FindBand(side, h_best);
+  if (!band) return std::nullopt;
+  const double tip = band->tip, root = band->root, depth = band->depth;
+  RecognizedGear g;
+  g.teeth = z;
+  g.internal = internal;
+  g.tip_radius_mm = tip;
+  g.root_radius_mm = root;
+  g.face_width_mm = band->h1 - band->h0;
+  g.module_mm = depth / 2.25;
+
+  const std::optional<Twist> twist = FitTwist(side, *band);
+  if (!twist) return std::nullopt;
+  g.herringbone = twist->herringbone;
+  const double sin_helix = twist->twist * z * g.module_mm / 2;
   if (!(std::abs(sin_helix) < 0.8)) return std::nullopt;
   g.helix_angle_rad = std::asin(sin_helix);
   if (std::abs(g.helix_angle_rad) < 1e-4) g.helix_angle_rad = 0;
@@ -282,67 +439,15 @@ std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
                           ? tip + 0.1 * depth
                           : std::max(root + 0.35 * depth, g.pitch_radius_mm - 0.15 * g.module_mm);
   const double r_hi = internal ? root - 0.35 * depth : tip - 0.1 * depth;
-  struct Point {
-    double r, y, side;
-  };
-  std::vector<Point> flank;
-  const double period = 2 * M_PI / z;
-  for (size_t i = 0; i < local.size(); ++i) {
-    const double r = radius(i), h = local[i].z();
-    if (r < r_lo || r > r_hi || h < h0 || h > h1) continue;
-    const double delta = Wrap(std::atan2(local[i].y(), local[i].x()) - phi0 - turn(h - h0), period);
-    flank.push_back({r, std::abs(delta), delta >= 0 ? 1.0 : -1.0});
-  }
+  const std::vector<FlankPoint> flank = FlankPoints(side, *band, *twist, r_lo, r_hi);
   if (flank.size() < 8) return std::nullopt;
-  struct Fit {
-    double rb = 0, psi = 0, e = 0, sse = kInf;
-  };
-  const auto fit = [&](double rb) {
-    // Least squares for y + inv = psi + side e.
-    double n = 0, s = 0, ss = 0, t = 0, st = 0;
-    for (const Point& p : flank) {
-      const double target = p.y + Involute(std::acos(std::min(1.0, rb / p.r)));
-      n += 1, s += p.side, ss += p.side * p.side, t += target, st += p.side * target;
-    }
-    Fit f;
-    f.rb = rb;
-    const double det = n * ss - s * s;
-    if (!(std::abs(det) > 0)) return f;
-    f.psi = (ss * t - s * st) / det;
-    f.e = (n * st - s * t) / det;
-    f.sse = 0;
-    for (const Point& p : flank) {
-      const double target = p.y + Involute(std::acos(std::min(1.0, rb / p.r)));
-      const double res = target - f.psi - p.side * f.e;
-      f.sse += res * res;
-    }
-    return f;
-  };
   // The base circle lies below the flanks of an external gear; a ring's (up to about 25 teeth at
   // 20 degrees) may lie among them, where the clamp makes the part below it radial.
-  double a = 0.5 * r_lo, b = 0.99999 * (internal ? r_hi : r_lo);
-  const double golden = 0.5 * (std::sqrt(5.0) - 1);
-  double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
-  Fit f1 = fit(x1), f2 = fit(x2);
-  for (int it = 0; it < 80; ++it) {
-    if (f1.sse < f2.sse) {
-      b = x2, x2 = x1, f2 = f1, x1 = b - golden * (b - a), f1 = fit(x1);
-    } else {
-      a = x1, x1 = x2, f1 = f2, x2 = a + golden * (b - a), f2 = fit(x2);
-    }
-  }
-  const Fit best_fit = f1.sse < f2.sse ? f1 : f2;
-  double worst = 0, sum = 0;
-  for (const Point& p : flank) {
-    const double alpha = std::acos(std::min(1.0, best_fit.rb / p.r));
-    const double res = p.y + Involute(alpha) - best_fit.psi - p.side * best_fit.e;
-    const double mm = std::abs(res) * p.r * std::cos(alpha);
-    worst = std::max(worst, mm);
-    sum += mm * mm;
-  }
-  const double rms = std::sqrt(sum / flank.size());
+  const InvoluteFit best_fit = FitInvolute(flank, 0.5 * r_lo, 0.99999 * (internal ? r_hi : r_lo));
+  double worst = 0;
+  const double rms = FlankDeviation(flank, best_fit, &worst);
   if (!(rms < 0.05 * g.module_mm)) return std::nullopt;
-  phi0 += best_fit.e;
+  const double phi0 = twist->phi0 + best_fit.e;
   g.involute_deviation_mm = worst;
   g.base_radius_mm = best_fit.rb;
   if (!(g.base_radius_mm < g.pitch_radius_mm)) return std::nullopt;
@@ -351,30 +456,11 @@ std::optional<RecognizedGear> Measure(const Mesh& mesh, const Frame& frame,
       std::atan(std::tan(g.transverse_pressure_angle_rad) * std::cos(g.helix_angle_rad));
   g.profile_shift = (tip - g.pitch_radius_mm) / g.module_mm + (internal ? 1.0 : -1.0);
 
-  // A round bore at mid-face: the inner outline, when most of it lies on one circle well inside
-  // the root (a key way may cut the rest), measured on its vertices.
   if (!internal) {
-    const Profile mid = Section(mesh, local, 0.5 * (h0 + h1), step);
-    std::vector<double> inner = mid.inner;
-    std::nth_element(inner.begin(), inner.begin() + kBins / 2, inner.end());
-    const double median = inner[kBins / 2];
-    int round = 0;
-    for (double r : mid.inner) round += std::abs(r - median) < 0.02 * median;
-    if (mid.ok && median < root - 0.25 * depth && round > 0.75 * kBins) {
-      std::vector<double> on;
-      for (size_t i = 0; i < local.size(); ++i) {
-        const double r = radius(i);
-        if (local[i].z() >= h0 && local[i].z() <= h1 && std::abs(r - median) < 0.02 * median)
-          on.push_back(r);
-      }
-      if (!on.empty()) {
-        std::nth_element(on.begin(), on.begin() + on.size() / 2, on.end());
-        g.bore_diameter_mm = 2 * on[on.size() / 2];
-      }
-    }
+    if (const std::optional<double> bore = BoreDiameter(side, *band)) g.bore_diameter_mm = *bore;
   }
   g.axis = frame.axis;
-  g.centre = frame.origin + h0 * frame.axis;
+  g.centre = frame.origin + band->h0 * frame.axis;
   g.reference = std::cos(phi0) * frame.u + std::sin(phi0) * frame.v;
   return g;
 }

@@ -381,26 +381,62 @@ class PlyValues {
   uint64_t record_ = 0;
 };
 
-}  // namespace
+// A header's "element" line after the keyword: name and count.
+PlyElement ParsePlyElementLine(Tokens* words, int line) {
+  PlyElement element;
+  element.name = std::string(words->Need("an element name"));
+  const std::string_view count = words->Need("an element count");
+  const auto n = ParseNumber<uint64_t>(count);
+  if (!n) words->Fail("element '" + element.name + "': expected a count, got " + Shown(count));
+  element.count = *n;
+  element.line = line;
+  return element;
+}
 
-Mesh ParsePly(std::string_view bytes, const std::string& origin) {
-  // The header: text lines up to "end_header".
+// A header's "property" line after the keyword: [list <count type>] <type> <name>.
+PlyProperty ParsePlyPropertyLine(Tokens* words) {
+  PlyProperty property;
+  std::string_view type = words->Need("a property type");
+  if (type == "list") {
+    property.list = true;
+    const std::string_view count_type = words->Need("a list's count type");
+    const auto c = PlyTypeNamed(count_type);
+    if (!c || *c == PlyType::kFloat32 || *c == PlyType::kFloat64) {
+      words->Fail("a list's count type must be an integer type, got " + Shown(count_type));
+    }
+    property.count_type = *c;
+    type = words->Need("a list's item type");
+  }
+  const auto t = PlyTypeNamed(type);
+  if (!t) words->Fail("unknown property type " + Shown(type));
+  property.type = *t;
+  property.name = std::string(words->Need("a property name"));
+  return property;
+}
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::kAscii;
+  std::vector<PlyElement> elements;
+  size_t body_start = std::string_view::npos;  // in the file's bytes
+  int body_line = 0;
+};
+
+// The header: text lines up to "end_header".
+PlyHeader ReadPlyHeader(std::string_view bytes, const std::string& origin) {
   Tokens header(bytes, origin);
   if (header.Next() != "ply") header.Fail("not a PLY file (it does not begin with 'ply')");
   header.RestOfLine();
   std::optional<PlyFormat> format;
-  std::vector<PlyElement> elements;
-  size_t body_start = std::string_view::npos;
-  int body_line = 0;
-  while (body_start == std::string_view::npos) {
+  PlyHeader out;
+  while (out.body_start == std::string_view::npos) {
     if (header.AtEnd()) header.Fail("the header has no 'end_header'");
     const std::string_view keyword = header.Next();
     const int line = header.line();
     Tokens words(header.RestOfLine(), origin, line);
     if (keyword == "comment" || keyword == "obj_info") continue;
     if (keyword == "end_header") {
-      body_start = bytes.size() - header.remaining();
-      body_line = line + 1;
+      out.body_start = bytes.size() - header.remaining();
+      out.body_line = line + 1;
       break;
     }
     if (keyword == "format") {
@@ -416,42 +452,24 @@ Mesh ParsePly(std::string_view bytes, const std::string& origin) {
                    " (ascii, binary_little_endian or binary_big_endian)");
       }
     } else if (keyword == "element") {
-      PlyElement element;
-      element.name = std::string(words.Need("an element name"));
-      const std::string_view count = words.Need("an element count");
-      const auto n = ParseNumber<uint64_t>(count);
-      if (!n) words.Fail("element '" + element.name + "': expected a count, got " + Shown(count));
-      element.count = *n;
-      element.line = line;
-      elements.push_back(std::move(element));
+      out.elements.push_back(ParsePlyElementLine(&words, line));
     } else if (keyword == "property") {
-      if (elements.empty()) words.Fail("a property before any element");
-      PlyProperty property;
-      std::string_view type = words.Need("a property type");
-      if (type == "list") {
-        property.list = true;
-        const std::string_view count_type = words.Need("a list's count type");
-        const auto c = PlyTypeNamed(count_type);
-        if (!c || *c == PlyType::kFloat32 || *c == PlyType::kFloat64) {
-          words.Fail("a list's count type must be an integer type, got " + Shown(count_type));
-        }
-        property.count_type = *c;
-        type = words.Need("a list's item type");
-      }
-      const auto t = PlyTypeNamed(type);
-      if (!t) words.Fail("unknown property type " + Shown(type));
-      property.type = *t;
-      property.name = std::string(words.Need("a property name"));
-      elements.back().properties.push_back(std::move(property));
+      if (out.elements.empty()) words.Fail("a property before any element");
+      out.elements.back().properties.push_back(ParsePlyPropertyLine(&words));
     } else {
       Tokens(keyword, origin, line).Fail("unknown header line " + Shown(keyword));
     }
   }
   if (!format) throw Error(origin + ": the PLY header has no 'format' line");
+  out.format = *format;
+  return out;
+}
 
-  // Which properties hold the geometry.
+// Which properties hold the geometry: the 'vertex' element (the last, if several) and in *xyz
+// the indices of its x, y and z. Refuses elements with records but no properties.
+const PlyElement* FindPlyVertex(const std::vector<PlyElement>& elements, const std::string& origin,
+                                int xyz[3]) {
   const PlyElement* vertex = nullptr;
-  int xyz[3] = {-1, -1, -1};
   for (const PlyElement& e : elements) {
     if (e.count > 0 && e.properties.empty()) {
       Tokens("", origin, e.line)
@@ -473,79 +491,117 @@ Mesh ParsePly(std::string_view bytes, const std::string& origin) {
     }
   }
   if (vertex == nullptr) throw Error(origin + ": the PLY file has no 'vertex' element");
+  return vertex;
+}
 
-  const std::string_view body = bytes.substr(body_start);
-  PlyValues values(body, *format, origin, body_line);
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<Triangle> triangles;
-  std::vector<uint32_t> corners;
-  bool have_faces = false;
-  for (const PlyElement& e : elements) {
-    // The smallest a record can be: each value a byte (binary: its size) and a separator.
-    size_t min_record = 0;
-    for (const PlyProperty& property : e.properties) {
-      min_record += *format == PlyFormat::kAscii ? 2
-                    : property.list              ? PlySize(property.count_type)
-                                                 : PlySize(property.type);
-    }
-    if (*format == PlyFormat::kAscii && min_record > 0) min_record -= 1;
-    if (e.count > values.remaining() / std::max<size_t>(min_record, 1)) {
-      throw Error(origin + ":" + std::to_string(e.line) + ": element '" + e.name + "' has " +
-                  std::to_string(e.count) + " records, more than the " +
-                  std::to_string(values.remaining()) + " bytes left in the file can hold");
-    }
-    const bool is_vertex = &e == vertex;
-    int face_list = -1;
-    if (e.name == "face") {
-      for (size_t p = 0; p < e.properties.size(); ++p) {
-        const PlyProperty& property = e.properties[p];
-        if (property.list && (property.name == "vertex_indices" || property.name == "vertex_index"))
-          face_list = static_cast<int>(p);
-      }
-      have_faces = have_faces || face_list >= 0;
-    }
-    if (is_vertex) positions.reserve(e.count);
-    for (uint64_t r = 0; r < e.count; ++r) {
-      values.At(e.name, r);
-      Eigen::Vector3f p = Eigen::Vector3f::Zero();
-      for (size_t q = 0; q < e.properties.size(); ++q) {
-        const PlyProperty& property = e.properties[q];
-        if (!property.list) {
-          const double v = values.Read(property.type, "value");
-          if (is_vertex) {
-            for (int k = 0; k < 3; ++k) {
-              if (xyz[k] == static_cast<int>(q)) p[k] = static_cast<float>(v);
-            }
-          }
-          continue;
-        }
-        const double count = values.Read(property.count_type, "list length");
-        if (count < 0 || count != std::floor(count)) {
-          values.Fail("a list length of " + std::to_string(count));
-        }
-        if (count > static_cast<double>(values.remaining())) {
-          values.Fail("truncated: a list of " + std::to_string(static_cast<uint64_t>(count)) +
-                      " items, more than the file holds");
-        }
-        const bool keep = static_cast<int>(q) == face_list;
-        if (keep) corners.clear();
-        for (uint64_t i = 0; i < static_cast<uint64_t>(count); ++i) {
-          const double index = values.Read(property.type, "list item");
-          if (!keep) continue;
-          if (!(index >= 0) || index != std::floor(index) ||
-              index >= static_cast<double>(positions.size())) {
-            values.Fail("face refers to vertex " + std::to_string(index) + ", but the file has " +
-                        std::to_string(positions.size()) + " vertices before it");
-          }
-          corners.push_back(static_cast<uint32_t>(index));
-        }
-        if (keep) AddPolygon(corners, positions, &triangles);
-      }
-      if (is_vertex) positions.push_back(p);
+// Refuses an element whose header count cannot fit in what is left of the body.
+void CheckPlyRoom(const PlyElement& e, PlyFormat format, const PlyValues& values,
+                  const std::string& origin) {
+  // The smallest a record can be: each value a byte (binary: its size) and a separator.
+  size_t min_record = 0;
+  for (const PlyProperty& property : e.properties) {
+    min_record += format == PlyFormat::kAscii ? 2
+                  : property.list             ? PlySize(property.count_type)
+                                              : PlySize(property.type);
+  }
+  if (format == PlyFormat::kAscii && min_record > 0) min_record -= 1;
+  if (e.count > values.remaining() / std::max<size_t>(min_record, 1)) {
+    throw Error(origin + ":" + std::to_string(e.line) + ": element '" + e.name + "' has " +
+                std::to_string(e.count) + " records, more than the " +
+                std::to_string(values.remaining()) + " bytes left in the file can hold");
+  }
+}
+
+// The index of a 'face' element's vertex list property, or -1.
+int PlyFaceList(const PlyElement& e) {
+  int face_list = -1;
+  if (e.name == "face") {
+    for (size_t p = 0; p < e.properties.size(); ++p) {
+      const PlyProperty& property = e.properties[p];
+      if (property.list && (property.name == "vertex_indices" || property.name == "vertex_index"))
+        face_list = static_cast<int>(p);
     }
   }
-  if (!have_faces) throw Error(origin + ": the PLY file has no faces (a point cloud?)");
-  return Compacted(std::move(positions), std::move(triangles));
+  return face_list;
+}
+
+// What reading the body builds up.
+struct PlyGeometry {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<Triangle> triangles;
+  std::vector<uint32_t> corners;  // of the face being read
+  bool have_faces = false;
+};
+
+// One list property of a record; a face's vertex list (`keep`) becomes triangles.
+void ReadPlyList(const PlyProperty& property, bool keep, PlyValues* values, PlyGeometry* geometry) {
+  const double count = values->Read(property.count_type, "list length");
+  if (count < 0 || count != std::floor(count)) {
+    values->Fail("a list length of " + std::to_string(count));
+  }
+  if (count > static_cast<double>(values->remaining())) {
+    values->Fail("truncated: a list of " + std::to_string(static_cast<uint64_t>(count)) +
+                 " items, more than the file holds");
+  }
+  std::vector<uint32_t>& corners = geometry->corners;
+  const std::vector<Eigen::Vector3f>& positions = geometry->positions;
+  if (keep) corners.clear();
+  for (uint64_t i = 0; i < static_cast<uint64_t>(count); ++i) {
+    const double index = values->Read(property.type, "list item");
+    if (!keep) continue;
+    if (!(index >= 0) || index != std::floor(index) ||
+        index >= static_cast<double>(positions.size())) {
+      values->Fail("face refers to vertex " + std::to_string(index) + ", but the file has " +
+                   std::to_string(positions.size()) + " vertices before it");
+    }
+    corners.push_back(static_cast<uint32_t>(index));
+  }
+  if (keep) AddPolygon(corners, positions, &geometry->triangles);
+}
+
+// The records of one element: the vertex element's give positions, a face element's vertex
+// lists triangles; other values are read past.
+void ReadPlyRecords(const PlyElement& e, bool is_vertex, const int xyz[3], PlyValues* values,
+                    PlyGeometry* geometry) {
+  const int face_list = PlyFaceList(e);
+  geometry->have_faces = geometry->have_faces || face_list >= 0;
+  if (is_vertex) geometry->positions.reserve(e.count);
+  for (uint64_t r = 0; r < e.count; ++r) {
+    values->At(e.name, r);
+    Eigen::Vector3f p = Eigen::Vector3f::Zero();
+    for (size_t q = 0; q < e.properties.size(); ++q) {
+      const PlyProperty& property = e.properties[q];
+      if (!property.list) {
+        const double v = values->Read(property.type, "value");
+        if (is_vertex) {
+          for (int k = 0; k < 3; ++k) {
+            if (xyz[k] == static_cast<int>(q)) p[k] = static_cast<float>(v);
+          }
+        }
+        continue;
+      }
+      ReadPlyList(property, static_cast<int>(q) == face_list, values, geometry);
+    }
+    if (is_vertex) geometry->positions.push_back(p);
+  }
+}
+
+}  // namespace
+
+Mesh ParsePly(std::string_view bytes, const std::string& origin) {
+  const PlyHeader header = ReadPlyHeader(bytes, origin);
+  int xyz[3] = {-1, -1, -1};
+  const PlyElement* vertex = FindPlyVertex(header.elements, origin, xyz);
+
+  const std::string_view body = bytes.substr(header.body_start);
+  PlyValues values(body, header.format, origin, header.body_line);
+  PlyGeometry geometry;
+  for (const PlyElement& e : header.elements) {
+    CheckPlyRoom(e, header.format, values, origin);
+    ReadPlyRecords(e, &e == vertex, xyz, &values, &geometry);
+  }
+  if (!geometry.have_faces) throw Error(origin + ": the PLY file has no faces (a point cloud?)");
+  return Compacted(std::move(geometry.positions), std::move(geometry.triangles));
 }
 
 // ---- OFF ----------------------------------------------------------------------------------------

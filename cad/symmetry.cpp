@@ -196,24 +196,9 @@ std::vector<Eigen::Isometry3d> Closure(const std::vector<Eigen::Isometry3d>& fro
   return group;
 }
 
-}  // namespace
-
-DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& options) {
-  const Probe probe(mesh, options);
-  DetectedSymmetries out;
+// Candidate axes: the principal axes of the surface, then the lines of its largest flat areas.
+std::vector<Eigen::Vector3d> CandidateAxes(const Probe& probe, const SymmetryOptions& options) {
   const Eigen::Vector3d& centre = probe.centre;
-  const double tol = probe.tol;
-  const Eigen::AlignedBox3d& box = probe.box;
-  out.centre = centre;
-  out.tolerance_mm = tol;
-  const auto holds = [&](const Eigen::Isometry3d& t, double* deviation) {
-    return probe.Holds(t, deviation);
-  };
-  const Surface& surface = *probe.surface;
-  const std::vector<Eigen::Vector3d>& points = probe.points;
-  const std::vector<Eigen::Vector3d>& quick = probe.quick;
-
-  // Candidate axes: the principal axes of the surface, then the lines of its largest flat areas.
   std::vector<Eigen::Vector3d> axes;
   const auto add_axis = [&](Eigen::Vector3d a) {
     if (!(a.norm() > 1e-9)) return;
@@ -240,56 +225,149 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     if (!(line.direction.norm() > 1e-9)) continue;
     const Eigen::Vector3d d = line.direction.normalized();
     const Eigen::Vector3d off = centre - line.point;
-    if ((off - off.dot(d) * d).norm() <= tol) add_axis(d);
+    if ((off - off.dot(d) * d).norm() <= probe.tol) add_axis(d);
   }
   std::vector<std::pair<double, Eigen::Vector3d>> flats;
   for (const auto& [key, bucket] : probe.normals) flats.push_back(bucket);
   std::stable_sort(flats.begin(), flats.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   for (size_t i = 0; i < flats.size() && i < 12; ++i) add_axis(flats[i].second);
+  return axes;
+}
 
-  // Each axis: continuous, else its largest n-fold rotation.
-  std::vector<Eigen::Isometry3d> generators;
-  for (const Eigen::Vector3d& a : axes) {
-    double worst = 0, deviation = 0;
-    bool continuous = true;
-    for (const double angle : kContinuousAngles) {
-      if (!holds(RotationAbout(centre, a, angle), &deviation)) {
-        continuous = false;
-        break;
-      }
-      worst = std::max(worst, deviation);
+// Axis a: continuous, else its largest n-fold rotation (recorded in *out, the turn added to
+// *generators), else nothing.
+void ClassifyAxis(const Probe& probe, const SymmetryOptions& options, const Eigen::Vector3d& a,
+                  DetectedSymmetries* out, std::vector<Eigen::Isometry3d>* generators) {
+  const Eigen::Vector3d& centre = probe.centre;
+  const double tol = probe.tol;
+  const auto holds = [&](const Eigen::Isometry3d& t, double* deviation) {
+    return probe.Holds(t, deviation);
+  };
+  double worst = 0, deviation = 0;
+  bool continuous = true;
+  for (const double angle : kContinuousAngles) {
+    if (!holds(RotationAbout(centre, a, angle), &deviation)) {
+      continuous = false;
+      break;
     }
-    if (continuous) {
-      out.axes.push_back({a, 0});
-      out.symmetries.continuous.push_back({a, centre});
-      out.continuous_deviation_mm.push_back(worst);
+    worst = std::max(worst, deviation);
+  }
+  if (continuous) {
+    out->axes.push_back({a, 0});
+    out->symmetries.continuous.push_back({a, centre});
+    out->continuous_deviation_mm.push_back(worst);
+    return;
+  }
+  for (int n = options.max_order; n >= 2; --n) {
+    // Every power must hold, not only the smallest turn (which a loose tolerance lets through
+    // for any large n): the smallest on the quick points first (most n fail there), then the
+    // half-way turn (the largest move), then the rest.
+    if (Deviation(*probe.surface, probe.quick, RotationAbout(centre, a, 2 * M_PI / n), tol) > tol)
       continue;
-    }
-    for (int n = options.max_order; n >= 2; --n) {
-      // Every power must hold, not only the smallest turn (which a loose tolerance lets through
-      // for any large n): the smallest on the quick points first (most n fail there), then the
-      // half-way turn (the largest move), then the rest.
-      if (Deviation(surface, quick, RotationAbout(centre, a, 2 * M_PI / n), tol) > tol) continue;
-      if (!holds(RotationAbout(centre, a, 2 * M_PI * (n / 2) / n), &deviation)) continue;
-      bool powers = true;
-      for (int k = 1; k < n / 2 && powers; ++k)
-        powers = holds(RotationAbout(centre, a, 2 * M_PI * k / n), &deviation);
-      if (powers) {
-        out.axes.push_back({a, n});
-        generators.push_back(RotationAbout(centre, a, 2 * M_PI / n));
-        break;
-      }
+    if (!holds(RotationAbout(centre, a, 2 * M_PI * (n / 2) / n), &deviation)) continue;
+    bool powers = true;
+    for (int k = 1; k < n / 2 && powers; ++k)
+      powers = holds(RotationAbout(centre, a, 2 * M_PI * k / n), &deviation);
+    if (powers) {
+      out->axes.push_back({a, n});
+      generators->push_back(RotationAbout(centre, a, 2 * M_PI / n));
+      break;
     }
   }
+}
+
+// The best half-turn about an axis perpendicular to the main one (not yet checked): flip axes of
+// an n-fold symmetry repeat every pi / n, so one lies in [0, pi / n); scan it, refine the best.
+Eigen::Isometry3d ScanFlip(const Probe& probe, const DetectedSymmetries::Axis& main) {
+  const Eigen::Vector3d& centre = probe.centre;
+  const Eigen::Vector3d m = main.direction;
+  const int n = std::max(1, main.order);
+  const Eigen::Vector3d hint =
+      std::abs(m.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d u = (hint - hint.dot(m) * m).normalized(), v = m.cross(u);
+  const auto flip = [&](double phi) {
+    return RotationAbout(centre, std::cos(phi) * u + std::sin(phi) * v, M_PI);
+  };
+  const auto quick_deviation = [&](double phi) {
+    return Deviation(*probe.surface, probe.quick, flip(phi), 1e300);
+  };
+  const int steps = 96;
+  const double period = M_PI / n;
+  double best_phi = 0, best = 1e300;
+  for (int k = 0; k < steps; ++k) {
+    const double phi = period * k / steps;
+    const double d = quick_deviation(phi);
+    if (d < best) best = d, best_phi = phi;
+  }
+  // Golden-section search on the quick deviation within a step either side.
+  double lo = best_phi - period / steps, hi = best_phi + period / steps;
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+  double f1 = quick_deviation(x1), f2 = quick_deviation(x2);
+  for (int it = 0; it < 40; ++it) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = quick_deviation(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = quick_deviation(x2);
+    }
+  }
+  const double phi = std::min(f1, f2) < best ? (f1 < f2 ? x1 : x2) : best_phi;
+  return flip(phi);
+}
+
+// The group the generators make (a continuous axis contributes its flips only), its members
+// other than the identity added to *out with their deviations. Candidate axes tilted within the
+// tolerance can make near-duplicates without end: at the cap, the group of the main axis's turn
+// and the flip alone.
+void AddGroup(const Probe& probe, const SymmetryOptions& options,
+              const std::vector<Eigen::Isometry3d>& generators,
+              std::optional<Eigen::Isometry3d> flip_found, DetectedSymmetries* out) {
+  const double tol = probe.tol;
+  const size_t cap = 2 * static_cast<size_t>(options.max_order) + 48;
+  const auto closure = [&](const std::vector<Eigen::Isometry3d>& from) {
+    return Closure(from, probe.box, 0.5 * tol, cap);
+  };
+  std::vector<Eigen::Isometry3d> group = closure(generators);
+  if (group.size() >= cap && !out->axes.empty() && out->axes[0].order >= 2) {
+    std::vector<Eigen::Isometry3d> main = {
+        RotationAbout(probe.centre, out->axes[0].direction, 2 * M_PI / out->axes[0].order)};
+    // (The candidate flips were among the tilted ones: the flip scanned for and refined.)
+    if (!flip_found) {
+      const Eigen::Isometry3d flip = ScanFlip(probe, out->axes[0]);
+      double deviation = 0;
+      if (probe.Holds(flip, &deviation)) flip_found = flip;
+    }
+    if (flip_found) main.push_back(*flip_found);
+    group = closure(main);
+  }
+  // Every member measured; those products that drift beyond the tolerance are left out.
+  for (size_t i = 1; i < group.size(); ++i) {
+    const double d = Deviation(*probe.surface, probe.points, group[i], tol);
+    if (d > tol) continue;
+    out->symmetries.discrete.push_back(group[i]);
+    out->discrete_deviation_mm.push_back(d);
+  }
+}
+
+}  // namespace
+
+DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& options) {
+  const Probe probe(mesh, options);
+  DetectedSymmetries out;
+  out.centre = probe.centre;
+  out.tolerance_mm = probe.tol;
+
+  std::vector<Eigen::Isometry3d> generators;
+  for (const Eigen::Vector3d& a : CandidateAxes(probe, options))
+    ClassifyAxis(probe, options, a, &out, &generators);
   // The main axis first: continuous, else the highest order (stable: candidates' order).
   std::stable_sort(out.axes.begin(), out.axes.end(), [](const auto& x, const auto& y) {
     const int ox = x.order == 0 ? 1 << 30 : x.order, oy = y.order == 0 ? 1 << 30 : y.order;
     return ox > oy;
   });
 
-  // Half-turns about an axis perpendicular to the main one: flip axes of an n-fold symmetry
-  // repeat every pi / n, so one lies in [0, pi / n); scan it, refine the best, check it.
+  // A half-turn about an axis perpendicular to the main one, scanned for and checked.
   // (Not needed when a candidate axis perpendicular to the main one already turns: the group
   // then has its flips, exactly.)
   bool have_flip = false;
@@ -298,46 +376,10 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     have_flip = have_flip || (out.axes[i].order >= 2 &&
                               std::abs(out.axes[i].direction.dot(out.axes[0].direction)) < 1e-6);
   }
-  // The best half-turn about an axis perpendicular to the main one (not yet checked).
-  const auto scan_flip = [&]() {
-    const Eigen::Vector3d m = out.axes[0].direction;
-    const int n = std::max(1, out.axes[0].order);
-    const Eigen::Vector3d hint =
-        std::abs(m.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-    const Eigen::Vector3d u = (hint - hint.dot(m) * m).normalized(), v = m.cross(u);
-    const auto flip = [&](double phi) {
-      return RotationAbout(centre, std::cos(phi) * u + std::sin(phi) * v, M_PI);
-    };
-    const auto quick_deviation = [&](double phi) {
-      return Deviation(surface, quick, flip(phi), 1e300);
-    };
-    const int steps = 96;
-    const double period = M_PI / n;
-    double best_phi = 0, best = 1e300;
-    for (int k = 0; k < steps; ++k) {
-      const double phi = period * k / steps;
-      const double d = quick_deviation(phi);
-      if (d < best) best = d, best_phi = phi;
-    }
-    // Golden-section search on the quick deviation within a step either side.
-    double lo = best_phi - period / steps, hi = best_phi + period / steps;
-    const double g = 0.5 * (std::sqrt(5.0) - 1);
-    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-    double f1 = quick_deviation(x1), f2 = quick_deviation(x2);
-    for (int it = 0; it < 40; ++it) {
-      if (f1 < f2) {
-        hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = quick_deviation(x1);
-      } else {
-        lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = quick_deviation(x2);
-      }
-    }
-    const double phi = std::min(f1, f2) < best ? (f1 < f2 ? x1 : x2) : best_phi;
-    return flip(phi);
-  };
   if (!out.axes.empty() && !(have_flip && out.axes[0].order != 0)) {
-    const Eigen::Isometry3d flip = scan_flip();
+    const Eigen::Isometry3d flip = ScanFlip(probe, out.axes[0]);
     double deviation = 0;
-    if (holds(flip, &deviation)) {
+    if (probe.Holds(flip, &deviation)) {
       if (out.axes[0].order == 0) {
         // About a continuous axis BOP lists one flip: the rotations make the others.
         out.symmetries.discrete.push_back(flip);
@@ -350,33 +392,7 @@ DetectedSymmetries DetectSymmetries(const Mesh& mesh, const SymmetryOptions& opt
     if (out.axes[0].order == 0) return out;
   }
 
-  // The group the generators make (a continuous axis contributes its flips only). Candidate axes
-  // tilted within the tolerance can make near-duplicates without end: at the cap, the group of
-  // the main axis's turn and the flip alone.
-  const size_t cap = 2 * static_cast<size_t>(options.max_order) + 48;
-  const auto closure = [&](const std::vector<Eigen::Isometry3d>& from) {
-    return Closure(from, box, 0.5 * tol, cap);
-  };
-  std::vector<Eigen::Isometry3d> group = closure(generators);
-  if (group.size() >= cap && !out.axes.empty() && out.axes[0].order >= 2) {
-    std::vector<Eigen::Isometry3d> main = {
-        RotationAbout(centre, out.axes[0].direction, 2 * M_PI / out.axes[0].order)};
-    // (The candidate flips were among the tilted ones: the flip scanned for and refined.)
-    if (!flip_found) {
-      const Eigen::Isometry3d flip = scan_flip();
-      double deviation = 0;
-      if (holds(flip, &deviation)) flip_found = flip;
-    }
-    if (flip_found) main.push_back(*flip_found);
-    group = closure(main);
-  }
-  // Every member measured; those products that drift beyond the tolerance are left out.
-  for (size_t i = 1; i < group.size(); ++i) {
-    const double d = Deviation(surface, points, group[i], tol);
-    if (d > tol) continue;
-    out.symmetries.discrete.push_back(group[i]);
-    out.discrete_deviation_mm.push_back(d);
-  }
+  AddGroup(probe, options, generators, flip_found, &out);
   return out;
 }
 

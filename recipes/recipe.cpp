@@ -1931,20 +1931,41 @@ RunSpec Reseed(const RunSpec& spec, uint64_t stream) {
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return z ^ (z >> 31);
   };
+  // Every described seed marked as a run's (Field::per_run_seed).
+  const auto seeds = [&](auto& options) {
+    std::decay_t<decltype(options)>::Fields(options, [&](auto& value, const Field& field) {
+      using T = std::decay_t<decltype(value)>;
+      if constexpr (std::is_same_v<T, int>) {  // a recipe's int (render.seed): kept non-negative
+        if (field.per_run_seed) value = static_cast<int>(move(static_cast<uint64_t>(value)) >> 33);
+      } else if constexpr (std::is_same_v<T, uint64_t>) {
+        if (field.per_run_seed) value = move(value);
+      }
+    });
+  };
   for (SceneSpec& scene : out.scenes) {
-    scene.arrangement.seed = move(scene.arrangement.seed);
+    seeds(scene.arrangement);
     if (scene.randomize) scene.randomize->draws.seed = move(scene.randomize->draws.seed);
   }
+  // The sections not described by fields yet: the randomisation draws and the view sampler.
   out.randomize.draws.seed = move(out.randomize.draws.seed);
   out.sampler.seed = move(out.sampler.seed);
-  // RenderOptions::seed is an int (a recipe value): kept non-negative.
-  out.render.seed = static_cast<int>(move(static_cast<uint64_t>(out.render.seed)) >> 33);
-  const auto move_sensor = [&](SensorOptions& sensor) {
-    sensor.imager.seed = move(sensor.imager.seed);
-    sensor.depth.seed = move(sensor.depth.seed);
+  seeds(out.render);
+  seeds(out.bop);
+  seeds(out.tessellation);
+  seeds(out.limits);
+  const auto sensor_seeds = [&](SensorOptions& sensor) {
+    seeds(sensor.imager);
+    seeds(sensor.depth);
+    seeds(sensor.lens);
   };
-  move_sensor(out.sensor);
-  for (RigSensor& sensor : out.rig) move_sensor(sensor.sensor);
+  sensor_seeds(out.sensor);
+  for (RigSensor& sensor : out.rig) sensor_seeds(sensor.sensor);
+  seeds(out.grasps.gripper);
+  seeds(out.grasps.sampling);
+  seeds(out.grasps.scene);
+  seeds(out.grasps.labels);
+  seeds(out.grasps.cup);
+  seeds(out.grasps.suction_sampling);
   return out;
 }
 

@@ -80,7 +80,7 @@ struct RenderOptions {
     visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
     visit(o.exposure, Field{"exposure", "number", "pbr: exposure in stops (-20 to 20)"});
     visit(o.view, Field{"view", "choice", "pbr: display transform", {"standard", "filmic"}});
-    visit(o.seed, Field{"seed", "integer", "pbr: sampler seed"});
+    visit(o.seed, RunSeed("seed", "pbr: sampler seed"));
     visit(o.hdr,
           Field{"hdr", "bool", "also write the colour as float EXR (rgb_hdr/; pbr: radiance)"});
     visit(o.denoise, Field{"denoise", "bool",

@@ -139,7 +139,7 @@ struct DepthModel {
     visit(o.block, Field{"block", "integer", "active_stereo: SGBM window (odd, 3-11)"});
     visit(o.min_texture, Field{"min_texture", "number",
                                "active_stereo: holes where the window's grey sd is lower (0-255)"});
-    visit(o.seed, Field{"seed", "integer", "seed of the noise"});
+    visit(o.seed, RunSeed("seed", "seed of the noise"));
   }
 };
 
@@ -181,7 +181,7 @@ struct ImageSensor {
     visit(o.read_noise, Field{"read_noise", "number", "read noise sigma (electrons)"});
     visit(o.vignetting,
           Field{"vignetting", "number", "share of the cos^4 fall-off towards the corners (0-1)"});
-    visit(o.seed, Field{"seed", "integer", "seed of the image noise"});
+    visit(o.seed, RunSeed("seed", "seed of the image noise"));
   }
 };
 

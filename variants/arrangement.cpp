@@ -132,8 +132,6 @@ void Apply(const Eigen::Isometry3d& motion, Body* body) {
   for (Instance& i : body->instances) i.world_from_model = motion * i.world_from_model;
 }
 
-// Rests a body: on its most stable face, a drawn one, or `pose_index`; then yaw about z and lower
-// onto the floor. Returns false when `pose_index` is beyond its stable poses.
 // The stable pose whose resting face points most nearly down in the body's own (design) frame;
 // ties go to the more probable pose (the list's order).
 size_t UprightPose(const std::vector<StablePose>& poses) {
@@ -152,6 +150,8 @@ void Lower(const std::vector<Part>& parts, Body* body) {
       body);
 }
 
+// Rests a body on `poses[pose_index]` (the caller's pick: its most stable face, a drawn one, or
+// the upright one; as designed: unturned); then yaw about z and lower onto the floor.
 void Rest(const std::vector<Part>& parts, const ArrangementOptions& o,
           const std::vector<StablePose>& poses, size_t pose_index, double yaw, Body* body) {
   if (o.pose != PoseMode::kAsDesigned) Apply(poses[pose_index].floor_from_body, body);
@@ -230,14 +230,19 @@ bool Drop(const std::vector<Part>& parts, const std::vector<CollisionShape>& sha
   return r.restless.empty();
 }
 
-// The arrangement of `instances`; a pile's distractors fall with it (the other layouts' fall in
-// Arrange, after it).
-Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                         const ArrangementOptions& options, const std::vector<int>& group,
-                         const std::vector<CollisionShape>* shapes) {
-  ArrangementOptions o = options;
-  if (o.pose == PoseMode::kAuto)
-    o.pose = o.layout == Layout::kAssembled ? PoseMode::kUpright : PoseMode::kStable;
+// The collision shapes of the parts marked `needed` (the others left empty).
+std::vector<CollisionShape> NeededShapes(const std::vector<Part>& parts,
+                                         const std::vector<bool>& needed) {
+  std::vector<CollisionShape> own;
+  own.resize(parts.size());
+  for (size_t p = 0; p < parts.size(); ++p) {
+    if (needed[p]) own[p] = MakeCollisionShape(parts[p]);
+  }
+  return own;
+}
+
+void CheckInputs(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                 const ArrangementOptions& o, const std::vector<int>& group) {
   std::string why;
   if (!o.Check(&why)) throw Error("arrangement: " + why);
   if (!group.empty() && group.size() != instances.size())
@@ -249,10 +254,11 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
       throw Error("arrangement: instance '" + instance.name + "' refers to a missing part");
     }
   }
-  Arrangement out;
-  if (instances.empty()) return out;
+}
 
-  // Rigid bodies: the groups, or everything for an assembled layout.
+// Rigid bodies: the groups, or everything for an assembled layout.
+std::vector<Body> GroupBodies(const std::vector<Instance>& instances,
+                              const std::vector<int>& group) {
   std::vector<Body> groups;
   std::map<int, size_t> index_of;
   for (size_t i = 0; i < instances.size(); ++i) {
@@ -261,140 +267,151 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
     if (inserted) groups.push_back(Body{g, {}});
     groups[it->second].instances.push_back(instances[i]);
   }
-  if (o.layout == Layout::kPile) {
-    PileOptions pile;
-    pile.container = o.container;
-    for (size_t p = 0; p < parts.size(); ++p)
-      pile.materials.push_back(
-          (o.part_physics.empty() ? o.physics : o.part_physics[p]).Draw(o.seed, p));
-    pile.drop_height_mm = o.drop_height_mm;
-    pile.max_seconds = o.settle_time_s;
-    pile.time_step_s = o.time_step_s;
-    pile.confirm_seconds = o.confirm_rest ? 1.0 : 0.0;
-    pile.seed = o.seed;
-    if (o.container.kind == Container::Kind::kFloor) {
-      const double side = std::sqrt(M_PI) * o.clutter_radius_mm;  // the clutter disc's area
-      pile.drop_size_mm = Eigen::Vector2d(side, side);
-    }
-    for (const Body& g : groups) {
-      if (g.instances.size() != 1) {
-        throw Error("arrangement: a pile drops single parts, but one group is an assembly of " +
-                    std::to_string(g.instances.size()) +
-                    " parts (give its parts as separate entries, or use another layout)");
-      }
-    }
-    std::vector<Instance> copies;
-    for (const Body& g : groups) {
-      for (int c = 0; c < o.copies; ++c) {
-        pile.bodies.push_back(g.instances[0].part);
-        copies.push_back(g.instances[0]);
-        out.group.push_back(g.group);
-      }
-    }
-    // Distractors join the drop: distractor k falls just before copy `slot` (after the last
-    // copy for slot = copies), drawn uniformly; `body_of[b]` says what body b is (>= 0: a copy,
-    // -1 - k: distractor k).
-    std::vector<std::pair<double, int>> order;
-    for (size_t c = 0; c < copies.size(); ++c) order.emplace_back(c + 0.5, static_cast<int>(c));
-    for (size_t k = 0; k < o.distractors.size(); ++k) {
-      const double slot = std::floor(UniformDraw(o.distractor_seed, streams::kDistractorOrder, k) *
-                                     (copies.size() + 1));
-      order.emplace_back(slot, -1 - static_cast<int>(k));
-    }
-    std::stable_sort(order.begin(), order.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
-    std::vector<int> body_of;
-    pile.bodies.clear();
-    for (const auto& [slot, what] : order) {
-      body_of.push_back(what);
-      pile.bodies.push_back(what >= 0 ? copies[what].part : o.distractors[-1 - what]);
-    }
-    std::vector<CollisionShape> own;
-    if (shapes == nullptr) {
-      std::vector<bool> needed(parts.size(), false);
-      for (int b : pile.bodies) needed[static_cast<size_t>(b)] = true;
-      own.resize(parts.size());
-      for (size_t p = 0; p < parts.size(); ++p) {
-        if (needed[p]) own[p] = MakeCollisionShape(parts[p]);
-      }
-      shapes = &own;
-    }
-    const PileResult r = DropPile(parts, *shapes, pile);
-    std::vector<int> index_of_body(body_of.size());
-    out.distractors.resize(o.distractors.size());
-    for (size_t b = 0; b < body_of.size(); ++b) {
-      const int what = body_of[b];
-      if (what >= 0) {
-        copies[what].world_from_model = r.world_from_model[b];
-        index_of_body[b] = what;
-      } else {
-        Instance& d = out.distractors[-1 - what];
-        d.part = o.distractors[-1 - what];
-        d.name = "distractor " + std::to_string(-1 - what);
-        d.world_from_model = r.world_from_model[b];
-        index_of_body[b] = what;
-      }
-    }
-    for (const std::vector<int>* from : {&r.restless, &r.escaped}) {
-      std::vector<int>& to = from == &r.restless ? out.restless : out.escaped;
-      for (int b : *from) {
-        const int what = index_of_body[b];
-        if (what >= 0) {
-          to.push_back(what);
-        } else {
-          (from == &r.restless ? out.restless_distractors : out.escaped_distractors)
-              .push_back(-1 - what);
-        }
-      }
-      std::sort(to.begin(), to.end());
-    }
-    std::sort(out.restless_distractors.begin(), out.restless_distractors.end());
-    std::sort(out.escaped_distractors.begin(), out.escaped_distractors.end());
-    out.instances = std::move(copies);
-    out.settle_seconds = r.seconds;
-    return out;
-  }
-  if (o.layout == Layout::kSingle && groups.size() != 1) {
-    throw Error("arrangement: the single layout takes one part or assembly (got " +
-                std::to_string(groups.size()) + ")");
-  }
-  std::vector<Body> bodies;
-  if (o.layout == Layout::kAssembled) {
-    Body all{groups[0].group, {}};
-    for (const Body& b : groups)
-      all.instances.insert(all.instances.end(), b.instances.begin(), b.instances.end());
-    const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned
-                                              ? std::vector<StablePose>{}
-                                              : StablePoses(parts, all.instances);
-    size_t pick = 0;
-    if (o.pose == PoseMode::kRandom) {
-      double u = UniformDraw(o.seed, streams::kAssembledPose, 0), acc = 0;
-      while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
-    } else if (o.pose == PoseMode::kUpright) {
-      pick = UprightPose(poses);
-    }
-    Rest(parts, o, poses, pick, 0.0, &all);
-    // Keep each instance's group for the caller.
-    std::vector<int> owner;
-    for (const Body& b : groups) owner.insert(owner.end(), b.instances.size(), b.group);
-    out.instances = all.instances;
-    out.group = owner;
-    return out;
-  }
+  return groups;
+}
 
-  // Copies of each group, each resting on its own: on the chosen face, at yaw 0 (or random), or
-  // where it fell.
-  const bool clutter = o.layout == Layout::kClutter;
-  std::vector<CollisionShape> own;
-  if (o.pose == PoseMode::kDropped && shapes == nullptr) {
-    std::vector<bool> needed(parts.size(), false);
-    for (const Instance& i : instances) needed[static_cast<size_t>(i.part)] = true;
-    own.resize(parts.size());
-    for (size_t p = 0; p < parts.size(); ++p) {
-      if (needed[p]) own[p] = MakeCollisionShape(parts[p]);
+// Distractors join the drop: distractor k falls just before copy `slot` (after the last
+// copy for slot = copies), drawn uniformly; `body_of[b]` says what body b is (>= 0: a copy,
+// -1 - k: distractor k). Sets the pile's bodies in that order and returns `body_of`.
+std::vector<int> DropOrder(const ArrangementOptions& o, const std::vector<Instance>& copies,
+                           PileOptions* pile) {
+  std::vector<std::pair<double, int>> order;
+  for (size_t c = 0; c < copies.size(); ++c) order.emplace_back(c + 0.5, static_cast<int>(c));
+  for (size_t k = 0; k < o.distractors.size(); ++k) {
+    const double slot = std::floor(UniformDraw(o.distractor_seed, streams::kDistractorOrder, k) *
+                                   (copies.size() + 1));
+    order.emplace_back(slot, -1 - static_cast<int>(k));
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<int> body_of;
+  pile->bodies.clear();
+  for (const auto& [slot, what] : order) {
+    body_of.push_back(what);
+    pile->bodies.push_back(what >= 0 ? copies[what].part : o.distractors[-1 - what]);
+  }
+  return body_of;
+}
+
+// Where the pile's bodies came to rest: into the copies, or `out`'s distractors; and which of
+// them were restless or escaped.
+void SortOutPile(const ArrangementOptions& o, const PileResult& r, const std::vector<int>& body_of,
+                 std::vector<Instance>* copies, Arrangement* out) {
+  std::vector<int> index_of_body(body_of.size());
+  out->distractors.resize(o.distractors.size());
+  for (size_t b = 0; b < body_of.size(); ++b) {
+    const int what = body_of[b];
+    if (what >= 0) {
+      (*copies)[what].world_from_model = r.world_from_model[b];
+      index_of_body[b] = what;
+    } else {
+      Instance& d = out->distractors[-1 - what];
+      d.part = o.distractors[-1 - what];
+      d.name = "distractor " + std::to_string(-1 - what);
+      d.world_from_model = r.world_from_model[b];
+      index_of_body[b] = what;
     }
+  }
+  for (const std::vector<int>* from : {&r.restless, &r.escaped}) {
+    std::vector<int>& to = from == &r.restless ? out->restless : out->escaped;
+    for (int b : *from) {
+      const int what = index_of_body[b];
+      if (what >= 0) {
+        to.push_back(what);
+      } else {
+        (from == &r.restless ? out->restless_distractors : out->escaped_distractors)
+            .push_back(-1 - what);
+      }
+    }
+    std::sort(to.begin(), to.end());
+  }
+  std::sort(out->restless_distractors.begin(), out->restless_distractors.end());
+  std::sort(out->escaped_distractors.begin(), out->escaped_distractors.end());
+}
+
+// layout: pile. Every copy of every (single-part) group and the distractors fall together into
+// the container.
+Arrangement ArrangePile(const std::vector<Part>& parts, const ArrangementOptions& o,
+                        const std::vector<Body>& groups,
+                        const std::vector<CollisionShape>* shapes) {
+  Arrangement out;
+  PileOptions pile;
+  pile.container = o.container;
+  for (size_t p = 0; p < parts.size(); ++p)
+    pile.materials.push_back(
+        (o.part_physics.empty() ? o.physics : o.part_physics[p]).Draw(o.seed, p));
+  pile.drop_height_mm = o.drop_height_mm;
+  pile.max_seconds = o.settle_time_s;
+  pile.time_step_s = o.time_step_s;
+  pile.confirm_seconds = o.confirm_rest ? 1.0 : 0.0;
+  pile.seed = o.seed;
+  if (o.container.kind == Container::Kind::kFloor) {
+    const double side = std::sqrt(M_PI) * o.clutter_radius_mm;  // the clutter disc's area
+    pile.drop_size_mm = Eigen::Vector2d(side, side);
+  }
+  for (const Body& g : groups) {
+    if (g.instances.size() != 1) {
+      throw Error("arrangement: a pile drops single parts, but one group is an assembly of " +
+                  std::to_string(g.instances.size()) +
+                  " parts (give its parts as separate entries, or use another layout)");
+    }
+  }
+  std::vector<Instance> copies;
+  for (const Body& g : groups) {
+    for (int c = 0; c < o.copies; ++c) {
+      pile.bodies.push_back(g.instances[0].part);
+      copies.push_back(g.instances[0]);
+      out.group.push_back(g.group);
+    }
+  }
+  const std::vector<int> body_of = DropOrder(o, copies, &pile);
+  std::vector<CollisionShape> own;
+  if (shapes == nullptr) {
+    std::vector<bool> needed(parts.size(), false);
+    for (int b : pile.bodies) needed[static_cast<size_t>(b)] = true;
+    own = NeededShapes(parts, needed);
     shapes = &own;
   }
+  const PileResult r = DropPile(parts, *shapes, pile);
+  SortOutPile(o, r, body_of, &copies, &out);
+  out.instances = std::move(copies);
+  out.settle_seconds = r.seconds;
+  return out;
+}
+
+// layout: assembled. Every group together as one body, rested on the chosen pose.
+Arrangement ArrangeAssembled(const std::vector<Part>& parts, const ArrangementOptions& o,
+                             const std::vector<Body>& groups) {
+  Arrangement out;
+  Body all{groups[0].group, {}};
+  for (const Body& b : groups)
+    all.instances.insert(all.instances.end(), b.instances.begin(), b.instances.end());
+  const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned
+                                            ? std::vector<StablePose>{}
+                                            : StablePoses(parts, all.instances);
+  size_t pick = 0;
+  if (o.pose == PoseMode::kRandom) {
+    double u = UniformDraw(o.seed, streams::kAssembledPose, 0), acc = 0;
+    while (pick + 1 < poses.size() && (acc += poses[pick].probability) < u) ++pick;
+  } else if (o.pose == PoseMode::kUpright) {
+    pick = UprightPose(poses);
+  }
+  Rest(parts, o, poses, pick, 0.0, &all);
+  // Keep each instance's group for the caller.
+  std::vector<int> owner;
+  for (const Body& b : groups) owner.insert(owner.end(), b.instances.size(), b.group);
+  out.instances = all.instances;
+  out.group = owner;
+  return out;
+}
+
+// Copies of each group, each resting on its own: on the chosen face, at yaw 0 (or random), or
+// where it fell.
+std::vector<Body> RestCopies(const std::vector<Part>& parts, const ArrangementOptions& o,
+                             const std::vector<Body>& groups,
+                             const std::vector<CollisionShape>* shapes) {
+  const bool clutter = o.layout == Layout::kClutter;
+  std::vector<Body> bodies;
   for (size_t g = 0; g < groups.size(); ++g) {
     const std::vector<StablePose> poses = o.pose == PoseMode::kAsDesigned
                                               ? std::vector<StablePose>{}
@@ -432,85 +449,100 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
       }
     }
   }
+  return bodies;
+}
 
-  if (!clutter) {
-    // Cells: a row, or rows of about sqrt(N); each body centred in its cell.
-    const size_t n = bodies.size();
-    const size_t columns = (o.layout == Layout::kRow || o.layout == Layout::kSingle)
-                               ? n
-                               : static_cast<size_t>(std::ceil(std::sqrt(double(n))));
-    std::vector<double> column_width(columns, 0.0), row_depth((n + columns - 1) / columns, 0.0);
-    std::vector<Eigen::AlignedBox3d> bounds;
-    for (size_t b = 0; b < n; ++b) {
-      bounds.push_back(Bounds(parts, bodies[b]));
-      column_width[b % columns] = std::max(column_width[b % columns], bounds[b].sizes().x());
-      row_depth[b / columns] = std::max(row_depth[b / columns], bounds[b].sizes().y());
-    }
-    for (size_t b = 0; b < n; ++b) {
-      double x = 0, y = 0;
-      for (size_t c = 0; c < b % columns; ++c) x += column_width[c] + o.gap_mm;
-      for (size_t r = 0; r < b / columns; ++r) y -= row_depth[r] + o.gap_mm;
-      const Eigen::Vector3d shift(x + 0.5 * column_width[b % columns] - bounds[b].center().x(),
-                                  y - 0.5 * row_depth[b / columns] - bounds[b].center().y(), 0.0);
-      Apply(Eigen::Isometry3d(Eigen::Translation3d(shift)), &bodies[b]);
-    }
-  } else {
-    // Clutter: largest footprints first, each at up to 500 random spots in the disc, kept `gap`
-    // from every body already down (footprints are the convex hulls of the bodies' floor shadows,
-    // so disjoint footprints mean disjoint bodies).
-    std::vector<Polygon> footprint(bodies.size());
-    for (size_t b = 0; b < bodies.size(); ++b) {
-      std::vector<Eigen::Vector2d> shadow;
-      for (const Instance& i : bodies[b].instances) {
-        for (const Eigen::Vector3f& p : parts[i.part].mesh.positions)
-          shadow.push_back((i.world_from_model * p.cast<double>()).head<2>());
-      }
-      footprint[b] = ConvexHull2D(shadow);
-    }
-    std::vector<size_t> order(bodies.size());
-    for (size_t b = 0; b < order.size(); ++b) order[b] = b;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](size_t a, size_t b) { return Area(footprint[a]) > Area(footprint[b]); });
-    std::vector<Polygon> placed;
-    std::vector<Body> kept;
-    for (size_t b : order) {
-      bool done = false;
-      for (int attempt = 0; attempt < 500 && !done; ++attempt) {
-        const uint64_t index = (static_cast<uint64_t>(b) << 20) + static_cast<uint64_t>(attempt);
-        const double r =
-            o.clutter_radius_mm * std::sqrt(UniformDraw(o.seed, streams::kClutterRadius, index));
-        const double phi = 2 * M_PI * UniformDraw(o.seed, streams::kClutterAngle, index);
-        const Eigen::Vector2d at(r * std::cos(phi), r * std::sin(phi));
-        Polygon moved = footprint[b];
-        bool inside = true;
-        for (auto& p : moved) {
-          p += at;
-          inside = inside && p.norm() <= o.clutter_radius_mm;
-        }
-        if (!inside) continue;
-        bool free = true;
-        for (const Polygon& other : placed) free = free && Separation(moved, other) >= o.gap_mm;
-        if (!free) continue;
-        placed.push_back(moved);
-        Body body = bodies[b];
-        Apply(Eigen::Isometry3d(Eigen::Translation3d(at.x(), at.y(), 0.0)), &body);
-        kept.push_back(std::move(body));
-        done = true;
-      }
-    }
-    if (kept.size() < bodies.size()) {
-      std::ostringstream message;
-      message << "clutter: only " << kept.size() << " of " << bodies.size()
-              << " parts fit in a disc of radius " << o.clutter_radius_mm << " mm with " << o.gap_mm
-              << " mm between them; give a larger radius or fewer copies";
-      throw Error(message.str());
-    }
-    // Back in input order, for stable output.
-    std::sort(kept.begin(), kept.end(),
-              [&](const Body& a, const Body& b) { return a.group < b.group; });
-    bodies = std::move(kept);
+// Cells: a row, or rows of about sqrt(N); each body centred in its cell.
+void PlaceInCells(const std::vector<Part>& parts, const ArrangementOptions& o,
+                  std::vector<Body>* bodies) {
+  const size_t n = bodies->size();
+  const size_t columns = (o.layout == Layout::kRow || o.layout == Layout::kSingle)
+                             ? n
+                             : static_cast<size_t>(std::ceil(std::sqrt(double(n))));
+  std::vector<double> column_width(columns, 0.0), row_depth((n + columns - 1) / columns, 0.0);
+  std::vector<Eigen::AlignedBox3d> bounds;
+  for (size_t b = 0; b < n; ++b) {
+    bounds.push_back(Bounds(parts, (*bodies)[b]));
+    column_width[b % columns] = std::max(column_width[b % columns], bounds[b].sizes().x());
+    row_depth[b / columns] = std::max(row_depth[b / columns], bounds[b].sizes().y());
   }
+  for (size_t b = 0; b < n; ++b) {
+    double x = 0, y = 0;
+    for (size_t c = 0; c < b % columns; ++c) x += column_width[c] + o.gap_mm;
+    for (size_t r = 0; r < b / columns; ++r) y -= row_depth[r] + o.gap_mm;
+    const Eigen::Vector3d shift(x + 0.5 * column_width[b % columns] - bounds[b].center().x(),
+                                y - 0.5 * row_depth[b / columns] - bounds[b].center().y(), 0.0);
+    Apply(Eigen::Isometry3d(Eigen::Translation3d(shift)), &(*bodies)[b]);
+  }
+}
 
+// Each body's footprint: the convex hull of its floor shadow.
+std::vector<Polygon> Footprints(const std::vector<Part>& parts, const std::vector<Body>& bodies) {
+  std::vector<Polygon> footprint(bodies.size());
+  for (size_t b = 0; b < bodies.size(); ++b) {
+    std::vector<Eigen::Vector2d> shadow;
+    for (const Instance& i : bodies[b].instances) {
+      for (const Eigen::Vector3f& p : parts[i.part].mesh.positions)
+        shadow.push_back((i.world_from_model * p.cast<double>()).head<2>());
+    }
+    footprint[b] = ConvexHull2D(shadow);
+  }
+  return footprint;
+}
+
+// Clutter: largest footprints first, each at up to 500 random spots in the disc, kept `gap`
+// from every body already down (footprints are the convex hulls of the bodies' floor shadows,
+// so disjoint footprints mean disjoint bodies).
+std::vector<Body> PlaceInClutter(const std::vector<Part>& parts, const ArrangementOptions& o,
+                                 const std::vector<Body>& bodies) {
+  const std::vector<Polygon> footprint = Footprints(parts, bodies);
+  std::vector<size_t> order(bodies.size());
+  for (size_t b = 0; b < order.size(); ++b) order[b] = b;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return Area(footprint[a]) > Area(footprint[b]); });
+  std::vector<Polygon> placed;
+  std::vector<Body> kept;
+  for (size_t b : order) {
+    bool done = false;
+    for (int attempt = 0; attempt < 500 && !done; ++attempt) {
+      const uint64_t index = (static_cast<uint64_t>(b) << 20) + static_cast<uint64_t>(attempt);
+      const double r =
+          o.clutter_radius_mm * std::sqrt(UniformDraw(o.seed, streams::kClutterRadius, index));
+      const double phi = 2 * M_PI * UniformDraw(o.seed, streams::kClutterAngle, index);
+      const Eigen::Vector2d at(r * std::cos(phi), r * std::sin(phi));
+      Polygon moved = footprint[b];
+      bool inside = true;
+      for (auto& p : moved) {
+        p += at;
+        inside = inside && p.norm() <= o.clutter_radius_mm;
+      }
+      if (!inside) continue;
+      bool free = true;
+      for (const Polygon& other : placed) free = free && Separation(moved, other) >= o.gap_mm;
+      if (!free) continue;
+      placed.push_back(moved);
+      Body body = bodies[b];
+      Apply(Eigen::Isometry3d(Eigen::Translation3d(at.x(), at.y(), 0.0)), &body);
+      kept.push_back(std::move(body));
+      done = true;
+    }
+  }
+  if (kept.size() < bodies.size()) {
+    std::ostringstream message;
+    message << "clutter: only " << kept.size() << " of " << bodies.size()
+            << " parts fit in a disc of radius " << o.clutter_radius_mm << " mm with " << o.gap_mm
+            << " mm between them; give a larger radius or fewer copies";
+    throw Error(message.str());
+  }
+  // Back in input order, for stable output.
+  std::sort(kept.begin(), kept.end(),
+            [&](const Body& a, const Body& b) { return a.group < b.group; });
+  return kept;
+}
+
+// The placed bodies' instances in order, each with its group (and restless ones marked).
+Arrangement Collect(const std::vector<Part>& parts, const std::vector<Body>& bodies, bool clutter) {
+  Arrangement out;
   for (const Body& body : bodies) {
     for (const Instance& i : body.instances) {
       if (body.restless) out.restless.push_back(static_cast<int>(out.instances.size()));
@@ -529,6 +561,42 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
     }
   }
   return out;
+}
+
+// The arrangement of `instances`; a pile's distractors fall with it (the other layouts' fall in
+// Arrange, after it).
+Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                         const ArrangementOptions& options, const std::vector<int>& group,
+                         const std::vector<CollisionShape>* shapes) {
+  ArrangementOptions o = options;
+  if (o.pose == PoseMode::kAuto)
+    o.pose = o.layout == Layout::kAssembled ? PoseMode::kUpright : PoseMode::kStable;
+  CheckInputs(parts, instances, o, group);
+  if (instances.empty()) return Arrangement{};
+
+  const std::vector<Body> groups = GroupBodies(instances, group);
+  if (o.layout == Layout::kPile) return ArrangePile(parts, o, groups, shapes);
+  if (o.layout == Layout::kSingle && groups.size() != 1) {
+    throw Error("arrangement: the single layout takes one part or assembly (got " +
+                std::to_string(groups.size()) + ")");
+  }
+  if (o.layout == Layout::kAssembled) return ArrangeAssembled(parts, o, groups);
+
+  const bool clutter = o.layout == Layout::kClutter;
+  std::vector<CollisionShape> own;
+  if (o.pose == PoseMode::kDropped && shapes == nullptr) {
+    std::vector<bool> needed(parts.size(), false);
+    for (const Instance& i : instances) needed[static_cast<size_t>(i.part)] = true;
+    own = NeededShapes(parts, needed);
+    shapes = &own;
+  }
+  std::vector<Body> bodies = RestCopies(parts, o, groups, shapes);
+  if (!clutter) {
+    PlaceInCells(parts, o, &bodies);
+  } else {
+    bodies = PlaceInClutter(parts, o, bodies);
+  }
+  return Collect(parts, bodies, clutter);
 }
 
 }  // namespace

@@ -95,7 +95,7 @@ struct ArrangementOptions {
     visit(o.copies,
           Field{"copies", "integer", "each group placed this many times (not with assembled)"});
     visit(o.clutter_radius_mm, Field{"radius", "length", "clutter: the disc the groups land in"});
-    visit(o.seed, Field{"seed", "integer", "random poses, yaws, clutter positions and piles"});
+    visit(o.seed, RunSeed("seed", "random poses, yaws, clutter positions and piles"));
     visit(o.drop_height_mm, Field{"drop_height", "length",
                                   "pile: the lowest part's start above the container's rim"});
     visit(o.settle_time_s, Field{"settle_time", "number",

@@ -44,8 +44,19 @@ struct Field {
   bool by_hand = false;
   // The name the run key and the shard file use: the recipe key, else `internal_name`.
   std::string_view internal_name = {};
+  // A seed of one run's draws (poses, noise, samples) that Reseed (recipes/recipe.h) moves to
+  // each stream of reseeded runs; the seeds of what a dataset holds once (model clouds, grasps,
+  // the split) are not marked. Made by RunSeed().
+  bool per_run_seed = false;
   std::string_view Name() const { return key.empty() ? internal_name : key; }
 };
+
+// An integer `key` that is a per-run seed (Field::per_run_seed).
+inline Field RunSeed(std::string_view key, std::string_view doc) {
+  Field field{key, "integer", doc};
+  field.per_run_seed = true;
+  return field;
+}
 
 // The value of a field as text, for the run key and the reference: numbers exactly (the shortest
 // text that reads back the same), bools as true/false, enums and choice bools by their choice name.

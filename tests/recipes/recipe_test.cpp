@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -1224,6 +1226,56 @@ TEST(Recipe, SymmetryListsAreReadInTheFilesFrame) {
   EXPECT_EQ(error("[]"), "r.yaml:1:33: parts[0].symmetry: an empty list: write 'none'");
   EXPECT_EQ(ErrorOf("parts: [{family: hex_nut, symmetry: [{axis: [0, 0, 1], order: 6}]}]\n"),
             "r.yaml:1:37: parts[0].symmetry: a list goes with 'file' (families declare theirs)");
+}
+
+// Each described field's text and whether it is a per-run seed, in order.
+template <class Options>
+std::vector<std::pair<std::string, bool>> FieldTexts(const Options& options) {
+  std::vector<std::pair<std::string, bool>> texts;
+  Options::Fields(options, [&](const auto& value, const Field& field) {
+    texts.push_back(
+        {std::string(field.Name()) + "=" + FieldText(value, field), field.per_run_seed});
+  });
+  return texts;
+}
+
+// Reseed moves every field marked as a run's seed (Field::per_run_seed) and no other described
+// field: the model clouds' and grasps' seeds stay (a dataset holds them once).
+TEST(Reseed, MovesExactlyTheSeedsMarkedPerRun) {
+  RunSpec spec = DefaultRunSpec();
+  spec.rig = {RigSensor{"a", spec.intrinsics, spec.sensor}};
+  const RunSpec out = Reseed(spec, 5);
+  int moved = 0;
+  const auto compare = [&](const auto& before, const auto& after) {
+    const auto a = FieldTexts(before), b = FieldTexts(after);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].first != b[i].first, a[i].second) << a[i].first << " -> " << b[i].first;
+      moved += a[i].first != b[i].first;
+    }
+  };
+  for (size_t s = 0; s < spec.scenes.size(); ++s)
+    compare(spec.scenes[s].arrangement, out.scenes[s].arrangement);
+  compare(spec.render, out.render);
+  compare(spec.bop, out.bop);
+  compare(spec.tessellation, out.tessellation);
+  compare(spec.limits, out.limits);
+  for (const auto& [a, b] :
+       {std::pair{&spec.sensor, &out.sensor}, std::pair{&spec.rig[0].sensor, &out.rig[0].sensor}}) {
+    compare(a->imager, b->imager);
+    compare(a->depth, b->depth);
+    compare(a->lens, b->lens);
+  }
+  compare(spec.grasps.gripper, out.grasps.gripper);
+  compare(spec.grasps.sampling, out.grasps.sampling);
+  compare(spec.grasps.cup, out.grasps.cup);
+  compare(spec.grasps.suction_sampling, out.grasps.suction_sampling);
+  // One arrangement seed per scene, the render seed, and each camera's imager and depth seeds.
+  EXPECT_EQ(moved, static_cast<int>(spec.scenes.size()) + 1 + 2 * 2);
+  EXPECT_NE(out.sampler.seed, spec.sampler.seed);
+  EXPECT_NE(out.randomize.draws.seed, spec.randomize.draws.seed);
+  EXPECT_EQ(Reseed(spec, 5).render.seed, out.render.seed);  // a stream is a function of its number
+  EXPECT_GE(out.render.seed, 0);
 }
 
 }  // namespace

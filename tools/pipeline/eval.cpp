@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -40,10 +41,11 @@ struct Estimate {
 };
 
 using ImageKey = std::pair<int, int>;  // scene, image
+using Estimates = std::map<std::pair<ImageKey, int>, std::vector<Estimate>>;
 
 // The estimates of RESULTS grouped per (image, object).
-std::map<std::pair<ImageKey, int>, std::vector<Estimate>> ReadResults(const fs::path& path) {
-  std::map<std::pair<ImageKey, int>, std::vector<Estimate>> out;
+Estimates ReadResults(const fs::path& path) {
+  Estimates out;
   for (const BopEstimate& e : ParseBopResults(ReadFileText(path), path.string()))
     out[{{e.scene_id, e.im_id}, e.obj_id}].push_back({e.score, e.cam_from_model});
   return out;
@@ -73,11 +75,9 @@ void Score(ObjectScores* s, const std::vector<double>& add_s, const std::vector<
   s->auc_add_or_s = AccuracyAuc(add_or_s, kAucMaxMm);
 }
 
-}  // namespace
-
-EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std::string& sensor) {
-  if (!fs::is_directory(dataset)) throw Error(dataset.string() + ": no such dataset folder");
-  // Models.
+// The models of DATASET by obj_id: models_info.json, names from models_cad.json and the point
+// clouds in models/points/.
+std::map<int, Model> ReadModels(const fs::path& dataset) {
   const fs::path info_file = dataset / "models" / "models_info.json";
   const fs::path cad_file = dataset / "models" / "models_cad.json";
   Json cad = Json::object();
@@ -111,34 +111,38 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
     m.points = DecodePointPly(ReadFileText(cloud), cloud.string());
     models[info.obj_id] = std::move(m);
   }
+  return models;
+}
 
-  const auto estimates = ReadResults(results);
-
-  // Which images: splits/test.txt if present, else all.
-  EvalReport report;
+// The images splits/test.txt lists (scene, image per line).
+std::set<ImageKey> ReadTestImages(const fs::path& test_list) {
   std::set<ImageKey> test_images;
-  const fs::path test_list = dataset / "splits" / "test.txt";
-  const bool use_split = fs::exists(test_list);
-  if (use_split) {
-    std::istringstream in(ReadFileText(test_list));
-    int scene, image;
-    while (in >> scene >> image) test_images.insert({scene, image});
-    if (!in.eof()) throw Error(test_list.string() + ": expected 'scene_id image_id' per line");
-    if (test_images.empty())
-      throw Error(test_list.string() + ": the test split is empty (see output.test_every)");
-    report.images = "test split (" + test_list.string() + ")";
-  } else {
-    report.images = "all images (no splits/test.txt)";
-  }
+  std::istringstream in(ReadFileText(test_list));
+  int scene, image;
+  while (in >> scene >> image) test_images.insert({scene, image});
+  if (!in.eof()) throw Error(test_list.string() + ": expected 'scene_id image_id' per line");
+  if (test_images.empty())
+    throw Error(test_list.string() + ": the test split is empty (see output.test_every)");
+  return test_images;
+}
 
-  // Ground truth of the evaluated images, grouped like the estimates.
-  struct Instance {
-    ImageKey image;
-    int obj_id;
-    Eigen::Isometry3d pose;
-  };
-  std::vector<Instance> truth;
-  std::set<ImageKey> images;
+struct TruthInstance {
+  ImageKey image;
+  int obj_id;
+  Eigen::Isometry3d pose;
+};
+
+struct Truth {
+  std::vector<TruthInstance> instances;
+  std::set<ImageKey> images;  // the evaluated images
+};
+
+// Ground truth of the evaluated images (`test_images`; none: every image of `sensor`), grouped like
+// the estimates.
+Truth ReadTruth(const fs::path& dataset, const std::string& sensor,
+                const std::map<int, Model>& models,
+                const std::optional<std::set<ImageKey>>& test_images) {
+  Truth truth;
   const fs::path root = FindSceneFolder(dataset, sensor);
   for (const auto& scene_dir : fs::directory_iterator(root)) {
     const fs::path gt_file =
@@ -148,25 +152,36 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
     if (!scene) continue;  // not a scene folder (BOP names them 000000, 000001, ...)
     for (const auto& [im, list] : ParseSceneGt(ReadFileText(gt_file), gt_file.string())) {
       const ImageKey key{*scene, im};
-      if (use_split && !test_images.count(key)) continue;
-      images.insert(key);
+      if (test_images && !test_images->count(key)) continue;
+      truth.images.insert(key);
       for (const BopGroundTruth& gt : list) {
         if (!models.count(gt.obj_id))
           throw Error(gt_file.string() + ": obj_id " + std::to_string(gt.obj_id) + " has no model");
-        truth.push_back({key, gt.obj_id, gt.cam_from_model});
+        truth.instances.push_back({key, gt.obj_id, gt.cam_from_model});
       }
     }
   }
-  report.image_count = static_cast<int>(images.size());
-  if (truth.empty()) throw Error(dataset.string() + ": no ground-truth instances to evaluate");
+  return truth;
+}
 
-  // Match estimates to instances: per (image, object), best score first, each to the unmatched
-  // instance it is closest to (by ADD(-S)).
+// Per ground-truth instance, the errors of the estimate matched to it (infinite: none).
+struct Errors {
+  std::vector<double> add_s, add_or_s, mssd;
+};
+
+// Match estimates to instances: per (image, object), best score first, each to the unmatched
+// instance it is closest to (by ADD(-S)). Counts the estimates left over (or for other images)
+// in `report`.
+Errors Match(const Truth& truth, const std::map<int, Model>& models, const Estimates& estimates,
+             EvalReport* report) {
+  const std::vector<TruthInstance>& instances = truth.instances;
   std::map<std::pair<ImageKey, int>, std::vector<size_t>> groups;
-  for (size_t i = 0; i < truth.size(); ++i) groups[{truth[i].image, truth[i].obj_id}].push_back(i);
+  for (size_t i = 0; i < instances.size(); ++i)
+    groups[{instances[i].image, instances[i].obj_id}].push_back(i);
   const double inf = std::numeric_limits<double>::infinity();
-  std::vector<double> add_s(truth.size(), inf), add_or_s(truth.size(), inf),
-      mssd(truth.size(), inf);
+  Errors errors{std::vector<double>(instances.size(), inf),
+                std::vector<double>(instances.size(), inf),
+                std::vector<double>(instances.size(), inf)};
   std::vector<std::pair<std::pair<ImageKey, int>, std::vector<size_t>>> work(groups.begin(),
                                                                              groups.end());
   std::vector<int> surplus(work.size(), 0);
@@ -184,7 +199,7 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
       double best_error = inf, best_add_s = inf;
       for (size_t m = 0; m < members.size(); ++m) {
         if (taken[m]) continue;
-        const Eigen::Isometry3d& gt = truth[members[m]].pose;
+        const Eigen::Isometry3d& gt = instances[members[m]].pose;
         const double s = AddSError(model.points, e.pose, gt);
         const double err = model.symmetric ? s : AddError(model.points, e.pose, gt);
         if (err < best_error) best = static_cast<int>(m), best_error = err, best_add_s = s;
@@ -194,27 +209,31 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
         continue;
       }
       taken[best] = true;
-      add_or_s[members[best]] = best_error;
-      add_s[members[best]] = best_add_s;
-      mssd[members[best]] =
-          MssdError(model.points, e.pose, truth[members[best]].pose, model.symmetry_poses);
+      errors.add_or_s[members[best]] = best_error;
+      errors.add_s[members[best]] = best_add_s;
+      errors.mssd[members[best]] =
+          MssdError(model.points, e.pose, instances[members[best]].pose, model.symmetry_poses);
     }
   });
   for (const auto& [key, list] : estimates) {
-    if (images.count(key.first) && !groups.count(key))
-      report.unmatched_estimates += static_cast<int>(list.size());
-    if (!images.count(key.first)) report.ignored_estimates += static_cast<int>(list.size());
+    if (truth.images.count(key.first) && !groups.count(key))
+      report->unmatched_estimates += static_cast<int>(list.size());
+    if (!truth.images.count(key.first)) report->ignored_estimates += static_cast<int>(list.size());
   }
-  for (int s : surplus) report.unmatched_estimates += s;
+  for (int s : surplus) report->unmatched_estimates += s;
+  return errors;
+}
 
-  // Scores per object and overall.
+// Scores per object and overall.
+void ScoreAll(const std::map<int, Model>& models, const std::vector<TruthInstance>& truth,
+              const Errors& errors, EvalReport* report) {
   std::vector<double> all_diam;
-  for (const Instance& t : truth) all_diam.push_back(models.at(t.obj_id).diameter);
+  for (const TruthInstance& t : truth) all_diam.push_back(models.at(t.obj_id).diameter);
   for (const auto& [obj, model] : models) {
     std::vector<double> a, b, m, d;
     for (size_t i = 0; i < truth.size(); ++i) {
       if (truth[i].obj_id != obj) continue;
-      a.push_back(add_s[i]), b.push_back(add_or_s[i]), m.push_back(mssd[i]);
+      a.push_back(errors.add_s[i]), b.push_back(errors.add_or_s[i]), m.push_back(errors.mssd[i]);
       d.push_back(model.diameter);
     }
     if (a.empty()) continue;
@@ -224,10 +243,36 @@ EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std:
     s.symmetric = model.symmetric;
     s.diameter_mm = model.diameter;
     Score(&s, a, b, m, d);
-    report.objects.push_back(s);
+    report->objects.push_back(s);
   }
-  report.overall.name = "all";
-  Score(&report.overall, add_s, add_or_s, mssd, all_diam);
+  report->overall.name = "all";
+  Score(&report->overall, errors.add_s, errors.add_or_s, errors.mssd, all_diam);
+}
+
+}  // namespace
+
+EvalReport Evaluate(const fs::path& dataset, const fs::path& results, const std::string& sensor) {
+  if (!fs::is_directory(dataset)) throw Error(dataset.string() + ": no such dataset folder");
+  const std::map<int, Model> models = ReadModels(dataset);
+  const Estimates estimates = ReadResults(results);
+
+  // Which images: splits/test.txt if present, else all.
+  EvalReport report;
+  std::optional<std::set<ImageKey>> test_images;
+  const fs::path test_list = dataset / "splits" / "test.txt";
+  if (fs::exists(test_list)) {
+    test_images = ReadTestImages(test_list);
+    report.images = "test split (" + test_list.string() + ")";
+  } else {
+    report.images = "all images (no splits/test.txt)";
+  }
+
+  const Truth truth = ReadTruth(dataset, sensor, models, test_images);
+  report.image_count = static_cast<int>(truth.images.size());
+  if (truth.instances.empty())
+    throw Error(dataset.string() + ": no ground-truth instances to evaluate");
+  const Errors errors = Match(truth, models, estimates, &report);
+  ScoreAll(models, truth.instances, errors, &report);
   return report;
 }
 

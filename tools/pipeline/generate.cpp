@@ -147,220 +147,323 @@ GenerateSummary Generate(const FrameSource& source, const GenerateOptions& optio
 
 namespace {
 
+// What GenerateFrom's steps share: the prepared run and the part of it this process renders.
+struct Run {
+  const FrameSource& source;
+  const GenerateOptions& options;
+  const RunSpec& spec;
+  const PreparedRun& prepared;
+  const std::vector<Part>& parts;
+  const std::vector<SweepView>& views;
+  const std::vector<RigSensor>& sensors;
+  const std::optional<ShardSpec>& shard;
+  std::vector<BopSensor> bop_sensors;
+  bool common = false;  // writes the files every dataset has once
+
+  // Work unit g = scene * views + view; a shard renders the units it owns.
+  bool Owns(size_t scene, size_t view) const {
+    return !shard || shard->Owns(scene * views.size() + view);
+  }
+  void Info(const std::string& line) const {
+    if (options.info) options.info(line);
+  }
+};
+
+Run MakeRun(const FrameSource& source, const GenerateOptions& options) {
+  const RunSpec& spec = source.spec();
+  const PreparedRun& prepared = source.prepared();
+  Run run{.source = source,
+          .options = options,
+          .spec = spec,
+          .prepared = prepared,
+          .parts = prepared.parts,
+          .views = source.views(),
+          .sensors = source.sensors(),
+          .shard = options.shard};
+  for (const RigSensor& sensor : run.sensors) {
+    run.bop_sensors.push_back(
+        {sensor.name, spec.rig.empty() ? spec.bop.gray_bits : GrayBits(sensor.sensor.image)});
+  }
+  run.common = !run.shard || run.shard->index == 0;
+  return run;
+}
+
+// The frames of this attempt: the last pipeline stage counts from many threads (atomics).
+struct Counts {
+  size_t total = 0;  // the units this run (or shard) owns
+  std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
+  size_t resumed = 0, damaged = 0, frames = 0;
+};
+
+size_t OwnedUnits(const Run& run) {
+  size_t total_frames = 0;
+  for (size_t s = 0; s < run.prepared.scenes.size(); ++s) {
+    for (size_t i = 0; i < run.views.size(); ++i) total_frames += run.Owns(s, i);
+  }
+  return total_frames;
+}
+
+void WarnPlacements(const Run& run) {
+  for (size_t s = 0; s < run.prepared.scenes.size(); ++s) {
+    for (const std::string& warning :
+         PlacementWarnings(run.parts, run.prepared.scenes[s].instances, run.sensors[0].intrinsics,
+                           run.spec.sweep)) {
+      Warn("scene '" + run.spec.scenes[s].name + "': " + warning);
+    }
+  }
+}
+
+// Where this attempt writes: a single run's staging folder, or a shard's tree (the output itself).
+struct Output {
+  std::filesystem::path root;
+  std::unique_ptr<StagingRun> staging;
+  std::unique_ptr<ShardTree> tree;
+};
+
+// A single run writes to a hidden staging folder beside the output, renamed into place at the
+// end. An interrupted run (killed, disk full) leaves it; the same run started again continues
+// from the frames it completed, if its run key (recipe text, parts, views, output options)
+// matches. Shards write into the output folder itself and agree on the key there.
+Output OpenOutput(const Run& run, const std::filesystem::path& output, const std::string& run_key) {
+  Output out;
+  if (run.shard) {
+    out.root = output;
+    out.tree = std::make_unique<ShardTree>(output, *run.shard, run_key);
+  } else {
+    out.staging = std::make_unique<StagingRun>(output, run_key, run.options.info);
+    out.root = out.staging->root();
+  }
+  return out;
+}
+
+void WriteCommonFiles(const Run& run, const std::filesystem::path& root) {
+  const RunSpec& spec = run.spec;
+  WriteBopCamera(root, run.sensors[0].intrinsics, spec.bop);  // a rig: its first sensor's
+  if (!spec.rig.empty()) {
+    for (const RigSensor& sensor : run.sensors)
+      WriteBopCamera(root, sensor.intrinsics, spec.bop, sensor.name);
+  }
+  WriteBopModels(root, run.parts, run.prepared.classes);
+  WriteModelPoints(root, run.parts, spec.bop);
+  if (spec.grasps.enabled && spec.grasps.acronym)
+    WriteGraspFiles(root, run.parts, spec.grasps, run.source);
+  WriteFileAtomic(root / "variants.json", run.prepared.variants_json);
+}
+
+std::vector<BopSceneWriter::CocoCategory> CocoCategories(const Run& run) {
+  std::vector<BopSceneWriter::CocoCategory> categories;
+  for (size_t p = 0; p < run.parts.size(); ++p) {
+    categories.push_back(
+        {static_cast<int>(p) + 1, run.parts[p].name, run.prepared.classes[p].name});
+  }
+  return categories;
+}
+
+// What merge needs to know about the run (shard 0 writes it).
+void WriteShardRunInfo(const Run& run, const ShardTree& tree,
+                       const std::vector<BopSceneWriter::CocoCategory>& categories) {
+  ShardRunInfo info;
+  info.shards = run.shard->count;
+  info.views = run.views.size();
+  info.bop = run.spec.bop;
+  if (!run.spec.rig.empty()) info.sensors = run.bop_sensors;
+  info.obj_ids = run.prepared.obj_ids;
+  info.categories = categories;
+  info.classes = run.prepared.classes;
+  tree.WriteRunInfo(info);
+}
+
+// Per scene, the writers of the other output formats and of the grasp labels (none: the scene
+// has no grasp labels here), beside the scene's RigSceneWriter.
+struct SceneFormats {
+  std::vector<std::vector<std::unique_ptr<FrameWriter>>> formats;
+  std::vector<std::unique_ptr<GraspLabelWriter>> grasps;
+};
+
+// Scene s's writers: its RigSceneWriter, appended to `writers`, and its entries of `formats`.
+void OpenScene(const Run& run, const std::filesystem::path& root, size_t s,
+               const std::vector<BopSceneWriter::CocoCategory>& categories,
+               std::vector<std::unique_ptr<RigSceneWriter>>* writers, SceneFormats* formats) {
+  const RunSpec& spec = run.spec;
+  const PreparedRun& prepared = run.prepared;
+  auto& writer = *writers->emplace_back(std::make_unique<RigSceneWriter>(
+      root, static_cast<int>(s), spec.bop, prepared.obj_ids[s], run.bop_sensors));
+  if (run.common) writer.WriteWorldPoses(prepared.scenes[s].instances);
+  writer.SetCocoCategories(categories);
+  FormatScene format_scene{root, static_cast<int>(s), spec.bop, {}};
+  for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
+    const Instance& instance = prepared.scenes[s].instances[i];
+    format_scene.instances.push_back({prepared.obj_ids[s][i],
+                                      prepared.classes[static_cast<size_t>(instance.part)],
+                                      instance.name, instance.world_from_model});
+  }
+  formats->formats.push_back(MakeFrameWriters(format_scene));
+  bool renders_here = false;  // a shard places only the grasps of scenes it renders frames of
+  for (size_t i = 0; i < run.views.size() && !renders_here; ++i) renders_here = run.Owns(s, i);
+  if (spec.grasps.enabled && (spec.grasps.labels.graspnet || spec.grasps.labels.suctionnet) &&
+      renders_here) {
+    formats->grasps[s] = std::make_unique<GraspLabelWriter>(
+        root, static_cast<int>(s), spec.grasps.labels, run.source.PlacedGrasps(s));
+  }
+}
+
+// The frames of scene s an interrupted attempt wrote: those whose files still match their
+// manifest entry count as resumed; the others are forgotten, to be rendered again.
+void CheckEarlierFrames(const Run& run, size_t s, RigSceneWriter& writer, Counts* counts) {
+  std::vector<int> earlier;
+  for (int id : writer.WrittenFrames()) {
+    if (id >= 0 && static_cast<size_t>(id) < run.views.size() &&
+        run.Owns(s, static_cast<size_t>(id)))
+      earlier.push_back(id);
+  }
+  std::vector<std::string> problems(earlier.size());
+  tbb::parallel_for(size_t{0}, earlier.size(),
+                    [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
+  for (size_t k = 0; k < earlier.size(); ++k) {
+    if (problems[k].empty()) {
+      ++counts->resumed;
+      continue;
+    }
+    Warn(problems[k] + ": rendering image " + std::to_string(earlier[k]) + " again");
+    writer.ForgetFrame(earlier[k]);
+    ++counts->damaged;
+  }
+}
+
+// Scene s through the TBB pipeline: cast -> encode + write, a bounded number of frames in flight.
+// Views showing too little of the scene are skipped (image ids keep their view index).
+void RenderScene(const Run& run, size_t s, RigSceneWriter& writer, const SceneFormats& scene,
+                 size_t to_render, Counts* counts) {
+  std::vector<const FrameWriter*> formats;
+  for (const auto& format : scene.formats[s]) formats.push_back(format.get());
+  if (scene.grasps[s]) formats.push_back(scene.grasps[s].get());
+  size_t next = 0;
+  const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
+  // The scene's acceleration structures first, with every thread (as before FrameSource:
+  // also for a scene this shard renders no frame of, so the same errors surface).
+  run.source.BuildScene(s);
+  using ViewPtr = std::shared_ptr<const RenderedView>;
+  tbb::parallel_pipeline(
+      tokens,
+      tbb::make_filter<void, size_t>(
+          tbb::filter_mode::serial_in_order,
+          [&](tbb::flow_control& control) -> size_t {
+            while (next < run.views.size() &&
+                   (!run.Owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
+              ++next;
+            }
+            if (next >= run.views.size()) {
+              control.stop();
+              return 0;
+            }
+            return next++;
+          }) &
+          tbb::make_filter<size_t, ViewPtr>(tbb::filter_mode::parallel,
+                                            [&](size_t i) {
+                                              return std::make_shared<const RenderedView>(
+                                                  run.source.Render(s * run.views.size() + i));
+                                            }) &
+          tbb::make_filter<ViewPtr, void>(tbb::filter_mode::parallel, [&](const ViewPtr& view) {
+            if (!view->kept) {
+              ++(view->visible_pixels == 0 ? counts->empty_views : counts->sparse_views);
+            } else {
+              std::vector<const Frame*> rig_frames;
+              for (const Frame& frame : view->frames) rig_frames.push_back(&frame);
+              writer.WriteFrame(static_cast<int>(view->view), rig_frames, formats);
+            }
+            const size_t n = ++counts->done;
+            if (run.options.progress) run.options.progress(n, to_render);
+          }));
+  run.source.ReleaseScene(s);
+  for (int id : writer.WrittenFrames()) counts->frames += run.Owns(s, static_cast<size_t>(id));
+}
+
+// A shard records that it finished (for merge); a single run moves its dataset into place.
+void Finish(const Run& run, const Output& out, const std::filesystem::path& output,
+            const std::vector<std::filesystem::path>& inputs,
+            const std::vector<std::unique_ptr<RigSceneWriter>>& writers, const Counts& counts,
+            std::chrono::steady_clock::time_point start) {
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (run.shard) {
+    std::ostringstream marker;
+    marker << "{\"shard\": " << run.shard->index << ", \"of\": " << run.shard->count
+           << ", \"units\": " << counts.total << ", \"frames\": " << counts.frames
+           << ", \"skipped_empty\": " << counts.empty_views
+           << ", \"skipped_sparse\": " << counts.sparse_views << ", \"seconds\": " << seconds
+           << "}";
+    out.tree->MarkDone(marker.str());
+  } else {
+    for (const auto& writer : writers) writer->RemoveFragments();
+    out.staging->Publish(output, run.options.overwrite, inputs);
+  }
+}
+
+GenerateSummary Summarize(const Run& run, const Counts& counts,
+                          std::chrono::steady_clock::time_point start) {
+  GenerateSummary summary;
+  summary.skipped_empty = counts.empty_views;
+  summary.skipped_sparse = counts.sparse_views;
+  summary.frames = counts.frames;
+  summary.resumed = counts.resumed;
+  summary.scenes = run.prepared.scenes.size();
+  summary.objects = run.parts.size();
+  summary.instances = 0;
+  for (const Scene& scene : run.prepared.scenes) summary.instances += scene.instances.size();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
 GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& options,
                              std::chrono::steady_clock::time_point start) {
   const RunSpec& spec = source.spec();
   const std::filesystem::path output = CheckOutput(spec, options);
   const std::vector<std::filesystem::path> inputs = RunInputs(spec);
-  const std::optional<ShardSpec>& shard = options.shard;
-  const std::vector<RigSensor>& sensors = source.sensors();
-  std::vector<BopSensor> bop_sensors;
-  for (const RigSensor& sensor : sensors) {
-    bop_sensors.push_back(
-        {sensor.name, spec.rig.empty() ? spec.bop.gray_bits : GrayBits(sensor.sensor.image)});
-  }
-  const PreparedRun& prepared = source.prepared();
-  const std::vector<Part>& parts = prepared.parts;
-  const std::vector<SweepView>& views = source.views();
-  const bool common = !shard || shard->index == 0;  // writes the files every dataset has once
-  if (common) {
-    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      for (const std::string& warning : PlacementWarnings(parts, prepared.scenes[s].instances,
-                                                          sensors[0].intrinsics, spec.sweep)) {
-        Warn("scene '" + spec.scenes[s].name + "': " + warning);
-      }
-    }
-  }
-  // Work unit g = scene * views + view; a shard renders the units it owns.
-  const auto owns = [&](size_t scene, size_t view) {
-    return !shard || shard->Owns(scene * views.size() + view);
-  };
-  size_t total_frames = 0;
-  for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-    for (size_t i = 0; i < views.size(); ++i) total_frames += owns(s, i);
-  }
+  const Run run = MakeRun(source, options);
+  const PreparedRun& prepared = run.prepared;
+  if (run.common) WarnPlacements(run);
+  Counts counts;
+  counts.total = OwnedUnits(run);
 
-  const auto info = [&](const std::string& line) {
-    if (options.info) options.info(line);
-  };
-  const std::string run_key = RunKey(spec, prepared, views);
-  info("tracing with Embree's " + TracingIsa(spec.render.isa) + " kernels");
+  const std::string run_key = RunKey(spec, prepared, run.views);
+  run.Info("tracing with Embree's " + TracingIsa(spec.render.isa) + " kernels");
   // Grasps: every shard samples them (its frames need them); the common files write them.
   if (spec.grasps.enabled) source.ObjectJawGrasps();
-  // A single run writes to a hidden staging folder beside the output, renamed into place at the
-  // end. An interrupted run (killed, disk full) leaves it; the same run started again continues
-  // from the frames it completed, if its run key (recipe text, parts, views, output options)
-  // matches. Shards write into the output folder itself and agree on the key there.
-  std::filesystem::path root;
-  std::unique_ptr<StagingRun> staging;
-  std::unique_ptr<ShardTree> tree;
-  if (shard) {
-    root = output;
-    tree = std::make_unique<ShardTree>(output, *shard, run_key);
-  } else {
-    staging = std::make_unique<StagingRun>(output, run_key, options.info);
-    root = staging->root();
-  }
+  const Output out = OpenOutput(run, output, run_key);
   // The staging folder (or shard tree) is kept on errors from here on: a rerun resumes from it.
-  std::atomic<size_t> done{0}, empty_views{0}, sparse_views{0};
-  size_t resumed = 0, damaged = 0, frames = 0;
   std::vector<std::unique_ptr<RigSceneWriter>> writers;
   try {
-    if (common) {
-      WriteBopCamera(root, sensors[0].intrinsics, spec.bop);  // a rig: its first sensor's
-      if (!spec.rig.empty()) {
-        for (const RigSensor& sensor : sensors)
-          WriteBopCamera(root, sensor.intrinsics, spec.bop, sensor.name);
-      }
-      WriteBopModels(root, parts, prepared.classes);
-      WriteModelPoints(root, parts, spec.bop);
-      if (spec.grasps.enabled && spec.grasps.acronym)
-        WriteGraspFiles(root, parts, spec.grasps, source);
-      WriteFileAtomic(root / "variants.json", prepared.variants_json);
-    }
-    std::vector<BopSceneWriter::CocoCategory> categories;
-    for (size_t p = 0; p < parts.size(); ++p) {
-      categories.push_back({static_cast<int>(p) + 1, parts[p].name, prepared.classes[p].name});
-    }
-    if (shard && shard->index == 0) {
-      ShardRunInfo run;
-      run.shards = shard->count;
-      run.views = views.size();
-      run.bop = spec.bop;
-      if (!spec.rig.empty()) run.sensors = bop_sensors;
-      run.obj_ids = prepared.obj_ids;
-      run.categories = categories;
-      run.classes = prepared.classes;
-      tree->WriteRunInfo(run);
-    }
+    if (run.common) WriteCommonFiles(run, out.root);
+    const std::vector<BopSceneWriter::CocoCategory> categories = CocoCategories(run);
+    if (run.shard && run.shard->index == 0) WriteShardRunInfo(run, *out.tree, categories);
 
     // Every scene's writers first: frames of an interrupted attempt count when every file still
     // matches their manifest entry; the others are rendered (again).
-    std::vector<std::vector<std::unique_ptr<FrameWriter>>> format_writers;
-    std::vector<std::unique_ptr<GraspLabelWriter>> grasp_writers(prepared.scenes.size());
+    SceneFormats formats;
+    formats.grasps.resize(prepared.scenes.size());
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      auto& writer = *writers.emplace_back(std::make_unique<RigSceneWriter>(
-          root, static_cast<int>(s), spec.bop, prepared.obj_ids[s], bop_sensors));
-      if (common) writer.WriteWorldPoses(prepared.scenes[s].instances);
-      writer.SetCocoCategories(categories);
-      FormatScene format_scene{root, static_cast<int>(s), spec.bop, {}};
-      for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {
-        const Instance& instance = prepared.scenes[s].instances[i];
-        format_scene.instances.push_back({prepared.obj_ids[s][i],
-                                          prepared.classes[static_cast<size_t>(instance.part)],
-                                          instance.name, instance.world_from_model});
-      }
-      format_writers.push_back(MakeFrameWriters(format_scene));
-      bool renders_here = false;  // a shard places only the grasps of scenes it renders frames of
-      for (size_t i = 0; i < views.size() && !renders_here; ++i) renders_here = owns(s, i);
-      if (spec.grasps.enabled && (spec.grasps.labels.graspnet || spec.grasps.labels.suctionnet) &&
-          renders_here) {
-        grasp_writers[s] = std::make_unique<GraspLabelWriter>(
-            root, static_cast<int>(s), spec.grasps.labels, source.PlacedGrasps(s));
-      }
-      std::vector<int> earlier;
-      for (int id : writer.WrittenFrames()) {
-        if (id >= 0 && static_cast<size_t>(id) < views.size() && owns(s, static_cast<size_t>(id)))
-          earlier.push_back(id);
-      }
-      std::vector<std::string> problems(earlier.size());
-      tbb::parallel_for(size_t{0}, earlier.size(),
-                        [&](size_t k) { problems[k] = writer.CheckFrame(earlier[k]); });
-      for (size_t k = 0; k < earlier.size(); ++k) {
-        if (problems[k].empty()) {
-          ++resumed;
-          continue;
-        }
-        Warn(problems[k] + ": rendering image " + std::to_string(earlier[k]) + " again");
-        writer.ForgetFrame(earlier[k]);
-        ++damaged;
-      }
+      OpenScene(run, out.root, s, categories, &writers, &formats);
+      CheckEarlierFrames(run, s, *writers[s], &counts);
     }
     // Progress counts the frames this attempt renders.
-    const size_t to_render = total_frames - resumed;
+    const size_t to_render = counts.total - counts.resumed;
     if (options.progress) options.progress(0, to_render);
 
-    // Render scene by scene: cast -> encode + write, a bounded number of frames in flight. Views
-    // showing too little of the scene are skipped (image ids keep their view index).
-    for (size_t s = 0; s < prepared.scenes.size(); ++s) {
-      RigSceneWriter& writer = *writers[s];
-      std::vector<const FrameWriter*> formats;
-      for (const auto& format : format_writers[s]) formats.push_back(format.get());
-      if (grasp_writers[s]) formats.push_back(grasp_writers[s].get());
-      size_t next = 0;
-      const size_t tokens = 2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency());
-      // The scene's acceleration structures first, with every thread (as before FrameSource:
-      // also for a scene this shard renders no frame of, so the same errors surface).
-      source.BuildScene(s);
-      using ViewPtr = std::shared_ptr<const RenderedView>;
-      tbb::parallel_pipeline(
-          tokens,
-          tbb::make_filter<void, size_t>(
-              tbb::filter_mode::serial_in_order,
-              [&](tbb::flow_control& control) -> size_t {
-                while (next < views.size() &&
-                       (!owns(s, next) || writer.HasFrame(static_cast<int>(next)))) {
-                  ++next;
-                }
-                if (next >= views.size()) {
-                  control.stop();
-                  return 0;
-                }
-                return next++;
-              }) &
-              tbb::make_filter<size_t, ViewPtr>(tbb::filter_mode::parallel,
-                                                [&](size_t i) {
-                                                  return std::make_shared<const RenderedView>(
-                                                      source.Render(s * views.size() + i));
-                                                }) &
-              tbb::make_filter<ViewPtr, void>(tbb::filter_mode::parallel, [&](const ViewPtr& view) {
-                if (!view->kept) {
-                  ++(view->visible_pixels == 0 ? empty_views : sparse_views);
-                } else {
-                  std::vector<const Frame*> rig_frames;
-                  for (const Frame& frame : view->frames) rig_frames.push_back(&frame);
-                  writer.WriteFrame(static_cast<int>(view->view), rig_frames, formats);
-                }
-                const size_t n = ++done;
-                if (options.progress) options.progress(n, to_render);
-              }));
-      source.ReleaseScene(s);
-      for (int id : writer.WrittenFrames()) frames += owns(s, static_cast<size_t>(id));
-    }
-    if (!shard) FinishDataset(root, spec.bop, writers, prepared.classes);
+    // Render scene by scene.
+    for (size_t s = 0; s < prepared.scenes.size(); ++s)
+      RenderScene(run, s, *writers[s], formats, to_render, &counts);
+    if (!run.shard) FinishDataset(out.root, spec.bop, writers, prepared.classes);
   } catch (const Error& e) {
-    throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + root.string() +
+    throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + out.root.string() +
                 ": the same command continues from them)");
   }
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (shard) {
-    std::ostringstream marker;
-    marker << "{\"shard\": " << shard->index << ", \"of\": " << shard->count
-           << ", \"units\": " << total_frames << ", \"frames\": " << frames
-           << ", \"skipped_empty\": " << empty_views << ", \"skipped_sparse\": " << sparse_views
-           << ", \"seconds\": " << seconds << "}";
-    tree->MarkDone(marker.str());
-  } else {
-    for (const auto& writer : writers) writer->RemoveFragments();
-    staging->Publish(output, options.overwrite, inputs);
-  }
-  if (resumed > 0) info("resumed: " + std::to_string(resumed) + " frames were already written");
-  if (damaged > 0)
-    info("rendered again: " + std::to_string(damaged) +
-         " frames whose files did not match the manifest");
-
-  GenerateSummary summary;
-  summary.skipped_empty = empty_views;
-  summary.skipped_sparse = sparse_views;
-  summary.frames = frames;
-  summary.resumed = resumed;
-  summary.scenes = prepared.scenes.size();
-  summary.objects = parts.size();
-  summary.instances = 0;
-  for (const Scene& scene : prepared.scenes) summary.instances += scene.instances.size();
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return summary;
+  Finish(run, out, output, inputs, writers, counts, start);
+  if (counts.resumed > 0)
+    run.Info("resumed: " + std::to_string(counts.resumed) + " frames were already written");
+  if (counts.damaged > 0)
+    run.Info("rendered again: " + std::to_string(counts.damaged) +
+             " frames whose files did not match the manifest");
+  return Summarize(run, counts, start);
 }
 
 }  // namespace

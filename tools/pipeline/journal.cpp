@@ -33,16 +33,76 @@ const std::string& BuildId() {
   return id;
 }
 
-std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
-                   const std::vector<SweepView>& views) {
+namespace {
+
+// The run key as it is written: the stream, the images the look reads (their bytes go in last)
+// and the described options by name (cad/core/schema.h).
+struct KeyWriter {
   std::ostringstream key;
-  key.precision(17);
-  key << "cadsynth run key 2\n";
-  // The recipe as it was read (not read again: it may have changed, or be a pipe).
-  if (!spec.recipe.empty()) key << "recipe\n" << spec.recipe_text << "\n";
-  if (spec.reseed != 0) key << "reseed " << spec.reseed << "\n";  // the seeds differ from the text
-  // The bytes of every CAD file, not only its name: a file edited between a kill and the rerun
-  // (or between two shards) would otherwise mix frames of two geometries.
+  std::set<std::filesystem::path> images;
+
+  KeyWriter() { key.precision(17); }
+
+  template <class Options>
+  void Fields(const char* section, const Options& options) {
+    key << section;
+    Options::Fields(options, [this](const auto& value, const Field& field) {
+      key << " " << field.Name() << "=" << FieldText(value, field);
+    });
+    key << "\n";
+  }
+
+  void Material(const char* what, const cadsynth::Material& m) {
+    const PrincipledParams& p = m.surface;
+    const Texture& t = m.texture;
+    key << what << " " << p.base_color.transpose() << " " << p.metallic << " " << p.roughness << " "
+        << p.specular << " " << p.anisotropic << " " << p.clearcoat << " " << p.clearcoat_roughness
+        << " " << p.multiscatter << " " << m.base_from_part << " tangent "
+        << static_cast<int>(m.tangent) << " texture " << static_cast<int>(t.kind) << " "
+        << t.scale_mm << " " << t.amount << " " << t.roughness_amount << " " << t.bump << " "
+        << t.color.transpose() << " " << t.seed << " " << t.image.string();
+    if (t.kind == Texture::Kind::kImage) key << " projection " << static_cast<int>(t.projection);
+    key << "\n";
+    if (!t.image.empty()) images.insert(t.image);
+  }
+
+  void Dist(const char* what, const std::optional<Distribution>& d) {
+    key << " " << what;
+    if (!d) return;
+    key << " " << static_cast<int>(d->kind) << " " << d->a << " " << d->b;
+    for (double v : d->values) key << " " << v;
+  }
+
+  void Randomized(const char* what, const MaterialRandomization& m) {
+    key << what;
+    for (const std::string& name : m.preset_names) key << " preset " << name;
+    for (const Texture& t : m.textures) {
+      key << " texture " << t.image.string() << " " << t.scale_mm;
+      images.insert(t.image);
+    }
+    Dist("hue", m.hue);
+    Dist("saturation", m.saturation);
+    Dist("value", m.value);
+    Dist("metallic", m.metallic);
+    Dist("roughness", m.roughness);
+    Dist("specular", m.specular);
+    Dist("texture_scale", m.texture_scale);
+    key << "\n";
+  }
+
+  void ImageChoice(const char* what, const cadsynth::ImageChoice& c) {
+    key << what;
+    for (const std::filesystem::path& file : c.files) {
+      key << " " << file.string();
+      images.insert(file);
+    }
+    key << "\n";
+  }
+};
+
+// The bytes of every CAD file, not only its name: a file edited between a kill and the rerun
+// (or between two shards) would otherwise mix frames of two geometries.
+void KeyInputFiles(const RunSpec& spec, KeyWriter& w) {
   std::set<std::filesystem::path> files;
   for (const SceneSpec& scene : spec.scenes) {
     for (const PartSource& source : scene.sources) {
@@ -59,275 +119,256 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   }
   for (const std::filesystem::path& file : files) {
     const std::string bytes = ReadFileText(file);
-    key << "file " << file.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
+    w.key << "file " << file.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
   }
-  key << prepared.variants_json << "\n";
+}
+
+// Lens distortion, depth of field and motion blur (recipes without them keep their run keys).
+void KeyOptics(const Intrinsics& k, const SensorOptions& sensor, KeyWriter& w) {
+  if (k.distortion.active()) w.Fields("distortion", k.distortion);
+  if (sensor.lens.active()) w.Fields("lens", sensor.lens);
+  if (sensor.motion.active()) {
+    const CameraMotion& m = sensor.motion;
+    w.key << "motion " << FieldText(m.exposure_s, Field{});
+    for (int i = 0; i < 3; ++i) w.key << " " << FieldText(m.velocity_mm_s[i], Field{});
+    for (int i = 0; i < 3; ++i) w.key << " " << FieldText(m.angular_velocity_rad_s[i], Field{});
+    w.key << "\n";
+  }
+}
+
+void KeySensors(const RunSpec& spec, KeyWriter& w) {
   const Intrinsics& k = spec.intrinsics;
-  key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " "
-      << k.cy << "\n";
-  // Every described option (cad/core/schema.h), by name.
-  const auto fields = [&key](const char* section, const auto& options) {
-    key << section;
-    std::decay_t<decltype(options)>::Fields(options, [&key](const auto& value, const Field& field) {
-      key << " " << field.Name() << "=" << FieldText(value, field);
-    });
-    key << "\n";
-  };
+  w.key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx
+        << " " << k.cy << "\n";
   // The sensor (recipes without camera.image and camera.depth keep their earlier run keys).
   if (spec.sensor.image != SensorOptions::Image::kRgb ||
       spec.sensor.depth.kind != DepthModel::Kind::kIdeal) {
-    key << "image " << static_cast<int>(spec.sensor.image) << "\n";
-    fields("depth", spec.sensor.depth);
+    w.key << "image " << static_cast<int>(spec.sensor.image) << "\n";
+    w.Fields("depth", spec.sensor.depth);
   }
-  if (spec.sensor.imager.active()) fields("imager", spec.sensor.imager);
-  // Lens distortion, depth of field and motion blur (recipes without them keep their run keys).
-  const auto optics = [&](const Intrinsics& k, const SensorOptions& sensor) {
-    if (k.distortion.active()) fields("distortion", k.distortion);
-    if (sensor.lens.active()) fields("lens", sensor.lens);
-    if (sensor.motion.active()) {
-      const CameraMotion& m = sensor.motion;
-      key << "motion " << FieldText(m.exposure_s, Field{});
-      for (int i = 0; i < 3; ++i) key << " " << FieldText(m.velocity_mm_s[i], Field{});
-      for (int i = 0; i < 3; ++i) key << " " << FieldText(m.angular_velocity_rad_s[i], Field{});
-      key << "\n";
-    }
-  };
-  optics(spec.intrinsics, spec.sensor);
+  if (spec.sensor.imager.active()) w.Fields("imager", spec.sensor.imager);
+  KeyOptics(spec.intrinsics, spec.sensor, w);
   // A rig's sensors (recipes without `cameras:` keep their earlier run keys).
   for (const RigSensor& sensor : spec.rig) {
     const Intrinsics& c = sensor.intrinsics;
     const Eigen::Matrix<double, 3, 4> pose = sensor.rig_from_cam.matrix().topRows<3>();
-    key << "sensor " << sensor.name << " " << c.width << " " << c.height << " " << c.fx << " "
-        << c.fy << " " << c.cx << " " << c.cy << " image " << static_cast<int>(sensor.sensor.image)
-        << " pose";
-    for (int i = 0; i < 12; ++i) key << " " << pose(i % 3, i / 3);
-    key << "\n";
-    fields("depth", sensor.sensor.depth);
-    fields("imager", sensor.sensor.imager);
-    optics(sensor.intrinsics, sensor.sensor);
+    w.key << "sensor " << sensor.name << " " << c.width << " " << c.height << " " << c.fx << " "
+          << c.fy << " " << c.cx << " " << c.cy << " image "
+          << static_cast<int>(sensor.sensor.image) << " pose";
+    for (int i = 0; i < 12; ++i) w.key << " " << pose(i % 3, i / 3);
+    w.key << "\n";
+    w.Fields("depth", sensor.sensor.depth);
+    w.Fields("imager", sensor.sensor.imager);
+    KeyOptics(sensor.intrinsics, sensor.sensor, w);
   }
-  fields("output", spec.bop);
-  fields("render", spec.render);
-  fields("tessellation", spec.tessellation);
+}
+
+// Each scene's arrangement, and a pile's container and physics.
+void KeyScenes(const RunSpec& spec, KeyWriter& w) {
   for (const SceneSpec& scene : spec.scenes) {
-    fields("scene", scene.arrangement);
-    if (scene.arrangement.layout == Layout::kPile ||
-        scene.arrangement.pose == PoseMode::kDropped) {  // the container and physics
-      const Container& c = scene.arrangement.container;
-      const PhysicsMaterial& p = scene.arrangement.physics.low;
-      key << "pile " << static_cast<int>(c.kind) << " " << c.inner_mm.transpose() << " "
+    w.Fields("scene", scene.arrangement);
+    if (scene.arrangement.layout != Layout::kPile && scene.arrangement.pose != PoseMode::kDropped)
+      continue;
+    const Container& c = scene.arrangement.container;
+    const PhysicsMaterial& p = scene.arrangement.physics.low;
+    w.key << "pile " << static_cast<int>(c.kind) << " " << c.inner_mm.transpose() << " "
           << c.height_mm << " " << c.wall_mm << " " << c.floor_mm << " " << c.corner_radius_mm
           << " " << c.material.density_kg_m3 << " " << c.material.friction << " "
           << c.material.restitution << " " << p.density_kg_m3 << " " << p.friction << " "
           << p.restitution << " " << scene.container_color.transpose() << " "
           << scene.container_material.has_value() << "\n";
-      // Ranges and rules (recipes without them keep their earlier run keys).
-      const auto physics = [&key](const PhysicsDraw& d) {
-        for (const PhysicsMaterial* m : {&d.low, &d.high})
-          key << " " << m->density_kg_m3 << " " << m->friction << " " << m->restitution;
-      };
-      const PhysicsDraw& all = scene.arrangement.physics;
-      if (all.high.density_kg_m3 != p.density_kg_m3 || all.high.friction != p.friction ||
-          all.high.restitution != p.restitution) {
-        key << "physics range";
-        physics(all);
-        key << "\n";
-      }
-      for (const PhysicsRule& rule : scene.physics_rules) {
-        key << "physics rule '" << rule.name << "' '" << rule.family << "' '" << rule.file << "'";
-        physics(rule.physics);
-        key << "\n";
-      }
+    // Ranges and rules (recipes without them keep their earlier run keys).
+    const auto physics = [&w](const PhysicsDraw& d) {
+      for (const PhysicsMaterial* m : {&d.low, &d.high})
+        w.key << " " << m->density_kg_m3 << " " << m->friction << " " << m->restitution;
+    };
+    const PhysicsDraw& all = scene.arrangement.physics;
+    if (all.high.density_kg_m3 != p.density_kg_m3 || all.high.friction != p.friction ||
+        all.high.restitution != p.restitution) {
+      w.key << "physics range";
+      physics(all);
+      w.key << "\n";
+    }
+    for (const PhysicsRule& rule : scene.physics_rules) {
+      w.key << "physics rule '" << rule.name << "' '" << rule.family << "' '" << rule.file << "'";
+      physics(rule.physics);
+      w.key << "\n";
     }
   }
-  fields("limits", spec.limits);
-  key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
-  // The rest of the spec that changes parts, classes or pixels without changing the recipe text
-  // (a RunSpec built in code has none): meshes' crease angle, classes, colours, the look.
-  key << "parts " << spec.crease_angle_rad << " " << static_cast<int>(spec.class_by) << " "
-      << spec.cad_colors << "\n";
+}
+
+// The rest of the spec that changes parts, classes or pixels without changing the recipe text
+// (a RunSpec built in code has none): meshes' crease angle, classes, colours, the look; in the
+// physically based mode materials, light sources and the environment.
+void KeyLook(const RunSpec& spec, KeyWriter& w) {
+  w.key << "parts " << spec.crease_angle_rad << " " << static_cast<int>(spec.class_by) << " "
+        << spec.cad_colors << "\n";
   for (const auto& [name, globs] : spec.class_groups) {
-    key << "class " << name;
-    for (const std::string& glob : globs) key << " " << glob;
-    key << "\n";
+    w.key << "class " << name;
+    for (const std::string& glob : globs) w.key << " " << glob;
+    w.key << "\n";
   }
   const Scene& look = spec.look;
-  key << "look " << look.floor << " " << look.floor_half_size_mm << " "
-      << look.floor_color.transpose() << " " << look.background_color.transpose() << " "
-      << look.ambient << " " << look.shadows << "\n";
+  w.key << "look " << look.floor << " " << look.floor_half_size_mm << " "
+        << look.floor_color.transpose() << " " << look.background_color.transpose() << " "
+        << look.ambient << " " << look.shadows << "\n";
   for (const Scene::Light& light : look.lights) {
-    key << "light " << static_cast<int>(light.kind) << " " << light.direction.transpose() << " "
-        << light.position.transpose() << " " << light.intensity << "\n";
+    w.key << "light " << static_cast<int>(light.kind) << " " << light.direction.transpose() << " "
+          << light.position.transpose() << " " << light.intensity << "\n";
   }
-  // The physically based mode's look (render.mode: pbr): materials, light sources, environment,
-  // and the bytes of every image they read (like the CAD files: an image edited between a kill
-  // and the rerun would otherwise mix frames of two looks).
-  std::set<std::filesystem::path> images;
-  const auto material = [&](const char* what, const Material& m) {
-    const PrincipledParams& p = m.surface;
-    const Texture& t = m.texture;
-    key << what << " " << p.base_color.transpose() << " " << p.metallic << " " << p.roughness << " "
-        << p.specular << " " << p.anisotropic << " " << p.clearcoat << " " << p.clearcoat_roughness
-        << " " << p.multiscatter << " " << m.base_from_part << " tangent "
-        << static_cast<int>(m.tangent) << " texture " << static_cast<int>(t.kind) << " "
-        << t.scale_mm << " " << t.amount << " " << t.roughness_amount << " " << t.bump << " "
-        << t.color.transpose() << " " << t.seed << " " << t.image.string();
-    if (t.kind == Texture::Kind::kImage) key << " projection " << static_cast<int>(t.projection);
-    key << "\n";
-    if (!t.image.empty()) images.insert(t.image);
-  };
-  material("floor_material", look.floor_material);
-  if (spec.default_material) material("default_material", *spec.default_material);
+  w.Material("floor_material", look.floor_material);
+  if (spec.default_material) w.Material("default_material", *spec.default_material);
   for (const MaterialRule& rule : spec.material_rules) {
-    key << "rule " << rule.name << " | " << rule.family << " | " << rule.file << "\n";
-    material("material", rule.material);
+    w.key << "rule " << rule.name << " | " << rule.family << " | " << rule.file << "\n";
+    w.Material("material", rule.material);
   }
   for (const LightSource& l : look.light_sources) {
-    key << "light_source " << static_cast<int>(l.kind) << " " << l.color.transpose() << " "
-        << l.power << " " << l.position.transpose() << " " << l.direction.transpose() << " "
-        << l.radius_mm << " " << l.size_x_mm << " " << l.size_y_mm << " " << l.x_axis.transpose()
-        << " " << l.spot_size_rad << " " << l.spot_blend << " " << l.angle_rad << "\n";
+    w.key << "light_source " << static_cast<int>(l.kind) << " " << l.color.transpose() << " "
+          << l.power << " " << l.position.transpose() << " " << l.direction.transpose() << " "
+          << l.radius_mm << " " << l.size_x_mm << " " << l.size_y_mm << " " << l.x_axis.transpose()
+          << " " << l.spot_size_rad << " " << l.spot_blend << " " << l.angle_rad << "\n";
   }
   const Environment& env = look.environment;
-  key << "environment " << static_cast<int>(env.kind) << " " << env.strength << " "
-      << env.color.transpose() << " " << env.zenith.transpose() << " " << env.horizon.transpose()
-      << " " << env.ground.transpose() << " " << env.image.string() << " " << env.rotation_rad
-      << "\n";
-  if (!env.image.empty()) images.insert(env.image);
-  // Domain randomisation, as each scene resolved it (a RunSpec built in code too), and the
-  // images its texture folders hold (a file added to a folder moves the picks).
-  const auto dist = [&](const char* what, const std::optional<Distribution>& d) {
-    key << " " << what;
-    if (!d) return;
-    key << " " << static_cast<int>(d->kind) << " " << d->a << " " << d->b;
-    for (double v : d->values) key << " " << v;
-  };
-  const auto randomized = [&](const char* what, const MaterialRandomization& m) {
-    key << what;
-    for (const std::string& name : m.preset_names) key << " preset " << name;
-    for (const Texture& t : m.textures) {
-      key << " texture " << t.image.string() << " " << t.scale_mm;
-      images.insert(t.image);
-    }
-    dist("hue", m.hue);
-    dist("saturation", m.saturation);
-    dist("value", m.value);
-    dist("metallic", m.metallic);
-    dist("roughness", m.roughness);
-    dist("specular", m.specular);
-    dist("texture_scale", m.texture_scale);
-    key << "\n";
-  };
-  for (const Randomization& r : prepared.randomization) {
-    key << "randomize " << r.seed << " " << static_cast<int>(r.floor_per) << " "
+  w.key << "environment " << static_cast<int>(env.kind) << " " << env.strength << " "
+        << env.color.transpose() << " " << env.zenith.transpose() << " " << env.horizon.transpose()
+        << " " << env.ground.transpose() << " " << env.image.string() << " " << env.rotation_rad
+        << "\n";
+  if (!env.image.empty()) w.images.insert(env.image);
+}
+
+// Domain randomisation, as each scene resolved it (a RunSpec built in code too), and the images
+// its texture folders hold (a file added to a folder moves the picks).
+void KeyRandomization(const Randomization& r, KeyWriter& w) {
+  w.key << "randomize " << r.seed << " " << static_cast<int>(r.floor_per) << " "
         << static_cast<int>(r.fixtures_per) << " " << static_cast<int>(r.lights_per) << " "
         << static_cast<int>(r.environment_per) << "\n";
-    for (const PartRandomization& p : r.parts) {
-      key << "randomize_part " << p.per_instance << " " << static_cast<int>(p.per) << " ";
-      randomized("", p.material);
-    }
-    for (int rule : r.instance_rule) key << " " << rule;
-    key << "\n";
-    if (r.floor) randomized("randomize_floor", *r.floor);
-    if (r.fixtures) randomized("randomize_fixtures", *r.fixtures);
-    if (const auto& l = r.lights) {
-      key << "randomize_lights " << l->keep;
-      for (LightSource::Kind k : l->kinds) key << " " << static_cast<int>(k);
-      dist("count", l->count);
-      dist("elevation", l->elevation_deg);
-      dist("azimuth", l->azimuth_deg);
-      dist("distance", l->distance_mm);
-      dist("power", l->power);
-      dist("temperature", l->temperature_k);
-      dist("size", l->size_mm);
-      key << "\n";
-    }
-    const auto image_choice = [&](const char* what, const ImageChoice& c) {
-      key << what;
-      for (const std::filesystem::path& file : c.files) {
-        key << " " << file.string();
-        images.insert(file);
-      }
-      key << "\n";
-    };
-    if (r.background) {
-      key << "randomize_background " << static_cast<int>(r.background_per) << " ";
-      image_choice("images", r.background->images);
-    }
-    if (const auto& e = r.environment) {
-      if (e->images) image_choice("randomize_environment_images", *e->images);
-      key << "randomize_environment";
-      dist("strength", e->strength);
-      dist("rotation", e->rotation_deg);
-      dist("temperature", e->temperature_k);
-      key << "\n";
-    }
-    if (const auto& d = r.distractors) {
-      key << "randomize_distractors " << static_cast<int>(d->material_per) << " "
-          << r.first_distractor;
-      dist("count", d->count);
-      dist("size", d->size_mm);
-      key << "\n";
-      if (d->material) randomized("randomize_distractor_material", *d->material);
-    }
-    if (const auto& c = r.camera) {
-      key << "randomize_camera";
-      dist("exposure", c->exposure);
-      dist("white_balance", c->white_balance_k);
-      dist("noise_gain", c->noise_gain);
-      dist("focus_distance", c->focus_distance_mm);
-      dist("f_number", c->f_number);
-      dist("rotation", c->rotation_deg);
-      dist("translation", c->translation_mm);
-      key << "\n";
-    }
+  for (const PartRandomization& p : r.parts) {
+    w.key << "randomize_part " << p.per_instance << " " << static_cast<int>(p.per) << " ";
+    w.Randomized("", p.material);
   }
-  // What prepare made of the recipe, whatever option decided it (a RunSpec built in code can
-  // change a scene's arrangement or a part without changing the recipe text): every object's
-  // geometry and colour, and every instance's pose.
+  for (int rule : r.instance_rule) w.key << " " << rule;
+  w.key << "\n";
+  if (r.floor) w.Randomized("randomize_floor", *r.floor);
+  if (r.fixtures) w.Randomized("randomize_fixtures", *r.fixtures);
+  if (const auto& l = r.lights) {
+    w.key << "randomize_lights " << l->keep;
+    for (LightSource::Kind k : l->kinds) w.key << " " << static_cast<int>(k);
+    w.Dist("count", l->count);
+    w.Dist("elevation", l->elevation_deg);
+    w.Dist("azimuth", l->azimuth_deg);
+    w.Dist("distance", l->distance_mm);
+    w.Dist("power", l->power);
+    w.Dist("temperature", l->temperature_k);
+    w.Dist("size", l->size_mm);
+    w.key << "\n";
+  }
+  if (r.background) {
+    w.key << "randomize_background " << static_cast<int>(r.background_per) << " ";
+    w.ImageChoice("images", r.background->images);
+  }
+  if (const auto& e = r.environment) {
+    if (e->images) w.ImageChoice("randomize_environment_images", *e->images);
+    w.key << "randomize_environment";
+    w.Dist("strength", e->strength);
+    w.Dist("rotation", e->rotation_deg);
+    w.Dist("temperature", e->temperature_k);
+    w.key << "\n";
+  }
+  if (const auto& d = r.distractors) {
+    w.key << "randomize_distractors " << static_cast<int>(d->material_per) << " "
+          << r.first_distractor;
+    w.Dist("count", d->count);
+    w.Dist("size", d->size_mm);
+    w.key << "\n";
+    if (d->material) w.Randomized("randomize_distractor_material", *d->material);
+  }
+  if (const auto& c = r.camera) {
+    w.key << "randomize_camera";
+    w.Dist("exposure", c->exposure);
+    w.Dist("white_balance", c->white_balance_k);
+    w.Dist("noise_gain", c->noise_gain);
+    w.Dist("focus_distance", c->focus_distance_mm);
+    w.Dist("f_number", c->f_number);
+    w.Dist("rotation", c->rotation_deg);
+    w.Dist("translation", c->translation_mm);
+    w.key << "\n";
+  }
+}
+
+// What prepare made of the recipe, whatever option decided it (a RunSpec built in code can
+// change a scene's arrangement or a part without changing the recipe text): every object's
+// geometry and colour, and every instance's pose.
+void KeyPrepared(const PreparedRun& prepared, KeyWriter& w) {
   for (const Part& part : prepared.parts) {
-    key << "object " << part.name << " " << KeyHasher().Geometry(part.mesh).Key().Hex() << " "
-        << part.color.value_or(Eigen::Vector3f::Constant(-1)).transpose() << "\n";
+    w.key << "object " << part.name << " " << KeyHasher().Geometry(part.mesh).Key().Hex() << " "
+          << part.color.value_or(Eigen::Vector3f::Constant(-1)).transpose() << "\n";
   }
   for (const Scene& scene : prepared.scenes) {
-    key << "scene\n";
+    w.key << "scene\n";
     for (const Instance& instance : scene.instances) {
-      key << instance.part << " " << instance.world_from_model.matrix().reshaped().transpose()
-          << " " << instance.color.value_or(Eigen::Vector3f::Constant(-1)).transpose() << "\n";
+      w.key << instance.part << " " << instance.world_from_model.matrix().reshaped().transpose()
+            << " " << instance.color.value_or(Eigen::Vector3f::Constant(-1)).transpose() << "\n";
     }
-    for (const Eigen::Vector3f& color : scene.part_colors) key << color.transpose() << " ";
-    key << "\n";
+    for (const Eigen::Vector3f& color : scene.part_colors) w.key << color.transpose() << " ";
+    w.key << "\n";
     // Totes, containers from files and distractors: where they are and how they look.
     for (const Scene::Fixture& f : scene.fixtures) {
-      key << "fixture " << f.name << " " << KeyHasher().Geometry(f.mesh).Key().Hex() << " "
-          << f.color.transpose() << "\n";
-      material("fixture_material", f.material);
+      w.key << "fixture " << f.name << " " << KeyHasher().Geometry(f.mesh).Key().Hex() << " "
+            << f.color.transpose() << "\n";
+      w.Material("fixture_material", f.material);
     }
   }
-  if (spec.grasps.enabled) {
-    const GraspSpec& grasps = spec.grasps;
-    fields("gripper", grasps.gripper);
-    fields("grasp_sampling", grasps.sampling);
-    fields("grasp_scene", grasps.scene);
-    fields("grasp_labels", grasps.labels);
-    key << "acronym " << grasps.acronym << "\n";
-    if (grasps.suction) {
-      fields("cup", grasps.cup);
-      fields("suction_sampling", grasps.suction_sampling);
-    }
+}
+
+void KeyGrasps(const GraspSpec& grasps, KeyWriter& w) {
+  if (!grasps.enabled) return;
+  w.Fields("gripper", grasps.gripper);
+  w.Fields("grasp_sampling", grasps.sampling);
+  w.Fields("grasp_scene", grasps.scene);
+  w.Fields("grasp_labels", grasps.labels);
+  w.key << "acronym " << grasps.acronym << "\n";
+  if (grasps.suction) {
+    w.Fields("cup", grasps.cup);
+    w.Fields("suction_sampling", grasps.suction_sampling);
   }
+}
+
+}  // namespace
+
+std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
+                   const std::vector<SweepView>& views) {
+  KeyWriter w;
+  w.key << "cadsynth run key 2\n";
+  // The recipe as it was read (not read again: it may have changed, or be a pipe).
+  if (!spec.recipe.empty()) w.key << "recipe\n" << spec.recipe_text << "\n";
+  if (spec.reseed != 0)
+    w.key << "reseed " << spec.reseed << "\n";  // the seeds differ from the text
+  KeyInputFiles(spec, w);
+  w.key << prepared.variants_json << "\n";
+  KeySensors(spec, w);
+  w.Fields("output", spec.bop);
+  w.Fields("render", spec.render);
+  w.Fields("tessellation", spec.tessellation);
+  KeyScenes(spec, w);
+  w.Fields("limits", spec.limits);
+  w.key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
+  KeyLook(spec, w);
+  for (const Randomization& r : prepared.randomization) KeyRandomization(r, w);
+  KeyPrepared(prepared, w);
+  KeyGrasps(spec.grasps, w);
   // The bytes of every image a material above reads.
-  for (const std::filesystem::path& image : images) {
+  for (const std::filesystem::path& image : w.images) {
     const std::string bytes = ReadFileText(image);
-    key << "image " << image.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
+    w.key << "image " << image.string() << " " << bytes.size() << " " << Crc32(bytes) << "\n";
   }
-  for (const SweepView& v : views) key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
+  for (const SweepView& v : views)
+    w.key << v.world_from_cam.matrix().reshaped().transpose() << "\n";
   // Embree's kernels on this machine: different widths give different last bits.
-  key << "trace " << TracingIsa(spec.render.isa) << "\n";
+  w.key << "trace " << TracingIsa(spec.render.isa) << "\n";
   // This build of cadsynth (our libraries are linked in statically): another build may write
   // other bytes, so it neither resumes this run nor joins its shards.
-  key << "build " << BuildId() << "\n";
-  return key.str();
+  w.key << "build " << BuildId() << "\n";
+  return w.key.str();
 }
 
 RunLock::RunLock(const std::filesystem::path& staging) : path_(staging.string() + ".lock") {

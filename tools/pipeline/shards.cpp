@@ -261,13 +261,11 @@ void ShardTree::MarkDone(const std::string& summary_json) const {
   WriteFileAtomic(Meta(dir_) / ShardFile(shard_.index, shard_.count, ".done"), summary_json + "\n");
 }
 
-MergeSummary Merge(const fs::path& dir_in,
-                   const std::function<void(const std::string&)>& info_sink) {
-  const auto start = std::chrono::steady_clock::now();
-  const auto info = [&](const std::string& line) {
-    if (info_sink) info_sink(line);
-  };
-  const fs::path dir = fs::absolute(dir_in).lexically_normal();
+namespace {
+
+// The run of the shard tree DIR, from the run.json shard 0 writes; throws Error saying why DIR
+// cannot be merged when there is none.
+ShardRunInfo ReadMergeRun(const fs::path& dir) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw Error(dir.string() + ": no such folder");
   const fs::path meta = Meta(dir);
@@ -286,103 +284,132 @@ MergeSummary Merge(const fs::path& dir_in,
                 (n > 0 ? std::to_string(n) : std::string("N")) +
                 " has not started (it writes .shards/run.json)");
   }
-  const ShardRunInfo run = ReadRunInfo(meta / "run.json");
-  const int n = run.shards;
-  if (fs::exists(meta / "merged", ec)) {  // an earlier merge completed the dataset, then stopped
-    MergeSummary summary;
-    summary.shards = n;
-    summary.scenes = run.obj_ids.size();
-    const std::string count = ReadFileText(meta / "merged");
-    char* end = nullptr;
-    summary.frames = std::strtoul(count.c_str(), &end, 10);
-    if (end == count.c_str())
-      throw Error((meta / "merged").string() + ": unreadable (expected a frame count)");
-    for (size_t s = 0; s < run.obj_ids.size(); ++s) {
-      const fs::path scene = dir / run.bop.split / Id6(static_cast<int>(s));
-      fs::remove_all(scene / ".fragments", ec);
-      for (const BopSensor& sensor : run.sensors)
-        fs::remove_all(scene / (".fragments" + sensor.Suffix()), ec);
-    }
-    fs::remove_all(meta, ec);
-    if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());
-    summary.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return summary;
-  }
+  return ReadRunInfo(meta / "run.json");
+}
 
-  // No shard may run while merging: the "merging" mark keeps new shards from starting (they look
-  // for it once they hold their lock), and every shard lock must be free after it is written.
-  // Locks are tried one at a time: a farm may have more shards than a process may open files.
-  const fs::path merging = meta / "merging";
-  WriteFileAtomic(merging, "merge\n");
-  struct Unmark {  // removed unless the merge completes (then all of .shards goes)
-    fs::path path;
-    ~Unmark() {
-      std::error_code ignored;
-      if (!path.empty()) fs::remove(path, ignored);
-    }
-  } unmark{merging};
-  std::vector<std::string> not_ready;
-  std::vector<bool> running(n, false);
+// An earlier merge completed the dataset, then stopped: only its clean-up is left.
+MergeSummary FinishCleanUp(const fs::path& dir, const ShardRunInfo& run,
+                           std::chrono::steady_clock::time_point start) {
+  std::error_code ec;
+  const fs::path meta = Meta(dir);
+  MergeSummary summary;
+  summary.shards = run.shards;
+  summary.scenes = run.obj_ids.size();
+  const std::string count = ReadFileText(meta / "merged");
+  char* end = nullptr;
+  summary.frames = std::strtoul(count.c_str(), &end, 10);
+  if (end == count.c_str())
+    throw Error((meta / "merged").string() + ": unreadable (expected a frame count)");
+  for (size_t s = 0; s < run.obj_ids.size(); ++s) {
+    const fs::path scene = dir / run.bop.split / Id6(static_cast<int>(s));
+    fs::remove_all(scene / ".fragments", ec);
+    for (const BopSensor& sensor : run.sensors)
+      fs::remove_all(scene / (".fragments" + sensor.Suffix()), ec);
+  }
+  fs::remove_all(meta, ec);
+  if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+// What Merge's checks share: the tree, its run, each scene's writer and the frames per shard.
+struct MergeTree {
+  fs::path dir, meta;
+  const ShardRunInfo& run;
+  int n = 0;  // shards
+  std::vector<std::unique_ptr<RigSceneWriter>> writers;
+  std::vector<bool> running;  // per shard: another process holds its lock
+  // Frames per shard: written (fragments) and declared (done markers), and its units.
+  std::vector<size_t> written, units, declared;
+  std::vector<std::string> not_ready;  // why the shards cannot be merged yet
+};
+
+// Locks are tried one at a time: a farm may have more shards than a process may open files.
+void FindRunningShards(MergeTree* tree) {
+  const int n = tree->n;
+  tree->running.assign(n, false);
   for (int i = 0; i < n; ++i) {
-    const int fd = TryLock(meta / ShardFile(i, n, ".lock"));
+    const int fd = TryLock(tree->meta / ShardFile(i, n, ".lock"));
     if (fd < 0) {
-      running[i] = true;
-      not_ready.push_back("shard " + std::to_string(i) + "/" + std::to_string(n) + " is running");
+      tree->running[i] = true;
+      tree->not_ready.push_back("shard " + std::to_string(i) + "/" + std::to_string(n) +
+                                " is running");
     } else {
       ::close(fd);
     }
   }
+}
 
-  const size_t scenes = run.obj_ids.size();
-  std::vector<std::unique_ptr<RigSceneWriter>> writers;
+void OpenSceneWriters(MergeTree* tree) {
+  const ShardRunInfo& run = tree->run;
   const std::vector<BopSensor> sensors =
       run.sensors.empty() ? std::vector<BopSensor>{BopSensor{}} : run.sensors;
-  for (size_t s = 0; s < scenes; ++s) {
-    writers.push_back(std::make_unique<RigSceneWriter>(dir, static_cast<int>(s), run.bop,
-                                                       run.obj_ids[s], sensors));
-    writers.back()->SetCocoCategories(run.categories);
+  for (size_t s = 0; s < run.obj_ids.size(); ++s) {
+    tree->writers.push_back(std::make_unique<RigSceneWriter>(tree->dir, static_cast<int>(s),
+                                                             run.bop, run.obj_ids[s], sensors));
+    tree->writers.back()->SetCocoCategories(run.categories);
   }
-  // Frames per shard: written (fragments) and declared (done markers).
-  std::vector<size_t> written(n, 0), units(n, 0);
-  for (size_t s = 0; s < scenes; ++s) {
-    for (size_t v = 0; v < run.views; ++v) ++units[(s * run.views + v) % n];
-    for (int id : writers[s]->WrittenFrames()) {
-      if (id >= 0 && static_cast<size_t>(id) < run.views) ++written[(s * run.views + id) % n];
+}
+
+void CountWrittenFrames(MergeTree* tree) {
+  const ShardRunInfo& run = tree->run;
+  const int n = tree->n;
+  tree->written.assign(n, 0);
+  tree->units.assign(n, 0);
+  for (size_t s = 0; s < tree->writers.size(); ++s) {
+    for (size_t v = 0; v < run.views; ++v) ++tree->units[(s * run.views + v) % n];
+    for (int id : tree->writers[s]->WrittenFrames()) {
+      if (id >= 0 && static_cast<size_t>(id) < run.views) ++tree->written[(s * run.views + id) % n];
     }
   }
-  std::vector<size_t> declared(n, 0);
+}
+
+// Each finished shard's frame count from its done marker; a shard without one is not ready.
+void ReadDoneMarkers(MergeTree* tree) {
+  const int n = tree->n;
+  tree->declared.assign(n, 0);
   for (int i = 0; i < n; ++i) {
-    const fs::path marker = meta / ShardFile(i, n, ".done");
-    if (running[i]) continue;
+    const fs::path marker = tree->meta / ShardFile(i, n, ".done");
+    if (tree->running[i]) continue;
+    std::error_code ec;
     if (!fs::exists(marker, ec)) {
       const std::string name = "shard " + std::to_string(i) + "/" + std::to_string(n);
-      if (written[i] == 0) {
-        not_ready.push_back(name + " has not started");
+      if (tree->written[i] == 0) {
+        tree->not_ready.push_back(name + " has not started");
       } else {
-        not_ready.push_back(name + " has not finished (" + std::to_string(written[i]) + " of " +
-                            std::to_string(units[i]) + " views done)");
+        tree->not_ready.push_back(name + " has not finished (" + std::to_string(tree->written[i]) +
+                                  " of " + std::to_string(tree->units[i]) + " views done)");
       }
       continue;
     }
     try {
-      declared[i] = Json::parse(ReadFileText(marker)).at("frames").get<size_t>();
+      tree->declared[i] = Json::parse(ReadFileText(marker)).at("frames").get<size_t>();
     } catch (const Json::exception&) {
-      not_ready.push_back(marker.string() + ": unreadable");
+      tree->not_ready.push_back(marker.string() + ": unreadable");
     }
   }
-  if (!not_ready.empty()) {
-    std::string list;
-    const size_t shown = std::min<size_t>(not_ready.size(), 8);
-    for (size_t k = 0; k < shown; ++k) list += (k ? "; " : "") + not_ready[k];
-    if (not_ready.size() > shown)
-      list += "; and " + std::to_string(not_ready.size() - shown) + " more";
-    throw Error(dir.string() + ": cannot merge yet: " + list);
-  }
+}
 
-  // Every frame's files against its manifest entry, in parallel.
+void ThrowUnlessReady(const MergeTree& tree) {
+  const std::vector<std::string>& not_ready = tree.not_ready;
+  if (not_ready.empty()) return;
+  std::string list;
+  const size_t shown = std::min<size_t>(not_ready.size(), 8);
+  for (size_t k = 0; k < shown; ++k) list += (k ? "; " : "") + not_ready[k];
+  if (not_ready.size() > shown)
+    list += "; and " + std::to_string(not_ready.size() - shown) + " more";
+  throw Error(tree.dir.string() + ": cannot merge yet: " + list);
+}
+
+// Every frame's files against its manifest entry, in parallel, and each shard's frames against
+// its done marker. Throws Error naming the shards to run again (their done markers removed, the
+// damaged frames forgotten: they re-render them).
+void CheckFrames(MergeTree* tree) {
+  const ShardRunInfo& run = tree->run;
+  const int n = tree->n;
+  const auto& writers = tree->writers;
   std::vector<std::pair<size_t, int>> frames;
-  for (size_t s = 0; s < scenes; ++s) {
+  for (size_t s = 0; s < writers.size(); ++s) {
     for (int id : writers[s]->WrittenFrames()) frames.push_back({s, id});
   }
   std::vector<std::string> problems(frames.size());
@@ -399,33 +426,68 @@ MergeSummary Merge(const fs::path& dir_in,
     damaged.push_back(problems[k]);
   }
   for (int i = 0; i < n; ++i) {
-    if (written[i] != declared[i] && !rerun.count(i)) {
+    if (tree->written[i] != tree->declared[i] && !rerun.count(i)) {
       rerun.insert(i);
       damaged.push_back("shard " + std::to_string(i) + "/" + std::to_string(n) + " reported " +
-                        std::to_string(declared[i]) + " frames, the folder holds " +
-                        std::to_string(written[i]));
+                        std::to_string(tree->declared[i]) + " frames, the folder holds " +
+                        std::to_string(tree->written[i]));
     }
   }
-  if (!rerun.empty()) {
-    std::string shards_text;
-    for (int i : rerun) {
-      fs::remove(meta / ShardFile(i, n, ".done"), ec);
-      shards_text +=
-          (shards_text.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(n);
-    }
-    std::string list;
-    for (size_t k = 0; k < std::min<size_t>(damaged.size(), 5); ++k) list += "\n  " + damaged[k];
-    if (damaged.size() > 5) list += "\n  and " + std::to_string(damaged.size() - 5) + " more";
-    throw Error(dir.string() + ": " + std::to_string(damaged.size()) +
-                " damaged or missing frame(s):" + list + "\nrun shard(s) " + shards_text +
-                " again (they re-render what is missing), then merge");
+  if (rerun.empty()) return;
+  std::error_code ec;
+  std::string shards_text;
+  for (int i : rerun) {
+    fs::remove(tree->meta / ShardFile(i, n, ".done"), ec);
+    shards_text += (shards_text.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(n);
   }
+  std::string list;
+  for (size_t k = 0; k < std::min<size_t>(damaged.size(), 5); ++k) list += "\n  " + damaged[k];
+  if (damaged.size() > 5) list += "\n  and " + std::to_string(damaged.size() - 5) + " more";
+  throw Error(tree->dir.string() + ": " + std::to_string(damaged.size()) +
+              " damaged or missing frame(s):" + list + "\nrun shard(s) " + shards_text +
+              " again (they re-render what is missing), then merge");
+}
+
+}  // namespace
+
+MergeSummary Merge(const fs::path& dir_in,
+                   const std::function<void(const std::string&)>& info_sink) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto info = [&](const std::string& line) {
+    if (info_sink) info_sink(line);
+  };
+  const fs::path dir = fs::absolute(dir_in).lexically_normal();
+  const ShardRunInfo run = ReadMergeRun(dir);
+  const fs::path meta = Meta(dir);
+  const int n = run.shards;
+  std::error_code ec;
+  if (fs::exists(meta / "merged", ec)) return FinishCleanUp(dir, run, start);
+
+  // No shard may run while merging: the "merging" mark keeps new shards from starting (they look
+  // for it once they hold their lock), and every shard lock must be free after it is written.
+  const fs::path merging = meta / "merging";
+  WriteFileAtomic(merging, "merge\n");
+  struct Unmark {  // removed unless the merge completes (then all of .shards goes)
+    fs::path path;
+    ~Unmark() {
+      std::error_code ignored;
+      if (!path.empty()) fs::remove(path, ignored);
+    }
+  } unmark{merging};
+  MergeTree tree{.dir = dir, .meta = meta, .run = run, .n = n};
+  FindRunningShards(&tree);
+  OpenSceneWriters(&tree);
+  CountWrittenFrames(&tree);
+  ReadDoneMarkers(&tree);
+  ThrowUnlessReady(tree);
+  CheckFrames(&tree);
 
   // What a single process does at its end, in the same order: the same bytes.
-  const size_t frame_count = FinishDataset(dir, run.bop, writers, run.classes);
+  const size_t scenes = run.obj_ids.size();
+  const size_t frame_count = FinishDataset(dir, run.bop, tree.writers, run.classes);
   // From here the dataset is complete: a merge interrupted while cleaning up only cleans up.
   WriteFileAtomic(meta / "merged", std::to_string(frame_count) + "\n");
-  for (const auto& writer : writers) writer->RemoveFragments();
+  for (const auto& writer : tree.writers) writer->RemoveFragments();
   unmark.path.clear();
   fs::remove_all(meta, ec);
   if (ec) throw Error(meta.string() + ": cannot remove: " + ec.message());

@@ -226,6 +226,13 @@ class Reader {
   std::filesystem::path base_dir_;
 };
 
+// "spur_gear, ring_gear, ...": for unknown-family messages.
+std::string KnownFamilies() {
+  std::vector<std::string> names;
+  for (const FamilyInfo& f : Families()) names.push_back(f.name);
+  return JoinNames(names);
+}
+
 void DetectFormatOrFail(const Reader& r, const YAML::Node& node, const std::string& key,
                         const std::filesystem::path& path) {
   try {
@@ -294,10 +301,8 @@ void ReadFamily(const Reader& r, const YAML::Node& item, const std::string& key,
   source->where = r.Where(item["family"]);
   const FamilyInfo* family = FindFamily(source->family);
   if (family == nullptr) {
-    std::string known;
-    for (const FamilyInfo& f : Families()) known += (known.empty() ? "" : ", ") + f.name;
     r.Fail(item["family"], key + ".family",
-           "unknown family '" + source->family + "' (known: " + known + ")");
+           "unknown family '" + source->family + "' (known: " + KnownFamilies() + ")");
   }
   ParamValues fixed;
   if (item["params"]) {
@@ -618,10 +623,8 @@ void ReadPartPatterns(const Reader& r, const YAML::Node& item, const std::string
     rule->family = r.Scalar(item["family"], key + ".family");
     if (FindFamily(rule->family) == nullptr &&
         rule->family.find_first_of("*?[") == std::string::npos) {
-      std::string known;
-      for (const FamilyInfo& f : Families()) known += (known.empty() ? "" : ", ") + f.name;
       r.Fail(item["family"], key + ".family",
-             "unknown family '" + rule->family + "' (known: " + known + ")");
+             "unknown family '" + rule->family + "' (known: " + KnownFamilies() + ")");
     }
   }
   if (item["file"]) rule->file = r.Scalar(item["file"], key + ".file");
@@ -1076,8 +1079,7 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
   if (node["preset"]) {
     const std::string name = r.Scalar(node["preset"], key + ".preset");
     if (!MaterialPreset(name, &m)) {
-      std::string known;
-      for (const std::string& n : MaterialPresetNames()) known += (known.empty() ? "" : ", ") + n;
+      const std::string known = JoinNames(MaterialPresetNames());
       const std::string best = NearestName(name, MaterialPresetNames());
       r.Fail(node["preset"], key + ".preset",
              "unknown material '" + name + "'" +

@@ -3,9 +3,11 @@
 # sudo available). Does nothing, and needs no network, when everything is already there.
 #   tools/setup.sh            what building and running cadsynth needs
 #   tools/setup.sh --tests    also Slurm and munge (a test starts a single-node Slurm cluster),
-#                             clang-format (a test checks the formatting), pytest (the Python
-#                             module's tests), python3-jsonschema and python3-yaml (the recipe's
-#                             JSON Schema checked by an independent validator)
+#                             clang-format (a test checks the formatting), clang and its
+#                             sanitizer runtimes (the sanitizer build, tools/sanitize.sh),
+#                             pytest (the Python module's tests), python3-jsonschema and
+#                             python3-yaml (the recipe's JSON Schema checked by an independent
+#                             validator)
 set -euo pipefail
 
 packages=(
@@ -19,7 +21,8 @@ packages=(
   pybind11-dev python3-dev python3-numpy python3-torch
 )
 case "${1:-}" in
-  --tests) packages+=(slurm-wlm munge clang-format python3-pytest python3-jsonschema python3-yaml) ;;
+  --tests) packages+=(slurm-wlm munge clang-format clang libclang-rt-14-dev python3-pytest
+                     python3-jsonschema python3-yaml) ;;
   "") ;;
   *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
 esac

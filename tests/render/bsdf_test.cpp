@@ -59,8 +59,9 @@ PrincipledParams Params(float base, float metallic, float roughness, float specu
 
 TEST(Ggx, DistributionOfNormalsIsNormalised) {
   // The projected microfacet area is the macro surface: the integral of D(m) m.z is 1.
-  for (const auto& [ax, ay] :
+  for (const auto& alpha :
        {std::pair{0.09f, 0.09f}, {0.25f, 0.25f}, {0.64f, 0.64f}, {0.15f, 0.45f}}) {
+    const float ax = alpha.first, ay = alpha.second;  // (clang 14 cannot capture a binding)
     const double total =
         Hemisphere([&](const Eigen::Vector3f& m) { return GgxD(m, ax, ay) * m.z(); }, 4000, 400);
     EXPECT_NEAR(total, 1.0, 2e-3) << ax << " " << ay;

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <system_error>
 
 #include <yaml-cpp/yaml.h>
@@ -516,36 +517,82 @@ std::vector<PartSource> ReadParts(const Reader& r, const YAML::Node& node,
   return sources;
 }
 
-void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
-  r.ExpectKeys(node, "classes", SchemaAt("classes"));
-  if (node["by"]) {
-    const std::string by = r.Scalar(node["by"], "classes.by");
-    if (by == "part") {
-      spec->class_by = RunSpec::ClassBy::kPart;
-    } else if (by == "assembly") {
-      spec->class_by = RunSpec::ClassBy::kAssembly;
+// A distribution of one number: a value (fixed), or {uniform: [low, high]},
+// {normal: [mean, sigma]}, {log_uniform: [low, high]} or {choice: [a, b, ...]}; `parse` reads
+// one number (lengths with their units).
+template <typename Parse>
+Distribution ReadDistribution(const Reader& r, const YAML::Node& node, const std::string& key,
+                              Parse parse) {
+  Distribution d;
+  if (node.IsScalar()) {
+    d = Distribution::Fixed(parse(node, key));
+  } else {
+    static const std::vector<std::string> kinds = {"uniform", "normal", "log_uniform", "choice"};
+    if (!node.IsMap() || node.size() != 1) {
+      r.Fail(node, key,
+             "expected a value or one of {uniform: [low, high]}, {normal: [mean, sigma]}, "
+             "{log_uniform: [low, high]}, {choice: [...]}");
+    }
+    const YAML::Node name_node = node.begin()->first;
+    const std::string name = name_node.as<std::string>();
+    const YAML::Node list = node.begin()->second;
+    const auto it = std::find(kinds.begin(), kinds.end(), name);
+    if (it == kinds.end()) {
+      const std::string best = NearestName(name, kinds);
+      r.Fail(name_node, key,
+             "unknown distribution '" + name + "'" +
+                 (best.empty() ? "" : " (did you mean '" + best + "'?)") +
+                 "; known: uniform, normal, log_uniform, choice");
+    }
+    if (!list.IsSequence()) r.Fail(list, key + "." + name, "expected a list");
+    if (name == "choice") {
+      d.kind = Distribution::Kind::kChoice;
+      for (const YAML::Node& v : list) d.values.push_back(parse(v, key + ".choice"));
     } else {
-      r.Fail(node["by"], "classes.by", "expected 'part' or 'assembly', got '" + by + "'");
+      if (list.size() != 2)
+        r.Fail(list, key + "." + name,
+               name == "normal" ? "expected [mean, sigma]" : "expected [low, high]");
+      d.kind = name == "uniform"  ? Distribution::Kind::kUniform
+               : name == "normal" ? Distribution::Kind::kNormal
+                                  : Distribution::Kind::kLogUniform;
+      d.a = parse(list[0], key + "." + name);
+      d.b = parse(list[1], key + "." + name);
     }
   }
-  if (node["groups"]) {
-    const YAML::Node groups = node["groups"];
-    if (!groups.IsMap()) r.Fail(groups, "classes.groups", "expected {class name: [name patterns]}");
-    for (auto it = groups.begin(); it != groups.end(); ++it) {
-      const std::string name = it->first.as<std::string>();
-      const std::string key = "classes.groups." + name;
-      std::vector<std::string> patterns;
-      // A copy: the iterator's value is a temporary, and a range-for over its member would read
-      // it after its end (AddressSanitizer: stack-use-after-scope).
-      const YAML::Node value = it->second;
-      if (value.IsSequence()) {
-        for (const YAML::Node& p : value) patterns.push_back(r.Scalar(p, key));
-      } else {
-        patterns.push_back(r.Scalar(value, key));
-      }
-      if (patterns.empty()) r.Fail(value, key, "give at least one name pattern");
-      spec->class_groups.emplace_back(name, patterns);
+  std::string why;
+  if (!d.Check(&why)) r.Fail(node, key, why);
+  return d;
+}
+
+// The value of the choice `text` among `field`'s choices (an enum's values or a bool's false and
+// true, in order); false if it is none of them.
+template <typename T>
+bool Choose(const Field& field, const std::string& text, T* value) {
+  for (size_t i = 0; i < field.choices.size(); ++i) {
+    if (text == field.choices[i]) {
+      *value = static_cast<T>(i);
+      return true;
     }
+  }
+  return false;
+}
+
+// A number against its field's range (Field::range).
+void CheckRange(const Reader& r, const YAML::Node& node, const std::string& key, Range range,
+                double value) {
+  switch (range) {
+    case Range::kAny:
+      return;
+    case Range::kUnit:
+      if (!(value >= 0 && value <= 1))
+        r.Fail(node, key, "must lie in [0, 1], got " + node.Scalar());
+      return;
+    case Range::kNonNegative:
+      if (value < 0) r.Fail(node, key, "must not be negative");
+      return;
+    case Range::kPositive:
+      if (!(value > 0)) r.Fail(node, key, "must be positive");
+      return;
   }
 }
 
@@ -553,15 +600,24 @@ void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 template <typename T>
 void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field,
                T* value) {
-  if constexpr (std::is_enum_v<T> || std::is_same_v<T, bool>) {
+  if constexpr (IsOptional<T>::value) {  // set by its key
+    typename T::value_type set{};
+    ReadField(r, node, key, field, &set);
+    *value = std::move(set);
+  } else if constexpr (std::is_same_v<T, Distribution>) {  // of numbers or of lengths
+    if (field.kind == "distribution_length") {
+      *value = ReadDistribution(
+          r, node, key, [&r](const YAML::Node& n, const std::string& k) { return r.Length(n, k); });
+    } else {
+      *value = ReadDistribution(
+          r, node, key, [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); });
+    }
+  } else if constexpr (std::is_enum_v<T> || std::is_same_v<T, bool>) {
     if (field.kind == "choice") {
       const std::string text = r.Scalar(node, key);
+      if (Choose(field, text, value)) return;
       std::string known;
       for (size_t i = 0; i < field.choices.size(); ++i) {
-        if (text == field.choices[i]) {
-          *value = static_cast<T>(i);
-          return;
-        }
         known += (i == 0                          ? "'"
                   : i + 1 == field.choices.size() ? " or '"
                                                   : ", '") +
@@ -573,22 +629,74 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
     }
   } else if constexpr (std::is_same_v<T, std::string>) {
     *value = r.Scalar(node, key);
+  } else if constexpr (std::is_same_v<T, std::filesystem::path>) {  // "path"
+    *value = r.ResolvePath(node, key);
+  } else if constexpr (IsFixedVector<T>::value) {  // "(linear_)color", "vector3" or "length3"
+    if constexpr (std::is_same_v<T, Eigen::Vector3f>) {
+      if (field.kind == "linear_color") {
+        *value = r.LinearColor(node, key);
+        return;
+      }
+      if (field.kind == "color") {  // sRGB [r, g, b], as given
+        *value = r.Color(node, key);
+        return;
+      }
+    }
+    if constexpr (T::RowsAtCompileTime == 3) {
+      *value = Triple(r, node, key, field.kind == "length3").cast<typename T::Scalar>();
+    } else {  // (a pair of lengths, [length, width], has its own message: read by hand)
+      constexpr int n = T::RowsAtCompileTime;
+      if (!node.IsSequence() || node.size() != n)
+        r.Fail(node, key, "expected a list of " + std::to_string(n) + " values");
+      for (int i = 0; i < n; ++i)
+        (*value)[i] = field.kind == "lengths" ? r.Length(node[i], key) : r.Number(node[i], key);
+    }
   } else if constexpr (std::is_same_v<T, std::vector<double>>) {  // "lengths" or numbers
     if (!node.IsSequence() || node.size() == 0) r.Fail(node, key, "expected a list of values");
     value->clear();
     for (const YAML::Node& item : node)
       value->push_back(field.kind == "lengths" ? r.Length(item, key) : r.Number(item, key));
+  } else if constexpr (IsVector<T>::value) {
+    // "names" (presets, light types): read by hand (Field::by_hand), each against its own table.
+    throw std::logic_error(key + ": a list of names is read by hand");
   } else if constexpr (std::is_floating_point_v<T>) {
-    *value = static_cast<T>(field.kind == "length"  ? r.Length(node, key)
-                            : field.kind == "angle" ? r.Angle(node, key)
-                                                    : r.Number(node, key));
+    const double number = field.kind == "length"  ? r.Length(node, key)
+                          : field.kind == "angle" ? r.Angle(node, key)
+                                                  : r.Number(node, key);
+    CheckRange(r, node, key, field.range, number);
+    *value = static_cast<T>(number);
   } else if constexpr (std::is_same_v<T, uint64_t>) {
     const int n = r.Integer(node, key);
     if (n < 0) r.Fail(node, key, "must not be negative");
+    CheckRange(r, node, key, field.range, n);
     *value = static_cast<uint64_t>(n);
   } else {
     *value = r.Integer(node, key);
+    CheckRange(r, node, key, field.range, *value);
   }
+}
+
+// The described field of `Options` whose recipe key (or, without one, internal name) is `key`
+// (for a key read by hand).
+template <typename Options>
+Field FieldOf(std::string_view key) {
+  const Options defaults{};
+  Field found;
+  Options::Fields(defaults, [&](const auto&, const Field& field) {
+    if (field.Name() == key) found = field;
+  });
+  return found;
+}
+
+// A choice read by hand (a tag): its value, or "unknown WHAT 'TEXT' (known: KNOWN)".
+template <typename T>
+T ReadKnown(const Reader& r, const YAML::Node& node, const std::string& key, const Field& field,
+            const std::string& what, std::vector<std::string> known = {}) {
+  const std::string text = r.Scalar(node, key);
+  T value{};
+  if (Choose(field, text, &value)) return value;
+  if (known.empty()) known.assign(field.choices.begin(), field.choices.end());
+  r.Fail(node, key, "unknown " + what + " '" + text + "' (known: " + JoinNames(known) + ")");
 }
 
 // Every described field of `options` that the recipe section `node` gives, except those read by
@@ -609,6 +717,30 @@ void ReadFields(const Reader& r, const YAML::Node& node, const std::string& sect
                 Options* options, const Key& schema) {
   r.ExpectKeys(node, section, schema);
   ReadDescribed(r, node, section, options);
+}
+
+void ReadClasses(const Reader& r, const YAML::Node& node, RunSpec* spec) {
+  r.ExpectKeys(node, "classes", SchemaAt("classes"));
+  if (node["by"]) ReadField(r, node["by"], "classes.by", FieldOf<RunSpec>("by"), &spec->class_by);
+  if (node["groups"]) {
+    const YAML::Node groups = node["groups"];
+    if (!groups.IsMap()) r.Fail(groups, "classes.groups", "expected {class name: [name patterns]}");
+    for (auto it = groups.begin(); it != groups.end(); ++it) {
+      const std::string name = it->first.as<std::string>();
+      const std::string key = "classes.groups." + name;
+      std::vector<std::string> patterns;
+      // A copy: the iterator's value is a temporary, and a range-for over its member would read
+      // it after its end (AddressSanitizer: stack-use-after-scope).
+      const YAML::Node value = it->second;
+      if (value.IsSequence()) {
+        for (const YAML::Node& p : value) patterns.push_back(r.Scalar(p, key));
+      } else {
+        patterns.push_back(r.Scalar(value, key));
+      }
+      if (patterns.empty()) r.Fail(value, key, "give at least one name pattern");
+      spec->class_groups.emplace_back(name, patterns);
+    }
+  }
 }
 
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
@@ -637,25 +769,29 @@ void ReadPartPatterns(const Reader& r, const YAML::Node& item, const std::string
 void ReadPhysics(const Reader& r, const YAML::Node& node, const std::string& key, PhysicsDraw* d,
                  const Key& schema, bool ranges) {
   r.ExpectKeys(node, key, schema);
-  const auto value = [&](const char* k, double PhysicsMaterial::*field) {
-    const YAML::Node v = node[k];
+  // Each described field (PhysicsMaterial::Fields) into both ends, the high end's found by its
+  // place among the fields.
+  std::vector<double*> high;
+  PhysicsMaterial::Fields(d->high,
+                          [&high](double& value, const Field&) { high.push_back(&value); });
+  size_t i = 0;
+  PhysicsMaterial::Fields(d->low, [&](double& low, const Field& field) {
+    double& hi = *high[i++];
+    const YAML::Node v = node[std::string(field.key)];
     if (!v) return;
-    const std::string at = key + "." + k;
+    const std::string at = key + "." + std::string(field.key);
     if (v.IsSequence()) {
       if (!ranges) r.Fail(v, at, "expected a number (a container's is not drawn)");
       if (v.size() != 2) r.Fail(v, at, "expected a number or a range [low, high]");
-      d->low.*field = r.Number(v[0], at);
-      d->high.*field = r.Number(v[1], at);
-      if (d->low.*field > d->high.*field) r.Fail(v, at, "the range's low end exceeds its high end");
+      ReadField(r, v[0], at, field, &low);
+      ReadField(r, v[1], at, field, &hi);
+      if (low > hi) r.Fail(v, at, "the range's low end exceeds its high end");
     } else {
-      d->low.*field = d->high.*field = r.Number(v, at);
+      ReadField(r, v, at, field, &low);
+      hi = low;
     }
-  };
-  value("density", &PhysicsMaterial::density_kg_m3);
-  value("friction", &PhysicsMaterial::friction);
-  value("restitution", &PhysicsMaterial::restitution);
-  std::string why;
-  if (!d->Check(&why)) r.Fail(node, key, why);
+  });
+  r.Check(*d, node, key);
 }
 
 // A pile's container: {type: tote | floor | file, inner: [x, y], height, wall, floor,
@@ -667,17 +803,9 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
   ReadPhysics(r, node, key, &material, SchemaAt("scene.container"), false);  // a mapping
   c.material = material.low;
   if (!node["type"]) r.Fail(node, key, "a container needs a 'type': tote, floor or file");
-  const std::string type = r.Scalar(node["type"], key + ".type");
-  if (type == "tote") {
-    c.kind = Container::Kind::kTote;
-  } else if (type == "floor") {
-    c.kind = Container::Kind::kFloor;
-  } else if (type == "file") {
-    c.kind = Container::Kind::kMesh;  // its mesh is read with the parts (prepare)
-  } else {
-    r.Fail(node["type"], key + ".type",
-           "unknown container '" + type + "' (known: tote, floor, file)");
-  }
+  // (A file's mesh is read with the parts: prepare.)
+  c.kind = ReadKnown<Container::Kind>(r, node["type"], key + ".type", FieldOf<Container>("type"),
+                                      "container");
   for (const char* k : {"inner", "height", "wall", "floor", "corner_radius"}) {
     if (node[k] && c.kind != Container::Kind::kTote)
       r.Fail(node[k], key + "." + k, "goes with type: tote");
@@ -700,13 +828,7 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
       r.Fail(inner, key + ".inner", "expected [length, width], e.g. [355 mm, 265 mm]");
     c.inner_mm = {r.Length(inner[0], key + ".inner"), r.Length(inner[1], key + ".inner")};
   }
-  const auto length = [&](const char* k, double* value) {
-    if (node[k]) *value = r.Length(node[k], key + "." + k);
-  };
-  length("height", &c.height_mm);
-  length("wall", &c.wall_mm);
-  length("floor", &c.floor_mm);
-  length("corner_radius", &c.corner_radius_mm);
+  ReadDescribed(r, node, key, &c);
   if (node["color"]) scene->container_color = r.Color(node["color"], key + ".color");
   if (node["material"])
     scene->container_material =
@@ -769,7 +891,8 @@ SceneSpec ReadSceneEntry(const Reader& r, const YAML::Node& node, const std::str
 void ReadTessellation(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   ReadFields(r, node, "tessellation", &spec->tessellation, SchemaAt("tessellation"));
   if (node["crease_angle"]) {
-    spec->crease_angle_rad = r.Angle(node["crease_angle"], "tessellation.crease_angle");
+    ReadField(r, node["crease_angle"], "tessellation.crease_angle",
+              FieldOf<RunSpec>("crease_angle"), &spec->crease_angle_rad);
     if (spec->crease_angle_rad < 0.0 || spec->crease_angle_rad > M_PI) {
       r.Fail(node["crease_angle"], "tessellation.crease_angle",
              "must lie between 0 and 180 degrees");
@@ -804,8 +927,8 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
     k = found->intrinsics;
     if (found->gray) sensor->image = SensorOptions::Image::kGray;
   }
-  if (node["width"]) k.width = r.Integer(node["width"], key + ".width");
-  if (node["height"]) k.height = r.Integer(node["height"], key + ".height");
+  ReadDescribed(r, node, key, &k);
+  // A field of view in place of fx, fy, cx and cy: from the width and the height.
   if (node["hfov"]) {
     const double hfov = r.Angle(node["hfov"], key + ".hfov");
     if (!(hfov > 0 && hfov < M_PI))
@@ -814,10 +937,6 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
       r.Fail(node["hfov"], key + ".hfov", "give hfov or fx/fy/cx/cy, not both");
     k = Intrinsics::FromFov(k.width, k.height, hfov);
   }
-  if (node["fx"]) k.fx = r.Number(node["fx"], key + ".fx");
-  if (node["fy"]) k.fy = r.Number(node["fy"], key + ".fy");
-  if (node["cx"]) k.cx = r.Number(node["cx"], key + ".cx");
-  if (node["cy"]) k.cy = r.Number(node["cy"], key + ".cy");
   if (const YAML::Node distortion = node["distortion"]) {
     ReadFields(r, distortion, key + ".distortion", &k.distortion, SchemaAt("camera.distortion"));
     r.Check(k, distortion, key + ".distortion");
@@ -1025,14 +1144,9 @@ void ReadCameras(const Reader& r, const YAML::Node& node, RunSpec* spec) {
 
 void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   ReadFields(r, node, "render", &spec->render, SchemaAt("render"));
+  // The fast mode's look (Scene::Fields) and its lights (Scene::Light::Fields).
   Scene& look = spec->look;
-  if (node["background"]) look.background_color = r.Color(node["background"], "render.background");
-  if (node["floor"]) look.floor = r.Bool(node["floor"], "render.floor");
-  if (node["floor_color"]) look.floor_color = r.Color(node["floor_color"], "render.floor_color");
-  if (node["ambient"])
-    look.ambient = static_cast<float>(r.Number(node["ambient"], "render.ambient"));
-  if (look.ambient < 0.0f) r.Fail(node["ambient"], "render.ambient", "must not be negative");
-  if (node["shadows"]) look.shadows = r.Bool(node["shadows"], "render.shadows");
+  ReadDescribed(r, node, "render", &look);
   if (node["lights"]) {
     const YAML::Node lights = node["lights"];
     if (!lights.IsSequence())
@@ -1045,33 +1159,55 @@ void ReadRender(const Reader& r, const YAML::Node& node, RunSpec* spec) {
       if (!lights[i]["direction"] == !lights[i]["position"])
         r.Fail(lights[i], key, "give a direction or a position");
       Scene::Light light;
-      if (lights[i]["direction"]) {
-        light.kind = Scene::Light::Kind::kDirectional;
-        light.direction = Triple(r, lights[i]["direction"], key + ".direction", false);
-        if (light.direction.norm() == 0)
-          r.Fail(lights[i]["direction"], key + ".direction", "the direction must not be zero");
-      } else {
-        light.kind = Scene::Light::Kind::kPoint;
-        light.position = Triple(r, lights[i]["position"], key + ".position", true);
-      }
-      if (lights[i]["intensity"])
-        light.intensity = static_cast<float>(r.Number(lights[i]["intensity"], key + ".intensity"));
-      if (light.intensity < 0)
-        r.Fail(lights[i]["intensity"], key + ".intensity", "must not be negative");
+      ReadDescribed(r, lights[i], key, &light);
+      light.kind =
+          lights[i]["direction"] ? Scene::Light::Kind::kDirectional : Scene::Light::Kind::kPoint;
+      if (light.kind == Scene::Light::Kind::kDirectional && light.direction.norm() == 0)
+        r.Fail(lights[i]["direction"], key + ".direction", "the direction must not be zero");
       look.lights.push_back(light);
     }
   }
   if (node["colors"]) {
+    // A bool's choices (RunSpec::Fields) are false first; the message names cad first.
     const std::string colors = r.Scalar(node["colors"], "render.colors");
-    if (colors != "cad" && colors != "palette") {
+    if (!Choose(FieldOf<RunSpec>("colors"), colors, &spec->cad_colors))
       r.Fail(node["colors"], "render.colors", "expected 'cad' or 'palette', got '" + colors + "'");
-    }
-    spec->cad_colors = colors == "cad";
   }
   r.Check(spec->render, node, "render");
 }
 
-// A material: a preset and/or its parameters, and a texture.
+// A texture's keys over `texture` (a preset's, or none): its type first (a new type starts from
+// that type's defaults), the described keys, then an image's pixels and projection.
+void ReadTexture(const Reader& r, const YAML::Node& t, const std::string& key, Texture* texture) {
+  const Field type = FieldOf<Texture>("type");
+  // The message lists the patterns, then none.
+  std::vector<std::string> known(type.choices.begin() + 1, type.choices.end());
+  known.emplace_back(type.choices[0]);
+  const auto kind = ReadKnown<Texture::Kind>(r, t["type"], key + ".type", type, "texture", known);
+  if (kind != texture->kind) *texture = Texture{};
+  texture->kind = kind;
+  ReadDescribed(r, t, key, texture);
+  if (t["seed"]) texture->seed = static_cast<uint64_t>(r.Integer(t["seed"], key + ".seed"));
+  if (texture->kind == Texture::Kind::kImage) {
+    if (!t["file"]) r.Fail(t, key, "an image texture needs a 'file'");
+    try {
+      texture->pixels = LoadLinearImage(texture->image);
+    } catch (const Error& e) {
+      r.Fail(t["file"], key + ".file", e.what());
+    }
+    if (const YAML::Node p = t["projection"]) {
+      texture->projection = ReadKnown<Texture::Projection>(
+          r, p, key + ".projection", FieldOf<Texture>("projection"), "projection");
+    }
+  } else if (t["file"]) {
+    r.Fail(t["file"], key + ".file", "only an image texture reads a file");
+  } else if (t["projection"]) {
+    r.Fail(t["projection"], key + ".projection",
+           "only an image texture is projected (procedural ones are solid)");
+  }
+}
+
+// A material: a preset, then the keys that change it, and a texture.
 Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string& key,
                       const Key& schema) {
   r.ExpectKeys(node, key, schema);
@@ -1094,34 +1230,8 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
       m.base_from_part = false;
     }
   }
-  const auto unit = [&](const char* k, float* value) {
-    if (!node[k]) return;
-    const double v = r.Number(node[k], key + "." + k);
-    if (!(v >= 0 && v <= 1))
-      r.Fail(node[k], key + "." + k, "must lie in [0, 1], got " + node[k].Scalar());
-    *value = static_cast<float>(v);
-  };
-  unit("metallic", &m.surface.metallic);
-  unit("roughness", &m.surface.roughness);
-  unit("specular", &m.surface.specular);
-  unit("anisotropic", &m.surface.anisotropic);
-  unit("clearcoat", &m.surface.clearcoat);
-  unit("clearcoat_roughness", &m.surface.clearcoat_roughness);
-  if (const YAML::Node d = node["distribution"]) {
-    // Blender's names for the Principled BSDF's microfacet distribution.
-    const std::string name = r.Scalar(d, key + ".distribution");
-    if (name != "ggx" && name != "multiscatter_ggx") {
-      r.Fail(d, key + ".distribution", "expected 'ggx' or 'multiscatter_ggx', got '" + name + "'");
-    }
-    m.surface.multiscatter = name == "multiscatter_ggx";
-  }
-  if (const YAML::Node t = node["tangent"]) {
-    // Where anisotropic highlights stretch: Blender's default (radial) or the model's x axis.
-    const std::string name = r.Scalar(t, key + ".tangent");
-    if (name != "radial" && name != "x")
-      r.Fail(t, key + ".tangent", "expected 'radial' or 'x', got '" + name + "'");
-    m.tangent = name == "x" ? Material::Tangent::kModelX : Material::Tangent::kRadial;
-  }
+  ReadDescribed(r, node, key, &m.surface);
+  ReadDescribed(r, node, key, &m);
   if (const YAML::Node t = node["texture"]) {
     const std::string tkey = key + ".texture";
     if (t.IsScalar() && t.Scalar() == "none") {
@@ -1129,72 +1239,10 @@ Material ReadMaterial(const Reader& r, const YAML::Node& node, const std::string
     } else {
       if (!t.IsMap() || !t["type"]) r.Fail(t, tkey, "a texture needs a 'type'");
       r.ExpectKeys(t, tkey, SchemaAt("materials.floor.texture"));
-      static const std::vector<std::pair<std::string, Texture::Kind>> kinds = {
-          {"noise", Texture::Kind::kNoise},         {"brushed", Texture::Kind::kBrushed},
-          {"turned", Texture::Kind::kTurned},       {"checker", Texture::Kind::kChecker},
-          {"concrete", Texture::Kind::kConcrete},   {"wood", Texture::Kind::kWood},
-          {"rust", Texture::Kind::kRust},           {"image", Texture::Kind::kImage},
-          {"scratches", Texture::Kind::kScratches}, {"none", Texture::Kind::kNone}};
-      const std::string type = r.Scalar(t["type"], tkey + ".type");
-      const auto it =
-          std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == type; });
-      if (it == kinds.end()) {
-        r.Fail(t["type"], tkey + ".type",
-               "unknown texture '" + type +
-                   "' (known: noise, brushed, turned, checker, concrete, wood, rust, scratches, "
-                   "image, "
-                   "none)");
-      }
-      // A new type starts from that type's defaults, not the preset's texture.
-      if (it->second != m.texture.kind) m.texture = Texture{};
-      m.texture.kind = it->second;
-      if (t["scale"]) {
-        m.texture.scale_mm = r.Length(t["scale"], tkey + ".scale");
-        if (!(m.texture.scale_mm > 0)) r.Fail(t["scale"], tkey + ".scale", "must be positive");
-      }
-      const auto tunit = [&](const char* k, float* value) {
-        if (!t[k]) return;
-        const double v = r.Number(t[k], tkey + "." + k);
-        if (v < 0 || v > 1)
-          r.Fail(t[k], tkey + "." + k, "must lie in [0, 1], got " + t[k].Scalar());
-        *value = static_cast<float>(v);
-      };
-      tunit("amount", &m.texture.amount);
-      tunit("roughness", &m.texture.roughness_amount);
-      tunit("bump", &m.texture.bump);
-      if (t["color"]) m.texture.color = r.LinearColor(t["color"], tkey + ".color");
-      if (t["seed"]) m.texture.seed = static_cast<uint64_t>(r.Integer(t["seed"], tkey + ".seed"));
-      if (m.texture.kind == Texture::Kind::kImage) {
-        if (!t["file"]) r.Fail(t, tkey, "an image texture needs a 'file'");
-        m.texture.image = r.ResolvePath(t["file"], tkey + ".file");
-        try {
-          m.texture.pixels = LoadLinearImage(m.texture.image);
-        } catch (const Error& e) {
-          r.Fail(t["file"], tkey + ".file", e.what());
-        }
-        if (const YAML::Node p = t["projection"]) {
-          const std::string text = r.Scalar(p, tkey + ".projection");
-          if (text == "auto") {
-            m.texture.projection = Texture::Projection::kAuto;
-          } else if (text == "triplanar") {
-            m.texture.projection = Texture::Projection::kTriplanar;
-          } else if (text == "uv") {
-            m.texture.projection = Texture::Projection::kUv;
-          } else {
-            r.Fail(p, tkey + ".projection",
-                   "unknown projection '" + text + "' (known: auto, triplanar, uv)");
-          }
-        }
-      } else if (t["file"]) {
-        r.Fail(t["file"], tkey + ".file", "only an image texture reads a file");
-      } else if (t["projection"]) {
-        r.Fail(t["projection"], tkey + ".projection",
-               "only an image texture is projected (procedural ones are solid)");
-      }
+      ReadTexture(r, t, tkey, &m.texture);
     }
   }
-  std::string why;
-  if (!m.Check(&why)) r.Fail(node, key, why);
+  r.Check(m, node, key);
   return m;
 }
 
@@ -1247,41 +1295,25 @@ Eigen::Vector3d ReadAim(const Reader& r, const YAML::Node& node, const std::stri
 LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::string& key) {
   if (!node.IsMap()) r.Fail(node, key, "expected a mapping of keys to values");
   if (!node["type"]) r.Fail(node, key, "a light needs a 'type': point, spot, rect, disc or sun");
-  const std::string type = r.Scalar(node["type"], key + ".type");
   LightSource l;
   using K = LightSource::Kind;
-  if (type == "point" || type == "spot") {
-    l.kind = type == "point" ? K::kPoint : K::kSpot;
-  } else if (type == "rect" || type == "disc") {
-    l.kind = type == "rect" ? K::kRect : K::kDisc;
-  } else if (type == "sun") {
-    l.kind = K::kSun;
-  } else {
-    r.Fail(node["type"], key + ".type",
-           "unknown light '" + type + "' (known: point, spot, rect, disc, sun)");
-  }
+  l.kind = ReadKnown<K>(r, node["type"], key + ".type", FieldOf<LightSource>("type"), "light");
   if (l.kind == K::kSun && node["power"])
     r.Fail(node["power"], key + ".power", "a sun's is 'strength' (irradiance, W/m2, as Blender's)");
   if (l.kind != K::kSun && node["strength"])
     r.Fail(node["strength"], key + ".strength", "this light's is 'power' (W, as Blender's)");
   r.ExpectKeys(node, key, SchemaAt("lighting.lights[]"));
-  if (node["color"]) l.color = r.LinearColor(node["color"], key + ".color");
-  if (node["position"]) l.position = Triple(r, node["position"], key + ".position", true);
+  ReadDescribed(r, node, key, &l);
   if (l.kind != K::kPoint) l.direction = ReadAim(r, node, key, l.position, l.direction);
+  // The sun's power is its `strength` (irradiance), as in Blender.
   const char* amount = l.kind == K::kSun ? "strength" : "power";
   if (!node[amount]) {
     r.Fail(node, key,
            l.kind == K::kSun ? "a sun needs a 'strength' (irradiance, W/m2, as Blender's)"
                              : "a light needs a 'power' (W, as Blender's)");
   }
-  l.power = r.Number(node[amount], key + "." + amount);
-  if (l.power < 0) r.Fail(node[amount], key + "." + amount, "must not be negative");
-  if (node["radius"]) {
-    l.radius_mm = r.Length(node["radius"], key + ".radius");
-    if (l.radius_mm < 0) r.Fail(node["radius"], key + ".radius", "must not be negative");
-  } else if (l.kind == K::kDisc) {
-    r.Fail(node, key, "a disc light needs a 'radius'");
-  }
+  ReadField(r, node[amount], key + "." + amount, FieldOf<LightSource>("power"), &l.power);
+  if (l.kind == K::kDisc && !node["radius"]) r.Fail(node, key, "a disc light needs a 'radius'");
   if (const YAML::Node size = node["size"]) {
     if (size.IsScalar()) {
       l.size_x_mm = l.size_y_mm = r.Length(size, key + ".size");
@@ -1292,10 +1324,6 @@ LightSource ReadLightSource(const Reader& r, const YAML::Node& node, const std::
       r.Fail(size, key + ".size", "expected a length or [x, y]");
     }
   }
-  if (node["x_axis"]) l.x_axis = Triple(r, node["x_axis"], key + ".x_axis", false);
-  if (node["spot_size"]) l.spot_size_rad = r.Angle(node["spot_size"], key + ".spot_size");
-  if (node["spot_blend"]) l.spot_blend = r.Number(node["spot_blend"], key + ".spot_blend");
-  if (node["angle"]) l.angle_rad = r.Angle(node["angle"], key + ".angle");
   r.Check(l, node, key);
   return l;
 }
@@ -1315,32 +1343,15 @@ void ReadLighting(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     const std::string key = "lighting.environment";
     Environment& e = spec->look.environment;
     if (!env.IsMap()) r.Fail(env, key, "expected a mapping of keys to values");
-    const std::string type = env["type"] ? r.Scalar(env["type"], key + ".type") : "uniform";
-    if (type == "uniform") {
-      e.kind = Environment::Kind::kUniform;
-    } else if (type == "sky") {
-      e.kind = Environment::Kind::kSky;
-    } else if (type == "image") {
-      e.kind = Environment::Kind::kImage;
-    } else {
-      r.Fail(env["type"], key + ".type",
-             "unknown environment '" + type + "' (known: uniform, sky, image)");
-    }
+    e.kind = env["type"] ? ReadKnown<Environment::Kind>(r, env["type"], key + ".type",
+                                                        FieldOf<Environment>("type"), "environment")
+                         : Environment::Kind::kUniform;
     r.ExpectKeys(env, key, SchemaAt("lighting.environment"));
     if (e.kind == Environment::Kind::kImage && !env["file"])
       r.Fail(env, key, "an image environment needs a 'file' (HDR, EXR, ...)");
-    // Environment colours are linear radiance multipliers (Blender's world colour).
-    if (env["color"]) e.color = r.LinearColor(env["color"], key + ".color");
-    if (env["zenith"]) e.zenith = r.LinearColor(env["zenith"], key + ".zenith");
-    if (env["horizon"]) e.horizon = r.LinearColor(env["horizon"], key + ".horizon");
-    if (env["ground"]) e.ground = r.LinearColor(env["ground"], key + ".ground");
-    if (env["strength"]) {
-      e.strength = static_cast<float>(r.Number(env["strength"], key + ".strength"));
-      if (e.strength < 0) r.Fail(env["strength"], key + ".strength", "must not be negative");
-    }
-    if (env["rotation"]) e.rotation_rad = r.Angle(env["rotation"], key + ".rotation");
+    // Colours are linear radiance multipliers (Blender's world colour).
+    ReadDescribed(r, env, key, &e);
     if (env["file"]) {
-      e.image = r.ResolvePath(env["file"], key + ".file");
       try {
         e.pixels = LoadLinearImage(e.image);
       } catch (const Error& err) {
@@ -1349,53 +1360,6 @@ void ReadLighting(const Reader& r, const YAML::Node& node, RunSpec* spec) {
     }
     r.Check(e, env, key);
   }
-}
-
-// A distribution of one number: a value (fixed), or {uniform: [low, high]},
-// {normal: [mean, sigma]}, {log_uniform: [low, high]} or {choice: [a, b, ...]}; `parse` reads
-// one number (lengths with their units).
-template <typename Parse>
-Distribution ReadDistribution(const Reader& r, const YAML::Node& node, const std::string& key,
-                              Parse parse) {
-  Distribution d;
-  if (node.IsScalar()) {
-    d = Distribution::Fixed(parse(node, key));
-  } else {
-    static const std::vector<std::string> kinds = {"uniform", "normal", "log_uniform", "choice"};
-    if (!node.IsMap() || node.size() != 1) {
-      r.Fail(node, key,
-             "expected a value or one of {uniform: [low, high]}, {normal: [mean, sigma]}, "
-             "{log_uniform: [low, high]}, {choice: [...]}");
-    }
-    const YAML::Node name_node = node.begin()->first;
-    const std::string name = name_node.as<std::string>();
-    const YAML::Node list = node.begin()->second;
-    const auto it = std::find(kinds.begin(), kinds.end(), name);
-    if (it == kinds.end()) {
-      const std::string best = NearestName(name, kinds);
-      r.Fail(name_node, key,
-             "unknown distribution '" + name + "'" +
-                 (best.empty() ? "" : " (did you mean '" + best + "'?)") +
-                 "; known: uniform, normal, log_uniform, choice");
-    }
-    if (!list.IsSequence()) r.Fail(list, key + "." + name, "expected a list");
-    if (name == "choice") {
-      d.kind = Distribution::Kind::kChoice;
-      for (const YAML::Node& v : list) d.values.push_back(parse(v, key + ".choice"));
-    } else {
-      if (list.size() != 2)
-        r.Fail(list, key + "." + name,
-               name == "normal" ? "expected [mean, sigma]" : "expected [low, high]");
-      d.kind = name == "uniform"  ? Distribution::Kind::kUniform
-               : name == "normal" ? Distribution::Kind::kNormal
-                                  : Distribution::Kind::kLogUniform;
-      d.a = parse(list[0], key + "." + name);
-      d.b = parse(list[1], key + "." + name);
-    }
-  }
-  std::string why;
-  if (!d.Check(&why)) r.Fail(node, key, why);
-  return d;
 }
 
 // A list of names, or one name, or {choice: [names]}: what is picked from, equally likely.
@@ -1418,14 +1382,6 @@ std::vector<std::pair<YAML::Node, std::string>> ReadNameChoice(const Reader& r,
   return names;
 }
 
-DrawPer ReadPer(const Reader& r, const YAML::Node& node, const std::string& key) {
-  const std::string per = r.Scalar(node, key);
-  if (per == "frame") return DrawPer::kFrame;
-  if (per == "scene") return DrawPer::kScene;
-  r.Fail(node, key, "expected 'frame' or 'scene', got '" + per + "'");
-}
-
-// A material's randomisation (parts, floor, fixtures) besides `other` keys.
 // Every PNG, JPEG, EXR and HDR image in the folder `node` names (relative to the recipe), sorted
 // by name so that picks do not depend on the file system, read once.
 ImageChoice ReadImageFolder(const Reader& r, const YAML::Node& node, const std::string& key) {
@@ -1461,12 +1417,13 @@ ImageChoice ReadImageFolder(const Reader& r, const YAML::Node& node, const std::
   return images;
 }
 
+// A material's randomisation (parts, floor, fixtures, distractors): presets picked by name,
+// textures from a folder, the described distributions, and its group's `per` (`per_field`).
 MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Node& node,
                                                 const std::string& key, const Key& schema,
-                                                DrawPer* per) {
+                                                const Field& per_field, DrawPer* per) {
   r.ExpectKeys(node, key, schema);
   MaterialRandomization m;
-  const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
   if (const YAML::Node p = node["preset"]) {
     for (const auto& [n, name] : ReadNameChoice(r, p, key + ".preset")) {
       Material preset;
@@ -1490,10 +1447,8 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
     Texture texture;
     texture.kind = Texture::Kind::kImage;
     texture.scale_mm = 200.0;
-    if (t["scale"]) {
-      texture.scale_mm = r.Length(t["scale"], at + ".scale");
-      if (!(texture.scale_mm > 0)) r.Fail(t["scale"], at + ".scale", "must be positive");
-    }
+    if (t["scale"])
+      ReadField(r, t["scale"], at + ".scale", FieldOf<Texture>("scale"), &texture.scale_mm);
     for (size_t i = 0; i < images.files.size(); ++i) {
       texture.image = images.files[i];
       texture.pixels = images.pixels[i];
@@ -1501,17 +1456,8 @@ MaterialRandomization ReadMaterialRandomization(const Reader& r, const YAML::Nod
       m.texture_names.push_back(images.names[i]);
     }
   }
-  const auto read = [&](const char* k, std::optional<Distribution>* d) {
-    if (node[k]) *d = ReadDistribution(r, node[k], key + "." + k, number);
-  };
-  read("hue", &m.hue);
-  read("saturation", &m.saturation);
-  read("value", &m.value);
-  read("metallic", &m.metallic);
-  read("roughness", &m.roughness);
-  read("specular", &m.specular);
-  read("texture_scale", &m.texture_scale);
-  if (node["per"]) *per = ReadPer(r, node["per"], key + ".per");
+  ReadDescribed(r, node, key, &m);
+  if (node["per"]) ReadField(r, node["per"], key + ".per", per_field, per);
   std::string why;
   if (!m.Check(&why)) r.Fail(node, key, why);
   return m;
@@ -1523,14 +1469,11 @@ void ReadDistractors(const Reader& r, const YAML::Node& n, const std::string& at
                      RandomizeSpec* spec) {
   r.ExpectKeys(n, at, SchemaAt("randomize.distractors"));
   DistractorRandomization d;
-  const auto number = [&r](const YAML::Node& v, const std::string& k) { return r.Number(v, k); };
-  const auto length = [&r](const YAML::Node& v, const std::string& k) { return r.Length(v, k); };
-  if (n["count"]) d.count = ReadDistribution(r, n["count"], at + ".count", number);
-  if (n["size"]) d.size_mm = ReadDistribution(r, n["size"], at + ".size", length);
+  ReadDescribed(r, n, at, &d);
   if (n["material"]) {
-    d.material =
-        ReadMaterialRandomization(r, n["material"], at + ".material",
-                                  SchemaAt("randomize.distractors.material"), &d.material_per);
+    d.material = ReadMaterialRandomization(
+        r, n["material"], at + ".material", SchemaAt("randomize.distractors.material"),
+        FieldOf<DistractorRandomization>("material_per"), &d.material_per);
   }
   std::vector<DistractorObject> objects;
   if (const YAML::Node list = n["objects"]) {
@@ -1649,8 +1592,7 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
   r.ExpectKeys(node, key, SchemaAt("randomize"));
   RandomizeSpec spec = base;
   Randomization& d = spec.draws;
-  const auto number = [&r](const YAML::Node& n, const std::string& k) { return r.Number(n, k); };
-  const auto length = [&r](const YAML::Node& n, const std::string& k) { return r.Length(n, k); };
+  // (A negative seed wraps.)
   if (node["seed"]) d.seed = static_cast<uint64_t>(r.Integer(node["seed"], key + ".seed"));
   if (const YAML::Node parts = node["parts"]) {
     if (!parts.IsSequence())
@@ -1662,13 +1604,11 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
       const YAML::Node item = parts[i];
       PartRandomization p;
       p.where = r.Where(item);
-      p.material = ReadMaterialRandomization(r, item, at, SchemaAt("randomize.parts[]"), &p.per);
-      if (const YAML::Node each = item["each"]) {
-        const std::string e = r.Scalar(each, at + ".each");
-        if (e != "part" && e != "instance")
-          r.Fail(each, at + ".each", "expected 'part' or 'instance', got '" + e + "'");
-        p.per_instance = e == "instance";
-      }
+      p.material = ReadMaterialRandomization(r, item, at, SchemaAt("randomize.parts[]"),
+                                             FieldOf<PartRandomization>("per"), &p.per);
+      if (item["each"])
+        ReadField(r, item["each"], at + ".each", FieldOf<PartRandomization>("each"),
+                  &p.per_instance);
       RandomizeRule rule;
       rule.where = p.where;
       ReadPartPatterns(r, item, at, &rule);
@@ -1676,44 +1616,30 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
       spec.part_rules.push_back(std::move(rule));
     }
   }
-  if (node["floor"])
-    d.floor = ReadMaterialRandomization(r, node["floor"], key + ".floor",
-                                        SchemaAt("randomize.floor"), &d.floor_per);
+  if (node["floor"]) {
+    d.floor =
+        ReadMaterialRandomization(r, node["floor"], key + ".floor", SchemaAt("randomize.floor"),
+                                  FieldOf<Randomization>("floor_per"), &d.floor_per);
+  }
   if (node["fixtures"]) {
     d.fixtures = ReadMaterialRandomization(r, node["fixtures"], key + ".fixtures",
-                                           SchemaAt("randomize.fixtures"), &d.fixtures_per);
+                                           SchemaAt("randomize.fixtures"),
+                                           FieldOf<Randomization>("fixtures_per"), &d.fixtures_per);
   }
   if (const YAML::Node n = node["lights"]) {
     const std::string at = key + ".lights";
     r.ExpectKeys(n, at, SchemaAt("randomize.lights"));
     LightRandomization l;
-    if (n["count"]) l.count = ReadDistribution(r, n["count"], at + ".count", number);
-    if (n["type"]) {
+    ReadDescribed(r, n, at, &l);
+    if (n["type"]) {  // the kinds to pick from, by name
+      const Field type = FieldOf<LightRandomization>("type");
       l.kinds.clear();
-      for (const auto& [t, name] : ReadNameChoice(r, n["type"], at + ".type")) {
-        static const std::vector<std::pair<std::string, LightSource::Kind>> kinds = {
-            {"point", LightSource::Kind::kPoint},
-            {"spot", LightSource::Kind::kSpot},
-            {"rect", LightSource::Kind::kRect},
-            {"disc", LightSource::Kind::kDisc}};
-        const auto it = std::find_if(kinds.begin(), kinds.end(),
-                                     [&](const auto& k) { return k.first == name; });
-        if (it == kinds.end())
-          r.Fail(t, at + ".type", "unknown light '" + name + "' (known: point, spot, rect, disc)");
-        l.kinds.push_back(it->second);
-      }
+      for (const auto& choice : ReadNameChoice(r, n["type"], at + ".type"))
+        l.kinds.push_back(
+            ReadKnown<LightSource::Kind>(r, choice.first, at + ".type", type, "light"));
     }
-    const auto read = [&](const char* k, Distribution* dist, auto parse) {
-      if (n[k]) *dist = ReadDistribution(r, n[k], at + "." + k, parse);
-    };
-    read("elevation", &l.elevation_deg, number);
-    read("azimuth", &l.azimuth_deg, number);
-    read("distance", &l.distance_mm, length);
-    read("power", &l.power, number);
-    read("temperature", &l.temperature_k, number);
-    read("size", &l.size_mm, length);
-    if (n["keep"]) l.keep = r.Bool(n["keep"], at + ".keep");
-    if (n["per"]) d.lights_per = ReadPer(r, n["per"], at + ".per");
+    if (n["per"])
+      ReadField(r, n["per"], at + ".per", FieldOf<Randomization>("lights_per"), &d.lights_per);
     std::string why;
     if (!l.Check(&why)) r.Fail(n, at, why);
     d.lights = l;
@@ -1728,12 +1654,11 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
         r.Fail(images, at + ".images", "give the 'folder' of equirectangular images to pick from");
       e.images = ReadImageFolder(r, images["folder"], at + ".images.folder");
     }
-    if (n["strength"]) e.strength = ReadDistribution(r, n["strength"], at + ".strength", number);
-    if (n["rotation"])
-      e.rotation_deg = ReadDistribution(r, n["rotation"], at + ".rotation", number);
-    if (n["temperature"])
-      e.temperature_k = ReadDistribution(r, n["temperature"], at + ".temperature", number);
-    if (n["per"]) d.environment_per = ReadPer(r, n["per"], at + ".per");
+    ReadDescribed(r, n, at, &e);
+    if (n["per"]) {
+      ReadField(r, n["per"], at + ".per", FieldOf<Randomization>("environment_per"),
+                &d.environment_per);
+    }
     std::string why;
     if (!e.Check(&why)) r.Fail(n, at, why);
     d.environment = e;
@@ -1742,16 +1667,7 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
     const std::string at = key + ".camera";
     r.ExpectKeys(n, at, SchemaAt("randomize.camera"));
     CameraRandomization c;
-    const auto read = [&](const char* k, std::optional<Distribution>* dist, auto parse) {
-      if (n[k]) *dist = ReadDistribution(r, n[k], at + "." + k, parse);
-    };
-    read("exposure", &c.exposure, number);
-    read("white_balance", &c.white_balance_k, number);
-    read("noise_gain", &c.noise_gain, number);
-    read("focus_distance", &c.focus_distance_mm, length);
-    read("f_number", &c.f_number, number);
-    read("rotation", &c.rotation_deg, number);
-    read("translation", &c.translation_mm, length);
+    ReadDescribed(r, n, at, &c);
     std::string why;
     if (!c.Check(&why)) r.Fail(n, at, why);
     d.camera = c;
@@ -1763,7 +1679,10 @@ RandomizeSpec ReadRandomize(const Reader& r, const YAML::Node& node, const std::
     if (!n["folder"]) r.Fail(n, at, "give the 'folder' of photos to pick from");
     BackgroundRandomization b;
     b.images = ReadImageFolder(r, n["folder"], at + ".folder");
-    if (n["per"]) d.background_per = ReadPer(r, n["per"], at + ".per");
+    if (n["per"]) {
+      ReadField(r, n["per"], at + ".per", FieldOf<Randomization>("background_per"),
+                &d.background_per);
+    }
     d.background = std::move(b);
   }
   return spec;
@@ -1946,10 +1865,10 @@ RunSpec Reseed(const RunSpec& spec, uint64_t stream) {
   };
   for (SceneSpec& scene : out.scenes) {
     seeds(scene.arrangement);
-    if (scene.randomize) scene.randomize->draws.seed = move(scene.randomize->draws.seed);
+    if (scene.randomize) seeds(scene.randomize->draws);
   }
-  // The sections not described by fields yet: the randomisation draws and the view sampler.
-  out.randomize.draws.seed = move(out.randomize.draws.seed);
+  seeds(out.randomize.draws);
+  // The section not described by fields yet: the view sampler.
   out.sampler.seed = move(out.sampler.seed);
   seeds(out.render);
   seeds(out.bop);

@@ -210,6 +210,24 @@ struct RunSpec {
   RunLimits limits;
   // Reseed(): the stream the seeds were moved to (0: the recipe's own seeds).
   uint64_t reseed = 0;
+
+  // The run-wide options that are RunSpec's own rather than a section struct's, each a key of a
+  // different section (tessellation, classes, render) and read there. Described here, not moved
+  // into a struct of their own: three scalars of three sections would make no section's struct,
+  // and described they still reach every visitor (the run key, the recipe tree, the tests). The
+  // rest of the spec is its structs' (their own Fields) or the recipe's own syntax.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.crease_angle_rad, Field{"crease_angle", "angle",
+                                    "meshes: sharper edges keep their own normals (0: faceted)"});
+    visit(
+        o.class_by,
+        Field{"by", "choice", "each distinct part, or each file's assembly", {"part", "assembly"}});
+    visit(o.cad_colors, Field{"colors",
+                              "choice",
+                              "colours from the CAD files where they have them, or the palette",
+                              {"palette", "cad"}});
+  }
 };
 
 // The same run with every seed of what is drawn per run moved to stream `stream` (0: unchanged):

@@ -13,14 +13,18 @@
 #include "dataset/output_formats.h"
 #include "recipes/recipe.h"
 #include "render/camera.h"
+#include "render/lights.h"
 #include "render/material.h"
+#include "render/randomize.h"
 #include "render/renderer.h"
+#include "render/scene.h"
 #include "render/sensor.h"
 #include "variants/arrangement.h"
 #include "variants/families.h"
 #include "variants/grasp/parallel_jaw.h"
 #include "variants/grasp/scene_grasps.h"
 #include "variants/grasp/suction.h"
+#include "variants/physics/pile.h"
 
 namespace cadsynth {
 namespace {
@@ -59,6 +63,37 @@ Key OnlyWith(Key key, std::vector<std::string> tags) {
 std::vector<Key> Join(std::vector<Key> keys, const std::vector<Key>& more) {
   keys.insert(keys.end(), more.begin(), more.end());
   return keys;
+}
+// The key called `name` among `keys` (a described one, to add what only the tree knows).
+Key& Named(std::vector<Key>& keys, std::string_view name) {
+  for (Key& key : keys)
+    if (key.name == name) return key;
+  throw std::logic_error("recipe schema: no key '" + std::string(name) + "'");
+}
+// The described key `name` of `Options` alone (RunSpec's own options lie in several sections).
+template <typename Options>
+Key KeyOf(std::string_view name) {
+  std::vector<Key> keys = KeysOf<Options>();
+  return Named(keys, name);
+}
+// `keys` with `more` after the key called `name` (keys read by hand among described ones).
+std::vector<Key> After(std::vector<Key> keys, std::string_view name, const std::vector<Key>& more) {
+  const size_t at = &Named(keys, name) - keys.data();
+  keys.insert(keys.begin() + at + 1, more.begin(), more.end());
+  return keys;
+}
+// A section whose keys go with values of its key `tag` (Key::tag, Field::only_with); a required
+// tag has no default, else its default is the tag's value when absent.
+Key Tagged(Key section, std::string tag, bool required) {
+  Key& key = Named(section.keys, tag);
+  key.required = required;
+  if (required) {
+    key.default_text.clear();
+  } else {
+    section.tag_default = key.default_text;
+  }
+  section.tag = std::move(tag);
+  return section;
 }
 
 std::vector<std::string> FamilyNames() {
@@ -119,74 +154,46 @@ std::vector<Key> PartKeys() {
                   "a moved surface point lands this near the surface (default: automatic)")}));
 }
 
-// A material of the physically based mode: a preset and/or its parameters, and a texture.
+// A material of the physically based mode: a preset and/or its parameters (PrincipledParams,
+// Material), and a texture (Texture).
 std::vector<Key> MaterialKeys() {
-  Key base = Value("base_color", "linear_color",
-                   "linear [r, g, b], sRGB \"#RRGGBB\", or cad (the part's own colour)");
-  base.scalar_kind = "text";
-  Key texture =
-      Section("texture", "a procedural or image texture (none: no texture)",
-              {Required(Choice("type",
-                               {"noise", "brushed", "turned", "checker", "concrete", "wood", "rust",
-                                "scratches", "image", "none"},
-                               "the pattern")),
-               Value("scale", "length", "the pattern's size"),
-               Value("amount", "number", "how strongly it changes the colour (0-1)"),
-               Value("roughness", "number", "how strongly it changes the roughness (0-1)"),
-               Value("bump", "number", "how strongly it bumps the normal (0-1)"),
-               Value("color", "linear_color", "the pattern's second colour"),
-               Value("seed", "integer", "the pattern's seed"),
-               OnlyWith(Value("file", "path", "the image (PNG, JPEG, EXR, HDR)"), {"image"}),
-               OnlyWith(Choice("projection", {"auto", "triplanar", "uv"},
-                               "how the image is laid on the part", "auto"),
-                        {"image"})});
-  texture.tag = "type";
+  std::vector<Key> surface = KeysOf<PrincipledParams>();
+  Named(surface, "base_color").scalar_kind = "text";  // cad
+  Key texture = Tagged(
+      Section("texture", "a procedural or image texture (none: no texture)", KeysOf<Texture>()),
+      "type", true);
   texture.scalar_kind = "choice";
   texture.scalar_choices = {"none"};
-  std::vector<std::string> presets = MaterialPresetNames();
-  return {Choice("preset", presets, "a preset the other keys then change"),
-          base,
-          Value("metallic", "number", "0 (dielectric) to 1 (metal)"),
-          Value("roughness", "number", "microfacet roughness (0-1)"),
-          Value("specular", "number", "dielectric specular level (0-1; 0.5 is IOR 1.5)"),
-          Value("anisotropic", "number", "stretch of highlights along the tangent (0-1)"),
-          Value("clearcoat", "number", "a clear coat's weight (0-1)"),
-          Value("clearcoat_roughness", "number", "the clear coat's roughness (0-1)"),
-          Choice("distribution", {"ggx", "multiscatter_ggx"}, "Blender's microfacet distribution",
-                 "ggx"),
-          Choice("tangent", {"radial", "x"},
-                 "where anisotropic highlights stretch: Blender's radial default or the model's x",
-                 "radial"),
-          texture};
+  return Join(Join({Choice("preset", MaterialPresetNames(), "a preset the other keys then change")},
+                   surface),
+              Join(KeysOf<Material>(), {texture}));
 }
 
-// Physics of parts in contact: each a number or, drawn per scene, a range [low, high].
+// Physics of parts in contact (PhysicsMaterial): each a number or, drawn per scene, a range
+// [low, high].
 std::vector<Key> PhysicsKeys() {
-  return {Value("density", "number_range", "kg/m3"),
-          Value("friction", "number_range", "Coulomb's mu"),
-          Value("restitution", "number_range", "bounciness (0-1)")};
+  std::vector<Key> keys = KeysOf<PhysicsMaterial>(ArrangementOptions{}.physics.low);
+  for (Key& key : keys) key.kind = "number_range";
+  return keys;
 }
 
 // The keys of a scene: its arrangement, a pile's container and the physics.
 std::vector<Key> SceneKeys() {
-  Key container = Section(
-      "container", "a pile's container",
-      Join({Required(Choice("type", {"tote", "floor", "file"},
-                            "a tote made here, the bare floor, or a CAD or mesh file")),
-            OnlyWith(Value("inner", "lengths", "inner size [length, width]"), {"tote"}),
-            OnlyWith(Value("height", "length", "wall height"), {"tote"}),
-            OnlyWith(Value("wall", "length", "wall thickness"), {"tote"}),
-            OnlyWith(Value("floor", "length", "floor thickness"), {"tote"}),
-            OnlyWith(Value("corner_radius", "length", "inner corner radius"), {"tote"}),
-            OnlyWith(Value("file", "path", "the container's CAD or mesh file"), {"file"}),
-            OnlyWith(Value("unit", "text", "the file's unit"), {"file"}),
-            OnlyWith(Value("encoding", "text", "STEP: code page of raw-byte names"), {"file"}),
-            OnlyWith(Choice("up", kAxes, "the file's up axis", "z"), {"file"}),
-            Value("color", "color", "its colour in the fast mode (sRGB [r, g, b])"),
-            Section("material", "its material in the pbr mode", MaterialKeys())},
-           {Value("density", "number", "kg/m3"), Value("friction", "number", "Coulomb's mu"),
-            Value("restitution", "number", "bounciness (0-1)")}));
-  container.tag = "type";
+  // The container's keys (Container), a file's (read as a part's), its look, and its physics
+  // (PhysicsMaterial, a plastic tote's by default).
+  const Key container = Tagged(
+      Section(
+          "container", "a pile's container",
+          Join(Join(KeysOf<Container>(),
+                    {OnlyWith(Value("file", "path", "the container's CAD or mesh file"), {"file"}),
+                     OnlyWith(Value("unit", "text", "the file's unit"), {"file"}),
+                     OnlyWith(Value("encoding", "text", "STEP: code page of raw-byte names"),
+                              {"file"}),
+                     OnlyWith(Choice("up", kAxes, "the file's up axis", "z"), {"file"}),
+                     Value("color", "color", "its colour in the fast mode (sRGB [r, g, b])"),
+                     Section("material", "its material in the pbr mode", MaterialKeys())}),
+               KeysOf<PhysicsMaterial>(Container{}.material))),
+      "type", true);
   Key physics = Section(
       "physics",
       "a pile's (or dropped parts') physics: one map for all parts, or a list of rules {name | "
@@ -205,40 +212,44 @@ std::vector<Key> CameraKeys() {
   depth.scalar_kind = "choice";
   depth.scalar_choices = depth.keys.front().choices;
   depth.default_text = "ideal";
-  return {
-      Choice("preset", CameraPresetNames(), "a camera's intrinsics (docs/sensors.md)", "kinect_v1"),
-      Value("width", "integer", "image width (px)", "640"),
-      Value("height", "integer", "image height (px)", "480"),
-      Value("fx", "number", "focal length along x (px)"),
-      Value("fy", "number", "focal length along y (px)"),
-      Value("cx", "number", "principal point x (px)"),
-      Value("cy", "number", "principal point y (px)"),
-      Value("hfov", "angle", "horizontal field of view instead of fx, fy, cx, cy"),
-      Choice("image", {"rgb", "gray", "gray16"}, "a colour or a grey camera", "rgb"),
-      Section("imager", "the image sensor: shot and read noise, vignetting", KeysOf<ImageSensor>()),
-      depth,
-      Section("distortion", "OpenCV's lens distortion", KeysOf<Distortion>()),
-      Section("lens", "pbr: depth of field through a thin lens", KeysOf<ThinLens>()),
-      Section("motion", "pbr: motion blur, the camera's velocities in its own frame",
-              {Value("velocity_mm_s", "vector3", "mm/s along the camera's axes"),
-               Value("angular_velocity_deg_s", "vector3", "degrees/s about its axes"),
-               Required(Value("exposure_ms", "number", "how long the shutter is open"))})};
+  // A preset, the intrinsics (Intrinsics), a field of view in place of K, and the sensor.
+  return Join(
+      Join({Choice("preset", CameraPresetNames(), "a camera's intrinsics (docs/sensors.md)",
+                   "kinect_v1")},
+           KeysOf<Intrinsics>()),
+      {Value("hfov", "angle", "horizontal field of view instead of fx, fy, cx, cy"),
+       Choice("image", {"rgb", "gray", "gray16"}, "a colour or a grey camera", "rgb"),
+       Section("imager", "the image sensor: shot and read noise, vignetting",
+               KeysOf<ImageSensor>()),
+       depth, Section("distortion", "OpenCV's lens distortion", KeysOf<Distortion>()),
+       Section("lens", "pbr: depth of field through a thin lens", KeysOf<ThinLens>()),
+       Section("motion", "pbr: motion blur, the camera's velocities in its own frame",
+               {Value("velocity_mm_s", "vector3", "mm/s along the camera's axes"),
+                Value("angular_velocity_deg_s", "vector3", "degrees/s about its axes"),
+                Required(Value("exposure_ms", "number", "how long the shutter is open"))})});
 }
 
-// A material's randomisation (parts, floor, fixtures, distractors).
+// A group's `per` (DrawPerField): how often it is drawn.
+Key Per(std::string doc) {
+  const Field field = DrawPerField("per");
+  return Choice("per", {field.choices.begin(), field.choices.end()}, std::move(doc),
+                DefaultText(DrawPer::kFrame, field));
+}
+
+// A material's randomisation (MaterialRandomization) without its group's `per`: presets, a texture
+// folder (read by hand) and the distributions.
+std::vector<Key> MaterialDrawFields() {
+  std::vector<Key> keys = KeysOf<MaterialRandomization>();
+  Named(keys, "preset").default_text.clear();  // none: the material's own
+  return After(keys, "preset",
+               {Section("textures", "an image from a folder, projected triplanarly",
+                        {Required(Value("folder", "folder", "the images to pick from")),
+                         Value("scale", "length", "the tile size")})});
+}
+
+// A material's randomisation (floor, fixtures, distractors) and how often it is drawn.
 std::vector<Key> MaterialDrawKeys() {
-  return {Value("preset", "names", "presets to pick from"),
-          Section("textures", "an image from a folder, projected triplanarly",
-                  {Required(Value("folder", "folder", "the images to pick from")),
-                   Value("scale", "length", "the tile size")}),
-          Value("hue", "distribution", "hue shift (turns)"),
-          Value("saturation", "distribution", "saturation factor"),
-          Value("value", "distribution", "value (brightness) factor"),
-          Value("metallic", "distribution", "metallic (0-1)"),
-          Value("roughness", "distribution", "roughness (0-1)"),
-          Value("specular", "distribution", "specular (0-1)"),
-          Value("texture_scale", "distribution", "factor on the texture's scale"),
-          Choice("per", {"frame", "scene"}, "how often it is drawn", "frame")};
+  return Join(MaterialDrawFields(), {Per("how often it is drawn")});
 }
 
 std::vector<Key> RandomizeKeys() {
@@ -251,46 +262,34 @@ std::vector<Key> RandomizeKeys() {
                 FamilyKeys()));
   objects.scalar_kind = "choice";
   objects.scalar_choices = {"box", "cylinder", "sphere"};
-  return {Value("seed", "integer", "the draws' seed", "0"),
-          List("parts", "parts' materials: the first rule matching a part draws it",
-               Join(Join(PartPatterns(), {Choice("each", {"part", "instance"},
-                                                 "one draw per part or per instance", "part")}),
-                    MaterialDrawKeys())),
-          Section("floor", "the floor's material", MaterialDrawKeys()),
-          Section("fixtures", "totes' and containers' materials", MaterialDrawKeys()),
-          Section("lights", "light sources placed around the scene",
-                  {Value("count", "distribution", "how many"),
-                   Value("type", "names", "point, spot, rect, disc"),
-                   Value("elevation", "distribution", "degrees above the floor"),
-                   Value("azimuth", "distribution", "degrees about the vertical"),
-                   Value("distance", "distribution_length", "from the scene's centre"),
-                   Value("power", "distribution", "W, as Blender's"),
-                   Value("temperature", "distribution", "colour temperature (K)"),
-                   Value("size", "distribution_length", "area lights' size"),
-                   Value("keep", "bool", "keep the recipe's own lights too", "false"),
-                   Choice("per", {"frame", "scene"}, "how often they are drawn", "frame")}),
-          Section("environment", "the world's light",
-                  {Section("images", "a world image per draw",
-                           {Required(Value("folder", "folder", "equirectangular images"))}),
-                   Value("strength", "distribution", "factor on the world's strength"),
-                   Value("rotation", "distribution", "degrees about the vertical"),
-                   Value("temperature", "distribution", "colour temperature (K)"),
-                   Choice("per", {"frame", "scene"}, "how often it is drawn", "frame")}),
-          Section("camera", "the camera's settings and pose jitter, per frame",
-                  {Value("exposure", "distribution", "stops"),
-                   Value("white_balance", "distribution", "K"),
-                   Value("noise_gain", "distribution", "factor on the image noise"),
-                   Value("focus_distance", "distribution_length", "the lens's focus"),
-                   Value("f_number", "distribution", "the lens's aperture"),
-                   Value("rotation", "distribution", "degrees of pose jitter"),
-                   Value("translation", "distribution_length", "pose jitter")}),
-          Section("distractors", "objects dropped among the parts, per scene, never labelled",
-                  {Value("count", "distribution", "how many"), objects,
-                   Value("size", "distribution_length", "their size"),
-                   Section("material", "their materials", MaterialDrawKeys())}),
-          Section("background", "photos pasted where nothing is hit (render.floor: false)",
-                  {Required(Value("folder", "folder", "the photos to pick from")),
-                   Choice("per", {"frame", "scene"}, "how often it is drawn", "frame")})};
+  // A part rule: its patterns, `each`, the material's keys, then `per` (PartRandomization).
+  std::vector<Key> part = KeysOf<PartRandomization>();
+  const std::vector<Key> part_keys = Join(Join(PartPatterns(), {Named(part, "each")}),
+                                          Join(MaterialDrawFields(), {Named(part, "per")}));
+  std::vector<Key> lights = KeysOf<LightRandomization>();
+  Named(lights, "type").choices.clear();  // (its doc lists them)
+  // The groups' described keys (their `per` is Randomization's), and those of their own syntax:
+  // the environment's image folder and the distractors' objects.
+  return Join(
+      KeysOf<Randomization>(),
+      {List("parts", "parts' materials: the first rule matching a part draws it", part_keys),
+       Section("floor", "the floor's material", MaterialDrawKeys()),
+       Section("fixtures", "totes' and containers' materials", MaterialDrawKeys()),
+       Section("lights", "light sources placed around the scene",
+               Join(lights, {Per("how often they are drawn")})),
+       Section("environment", "the world's light",
+               Join(Join({Section("images", "a world image per draw",
+                                  {Required(Value("folder", "folder", "equirectangular images"))})},
+                         KeysOf<EnvironmentRandomization>()),
+                    {Per("how often it is drawn")})),
+       Section("camera", "the camera's settings and pose jitter, per frame",
+               KeysOf<CameraRandomization>()),
+       Section("distractors", "objects dropped among the parts, per scene, never labelled",
+               Join(After(KeysOf<DistractorRandomization>(), "count", {objects}),
+                    {Section("material", "their materials", MaterialDrawKeys())})),
+       Section("background", "photos pasted where nothing is hit (render.floor: false)",
+               {Required(Value("folder", "folder", "the photos to pick from")),
+                Per("how often it is drawn")})});
 }
 
 std::vector<Key> GraspKeys() {
@@ -328,55 +327,41 @@ Key BuildSchema() {
                        Value("look_at", "length3", "the point it looks at, in the rig's frame"),
                        Value("rotation", "numbers", "rig_R_cam, 9 numbers row-major")},
                       CameraKeys()));
-  Key lights = List("lights", "fast mode: directional or point lights (Lambert)",
-                    {Value("direction", "vector3", "directional: the way the light travels"),
-                     Value("position", "length3", "a point light (no fall-off)"),
-                     Value("intensity", "number", "its weight", "1")});
-  Key sources = List(
-      "lights", "light sources, Blender's units",
-      {Required(Choice("type", {"point", "spot", "rect", "disc", "sun"}, "the kind of light")),
-       Value("color", "linear_color", "its colour"),
-       OnlyWith(Value("position", "length3", "where it is"), {"point", "spot", "rect", "disc"}),
-       OnlyWith(Value("power", "number", "W, as Blender's"), {"point", "spot", "rect", "disc"}),
-       OnlyWith(Value("radius", "length", "its radius (soft shadows)"), {"point", "spot", "disc"}),
-       OnlyWith(Value("direction", "vector3", "the way it shines"),
-                {"spot", "rect", "disc", "sun"}),
-       OnlyWith(Value("target", "length3", "the point it shines at"), {"spot", "rect", "disc"}),
-       OnlyWith(Value("spot_size", "angle", "the cone's full angle"), {"spot"}),
-       OnlyWith(Value("spot_blend", "number", "the cone edge's softness (0-1)"), {"spot"}),
-       OnlyWith(Value("size", "length_or_pair", "a length, or [x, y]"), {"rect"}),
-       OnlyWith(Value("x_axis", "vector3", "the rectangle's x direction"), {"rect"}),
-       OnlyWith(Value("strength", "number", "irradiance, W/m2, as Blender's"), {"sun"}),
-       OnlyWith(Value("angle", "angle", "the sun's angular diameter"), {"sun"})});
-  sources.tag = "type";
-  Key environment =
-      Section("environment", "the world's light",
-              {Choice("type", {"uniform", "sky", "image"}, "the kind of world", "uniform"),
-               OnlyWith(Value("color", "linear_color", "its colour"), {"uniform"}),
-               Value("strength", "number", "a factor on its radiance", "1"),
-               OnlyWith(Value("zenith", "linear_color", "the sky's colour overhead"), {"sky"}),
-               OnlyWith(Value("horizon", "linear_color", "at the horizon"), {"sky"}),
-               OnlyWith(Value("ground", "linear_color", "below the horizon"), {"sky"}),
-               OnlyWith(Value("file", "path", "an equirectangular HDR or EXR image"), {"image"}),
-               OnlyWith(Value("rotation", "angle", "about the vertical, as a Mapping node's z"),
-                        {"image"})});
-  environment.tag = "type";
-  environment.tag_default = "uniform";
+  // The fast mode's look (Scene) and lights (Scene::Light: a direction or a position, no default).
+  std::vector<Key> fast_light = KeysOf<Scene::Light>();
+  for (const char* name : {"direction", "position"}) Named(fast_light, name).default_text.clear();
+  const std::vector<Key> look =
+      After(KeysOf<Scene>(), "ambient",
+            {List("lights", "fast mode: directional or point lights (Lambert)", fast_light)});
+  // A light's keys and the environment's (LightSource, Environment), and those read by hand: a
+  // target in place of a direction, the rect's size, the sun's strength in place of a power.
+  std::vector<Key> light = KeysOf<LightSource>();
+  Named(light, "power").default_text.clear();  // none: a light needs one
+  light = After(
+      light, "direction",
+      {OnlyWith(Value("target", "length3", "the point it shines at"), {"spot", "rect", "disc"})});
+  light = After(light, "spot_blend",
+                {OnlyWith(Value("size", "length_or_pair", "a length, or [x, y]",
+                                DefaultText(LightSource{}.size_x_mm, Field{.kind = "length"})),
+                          {"rect"})});
+  light = After(light, "x_axis",
+                {OnlyWith(Value("strength", "number", "irradiance, W/m2, as Blender's"), {"sun"})});
+  const Key sources = Tagged(List("lights", "light sources, Blender's units", light), "type", true);
+  const Key environment =
+      Tagged(Section("environment", "the world's light", KeysOf<Environment>()), "type", false);
   Key output_formats = Value("formats", "choices", "bop (always) plus any of the others");
   output_formats.choices = OutputFormatNames();
-  Key classes = Section(
-      "classes", "what one object class is",
-      {Choice("by", {"part", "assembly"}, "each distinct part, or each file's assembly", "part"),
-       Value("groups", "any", "{class name: a name glob or a list of globs}, in order")});
+  Key classes =
+      Section("classes", "what one object class is",
+              {KeyOf<RunSpec>("by"),
+               Value("groups", "any", "{class name: a name glob or a list of globs}, in order")});
 
   Key root = Section(
       "", "a cadsynth recipe",
       {parts, Section("scene", "how the parts of `parts` lie on the floor", SceneKeys()), scenes,
        classes,
        Section("tessellation", "how B-rep surfaces become triangles",
-               Join(KeysOf<TessellationOptions>(),
-                    {Value("crease_angle", "angle",
-                           "meshes: sharper edges keep their own normals (0: faceted)", "30")})),
+               Join(KeysOf<TessellationOptions>(), {KeyOf<RunSpec>("crease_angle")})),
        Section("camera", "the one camera", CameraKeys()), rig,
        Section(
            "sweep", "the camera views: each axis a value, a list or {from, to, step}",
@@ -391,15 +376,7 @@ Key BuildSchema() {
             Value("target_jitter", "length", "each view aims within this of the target", "0 mm"),
             Value("min_visible_pixels", "integer", "skip views with fewer object pixels", "0")}),
        Section("render", "ray casting and shading",
-               Join(KeysOf<RenderOptions>(),
-                    {Value("background", "color", "fast: where nothing is hit (sRGB)"),
-                     Value("floor", "bool", "a floor under the parts", "true"),
-                     Value("floor_color", "color", "the floor's colour (sRGB)"),
-                     Value("ambient", "number", "fast: ambient light", "0.3"), lights,
-                     Value("shadows", "bool", "fast: hard shadows", "true"),
-                     Choice("colors", {"cad", "palette"},
-                            "colours from the CAD files where they have them, or the palette",
-                            "cad")})),
+               Join(Join(KeysOf<RenderOptions>(), look), {KeyOf<RunSpec>("colors")})),
        Section("materials", "pbr: the materials of the floor and the parts",
                {Section("floor", "the floor's material", MaterialKeys()),
                 Section("default", "parts no rule matches", MaterialKeys()),

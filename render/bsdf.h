@@ -18,6 +18,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "cad/core/schema.h"
+
 namespace cadsynth {
 
 struct PrincipledParams {
@@ -40,6 +42,28 @@ struct PrincipledParams {
   // compensated albedo, so a white dielectric still does. Like Cycles', the scale depends on the
   // viewing direction only: f(wo, wi) is no longer reciprocal.
   bool multiscatter = false;
+
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    // base_color: cad (the part's colour) is Material::base_from_part's: read by hand.
+    visit(o.base_color,
+          Field{.key = "base_color",
+                .kind = "linear_color",
+                .doc = "linear [r, g, b], sRGB \"#RRGGBB\", or cad (the part's own colour)",
+                .by_hand = true});
+    visit(o.metallic, UnitNumber("metallic", "0 (dielectric) to 1 (metal)"));
+    visit(o.roughness, UnitNumber("roughness", "microfacet roughness (0-1)"));
+    visit(o.specular, UnitNumber("specular", "dielectric specular level (0-1; 0.5 is IOR 1.5)"));
+    visit(o.anisotropic,
+          UnitNumber("anisotropic", "stretch of highlights along the tangent (0-1)"));
+    visit(o.clearcoat, UnitNumber("clearcoat", "a clear coat's weight (0-1)"));
+    visit(o.clearcoat_roughness,
+          UnitNumber("clearcoat_roughness", "the clear coat's roughness (0-1)"));
+    visit(o.multiscatter, Field{"distribution",
+                                "choice",
+                                "Blender's microfacet distribution",
+                                {"ggx", "multiscatter_ggx"}});
+  }
 };
 
 class PrincipledBsdf {

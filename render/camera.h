@@ -83,6 +83,18 @@ struct Intrinsics {
   bool Project(const Eigen::Vector3d& p, Eigen::Vector2d* uv) const;
   // Also that every point of the image (its border's pixel corners) has a ray.
   bool Check(std::string* why) const;
+
+  // The size and K; `distortion` describes its own (Distortion::Fields). The recipe's `preset`
+  // (every field) and `hfov` (fx, fy, cx, cy from the width and height) are read by hand.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.width, Field{"width", "integer", "image width (px)"});
+    visit(o.height, Field{"height", "integer", "image height (px)"});
+    visit(o.fx, Field{"fx", "number", "focal length along x (px)"});
+    visit(o.fy, Field{"fy", "number", "focal length along y (px)"});
+    visit(o.cx, Field{"cx", "number", "principal point x (px)"});
+    visit(o.cy, Field{"cy", "number", "principal point y (px)"});
+  }
 };
 
 // A thin lens: depth of field in the physically based colour image (labels and depth keep the

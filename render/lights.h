@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include "cad/core/schema.h"
 #include "render/image.h"
 
 namespace cadsynth {
@@ -47,6 +48,58 @@ struct LightSource {
   double angle_rad = 0.00918043;              // sun: angular diameter (0.526 deg, Blender's)
 
   bool Check(std::string* why) const;
+
+  // In the recipe's order. Read by hand: `type` (the tag the other keys go with), the power (a
+  // sun's is `strength`), the direction (or a `target`) and the size (`size`: a length or [x, y]).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.kind, Field{.key = "type",
+                        .kind = "choice",
+                        .doc = "the kind of light",
+                        .choices = {"point", "spot", "rect", "disc", "sun"},
+                        .by_hand = true});
+    visit(o.color, Field{"color", "linear_color", "its colour"});
+    visit(o.position, Field{.key = "position",
+                            .kind = "length3",
+                            .doc = "where it is",
+                            .only_with = {"point", "spot", "rect", "disc"}});
+    visit(o.power, Field{.key = "power",
+                         .kind = "number",
+                         .doc = "W, as Blender's",
+                         .by_hand = true,
+                         .range = Range::kNonNegative,
+                         .only_with = {"point", "spot", "rect", "disc"}});
+    visit(o.radius_mm, Field{.key = "radius",
+                             .kind = "length",
+                             .doc = "its radius (soft shadows)",
+                             .range = Range::kNonNegative,
+                             .only_with = {"point", "spot", "disc"}});
+    visit(o.direction, Field{.key = "direction",
+                             .kind = "vector3",
+                             .doc = "the way it shines",
+                             .by_hand = true,
+                             .only_with = {"spot", "rect", "disc", "sun"}});
+    visit(o.spot_size_rad, Field{.key = "spot_size",
+                                 .kind = "angle",
+                                 .doc = "the cone's full angle",
+                                 .only_with = {"spot"}});
+    visit(o.spot_blend, Field{.key = "spot_blend",
+                              .kind = "number",
+                              .doc = "the cone edge's softness (0-1)",
+                              .only_with = {"spot"}});
+    visit(o.size_x_mm,
+          Field{.kind = "length", .doc = "rect: its x side", .internal_name = "size_x"});
+    visit(o.size_y_mm,
+          Field{.kind = "length", .doc = "rect: its y side", .internal_name = "size_y"});
+    visit(o.x_axis, Field{.key = "x_axis",
+                          .kind = "vector3",
+                          .doc = "the rectangle's x direction",
+                          .only_with = {"rect"}});
+    visit(o.angle_rad, Field{.key = "angle",
+                             .kind = "angle",
+                             .doc = "the sun's angular diameter",
+                             .only_with = {"sun"}});
+  }
 };
 
 struct Environment {
@@ -66,6 +119,44 @@ struct Environment {
   double rotation_rad = 0.0;
 
   bool Check(std::string* why) const;
+
+  // `type` (the tag the other keys go with) is read by hand, and so are the file's pixels.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.kind, Field{.key = "type",
+                        .kind = "choice",
+                        .doc = "the kind of world",
+                        .choices = {"uniform", "sky", "image"},
+                        .by_hand = true});
+    visit(
+        o.color,
+        Field{
+            .key = "color", .kind = "linear_color", .doc = "its colour", .only_with = {"uniform"}});
+    visit(o.strength, Field{.key = "strength",
+                            .kind = "number",
+                            .doc = "a factor on its radiance",
+                            .range = Range::kNonNegative});
+    visit(o.zenith, Field{.key = "zenith",
+                          .kind = "linear_color",
+                          .doc = "the sky's colour overhead",
+                          .only_with = {"sky"}});
+    visit(o.horizon, Field{.key = "horizon",
+                           .kind = "linear_color",
+                           .doc = "at the horizon",
+                           .only_with = {"sky"}});
+    visit(o.ground, Field{.key = "ground",
+                          .kind = "linear_color",
+                          .doc = "below the horizon",
+                          .only_with = {"sky"}});
+    visit(o.image, Field{.key = "file",
+                         .kind = "path",
+                         .doc = "an equirectangular HDR or EXR image",
+                         .only_with = {"image"}});
+    visit(o.rotation_rad, Field{.key = "rotation",
+                                .kind = "angle",
+                                .doc = "about the vertical, as a Mapping node's z",
+                                .only_with = {"image"}});
+  }
 };
 
 }  // namespace cadsynth

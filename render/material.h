@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "cad/core/schema.h"
 #include "render/bsdf.h"
 #include "render/image.h"
 
@@ -49,6 +50,39 @@ struct Texture {
   uint64_t seed = 0;                           // pattern variant
   std::filesystem::path image;                 // kImage
   std::shared_ptr<const LinearImage> pixels;   // kImage: the file's pixels, once read
+
+  // In the recipe's order; `type` (a new type starts from its defaults), `seed` (a negative one
+  // wraps) and `projection` (its own message) are read by hand.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.kind, Field{.key = "type",
+                        .kind = "choice",
+                        .doc = "the pattern",
+                        .choices = {"none", "noise", "brushed", "turned", "checker", "concrete",
+                                    "wood", "rust", "scratches", "image"},
+                        .by_hand = true});
+    visit(o.scale_mm, Field{.key = "scale",
+                            .kind = "length",
+                            .doc = "the pattern's size",
+                            .range = Range::kPositive});
+    visit(o.amount, UnitNumber("amount", "how strongly it changes the colour (0-1)"));
+    visit(o.roughness_amount,
+          UnitNumber("roughness", "how strongly it changes the roughness (0-1)"));
+    visit(o.bump, UnitNumber("bump", "how strongly it bumps the normal (0-1)"));
+    visit(o.color, Field{"color", "linear_color", "the pattern's second colour"});
+    visit(o.seed,
+          Field{.key = "seed", .kind = "integer", .doc = "the pattern's seed", .by_hand = true});
+    visit(o.image, Field{.key = "file",
+                         .kind = "path",
+                         .doc = "the image (PNG, JPEG, EXR, HDR)",
+                         .only_with = {"image"}});
+    visit(o.projection, Field{.key = "projection",
+                              .kind = "choice",
+                              .doc = "how the image is laid on the part",
+                              .choices = {"auto", "triplanar", "uv"},
+                              .by_hand = true,
+                              .only_with = {"image"}});
+  }
 };
 
 struct Material {
@@ -66,6 +100,20 @@ struct Material {
   Tangent tangent = Tangent::kRadial;
 
   bool Check(std::string* why) const;
+
+  // The material's own fields; `surface` and `texture` describe theirs (PrincipledParams::Fields,
+  // Texture::Fields).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.tangent,
+          Field{"tangent",
+                "choice",
+                "where anisotropic highlights stretch: Blender's radial default or the model's x",
+                {"radial", "x"}});
+    visit(o.base_from_part, Field{.kind = "bool",
+                                  .doc = "the base colour is the part's own (base_color: cad)",
+                                  .internal_name = "base_from_part"});
+  }
 };
 
 // The presets, linear base colours from measured reflectances of the metals (F0) and typical

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "cad/core/schema.h"
 #include "render/camera.h"
 #include "render/lights.h"
 #include "render/material.h"
@@ -50,11 +51,42 @@ struct Distribution {
   // range, the tails of a normal are clipped to it).
   double Lowest() const;
   double Highest() const;
+  bool operator==(const Distribution&) const = default;
+
+  // As a recipe writes it (cad/core/schema.h FieldText): the value, {uniform | normal |
+  // log_uniform: [a, b]} or {choice: [values]}, numbers exactly (lengths in mm: bare numbers).
+  std::string Text() const {
+    const auto number = [](double v) { return FieldText(v, Field{}); };
+    if (kind == Kind::kFixed) return number(a);
+    std::string list;
+    if (kind == Kind::kChoice) {
+      for (size_t i = 0; i < values.size(); ++i) list += (i ? ", " : "") + number(values[i]);
+    } else {
+      list = number(a) + ", " + number(b);
+    }
+    const char* name = kind == Kind::kUniform  ? "uniform"
+                       : kind == Kind::kNormal ? "normal"
+                       : kind == Kind::kChoice ? "choice"
+                                               : "log_uniform";
+    std::string text = "{";  // (appended: GCC 12 warns falsely on "{" + std::string&&)
+    text.append(name).append(": [").append(list).append("]}");
+    return text;
+  }
 };
 
 // How often a group's quantities are drawn anew: every frame, or once per scene (all its frames
 // share the draw).
 enum class DrawPer { kFrame, kScene };
+
+// The field of a group's DrawPer: the recipe key `per` of the group's section (`key` where the
+// struct holds that section's keys, else empty and `name` for the run key).
+inline Field DrawPerField(std::string_view key, std::string_view name = {}) {
+  return Field{.key = key,
+               .kind = "choice",
+               .doc = "how often it is drawn",
+               .choices = {"frame", "scene"},
+               .internal_name = name};
+}
 
 // A surface's material redrawn around its own: a preset picked from `presets` (none: keep the
 // material), an image texture picked from `textures` (none: keep the texture), its base colour
@@ -71,6 +103,21 @@ struct MaterialRandomization {
   std::optional<Distribution> hue, saturation, value;
   std::optional<Distribution> metallic, roughness, specular, texture_scale;
   bool Check(std::string* why) const;
+
+  // The presets are picked by name (read by hand: each must be a preset); the textures come from
+  // a folder (`textures: {folder, scale}`, read by hand, keyed by their files).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.preset_names,
+          Field{.key = "preset", .kind = "names", .doc = "presets to pick from", .by_hand = true});
+    visit(o.hue, Field{"hue", "distribution", "hue shift (turns)"});
+    visit(o.saturation, Field{"saturation", "distribution", "saturation factor"});
+    visit(o.value, Field{"value", "distribution", "value (brightness) factor"});
+    visit(o.metallic, Field{"metallic", "distribution", "metallic (0-1)"});
+    visit(o.roughness, Field{"roughness", "distribution", "roughness (0-1)"});
+    visit(o.specular, Field{"specular", "distribution", "specular (0-1)"});
+    visit(o.texture_scale, Field{"texture_scale", "distribution", "factor on the texture's scale"});
+  }
 };
 
 // Parts the rule matches (by name, family or file; the run resolves which instances) get a
@@ -80,6 +127,14 @@ struct PartRandomization {
   bool per_instance = false;
   DrawPer per = DrawPer::kFrame;
   std::string where;  // the rule's place in the recipe, for messages
+
+  // Its own keys; the material's are MaterialRandomization's, the patterns the rule's.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.per_instance,
+          Field{"each", "choice", "one draw per part or per instance", {"part", "instance"}});
+    visit(o.per, DrawPerField("per"));
+  }
 };
 
 // Lights on a shell about the scene: `count` lights of a kind picked from `kinds`, each at an
@@ -99,6 +154,24 @@ struct LightRandomization {
   Distribution size_mm = Distribution::Uniform(200, 1000);
   bool keep = false;
   bool Check(std::string* why) const;
+
+  // `type` is a list of names (read by hand); `per` is Randomization::lights_per.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.count, Field{"count", "distribution", "how many"});
+    visit(o.kinds, Field{.key = "type",
+                         .kind = "names",
+                         .doc = "point, spot, rect, disc",
+                         .choices = {"point", "spot", "rect", "disc"},
+                         .by_hand = true});
+    visit(o.elevation_deg, Field{"elevation", "distribution", "degrees above the floor"});
+    visit(o.azimuth_deg, Field{"azimuth", "distribution", "degrees about the vertical"});
+    visit(o.distance_mm, Field{"distance", "distribution_length", "from the scene's centre"});
+    visit(o.power, Field{"power", "distribution", "W, as Blender's"});
+    visit(o.temperature_k, Field{"temperature", "distribution", "colour temperature (K)"});
+    visit(o.size_mm, Field{"size", "distribution_length", "area lights' size"});
+    visit(o.keep, Field{"keep", "bool", "keep the recipe's own lights too"});
+  }
 };
 
 // Images picked from a folder, equally likely (each with its pixels, read once), and their file
@@ -117,6 +190,15 @@ struct EnvironmentRandomization {
   std::optional<ImageChoice> images;
   std::optional<Distribution> strength, rotation_deg, temperature_k;
   bool Check(std::string* why) const;
+
+  // `images: {folder}` is read by hand (keyed by its files); `per` is
+  // Randomization::environment_per.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.strength, Field{"strength", "distribution", "factor on the world's strength"});
+    visit(o.rotation_deg, Field{"rotation", "distribution", "degrees about the vertical"});
+    visit(o.temperature_k, Field{"temperature", "distribution", "colour temperature (K)"});
+  }
 };
 
 // Background photos (FrameLook::background) picked from a folder: the render pasted over a photo
@@ -139,6 +221,17 @@ struct CameraRandomization {
   std::optional<Distribution> exposure, white_balance_k, noise_gain, focus_distance_mm, f_number;
   std::optional<Distribution> rotation_deg, translation_mm;
   bool Check(std::string* why) const;
+
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.exposure, Field{"exposure", "distribution", "stops"});
+    visit(o.white_balance_k, Field{"white_balance", "distribution", "K"});
+    visit(o.noise_gain, Field{"noise_gain", "distribution", "factor on the image noise"});
+    visit(o.focus_distance_mm, Field{"focus_distance", "distribution_length", "the lens's focus"});
+    visit(o.f_number, Field{"f_number", "distribution", "the lens's aperture"});
+    visit(o.rotation_deg, Field{"rotation", "distribution", "degrees of pose jitter"});
+    visit(o.translation_mm, Field{"translation", "distribution_length", "pose jitter"});
+  }
 };
 
 // One recorded draw: the quantity's name (dotted, e.g. "part.2.roughness", "light.0.power",
@@ -164,6 +257,15 @@ struct DistractorRandomization {
   std::optional<MaterialRandomization> material;
   DrawPer material_per = DrawPer::kFrame;
   bool Check(std::string* why) const;
+
+  // `objects` is the run's (RandomizeSpec::distractor_objects), `material` a section of its own
+  // (MaterialRandomization) whose `per` is material_per.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.count, Field{"count", "distribution", "how many"});
+    visit(o.size_mm, Field{"size", "distribution_length", "their size"});
+    visit(o.material_per, DrawPerField("", "material_per"));
+  }
 };
 
 // One distractor of a scene: the object picked (an index into the run's list), the primitive's
@@ -202,6 +304,20 @@ struct Randomization {
   bool changes_look() const;
   bool active() const { return changes_look() || camera.has_value() || distractors.has_value(); }
   bool Check(std::string* why) const;
+
+  // Its own options: the seed (a run's: Reseed moves it; read by hand, a negative one wraps) and
+  // how often each group is drawn (each its section's `per`). The groups describe theirs.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    Field seed = RunSeed("seed", "the draws' seed");
+    seed.by_hand = true;
+    visit(o.seed, seed);
+    visit(o.floor_per, DrawPerField("", "floor_per"));
+    visit(o.fixtures_per, DrawPerField("", "fixtures_per"));
+    visit(o.lights_per, DrawPerField("", "lights_per"));
+    visit(o.environment_per, DrawPerField("", "environment_per"));
+    visit(o.background_per, DrawPerField("", "background_per"));
+  }
 };
 
 // What one frame is drawn to be.

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "cad/core/schema.h"
 #include "cad/part.h"
 #include "render/image.h"
 #include "render/lights.h"
@@ -43,10 +44,47 @@ struct Scene {
     Eigen::Vector3d direction{-0.3, -0.4, -1.0};  // directional: the way the light travels (world)
     Eigen::Vector3d position{0.0, 0.0, 2000.0};   // point: where it is (world, mm); no fall-off
     float intensity = 0.75f;
+
+    // A recipe's light gives a direction (directional) or a position (point): its kind has no key
+    // of its own, the reader sets it from which one is given.
+    template <class Self, class Visit>
+    static void Fields(Self& o, Visit&& visit) {
+      visit(o.kind, Field{.kind = "choice",
+                          .doc = "directional (a direction given) or point (a position given)",
+                          .choices = {"directional", "point"},
+                          .internal_name = "kind"});
+      visit(o.direction, Field{"direction", "vector3", "directional: the way the light travels"});
+      visit(o.position, Field{"position", "length3", "a point light (no fall-off)"});
+      visit(o.intensity, Field{.key = "intensity",
+                               .kind = "number",
+                               .doc = "its weight",
+                               .range = Range::kNonNegative});
+    }
   };
   std::vector<Light> lights = {Light{}};
   float ambient = 0.3f;
   bool shadows = true;  // hard shadows: an occlusion ray from every lit point to every light
+
+  // The look options above, the recipe's `render` keys (the fast mode's), and only those: a Scene
+  // is also what a run draws (instances, fixtures, the pbr mode's materials, lights and
+  // environment), which the run key takes from what prepare made (KeyPrepared) or from their own
+  // descriptions (Material, LightSource, Environment). Called Fields rather than LookFields so
+  // that every visitor (the recipe reader and tree, the run key, the tests) takes a Scene as it
+  // takes any described options. `lights` describe their own (Light::Fields).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.background_color, Field{"background", "color", "fast: where nothing is hit (sRGB)"});
+    visit(o.floor, Field{"floor", "bool", "a floor under the parts"});
+    visit(o.floor_color, Field{"floor_color", "color", "the floor's colour (sRGB)"});
+    visit(o.ambient, Field{.key = "ambient",
+                           .kind = "number",
+                           .doc = "fast: ambient light",
+                           .range = Range::kNonNegative});
+    visit(o.shadows, Field{"shadows", "bool", "fast: hard shadows"});
+    visit(o.floor_half_size_mm, Field{.kind = "length",
+                                      .doc = "the floor square's half side",
+                                      .internal_name = "floor_half_size"});
+  }
 
   // The physically based mode (RenderOptions::mode pbr) shades with these instead of the colours,
   // lights, ambient and background above. Depth and every label are the same in both modes.

@@ -44,7 +44,7 @@ struct KeyWriter {
   KeyWriter() { key.precision(17); }
 
   template <class Options>
-  void Fields(const char* section, const Options& options) {
+  void Fields(std::string_view section, const Options& options) {
     key << section;
     Options::Fields(options, [this](const auto& value, const Field& field) {
       key << " " << field.Name() << "=" << FieldText(value, field);
@@ -52,41 +52,24 @@ struct KeyWriter {
     key << "\n";
   }
 
-  void Material(const char* what, const cadsynth::Material& m) {
-    const PrincipledParams& p = m.surface;
-    const Texture& t = m.texture;
-    key << what << " " << p.base_color.transpose() << " " << p.metallic << " " << p.roughness << " "
-        << p.specular << " " << p.anisotropic << " " << p.clearcoat << " " << p.clearcoat_roughness
-        << " " << p.multiscatter << " " << m.base_from_part << " tangent "
-        << static_cast<int>(m.tangent) << " texture " << static_cast<int>(t.kind) << " "
-        << t.scale_mm << " " << t.amount << " " << t.roughness_amount << " " << t.bump << " "
-        << t.color.transpose() << " " << t.seed << " " << t.image.string();
-    if (t.kind == Texture::Kind::kImage) key << " projection " << static_cast<int>(t.projection);
-    key << "\n";
-    if (!t.image.empty()) images.insert(t.image);
+  // A material's own fields, its surface's and its texture's; the texture's image is read.
+  void Material(const std::string& what, const cadsynth::Material& m) {
+    Fields(what, m);
+    Fields(what + ".surface", m.surface);
+    Fields(what + ".texture", m.texture);
+    if (!m.texture.image.empty()) images.insert(m.texture.image);
   }
 
-  void Dist(const char* what, const std::optional<Distribution>& d) {
-    key << " " << what;
-    if (!d) return;
-    key << " " << static_cast<int>(d->kind) << " " << d->a << " " << d->b;
-    for (double v : d->values) key << " " << v;
-  }
-
-  void Randomized(const char* what, const MaterialRandomization& m) {
-    key << what;
-    for (const std::string& name : m.preset_names) key << " preset " << name;
+  // A material's randomisation: its described fields, and the textures of its folder (their
+  // files and tile size; the images are read).
+  void Randomized(const std::string& what, const MaterialRandomization& m) {
+    Fields(what, m);
+    if (m.textures.empty()) return;
+    key << what << ".textures";
     for (const Texture& t : m.textures) {
-      key << " texture " << t.image.string() << " " << t.scale_mm;
+      key << " " << t.image.string() << " " << FieldText(t.scale_mm, Field{});
       images.insert(t.image);
     }
-    Dist("hue", m.hue);
-    Dist("saturation", m.saturation);
-    Dist("value", m.value);
-    Dist("metallic", m.metallic);
-    Dist("roughness", m.roughness);
-    Dist("specular", m.specular);
-    Dist("texture_scale", m.texture_scale);
     key << "\n";
   }
 
@@ -137,9 +120,7 @@ void KeyOptics(const Intrinsics& k, const SensorOptions& sensor, KeyWriter& w) {
 }
 
 void KeySensors(const RunSpec& spec, KeyWriter& w) {
-  const Intrinsics& k = spec.intrinsics;
-  w.key << "camera " << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx
-        << " " << k.cy << "\n";
+  w.Fields("camera", spec.intrinsics);
   // The sensor (recipes without camera.image and camera.depth keep their earlier run keys).
   if (spec.sensor.image != SensorOptions::Image::kRgb ||
       spec.sensor.depth.kind != DepthModel::Kind::kIdeal) {
@@ -150,13 +131,12 @@ void KeySensors(const RunSpec& spec, KeyWriter& w) {
   KeyOptics(spec.intrinsics, spec.sensor, w);
   // A rig's sensors (recipes without `cameras:` keep their earlier run keys).
   for (const RigSensor& sensor : spec.rig) {
-    const Intrinsics& c = sensor.intrinsics;
     const Eigen::Matrix<double, 3, 4> pose = sensor.rig_from_cam.matrix().topRows<3>();
-    w.key << "sensor " << sensor.name << " " << c.width << " " << c.height << " " << c.fx << " "
-          << c.fy << " " << c.cx << " " << c.cy << " image "
-          << static_cast<int>(sensor.sensor.image) << " pose";
+    w.key << "sensor " << sensor.name << " image " << static_cast<int>(sensor.sensor.image)
+          << " pose";
     for (int i = 0; i < 12; ++i) w.key << " " << pose(i % 3, i / 3);
     w.key << "\n";
+    w.Fields("camera", sensor.intrinsics);
     w.Fields("depth", sensor.sensor.depth);
     w.Fields("imager", sensor.sensor.imager);
     KeyOptics(sensor.intrinsics, sensor.sensor, w);
@@ -170,29 +150,17 @@ void KeyScenes(const RunSpec& spec, KeyWriter& w) {
     if (scene.arrangement.layout != Layout::kPile && scene.arrangement.pose != PoseMode::kDropped)
       continue;
     const Container& c = scene.arrangement.container;
-    const PhysicsMaterial& p = scene.arrangement.physics.low;
-    w.key << "pile " << static_cast<int>(c.kind) << " " << c.inner_mm.transpose() << " "
-          << c.height_mm << " " << c.wall_mm << " " << c.floor_mm << " " << c.corner_radius_mm
-          << " " << c.material.density_kg_m3 << " " << c.material.friction << " "
-          << c.material.restitution << " " << p.density_kg_m3 << " " << p.friction << " "
-          << p.restitution << " " << scene.container_color.transpose() << " "
+    w.Fields("container", c);
+    w.Fields("container.material", c.material);
+    w.key << "container_look " << FieldText(scene.container_color, Field{}) << " "
           << scene.container_material.has_value() << "\n";
-    // Ranges and rules (recipes without them keep their earlier run keys).
-    const auto physics = [&w](const PhysicsDraw& d) {
-      for (const PhysicsMaterial* m : {&d.low, &d.high})
-        w.key << " " << m->density_kg_m3 << " " << m->friction << " " << m->restitution;
-    };
-    const PhysicsDraw& all = scene.arrangement.physics;
-    if (all.high.density_kg_m3 != p.density_kg_m3 || all.high.friction != p.friction ||
-        all.high.restitution != p.restitution) {
-      w.key << "physics range";
-      physics(all);
-      w.key << "\n";
-    }
+    // The parts' physics, both ends of its ranges (equal where a value is fixed), and the rules.
+    w.Fields("physics.low", scene.arrangement.physics.low);
+    w.Fields("physics.high", scene.arrangement.physics.high);
     for (const PhysicsRule& rule : scene.physics_rules) {
-      w.key << "physics rule '" << rule.name << "' '" << rule.family << "' '" << rule.file << "'";
-      physics(rule.physics);
-      w.key << "\n";
+      w.key << "physics_rule '" << rule.name << "' '" << rule.family << "' '" << rule.file << "'\n";
+      w.Fields("physics_rule.low", rule.physics.low);
+      w.Fields("physics_rule.high", rule.physics.high);
     }
   }
 }
@@ -201,98 +169,53 @@ void KeyScenes(const RunSpec& spec, KeyWriter& w) {
 // (a RunSpec built in code has none): meshes' crease angle, classes, colours, the look; in the
 // physically based mode materials, light sources and the environment.
 void KeyLook(const RunSpec& spec, KeyWriter& w) {
-  w.key << "parts " << spec.crease_angle_rad << " " << static_cast<int>(spec.class_by) << " "
-        << spec.cad_colors << "\n";
+  w.Fields("run", spec);  // RunSpec's own options: crease angle, classes, colours
   for (const auto& [name, globs] : spec.class_groups) {
     w.key << "class " << name;
     for (const std::string& glob : globs) w.key << " " << glob;
     w.key << "\n";
   }
   const Scene& look = spec.look;
-  w.key << "look " << look.floor << " " << look.floor_half_size_mm << " "
-        << look.floor_color.transpose() << " " << look.background_color.transpose() << " "
-        << look.ambient << " " << look.shadows << "\n";
-  for (const Scene::Light& light : look.lights) {
-    w.key << "light " << static_cast<int>(light.kind) << " " << light.direction.transpose() << " "
-          << light.position.transpose() << " " << light.intensity << "\n";
-  }
+  w.Fields("look", look);  // the look options only (Scene::Fields)
+  for (const Scene::Light& light : look.lights) w.Fields("light", light);
   w.Material("floor_material", look.floor_material);
   if (spec.default_material) w.Material("default_material", *spec.default_material);
   for (const MaterialRule& rule : spec.material_rules) {
     w.key << "rule " << rule.name << " | " << rule.family << " | " << rule.file << "\n";
     w.Material("material", rule.material);
   }
-  for (const LightSource& l : look.light_sources) {
-    w.key << "light_source " << static_cast<int>(l.kind) << " " << l.color.transpose() << " "
-          << l.power << " " << l.position.transpose() << " " << l.direction.transpose() << " "
-          << l.radius_mm << " " << l.size_x_mm << " " << l.size_y_mm << " " << l.x_axis.transpose()
-          << " " << l.spot_size_rad << " " << l.spot_blend << " " << l.angle_rad << "\n";
-  }
+  for (const LightSource& l : look.light_sources) w.Fields("light_source", l);
   const Environment& env = look.environment;
-  w.key << "environment " << static_cast<int>(env.kind) << " " << env.strength << " "
-        << env.color.transpose() << " " << env.zenith.transpose() << " " << env.horizon.transpose()
-        << " " << env.ground.transpose() << " " << env.image.string() << " " << env.rotation_rad
-        << "\n";
+  w.Fields("environment", env);
   if (!env.image.empty()) w.images.insert(env.image);
 }
 
 // Domain randomisation, as each scene resolved it (a RunSpec built in code too), and the images
 // its texture folders hold (a file added to a folder moves the picks).
 void KeyRandomization(const Randomization& r, KeyWriter& w) {
-  w.key << "randomize " << r.seed << " " << static_cast<int>(r.floor_per) << " "
-        << static_cast<int>(r.fixtures_per) << " " << static_cast<int>(r.lights_per) << " "
-        << static_cast<int>(r.environment_per) << "\n";
+  w.Fields("randomize", r);
   for (const PartRandomization& p : r.parts) {
-    w.key << "randomize_part " << p.per_instance << " " << static_cast<int>(p.per) << " ";
-    w.Randomized("", p.material);
+    w.Fields("randomize_part", p);
+    w.Randomized("randomize_part.material", p.material);
   }
+  // Resolved by the run: the rule that draws each instance's material.
+  w.key << "randomize_instance_rules";
   for (int rule : r.instance_rule) w.key << " " << rule;
   w.key << "\n";
   if (r.floor) w.Randomized("randomize_floor", *r.floor);
   if (r.fixtures) w.Randomized("randomize_fixtures", *r.fixtures);
-  if (const auto& l = r.lights) {
-    w.key << "randomize_lights " << l->keep;
-    for (LightSource::Kind k : l->kinds) w.key << " " << static_cast<int>(k);
-    w.Dist("count", l->count);
-    w.Dist("elevation", l->elevation_deg);
-    w.Dist("azimuth", l->azimuth_deg);
-    w.Dist("distance", l->distance_mm);
-    w.Dist("power", l->power);
-    w.Dist("temperature", l->temperature_k);
-    w.Dist("size", l->size_mm);
-    w.key << "\n";
-  }
-  if (r.background) {
-    w.key << "randomize_background " << static_cast<int>(r.background_per) << " ";
-    w.ImageChoice("images", r.background->images);
-  }
+  if (r.lights) w.Fields("randomize_lights", *r.lights);
+  if (r.background) w.ImageChoice("randomize_background", r.background->images);
   if (const auto& e = r.environment) {
     if (e->images) w.ImageChoice("randomize_environment_images", *e->images);
-    w.key << "randomize_environment";
-    w.Dist("strength", e->strength);
-    w.Dist("rotation", e->rotation_deg);
-    w.Dist("temperature", e->temperature_k);
-    w.key << "\n";
+    w.Fields("randomize_environment", *e);
   }
   if (const auto& d = r.distractors) {
-    w.key << "randomize_distractors " << static_cast<int>(d->material_per) << " "
-          << r.first_distractor;
-    w.Dist("count", d->count);
-    w.Dist("size", d->size_mm);
-    w.key << "\n";
+    w.Fields("randomize_distractors", *d);
+    w.key << "randomize_first_distractor " << r.first_distractor << "\n";  // resolved by the run
     if (d->material) w.Randomized("randomize_distractor_material", *d->material);
   }
-  if (const auto& c = r.camera) {
-    w.key << "randomize_camera";
-    w.Dist("exposure", c->exposure);
-    w.Dist("white_balance", c->white_balance_k);
-    w.Dist("noise_gain", c->noise_gain);
-    w.Dist("focus_distance", c->focus_distance_mm);
-    w.Dist("f_number", c->f_number);
-    w.Dist("rotation", c->rotation_deg);
-    w.Dist("translation", c->translation_mm);
-    w.key << "\n";
-  }
+  if (r.camera) w.Fields("randomize_camera", *r.camera);
 }
 
 // What prepare made of the recipe, whatever option decided it (a RunSpec built in code can

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "cad/core/schema.h"
 #include "cad/mesh.h"
 #include "cad/part.h"
 #include "variants/physics/collision.h"
@@ -26,6 +27,15 @@ struct PhysicsMaterial {
   double restitution = 0.1;
 
   bool Check(std::string* why) const;
+
+  // A pile's `physics` (where each may also be a range [low, high], read by hand) and a
+  // container's keys.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.density_kg_m3, Field{"density", "number", "kg/m3"});
+    visit(o.friction, Field{"friction", "number", "Coulomb's mu"});
+    visit(o.restitution, Field{"restitution", "number", "bounciness (0-1)"});
+  }
 };
 
 // What the parts fall into. A tote stands on the floor centred on the origin: its inner floor is
@@ -36,7 +46,7 @@ struct PhysicsMaterial {
 // the collision (Bullet's static triangle mesh: no convexity needed, no thickness either, so thin
 // walls rely on the parts' continuous collision detection).
 struct Container {
-  enum class Kind { kFloor, kTote, kMesh };
+  enum class Kind { kTote, kFloor, kMesh };  // in the recipe's order (Fields' choices)
   Kind kind = Kind::kFloor;
   Mesh mesh;  // kMesh: in the world frame (mm), standing on the floor z = 0
   Eigen::Vector2d inner_mm{355.0, 265.0};  // inner length (x) and width (y)
@@ -51,6 +61,33 @@ struct Container {
   double BottomZ() const { return kind == Kind::kTote ? floor_mm : 0.0; }
   // The tote's rim, the mesh's top, or the floor.
   double RimZ() const;
+
+  // A pile's `container` keys but its physics (`material`: PhysicsMaterial::Fields) and its mesh
+  // (read from its file with the parts). Read by hand: `type` (the tag the other keys go with)
+  // and `inner` (its own message).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.kind, Field{.key = "type",
+                        .kind = "choice",
+                        .doc = "a tote made here, the bare floor, or a CAD or mesh file",
+                        .choices = {"tote", "floor", "file"},
+                        .by_hand = true});
+    visit(o.inner_mm, Field{.key = "inner",
+                            .kind = "lengths",
+                            .doc = "inner size [length, width]",
+                            .by_hand = true,
+                            .only_with = {"tote"}});
+    visit(o.height_mm,
+          Field{.key = "height", .kind = "length", .doc = "wall height", .only_with = {"tote"}});
+    visit(o.wall_mm,
+          Field{.key = "wall", .kind = "length", .doc = "wall thickness", .only_with = {"tote"}});
+    visit(o.floor_mm,
+          Field{.key = "floor", .kind = "length", .doc = "floor thickness", .only_with = {"tote"}});
+    visit(o.corner_radius_mm, Field{.key = "corner_radius",
+                                    .kind = "length",
+                                    .doc = "inner corner radius",
+                                    .only_with = {"tote"}});
+  }
 };
 
 // The container as a triangle mesh in its own frame (= the world's), outward normals, for the

@@ -3,15 +3,18 @@
 // the recipe reference and docs/recipes.md.
 #include <fstream>
 #include <functional>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <type_traits>
 
 #include <gtest/gtest.h>
 
 #include "cad/core/error.h"
 #include "recipes/recipe_schema.h"
+#include "tests/test_support.h"
 #include "tools/pipeline/generate.h"
 #include "tools/pipeline/journal.h"
 #include "tools/pipeline/shards.h"
@@ -26,6 +29,26 @@ T Changed(const T& value, const Field& field) {
     T longer = value;
     longer.push_back(1.5);
     return longer;
+  } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {  // names
+    T longer = value;
+    longer.push_back("x");
+    return longer;
+  } else if constexpr (IsVector<T>::value) {  // names of an enum's values
+    T longer = value;
+    longer.emplace_back();
+    return longer;
+  } else if constexpr (std::is_same_v<T, Distribution>) {
+    // A value one more; a range half as wide (it stays inside the options' range).
+    if (value.kind == Distribution::Kind::kFixed) return Distribution::Fixed(value.a + 1);
+    T changed = value;
+    changed.b = (value.a + value.b) / 2;
+    if (value.kind == Distribution::Kind::kChoice) changed.values.push_back(value.values.back());
+    return changed;
+  } else if constexpr (std::is_same_v<T, std::optional<Distribution>>) {
+    if (value) return Changed(*value, field);
+    // Set, to a value the options accept (a colour temperature in kelvin).
+    return Distribution::Fixed(field.key == "temperature" || field.key == "white_balance" ? 5000
+                                                                                          : 1);
   } else if constexpr (std::is_enum_v<T>) {
     return static_cast<T>((static_cast<size_t>(value) + 1) %
                           std::max<size_t>(2, field.choices.size()));
@@ -33,6 +56,12 @@ T Changed(const T& value, const Field& field) {
     return !value;
   } else if constexpr (std::is_same_v<T, std::string>) {
     return field.key == "isa" ? (value == "auto" ? "sse2" : "auto") : value + "x";
+  } else if constexpr (std::is_same_v<T, std::filesystem::path>) {
+    return value.string() + "x";
+  } else if constexpr (IsFixedVector<T>::value) {
+    T moved = value;
+    moved.x() += static_cast<typename T::Scalar>(0.1);
+    return moved;
   } else if constexpr (std::is_floating_point_v<T>) {
     return value > 0 && value < 1 ? value / 2 : value + 1;
   } else {
@@ -40,12 +69,13 @@ T Changed(const T& value, const Field& field) {
   }
 }
 
-// Every field of `Options` inside `spec` (found by `select`), one at a time.
-template <typename Options, typename Select, typename Check>
-int ForEachChange(const RunSpec& base, Select select, Check check) {
+// Every field of `Options` inside `base` (a RunSpec, or a scene's Randomization; found by
+// `select`), one at a time.
+template <typename Options, typename Base, typename Select, typename Check>
+int ForEachChange(const Base& base, Select select, Check check) {
   int n = 0;
   for (int index = 0;; ++index) {
-    RunSpec spec = base;
+    Base spec = base;
     int at = 0;
     std::string name;
     Options::Fields(select(spec), [&](auto& value, const Field& field) {
@@ -78,22 +108,24 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
             16);
+  // Each field of `Options` in `base` changes base's key to one of its own.
+  const auto each_field = [&](auto options, const RunSpec& base, auto select) {
+    const std::string base_key = RunKey(base, prepared, views);
+    return ForEachChange<decltype(options)>(
+        base, select, [&](const RunSpec& c, const std::string& name) {
+          const std::string key = RunKey(c, prepared, views);
+          EXPECT_NE(key, base_key) << name << " is not in the run key";
+          EXPECT_TRUE(keys.insert(key).second) << name;
+        });
+  };
   // The camera's sensor: its image and, with a model other than ideal (an active image sensor),
   // every depth (image sensor) field; inactive, they leave earlier run keys alone.
   {
     RunSpec changed = spec;
     changed.sensor.image = SensorOptions::Image::kGray;
     check(changed, "camera.image");
-    // Each field of `Options` in `base` changes base's key to one of its own.
-    const auto each_field = [&](auto options, const RunSpec& base, auto select) {
-      const std::string base_key = RunKey(base, prepared, views);
-      return ForEachChange<decltype(options)>(
-          base, select, [&](const RunSpec& c, const std::string& name) {
-            const std::string key = RunKey(c, prepared, views);
-            EXPECT_NE(key, base_key) << name << " is not in the run key";
-            EXPECT_TRUE(keys.insert(key).second) << name;
-          });
-    };
+    EXPECT_EQ(
+        each_field(Intrinsics{}, spec, [](RunSpec& s) -> Intrinsics& { return s.intrinsics; }), 6);
     RunSpec kinect = spec;
     kinect.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
     check(kinect, "camera.depth.model");
@@ -117,8 +149,9 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
       check(c, what);
     };
     edited("cameras[1].name", [](RigSensor& s) { s.name = "c"; });
-    edited("cameras[1].fx", [](RigSensor& s) { s.intrinsics.fx += 1; });
-    edited("cameras[1].height", [](RigSensor& s) { s.intrinsics.height += 1; });
+    EXPECT_EQ(each_field(Intrinsics{}, rig,
+                         [](RunSpec& s) -> Intrinsics& { return s.rig[1].intrinsics; }),
+              6);
     edited("cameras[1].image", [](RigSensor& s) { s.sensor.image = SensorOptions::Image::kGray; });
     edited("cameras[1].position", [](RigSensor& s) { s.rig_from_cam.translation().x() = 1e-3; });
     edited("cameras[1].rotation", [](RigSensor& s) {
@@ -188,21 +221,35 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
     no_acronym.grasps.acronym = false;
     check(no_acronym, "grasps.formats: acronym");
   }
-  // The physically based look, read by hand from materials: and lighting:.
+  // The physically based look: every field of the floor's material (its own, its surface's and
+  // its texture's), of a light source and of the environment. The run key reads the bytes of
+  // their images: the files exist, and so do those of the changed names.
   {
+    testing::ScratchDir dir;
+    for (const char* name : {"tile.png", "tile.pngx", "sky.hdr", "sky.hdrx"})
+      std::ofstream(dir / name) << name;
+    RunSpec pbr = spec;
+    pbr.look.floor_material.texture.image = dir / "tile.png";
+    pbr.look.environment.image = dir / "sky.hdr";
+    check(pbr, "images");
+    EXPECT_EQ(
+        each_field(Material{}, pbr, [](RunSpec& s) -> Material& { return s.look.floor_material; }),
+        2);
+    EXPECT_EQ(
+        each_field(PrincipledParams{}, pbr,
+                   [](RunSpec& s) -> PrincipledParams& { return s.look.floor_material.surface; }),
+        8);
+    EXPECT_EQ(each_field(Texture{}, pbr,
+                         [](RunSpec& s) -> Texture& { return s.look.floor_material.texture; }),
+              9);
+    EXPECT_EQ(each_field(LightSource{}, pbr,
+                         [](RunSpec& s) -> LightSource& { return s.look.light_sources[0]; }),
+              12);
+    EXPECT_EQ(each_field(Environment{}, pbr,
+                         [](RunSpec& s) -> Environment& { return s.look.environment; }),
+              8);
+    // A material rule, and its material's fields.
     RunSpec changed = spec;
-    changed.look.light_sources[0].power += 1;
-    check(changed, "a light source's power");
-    changed = spec;
-    changed.look.environment.strength = 2;
-    check(changed, "the environment");
-    changed = spec;
-    changed.look.floor_material.surface.roughness = 0.1f;
-    check(changed, "the floor material");
-    changed = spec;
-    changed.look.floor_material.texture.seed = 5;
-    check(changed, "a texture seed");
-    changed = spec;
     changed.material_rules.push_back({"*", "", "", Material{}});
     check(changed, "a material rule");
     changed.material_rules.back().material.surface.clearcoat = 0.5f;
@@ -216,6 +263,120 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
       ForEachChange<ArrangementOptions>(
           spec, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; }, check),
       10);
+  // Domain randomisation as the scene resolved it (the run keys the prepared run's): every group
+  // set (unset, a group's fields do not reach the key), then every field of each.
+  {
+    ASSERT_EQ(prepared.randomization.size(), 1u);
+    PreparedRun randomized = prepared;
+    Randomization& all = randomized.randomization[0];
+    all.parts = {PartRandomization{}};
+    all.floor = all.fixtures = MaterialRandomization{};
+    all.lights = LightRandomization{};
+    all.environment = EnvironmentRandomization{};
+    all.camera = CameraRandomization{};
+    all.distractors = DistractorRandomization{};
+    all.distractors->material = MaterialRandomization{};
+    const Randomization groups = all;
+    const std::string groups_key = RunKey(spec, randomized, views);
+    EXPECT_NE(groups_key, base) << "randomize";
+    const auto each_draw = [&](auto options, auto select) {
+      return ForEachChange<decltype(options)>(
+          groups, select, [&](const Randomization& changed, const std::string& name) {
+            randomized.randomization[0] = changed;
+            const std::string key = RunKey(spec, randomized, views);
+            EXPECT_NE(key, groups_key) << name << " is not in the run key";
+            EXPECT_TRUE(keys.insert(key).second) << name;
+          });
+    };
+    EXPECT_EQ(each_draw(Randomization{}, [](Randomization& r) -> Randomization& { return r; }), 6);
+    EXPECT_EQ(each_draw(PartRandomization{},
+                        [](Randomization& r) -> PartRandomization& { return r.parts[0]; }),
+              2);
+    EXPECT_EQ(
+        each_draw(MaterialRandomization{},
+                  [](Randomization& r) -> MaterialRandomization& { return r.parts[0].material; }),
+        8);
+    EXPECT_EQ(each_draw(MaterialRandomization{},
+                        [](Randomization& r) -> MaterialRandomization& { return *r.floor; }),
+              8);
+    EXPECT_EQ(each_draw(MaterialRandomization{},
+                        [](Randomization& r) -> MaterialRandomization& { return *r.fixtures; }),
+              8);
+    EXPECT_EQ(each_draw(LightRandomization{},
+                        [](Randomization& r) -> LightRandomization& { return *r.lights; }),
+              9);
+    EXPECT_EQ(
+        each_draw(EnvironmentRandomization{},
+                  [](Randomization& r) -> EnvironmentRandomization& { return *r.environment; }),
+        3);
+    EXPECT_EQ(each_draw(CameraRandomization{},
+                        [](Randomization& r) -> CameraRandomization& { return *r.camera; }),
+              7);
+    EXPECT_EQ(
+        each_draw(DistractorRandomization{},
+                  [](Randomization& r) -> DistractorRandomization& { return *r.distractors; }),
+        3);
+    EXPECT_EQ(each_draw(MaterialRandomization{},
+                        [](Randomization& r) -> MaterialRandomization& {
+                          return *r.distractors->material;
+                        }),
+              8);
+  }
+  // The run's own options, and the fast mode's look and light.
+  EXPECT_EQ(ForEachChange<RunSpec>(
+                spec, [](RunSpec& s) -> RunSpec& { return s; }, check),
+            3);
+  EXPECT_EQ(ForEachChange<Scene>(
+                spec, [](RunSpec& s) -> Scene& { return s.look; }, check),
+            6);
+  EXPECT_EQ(ForEachChange<Scene::Light>(
+                spec, [](RunSpec& s) -> Scene::Light& { return s.look.lights[0]; }, check),
+            4);
+  // A pile: its container, the container's physics, the parts' (both ends of a range) and a
+  // rule's.
+  {
+    RunSpec pile = spec;
+    pile.scenes[0].arrangement.layout = Layout::kPile;
+    check(pile, "scene.layout: pile");
+    EXPECT_EQ(
+        each_field(Container{}, pile,
+                   [](RunSpec& s) -> Container& { return s.scenes[0].arrangement.container; }),
+        6);
+    EXPECT_EQ(each_field(PhysicsMaterial{}, pile,
+                         [](RunSpec& s) -> PhysicsMaterial& {
+                           return s.scenes[0].arrangement.container.material;
+                         }),
+              3);
+    EXPECT_EQ(each_field(PhysicsMaterial{}, pile,
+                         [](RunSpec& s) -> PhysicsMaterial& {
+                           return s.scenes[0].arrangement.physics.low;
+                         }),
+              3);
+    EXPECT_EQ(each_field(PhysicsMaterial{}, pile,
+                         [](RunSpec& s) -> PhysicsMaterial& {
+                           return s.scenes[0].arrangement.physics.high;
+                         }),
+              3);
+    RunSpec changed = pile;
+    changed.scenes[0].container_color.x() = 0.9f;
+    check(changed, "scene.container.color");
+    changed = pile;
+    changed.scenes[0].container_material = Material{};
+    check(changed, "scene.container.material");
+    RunSpec ruled = pile;
+    ruled.scenes[0].physics_rules.push_back({"*", "", "", PhysicsDraw{}, ""});
+    check(ruled, "scene.physics[0]");
+    EXPECT_EQ(each_field(PhysicsMaterial{}, ruled,
+                         [](RunSpec& s) -> PhysicsMaterial& {
+                           return s.scenes[0].physics_rules[0].physics.low;
+                         }),
+              3);
+    EXPECT_EQ(each_field(PhysicsMaterial{}, ruled,
+                         [](RunSpec& s) -> PhysicsMaterial& {
+                           return s.scenes[0].physics_rules[0].physics.high;
+                         }),
+              3);
+  }
 }
 
 // The scene keys, read from a recipe with parts (a scene section needs them).
@@ -268,38 +429,59 @@ TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {
 // Each option with a recipe key is read from it: the recipe that writes the changed value (as
 // the reference prints it) gives the changed options.
 TEST(Schema, EveryRecipeKeyIsRead) {
+  // An image for an image environment (a binary PPM: read by its content).
+  testing::ScratchDir dir;
+  std::ofstream(dir / "sky.png", std::ios::binary) << "P6\n2 2\n255\n" << std::string(12, '\x40');
   int read = 0;
-  const auto section = [&](const char* name, auto select) {
+  // Each field of the options `select` finds in `base` (or only the one keyed `only`), written
+  // as "KEY: VALUE" in place of the {} of `recipe(key)` (the recipe text the key needs).
+  const auto read_in = [&](auto recipe, const RunSpec& base, auto select,
+                           std::string_view only = {}) {
     using Options = std::decay_t<decltype(select(std::declval<RunSpec&>()))>;
-    ForEachChange<Options>(RunSpec{}, select, [&](const RunSpec& changed, const std::string&) {
-      Options::Fields(select(const_cast<RunSpec&>(changed)), [&](const auto& value,
-                                                                 const Field& field) {
-        using T = std::decay_t<decltype(value)>;
-        if (field.key.empty() || field.by_hand) return;
-        T expected = value;
-        std::string text = FieldText(value, field);
-        if (field.kind == "length") text += " mm";
-        if (field.kind == "angle") text += " rad";
-        // The section at its path ("grasps.gripper": nested), the one key in it.
-        std::string yaml, indent;
-        std::string path = name;
-        for (size_t dot; (dot = path.find('.')) != std::string::npos; indent += "  ") {
-          yaml += indent + path.substr(0, dot) + ":\n";
-          path = path.substr(dot + 1);
-        }
-        yaml += indent + path + ":\n" + indent + "  " + std::string(field.key) + ": " + text + "\n";
-        const RunSpec parsed = ParseRecipe(yaml, "r.yaml", ".");
-        Options::Fields(select(const_cast<RunSpec&>(parsed)),
-                        [&](const auto& got, const Field& other) {
-                          if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
-                            if (other.Name() == field.Name()) {
-                              EXPECT_EQ(got, expected) << name << "." << field.key;
-                            }
-                          }
-                        });
-        ++read;
-      });
+    ForEachChange<Options>(base, select, [&](const RunSpec& changed, const std::string&) {
+      Options::Fields(
+          select(const_cast<RunSpec&>(changed)), [&](const auto& value, const Field& field) {
+            using T = std::decay_t<decltype(value)>;
+            if (field.key.empty() || field.by_hand || (!only.empty() && field.key != only)) return;
+            if constexpr (IsOptional<T>::value) {
+              if (!value) return;  // unset: nothing to write
+            }
+            T expected = value;
+            std::string text = FieldText(value, field);
+            if (field.kind == "length") text += " mm";
+            if (field.kind == "angle") text += " rad";
+            std::string yaml = recipe(field.key);
+            yaml.replace(yaml.find("{}"), 2, std::string(field.key) + ": " + text);
+            const RunSpec parsed = ParseRecipe(yaml, "r.yaml", dir.path());
+            Options::Fields(select(const_cast<RunSpec&>(parsed)),
+                            [&](const auto& got, const Field& other) {
+                              if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
+                                if (other.Name() == field.Name()) {
+                                  EXPECT_EQ(got, expected) << yaml;
+                                }
+                              }
+                            });
+            ++read;
+          });
     });
+  };
+  // The recipe text of the section at its path ("grasps.gripper": nested) with {} for its key.
+  const auto nested = [](const char* name) {
+    std::string yaml, indent;
+    std::string path = name;
+    for (size_t dot; (dot = path.find('.')) != std::string::npos; indent += "  ") {
+      yaml += indent + path.substr(0, dot) + ":\n";
+      path = path.substr(dot + 1);
+    }
+    return yaml + indent + path + ":\n" + indent + "  {}\n";
+  };
+  // The same after `prefix(key)`, what the key needs of the rest of the recipe.
+  const auto section_after = [&](const char* name, auto prefix, auto select) {
+    read_in([&](std::string_view key) { return prefix(key) + nested(name); }, RunSpec{}, select);
+  };
+  const auto section = [&](const char* name, auto select, std::string_view only = {}) {
+    const std::string yaml = nested(name);
+    read_in([&](std::string_view) { return yaml; }, RunSpec{}, select, only);
   };
   section("output", [](RunSpec& s) -> BopOptions& { return s.bop; });
   section("render", [](RunSpec& s) -> RenderOptions& { return s.render; });
@@ -312,6 +494,78 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   section("grasps.suction", [](RunSpec& s) -> SuctionCup& { return s.grasps.cup; });
   section("grasps.suction",
           [](RunSpec& s) -> SuctionOptions& { return s.grasps.suction_sampling; });
+  section("materials.floor",
+          [](RunSpec& s) -> PrincipledParams& { return s.look.floor_material.surface; });
+  section("materials.floor", [](RunSpec& s) -> Material& { return s.look.floor_material; });
+  // Randomisation groups (set when selected): they draw in the pbr mode, the camera's lens and
+  // noise need a lens and noise, an environment's rotation an image environment.
+  const auto pbr = [](std::string_view) { return std::string("render: {mode: pbr}\n"); };
+  section_after("randomize.floor", pbr, [](RunSpec& s) -> MaterialRandomization& {
+    auto& floor = s.randomize.draws.floor;
+    return floor ? *floor : floor.emplace();
+  });
+  section_after("randomize.lights", pbr, [](RunSpec& s) -> LightRandomization& {
+    auto& lights = s.randomize.draws.lights;
+    return lights ? *lights : lights.emplace();
+  });
+  section_after(
+      "randomize.environment",
+      [](std::string_view key) {
+        return std::string("render: {mode: pbr}\n") +
+               (key == "rotation" ? "lighting: {environment: {type: image, file: sky.png}}\n" : "");
+      },
+      [](RunSpec& s) -> EnvironmentRandomization& {
+        auto& environment = s.randomize.draws.environment;
+        return environment ? *environment : environment.emplace();
+      });
+  section_after(
+      "randomize.camera",
+      [](std::string_view) {
+        return std::string(
+            "render: {mode: pbr}\ncamera: {imager: {full_well: 10000}, lens: {focal_length: 8}}\n");
+      },
+      [](RunSpec& s) -> CameraRandomization& {
+        auto& camera = s.randomize.draws.camera;
+        return camera ? *camera : camera.emplace();
+      });
+  section_after("randomize.distractors", pbr, [](RunSpec& s) -> DistractorRandomization& {
+    auto& distractors = s.randomize.draws.distractors;
+    return distractors ? *distractors : distractors.emplace();
+  });
+  section_after("randomize.distractors.material", pbr, [](RunSpec& s) -> MaterialRandomization& {
+    auto& distractors = s.randomize.draws.distractors;
+    auto& material = (distractors ? *distractors : distractors.emplace()).material;
+    return material ? *material : material.emplace();
+  });
+  // A recipe text that is the same for every key.
+  const auto fixed = [](const std::string& yaml) {
+    return [yaml](std::string_view) { return yaml; };
+  };
+  section("camera", [](RunSpec& s) -> Intrinsics& { return s.intrinsics; });
+  section("render", [](RunSpec& s) -> Scene& { return s.look; });
+  // RunSpec's own options, each in its own section.
+  const auto run = [](RunSpec& s) -> RunSpec& { return s; };
+  section("tessellation", run, "crease_angle");
+  section("classes", run, "by");
+  section("render", run, "colors");
+  // A fast-mode light gives a direction or a position.
+  const auto light = [](RunSpec& s) -> Scene::Light& { return s.look.lights[0]; };
+  read_in(fixed("render:\n  lights:\n    - {}\n"), RunSpec{}, light, "direction");
+  read_in(fixed("render:\n  lights:\n    - {}\n"), RunSpec{}, light, "position");
+  read_in(fixed("render:\n  lights:\n    - position: [0, 0, 1000]\n      {}\n"), RunSpec{}, light,
+          "intensity");
+  // A pile's container, its physics and the parts'.
+  RunSpec pile;
+  pile.scenes.resize(1);
+  const std::string scene = "parts:\n  - {family: hex_nut}\nscene:\n  layout: pile\n";
+  const std::string container = scene + "  container:\n    type: tote\n    {}\n";
+  read_in(fixed(container), pile,
+          [](RunSpec& s) -> Container& { return s.scenes[0].arrangement.container; });
+  read_in(fixed(container), pile, [](RunSpec& s) -> PhysicsMaterial& {
+    return s.scenes[0].arrangement.container.material;
+  });
+  read_in(fixed(scene + "  physics:\n    {}\n"), pile,
+          [](RunSpec& s) -> PhysicsMaterial& { return s.scenes[0].arrangement.physics.low; });
   EXPECT_GT(read, 120);
 }
 
@@ -353,6 +607,60 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
                      [&](const auto&, const Field& f) { expect_key("camera.distortion", f); });
   const ThinLens lens;
   ThinLens::Fields(lens, [&](const auto&, const Field& f) { expect_key("camera.lens", f); });
+  const Material material;
+  PrincipledParams::Fields(material.surface,
+                           [&](const auto&, const Field& f) { expect_key("materials.floor", f); });
+  Material::Fields(material,
+                   [&](const auto&, const Field& f) { expect_key("materials.floor", f); });
+  Texture::Fields(material.texture,
+                  [&](const auto&, const Field& f) { expect_key("materials.floor.texture", f); });
+  const LightSource light;
+  LightSource::Fields(light,
+                      [&](const auto&, const Field& f) { expect_key("lighting.lights[]", f); });
+  const Environment environment;
+  Environment::Fields(environment,
+                      [&](const auto&, const Field& f) { expect_key("lighting.environment", f); });
+  const Randomization randomize;
+  Randomization::Fields(randomize,
+                        [&](const auto&, const Field& f) { expect_key("randomize", f); });
+  const PartRandomization part;
+  PartRandomization::Fields(
+      part, [&](const auto&, const Field& f) { expect_key("randomize.parts[]", f); });
+  for (const char* section : {"randomize.parts[]", "randomize.floor", "randomize.fixtures",
+                              "randomize.distractors.material"}) {
+    MaterialRandomization::Fields(part.material,
+                                  [&](const auto&, const Field& f) { expect_key(section, f); });
+  }
+  const LightRandomization lights;
+  LightRandomization::Fields(
+      lights, [&](const auto&, const Field& f) { expect_key("randomize.lights", f); });
+  const EnvironmentRandomization world;
+  EnvironmentRandomization::Fields(
+      world, [&](const auto&, const Field& f) { expect_key("randomize.environment", f); });
+  const CameraRandomization camera;
+  CameraRandomization::Fields(
+      camera, [&](const auto&, const Field& f) { expect_key("randomize.camera", f); });
+  const DistractorRandomization distractors;
+  DistractorRandomization::Fields(
+      distractors, [&](const auto&, const Field& f) { expect_key("randomize.distractors", f); });
+  const Intrinsics intrinsics;
+  Intrinsics::Fields(intrinsics, [&](const auto&, const Field& f) { expect_key("camera", f); });
+  const Scene look;
+  Scene::Fields(look, [&](const auto&, const Field& f) { expect_key("render", f); });
+  Scene::Light::Fields(look.lights[0],
+                       [&](const auto&, const Field& f) { expect_key("render.lights[]", f); });
+  const Container container;
+  Container::Fields(container,
+                    [&](const auto&, const Field& f) { expect_key("scene.container", f); });
+  PhysicsMaterial::Fields(container.material, [&](const auto&, const Field& f) {
+    expect_key("scene.container", f);
+    expect_key("scene.physics", f);
+  });
+  // RunSpec's own options, each in its section.
+  const std::map<std::string_view, std::string> sections = {
+      {"crease_angle", "tessellation"}, {"by", "classes"}, {"colors", "render"}};
+  const RunSpec spec;
+  RunSpec::Fields(spec, [&](const auto&, const Field& f) { expect_key(sections.at(f.key), f); });
 }
 
 // Each camera.depth key is read over the model's defaults.

@@ -806,22 +806,13 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
   // (A file's mesh is read with the parts: prepare.)
   c.kind = ReadKnown<Container::Kind>(r, node["type"], key + ".type", FieldOf<Container>("type"),
                                       "container");
-  for (const char* k : {"inner", "height", "wall", "floor", "corner_radius"}) {
-    if (node[k] && c.kind != Container::Kind::kTote)
-      r.Fail(node[k], key + "." + k, "goes with type: tote");
-  }
-  for (const char* k : {"unit", "encoding", "up"}) {
-    if (node[k] && c.kind != Container::Kind::kMesh)
-      r.Fail(node[k], key + "." + k, "goes with type: file");
-  }
+  // (Keys of another type were refused by ReadPhysics' ExpectKeys: Key::only_with.)
   if (c.kind == Container::Kind::kMesh) {
     if (!node["file"]) r.Fail(node, key, "a container of type file needs a 'file' (CAD or mesh)");
     PartSource source;
     ReadUp(r, node, key, &source);
     ReadFileSource(r, node, key, &source);
     scene->container_file = std::move(source);
-  } else if (node["file"]) {
-    r.Fail(node["file"], key + ".file", "goes with type: file");
   }
   if (const YAML::Node inner = node["inner"]) {
     if (!inner.IsSequence() || inner.size() != 2)

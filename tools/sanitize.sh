@@ -3,8 +3,9 @@
 # runs the whole test suite there. It builds with clang (tools/setup.sh --tests installs it and its
 # sanitizer runtimes): the same sources compile about a third faster than with GCC at -O1 with the
 # sanitizers (generate_test.cpp: 49 s against 77 s of CPU), and the suite is then checked by a
-# second compiler's warnings and checks as well as the Release build's GCC. Leak checking is off: OpenCASCADE, TBB and assimp keep
-# process-lifetime singletons that LeakSanitizer would report on every test.
+# second compiler's warnings and checks as well as the Release build's GCC. Leak checking is off:
+# OpenCASCADE, TBB and assimp keep process-lifetime singletons that LeakSanitizer would report on
+# every test.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cmake -S "$root" -B "$root/build-asan" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1" \

@@ -644,6 +644,7 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
     }
     if constexpr (T::RowsAtCompileTime == 3) {
       *value = Triple(r, node, key, field.kind == "length3").cast<typename T::Scalar>();
+      if (field.kind == "degrees3") *value *= static_cast<typename T::Scalar>(kDeg);
     } else {  // (a pair of lengths, [length, width], has its own message: read by hand)
       constexpr int n = T::RowsAtCompileTime;
       if (!node.IsSequence() || node.size() != n)
@@ -664,7 +665,7 @@ void ReadField(const Reader& r, const YAML::Node& node, const std::string& key, 
                           : field.kind == "angle" ? r.Angle(node, key)
                                                   : r.Number(node, key);
     CheckRange(r, node, key, field.range, number);
-    *value = static_cast<T>(number);
+    *value = static_cast<T>(field.kind == "milliseconds" ? number / 1000.0 : number);
   } else if constexpr (std::is_same_v<T, uint64_t>) {
     const int n = r.Integer(node, key);
     if (n < 0) r.Fail(node, key, "must not be negative");
@@ -943,31 +944,12 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
   if (const YAML::Node motion = node["motion"]) {
     const std::string at = key + ".motion";
     r.ExpectKeys(motion, at, SchemaAt("camera.motion"));
-    CameraMotion& m = sensor->motion;
     if (!motion["exposure_ms"])
       r.Fail(motion, at, "give 'exposure_ms', how long the shutter is open");
-    m.exposure_s = r.Number(motion["exposure_ms"], at + ".exposure_ms") / 1000.0;
-    if (motion["velocity_mm_s"])
-      m.velocity_mm_s = Triple(r, motion["velocity_mm_s"], at + ".velocity_mm_s", false);
-    if (motion["angular_velocity_deg_s"]) {
-      m.angular_velocity_rad_s =
-          Triple(r, motion["angular_velocity_deg_s"], at + ".angular_velocity_deg_s", false) *
-          (M_PI / 180.0);
-    }
-    r.Check(m, motion, at);
+    ReadDescribed(r, motion, at, &sensor->motion);
+    r.Check(sensor->motion, motion, at);
   }
-  if (node["image"]) {
-    const std::string image = r.Scalar(node["image"], key + ".image");
-    if (image == "rgb") {
-      sensor->image = SensorOptions::Image::kRgb;
-    } else if (image == "gray") {
-      sensor->image = SensorOptions::Image::kGray;
-    } else if (image == "gray16") {
-      sensor->image = SensorOptions::Image::kGray16;
-    } else {
-      r.Fail(node["image"], key + ".image", "expected rgb, gray or gray16, got '" + image + "'");
-    }
-  }
+  ReadDescribed(r, node, key, sensor);  // the image
   if (const YAML::Node imager = node["imager"]) {
     ReadFields(r, imager, key + ".imager", &sensor->imager, SchemaAt("camera.imager"));
     r.Check(sensor->imager, imager, key + ".imager");
@@ -992,48 +974,24 @@ void ReadCamera(const Reader& r, const YAML::Node& node, const std::string& key,
 
 void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.ExpectKeys(node, "sweep", SchemaAt("sweep"));
+  // Each axis a series (the recipe's own syntax); the target, the sampler and the jitter described.
   const auto angle = [&](const YAML::Node& n, const std::string& k) { return r.Angle(n, k); };
   const auto length = [&](const YAML::Node& n, const std::string& k) { return r.Length(n, k); };
   SweepOptions& s = spec->sweep;
   if (node["yaw"]) s.yaw_rad = r.Series(node["yaw"], "sweep.yaw", angle);
   if (node["pitch"]) s.pitch_rad = r.Series(node["pitch"], "sweep.pitch", angle);
   if (node["radius"]) s.radius_mm = r.Series(node["radius"], "sweep.radius", length);
-  if (node["target"]) {
-    const YAML::Node t = node["target"];
-    if (!t.IsSequence() || t.size() != 3) r.Fail(t, "sweep.target", "expected [x, y, z]");
-    for (int i = 0; i < 3; ++i) s.target[i] = r.Length(t[i], "sweep.target");
-  }
+  ReadDescribed(r, node, "sweep", &s);
   r.Check(s, node, "sweep");
   ViewSampler& v = spec->sampler;
-  if (node["sampler"]) {
-    const std::string kind = r.Scalar(node["sampler"], "sweep.sampler");
-    if (kind == "grid") {
-      v.kind = ViewSampler::Kind::kGrid;
-    } else if (kind == "fibonacci") {
-      v.kind = ViewSampler::Kind::kFibonacci;
-    } else if (kind == "random") {
-      v.kind = ViewSampler::Kind::kRandom;
-    } else {
-      r.Fail(node["sampler"], "sweep.sampler",
-             "expected grid, fibonacci or random, got '" + kind + "'");
-    }
-  }
+  ReadDescribed(r, node, "sweep", &v);
+  ReadDescribed(r, node, "sweep", spec);  // min_visible_pixels (RunSpec's own)
   // Fibonacci and random views fill the band between the lowest and highest pitch; random radii the
   // range between the smallest and largest radius.
   v.min_pitch_rad = *std::min_element(s.pitch_rad.begin(), s.pitch_rad.end());
   v.max_pitch_rad = *std::max_element(s.pitch_rad.begin(), s.pitch_rad.end());
   v.min_radius_mm = *std::min_element(s.radius_mm.begin(), s.radius_mm.end());
   v.max_radius_mm = *std::max_element(s.radius_mm.begin(), s.radius_mm.end());
-  if (node["count"]) v.count = r.Integer(node["count"], "sweep.count");
-  if (node["seed"]) v.seed = static_cast<uint64_t>(r.Integer(node["seed"], "sweep.seed"));
-  if (node["roll_jitter"]) v.roll_jitter_rad = r.Angle(node["roll_jitter"], "sweep.roll_jitter");
-  if (node["target_jitter"])
-    v.target_jitter_mm = r.Length(node["target_jitter"], "sweep.target_jitter");
-  if (node["min_visible_pixels"]) {
-    spec->min_visible_pixels = r.Integer(node["min_visible_pixels"], "sweep.min_visible_pixels");
-    if (spec->min_visible_pixels < 0)
-      r.Fail(node["min_visible_pixels"], "sweep.min_visible_pixels", "must not be negative");
-  }
   r.Check(v, node, "sweep");
 }
 
@@ -1859,8 +1817,7 @@ RunSpec Reseed(const RunSpec& spec, uint64_t stream) {
     if (scene.randomize) seeds(scene.randomize->draws);
   }
   seeds(out.randomize.draws);
-  // The section not described by fields yet: the view sampler.
-  out.sampler.seed = move(out.sampler.seed);
+  seeds(out.sampler);
   seeds(out.render);
   seeds(out.bop);
   seeds(out.tessellation);

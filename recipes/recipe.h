@@ -212,8 +212,8 @@ struct RunSpec {
   uint64_t reseed = 0;
 
   // The run-wide options that are RunSpec's own rather than a section struct's, each a key of a
-  // different section (tessellation, classes, render) and read there. Described here, not moved
-  // into a struct of their own: three scalars of three sections would make no section's struct,
+  // different section (tessellation, classes, sweep, render) and read there. Described here, not
+  // moved into a struct of their own: four scalars of four sections would make no section's struct,
   // and described they still reach every visitor (the run key, the recipe tree, the tests). The
   // rest of the spec is its structs' (their own Fields) or the recipe's own syntax.
   template <class Self, class Visit>
@@ -223,6 +223,10 @@ struct RunSpec {
     visit(
         o.class_by,
         Field{"by", "choice", "each distinct part, or each file's assembly", {"part", "assembly"}});
+    visit(o.min_visible_pixels, Field{.key = "min_visible_pixels",
+                                      .kind = "integer",
+                                      .doc = "skip views with fewer object pixels",
+                                      .range = Range::kNonNegative});
     visit(o.cad_colors, Field{"colors",
                               "choice",
                               "colours from the CAD files where they have them, or the palette",

@@ -212,21 +212,23 @@ std::vector<Key> CameraKeys() {
   depth.scalar_kind = "choice";
   depth.scalar_choices = depth.keys.front().choices;
   depth.default_text = "ideal";
+  Key motion = Section("motion", "pbr: motion blur, the camera's velocities in its own frame",
+                       KeysOf<CameraMotion>());
+  Key& exposure = Named(motion.keys, "exposure_ms");
+  exposure.required = true;
+  exposure.default_text.clear();  // (no default: it must be given)
   // A preset, the intrinsics (Intrinsics), a field of view in place of K, and the sensor.
   return Join(
       Join({Choice("preset", CameraPresetNames(), "a camera's intrinsics (docs/sensors.md)",
                    "kinect_v1")},
            KeysOf<Intrinsics>()),
       {Value("hfov", "angle", "horizontal field of view instead of fx, fy, cx, cy"),
-       Choice("image", {"rgb", "gray", "gray16"}, "a colour or a grey camera", "rgb"),
+       KeysOf<SensorOptions>().front(),
        Section("imager", "the image sensor: shot and read noise, vignetting",
                KeysOf<ImageSensor>()),
        depth, Section("distortion", "OpenCV's lens distortion", KeysOf<Distortion>()),
        Section("lens", "pbr: depth of field through a thin lens", KeysOf<ThinLens>()),
-       Section("motion", "pbr: motion blur, the camera's velocities in its own frame",
-               {Value("velocity_mm_s", "vector3", "mm/s along the camera's axes"),
-                Value("angular_velocity_deg_s", "vector3", "degrees/s about its axes"),
-                Required(Value("exposure_ms", "number", "how long the shutter is open"))})});
+       motion});
 }
 
 // A group's `per` (DrawPerField): how often it is drawn.
@@ -365,16 +367,8 @@ Key BuildSchema() {
        Section("camera", "the one camera", CameraKeys()), rig,
        Section(
            "sweep", "the camera views: each axis a value, a list or {from, to, step}",
-           {Value("yaw", "series_angle", "about the vertical"),
-            Value("pitch", "series_angle", "elevation above the floor; 90: straight down"),
-            Value("radius", "series_length", "distance to the target"),
-            Value("target", "length3", "the point the camera looks at", "[0, 0, 0]"),
-            Choice("sampler", {"grid", "fibonacci", "random"}, "how views are placed", "grid"),
-            Value("count", "integer", "fibonacci, random: how many views"),
-            Value("seed", "integer", "random views and jitter", "0"),
-            Value("roll_jitter", "angle", "each view rolls about its axis by up to this", "0"),
-            Value("target_jitter", "length", "each view aims within this of the target", "0 mm"),
-            Value("min_visible_pixels", "integer", "skip views with fewer object pixels", "0")}),
+           Join(Join(KeysOf<SweepOptions>(DefaultRunSpec().sweep), KeysOf<ViewSampler>()),
+                {KeyOf<RunSpec>("min_visible_pixels")})),
        Section("render", "ray casting and shading",
                Join(Join(KeysOf<RenderOptions>(), look), {KeyOf<RunSpec>("colors")})),
        Section("materials", "pbr: the materials of the floor and the parts",
@@ -449,7 +443,7 @@ Json ValueSchema(const std::string& kind, const std::vector<std::string>& choice
   const Json length = NumberOrText();  // 30, "30 mm", "0.5 m"
   const Json hex = Json{{"type", "string"}, {"pattern", "^#[0-9a-fA-F]{6}$"}};
   if (kind == "length" || kind == "angle") return length;
-  if (kind == "number") return number;
+  if (kind == "number" || kind == "milliseconds") return number;
   if (kind == "integer") return Json{{"type", "integer"}};
   if (kind == "bool") return Json{{"type", "boolean"}};
   if (kind == "text" || kind == "path" || kind == "folder") return Json{{"type", "string"}};
@@ -465,7 +459,7 @@ Json ValueSchema(const std::string& kind, const std::vector<std::string>& choice
   if (kind == "choices") return Json{{"type", "array"}, {"items", ValueSchema("choice", choices)}};
   if (kind == "color") return Triple(number);
   if (kind == "linear_color") return Json{{"anyOf", Json::array({Triple(number), hex})}};
-  if (kind == "vector3") return Triple(number);
+  if (kind == "vector3" || kind == "degrees3") return Triple(number);
   if (kind == "length3") return Triple(length);
   if (kind == "lengths") return Json{{"type", "array"}, {"items", length}};
   if (kind == "numbers") return Json{{"type", "array"}, {"items", number}};

@@ -141,6 +141,15 @@ struct CameraMotion {
   // The motion of a camera fixed to this one (a rig), at this_from_other: the same rigid motion
   // in the other camera's frame (the adjoint: w' = R^T w, v' = R^T (v + w x t)).
   CameraMotion Seen(const Eigen::Isometry3d& this_from_other) const;
+
+  // The recipe's `exposure_ms` is required when motion is given (read by hand).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.velocity_mm_s, Field{"velocity_mm_s", "vector3", "mm/s along the camera's axes"});
+    visit(o.angular_velocity_rad_s,
+          Field{"angular_velocity_deg_s", "degrees3", "degrees/s about its axes"});
+    visit(o.exposure_s, Field{"exposure_ms", "milliseconds", "how long the shutter is open"});
+  }
 };
 
 // Named cameras (the recipe's camera.preset). Nominal: square pixels and a centred principal point
@@ -177,6 +186,25 @@ struct SweepOptions {
 
   bool Check(std::string* why) const;
   size_t NumViews() const { return yaw_rad.size() * pitch_rad.size() * radius_mm.size(); }
+
+  // Each axis is a series (a value, a list or {from, to, step}: the recipe's own syntax, read by
+  // hand).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.yaw_rad, Field{.key = "yaw",
+                           .kind = "series_angle",
+                           .doc = "about the vertical",
+                           .by_hand = true});
+    visit(o.pitch_rad, Field{.key = "pitch",
+                             .kind = "series_angle",
+                             .doc = "elevation above the floor; 90: straight down",
+                             .by_hand = true});
+    visit(o.radius_mm, Field{.key = "radius",
+                             .kind = "series_length",
+                             .doc = "distance to the target",
+                             .by_hand = true});
+    visit(o.target, Field{"target", "length3", "the point the camera looks at"});
+  }
 };
 
 // One pose of the sweep. Views are ordered radius-major, then pitch, then yaw (yaw varies fastest).
@@ -212,6 +240,22 @@ struct ViewSampler {
   uint64_t seed = 0;
 
   bool Check(std::string* why) const;
+
+  // The band and the radii come from the sweep's series (set by the reader, in the run key).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.kind, Field{"sampler", "choice", "how views are placed", {"grid", "fibonacci", "random"}});
+    visit(o.count, Field{"count", "integer", "fibonacci, random: how many views"});
+    visit(o.seed, RunSeed("seed", "random views and jitter"));
+    visit(o.roll_jitter_rad,
+          Field{"roll_jitter", "angle", "each view rolls about its axis by up to this"});
+    visit(o.target_jitter_mm,
+          Field{"target_jitter", "length", "each view aims within this of the target"});
+    visit(o.min_pitch_rad, Field{.internal_name = "min_pitch"});
+    visit(o.max_pitch_rad, Field{.internal_name = "max_pitch"});
+    visit(o.min_radius_mm, Field{.internal_name = "min_radius"});
+    visit(o.max_radius_mm, Field{.internal_name = "max_radius"});
+  }
 };
 
 // The views of `sampler` (grid and fibonacci radii come from `sweep`). Seeded draws are the same on

@@ -206,6 +206,12 @@ struct SensorOptions {
   bool Check(std::string* why) const {
     return imager.Check(why) && depth.Check(why) && lens.Check(why) && motion.Check(why);
   }
+
+  // The image; the imager, depth, lens and motion describe their own fields.
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.image, Field{"image", "choice", "a colour or a grey camera", {"rgb", "gray", "gray16"}});
+  }
 };
 
 class PixelRays;  // render/pixel_rays.h

@@ -47,7 +47,9 @@ struct Field {
   // (degrees or with a unit, radians inside), "number", "integer", "bool", "text", "choice"
   // (one of `choices`; an enum's values in order, a bool's false then true), "color" (sRGB
   // [r, g, b]), "linear_color" ([r, g, b] or "#RRGGBB"), "vector3" ([x, y, z]), "length3" ([x, y,
-  // z] with units, mm inside), "path" (a file, relative to the recipe), "distribution" or
+  // z] with units, mm inside), "degrees3" ([x, y, z] in degrees, radians inside), "milliseconds"
+  // (a number of ms, seconds inside), "series_angle" and "series_length" (a value, a list or
+  // {from, to, step}; read by hand), "path" (a file, relative to the recipe), "distribution" or
   // "distribution_length" (a value or {uniform | normal | log_uniform | choice: [...]} of numbers
   // or of lengths, mm inside: a Distribution, render/randomize.h) or "names" (a name, a list or
   // {choice: [...]}; read by hand).
@@ -152,6 +154,7 @@ struct Key {
   std::string name;
   // A value's kind (Field::kind's, or one of the recipe's own: "color" sRGB [r, g, b],
   // "linear_color" [r, g, b] or "#RRGGBB", "vector3" [x, y, z], "length3" [x, y, z] with units,
+  // "degrees3" [x, y, z] in degrees, "milliseconds" a number of ms,
   // "lengths" a list of lengths, "series_angle" and "series_length" (a value, a list or
   // {from, to, step}), "distribution" and "distribution_length" (a value or {uniform | normal |
   // log_uniform | choice: [...]}), "names" (a name, a list, or {choice: [...]}), "choices" (a list
@@ -199,11 +202,14 @@ std::string DefaultText(const T& value, const Field& field) {
     for (int i = 0; i < value.size(); ++i) text += (i ? ", " : "") + DefaultText(value[i], field);
     return text + "]";
   } else if constexpr (std::is_floating_point_v<T>) {
-    if (field.kind == "angle") {
+    if (field.kind == "milliseconds") return FieldText(static_cast<double>(value) * 1000.0, field);
+    if (field.kind == "angle" || field.kind == "series_angle" || field.kind == "degrees3") {
       return FieldText(std::round(static_cast<double>(value) * 180.0 / M_PI * 1e6) / 1e6, field);
     }
     return FieldText(value, field) +
-           (field.kind == "length" || field.kind == "lengths" ? " mm" : "");
+           (field.kind == "length" || field.kind == "lengths" || field.kind == "series_length"
+                ? " mm"
+                : "");
   } else {
     return FieldText(value, field);
   }

@@ -120,7 +120,7 @@ sweep:
   EXPECT_NEAR(ParseRecipe("camera: {width: 800, height: 600, hfov: 90}\n", "r", ".").intrinsics.fx,
               400.0, 1e-9);
   EXPECT_EQ(ErrorOf("sweep: {sampler: spiral}\n"),
-            "r.yaml:1:18: sweep.sampler: expected grid, fibonacci or random, got 'spiral'");
+            "r.yaml:1:18: sweep.sampler: expected 'grid', 'fibonacci' or 'random', got 'spiral'");
   EXPECT_EQ(ErrorOf("camera: {preset: kinect_v2}\n"),
             "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, "
             "realsense_d435, realsense_d435_640, realsense_d435_depth, realsense_l515, "
@@ -193,7 +193,7 @@ camera:
   EXPECT_EQ(ErrorOf("camera:\n  depth: {model: azure_kinect, basline: 5 cm}\n"),
             "r.yaml:2:32: unknown key 'camera.depth.basline' (did you mean 'baseline'?)");
   EXPECT_EQ(ErrorOf("camera: {image: color}\n"),
-            "r.yaml:1:17: camera.image: expected rgb, gray or gray16, got 'color'");
+            "r.yaml:1:17: camera.image: expected 'rgb', 'gray' or 'gray16', got 'color'");
   EXPECT_EQ(ErrorOf("camera: {image: gray16}\noutput: {rgb: jpg}\n"),
             "r.yaml:1:17: camera.image: 16-bit grey images cannot be JPEG (rgb: png)");
   EXPECT_EQ(ErrorOf("camera: {image: gray}\noutput: {formats: [bop, paper]}\n"),

@@ -110,13 +110,7 @@ void KeyInputFiles(const RunSpec& spec, KeyWriter& w) {
 void KeyOptics(const Intrinsics& k, const SensorOptions& sensor, KeyWriter& w) {
   if (k.distortion.active()) w.Fields("distortion", k.distortion);
   if (sensor.lens.active()) w.Fields("lens", sensor.lens);
-  if (sensor.motion.active()) {
-    const CameraMotion& m = sensor.motion;
-    w.key << "motion " << FieldText(m.exposure_s, Field{});
-    for (int i = 0; i < 3; ++i) w.key << " " << FieldText(m.velocity_mm_s[i], Field{});
-    for (int i = 0; i < 3; ++i) w.key << " " << FieldText(m.angular_velocity_rad_s[i], Field{});
-    w.key << "\n";
-  }
+  if (sensor.motion.active()) w.Fields("motion", sensor.motion);
 }
 
 void KeySensors(const RunSpec& spec, KeyWriter& w) {
@@ -124,7 +118,7 @@ void KeySensors(const RunSpec& spec, KeyWriter& w) {
   // The sensor (recipes without camera.image and camera.depth keep their earlier run keys).
   if (spec.sensor.image != SensorOptions::Image::kRgb ||
       spec.sensor.depth.kind != DepthModel::Kind::kIdeal) {
-    w.key << "image " << static_cast<int>(spec.sensor.image) << "\n";
+    w.Fields("sensor", spec.sensor);  // the image
     w.Fields("depth", spec.sensor.depth);
   }
   if (spec.sensor.imager.active()) w.Fields("imager", spec.sensor.imager);
@@ -132,10 +126,10 @@ void KeySensors(const RunSpec& spec, KeyWriter& w) {
   // A rig's sensors (recipes without `cameras:` keep their earlier run keys).
   for (const RigSensor& sensor : spec.rig) {
     const Eigen::Matrix<double, 3, 4> pose = sensor.rig_from_cam.matrix().topRows<3>();
-    w.key << "sensor " << sensor.name << " image " << static_cast<int>(sensor.sensor.image)
-          << " pose";
+    w.key << "rig_sensor " << sensor.name << " pose";
     for (int i = 0; i < 12; ++i) w.key << " " << pose(i % 3, i / 3);
     w.key << "\n";
+    w.Fields("sensor", sensor.sensor);
     w.Fields("camera", sensor.intrinsics);
     w.Fields("depth", sensor.sensor.depth);
     w.Fields("imager", sensor.sensor.imager);
@@ -169,7 +163,7 @@ void KeyScenes(const RunSpec& spec, KeyWriter& w) {
 // (a RunSpec built in code has none): meshes' crease angle, classes, colours, the look; in the
 // physically based mode materials, light sources and the environment.
 void KeyLook(const RunSpec& spec, KeyWriter& w) {
-  w.Fields("run", spec);  // RunSpec's own options: crease angle, classes, colours
+  w.Fields("run", spec);  // RunSpec's own options: crease angle, classes, views, colours
   for (const auto& [name, globs] : spec.class_groups) {
     w.key << "class " << name;
     for (const std::string& glob : globs) w.key << " " << glob;
@@ -274,7 +268,8 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   w.Fields("tessellation", spec.tessellation);
   KeyScenes(spec, w);
   w.Fields("limits", spec.limits);
-  w.key << "min_visible_pixels " << spec.min_visible_pixels << "\n";
+  w.Fields("sweep", spec.sweep);
+  w.Fields("sampler", spec.sampler);
   KeyLook(spec, w);
   for (const Randomization& r : prepared.randomization) KeyRandomization(r, w);
   KeyPrepared(prepared, w);

@@ -22,6 +22,20 @@
 namespace cadsynth {
 namespace {
 
+// A described field's value as a recipe writes it (the reader's units: mm, radians with their
+// unit, milliseconds, degrees).
+template <typename T>
+std::string RecipeText(const T& value, const Field& field) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (field.kind == "milliseconds") return FieldText(value * 1000.0, field);
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    if (field.kind == "degrees3") return FieldText(Eigen::Vector3d(value * (180.0 / M_PI)), field);
+  }
+  return FieldText(value, field) + (field.kind == "length"  ? " mm"
+                                    : field.kind == "angle" ? " rad"
+                                                            : "");
+}
+
 // A value other than `value` that the options still accept where possible.
 template <typename T>
 T Changed(const T& value, const Field& field) {
@@ -121,9 +135,9 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   // The camera's sensor: its image and, with a model other than ideal (an active image sensor),
   // every depth (image sensor) field; inactive, they leave earlier run keys alone.
   {
-    RunSpec changed = spec;
-    changed.sensor.image = SensorOptions::Image::kGray;
-    check(changed, "camera.image");
+    EXPECT_EQ(each_field(SensorOptions{}, spec,
+                         [](RunSpec& s) -> SensorOptions& { return s.sensor; }),
+              1);
     EXPECT_EQ(
         each_field(Intrinsics{}, spec, [](RunSpec& s) -> Intrinsics& { return s.intrinsics; }), 6);
     RunSpec kinect = spec;
@@ -152,7 +166,9 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
     EXPECT_EQ(each_field(Intrinsics{}, rig,
                          [](RunSpec& s) -> Intrinsics& { return s.rig[1].intrinsics; }),
               6);
-    edited("cameras[1].image", [](RigSensor& s) { s.sensor.image = SensorOptions::Image::kGray; });
+    EXPECT_EQ(each_field(SensorOptions{}, rig,
+                         [](RunSpec& s) -> SensorOptions& { return s.rig[1].sensor; }),
+              1);
     edited("cameras[1].position", [](RigSensor& s) { s.rig_from_cam.translation().x() = 1e-3; });
     edited("cameras[1].rotation", [](RigSensor& s) {
       s.rig_from_cam.linear() = Eigen::AngleAxisd(1e-6, Eigen::Vector3d::UnitZ()).matrix();
@@ -176,16 +192,13 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
               5);
     EXPECT_EQ(each_field(ThinLens{}, lensed, [](RunSpec& s) -> ThinLens& { return s.sensor.lens; }),
               3);
-    const auto moved = [&](const char* what, auto edit) {
+    EXPECT_EQ(each_field(CameraMotion{}, lensed,
+                         [](RunSpec& s) -> CameraMotion& { return s.sensor.motion; }),
+              3);
+    for (int i = 1; i < 3; ++i) {  // (each_field moves x)
       RunSpec c = lensed;
-      edit(c.sensor.motion);
-      check(c, what);
-    };
-    moved("camera.motion.exposure_ms", [](CameraMotion& m) { m.exposure_s *= 2; });
-    for (int i = 0; i < 3; ++i) {
-      moved("camera.motion.velocity_mm_s", [i](CameraMotion& m) { m.velocity_mm_s[i] += 1; });
-      moved("camera.motion.angular_velocity_deg_s",
-            [i](CameraMotion& m) { m.angular_velocity_rad_s[i] += 1e-3; });
+      c.sensor.motion.angular_velocity_rad_s[i] += 1e-3;
+      check(c, "camera.motion.angular_velocity_deg_s");
     }
     edited("cameras[1].distortion", [](RigSensor& s) { s.intrinsics.distortion.p2 = 1e-4; });
     edited("cameras[1].lens", [](RigSensor& s) { s.sensor.lens.focal_length_mm = 12; });
@@ -322,10 +335,16 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
                         }),
               8);
   }
-  // The run's own options, and the fast mode's look and light.
+  // The run's own options, the views, and the fast mode's look and light.
   EXPECT_EQ(ForEachChange<RunSpec>(
                 spec, [](RunSpec& s) -> RunSpec& { return s; }, check),
-            3);
+            4);
+  EXPECT_EQ(ForEachChange<SweepOptions>(
+                spec, [](RunSpec& s) -> SweepOptions& { return s.sweep; }, check),
+            4);
+  EXPECT_EQ(ForEachChange<ViewSampler>(
+                spec, [](RunSpec& s) -> ViewSampler& { return s.sampler; }, check),
+            9);
   EXPECT_EQ(ForEachChange<Scene>(
                 spec, [](RunSpec& s) -> Scene& { return s.look; }, check),
             6);
@@ -447,16 +466,17 @@ TEST(Schema, EveryRecipeKeyIsRead) {
               if (!value) return;  // unset: nothing to write
             }
             T expected = value;
-            std::string text = FieldText(value, field);
-            if (field.kind == "length") text += " mm";
-            if (field.kind == "angle") text += " rad";
+            const std::string text = RecipeText(value, field);
             std::string yaml = recipe(field.key);
             yaml.replace(yaml.find("{}"), 2, std::string(field.key) + ": " + text);
             const RunSpec parsed = ParseRecipe(yaml, "r.yaml", dir.path());
             Options::Fields(select(const_cast<RunSpec&>(parsed)),
                             [&](const auto& got, const Field& other) {
                               if constexpr (std::is_same_v<std::decay_t<decltype(got)>, T>) {
-                                if (other.Name() == field.Name()) {
+                                if (other.Name() != field.Name()) return;
+                                if constexpr (IsFixedVector<T>::value) {  // degrees: to 1e-12
+                                  EXPECT_LT((got - expected).norm(), 1e-12) << yaml;
+                                } else {
                                   EXPECT_EQ(got, expected) << yaml;
                                 }
                               }
@@ -547,7 +567,17 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   const auto run = [](RunSpec& s) -> RunSpec& { return s; };
   section("tessellation", run, "crease_angle");
   section("classes", run, "by");
+  section("sweep", run, "min_visible_pixels");
   section("render", run, "colors");
+  // The views, the camera's image and its motion (pbr only; the exposure is required).
+  section("sweep", [](RunSpec& s) -> SweepOptions& { return s.sweep; });
+  section("sweep", [](RunSpec& s) -> ViewSampler& { return s.sampler; });
+  section("camera", [](RunSpec& s) -> SensorOptions& { return s.sensor; });
+  const auto motion = [](RunSpec& s) -> CameraMotion& { return s.sensor.motion; };
+  const std::string moving = "render: {mode: pbr}\ncamera:\n  motion:\n";
+  read_in(fixed(moving + "    {}\n"), RunSpec{}, motion, "exposure_ms");
+  for (const char* key : {"velocity_mm_s", "angular_velocity_deg_s"})
+    read_in(fixed(moving + "    exposure_ms: 5\n    {}\n"), RunSpec{}, motion, key);
   // A fast-mode light gives a direction or a position.
   const auto light = [](RunSpec& s) -> Scene::Light& { return s.look.lights[0]; };
   read_in(fixed("render:\n  lights:\n    - {}\n"), RunSpec{}, light, "direction");
@@ -566,7 +596,7 @@ TEST(Schema, EveryRecipeKeyIsRead) {
   });
   read_in(fixed(scene + "  physics:\n    {}\n"), pile,
           [](RunSpec& s) -> PhysicsMaterial& { return s.scenes[0].arrangement.physics.low; });
-  EXPECT_GT(read, 120);
+  EXPECT_GT(read, 130);
 }
 
 // `cadsynth generate --help-recipe` and docs/recipes.md list every recipe key of the described
@@ -645,6 +675,14 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
       distractors, [&](const auto&, const Field& f) { expect_key("randomize.distractors", f); });
   const Intrinsics intrinsics;
   Intrinsics::Fields(intrinsics, [&](const auto&, const Field& f) { expect_key("camera", f); });
+  const SensorOptions sensor;
+  SensorOptions::Fields(sensor, [&](const auto&, const Field& f) { expect_key("camera", f); });
+  CameraMotion::Fields(sensor.motion,
+                       [&](const auto&, const Field& f) { expect_key("camera.motion", f); });
+  const SweepOptions sweep;
+  SweepOptions::Fields(sweep, [&](const auto&, const Field& f) { expect_key("sweep", f); });
+  const ViewSampler sampler;
+  ViewSampler::Fields(sampler, [&](const auto&, const Field& f) { expect_key("sweep", f); });
   const Scene look;
   Scene::Fields(look, [&](const auto&, const Field& f) { expect_key("render", f); });
   Scene::Light::Fields(look.lights[0],
@@ -658,7 +696,10 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
   });
   // RunSpec's own options, each in its section.
   const std::map<std::string_view, std::string> sections = {
-      {"crease_angle", "tessellation"}, {"by", "classes"}, {"colors", "render"}};
+      {"crease_angle", "tessellation"},
+      {"by", "classes"},
+      {"min_visible_pixels", "sweep"},
+      {"colors", "render"}};
   const RunSpec spec;
   RunSpec::Fields(spec, [&](const auto&, const Field& f) { expect_key(sections.at(f.key), f); });
 }

@@ -227,8 +227,7 @@ std::vector<Key> CameraKeys() {
        Section("imager", "the image sensor: shot and read noise, vignetting",
                KeysOf<ImageSensor>()),
        depth, Section("distortion", "OpenCV's lens distortion", KeysOf<Distortion>()),
-       Section("lens", "pbr: depth of field through a thin lens", KeysOf<ThinLens>()),
-       motion});
+       Section("lens", "pbr: depth of field through a thin lens", KeysOf<ThinLens>()), motion});
 }
 
 // A group's `per` (DrawPerField): how often it is drawn.
@@ -365,10 +364,9 @@ Key BuildSchema() {
        Section("tessellation", "how B-rep surfaces become triangles",
                Join(KeysOf<TessellationOptions>(), {KeyOf<RunSpec>("crease_angle")})),
        Section("camera", "the one camera", CameraKeys()), rig,
-       Section(
-           "sweep", "the camera views: each axis a value, a list or {from, to, step}",
-           Join(Join(KeysOf<SweepOptions>(DefaultRunSpec().sweep), KeysOf<ViewSampler>()),
-                {KeyOf<RunSpec>("min_visible_pixels")})),
+       Section("sweep", "the camera views: each axis a value, a list or {from, to, step}",
+               Join(Join(KeysOf<SweepOptions>(DefaultRunSpec().sweep), KeysOf<ViewSampler>()),
+                    {KeyOf<RunSpec>("min_visible_pixels")})),
        Section("render", "ray casting and shading",
                Join(Join(KeysOf<RenderOptions>(), look), {KeyOf<RunSpec>("colors")})),
        Section("materials", "pbr: the materials of the floor and the parts",

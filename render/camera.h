@@ -191,10 +191,9 @@ struct SweepOptions {
   // hand).
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
-    visit(o.yaw_rad, Field{.key = "yaw",
-                           .kind = "series_angle",
-                           .doc = "about the vertical",
-                           .by_hand = true});
+    visit(
+        o.yaw_rad,
+        Field{.key = "yaw", .kind = "series_angle", .doc = "about the vertical", .by_hand = true});
     visit(o.pitch_rad, Field{.key = "pitch",
                              .kind = "series_angle",
                              .doc = "elevation above the floor; 90: straight down",
@@ -244,7 +243,8 @@ struct ViewSampler {
   // The band and the radii come from the sweep's series (set by the reader, in the run key).
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
-    visit(o.kind, Field{"sampler", "choice", "how views are placed", {"grid", "fibonacci", "random"}});
+    visit(o.kind,
+          Field{"sampler", "choice", "how views are placed", {"grid", "fibonacci", "random"}});
     visit(o.count, Field{"count", "integer", "fibonacci, random: how many views"});
     visit(o.seed, RunSeed("seed", "random views and jitter"));
     visit(o.roll_jitter_rad,

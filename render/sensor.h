@@ -210,7 +210,8 @@ struct SensorOptions {
   // The image; the imager, depth, lens and motion describe their own fields.
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
-    visit(o.image, Field{"image", "choice", "a colour or a grey camera", {"rgb", "gray", "gray16"}});
+    visit(o.image,
+          Field{"image", "choice", "a colour or a grey camera", {"rgb", "gray", "gray16"}});
   }
 };
 

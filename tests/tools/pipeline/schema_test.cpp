@@ -135,9 +135,9 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   // The camera's sensor: its image and, with a model other than ideal (an active image sensor),
   // every depth (image sensor) field; inactive, they leave earlier run keys alone.
   {
-    EXPECT_EQ(each_field(SensorOptions{}, spec,
-                         [](RunSpec& s) -> SensorOptions& { return s.sensor; }),
-              1);
+    EXPECT_EQ(
+        each_field(SensorOptions{}, spec, [](RunSpec& s) -> SensorOptions& { return s.sensor; }),
+        1);
     EXPECT_EQ(
         each_field(Intrinsics{}, spec, [](RunSpec& s) -> Intrinsics& { return s.intrinsics; }), 6);
     RunSpec kinect = spec;
@@ -695,11 +695,10 @@ TEST(Schema, ReferenceAndReadmeListEveryKey) {
     expect_key("scene.physics", f);
   });
   // RunSpec's own options, each in its section.
-  const std::map<std::string_view, std::string> sections = {
-      {"crease_angle", "tessellation"},
-      {"by", "classes"},
-      {"min_visible_pixels", "sweep"},
-      {"colors", "render"}};
+  const std::map<std::string_view, std::string> sections = {{"crease_angle", "tessellation"},
+                                                            {"by", "classes"},
+                                                            {"min_visible_pixels", "sweep"},
+                                                            {"colors", "render"}};
   const RunSpec spec;
   RunSpec::Fields(spec, [&](const auto&, const Field& f) { expect_key(sections.at(f.key), f); });
 }

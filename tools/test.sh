@@ -8,6 +8,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh" --tests
 "$root/tools/build.sh"
+"$root/tools/seed_test_costs.sh" "$root/build"
 cd "$root/build"
 ctest --output-on-failure --parallel "$(nproc)" --timeout 900
 "$root/tools/sanitize.sh"

@@ -15,13 +15,5 @@ cmake --build "$root/build-asan" --parallel "$(nproc)"
 cd "$root/build-asan"
 export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-# Not run here (tools/test.sh runs them in the Release build first): clang_format checks sources,
-# not code; slurm_single_node starts daemons; and three long tests whose code shorter tests
-# already run under the sanitizers: the whole 432-frame default job (Cli's one-view, resume and
-# shard tests run the same generate path; 173 s here), the STEP round trip of every family's
-# symmetries (OpenCASCADE's writer and reader take its time; 201 s) and the families generated
-# twice for identical bytes (Generate's other tests; 101 s).
-skip="clang_format|slurm|Cli.GenerateWithoutArgumentsWritesTheDefaultDataset"
-skip+="|Symmetry.FamilyPartsWrittenToStepAndReadBackKeepTheirSymmetries"
-skip+="|Generate.GridAndRandomFamiliesGenerateTwiceIdentically"
-ctest --output-on-failure --parallel "$(nproc)" --timeout 1800 -E "$skip"
+# clang_format checks sources, not code; slurm_single_node starts daemons (run by tools/test.sh).
+ctest --output-on-failure --parallel "$(nproc)" --timeout 1800 -E "clang_format|slurm"

@@ -91,6 +91,8 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   r.Check(s, node, "sweep");
   ViewSampler& v = spec->sampler;
   ReadDescribed(r, node, "sweep", &v);
+  // (A negative seed wraps.)
+  if (node["seed"]) v.seed = static_cast<uint64_t>(r.Integer(node["seed"], "sweep.seed"));
   ReadDescribed(r, node, "sweep", spec);  // min_visible_pixels (RunSpec's own)
   // Fibonacci and random views fill the band between the lowest and highest pitch; random radii the
   // range between the smallest and largest radius.

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -27,8 +29,8 @@
 
 namespace cadsynth::recipe_detail {
 
-constexpr double kDeg = M_PI / 180.0;
-constexpr size_t kMaxSeries = 1000000;
+inline constexpr double kDeg = M_PI / 180.0;
+inline constexpr size_t kMaxSeries = 1000000;
 
 // Reads one recipe; every failure names name:line:column of the offending node.
 class Reader {

@@ -142,7 +142,7 @@ struct CameraMotion {
   // in the other camera's frame (the adjoint: w' = R^T w, v' = R^T (v + w x t)).
   CameraMotion Seen(const Eigen::Isometry3d& this_from_other) const;
 
-  // The recipe's `exposure_ms` is required when motion is given (read by hand).
+  // The recipe's `exposure_ms` must be given with a motion (checked by hand).
   template <class Self, class Visit>
   static void Fields(Self& o, Visit&& visit) {
     visit(o.velocity_mm_s, Field{"velocity_mm_s", "vector3", "mm/s along the camera's axes"});
@@ -246,7 +246,9 @@ struct ViewSampler {
     visit(o.kind,
           Field{"sampler", "choice", "how views are placed", {"grid", "fibonacci", "random"}});
     visit(o.count, Field{"count", "integer", "fibonacci, random: how many views"});
-    visit(o.seed, RunSeed("seed", "random views and jitter"));
+    Field seed = RunSeed("seed", "random views and jitter");
+    seed.by_hand = true;  // read by hand: a negative one wraps, as randomize.seed's
+    visit(o.seed, seed);
     visit(o.roll_jitter_rad,
           Field{"roll_jitter", "angle", "each view rolls about its axis by up to this"});
     visit(o.target_jitter_mm,

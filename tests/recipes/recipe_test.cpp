@@ -1257,6 +1257,7 @@ TEST(Reseed, MovesExactlyTheSeedsMarkedPerRun) {
   for (size_t s = 0; s < spec.scenes.size(); ++s)
     compare(spec.scenes[s].arrangement, out.scenes[s].arrangement);
   compare(spec.render, out.render);
+  compare(spec.sampler, out.sampler);
   compare(spec.bop, out.bop);
   compare(spec.tessellation, out.tessellation);
   compare(spec.limits, out.limits);
@@ -1270,9 +1271,9 @@ TEST(Reseed, MovesExactlyTheSeedsMarkedPerRun) {
   compare(spec.grasps.sampling, out.grasps.sampling);
   compare(spec.grasps.cup, out.grasps.cup);
   compare(spec.grasps.suction_sampling, out.grasps.suction_sampling);
-  // One arrangement seed per scene, the render seed, and each camera's imager and depth seeds.
-  EXPECT_EQ(moved, static_cast<int>(spec.scenes.size()) + 1 + 2 * 2);
-  EXPECT_NE(out.sampler.seed, spec.sampler.seed);
+  // One arrangement seed per scene, the render and view sampler seeds, and each camera's imager
+  // and depth seeds.
+  EXPECT_EQ(moved, static_cast<int>(spec.scenes.size()) + 2 + 2 * 2);
   EXPECT_NE(out.randomize.draws.seed, spec.randomize.draws.seed);
   EXPECT_EQ(Reseed(spec, 5).render.seed, out.render.seed);  // a stream is a function of its number
   EXPECT_GE(out.render.seed, 0);

@@ -115,7 +115,7 @@ void KeyOptics(const Intrinsics& k, const SensorOptions& sensor, KeyWriter& w) {
 
 void KeySensors(const RunSpec& spec, KeyWriter& w) {
   w.Fields("camera", spec.intrinsics);
-  // The sensor (recipes without camera.image and camera.depth keep their earlier run keys).
+  // The sensor's image and depth model (written only when either is set, as before).
   if (spec.sensor.image != SensorOptions::Image::kRgb ||
       spec.sensor.depth.kind != DepthModel::Kind::kIdeal) {
     w.Fields("sensor", spec.sensor);  // the image

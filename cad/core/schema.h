@@ -14,9 +14,8 @@
 // and values. A described struct enters the tree through KeysOf<Options>() (its fields, their
 // kinds, docs, choices and defaults); keys whose syntax is the recipe's own (part sources, class
 // groups, camera presets and rigs, image folders) are declared in the tree with their kind. The
-// reader takes every section's allowed keys from the tree, and the reference, the docs page and the
-// JSON Schema
-// (`cadsynth generate --recipe-schema`) are written from it.
+// reader takes every section's allowed keys from the tree, and the reference, the docs page and
+// the JSON Schema (`cadsynth generate --recipe-schema`) are written from it.
 #pragma once
 
 #include <cmath>

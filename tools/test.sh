@@ -1,14 +1,19 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs the whole test suite with ctest; then builds it again
-# with AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/, tools/sanitize.sh) and runs
-# it there. Tests that need the shared third-party data (../shared/data, or $CADSYNTH_TEST_DATA)
-# skip, saying so, without it; the Slurm test needs root (it starts slurmd) and skips, saying so,
-# without it.
+# Installs what is missing, builds, runs the default job, and runs the whole test suite:
+# - build/ (Release, GCC): the program, the Python module and the benchmarks; the default job
+#   (out/default, as tools/demo.sh writes it), then the checks that run the program, the Python
+#   module and the sources (Python tests, the Slurm cluster, the recipe schema, the generated docs,
+#   the format check, the Cycles comparison);
+# - build-asan/ (clang, AddressSanitizer and UndefinedBehaviorSanitizer, tools/sanitize.sh): the
+#   GoogleTest programs, built and run once, there.
+# Tests that need the shared third-party data (../shared/data, or $CADSYNTH_TEST_DATA) skip, saying
+# so, without it; the Slurm test needs root (it starts slurmd) and skips, saying so, without it.
+# docs/testing.md says why the GoogleTest programs run only under the sanitizers.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh" --tests
-"$root/tools/build.sh"
+"$root/tools/build.sh" -DCADSYNTH_BUILD_TESTS=OFF
+"$root/build/tools/cadsynth" generate -o "$root/out/default" --overwrite
 "$root/tools/seed_test_costs.sh" "$root/build"
-cd "$root/build"
-ctest --output-on-failure --parallel "$(nproc)" --timeout 900
+(cd "$root/build" && ctest --output-on-failure --parallel "$(nproc)" --timeout 900)
 "$root/tools/sanitize.sh"

@@ -49,7 +49,7 @@ struct Args {
   std::string recipe, output, shard, progress = "auto", cache;
   bool overwrite = false, quiet = false, help_recipe = false, recipe_schema = false,
        no_cache = false;
-  int threads = 0;
+  int threads = 0, shards = 0;
   // merge, preview
   std::string dir;
   // inspect
@@ -86,9 +86,20 @@ int RunGenerate(const Args& a) {
     return 0;
   }
   std::optional<cadsynth::ShardSpec> shard;
+  std::string shard_source;
+  if (a.shards != 0 && a.shard != "auto") {
+    throw UsageError{"--shards N goes with --shard auto (with --shard I/N the count is N)"};
+  }
   if (!a.shard.empty()) {
     try {
-      shard = cadsynth::ParseShard(a.shard);
+      if (a.shard == "auto") {
+        const cadsynth::SchedulerShard found = cadsynth::ShardFromScheduler(
+            [](const char* name) { return std::getenv(name); }, a.shards);
+        shard = found.shard;
+        shard_source = found.source;
+      } else {
+        shard = cadsynth::ParseShard(a.shard);
+      }
     } catch (const cadsynth::Error& e) {
       throw UsageError{e.what()};
     }
@@ -113,6 +124,7 @@ int RunGenerate(const Args& a) {
   }
   if (!a.quiet) {
     options.info = [](const std::string& line) { std::cout << line << "\n" << std::flush; };
+    if (!shard_source.empty()) options.info("shard " + shard->Name() + " from " + shard_source);
   }
   if (!a.quiet || a.progress == "json") {
     using Mode = cadsynth::ProgressReporter::Mode;
@@ -258,8 +270,16 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   gen->add_option(
          "--shard", a.shard,
          "render only shard I of N (0 <= I < N) into DIR, beside the other shards; join them with "
-         "'cadsynth merge DIR' once all have finished (tools/slurm/ runs both)")
-      ->type_name("I/N");
+         "'cadsynth merge DIR' once all have finished (tools/slurm/ runs both). 'auto': the "
+         "array task's shard, from SLURM_ARRAY_TASK_ID (of the array's range), "
+         "JOB_COMPLETION_INDEX (a Kubernetes Indexed Job; needs --shards), "
+         "AWS_BATCH_JOB_ARRAY_INDEX/_SIZE or BATCH_TASK_INDEX/_COUNT (Google Cloud Batch)")
+      ->type_name("I/N|auto");
+  gen->add_option("--shards", a.shards,
+                  "with --shard auto: the shard count (a Kubernetes Job's completions); one a "
+                  "scheduler sets must equal it; with Slurm, the task ID is then the shard index")
+      ->check(CLI::Range(1, 1000000))
+      ->type_name("N");
   gen->add_option("-j,--threads", a.threads,
                   "worker threads (default: all cores); results do not depend on it")
       ->check(CLI::Range(1, 1024))

@@ -7,8 +7,12 @@
 #                             sanitizer runtimes (the sanitizer build, tools/sanitize.sh),
 #                             pytest (the Python module's tests), python3-jsonschema and
 #                             python3-yaml (the recipe's JSON Schema checked by an independent
-#                             validator)
+#                             validator), Node.js and npm, with which it installs the
+#                             kubernetes-models package (pinned by tools/kubernetes/package-lock.json)
+#                             into tools/kubernetes/node_modules: the Kubernetes API schema that
+#                             the manifests are checked against
 set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
 
 packages=(
   cmake ninja-build g++ pkg-config
@@ -22,10 +26,28 @@ packages=(
 )
 case "${1:-}" in
   --tests) packages+=(slurm-wlm munge clang-format clang libclang-rt-14-dev python3-pytest
-                     python3-jsonschema python3-yaml) ;;
+                     python3-jsonschema python3-yaml)
+           # Debian's nodejs and npm, unless a Node.js with npm is already installed (another
+           # vendor's nodejs package conflicts with Debian's npm).
+           command -v node > /dev/null && command -v npm > /dev/null || packages+=(nodejs npm) ;;
   "") ;;
   *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
 esac
+
+# The Kubernetes API schema for the manifests' check (tests/farm/kubernetes_test.py), from npm's
+# registry, checked against the lock file's hashes; once (again when the lock file changes).
+# Without the registry the check is skipped, saying why; nothing else needs it.
+install_kubernetes_schema() {
+  [ "${1:-}" = "--tests" ] || return 0
+  local folder=$root/tools/kubernetes
+  if [ -f "$folder/node_modules/.package-lock.json" ] &&
+     [ "$folder/node_modules/.package-lock.json" -nt "$folder/package-lock.json" ]; then
+    return 0
+  fi
+  echo "setup: npm ci in tools/kubernetes (kubernetes-models, the Kubernetes API schema)"
+  (cd "$folder" && npm ci --no-audit --no-fund --loglevel=error) ||
+    echo "setup: warning: npm ci failed; the Kubernetes manifests' schema check will be skipped" >&2
+}
 
 missing=()
 for p in "${packages[@]}"; do
@@ -33,6 +55,7 @@ for p in "${packages[@]}"; do
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} packages present"
+  install_kubernetes_schema "${1:-}"
   exit 0
 fi
 
@@ -45,3 +68,4 @@ echo "setup: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $sudo apt-get update -q
 $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
+install_kubernetes_schema "${1:-}"

@@ -128,7 +128,7 @@ cat "$work/merge.log"
 
 for i in 0 1 2 3; do
   log=$work/shard-${jobid}_$i.log
-  grep -q "cadsynth shard $i/4 on" "$log" || { echo "FAIL: task $i did not run shard $i/4"; cat "$log"; exit 1; }
+  grep -q "^shard $i/4 from SLURM_ARRAY_TASK_ID=$i of the array 0-3$" "$log" || { echo "FAIL: task $i did not run shard $i/4"; cat "$log"; exit 1; }
   grep -q '"done":6,"total":6' "$log" || { echo "FAIL: shard $i/4 did not render its 6 frames"; cat "$log"; exit 1; }
 done
 grep -q "merged 4 shards" "$work/merge.log" || { echo "FAIL: merge did not report 4 shards"; exit 1; }

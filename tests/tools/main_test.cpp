@@ -39,13 +39,18 @@ TEST(Cli, HelpVersionAndUsageErrors) {
             "error: unknown option '--progressx'\n(run 'cadsynth generate --help' for usage)\n");
   EXPECT_EQ(Cadsynth("merge", dir).err,
             "error: DIR is required\n(run 'cadsynth merge --help' for usage)\n");
+  const CliRun shards = Cadsynth("generate --shard 1/4 --shards 4 -o out", dir);
+  EXPECT_EQ(shards.code, 2);
+  EXPECT_NE(shards.err.find("--shards N goes with --shard auto"), std::string::npos) << shards.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
 }
 
 // Every subcommand describes its own options.
 TEST(Cli, EverySubcommandHasHelp) {
   ScratchDir dir;
   const std::map<std::string, std::vector<std::string>> options = {
-      {"generate", {"--output", "--overwrite", "--shard", "--threads", "--progress", "--quiet"}},
+      {"generate",
+       {"--output", "--overwrite", "--shard", "--shards", "--threads", "--progress", "--quiet"}},
       {"merge", {"DIR"}},
       {"inspect", {"FILE", "--json", "--unit", "--encoding", "--deflection"}},
       {"variants", {"RECIPE", "--export-step", "--overwrite"}},

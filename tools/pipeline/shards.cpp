@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <system_error>
 
@@ -158,6 +159,141 @@ ShardSpec ParseShard(const std::string& text) {
     throw Error("--shard " + text + ": I must be at least 0 and less than N (N from 1 to 1000000)");
   }
   return {static_cast<int>(index), static_cast<int>(count)};
+}
+
+namespace {
+
+// One scheduler's reading of the environment: unset, or the shard it names.
+struct SchedulerReading {
+  bool set = false;
+  ShardSpec shard;
+  std::string source;
+};
+
+// A variable's value as a task index or count: decimal digits only (no sign, no spaces).
+std::optional<long> EnvNumber(const std::function<const char*(const char*)>& env,
+                              const char* name) {
+  const char* value = env(name);
+  if (value == nullptr) return std::nullopt;
+  const std::string text = value;
+  if (text.empty() || text.size() > 9 ||
+      text.find_first_not_of("0123456789") != std::string::npos) {
+    throw Error("--shard auto: " + std::string(name) + "='" + text +
+                "' is not a task index or count (a whole number)");
+  }
+  return std::stol(text);
+}
+
+std::string Assignment(const char* name, long value) {
+  return std::string(name) + "=" + std::to_string(value);
+}
+
+// Index `index` of `count` from `source`, checked.
+SchedulerReading Reading(long index, long count, std::string source) {
+  if (count < 1 || count > 1000000) {
+    throw Error("--shard auto: " + source + ": the shard count must be from 1 to 1000000");
+  }
+  if (index < 0 || index >= count) {
+    throw Error("--shard auto: " + source + ": the index must be at least 0 and less than " +
+                std::to_string(count));
+  }
+  return {true, {static_cast<int>(index), static_cast<int>(count)}, std::move(source)};
+}
+
+SchedulerReading FromSlurm(const std::function<const char*(const char*)>& env, int shards) {
+  const std::optional<long> id = EnvNumber(env, "SLURM_ARRAY_TASK_ID");
+  if (!id) return {};
+  if (shards > 0) {
+    // The ID itself: reruns of some tasks (--array=3,17) keep their shard numbers.
+    return Reading(
+        *id, shards,
+        Assignment("SLURM_ARRAY_TASK_ID", *id) + " of --shards " + std::to_string(shards));
+  }
+  const std::optional<long> min = EnvNumber(env, "SLURM_ARRAY_TASK_MIN");
+  const std::optional<long> max = EnvNumber(env, "SLURM_ARRAY_TASK_MAX");
+  if (!min || !max || *max < *min) {
+    throw Error(
+        "--shard auto: SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_MIN and "
+        "SLURM_ARRAY_TASK_MAX are not (or MAX < MIN): give the count with --shards N");
+  }
+  const long count = *max - *min + 1;
+  const std::optional<long> tasks = EnvNumber(env, "SLURM_ARRAY_TASK_COUNT");
+  if (tasks && *tasks != count) {
+    throw Error("--shard auto: the Slurm array " + std::to_string(*min) + "-" +
+                std::to_string(*max) +
+                " has gaps (SLURM_ARRAY_TASK_COUNT=" + std::to_string(*tasks) +
+                "): use a contiguous range, or give the shard count with --shards N (the task "
+                "ID is then the shard index)");
+  }
+  return Reading(*id - *min, count,
+                 Assignment("SLURM_ARRAY_TASK_ID", *id) + " of the array " + std::to_string(*min) +
+                     "-" + std::to_string(*max));
+}
+
+SchedulerReading FromKubernetes(const std::function<const char*(const char*)>& env, int shards) {
+  const std::optional<long> index = EnvNumber(env, "JOB_COMPLETION_INDEX");
+  if (!index) return {};
+  if (shards <= 0) {
+    throw Error(
+        "--shard auto: JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job), whose pods "
+        "are not told the shard count: give --shards N equal to the Job's "
+        "spec.completions");
+  }
+  return Reading(
+      *index, shards,
+      Assignment("JOB_COMPLETION_INDEX", *index) + " of --shards " + std::to_string(shards));
+}
+
+// A scheduler that sets both the index and the count.
+SchedulerReading FromIndexAndCount(const std::function<const char*(const char*)>& env,
+                                   const char* index_name, const char* count_name) {
+  const std::optional<long> index = EnvNumber(env, index_name);
+  if (!index) return {};
+  const std::optional<long> count = EnvNumber(env, count_name);
+  if (!count) {
+    throw Error("--shard auto: " + std::string(index_name) + " is set but " + count_name +
+                " is not");
+  }
+  return Reading(*index, *count,
+                 Assignment(index_name, *index) + " of " + Assignment(count_name, *count));
+}
+
+}  // namespace
+
+SchedulerShard ShardFromScheduler(const std::function<const char*(const char*)>& env, int shards) {
+  if (shards < 0 || shards > 1000000) {
+    throw Error("--shards " + std::to_string(shards) +
+                ": the shard count must be from 1 to "
+                "1000000");
+  }
+  const SchedulerReading readings[] = {
+      FromSlurm(env, shards),
+      FromKubernetes(env, shards),
+      FromIndexAndCount(env, "AWS_BATCH_JOB_ARRAY_INDEX", "AWS_BATCH_JOB_ARRAY_SIZE"),
+      FromIndexAndCount(env, "BATCH_TASK_INDEX", "BATCH_TASK_COUNT"),
+  };
+  const SchedulerReading* found = nullptr;
+  for (const SchedulerReading& reading : readings) {
+    if (!reading.set) continue;
+    if (shards > 0 && reading.shard.count != shards) {
+      throw Error("--shard auto: " + reading.source + " but --shards " + std::to_string(shards) +
+                  ": give the scheduler's count, or leave --shards out");
+    }
+    if (found != nullptr &&
+        (found->shard.index != reading.shard.index || found->shard.count != reading.shard.count)) {
+      throw Error("--shard auto: the schedulers' variables disagree: " + found->source +
+                  " is shard " + found->shard.Name() + ", " + reading.source + " is shard " +
+                  reading.shard.Name() + "; unset the one that does not belong to this task");
+    }
+    if (found == nullptr) found = &reading;
+  }
+  if (found == nullptr) {
+    throw Error(
+        "--shard auto: no scheduler task index is set (SLURM_ARRAY_TASK_ID, "
+        "JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX or BATCH_TASK_INDEX); outside "
+        "an array job give the shard as --shard I/N");
+  }
+  return {found->shard, found->source};
 }
 
 ShardTree::ShardTree(const fs::path& dir, ShardSpec shard, const std::string& run_key)

@@ -38,6 +38,22 @@ struct ShardSpec {
 // "I/N" with 0 <= I < N; throws Error saying what is wrong otherwise.
 ShardSpec ParseShard(const std::string& text);
 
+// `--shard auto`: the shard this process is, from the task index its scheduler sets.
+//   Slurm array        SLURM_ARRAY_TASK_ID, less SLURM_ARRAY_TASK_MIN, of the array's range
+//                      (MIN..MAX, which must be contiguous); with `shards`, the ID itself of N
+//   Kubernetes         JOB_COMPLETION_INDEX of an Indexed Job; the count is `shards` (pods are
+//                      not told the Job's completions)
+//   AWS Batch array    AWS_BATCH_JOB_ARRAY_INDEX of AWS_BATCH_JOB_ARRAY_SIZE
+//   Google Cloud Batch BATCH_TASK_INDEX of BATCH_TASK_COUNT
+// `shards` is `--shards N` (0: not given); a count a scheduler sets must equal it. Throws Error
+// naming the variables when none is set, one is not a number or out of range, or two of them (or
+// a scheduler and `shards`) disagree. `env` looks a variable up (nullptr: unset); std::getenv.
+struct SchedulerShard {
+  ShardSpec shard;
+  std::string source;  // where it came from: "JOB_COMPLETION_INDEX=3 of --shards 8"
+};
+SchedulerShard ShardFromScheduler(const std::function<const char*(const char*)>& env, int shards);
+
 // What merge needs to know about a run, without the CAD: written by shard 0 before rendering.
 struct ShardRunInfo {
   int shards = 1;

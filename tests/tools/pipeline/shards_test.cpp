@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -61,6 +62,117 @@ TEST(Shards, ParseShardTakesIOfN) {
   EXPECT_FALSE(s.Owns(0));
   EXPECT_TRUE(s.Owns(1));
   EXPECT_TRUE(s.Owns(4));
+}
+
+// A scheduler's environment: the variables set, the rest unset.
+class FakeEnvironment {
+ public:
+  FakeEnvironment(std::map<std::string, std::string> vars) : vars_(std::move(vars)) {}
+  std::function<const char*(const char*)> Lookup() const {
+    return [this](const char* name) -> const char* {
+      const auto it = vars_.find(name);
+      return it == vars_.end() ? nullptr : it->second.c_str();
+    };
+  }
+
+ private:
+  std::map<std::string, std::string> vars_;
+};
+
+ShardSpec Auto(const std::map<std::string, std::string>& vars, int shards = 0) {
+  const FakeEnvironment env(vars);
+  return ShardFromScheduler(env.Lookup(), shards).shard;
+}
+
+std::string AutoError(const std::map<std::string, std::string>& vars, int shards = 0) {
+  try {
+    Auto(vars, shards);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Shards, AutoReadsTheSlurmArrayRange) {
+  // sbatch --array=0-3: task 2 is shard 2/4.
+  const std::map<std::string, std::string> slurm = {{"SLURM_ARRAY_TASK_ID", "2"},
+                                                    {"SLURM_ARRAY_TASK_MIN", "0"},
+                                                    {"SLURM_ARRAY_TASK_MAX", "3"},
+                                                    {"SLURM_ARRAY_TASK_COUNT", "4"}};
+  EXPECT_EQ(Auto(slurm).Name(), "2/4");
+  // --array=1-100: task 1 is shard 0, task 100 is shard 99, of 100.
+  EXPECT_EQ(Auto({{"SLURM_ARRAY_TASK_ID", "1"},
+                  {"SLURM_ARRAY_TASK_MIN", "1"},
+                  {"SLURM_ARRAY_TASK_MAX", "100"}})
+                .Name(),
+            "0/100");
+  EXPECT_EQ(Auto({{"SLURM_ARRAY_TASK_ID", "100"},
+                  {"SLURM_ARRAY_TASK_MIN", "1"},
+                  {"SLURM_ARRAY_TASK_MAX", "100"}})
+                .Name(),
+            "99/100");
+  // A rerun of some tasks (--array=3,17) with the count given: the ID is the index.
+  const std::map<std::string, std::string> rerun = {{"SLURM_ARRAY_TASK_ID", "17"},
+                                                    {"SLURM_ARRAY_TASK_MIN", "3"},
+                                                    {"SLURM_ARRAY_TASK_MAX", "17"},
+                                                    {"SLURM_ARRAY_TASK_COUNT", "2"}};
+  EXPECT_EQ(Auto(rerun, 100).Name(), "17/100");
+  // ... without it, the gaps are an error that says what to do.
+  EXPECT_NE(AutoError(rerun).find("has gaps"), std::string::npos) << AutoError(rerun);
+  EXPECT_NE(AutoError(rerun).find("--shards N"), std::string::npos);
+  EXPECT_NE(AutoError({{"SLURM_ARRAY_TASK_ID", "2"}}).find("SLURM_ARRAY_TASK_MIN"),
+            std::string::npos);
+  EXPECT_NE(AutoError({{"SLURM_ARRAY_TASK_ID", "100"}}, 100).find("less than 100"),
+            std::string::npos);
+}
+
+TEST(Shards, AutoReadsKubernetesAwsAndGoogleBatch) {
+  EXPECT_EQ(Auto({{"JOB_COMPLETION_INDEX", "7"}}, 8).Name(), "7/8");
+  EXPECT_EQ(Auto({{"JOB_COMPLETION_INDEX", "0"}}, 1).Name(), "0/1");
+  // Pods are not told the Job's completions.
+  EXPECT_NE(AutoError({{"JOB_COMPLETION_INDEX", "7"}}).find("spec.completions"), std::string::npos);
+  EXPECT_NE(AutoError({{"JOB_COMPLETION_INDEX", "8"}}, 8).find("less than 8"), std::string::npos);
+  EXPECT_EQ(Auto({{"AWS_BATCH_JOB_ARRAY_INDEX", "0"}, {"AWS_BATCH_JOB_ARRAY_SIZE", "10"}}).Name(),
+            "0/10");
+  EXPECT_EQ(
+      Auto({{"AWS_BATCH_JOB_ARRAY_INDEX", "9"}, {"AWS_BATCH_JOB_ARRAY_SIZE", "10"}}, 10).Name(),
+      "9/10");
+  EXPECT_NE(AutoError({{"AWS_BATCH_JOB_ARRAY_INDEX", "3"}}).find("AWS_BATCH_JOB_ARRAY_SIZE"),
+            std::string::npos);
+  EXPECT_EQ(Auto({{"BATCH_TASK_INDEX", "4"}, {"BATCH_TASK_COUNT", "5"}}).Name(), "4/5");
+  // The count a scheduler sets is the one: --shards must agree with it.
+  const std::string mismatch =
+      AutoError({{"AWS_BATCH_JOB_ARRAY_INDEX", "3"}, {"AWS_BATCH_JOB_ARRAY_SIZE", "10"}}, 8);
+  EXPECT_NE(mismatch.find("AWS_BATCH_JOB_ARRAY_SIZE=10"), std::string::npos) << mismatch;
+  EXPECT_NE(mismatch.find("--shards 8"), std::string::npos) << mismatch;
+}
+
+TEST(Shards, AutoRefusesNothingGarbageAndDisagreement) {
+  const std::string none = AutoError({{"HOME", "/root"}});
+  EXPECT_NE(none.find("no scheduler task index"), std::string::npos) << none;
+  EXPECT_NE(none.find("--shard I/N"), std::string::npos) << none;
+  for (const char* bad : {"", "-1", "3x", " 3", "1e3", "0x10", "99999999999"}) {
+    const std::string error = AutoError({{"JOB_COMPLETION_INDEX", bad}}, 8);
+    EXPECT_NE(error.find("is not a task index"), std::string::npos) << bad << ": " << error;
+  }
+  EXPECT_NE(AutoError({{"BATCH_TASK_INDEX", "0"}, {"BATCH_TASK_COUNT", "0"}}).find("from 1"),
+            std::string::npos);
+  // Two schedulers that agree (a Slurm array inside a Kubernetes pod, say) are one shard ...
+  EXPECT_EQ(Auto({{"JOB_COMPLETION_INDEX", "2"},
+                  {"SLURM_ARRAY_TASK_ID", "2"},
+                  {"SLURM_ARRAY_TASK_MIN", "0"},
+                  {"SLURM_ARRAY_TASK_MAX", "3"}},
+                 4)
+                .Name(),
+            "2/4");
+  // ... two that disagree are an error naming both.
+  const std::string both = AutoError({{"AWS_BATCH_JOB_ARRAY_INDEX", "1"},
+                                      {"AWS_BATCH_JOB_ARRAY_SIZE", "4"},
+                                      {"BATCH_TASK_INDEX", "2"},
+                                      {"BATCH_TASK_COUNT", "4"}});
+  EXPECT_NE(both.find("disagree"), std::string::npos) << both;
+  EXPECT_NE(both.find("AWS_BATCH_JOB_ARRAY_INDEX=1"), std::string::npos) << both;
+  EXPECT_NE(both.find("BATCH_TASK_INDEX=2"), std::string::npos) << both;
 }
 
 TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {

@@ -24,6 +24,7 @@ namespace {
 constexpr char kMagic[8] = {'c', 's', 'c', 'a', 'c', 'h', 'e', '1'};
 constexpr uint32_t kAssemblyTag = 0x41535331;  // "ASS1"
 constexpr uint32_t kHullTag = 0x48554c32;      // "HUL2"
+constexpr uint32_t kSymmetryTag = 0x53594d31;  // "SYM1"
 
 XXH3_state_t* State(void* p) { return static_cast<XXH3_state_t*>(p); }
 
@@ -48,6 +49,30 @@ Eigen::Vector3d GetVector3(ByteReader* in) {
   Eigen::Vector3d v;
   for (int k = 0; k < 3; ++k) v[k] = in->Get<double>();
   return v;
+}
+
+void PutSymmetries(ByteWriter* out, const Symmetries& symmetries) {
+  out->Put<uint64_t>(symmetries.discrete.size());
+  for (const Eigen::Isometry3d& s : symmetries.discrete) PutTransform(out, s);
+  out->Put<uint64_t>(symmetries.continuous.size());
+  for (const Symmetries::Axis& a : symmetries.continuous) {
+    PutVector<3>(out, a.direction);
+    PutVector<3>(out, a.offset);
+  }
+}
+
+Symmetries GetSymmetries(ByteReader* in) {
+  Symmetries symmetries;
+  const uint64_t discrete = in->Get<uint64_t>();
+  for (uint64_t k = 0; k < discrete; ++k) symmetries.discrete.push_back(GetTransform(in));
+  const uint64_t continuous = in->Get<uint64_t>();
+  for (uint64_t k = 0; k < continuous; ++k) {
+    Symmetries::Axis axis;
+    axis.direction = GetVector3(in);
+    axis.offset = GetVector3(in);
+    symmetries.continuous.push_back(axis);
+  }
+  return symmetries;
 }
 
 void PutColor(ByteWriter* out, const std::optional<Eigen::Vector3f>& color) {
@@ -191,6 +216,56 @@ std::string EncodeHull(const ConvexHull& hull) {
   return std::move(out.bytes());
 }
 
+std::string EncodeDetectedSymmetries(const DetectedSymmetries& found,
+                                     const std::vector<double>& entry_deviation) {
+  ByteWriter out;
+  out.Put<uint32_t>(kSymmetryTag);
+  PutSymmetries(&out, found.symmetries);
+  out.PutArray(found.discrete_deviation_mm);
+  out.PutArray(found.continuous_deviation_mm);
+  out.PutArray(found.discrete_brep_mm);
+  out.PutArray(found.continuous_brep_mm);
+  out.Put<int32_t>(found.brep_faces_not_compared);
+  out.Put<double>(found.tolerance_mm);
+  out.Put<uint64_t>(found.axes.size());
+  for (const DetectedSymmetries::Axis& axis : found.axes) {
+    PutVector<3>(&out, axis.direction);
+    out.Put<int32_t>(axis.order);
+  }
+  PutVector<3>(&out, found.centre);
+  out.PutArray(entry_deviation);
+  return std::move(out.bytes());
+}
+
+DetectedSymmetries DecodeDetectedSymmetries(std::string_view bytes,
+                                            std::vector<double>* entry_deviation) {
+  ByteReader in(bytes);
+  if (in.Get<uint32_t>() != kSymmetryTag) throw Error("part cache: not a part's symmetries");
+  DetectedSymmetries found;
+  found.symmetries = GetSymmetries(&in);
+  found.discrete_deviation_mm = in.GetArray<double>();
+  found.continuous_deviation_mm = in.GetArray<double>();
+  found.discrete_brep_mm = in.GetArray<double>();
+  found.continuous_brep_mm = in.GetArray<double>();
+  found.brep_faces_not_compared = in.Get<int32_t>();
+  found.tolerance_mm = in.Get<double>();
+  const uint64_t axes = in.Get<uint64_t>();
+  for (uint64_t k = 0; k < axes; ++k) {
+    DetectedSymmetries::Axis axis;
+    axis.direction = GetVector3(&in);
+    axis.order = in.Get<int32_t>();
+    found.axes.push_back(axis);
+  }
+  found.centre = GetVector3(&in);
+  *entry_deviation = in.GetArray<double>();
+  if (!in.done()) throw Error("part cache: trailing bytes after a part's symmetries");
+  if (found.discrete_deviation_mm.size() != found.symmetries.discrete.size() ||
+      found.continuous_deviation_mm.size() != found.symmetries.continuous.size()) {
+    throw Error("part cache: a part's symmetries and their deviations do not match");
+  }
+  return found;
+}
+
 ConvexHull DecodeHull(std::string_view bytes) {
   ByteReader in(bytes);
   if (in.Get<uint32_t>() != kHullTag) throw Error("part cache: not a convex hull");
@@ -226,13 +301,7 @@ std::string EncodeAssembly(const Assembly& assembly, const std::vector<std::stri
     out.Put<uint8_t>(part.watertight);
     out.Put<double>(part.max_deviation_mm);
     PutColor(&out, part.color);
-    out.Put<uint64_t>(part.symmetries.discrete.size());
-    for (const Eigen::Isometry3d& s : part.symmetries.discrete) PutTransform(&out, s);
-    out.Put<uint64_t>(part.symmetries.continuous.size());
-    for (const Symmetries::Axis& a : part.symmetries.continuous) {
-      PutVector<3>(&out, a.direction);
-      PutVector<3>(&out, a.offset);
-    }
+    PutSymmetries(&out, part.symmetries);
     PutShape(&out, part.brep);
   }
   out.Put<uint64_t>(assembly.instances.size());
@@ -268,15 +337,7 @@ Assembly DecodeAssembly(std::string_view bytes, std::vector<std::string>* warnin
     part.watertight = in.Get<uint8_t>() != 0;
     part.max_deviation_mm = in.Get<double>();
     part.color = GetColor(&in);
-    const uint64_t discrete = in.Get<uint64_t>();
-    for (uint64_t k = 0; k < discrete; ++k) part.symmetries.discrete.push_back(GetTransform(&in));
-    const uint64_t continuous = in.Get<uint64_t>();
-    for (uint64_t k = 0; k < continuous; ++k) {
-      Symmetries::Axis axis;
-      axis.direction = GetVector3(&in);
-      axis.offset = GetVector3(&in);
-      part.symmetries.continuous.push_back(axis);
-    }
+    part.symmetries = GetSymmetries(&in);
     part.brep = GetShape(&in);
     assembly.parts.push_back(std::move(part));
   }

@@ -24,6 +24,7 @@
 #include "cad/hull.h"
 #include "cad/mesh.h"
 #include "cad/part.h"
+#include "cad/symmetry.h"
 
 namespace cadsynth {
 
@@ -125,6 +126,12 @@ class ByteReader {
 // What a part cache can hold, as bytes. Decode* throw Error on damaged bytes.
 std::string EncodeHull(const ConvexHull& hull);
 ConvexHull DecodeHull(std::string_view bytes);
+// A part's symmetries as detected or measured (DetectSymmetries, MeasureSymmetries, with
+// CompareBrepFaces' results if it ran), and the worst deviation of each entry of a recipe's list.
+std::string EncodeDetectedSymmetries(const DetectedSymmetries& found,
+                                     const std::vector<double>& entry_deviation);
+DetectedSymmetries DecodeDetectedSymmetries(std::string_view bytes,
+                                            std::vector<double>* entry_deviation);
 // An assembly as the importer returns it, B-rep shapes included (OpenCASCADE's binary format),
 // and the warnings reading it gave; convex hulls are not stored (they have their own entries).
 std::string EncodeAssembly(const Assembly& assembly, const std::vector<std::string>& warnings);

@@ -293,11 +293,12 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   gen->add_flag(
       "-q,--quiet", a.quiet,
       "no progress or info lines, only warnings and errors (--progress=json still prints)");
-  CLI::Option* cache = gen->add_option("--cache", a.cache,
-                                       "the part cache (imported parts, hulls, repeated shapes; "
-                                       "shared by runs and shards; default $CADSYNTH_CACHE, else "
-                                       "$XDG_CACHE_HOME/cadsynth or ~/.cache/cadsynth)")
-                           ->type_name("DIR");
+  CLI::Option* cache =
+      gen->add_option("--cache", a.cache,
+                      "the part cache (imported parts, hulls, repeated shapes, symmetries, grasps; "
+                      "shared by runs and shards; default $CADSYNTH_CACHE, else "
+                      "$XDG_CACHE_HOME/cadsynth or ~/.cache/cadsynth)")
+          ->type_name("DIR");
   gen->add_flag("--no-cache", a.no_cache,
                 "read and analyse every part afresh (the output is the same bytes either way)")
       ->excludes(cache);

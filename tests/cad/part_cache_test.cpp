@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -127,6 +128,42 @@ TEST(PartCache, TruncatedOrForeignBytesAreErrors) {
   ConvexHull bad = hull;
   bad.triangles[3][2] = 4;  // names no vertex
   EXPECT_THROW(DecodeHull(EncodeHull(bad)), Error);
+}
+
+TEST(PartCache, DetectedSymmetriesRoundTripExactly) {
+  DetectedSymmetries found;
+  found.symmetries = Symmetries::Cyclic(6, true, 1.25, 0.3);
+  found.discrete_deviation_mm.assign(found.symmetries.discrete.size(), 0.0);
+  for (size_t k = 0; k < found.discrete_deviation_mm.size(); ++k)
+    found.discrete_deviation_mm[k] = 0.001 * static_cast<double>(k + 1);
+  found.discrete_brep_mm = {1e-9, std::numeric_limits<double>::infinity()};
+  found.brep_faces_not_compared = 3;
+  found.tolerance_mm = 0.0937;
+  found.axes = {{Eigen::Vector3d(0, 0, -1), 6}, {Eigen::Vector3d(1, 0, 0), 2}};
+  found.centre = Eigen::Vector3d(0.5, -0.25, 3.0);
+  const std::vector<double> entries = {0.002, 0.004};
+  std::vector<double> entries_read;
+  const DetectedSymmetries read =
+      DecodeDetectedSymmetries(EncodeDetectedSymmetries(found, entries), &entries_read);
+  ASSERT_EQ(read.symmetries.discrete.size(), found.symmetries.discrete.size());
+  for (size_t k = 0; k < found.symmetries.discrete.size(); ++k)
+    EXPECT_EQ(read.symmetries.discrete[k].matrix(), found.symmetries.discrete[k].matrix());
+  EXPECT_EQ(read.discrete_deviation_mm, found.discrete_deviation_mm);
+  EXPECT_EQ(read.discrete_brep_mm, found.discrete_brep_mm);
+  EXPECT_EQ(read.brep_faces_not_compared, 3);
+  EXPECT_EQ(read.tolerance_mm, found.tolerance_mm);
+  ASSERT_EQ(read.axes.size(), 2u);
+  EXPECT_EQ(read.axes[0].direction, found.axes[0].direction);
+  EXPECT_EQ(read.axes[0].order, 6);
+  EXPECT_EQ(read.centre, found.centre);
+  EXPECT_EQ(entries_read, entries);
+  // Cut short, or deviations that do not match the symmetries: errors (a miss).
+  const std::string bytes = EncodeDetectedSymmetries(found, entries);
+  for (size_t cut : {size_t{0}, size_t{4}, bytes.size() / 2, bytes.size() - 1})
+    EXPECT_THROW(DecodeDetectedSymmetries(bytes.substr(0, cut), &entries_read), Error) << cut;
+  DetectedSymmetries bad = found;
+  bad.discrete_deviation_mm.pop_back();
+  EXPECT_THROW(DecodeDetectedSymmetries(EncodeDetectedSymmetries(bad, {}), &entries_read), Error);
 }
 
 // An entry whose bytes changed on disk (a flipped bit, a cut write) is a miss.

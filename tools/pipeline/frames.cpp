@@ -4,12 +4,16 @@
 #include <chrono>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
+#include <string_view>
+#include <type_traits>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "cad/core/error.h"
+#include "cad/part_cache.h"
 #include "render/randomize.h"
 #include "render/renderer.h"
 #include "render/sampling.h"
@@ -189,6 +193,118 @@ RenderedView FrameSource::Render(size_t unit) const {
   return out;
 }
 
+namespace {
+
+// Every field of an option struct (cad/core/schema.h) into a part cache key.
+struct HashFields {
+  KeyHasher* hasher;
+  template <class T>
+  void operator()(const T& value, const Field&) const {
+    if constexpr (std::is_same_v<T, std::string>) {
+      hasher->Text(value);
+    } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+      hasher->Value<uint64_t>(value.size());
+      for (double x : value) hasher->Value(x);
+    } else {
+      hasher->Value(value);
+    }
+  }
+};
+
+// What a part's grasps depend on: its mesh, its volume and centre of mass (the suction cup's
+// wrench), the gripper, the cup and the samplings' options with the part's own seeds.
+CacheKey GraspKey(const PartCache& cache, const Part& part, const GraspSpec& spec,
+                  const AntipodalOptions& jaw, const SuctionOptions* suction) {
+  KeyHasher hasher;
+  cache.Start(&hasher, "grasps 1");
+  hasher.Geometry(part.mesh);
+  hasher.Value(part.mass.volume_mm3).Value(part.mass.center_of_mass);
+  ParallelJawGripper::Fields(spec.gripper, HashFields{&hasher});
+  AntipodalOptions::Fields(jaw, HashFields{&hasher});
+  hasher.Value<uint8_t>(suction != nullptr);
+  if (suction != nullptr) {
+    SuctionCup::Fields(spec.cup, HashFields{&hasher});
+    SuctionOptions::Fields(*suction, HashFields{&hasher});
+  }
+  return hasher.Key();
+}
+
+void PutVector(ByteWriter* out, const Eigen::Vector3d& v) {
+  for (int k = 0; k < 3; ++k) out->Put<double>(v[k]);
+}
+
+Eigen::Vector3d GetVector(ByteReader* in) {
+  Eigen::Vector3d v;
+  for (int k = 0; k < 3; ++k) v[k] = in->Get<double>();
+  return v;
+}
+
+std::string EncodeGrasps(const std::vector<ParallelJawGrasp>& jaw,
+                         const std::vector<SuctionGrasp>& suction) {
+  ByteWriter out;
+  out.Put<uint64_t>(jaw.size());
+  for (const ParallelJawGrasp& g : jaw) {
+    for (int k = 0; k < 16; ++k) out.Put<double>(g.model_from_gripper.matrix().data()[k]);
+    out.Put<double>(g.width_mm);
+    out.Put<double>(g.opening_mm);
+    out.Put<double>(g.depth_mm);
+    out.Put<uint8_t>(g.free_when_open);
+    for (int c = 0; c < 2; ++c) {
+      PutVector(&out, g.contacts[c]);
+      PutVector(&out, g.normals[c]);
+    }
+    out.Put<double>(g.quality);
+  }
+  out.Put<uint64_t>(suction.size());
+  for (const SuctionGrasp& g : suction) {
+    PutVector(&out, g.point);
+    PutVector(&out, g.approach);
+    out.Put<double>(g.seal);
+    out.Put<double>(g.wrench);
+    out.Put<double>(g.rim_height_mm);
+  }
+  return std::move(out.bytes());
+}
+
+void DecodeGrasps(std::string_view bytes, std::vector<ParallelJawGrasp>* jaw,
+                  std::vector<SuctionGrasp>* suction) {
+  ByteReader in(bytes);
+  const uint64_t jaws = in.Get<uint64_t>();
+  if (jaws > bytes.size()) throw Error("part cache: damaged grasps");
+  jaw->clear();
+  for (uint64_t i = 0; i < jaws; ++i) {
+    ParallelJawGrasp g;
+    Eigen::Matrix4d m;
+    for (int k = 0; k < 16; ++k) m.data()[k] = in.Get<double>();
+    g.model_from_gripper.matrix() = m;
+    g.width_mm = in.Get<double>();
+    g.opening_mm = in.Get<double>();
+    g.depth_mm = in.Get<double>();
+    g.free_when_open = in.Get<uint8_t>() != 0;
+    for (int c = 0; c < 2; ++c) {
+      g.contacts[c] = GetVector(&in);
+      g.normals[c] = GetVector(&in);
+    }
+    g.quality = in.Get<double>();
+    jaw->push_back(g);
+  }
+  const uint64_t cups = in.Get<uint64_t>();
+  if (cups > bytes.size()) throw Error("part cache: damaged grasps");
+  suction->clear();
+  for (uint64_t i = 0; i < cups; ++i) {
+    SuctionGrasp g;
+    g.point = GetVector(&in);
+    g.approach = GetVector(&in);
+    g.seal = in.Get<double>();
+    g.wrench = in.Get<double>();
+    g.rim_height_mm = in.Get<double>();
+    suction->push_back(g);
+  }
+  if (!in.done()) throw Error("part cache: trailing bytes after grasps");
+}
+
+}  // namespace
+
 void FrameSource::SampleGraspsOnce() const {
   if (!grasps_) throw Error("the recipe asks for no grasps (grasps:)");
   std::call_once(grasps_->sampled, [&] {
@@ -196,18 +312,32 @@ void FrameSource::SampleGraspsOnce() const {
     const GraspSpec& spec = spec_.grasps;
     const std::vector<Part>& parts = prepared_.parts;
     grasps_->jaw.resize(parts.size());
-    if (spec.suction) grasps_->suction.resize(parts.size());
-    // Every object from its own seed.
+    std::vector<std::vector<SuctionGrasp>> suction_grasps(parts.size());
+    std::optional<PartCache> cache;
+    if (options_.cache) cache.emplace(*options_.cache, BuildId());
+    // Every object from its own seed; each object's grasps kept in the part cache.
     tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
       AntipodalOptions options = spec.sampling;
       options.seed = Hash(spec.sampling.seed, p);
-      grasps_->jaw[p] = SampleAntipodalGrasps(parts[p], spec.gripper, options);
-      if (spec.suction) {
-        SuctionOptions suction = spec.suction_sampling;
-        suction.seed = Hash(spec.suction_sampling.seed, p);
-        grasps_->suction[p] = SampleSuctionGrasps(parts[p], spec.cup, suction);
+      SuctionOptions suction = spec.suction_sampling;
+      suction.seed = Hash(spec.suction_sampling.seed, p);
+      std::optional<CacheKey> key;
+      if (cache) {
+        key = GraspKey(*cache, parts[p], spec, options, spec.suction ? &suction : nullptr);
+        if (const std::optional<std::string> bytes = cache->Load("grasps", *key)) {
+          try {
+            DecodeGrasps(*bytes, &grasps_->jaw[p], &suction_grasps[p]);
+            return;
+          } catch (const Error&) {  // damaged: sampled again below
+          }
+        }
       }
+      grasps_->jaw[p] = SampleAntipodalGrasps(parts[p], spec.gripper, options);
+      suction_grasps[p].clear();
+      if (spec.suction) suction_grasps[p] = SampleSuctionGrasps(parts[p], spec.cup, suction);
+      if (key) cache->Store("grasps", *key, EncodeGrasps(grasps_->jaw[p], suction_grasps[p]));
     });
+    if (spec.suction) grasps_->suction = std::move(suction_grasps);
     if (spec.suction) {
       for (const Part& part : parts) {
         if (!(part.mass.volume_mm3 > 0))

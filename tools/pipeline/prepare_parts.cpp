@@ -471,8 +471,34 @@ std::vector<SymmetryCheck> GatherParts(const Context& context, PrepareState* sta
   return detect;
 }
 
+// What a part's symmetries on its mesh depend on: the mesh, the options (tolerances, limits, the
+// B-rep's axes of revolution) and a recipe's list with the frame it is given in.
+static std::optional<CacheKey> SymmetryKey(const PartCache* cache, const Part& part,
+                                           const SymmetryOptions& options,
+                                           const PartSource* given) {
+  if (cache == nullptr) return std::nullopt;
+  KeyHasher hasher;
+  cache->Start(&hasher, "symmetry 1");
+  hasher.Geometry(part.mesh);
+  hasher.Value(options.tolerance_mm).Value(options.deviation_mm);
+  hasher.Value(options.max_order).Value(options.max_points);
+  hasher.Value<uint64_t>(options.axis_hints.size());
+  for (const SymmetryOptions::Line& line : options.axis_hints)
+    hasher.Value(line.point).Value(line.direction);
+  hasher.Value<uint8_t>(given != nullptr);
+  if (given != nullptr) {
+    hasher.Value(part.cad_from_model.matrix());
+    hasher.Value<uint64_t>(given->given_symmetries.size());
+    for (const PartSource::GivenSymmetry& g : given->given_symmetries) {
+      hasher.Value(g.axis).Value(g.order).Value<uint8_t>(g.through.has_value());
+      if (g.through) hasher.Value(*g.through);
+    }
+  }
+  return hasher.Key();
+}
+
 // Symmetries of the parts that declare none (imported files), found on their meshes, or as
-// the recipe lists them, measured on the meshes.
+// the recipe lists them, measured on the meshes; both kept in the part cache.
 void FindSymmetries(const Context& context, const std::vector<SymmetryCheck>& detect,
                     std::vector<Part>* parts) {
   std::vector<DetectedSymmetries> found(detect.size());
@@ -487,11 +513,31 @@ void FindSymmetries(const Context& context, const std::vector<SymmetryCheck>& de
     }
     try {
       const SymmetryOptions options = PartSymmetryOptions(part, detect[k].tolerance_mm);
-      if (detect[k].given == nullptr) {
-        found[k] = DetectSymmetries(part.mesh, options);
-      } else {
-        found[k] = MeasureListedSymmetries(part, *detect[k].given, options, &entry_deviation[k]);
+      const std::optional<CacheKey> key =
+          SymmetryKey(context.cache, part, options, detect[k].given);
+      bool cached = false;
+      if (key) {
+        if (const std::optional<std::string> bytes = context.cache->Load("symmetry", *key)) {
+          try {
+            found[k] = DecodeDetectedSymmetries(*bytes, &entry_deviation[k]);
+            cached = true;
+          } catch (const Error&) {  // damaged: measured again below
+            entry_deviation[k].clear();
+          }
+        }
       }
+      if (!cached) {
+        if (detect[k].given == nullptr) {
+          found[k] = DetectSymmetries(part.mesh, options);
+        } else {
+          found[k] = MeasureListedSymmetries(part, *detect[k].given, options, &entry_deviation[k]);
+        }
+        if (key) {
+          context.cache->Store("symmetry", *key,
+                               EncodeDetectedSymmetries(found[k], entry_deviation[k]));
+        }
+      }
+      // On the exact B-rep, which the key does not cover (the mesh and the options do).
       CompareBrepFaces(part, &found[k]);
     } catch (const Error& e) {
       failure[k] = e.what();  // reported below, in order

@@ -1,7 +1,9 @@
 #include "tools/pipeline/generate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -519,6 +521,65 @@ std::pair<size_t, size_t> NpyShape(const std::string& bytes) {
   size_t rows = 0, cols = 0;
   std::sscanf(bytes.c_str() + open + 10, "%zu, %zu", &rows, &cols);
   return {rows, cols};
+}
+
+// Every object's grasps are sampled once: the part cache keeps them (the same grasps as without
+// it), and a warm run reads them (here every entry replaced by one object's, which every object
+// then has).
+TEST(Generate, ObjectGraspsComeFromThePartCache) {
+  ScratchDir dir;
+  RunSpec spec = SmallDefault();
+  spec.scenes = {spec.scenes[2]};  // pegs, faceplate, shaft, bolt
+  spec.grasps.enabled = true;
+  spec.grasps.sampling.samples = 150;
+  spec.grasps.sampling.approaches = 4;
+  spec.grasps.suction = true;
+  spec.grasps.suction_sampling.samples = 600;
+  const auto same = [](const FrameSource& a, const FrameSource& b) {
+    const auto& ja = a.ObjectJawGrasps();
+    const auto& jb = b.ObjectJawGrasps();
+    const auto& sa = a.ObjectSuctionGrasps();
+    const auto& sb = b.ObjectSuctionGrasps();
+    if (ja.size() != jb.size() || sa.size() != sb.size()) return false;
+    for (size_t p = 0; p < ja.size(); ++p) {
+      if (ja[p].size() != jb[p].size() || sa[p].size() != sb[p].size()) return false;
+      for (size_t i = 0; i < ja[p].size(); ++i) {
+        if (ja[p][i].model_from_gripper.matrix() != jb[p][i].model_from_gripper.matrix() ||
+            ja[p][i].quality != jb[p][i].quality || ja[p][i].width_mm != jb[p][i].width_mm ||
+            ja[p][i].contacts[1] != jb[p][i].contacts[1])
+          return false;
+      }
+      for (size_t i = 0; i < sa[p].size(); ++i) {
+        if (sa[p][i].point != sb[p][i].point || sa[p][i].wrench != sb[p][i].wrench) return false;
+      }
+    }
+    return true;
+  };
+  const FrameSource plain(spec);
+  FrameSourceOptions options;
+  options.cache = dir / "cache";
+  const FrameSource cold(spec, options);
+  EXPECT_TRUE(same(plain, cold));
+  std::vector<std::filesystem::path> entries;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache" / "grasps"))
+    if (e.is_regular_file()) entries.push_back(e.path());
+  const size_t objects = plain.ObjectJawGrasps().size();
+  ASSERT_EQ(entries.size(), objects);
+  const FrameSource warm(spec, options);
+  EXPECT_TRUE(same(plain, warm));
+  // Every entry replaced by the first: every object now has the same grasps.
+  std::sort(entries.begin(), entries.end());
+  for (size_t k = 1; k < entries.size(); ++k)
+    std::filesystem::copy_file(entries[0], entries[k],
+                               std::filesystem::copy_options::overwrite_existing);
+  const FrameSource forged(spec, options);
+  std::set<size_t> counts, plain_counts;
+  for (size_t p = 0; p < objects; ++p) {
+    counts.insert(forged.ObjectJawGrasps()[p].size());
+    plain_counts.insert(plain.ObjectJawGrasps()[p].size());
+  }
+  EXPECT_EQ(counts.size(), 1u);
+  EXPECT_GT(plain_counts.size(), 1u);
 }
 
 TEST(Generate, GraspsAreWrittenPerObjectAndPerFrame) {

@@ -1,7 +1,9 @@
 #include "tools/pipeline/prepare.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 
@@ -125,6 +127,10 @@ TEST(Prepare, PartCacheGivesTheSameParts) {
           std::equal(a.mesh.positions.begin(), a.mesh.positions.end(), b.mesh.positions.begin()));
       EXPECT_TRUE(std::equal(a.mesh.normals.begin(), a.mesh.normals.end(), b.mesh.normals.begin()));
       EXPECT_EQ(b.mass.volume_mm3, a.mass.volume_mm3);
+      ASSERT_EQ(b.symmetries.discrete.size(), a.symmetries.discrete.size());
+      for (size_t k = 0; k < a.symmetries.discrete.size(); ++k)
+        EXPECT_EQ(b.symmetries.discrete[k].matrix(), a.symmetries.discrete[k].matrix());
+      EXPECT_EQ(b.symmetries.continuous.size(), a.symmetries.continuous.size());
       ASSERT_EQ(b.hull != nullptr, a.hull != nullptr);
       // The same corners and diameter (CGAL may split a planar facet into other triangles from
       // one call to the next; the poses use the facets' outlines, not their triangles).
@@ -143,6 +149,42 @@ TEST(Prepare, PartCacheGivesTheSameParts) {
     }
     EXPECT_EQ(run->variants_json, plain.variants_json);
   }
+}
+
+// The symmetries of an imported part are detected once: the next run reads them from the part
+// cache (here an entry replaced by other symmetries, which the run then reports as the part's).
+TEST(Prepare, ImportedPartsSymmetriesComeFromThePartCache) {
+  testing::ScratchDir dir;
+  const RunSpec spec = CacheSpec(dir / "open.stl");
+  const PartCache cache(dir / "cache", "test build");
+  const PreparedRun cold = Prepare(spec, {}, &cache);
+  const auto found = std::find_if(cold.parts.begin(), cold.parts.end(),
+                                  [](const Part& p) { return p.name == "open"; });
+  ASSERT_NE(found, cold.parts.end());
+  // Three right-angled faces about a corner: 3-fold about the diagonal (1, 1, 1).
+  ASSERT_EQ(found->symmetries.discrete.size(), 2u);
+  EXPECT_TRUE(found->symmetries.continuous.empty());
+  std::vector<std::filesystem::path> entries;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache" / "symmetry"))
+    if (e.is_regular_file()) entries.push_back(e.path());
+  ASSERT_EQ(entries.size(), 1u);  // the only part whose symmetries are detected
+  const std::string hex = entries[0].stem().string();
+  ASSERT_EQ(hex.size(), 32u);
+  const CacheKey key{std::stoull(hex.substr(0, 16), nullptr, 16),
+                     std::stoull(hex.substr(16), nullptr, 16)};
+  DetectedSymmetries other;
+  other.symmetries.continuous.push_back({Eigen::Vector3d::UnitX(), Eigen::Vector3d(1, 2, 3)});
+  other.continuous_deviation_mm = {0.001};
+  other.axes.push_back({Eigen::Vector3d::UnitX(), 0});
+  other.tolerance_mm = 0.05;
+  cache.Store("symmetry", key, EncodeDetectedSymmetries(other, {}));
+  const PreparedRun warm = Prepare(spec, {}, &cache);
+  const auto read = std::find_if(warm.parts.begin(), warm.parts.end(),
+                                 [](const Part& p) { return p.name == "open"; });
+  ASSERT_NE(read, warm.parts.end());
+  EXPECT_TRUE(read->symmetries.discrete.empty());
+  ASSERT_EQ(read->symmetries.continuous.size(), 1u);
+  EXPECT_EQ(read->symmetries.continuous[0].offset, Eigen::Vector3d(1, 2, 3));
 }
 
 // An entry damaged on disk is computed again, with the same result.

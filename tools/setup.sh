@@ -7,10 +7,11 @@
 #                             sanitizer runtimes (the sanitizer build, tools/sanitize.sh),
 #                             pytest (the Python module's tests), python3-jsonschema and
 #                             python3-yaml (the recipe's JSON Schema checked by an independent
-#                             validator), Node.js and npm, with which it installs the
-#                             kubernetes-models package (pinned by tools/kubernetes/package-lock.json)
-#                             into tools/kubernetes/node_modules: the Kubernetes API schema that
-#                             the manifests are checked against
+#                             validator), Node.js, and the kubernetes-models npm package (pinned
+#                             by tools/kubernetes/package-lock.json, fetched from npm's registry
+#                             by tools/kubernetes/fetch_packages.py into tools/kubernetes/
+#                             node_modules): the Kubernetes API schema the manifests are checked
+#                             against
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 
@@ -27,9 +28,9 @@ packages=(
 case "${1:-}" in
   --tests) packages+=(slurm-wlm munge clang-format clang libclang-rt-14-dev python3-pytest
                      python3-jsonschema python3-yaml)
-           # Debian's nodejs and npm, unless a Node.js with npm is already installed (another
-           # vendor's nodejs package conflicts with Debian's npm).
-           command -v node > /dev/null && command -v npm > /dev/null || packages+=(nodejs npm) ;;
+           # Debian's nodejs, unless a Node.js is already installed (another vendor's). Not
+           # Debian's npm, which brings about 400 packages: fetch_packages.py does its work here.
+           command -v node > /dev/null || packages+=(nodejs) ;;
   "") ;;
   *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
 esac
@@ -44,9 +45,9 @@ install_kubernetes_schema() {
      [ "$folder/node_modules/.package-lock.json" -nt "$folder/package-lock.json" ]; then
     return 0
   fi
-  echo "setup: npm ci in tools/kubernetes (kubernetes-models, the Kubernetes API schema)"
-  (cd "$folder" && npm ci --no-audit --no-fund --loglevel=error) ||
-    echo "setup: warning: npm ci failed; the Kubernetes manifests' schema check will be skipped" >&2
+  echo "setup: fetching tools/kubernetes' npm packages (kubernetes-models, the Kubernetes API schema)"
+  python3 "$folder/fetch_packages.py" ||
+    echo "setup: warning: fetching them failed; the Kubernetes manifests' schema check will be skipped" >&2
 }
 
 missing=()

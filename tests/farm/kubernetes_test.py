@@ -69,7 +69,7 @@ def check_schema(source):
         return 77
     package = os.path.join(source, "tools", "kubernetes", "node_modules", "kubernetes-models")
     if not os.path.isdir(package):
-        print("SKIPPED: " + package + " is missing: run `npm ci --prefix tools/kubernetes` "
+        print("SKIPPED: " + package + " is missing: run `python3 tools/kubernetes/fetch_packages.py` "
               "(tools/setup.sh --tests does)")
         return 77
     objects = manifests(source)

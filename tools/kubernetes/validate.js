@@ -2,7 +2,7 @@
 // kubernetes-models package (its validators are generated from that schema: required fields,
 // types, enumerations such as completionMode, formats such as resource quantities).
 //
-//   npm ci --prefix tools/kubernetes     (tools/setup.sh --tests does it)
+//   python3 tools/kubernetes/fetch_packages.py   (or npm ci there; tools/setup.sh --tests does it)
 //   node tools/kubernetes/validate.js OBJECTS.json
 //
 // OBJECTS.json is a list of {"source": "file.yaml#1", "object": {...}}: the YAML documents as

@@ -266,6 +266,68 @@ DetectedSymmetries DecodeDetectedSymmetries(std::string_view bytes,
   return found;
 }
 
+std::string EncodeGrasps(const std::vector<ParallelJawGrasp>& jaw,
+                         const std::vector<SuctionGrasp>& suction) {
+  ByteWriter out;
+  out.Put<uint64_t>(jaw.size());
+  for (const ParallelJawGrasp& g : jaw) {
+    PutTransform(&out, g.model_from_gripper);
+    out.Put<double>(g.width_mm);
+    out.Put<double>(g.opening_mm);
+    out.Put<double>(g.depth_mm);
+    out.Put<uint8_t>(g.free_when_open);
+    for (int c = 0; c < 2; ++c) {
+      PutVector<3>(&out, g.contacts[c]);
+      PutVector<3>(&out, g.normals[c]);
+    }
+    out.Put<double>(g.quality);
+  }
+  out.Put<uint64_t>(suction.size());
+  for (const SuctionGrasp& g : suction) {
+    PutVector<3>(&out, g.point);
+    PutVector<3>(&out, g.approach);
+    out.Put<double>(g.seal);
+    out.Put<double>(g.wrench);
+    out.Put<double>(g.rim_height_mm);
+  }
+  return std::move(out.bytes());
+}
+
+void DecodeGrasps(std::string_view bytes, std::vector<ParallelJawGrasp>* jaw,
+                  std::vector<SuctionGrasp>* suction) {
+  ByteReader in(bytes);
+  const uint64_t jaws = in.Get<uint64_t>();
+  if (jaws > bytes.size()) throw Error("part cache: damaged grasps");
+  jaw->clear();
+  for (uint64_t i = 0; i < jaws; ++i) {
+    ParallelJawGrasp g;
+    g.model_from_gripper = GetTransform(&in);
+    g.width_mm = in.Get<double>();
+    g.opening_mm = in.Get<double>();
+    g.depth_mm = in.Get<double>();
+    g.free_when_open = in.Get<uint8_t>() != 0;
+    for (int c = 0; c < 2; ++c) {
+      g.contacts[c] = GetVector3(&in);
+      g.normals[c] = GetVector3(&in);
+    }
+    g.quality = in.Get<double>();
+    jaw->push_back(g);
+  }
+  const uint64_t cups = in.Get<uint64_t>();
+  if (cups > bytes.size()) throw Error("part cache: damaged grasps");
+  suction->clear();
+  for (uint64_t i = 0; i < cups; ++i) {
+    SuctionGrasp g;
+    g.point = GetVector3(&in);
+    g.approach = GetVector3(&in);
+    g.seal = in.Get<double>();
+    g.wrench = in.Get<double>();
+    g.rim_height_mm = in.Get<double>();
+    suction->push_back(g);
+  }
+  if (!in.done()) throw Error("part cache: trailing bytes after grasps");
+}
+
 ConvexHull DecodeHull(std::string_view bytes) {
   ByteReader in(bytes);
   if (in.Get<uint32_t>() != kHullTag) throw Error("part cache: not a convex hull");

@@ -21,6 +21,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "cad/core/schema.h"
+#include "cad/grasp.h"
 #include "cad/hull.h"
 #include "cad/mesh.h"
 #include "cad/part.h"
@@ -61,6 +63,14 @@ class KeyHasher {
   }
   // A mesh's geometry: positions, normals, triangles and face ids.
   KeyHasher& Geometry(const Mesh& mesh);
+  // Every field of a described struct (cad/core/schema.h): its name and exact text.
+  template <class Options>
+  KeyHasher& Fields(const Options& options) {
+    Options::Fields(options, [this](const auto& value, const Field& field) {
+      Text(field.Name()).Text(FieldText(value, field));
+    });
+    return *this;
+  }
   CacheKey Key() const;
 
  private:
@@ -126,6 +136,11 @@ class ByteReader {
 // What a part cache can hold, as bytes. Decode* throw Error on damaged bytes.
 std::string EncodeHull(const ConvexHull& hull);
 ConvexHull DecodeHull(std::string_view bytes);
+// An object's sampled grasps (parallel-jaw and suction), in the order sampled.
+std::string EncodeGrasps(const std::vector<ParallelJawGrasp>& jaw,
+                         const std::vector<SuctionGrasp>& suction);
+void DecodeGrasps(std::string_view bytes, std::vector<ParallelJawGrasp>* jaw,
+                  std::vector<SuctionGrasp>* suction);
 // A part's symmetries as detected or measured (DetectSymmetries, MeasureSymmetries, with
 // CompareBrepFaces' results if it ran), and the worst deviation of each entry of a recipe's list.
 std::string EncodeDetectedSymmetries(const DetectedSymmetries& found,

@@ -278,7 +278,7 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   gen->add_option("--shards", a.shards,
                   "with --shard auto: the shard count (a Kubernetes Job's completions); one a "
                   "scheduler sets must equal it; with Slurm, the task ID is then the shard index")
-      ->check(CLI::Range(1, 1000000))
+      ->check(CLI::Range(1, cadsynth::ShardSpec::kMaxCount))
       ->type_name("N");
   gen->add_option("-j,--threads", a.threads,
                   "worker threads (default: all cores); results do not depend on it")

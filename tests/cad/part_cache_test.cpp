@@ -166,6 +166,45 @@ TEST(PartCache, DetectedSymmetriesRoundTripExactly) {
   EXPECT_THROW(DecodeDetectedSymmetries(EncodeDetectedSymmetries(bad, {}), &entries_read), Error);
 }
 
+TEST(PartCache, GraspsRoundTripExactly) {
+  ParallelJawGrasp jaw;
+  jaw.model_from_gripper =
+      Eigen::Translation3d(1, 2, 3) * Eigen::AngleAxisd(0.3, Eigen::Vector3d(0, 0.6, 0.8));
+  jaw.width_mm = 12.5;
+  jaw.opening_mm = 22.5;
+  jaw.depth_mm = 8.8;
+  jaw.free_when_open = true;
+  jaw.contacts[1] = Eigen::Vector3d(4, 5, 6);
+  jaw.normals[0] = Eigen::Vector3d(0, 0, -1);
+  jaw.quality = 0.75;
+  SuctionGrasp cup;
+  cup.point = Eigen::Vector3d(-1, 0.5, 2);
+  cup.seal = 0.9;
+  cup.wrench = 0.4;
+  cup.rim_height_mm = 0.25;
+  std::vector<ParallelJawGrasp> jaws;
+  std::vector<SuctionGrasp> cups;
+  const std::string bytes = EncodeGrasps({jaw, jaw}, {cup});
+  DecodeGrasps(bytes, &jaws, &cups);
+  ASSERT_EQ(jaws.size(), 2u);
+  ASSERT_EQ(cups.size(), 1u);
+  EXPECT_EQ(jaws[1].model_from_gripper.matrix(), jaw.model_from_gripper.matrix());
+  EXPECT_EQ(jaws[1].width_mm, 12.5);
+  EXPECT_EQ(jaws[1].opening_mm, 22.5);
+  EXPECT_EQ(jaws[1].depth_mm, 8.8);
+  EXPECT_TRUE(jaws[1].free_when_open);
+  EXPECT_EQ(jaws[1].contacts[1], jaw.contacts[1]);
+  EXPECT_EQ(jaws[1].normals[0], jaw.normals[0]);
+  EXPECT_EQ(jaws[1].quality, 0.75);
+  EXPECT_EQ(cups[0].point, cup.point);
+  EXPECT_EQ(cups[0].approach, cup.approach);
+  EXPECT_EQ(cups[0].quality(), cup.quality());
+  EXPECT_EQ(cups[0].rim_height_mm, 0.25);
+  for (size_t cut : {size_t{0}, size_t{7}, bytes.size() / 2, bytes.size() - 1})
+    EXPECT_THROW(DecodeGrasps(bytes.substr(0, cut), &jaws, &cups), Error) << cut;
+  EXPECT_THROW(DecodeGrasps(bytes + "x", &jaws, &cups), Error);
+}
+
 // An entry whose bytes changed on disk (a flipped bit, a cut write) is a miss.
 TEST(PartCache, DamagedEntriesAreMisses) {
   testing::ScratchDir dir;

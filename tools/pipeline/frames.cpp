@@ -6,8 +6,6 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
-#include <string_view>
-#include <type_traits>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -195,22 +193,6 @@ RenderedView FrameSource::Render(size_t unit) const {
 
 namespace {
 
-// Every field of an option struct (cad/core/schema.h) into a part cache key.
-struct HashFields {
-  KeyHasher* hasher;
-  template <class T>
-  void operator()(const T& value, const Field&) const {
-    if constexpr (std::is_same_v<T, std::string>) {
-      hasher->Text(value);
-    } else if constexpr (std::is_same_v<T, std::vector<double>>) {
-      hasher->Value<uint64_t>(value.size());
-      for (double x : value) hasher->Value(x);
-    } else {
-      hasher->Value(value);
-    }
-  }
-};
-
 // What a part's grasps depend on: its mesh, its volume and centre of mass (the suction cup's
 // wrench), the gripper, the cup and the samplings' options with the part's own seeds.
 CacheKey GraspKey(const PartCache& cache, const Part& part, const GraspSpec& spec,
@@ -219,88 +201,9 @@ CacheKey GraspKey(const PartCache& cache, const Part& part, const GraspSpec& spe
   cache.Start(&hasher, "grasps 1");
   hasher.Geometry(part.mesh);
   hasher.Value(part.mass.volume_mm3).Value(part.mass.center_of_mass);
-  ParallelJawGripper::Fields(spec.gripper, HashFields{&hasher});
-  AntipodalOptions::Fields(jaw, HashFields{&hasher});
-  hasher.Value<uint8_t>(suction != nullptr);
-  if (suction != nullptr) {
-    SuctionCup::Fields(spec.cup, HashFields{&hasher});
-    SuctionOptions::Fields(*suction, HashFields{&hasher});
-  }
+  hasher.Fields(spec.gripper).Fields(jaw).Value<uint8_t>(suction != nullptr);
+  if (suction != nullptr) hasher.Fields(spec.cup).Fields(*suction);
   return hasher.Key();
-}
-
-void PutVector(ByteWriter* out, const Eigen::Vector3d& v) {
-  for (int k = 0; k < 3; ++k) out->Put<double>(v[k]);
-}
-
-Eigen::Vector3d GetVector(ByteReader* in) {
-  Eigen::Vector3d v;
-  for (int k = 0; k < 3; ++k) v[k] = in->Get<double>();
-  return v;
-}
-
-std::string EncodeGrasps(const std::vector<ParallelJawGrasp>& jaw,
-                         const std::vector<SuctionGrasp>& suction) {
-  ByteWriter out;
-  out.Put<uint64_t>(jaw.size());
-  for (const ParallelJawGrasp& g : jaw) {
-    for (int k = 0; k < 16; ++k) out.Put<double>(g.model_from_gripper.matrix().data()[k]);
-    out.Put<double>(g.width_mm);
-    out.Put<double>(g.opening_mm);
-    out.Put<double>(g.depth_mm);
-    out.Put<uint8_t>(g.free_when_open);
-    for (int c = 0; c < 2; ++c) {
-      PutVector(&out, g.contacts[c]);
-      PutVector(&out, g.normals[c]);
-    }
-    out.Put<double>(g.quality);
-  }
-  out.Put<uint64_t>(suction.size());
-  for (const SuctionGrasp& g : suction) {
-    PutVector(&out, g.point);
-    PutVector(&out, g.approach);
-    out.Put<double>(g.seal);
-    out.Put<double>(g.wrench);
-    out.Put<double>(g.rim_height_mm);
-  }
-  return std::move(out.bytes());
-}
-
-void DecodeGrasps(std::string_view bytes, std::vector<ParallelJawGrasp>* jaw,
-                  std::vector<SuctionGrasp>* suction) {
-  ByteReader in(bytes);
-  const uint64_t jaws = in.Get<uint64_t>();
-  if (jaws > bytes.size()) throw Error("part cache: damaged grasps");
-  jaw->clear();
-  for (uint64_t i = 0; i < jaws; ++i) {
-    ParallelJawGrasp g;
-    Eigen::Matrix4d m;
-    for (int k = 0; k < 16; ++k) m.data()[k] = in.Get<double>();
-    g.model_from_gripper.matrix() = m;
-    g.width_mm = in.Get<double>();
-    g.opening_mm = in.Get<double>();
-    g.depth_mm = in.Get<double>();
-    g.free_when_open = in.Get<uint8_t>() != 0;
-    for (int c = 0; c < 2; ++c) {
-      g.contacts[c] = GetVector(&in);
-      g.normals[c] = GetVector(&in);
-    }
-    g.quality = in.Get<double>();
-    jaw->push_back(g);
-  }
-  const uint64_t cups = in.Get<uint64_t>();
-  if (cups > bytes.size()) throw Error("part cache: damaged grasps");
-  suction->clear();
-  for (uint64_t i = 0; i < cups; ++i) {
-    SuctionGrasp g;
-    g.point = GetVector(&in);
-    g.approach = GetVector(&in);
-    g.seal = in.Get<double>();
-    g.wrench = in.Get<double>();
-    g.rim_height_mm = in.Get<double>();
-    suction->push_back(g);
-  }
-  if (!in.done()) throw Error("part cache: trailing bytes after grasps");
 }
 
 }  // namespace

@@ -35,9 +35,7 @@ constexpr size_t kLargeMeshVertices = 1000000;
 
 // The options an import or variant depends on, into a cache key.
 void HashOptions(KeyHasher* hasher, const ImportOptions& options) {
-  TessellationOptions::Fields(options.tessellation, [&](const auto& value, const Field& field) {
-    hasher->Text(field.Name()).Text(FieldText(value, field));
-  });
+  hasher->Fields(options.tessellation);
   hasher->Text(options.unit).Text(options.encoding).Value(options.crease_angle_rad);
 }
 

@@ -155,8 +155,9 @@ ShardSpec ParseShard(const std::string& text) {
       !number(text.substr(slash + 1), &count)) {
     throw Error("--shard takes I/N (shard I of N, counting from 0), got '" + text + "'");
   }
-  if (count < 1 || count > 1000000 || index < 0 || index >= count) {
-    throw Error("--shard " + text + ": I must be at least 0 and less than N (N from 1 to 1000000)");
+  if (count < 1 || count > ShardSpec::kMaxCount || index < 0 || index >= count) {
+    throw Error("--shard " + text + ": I must be at least 0 and less than N (N from 1 to " +
+                std::to_string(ShardSpec::kMaxCount) + ")");
   }
   return {static_cast<int>(index), static_cast<int>(count)};
 }
@@ -190,8 +191,9 @@ std::string Assignment(const char* name, long value) {
 
 // Index `index` of `count` from `source`, checked.
 SchedulerReading Reading(long index, long count, std::string source) {
-  if (count < 1 || count > 1000000) {
-    throw Error("--shard auto: " + source + ": the shard count must be from 1 to 1000000");
+  if (count < 1 || count > ShardSpec::kMaxCount) {
+    throw Error("--shard auto: " + source + ": the shard count must be from 1 to " +
+                std::to_string(ShardSpec::kMaxCount));
   }
   if (index < 0 || index >= count) {
     throw Error("--shard auto: " + source + ": the index must be at least 0 and less than " +
@@ -261,10 +263,9 @@ SchedulerReading FromIndexAndCount(const std::function<const char*(const char*)>
 }  // namespace
 
 SchedulerShard ShardFromScheduler(const std::function<const char*(const char*)>& env, int shards) {
-  if (shards < 0 || shards > 1000000) {
-    throw Error("--shards " + std::to_string(shards) +
-                ": the shard count must be from 1 to "
-                "1000000");
+  if (shards < 0 || shards > ShardSpec::kMaxCount) {
+    throw Error("--shards " + std::to_string(shards) + ": the shard count must be from 1 to " +
+                std::to_string(ShardSpec::kMaxCount));
   }
   const SchedulerReading readings[] = {
       FromSlurm(env, shards),

@@ -27,6 +27,7 @@
 namespace cadsynth {
 
 struct ShardSpec {
+  static constexpr int kMaxCount = 1000000;  // the most shards a run is cut into
   int index = 0;
   int count = 1;
   bool Owns(size_t unit) const {

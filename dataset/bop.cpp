@@ -63,6 +63,11 @@ bool BopOptions::Check(std::string* why) const {
     *why = "model_points must be 0 to 10,000,000";
     return false;
   }
+  if (archive_samples < 1 || archive_samples > 1000000 || archive_megabytes < 1 ||
+      archive_megabytes > 1048576) {
+    *why = "archive_samples must be 1 to 1,000,000 and archive_megabytes 1 to 1,048,576";
+    return false;
+  }
   if (test_every < 0 || !(test_fraction >= 0 && test_fraction <= 1) ||
       !(target_min_visib_fract >= 0 && target_min_visib_fract <= 1)) {
     *why = "test_every must not be negative; test_fraction and target_min_visib_fract lie in 0..1";

@@ -95,6 +95,11 @@ struct BopOptions {
   bool paper_layout = false;
   bool pvn3d_meta = false;
   bool grasp_points = false;
+  // Webdataset archive shards (formats: webdataset; dataset/webdataset.h): a new archive starts
+  // before one would hold more than archive_samples samples or archive_megabytes MiB.
+  bool webdataset = false;
+  int archive_samples = 1000;
+  int archive_megabytes = 1024;
   bool even_points = false;
   uint64_t point_seed = 0;
 
@@ -144,6 +149,17 @@ struct BopOptions {
         o.grasp_points,
         Field{
             "", "bool", "grasp-detector point arrays (formats: grasp)", {}, true, "grasp_points"});
+    visit(
+        o.webdataset,
+        Field{
+            "", "bool", "webdataset archive shards (formats: webdataset)", {}, true, "webdataset"});
+    visit(o.archive_samples,
+          Field{"archive_samples", "integer",
+                "with formats: webdataset, the most samples (views) per archive (1-1,000,000)"});
+    visit(o.archive_megabytes,
+          Field{"archive_megabytes", "integer",
+                "with formats: webdataset, the most MiB per archive (1-1,048,576; a larger view "
+                "gets an archive of its own)"});
     visit(
         o.jpeg_quality,
         Field{

@@ -15,6 +15,9 @@ const std::vector<OutputFormat>& OutputFormats() {
       {"paper", &BopOptions::paper_layout, nullptr, true, MakePaperLayoutWriter},
       {"pvn3d", &BopOptions::pvn3d_meta, "paper", true, MakePvn3dWriter},
       {"grasp", &BopOptions::grasp_points, nullptr, false, MakeGraspPointsWriter},
+      // packed from every format's files once a run or shard has rendered its frames
+      // (dataset/webdataset.h; the generate pipeline calls it)
+      {"webdataset", &BopOptions::webdataset},
   };
   return formats;
 }

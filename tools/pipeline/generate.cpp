@@ -21,6 +21,7 @@
 #include "dataset/file_io.h"
 #include "dataset/grasp_labels.h"
 #include "dataset/output_formats.h"
+#include "dataset/webdataset.h"
 #include "render/randomize.h"
 #include "render/renderer.h"
 #include "tools/pipeline/journal.h"
@@ -378,6 +379,39 @@ void RenderScene(const Run& run, size_t s, RigSceneWriter& writer, const SceneFo
   for (int id : writer.WrittenFrames()) counts->frames += run.Owns(s, static_cast<size_t>(id));
 }
 
+// The written frames this run (or shard) owns, as webdataset samples, in scene and image order.
+std::vector<ArchiveSample> OwnedSamples(
+    const Run& run, const std::vector<std::unique_ptr<RigSceneWriter>>& writers) {
+  std::vector<ArchiveSample> samples;
+  const int views = static_cast<int>(run.views.size());
+  for (size_t s = 0; s < writers.size(); ++s) {
+    for (int id : writers[s]->WrittenFrames()) {
+      if (id < 0 || id >= views || !run.Owns(s, static_cast<size_t>(id))) continue;
+      // The split is known while rendering only when no view is skipped (as Run.frames()).
+      std::string split;
+      if (run.spec.min_visible_pixels <= 0)
+        split = run.spec.bop.IsTest(id, views) ? "test" : "train";
+      samples.push_back({static_cast<int>(s), id, split});
+    }
+  }
+  return samples;
+}
+
+// formats: webdataset. The frames this attempt owns, packed into its archives; a farm task then
+// drops its loose copies (merge restores them from the archives).
+void PackArchives(const Run& run, const std::filesystem::path& root,
+                  const std::vector<std::unique_ptr<RigSceneWriter>>& writers) {
+  const std::vector<ArchiveSample> samples = OwnedSamples(run, writers);
+  const int shard = run.shard ? run.shard->index : 0;
+  const int shards = run.shard ? run.shard->count : 1;
+  const ArchiveManifest manifest =
+      WriteArchives(root, run.spec.bop, run.bop_sensors, samples, shard, shards);
+  run.Info("webdataset: " + std::to_string(manifest.samples) + " samples in " +
+           std::to_string(manifest.archives.size()) + " archives (" +
+           ManifestPath(root, shard).filename().string() + ")");
+  if (run.shard) RemoveArchivedFrames(root, run.spec.bop, run.bop_sensors, samples);
+}
+
 // A shard records that it finished (for merge); a single run moves its dataset into place.
 void Finish(const Run& run, const Output& out, const std::filesystem::path& output,
             const std::vector<std::filesystem::path>& inputs,
@@ -439,6 +473,10 @@ GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& o
 
     // Every scene's writers first: frames of an interrupted attempt count when every file still
     // matches their manifest entry; the others are rendered (again).
+    // A farm task run again after its archives were complete: their frames back first, so
+    // that they count as written (the archives are written again, to the same bytes).
+    if (run.shard && spec.bop.webdataset)
+      RestoreArchivedFrames(out.root, spec.bop, run.shard->index);
     SceneFormats formats;
     formats.grasps.resize(prepared.scenes.size());
     for (size_t s = 0; s < prepared.scenes.size(); ++s) {
@@ -452,6 +490,7 @@ GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& o
     // Render scene by scene.
     for (size_t s = 0; s < prepared.scenes.size(); ++s)
       RenderScene(run, s, *writers[s], formats, to_render, &counts);
+    if (spec.bop.webdataset) PackArchives(run, out.root, writers);
     if (!run.shard) FinishDataset(out.root, spec.bop, writers, prepared.classes);
   } catch (const Error& e) {
     throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + out.root.string() +

@@ -22,6 +22,7 @@
 
 #include "cad/core/error.h"
 #include "dataset/file_io.h"
+#include "dataset/webdataset.h"
 #include "tools/pipeline/journal.h"
 
 namespace cadsynth {
@@ -613,6 +614,12 @@ MergeSummary Merge(const fs::path& dir_in,
   } unmark{merging};
   MergeTree tree{.dir = dir, .meta = meta, .run = run, .n = n};
   FindRunningShards(&tree);
+  // formats: webdataset: the tasks kept their frames only in their archives; back into the
+  // tree first (checked against the manifests), unless a shard still runs (refused below).
+  if (std::none_of(tree.running.begin(), tree.running.end(), [](bool r) { return r; })) {
+    const size_t restored = RestoreArchivedFrames(dir, run.bop);
+    if (restored > 0) info("restored " + std::to_string(restored) + " frames from webdataset/");
+  }
   OpenSceneWriters(&tree);
   CountWrittenFrames(&tree);
   ReadDoneMarkers(&tree);

@@ -120,12 +120,13 @@ std::string EncodeImagePng(const void* pixels, int width, int height, int channe
   return EncodePng(bgr, "image");
 }
 
-DecodedImage ReadImageFile(const std::filesystem::path& path) {
-  const cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  if (image.empty()) throw Error(path.string() + ": not an image OpenCV can read");
+namespace {
+
+DecodedImage ToDecoded(const cv::Mat& image, const std::string& origin) {
+  if (image.empty()) throw Error(origin + ": not an image OpenCV can read");
   const int depth = image.depth();
   if ((depth != CV_8U && depth != CV_16U) || (image.channels() != 1 && image.channels() != 3))
-    throw Error(path.string() + ": not an 8- or 16-bit grey or colour image");
+    throw Error(origin + ": not an 8- or 16-bit grey or colour image");
   cv::Mat rgb = image;
   if (image.channels() == 3) cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
   DecodedImage out;
@@ -138,6 +139,17 @@ DecodedImage ReadImageFile(const std::filesystem::path& path) {
   for (int v = 0; v < rgb.rows; ++v)
     std::memcpy(out.bytes.data() + row * static_cast<size_t>(v), rgb.ptr(v), row);
   return out;
+}
+
+}  // namespace
+
+DecodedImage ReadImageFile(const std::filesystem::path& path) {
+  return ToDecoded(cv::imread(path.string(), cv::IMREAD_UNCHANGED), path.string());
+}
+
+DecodedImage DecodeImage(std::string_view bytes, const std::string& origin) {
+  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
+  return ToDecoded(cv::imdecode(buffer, cv::IMREAD_UNCHANGED), origin);
 }
 
 uint16_t EncodeDepth(float depth_mm, double depth_scale) {

@@ -310,6 +310,8 @@ struct DecodedImage {
   std::vector<uint8_t> bytes;
 };
 DecodedImage ReadImageFile(const std::filesystem::path& path);
+// The same from an image file's bytes (a webdataset member); `origin` names it in errors.
+DecodedImage DecodeImage(std::string_view bytes, const std::string& origin);
 
 // Writes the images of one scene as frames arrive (from any thread) and its JSON files at the end.
 class BopSceneWriter {

@@ -86,18 +86,31 @@ void BindHelpers(py::module_& m) {
       },
       "depth_mm"_a, "depth_scale"_a = 1.0,
       "Depth in mm as BOP's uint16 image holds it (value * depth_scale = mm; 0: none).");
+  const auto to_array = [](DecodedImage image) -> py::array {
+    std::vector<py::ssize_t> shape = {image.height, image.width};
+    if (image.channels == 3) shape.push_back(3);
+    if (image.bits == 8) return Own(std::move(image.bytes), shape);
+    std::vector<uint16_t> values(image.bytes.size() / 2);
+    std::memcpy(values.data(), image.bytes.data(), image.bytes.size());
+    return Own(std::move(values), shape);
+  };
   m.def(
       "read_image",
-      [](const std::filesystem::path& path) -> py::array {
-        DecodedImage image = ReadImageFile(path);
-        std::vector<py::ssize_t> shape = {image.height, image.width};
-        if (image.channels == 3) shape.push_back(3);
-        if (image.bits == 8) return Own(std::move(image.bytes), shape);
-        std::vector<uint16_t> values(image.bytes.size() / 2);
-        std::memcpy(values.data(), image.bytes.data(), image.bytes.size());
-        return Own(std::move(values), shape);
-      },
+      [to_array](const std::filesystem::path& path) { return to_array(ReadImageFile(path)); },
       "path"_a, "Reads a PNG or JPEG image (RGB order for colour; uint8 or uint16).");
+  m.def(
+      "decode_image",
+      [to_array](const py::bytes& data) {
+        const std::string_view bytes = data;
+        DecodedImage image;
+        {
+          py::gil_scoped_release release;
+          image = DecodeImage(bytes, "decode_image");
+        }
+        return to_array(std::move(image));
+      },
+      "data"_a,
+      "Decodes a PNG or JPEG file's bytes, as read_image (a webdataset member, for example).");
   m.def(
       "evaluate",
       [](const std::filesystem::path& dataset, const std::filesystem::path& results,

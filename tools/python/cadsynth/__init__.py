@@ -8,7 +8,9 @@
 Recipe reads and checks a recipe (a bad one raises cadsynth.Error "FILE:LINE:COLUMN: what");
 Recipe.prepare() builds the parts and scenes; Run.frames() renders the frames in the background,
 in order, the same frames `cadsynth generate` writes; Run.write() writes them as it does.
-cadsynth.torch.FrameDataset feeds a torch DataLoader (imported on use: torch is optional).
+cadsynth.torch.FrameDataset feeds a torch DataLoader (imported on use: torch is optional);
+cadsynth.webdataset reads the archives of output format `webdataset`, and
+cadsynth.torch.ArchiveDataset feeds them to a DataLoader.
 """
 
 from ._cadsynth import (  # noqa: F401
@@ -17,6 +19,7 @@ from ._cadsynth import (  # noqa: F401
     Recipe,
     Run,
     __version__,
+    decode_image,
     default_cache,
     encode_depth,
     encode_png,
@@ -29,6 +32,7 @@ __all__ = [
     "FrameIterator",
     "Recipe",
     "Run",
+    "decode_image",
     "default_cache",
     "encode_depth",
     "encode_png",

@@ -30,7 +30,7 @@ from ._cadsynth import Recipe
 if TYPE_CHECKING:
     from ._cadsynth import Run
 
-__all__ = ["FrameDataset", "collate"]
+__all__ = ["ArchiveDataset", "FrameDataset", "collate"]
 
 # The keys whose arrays have a row per instance or per grasp (N, M and S in class Frame of
 # _cadsynth.pyi; a test holds the two together): their length varies from frame to frame, so
@@ -103,6 +103,64 @@ class FrameDataset(IterableDataset):
                 yield self.transform(frame) if self.transform else frame
         finally:
             frames.close()
+
+
+class ArchiveDataset(IterableDataset):
+    """The frames of webdataset archives (output format `webdataset`), decoded as Run.frames()
+    yields them (cadsynth.webdataset.decode), for a DataLoader.
+
+    source: a dataset folder (its webdataset/ manifests list the archives; tasks that have not
+        finished yet are left out, complete=True refuses them) or a list of archive paths.
+    Archives are dealt out whole: archive a goes to consumer a % consumers, where the consumers
+    are every DataLoader worker of every process of torch.distributed (rank r, worker w: consumer
+    r * workers + w); each reads its archives as streams, in order, so together they yield every
+    frame once. shuffle: each epoch, a seeded permutation of the archives (seed + epoch; call
+    set_epoch) before they are dealt out.
+    masks, transform: as FrameDataset.
+    """
+
+    def __init__(self, source: str | os.PathLike[str] | Sequence[str | os.PathLike[str]], *,
+                 complete: bool = False, masks: bool = True, shuffle: bool = False,
+                 seed: int = 0,
+                 transform: Callable[[dict[str, Any]], Any] | None = None) -> None:
+        super().__init__()
+        from . import webdataset
+        if isinstance(source, (str, os.PathLike)):
+            self.archives = [os.fspath(p) for p in webdataset.archives(source, complete)]
+        else:
+            self.archives = [os.fspath(p) for p in source]
+        self.masks = bool(masks)
+        self.shuffle = bool(shuffle)
+        self.seed = int(seed)
+        self.epoch = 0
+        self.transform = transform
+
+    def set_epoch(self, epoch: int) -> None:
+        self.epoch = int(epoch)
+
+    def _consumer(self) -> tuple[int, int]:
+        info = get_worker_info()
+        worker, workers = (info.id, info.num_workers) if info is not None else (0, 1)
+        rank, ranks = 0, 1
+        if torch.distributed.is_available() and torch.distributed.is_initialized():
+            rank, ranks = torch.distributed.get_rank(), torch.distributed.get_world_size()
+        return rank * workers + worker, ranks * workers
+
+    def mine(self) -> list[str]:
+        """The archives this process and worker reads, in order."""
+        order = list(self.archives)
+        if self.shuffle:
+            rng = np.random.default_rng(self.seed + self.epoch)
+            order = [order[i] for i in rng.permutation(len(order))]
+        consumer, consumers = self._consumer()
+        return order[consumer::consumers]
+
+    def __iter__(self) -> Iterator[Any]:
+        from . import webdataset
+        for path in self.mine():
+            for key, members in webdataset.samples(path):
+                frame = _torch_types(webdataset.decode(key, members, self.masks))
+                yield self.transform(frame) if self.transform else frame
 
 
 def _torch_types(frame: dict[str, Any]) -> dict[str, Any]:

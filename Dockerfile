@@ -1,19 +1,35 @@
-# cadsynth in a container (docs/install.md, "Docker and Apptainer"): Debian 12, the project's own setup
-# script, a Release build installed to /usr/local (the executable, the Python module, the shipped
-# recipes in /usr/local/share/cadsynth/recipes).
+# cadsynth's container image (README, "Containers"): Debian 12, two stages.
+#   build:   the project's setup script (tools/setup.sh --image: compilers and -dev packages,
+#            no PyTorch), a Release build installed to /usr/local, and the list of the Debian
+#            packages whose shared libraries the executable and the Python module load
+#   runtime: Debian 12 with only those packages, python3 and numpy; /usr/local from the build
+#            stage; no compilers; runs as the user cadsynth (uid 1000), writing under /out only
+#            (the part cache too: CADSYNTH_CACHE=/out/.cadsynth_cache)
+# tools/container.sh builds it without a registry or a daemon (a Debian 12 base from debootstrap,
+# buildah bud) and checks it. With Docker or Podman and a registry:
 #   docker build -t cadsynth .
-#   docker run --rm -v "$PWD/out:/out" cadsynth generate -o /out/default
-#   apptainer build cadsynth.sif docker-daemon://cadsynth:latest
-FROM debian:12
+#   docker run --rm --read-only -v "$PWD/out:/out" cadsynth generate -o /out/default
+ARG BASE=debian:12
+FROM ${BASE} AS build
 COPY . /src/cadsynth
-RUN /src/cadsynth/tools/setup.sh \
+RUN /src/cadsynth/tools/setup.sh --image \
  && cmake -S /src/cadsynth -B /src/build -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DCADSYNTH_BUILD_TESTS=OFF -DCADSYNTH_BUILD_BENCHMARKS=OFF \
  && cmake --build /src/build \
- && cmake --install /src/build --prefix /usr/local \
- && rm -rf /src/build /var/lib/apt/lists/*
-# The part cache is ~/.cache/cadsynth (/root/.cache/cadsynth here; under Apptainer, the user's
-# own): mount a volume there to keep it between runs.
-WORKDIR /work
+ && cmake --install /src/build --prefix /usr/local --strip \
+ && /src/cadsynth/tools/container/runtime_packages.sh /usr/local > /src/runtime-packages.txt
+
+FROM ${BASE}
+COPY --from=build /src/runtime-packages.txt /tmp/runtime-packages.txt
+RUN apt-get update -q \
+ && DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
+      python3 python3-numpy $(cat /tmp/runtime-packages.txt) \
+ && rm -rf /var/lib/apt/lists/* /var/cache/apt/archives/*.deb /tmp/runtime-packages.txt \
+ && useradd --create-home --uid 1000 cadsynth \
+ && mkdir /out && chown cadsynth:cadsynth /out
+COPY --from=build /usr/local /usr/local
+ENV CADSYNTH_CACHE=/out/.cadsynth_cache
+USER cadsynth
+WORKDIR /out
 ENTRYPOINT ["cadsynth"]
 CMD ["--help"]

@@ -12,6 +12,9 @@
 #                             by tools/kubernetes/fetch_packages.py into tools/kubernetes/
 #                             node_modules): the Kubernetes API schema the manifests are checked
 #                             against
+#   tools/setup.sh --image    the container image's build stage (Dockerfile): what building
+#                             needs, without PyTorch (the image leaves it out: 1.5 GB for the
+#                             optional cadsynth.torch)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 
@@ -31,8 +34,9 @@ case "${1:-}" in
            # Debian's nodejs, unless a Node.js is already installed (another vendor's). Not
            # Debian's npm, which brings about 400 packages: fetch_packages.py does its work here.
            command -v node > /dev/null || packages+=(nodejs) ;;
+  --image) packages=("${packages[@]/python3-torch}") ;;
   "") ;;
-  *) echo "usage: $0 [--tests]" >&2; exit 2 ;;
+  *) echo "usage: $0 [--tests | --image]" >&2; exit 2 ;;
 esac
 
 # The Kubernetes API schema for the manifests' check (tests/farm/kubernetes_test.py), from npm's
@@ -52,6 +56,7 @@ install_kubernetes_schema() {
 
 missing=()
 for p in "${packages[@]}"; do
+  [ -n "$p" ] || continue
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -eq 0 ]; then

@@ -6,6 +6,8 @@
 #include <set>
 #include <system_error>
 
+#include <tbb/parallel_for.h>
+
 #include "cad/core/error.h"
 #include "dataset/bop_fragment.h"
 #include "dataset/bop_internal.h"
@@ -114,12 +116,18 @@ std::vector<Member> SampleMembers(const std::filesystem::path& root, const BopOp
         FileMemberNames(fragment, options, sample.scene_id, sample.image_id, &taken);
     for (size_t i = 0; i < fragment.files.size(); ++i) {
       const FileRecord& record = fragment.files[i];
-      const std::string problem = CheckFile(root, record);
-      if (!problem.empty())
-        throw Error((root / record.path).string() + ": " + problem + " (cannot archive image " +
-                    std::to_string(sample.image_id) + " of scene " +
+      std::string bytes;
+      try {
+        bytes = ReadFileText(root / record.path);
+      } catch (const Error&) {
+        bytes.clear();
+      }
+      if (bytes.size() != record.size || Crc32(bytes) != record.crc32)
+        throw Error((root / record.path).string() +
+                    ": missing, or its size or CRC-32 differs from the frame's manifest (cannot " +
+                    "archive image " + std::to_string(sample.image_id) + " of scene " +
                     std::to_string(sample.scene_id) + ")");
-      members.push_back({key + "." + names[i], ReadFileText(root / record.path)});
+      members.push_back({key + "." + names[i], std::move(bytes)});
     }
   }
   if (!sample.split.empty()) members.push_back({key + ".split.txt", sample.split});
@@ -174,24 +182,35 @@ ArchiveManifest WriteArchives(const std::filesystem::path& root, const BopOption
     manifest.archives.push_back(record);
     tar.reset();
   };
-  for (const ArchiveSample& sample : samples) {
-    const std::vector<Member> members = SampleMembers(root, options, sensors, sample);
-    uint64_t sample_bytes = 0;
-    for (const Member& m : members) sample_bytes += TarWriter::MemberBytes(m.bytes.size());
-    if (tar && (record.samples >= static_cast<size_t>(options.archive_samples) ||
-                tar->bytes() + sample_bytes + TarWriter::kEndBytes > max_bytes)) {
-      close();
+  // Samples' members read (and checked) in parallel, a batch at a time; written in order.
+  constexpr size_t kBatch = 32;
+  std::vector<std::vector<Member>> batch;
+  for (size_t first = 0; first < samples.size(); first += kBatch) {
+    const size_t count = std::min(kBatch, samples.size() - first);
+    batch.assign(count, {});
+    tbb::parallel_for(size_t{0}, count, [&](size_t k) {
+      batch[k] = SampleMembers(root, options, sensors, samples[first + k]);
+    });
+    for (size_t k = 0; k < count; ++k) {
+      const ArchiveSample& sample = samples[first + k];
+      const std::vector<Member>& members = batch[k];
+      uint64_t sample_bytes = 0;
+      for (const Member& m : members) sample_bytes += TarWriter::MemberBytes(m.bytes.size());
+      if (tar && (record.samples >= static_cast<size_t>(options.archive_samples) ||
+                  tar->bytes() + sample_bytes + TarWriter::kEndBytes > max_bytes)) {
+        close();
+      }
+      if (!tar) {
+        record = ArchiveRecord{};
+        record.file = ArchiveName(shard, manifest.archives.size());
+        record.first_key = SampleKey(sample.scene_id, sample.image_id);
+        tar = std::make_unique<TarWriter>(folder / record.file);
+      }
+      for (const Member& m : members) tar->Add(m.name, m.bytes);
+      ++record.samples;
+      ++manifest.samples;
+      record.last_key = SampleKey(sample.scene_id, sample.image_id);
     }
-    if (!tar) {
-      record = ArchiveRecord{};
-      record.file = ArchiveName(shard, manifest.archives.size());
-      record.first_key = SampleKey(sample.scene_id, sample.image_id);
-      tar = std::make_unique<TarWriter>(folder / record.file);
-    }
-    for (const Member& m : members) tar->Add(m.name, m.bytes);
-    ++record.samples;
-    ++manifest.samples;
-    record.last_key = SampleKey(sample.scene_id, sample.image_id);
   }
   close();
   WriteFileAtomic(ManifestPath(root, shard), ManifestJson(manifest).dump(1) + "\n");

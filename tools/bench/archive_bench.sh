@@ -10,6 +10,7 @@
 # 4. 1,000 small shards (3 scenes x 360 views at 64 x 48) with and without archives: the array's
 #    wall time and `cadsynth merge`, seconds.
 set -euo pipefail
+# Keep the build still while this runs: shards of another executable are refused (run key).
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 parallel=${1:-2}
 cd "$root"
@@ -19,8 +20,13 @@ trap 'rm -rf "$work"' EXIT
 export CADSYNTH_CACHE=$work/cache
 printf 'output: {formats: [bop, webdataset]}\n' > "$work/default_wds.yaml"
 printf 'output: {formats: [bop]}\n' > "$work/default.yaml"
-seconds() { local s; s=$(date +%s.%N); "$@" > /dev/null 2>&1; echo "$(date +%s.%N) - $s" | bc; }
-"$exe" generate "$work/default.yaml" -o "$work/warm" --quiet  # fills the part cache
+seconds() {  # COMMAND...: its wall time in seconds; exits naming it when it fails
+  local s
+  s=$(date +%s.%N)
+  "$@" > "$work/last.log" 2>&1 || { echo "FAILED: $* ($(tail -3 "$work/last.log"))" >&2; exit 1; }
+  echo "$(date +%s.%N) - $s" | bc
+}
+"$exe" generate "$work/default.yaml" -o "$work/warm" --quiet > /dev/null  # fills the part cache
 echo "default job, one process, bop only: $(seconds "$exe" generate "$work/default.yaml" -o "$work/one" --quiet) s"
 echo "default job, one process, bop + webdataset: $(seconds "$exe" generate "$work/default_wds.yaml" -o "$work/one_wds" --quiet) s"
 shards() {  # RECIPE COUNT DIR

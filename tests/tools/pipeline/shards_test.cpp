@@ -24,6 +24,7 @@ namespace cadsynth {
 namespace {
 
 using testing::ExpectSameTree;
+using testing::RunJob;
 using testing::ScratchDir;
 
 // The default job (three scenes) at 160x120, four views each (12 units), every output format.
@@ -32,14 +33,6 @@ RunSpec SmallFarmSpec() {
   spec.bop.paper_layout = spec.bop.pvn3d_meta = spec.bop.grasp_points = true;
   spec.bop.model_points = 200;
   return spec;
-}
-
-GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out,
-                       std::optional<ShardSpec> shard = {}) {
-  GenerateOptions options;
-  options.output = out;
-  options.shard = shard;
-  return Generate(spec, options);
 }
 
 std::string MergeError(const std::filesystem::path& dir) {

@@ -3,9 +3,12 @@
 // 700 mm: a few seconds for the whole pipeline, every module exercised.
 #pragma once
 
+#include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "recipes/recipe.h"
+#include "tools/pipeline/generate.h"
 
 namespace cadsynth::testing {
 
@@ -16,6 +19,15 @@ inline RunSpec SmallJob(std::vector<double> yaws_rad = {0.0, 2.0}) {
   spec.sweep.pitch_rad = {0.6};
   spec.sweep.radius_mm = {700.0};
   return spec;
+}
+
+// Runs `spec` into `out` (as shard `shard` of a farm run when given), as `cadsynth generate` does.
+inline GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out,
+                              std::optional<ShardSpec> shard = {}) {
+  GenerateOptions options;
+  options.output = out;
+  options.shard = shard;
+  return Generate(spec, options);
 }
 
 }  // namespace cadsynth::testing

@@ -24,6 +24,7 @@ namespace {
 using testing::ExpectSameTree;
 using testing::ReadFile;
 using testing::ReadTree;
+using testing::RunJob;
 using testing::ScratchDir;
 
 // The default job (three scenes) at 160x120, four views each (12 units), every output format,
@@ -35,14 +36,6 @@ RunSpec ArchiveSpec() {
   spec.bop.webdataset = true;
   spec.bop.archive_samples = 3;
   return spec;
-}
-
-GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out,
-                       std::optional<ShardSpec> shard = {}) {
-  GenerateOptions options;
-  options.output = out;
-  options.shard = shard;
-  return Generate(spec, options);
 }
 
 // Archive name -> bytes, of ROOT/webdataset.

@@ -90,8 +90,8 @@ check_image() {
   run() { buildah run --isolation chroot -v "$out:/out" "$ctr" -- "$@"; }
 
   [ "$(run id -un)" = cadsynth ] || fail "the image does not run as user cadsynth"
-  if run sh -c 'command -v gcc cc c++ g++ clang ld cpp' | grep -q .; then
-    fail "the image holds a compiler: $(run sh -c 'command -v gcc cc c++ g++ clang ld cpp')"
+  if run sh -c 'command -v gcc cc c++ g++ clang ld cpp || true' | grep -q .; then
+    fail "the image holds a compiler: $(run sh -c 'command -v gcc cc c++ g++ clang ld cpp || true')"
   fi
   marker=$work/marker
   touch "$marker"

@@ -14,7 +14,8 @@ SCENEID_IMID) decodes to the keys of class Frame (_cadsynth.pyi) that its files 
   ir, instance (from the visible masks: exact with output.visibility exact, the default),
   randomization, graspnet / suctionnet and their labels, sensor and sensors (a rig);
 - depth and depth_gt as the PNG holds them: encode_depth(depth, depth_scale) * depth_scale, that
-  is, rounded to depth_scale (0.1 mm by default);
+  is, rounded to depth_scale (0.1 mm by default); rgb as its file holds it (lossy with
+  output.rgb: jpg);
 - normals (8-bit PNG) and radiance (EXR) are not decoded (their files are in the archive).
 
 Only the standard library's tarfile, numpy and the module's PNG decoder are used.

@@ -107,7 +107,8 @@ std::vector<Member> SampleMembers(const std::filesystem::path& root, const BopOp
         FragmentPath(root, options, sample.scene_id, sample.image_id, x);
     std::string text = ReadFileText(fragment_path);
     const Fragment fragment = bop_internal::ParseFragmentText(text, fragment_path.string());
-    for (const std::string name : {"cadsynth", "camera", "gt", "gt_info"}) taken.insert(name + x);
+    for (const std::string name : {"cadsynth", "camera", "gt", "gt_info"})
+      taken.insert(name + x + ".json");
     members.push_back({key + ".cadsynth" + x + ".json", std::move(text)});
     members.push_back({key + ".camera" + x + ".json", fragment.camera.dump()});
     members.push_back({key + ".gt" + x + ".json", fragment.gt.dump()});
@@ -309,7 +310,8 @@ size_t RestoreSample(const std::filesystem::path& root, const BopOptions& option
       throw Error(archive + ": member '" + key + "." + member.name + "' names no sensor");
     const std::string origin = archive + ":" + key + "." + member.name;
     const Fragment fragment = bop_internal::ParseFragmentText(member.bytes, origin);
-    for (const std::string n : {"cadsynth", "camera", "gt", "gt_info"}) taken.insert(n + *x);
+    for (const std::string n : {"cadsynth", "camera", "gt", "gt_info"})
+      taken.insert(n + *x + ".json");
     const std::vector<std::string> names =
         FileMemberNames(fragment, options, *scene, *image, &taken);
     const std::filesystem::path fragment_path = FragmentPath(root, options, *scene, *image, *x);

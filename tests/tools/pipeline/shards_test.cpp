@@ -26,14 +26,7 @@ namespace {
 using testing::ExpectSameTree;
 using testing::RunJob;
 using testing::ScratchDir;
-
-// The default job (three scenes) at 160x120, four views each (12 units), every output format.
-RunSpec SmallFarmSpec() {
-  RunSpec spec = testing::SmallJob({0.0, 1.5, 3.0, 4.5});
-  spec.bop.paper_layout = spec.bop.pvn3d_meta = spec.bop.grasp_points = true;
-  spec.bop.model_points = 200;
-  return spec;
-}
+using testing::SmallFarmJob;
 
 std::string MergeError(const std::filesystem::path& dir) {
   try {
@@ -170,7 +163,7 @@ TEST(Shards, AutoRefusesNothingGarbageAndDisagreement) {
 
 TEST(Shards, MergedShardsAreByteIdenticalToOneProcess) {
   ScratchDir dir;
-  const RunSpec spec = SmallFarmSpec();
+  const RunSpec spec = SmallFarmJob();
   const GenerateSummary whole = RunJob(spec, dir / "whole");
   EXPECT_EQ(whole.frames, 12u);
   // Four shards, in no particular order; each renders every 4th unit of scene * views + view.
@@ -214,7 +207,7 @@ TEST(Shards, CameraRigShardsMergeToOneProcessesBytes) {
   // shard stopped between the sensors) is not written: merge names the shard, which renders it
   // again.
   ScratchDir dir;
-  RunSpec spec = SmallFarmSpec();
+  RunSpec spec = SmallFarmJob();
   RigSensor a{"a", spec.intrinsics, {}};
   a.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
   RigSensor b{"b", Intrinsics{120, 90, 100.0, 100.0, 59.5, 44.5}, {}};
@@ -240,7 +233,7 @@ TEST(Shards, PhysicallyBasedShardsAreByteIdenticalToOneProcess) {
   // The path tracer's noise depends on (seed, view, pixel) only: shards render the same bytes,
   // the linear EXR colour included.
   ScratchDir dir;
-  RunSpec spec = SmallFarmSpec();
+  RunSpec spec = SmallFarmJob();
   spec.render.mode = RenderOptions::Mode::kPbr;
   spec.render.samples = 2;
   spec.render.bounces = 1;
@@ -258,7 +251,7 @@ TEST(Shards, PhysicallyBasedShardsAreByteIdenticalToOneProcess) {
 
 // The small farm with materials, lights, camera jitter and distractors randomised.
 RunSpec RandomizedFarmSpec() {
-  RunSpec spec = SmallFarmSpec();
+  RunSpec spec = SmallFarmJob();
   spec.render.mode = RenderOptions::Mode::kPbr;
   spec.render.samples = 1;
   spec.render.bounces = 1;
@@ -301,7 +294,7 @@ TEST(Shards, RandomizedShardsAreByteIdenticalToOneProcess) {
 
 TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {
   ScratchDir dir;
-  const RunSpec spec = SmallFarmSpec();
+  const RunSpec spec = SmallFarmJob();
   EXPECT_NE(MergeError(dir / "tree").find("no such folder"), std::string::npos);
   RunJob(spec, dir / "tree", ShardSpec{1, 3});
   EXPECT_NE(MergeError(dir / "tree").find("shard 0/3 has not started"), std::string::npos);
@@ -337,7 +330,7 @@ TEST(Shards, MergeRefusesUnfinishedAndRunningShardsNamingThem) {
 // open files. Twelve shards of one unit each, merged with room for only a few more open files.
 TEST(Shards, MergeOpensFewFilesWhateverTheShardCount) {
   ScratchDir dir;
-  const RunSpec spec = SmallFarmSpec();
+  const RunSpec spec = SmallFarmJob();
   RunJob(spec, dir / "whole");
   for (int i = 0; i < 12; ++i) RunJob(spec, dir / "tree", ShardSpec{i, 12});
   size_t open_files = 0;
@@ -356,7 +349,7 @@ TEST(Shards, MergeOpensFewFilesWhateverTheShardCount) {
 
 TEST(Shards, DamagedFramesAreNamedAndTheirShardRendersThemAgain) {
   ScratchDir dir;
-  const RunSpec spec = SmallFarmSpec();
+  const RunSpec spec = SmallFarmJob();
   RunJob(spec, dir / "whole");
   for (int i = 0; i < 2; ++i) RunJob(spec, dir / "tree", ShardSpec{i, 2});
   // Unit 3 (scene 0, image 3) belongs to shard 1: damage its mask, delete its grasp points.
@@ -385,7 +378,7 @@ TEST(Shards, DamagedFramesAreNamedAndTheirShardRendersThemAgain) {
 
 TEST(Shards, ShardsOfAnotherRunOrCountAreRefused) {
   ScratchDir dir;
-  RunSpec spec = SmallFarmSpec();
+  RunSpec spec = SmallFarmJob();
   RunJob(spec, dir / "tree", ShardSpec{0, 3});
   try {
     RunJob(spec, dir / "tree", ShardSpec{1, 2});
@@ -402,7 +395,7 @@ TEST(Shards, ShardsOfAnotherRunOrCountAreRefused) {
   }
   // A machine whose CPU gives Embree other kernels than the first shard's, or another build of
   // cadsynth: the key says so, and the message says what to do.
-  spec.bop.depth_scale = SmallFarmSpec().bop.depth_scale;
+  spec.bop.depth_scale = SmallFarmJob().bop.depth_scale;
   const std::filesystem::path key = dir / "tree" / ".shards" / "run_key";
   const std::string original = testing::ReadFile(key);
   const auto refusal = [&](const std::string& prefix, const std::string& value) {
@@ -451,7 +444,7 @@ bool Says(const std::vector<std::string>& lines, const std::string& text) {
 
 TEST(Resume, AChangedRunStartsOverAndADamagedFrameIsRenderedAgain) {
   ScratchDir dir;
-  RunSpec spec = SmallFarmSpec();
+  RunSpec spec = SmallFarmJob();
   RunJob(spec, dir / "whole");
   const std::filesystem::path partial = dir / ".out.partial";
 

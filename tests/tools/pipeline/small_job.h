@@ -21,6 +21,15 @@ inline RunSpec SmallJob(std::vector<double> yaws_rad = {0.0, 2.0}) {
   return spec;
 }
 
+// The farm tests' job: SmallJob with four views (12 units, three scenes) and every output format
+// derived from the frames (paper layout, PVN3D meta, grasp points), 200-point model clouds.
+inline RunSpec SmallFarmJob() {
+  RunSpec spec = SmallJob({0.0, 1.5, 3.0, 4.5});
+  spec.bop.paper_layout = spec.bop.pvn3d_meta = spec.bop.grasp_points = true;
+  spec.bop.model_points = 200;
+  return spec;
+}
+
 // Runs `spec` into `out` (as shard `shard` of a farm run when given), as `cadsynth generate` does.
 inline GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out,
                               std::optional<ShardSpec> shard = {}) {

@@ -27,12 +27,9 @@ using testing::ReadTree;
 using testing::RunJob;
 using testing::ScratchDir;
 
-// The default job (three scenes) at 160x120, four views each (12 units), every output format,
-// at most 3 samples per archive.
+// The farm tests' job (12 units, every output format) with archives of at most 3 samples.
 RunSpec ArchiveSpec() {
-  RunSpec spec = testing::SmallJob({0.0, 1.5, 3.0, 4.5});
-  spec.bop.paper_layout = spec.bop.pvn3d_meta = spec.bop.grasp_points = true;
-  spec.bop.model_points = 200;
+  RunSpec spec = testing::SmallFarmJob();
   spec.bop.webdataset = true;
   spec.bop.archive_samples = 3;
   return spec;

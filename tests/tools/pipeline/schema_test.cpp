@@ -118,7 +118,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   };
   EXPECT_EQ(ForEachChange<BopOptions>(
                 spec, [](RunSpec& s) -> BopOptions& { return s.bop; }, check),
-            19);
+            22);
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
             16);

@@ -125,15 +125,16 @@ namespace {
 DecodedImage ToDecoded(const cv::Mat& image, const std::string& origin) {
   if (image.empty()) throw Error(origin + ": not an image OpenCV can read");
   const int depth = image.depth();
-  if ((depth != CV_8U && depth != CV_16U) || (image.channels() != 1 && image.channels() != 3))
-    throw Error(origin + ": not an 8- or 16-bit grey or colour image");
+  if ((depth != CV_8U && depth != CV_16U && depth != CV_32F) ||
+      (image.channels() != 1 && image.channels() != 3))
+    throw Error(origin + ": not an 8- or 16-bit or float grey or colour image");
   cv::Mat rgb = image;
   if (image.channels() == 3) cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
   DecodedImage out;
   out.width = rgb.cols;
   out.height = rgb.rows;
   out.channels = rgb.channels();
-  out.bits = depth == CV_16U ? 16 : 8;
+  out.bits = depth == CV_32F ? 32 : depth == CV_16U ? 16 : 8;
   const size_t row = static_cast<size_t>(rgb.cols) * rgb.elemSize();
   out.bytes.resize(row * static_cast<size_t>(rgb.rows));
   for (int v = 0; v < rgb.rows; ++v)

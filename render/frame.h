@@ -32,6 +32,9 @@ struct Frame {
   // A depth model other than ideal (render/sensor.h): what the sensor returns (mm, 0 = none).
   // `depth` stays exact, and every label comes from it. Empty for the ideal model.
   std::vector<float> sensor_depth;
+  // pbr mode: the paths each pixel's colour averages (render.samples, or fewer where adaptive
+  // sampling stopped early; render.noise_threshold). Empty in the fast mode.
+  std::vector<uint32_t> samples;
   // active_stereo: the left IR image the matcher read (8 bit, the dots and the ambient light).
   std::vector<uint8_t> infrared;
 

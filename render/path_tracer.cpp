@@ -741,10 +741,20 @@ void PathTracer::ProjectorSignal(const RTCRayHit16& rh, const int valid[16],
   }
 }
 
+bool AdaptiveSampling::Converged(int n, double sum, double sum_sq) const {
+  if (n < 2) return false;
+  const double mean = sum / n;
+  const double variance = std::max(0.0, sum_sq - n * mean * mean) / (n - 1);
+  const double error = std::sqrt(variance / n);  // the standard error of the pixel's mean
+  const float hi = static_cast<float>(exposure_scale * (mean + error));
+  const float lo = static_cast<float>(exposure_scale * std::max(0.0, mean - error));
+  return 0.5f * (DisplayValue(hi, filmic) - DisplayValue(lo, filmic)) <= threshold;
+}
+
 void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const ThinLens& lens,
-                           const CameraMotion& motion, int u0, int v0, int samples,
-                           uint64_t frame_seed, Eigen::Vector3f out[16],
-                           TileFeatures* features) const {
+                           const CameraMotion& motion, int u0, int v0,
+                           const AdaptiveSampling& sampling, uint64_t frame_seed,
+                           Eigen::Vector3f out[16], TileFeatures* features, int taken[16]) const {
   const Impl& im = *impl_;
   const Intrinsics& k = camera.intrinsics;
   const float aperture_radius = lens.active() ? static_cast<float>(0.5 * lens.aperture_mm()) : 0.0f;
@@ -754,57 +764,69 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
   const Eigen::Vector3f origin = camera.world_from_cam.translation().cast<float>();
   const int bounces = im.scene.bounces;
   const int num_lights = static_cast<int>(im.lights.size());
+  const int samples = sampling.samples;
   // Each lane's selection probabilities at its last vertex (its next-event estimation's), which
   // the BSDF ray leaving that vertex needs again for its MIS weights when it finds a light.
   const bool rated = im.num_strategies <= Impl::kMaxRated;
   const float even = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
   float selection[16][Impl::kMaxRated];
 
-  Eigen::Vector3f sum[16];
-  int paths[16] = {};  // per lane: the paths that had a ray
-  // Denoiser features: sums over the paths of the first surface's albedo and normal, and of each
-  // path's luminance and its square.
-  Eigen::Vector3f albedo_sum[16], normal_sum[16], before[16];
+  // Per pixel of the tile: the sums over its paths so far (radiance; the denoiser's first-surface
+  // albedo and normal; each path's luminance and its square, for the error estimate), the paths
+  // that had a ray, and the samples drawn (paths without a ray included).
+  Eigen::Vector3f sum[16], albedo_sum[16], normal_sum[16];
   double luminance_sum[16] = {}, luminance_sq[16] = {};
-  alignas(64) int had_ray[16];
+  int paths[16] = {}, drawn[16] = {};
   uint64_t pixel_seed[16];
-  alignas(64) int in_image[16];
+  bool in_image[16];
   for (int j = 0; j < 16; ++j) {
     sum[j].setZero();
     albedo_sum[j].setZero();
     normal_sum[j].setZero();
     const int u = u0 + j % 4, v = v0 + j / 4;
-    in_image[j] = (u < k.width && v < k.height) ? -1 : 0;
+    in_image[j] = u < k.width && v < k.height;
     pixel_seed[j] = Hash(frame_seed, static_cast<uint64_t>(v) * 65536u + static_cast<uint64_t>(u));
   }
 
+  // A packet's lanes are paths: lane j traces sample lane_sample[j] of tile pixel lane_pixel[j].
+  int lane_pixel[16], lane_sample[16];
   RTCIntersectContext context;
   RTCRayHit16 rh;
   RTCRay16 shadow;
   alignas(64) int active[16];
   alignas(64) int shadow_valid[16];
+  alignas(64) int had_ray[16];
   Eigen::Vector3f throughput[16], dir[16], shadow_value[16], prev_normal[16];
+  Eigen::Vector3f value[16], first_albedo[16], first_normal[16];
   float prev_pdf[16], cone_width[16], cone_spread[16];
   // A pixel's angular size: the camera rays' cone.
   const float pixel_spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
 
-  for (int s = 0; s < samples; ++s) {
+  // Traces the paths in lanes [0, lanes) and adds each to its pixel's sums, in lane order.
+  const auto trace_packet = [&](int lanes) {
     // Camera rays through a point of each pixel: directions with camera z = 1, so that the clip
     // range is in depth like the labels'.
     for (int j = 0; j < 16; ++j) {
-      const int u = u0 + j % 4, v = v0 + j / 4;
-      active[j] = in_image[j];
+      active[j] = 0;
+      value[j].setZero();
+      first_albedo[j] = Eigen::Vector3f::Ones();
+      first_normal[j].setZero();
+      if (j >= lanes) {
+        SetRayLane(&rh.ray, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
+        had_ray[j] = 0;
+        continue;
+      }
+      const int p = lane_pixel[j];
+      const int u = u0 + p % 4, v = v0 + p / 4;
       throughput[j].setOnes();
       prev_pdf[j] = 0;
       cone_width[j] = 0;
       cone_spread[j] = pixel_spread;
-      const PixelSampler sampler(pixel_seed[j], s);
+      const PixelSampler sampler(pixel_seed[p], static_cast<uint32_t>(lane_sample[j]));
       const Eigen::Vector2f jitter = sampler.Get2D(0);
       Eigen::Vector2f xy = Eigen::Vector2f::Zero();
-      if (active[j] && !rays.At(u, v, jitter.x(), jitter.y(), &xy)) active[j] = 0;
-      paths[j] += active[j] != 0;
+      active[j] = rays.At(u, v, jitter.x(), jitter.y(), &xy) ? -1 : 0;
       had_ray[j] = active[j];
-      before[j] = sum[j];
       Eigen::Vector3f o_cam = Eigen::Vector3f::Zero(), d_cam(xy.x(), xy.y(), 1.0f);
       if (aperture_radius > 0.0f) {
         // Through a point of the aperture to where the pixel's ray meets the plane of focus;
@@ -850,10 +872,9 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
           float pdf;
           if (!HitLight(im.lights[k], o, dir[j], seg, &le, &pdf)) continue;
           const float w = depth == 0 ? 1.0f : PowerHeuristic(prev_pdf[j], select_pdf(k) * pdf);
-          sum[j] += throughput[j].cwiseProduct(le) * w;
+          value[j] += throughput[j].cwiseProduct(le) * w;
         }
         if (!hit) {
-          if (features != nullptr && depth == 0) albedo_sum[j] += Eigen::Vector3f::Ones();
           if (im.environment) {
             const Eigen::Vector3f le = im.environment->Eval(dir[j]);
             const float w =
@@ -861,7 +882,7 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
                     ? 1.0f
                     : PowerHeuristic(prev_pdf[j], select_pdf(num_lights) *
                                                       im.environment->Pdf(dir[j], prev_normal[j]));
-            sum[j] += throughput[j].cwiseProduct(le) * w;
+            value[j] += throughput[j].cwiseProduct(le) * w;
           }
           active[j] = 0;
           continue;
@@ -882,16 +903,18 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
           continue;
         }
         const Impl::Surface surf = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
-        if (features != nullptr && depth == 0) {
-          albedo_sum[j] += surf.params.base_color;
-          normal_sum[j] += surf.ns;
+        if (depth == 0) {
+          first_albedo[j] = surf.params.base_color;
+          first_normal[j] = surf.ns;
         }
         const Impl::ShadingFrame local(surf);
         const Eigen::Vector3f &t = local.t, &b = local.b;
         const auto to_local = [&](const Eigen::Vector3f& w) { return local.ToLocal(w); };
         const Eigen::Vector3f wo = to_local(-dir[j]);
         const PrincipledBsdf bsdf(surf.params);
-        const PixelSampler sampler(pixel_seed[j], s);
+        const uint64_t seed = pixel_seed[lane_pixel[j]];
+        const uint32_t s = static_cast<uint32_t>(lane_sample[j]);
+        const PixelSampler sampler(seed, s);
         const uint32_t dim = 1 + 3 * static_cast<uint32_t>(depth);
         const Eigen::Vector2f u_choice = sampler.Get2D(dim);
         // A little off the surface along its geometric normal, scaled with the coordinates
@@ -958,7 +981,7 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
         if (depth >= 2) {
           const float q = std::min(0.95f, next.maxCoeff());
           const float r = UnitFloat(static_cast<uint32_t>(
-              Hash(pixel_seed[j], (static_cast<uint64_t>(s) << 8) | static_cast<uint64_t>(depth))));
+              Hash(seed, (static_cast<uint64_t>(s) << 8) | static_cast<uint64_t>(depth))));
           if (!(r < q)) continue;
           next /= q;
         }
@@ -981,7 +1004,7 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
         rtcInitIntersectContext(&context);
         rtcOccluded16(shadow_valid, im.scene.world, &context, &shadow);
         for (int j = 0; j < 16; ++j) {
-          if (shadow_valid[j] && shadow.tfar[j] >= 0) sum[j] += shadow_value[j];
+          if (shadow_valid[j] && shadow.tfar[j] >= 0) value[j] += shadow_value[j];
         }
       }
       bool any_active = false;
@@ -990,13 +1013,71 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       rtcInitIntersectContext(&context);
       rtcIntersect16(active, im.scene.world, &context, &rh);
     }
-    for (int j = 0; features != nullptr && j < 16; ++j) {
-      if (!had_ray[j]) continue;
-      const double l = Luminance(Eigen::Vector3f(sum[j] - before[j]));
-      luminance_sum[j] += l;
-      luminance_sq[j] += l * l;
+    for (int j = 0; j < lanes; ++j) {
+      const int p = lane_pixel[j];
+      ++drawn[p];
+      if (!had_ray[j]) continue;  // a point of the pixel without a ray, beyond a lens's fold
+      ++paths[p];
+      sum[p] += value[j];
+      albedo_sum[p] += first_albedo[j];
+      normal_sum[p] += first_normal[j];
+      const double l = Luminance(value[j]);
+      luminance_sum[p] += l;
+      luminance_sq[p] += l * l;
     }
+  };
+
+  // Runs `count[p]` more samples of each tile pixel p, 16 paths per packet: sample by sample,
+  // pixel by pixel within a sample (so a whole tile's first packets are one sample of each pixel).
+  const auto run = [&](const int count[16]) {
+    int lanes = 0, most = 0, base[16];
+    for (int p = 0; p < 16; ++p) most = std::max(most, count[p]), base[p] = drawn[p];
+    for (int i = 0; i < most; ++i) {
+      for (int p = 0; p < 16; ++p) {
+        if (i >= count[p]) continue;
+        lane_pixel[lanes] = p;
+        lane_sample[lanes] = base[p] + i;
+        if (++lanes == 16) {
+          trace_packet(lanes);
+          lanes = 0;
+        }
+      }
+    }
+    if (lanes > 0) trace_packet(lanes);
+  };
+
+  int count[16];
+  const int first = sampling.adaptive() ? std::min(samples, sampling.min_samples) : samples;
+  for (int p = 0; p < 16; ++p) count[p] = in_image[p] ? first : 0;
+  run(count);
+  while (sampling.adaptive()) {
+    // A pixel goes on while its own estimate or a 4-neighbour's in the tile is above the
+    // threshold (Cycles' dilation of unconverged pixels), until it has `samples`.
+    bool converged[16];
+    for (int p = 0; p < 16; ++p) {
+      converged[p] =
+          !in_image[p] || sampling.Converged(paths[p], luminance_sum[p], luminance_sq[p]);
+    }
+    int open = 0;
+    for (int p = 0; p < 16; ++p) {
+      const int x = p % 4, y = p / 4;
+      const bool near_open = !converged[p] || (x > 0 && !converged[p - 1]) ||
+                             (x < 3 && !converged[p + 1]) || (y > 0 && !converged[p - 4]) ||
+                             (y < 3 && !converged[p + 4]);
+      count[p] = in_image[p] && near_open && drawn[p] < samples ? 1 : 0;
+      open += count[p];
+    }
+    if (open == 0) break;
+    // Steps that fill packets: 16 paths over the open pixels, at least a quarter of what each
+    // has drawn (a geometric schedule, so the checks cost little), within `samples`.
+    for (int p = 0; p < 16; ++p) {
+      if (count[p] == 0) continue;
+      const int step = std::max((16 + open - 1) / open, drawn[p] / 4);
+      count[p] = std::min(step, samples - drawn[p]);
+    }
+    run(count);
   }
+
   for (int j = 0; features != nullptr && j < 16; ++j) {
     const int n = paths[j];
     features->albedo[j] = n > 0 ? Eigen::Vector3f(albedo_sum[j] / n) : Eigen::Vector3f::Ones();
@@ -1009,8 +1090,9 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
   }
   // (Paths from points of the pixel without a ray, beyond a lens's fold, are left out.)
   for (int j = 0; j < 16; ++j) {
-    const int n = paths[j] < samples ? paths[j] : samples;
-    out[j] = in_image[j] && n > 0 ? Eigen::Vector3f(sum[j] / n) : Eigen::Vector3f::Zero();
+    out[j] =
+        in_image[j] && paths[j] > 0 ? Eigen::Vector3f(sum[j] / paths[j]) : Eigen::Vector3f::Zero();
+    if (taken != nullptr) taken[j] = in_image[j] ? drawn[j] : 0;
   }
 }
 

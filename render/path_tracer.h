@@ -65,6 +65,25 @@ struct TileFeatures {
   float variance[16];          // of the pixel's mean luminance (the paths' sample variance / n)
 };
 
+// How many paths a tile's pixels get (render.samples, render.noise_threshold, render.min_samples).
+// Without a threshold every pixel gets `samples`. With one, every pixel first gets `min_samples`,
+// then more in steps until the standard error of its mean, carried through the exposure and the
+// display transform, is at most `threshold` (on the [0, 1] scale of the 8-bit image: 0.01 is
+// 2.5 grey levels) for it and its 4-neighbours in the tile, or it has `samples`: as Cycles'
+// adaptive sampling, samples go where the image is still noisy. The schedule is a function of the
+// tile's own paths, so the image is the same for any thread count, tile order or shard.
+struct AdaptiveSampling {
+  int samples = 16;          // paths per pixel, at most
+  int min_samples = 0;       // before the first check (adaptive only)
+  float threshold = 0.0f;    // 0: off
+  float exposure_scale = 1;  // linear radiance to the value the display transform takes
+  bool filmic = true;
+
+  bool adaptive() const { return threshold > 0 && min_samples < samples; }
+  // Whether a pixel whose `n` paths have luminances summing to `sum` (squares: `sum_sq`) is done.
+  bool Converged(int n, double sum, double sum_sq) const;
+};
+
 class PathTracer {
  public:
   // Loads the environment's and textures' images that are not loaded yet; throws Error naming the
@@ -74,16 +93,19 @@ class PathTracer {
   explicit PathTracer(PathTracerScene scene, const PathTracer* like = nullptr);
   ~PathTracer();
 
-  // Mean linear radiance over `samples` paths through each pixel of the 4 x 4 tile whose top-left
-  // pixel is (u0, v0) (pixel u0 + j % 4, v0 + j / 4 in out[j]; lanes outside the image are 0).
+  // Mean linear radiance over the paths through each pixel of the 4 x 4 tile whose top-left
+  // pixel is (u0, v0) (pixel u0 + j % 4, v0 + j / 4 in out[j]; lanes outside the image are 0), as
+  // many as `sampling` gives it (`taken[j]`, when given). A packet's 16 lanes are paths of any of
+  // the tile's pixels, so pixels that stopped early leave no lane idle.
   // Each path starts at a random point of its pixel (through `rays`, so lens distortion bends it
   // as it bends the labels' rays), of the thin lens's aperture when `lens` is active (depth of
   // field), and at a random time of the exposure when `motion` is active (the camera at
   // camera.world_from_cam * motion.At(tau); motion blur). `features`, when given, receives the
   // denoiser's guides for the same pixels (the radiance does not depend on it).
   void TraceTile(const Camera& camera, const PixelRays& rays, const ThinLens& lens,
-                 const CameraMotion& motion, int u0, int v0, int samples, uint64_t frame_seed,
-                 Eigen::Vector3f out[16], TileFeatures* features = nullptr) const;
+                 const CameraMotion& motion, int u0, int v0, const AdaptiveSampling& sampling,
+                 uint64_t frame_seed, Eigen::Vector3f out[16], TileFeatures* features = nullptr,
+                 int taken[16] = nullptr) const;
 
   // A depth sensor's projector return at the hits of a packet of camera rays traced in
   // scene.world (render/sensor.h): pi * luminance(f(wo, wi)) * cos(wi) with the hit's textured

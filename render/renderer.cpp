@@ -60,6 +60,10 @@ bool RenderOptions::Check(std::string* why) const {
     *why = "isa must be auto, sse2, sse4.2, avx, avx2 or avx512, got '" + isa + "'";
   } else if (samples < 1 || samples > 65536) {
     *why = "samples must be 1 to 65536 paths per pixel";
+  } else if (!(noise_threshold >= 0 && noise_threshold <= 1)) {
+    *why = "noise_threshold must be 0 (off) or a display-value error in (0, 1]";
+  } else if (min_samples < 0 || min_samples > samples) {
+    *why = "min_samples must be 0 (samples / 8) to samples";
   } else if (bounces < 0 || bounces > 64) {
     *why = "bounces must be 0 to 64";
   } else if (!(exposure >= -20 && exposure <= 20)) {
@@ -920,6 +924,7 @@ struct Renderer::Impl::FramePasses {
   const Eigen::Vector3f white_balance;
   const bool balanced;
   const bool filmic;
+  const AdaptiveSampling sampling;
 
   const std::shared_ptr<const PixelRays> rays;
   const bool distorted;
@@ -973,6 +978,8 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
       white_balance(look != nullptr ? look->white_balance : Eigen::Vector3f::Ones()),
       balanced(white_balance != Eigen::Vector3f::Ones()),
       filmic(o.view == RenderOptions::View::kFilmic),
+      sampling{o.samples, o.FirstSamples(), static_cast<float>(o.noise_threshold), exposure_scale,
+               filmic},
       rays(im.RaysOf(k)),
       distorted(rays->distorted()),
       gen(camera.world_from_cam.linear().cast<float>(),
@@ -994,6 +1001,7 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
   if (projector) projector_seen.assign(num_pixels, 0), signal.assign(num_pixels, 0.0f);
   if (gray) frame.gray.assign(num_pixels, 0.0f);
   if (o.hdr) frame.radiance.assign(3 * num_pixels, 0.0f);
+  if (pbr && o.shade) frame.samples.assign(num_pixels, 0);
 
   if (!distorted) rays->Tabulate(0.5, 0.5, kTile, &xs, &ys);
   for (int sy = 0; sy < o.supersampling && o.supersampling > 1; ++sy) {
@@ -1106,11 +1114,13 @@ void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
   for (int j = 0; j < 16; ++j) radiance[j].setZero();
   if (pbr && o.shade) {
     TileFeatures features;
-    tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, o.samples, frame_seed,
-                      radiance, denoising ? &features : nullptr);
+    int taken[16];
+    tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, sampling, frame_seed,
+                      radiance, denoising ? &features : nullptr, taken);
     for (int j = 0; j < 16; ++j) {
       if (!valid[j]) continue;
       const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+      frame.samples[pixel] = static_cast<uint32_t>(taken[j]);
       if (o.hdr) {
         for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[j][c];
       }

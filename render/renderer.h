@@ -1,6 +1,7 @@
 // Ray casting of a Scene with Embree: RGB, depth, visible instance ids and amodal masks.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -40,7 +41,12 @@ struct RenderOptions {
   // kPbr path-traces Scene's materials, light sources and environment (render/path_tracer.h).
   enum class Mode { kFast, kPbr };
   Mode mode = Mode::kFast;
-  int samples = 16;       // pbr: paths per pixel
+  int samples = 16;  // pbr: paths per pixel (with noise_threshold: at most)
+  // pbr: adaptive sampling (render/path_tracer.h, AdaptiveSampling): a pixel stops once the
+  // standard error of its displayed value (0-1) is at most noise_threshold, after min_samples
+  // (0: samples / 8, at least 4). 0: off, every pixel gets `samples`.
+  double noise_threshold = 0.0;
+  int min_samples = 0;
   int bounces = 3;        // pbr: surface interactions after the first (Blender's max bounces)
   double exposure = 0.0;  // pbr: stops; the linear value is scaled by 2^exposure
   // pbr: display transform of the exposed linear value: kStandard clips and encodes sRGB;
@@ -57,6 +63,8 @@ struct RenderOptions {
   bool denoise = false;
 
   bool Check(std::string* why) const;
+  // The paths a pixel gets before adaptive sampling's first check.
+  int FirstSamples() const { return min_samples > 0 ? min_samples : std::max(4, samples / 8); }
 
   // Every field, once (cad/core/schema.h): the recipe's `render:` section, the run key, the shard
   // file.
@@ -76,7 +84,15 @@ struct RenderOptions {
                         "choice",
                         "colour image: fast (Lambert, hard shadows) or pbr (path traced)",
                         {"fast", "pbr"}});
-    visit(o.samples, Field{"samples", "integer", "pbr: paths per pixel (1-65536)"});
+    visit(o.samples, Field{"samples", "integer",
+                           "pbr: paths per pixel (1-65536; the most with noise_threshold)"});
+    visit(o.noise_threshold,
+          Field{"noise_threshold", "number",
+                "pbr: adaptive sampling: a pixel stops when the standard error of its displayed "
+                "value (0-1) is at most this (0: off; samples is then the most)"});
+    visit(o.min_samples, Field{"min_samples", "integer",
+                               "pbr: adaptive sampling: paths before the first check (0: samples "
+                               "/ 8, at least 4)"});
     visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
     visit(o.exposure, Field{"exposure", "number", "pbr: exposure in stops (-20 to 20)"});
     visit(o.view, Field{"view", "choice", "pbr: display transform", {"standard", "filmic"}});

@@ -9,8 +9,9 @@
 # poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
 # normals), scene_gt_world.json and scene_camera.json. Cycles is set up as docs/testing.md's "Checked
 # against Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
-# threshold, no denoising or adaptive sampling, the same bounces. The result is written as a
-# 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).
+# threshold, no denoising or adaptive sampling (unless the spec sets adaptive_threshold), the same
+# bounces. The result is written as a 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's
+# rgb_hdr/).
 import fnmatch
 import json
 import math
@@ -144,7 +145,12 @@ def main():
     cy = scene.cycles
     cy.device = "CPU"
     cy.samples = spec["samples"]
-    cy.use_adaptive_sampling = False
+    # Adaptive sampling only when the spec asks (tools/bench/equal_error.py, as BlenderProc's
+    # default: noise threshold 0.01): the comparison's cases sample every pixel alike.
+    cy.use_adaptive_sampling = spec.get("adaptive_threshold", 0.0) > 0.0
+    if cy.use_adaptive_sampling:
+        cy.adaptive_threshold = spec["adaptive_threshold"]
+        cy.adaptive_min_samples = spec.get("adaptive_min_samples", 0)
     cy.use_denoising = False
     cy.seed = spec.get("seed", 0)
     cy.max_bounces = spec["bounces"]

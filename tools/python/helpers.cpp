@@ -90,6 +90,11 @@ void BindHelpers(py::module_& m) {
     std::vector<py::ssize_t> shape = {image.height, image.width};
     if (image.channels == 3) shape.push_back(3);
     if (image.bits == 8) return Own(std::move(image.bytes), shape);
+    if (image.bits == 32) {
+      std::vector<float> values(image.bytes.size() / 4);
+      std::memcpy(values.data(), image.bytes.data(), image.bytes.size());
+      return Own(std::move(values), shape);
+    }
     std::vector<uint16_t> values(image.bytes.size() / 2);
     std::memcpy(values.data(), image.bytes.data(), image.bytes.size());
     return Own(std::move(values), shape);
@@ -97,7 +102,9 @@ void BindHelpers(py::module_& m) {
   m.def(
       "read_image",
       [to_array](const std::filesystem::path& path) { return to_array(ReadImageFile(path)); },
-      "path"_a, "Reads a PNG or JPEG image (RGB order for colour; uint8 or uint16).");
+      "path"_a,
+      "Reads a PNG, JPEG or EXR image (RGB order for colour; uint8, uint16, or float32 for "
+      "EXR such as rgb_hdr/).");
   m.def(
       "decode_image",
       [to_array](const py::bytes& data) {
@@ -110,7 +117,8 @@ void BindHelpers(py::module_& m) {
         return to_array(std::move(image));
       },
       "data"_a,
-      "Decodes a PNG or JPEG file's bytes, as read_image (a webdataset member, for example).");
+      "Decodes a PNG, JPEG or EXR file's bytes, as read_image (a webdataset member, for "
+      "example).");
   m.def(
       "evaluate",
       [](const std::filesystem::path& dataset, const std::filesystem::path& results,

@@ -230,12 +230,14 @@ TEST(Shards, CameraRigShardsMergeToOneProcessesBytes) {
 }
 
 TEST(Shards, PhysicallyBasedShardsAreByteIdenticalToOneProcess) {
-  // The path tracer's noise depends on (seed, view, pixel) only: shards render the same bytes,
-  // the linear EXR colour included.
+  // The path tracer's noise depends on (seed, view, pixel) only, and adaptive sampling's stops
+  // on the tile's own paths: shards render the same bytes, the linear EXR colour included.
   ScratchDir dir;
   RunSpec spec = SmallFarmJob();
   spec.render.mode = RenderOptions::Mode::kPbr;
-  spec.render.samples = 2;
+  spec.render.samples = 6;
+  spec.render.min_samples = 2;
+  spec.render.noise_threshold = 0.05;
   spec.render.bounces = 1;
   spec.render.hdr = true;
   Material steel;

@@ -1,0 +1,292 @@
+// Adaptive sampling (render.noise_threshold): a pixel stops once the standard error of its
+// displayed value is below the threshold. Checked against answers worked out by hand (a furnace,
+// the irradiance under a disc light and under the sun, which adaptive stopping must not bias),
+// against where the noise is (a flat lit floor stops early, a glossy sphere's edge goes on), and
+// for the same bytes on any thread count.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include <gtest/gtest.h>
+
+#include "tests/render/render_support.h"
+
+#include "cad/shape.h"
+#include "render/path_tracer.h"
+#include "render/renderer.h"
+
+namespace cadsynth {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+using testing::LookingDown;
+
+Material Lambert(float albedo) {
+  Material m;
+  m.surface.base_color = Eigen::Vector3f::Constant(albedo);
+  m.surface.metallic = 0;
+  m.surface.specular = 0;
+  m.surface.roughness = 1;
+  return m;
+}
+
+RenderOptions Adaptive(int samples, double threshold, int min_samples, int bounces) {
+  RenderOptions o;
+  o.mode = RenderOptions::Mode::kPbr;
+  o.samples = samples;
+  o.noise_threshold = threshold;
+  o.min_samples = min_samples;
+  o.bounces = bounces;
+  o.hdr = true;
+  o.view = RenderOptions::View::kStandard;
+  o.amodal_masks = false;
+  return o;
+}
+
+Scene Dark() {
+  Scene scene;
+  scene.light_sources.clear();
+  scene.environment.color.setZero();
+  return scene;
+}
+
+double MeanRed(const Frame& frame) {
+  double sum = 0;
+  for (size_t p = 0; p < frame.samples.size(); ++p) sum += frame.radiance[3 * p];
+  return sum / static_cast<double>(frame.samples.size());
+}
+
+double MeanSamples(const Frame& frame) {
+  double sum = 0;
+  for (uint32_t n : frame.samples) sum += n;
+  return sum / static_cast<double>(frame.samples.size());
+}
+
+TEST(AdaptiveSampling, ConvergedFollowsTheStandardErrorOfTheDisplayedValue) {
+  AdaptiveSampling a;
+  a.samples = 64;
+  a.min_samples = 4;
+  a.threshold = 0.01f;
+  a.filmic = false;
+  // Every path 0.5: no spread, done. One path says nothing of the spread: not done.
+  EXPECT_TRUE(a.Converged(8, 8 * 0.5, 8 * 0.25));
+  EXPECT_FALSE(a.Converged(1, 0.5, 0.25));
+  // Paths of 0 and 1 alternating, n = 16: mean 0.5, sample variance 16/15 * 1/4, standard error
+  // 0.129: the sRGB curve's slope at 0.5 is 1.055 / 2.4 * 0.5^(-0.583) = 0.66, so the displayed
+  // error is about 0.085. With n = 10000 the standard error is 0.005 (displayed 0.0033): done at
+  // 0.01, not at 0.003.
+  EXPECT_FALSE(a.Converged(16, 8, 8));
+  EXPECT_TRUE(a.Converged(10000, 5000, 5000));
+  a.threshold = 0.003f;
+  EXPECT_FALSE(a.Converged(10000, 5000, 5000));
+  // Exposure: paths of 0 and 1, n = 400: standard error 0.025 about a mean of 0.5, displayed
+  // about 0.66 * 0.025 = 0.017, not done. Four stops darker (x 1/16): 0.0016 about 0.031, where
+  // the sRGB curve's slope is 1.055 / 2.4 * 0.031^(-0.583) = 3.3, so about 0.0052: done.
+  a.threshold = 0.01f;
+  EXPECT_FALSE(a.Converged(400, 200, 200));
+  a.exposure_scale = 1.0f / 16;
+  EXPECT_TRUE(a.Converged(400, 200, 200));
+  a.threshold = 0.004f;
+  EXPECT_FALSE(a.Converged(400, 200, 200));
+}
+
+TEST(AdaptiveSampling, FurnaceStopsAtTheMinimumAndStaysExact) {
+  // The white furnace (path_tracer_test.cpp): every path of every pixel returns the sky's
+  // radiance, so every pixel's spread is 0 and it stops after min_samples.
+  std::vector<Part> parts = {MakePart("ball", MakeSphere(50.0), TessellationOptions{0.02, 0.05})};
+  Scene scene = Dark();
+  scene.floor = false;
+  scene.instances = {Instance{0, "ball", Eigen::Isometry3d::Identity()}};
+  scene.materials = {Lambert(1.0f)};
+  scene.instance_material = {0};
+  scene.environment.color = Eigen::Vector3f::Constant(0.5f);
+  Camera camera;
+  camera.intrinsics = Intrinsics::FromFov(64, 64, 0.5);
+  camera.world_from_cam = LookingDown({0, 0, 300});
+  const Renderer renderer(parts, scene, Adaptive(256, 0.01, 8, 2));
+  const Frame frame = renderer.Render(camera);
+  for (size_t p = 0; p < frame.samples.size(); ++p) {
+    EXPECT_EQ(frame.samples[p], 8u) << p;
+    EXPECT_NEAR(frame.radiance[3 * p], 0.5f, 0.005f) << p;
+  }
+}
+
+// A white Lambert floor seen straight down through a 32 x 32 pixel patch (4 mm across), lit by
+// `light` only: every pixel sees the same radiance, and the mean over all of them must be the
+// answer worked out by hand although each pixel stopped when its own noise looked small enough.
+Frame FloorPatch(const LightSource& light, const RenderOptions& options) {
+  Scene scene = Dark();
+  scene.floor_material = Lambert(1.0f);
+  scene.light_sources = {light};
+  Camera camera;
+  camera.intrinsics = Intrinsics::FromFov(32, 32, 0.004);
+  camera.world_from_cam = LookingDown({0, 0, 1000});
+  const Renderer renderer({}, scene, options);
+  return renderer.Render(camera);
+}
+
+TEST(AdaptiveSampling, DiscLightIrradianceIsUnbiased) {
+  // pi L sin^2(alpha) / pi with L = P / (4 A) (Blender's area light), as in path_tracer_test.cpp.
+  const double radius = 200.0, height = 300.0, power = 50.0;
+  LightSource disc;
+  disc.kind = LightSource::Kind::kDisc;
+  disc.radius_mm = radius;
+  disc.position = {0, 0, height};
+  disc.direction = {0, 0, -1};
+  disc.power = power;
+  const double l = power / (4 * kPi * radius * radius * 1e-6);
+  const double expected = l * radius * radius / (radius * radius + height * height);
+  // 30.6 W/(m^2 sr): exposed by 2^-6.5 it shows about 0.6 (unexposed it would clip to white,
+  // where no noise shows and every pixel stops at once).
+  RenderOptions o = Adaptive(1024, 0.005, 16, 0);
+  o.exposure = -6.5;
+  const Frame frame = FloorPatch(disc, o);
+  const double mean_samples = MeanSamples(frame);
+  EXPECT_GT(mean_samples, 16.5);
+  EXPECT_LT(mean_samples, 1000.0);
+  EXPECT_NEAR(MeanRed(frame), expected, 0.003 * expected) << mean_samples << " samples";
+}
+
+TEST(AdaptiveSampling, SunIrradianceIsUnbiased) {
+  // A sun of strength S (W/m^2 on a surface facing it) and angular diameter 10 deg, 40 deg from
+  // the zenith: the integral of cos over a uniform cone is pi sin^2(a) times the cosine of its
+  // axis, so E = S cos(40 deg) exactly, and the white floor's radiance is E / pi.
+  LightSource sun;
+  sun.kind = LightSource::Kind::kSun;
+  sun.power = 3.0;
+  const double theta = 40 * kPi / 180;
+  sun.direction = {std::sin(theta), 0.0, -std::cos(theta)};
+  sun.angle_rad = 10 * kPi / 180;
+  const double expected = sun.power * std::cos(theta) / kPi;
+  const Frame frame = FloorPatch(sun, Adaptive(1024, 0.0005, 8, 0));
+  const double mean_samples = MeanSamples(frame);
+  EXPECT_GT(mean_samples, 8.5);
+  EXPECT_LT(mean_samples, 1000.0);
+  EXPECT_NEAR(MeanRed(frame), expected, 0.002 * expected) << MeanSamples(frame) << " samples";
+}
+
+// A glossy metal sphere on a dark Lambert floor under a uniform sky, seen from the side. Far from
+// the sphere the floor's every path returns albedo * sky (the sky's sample and the BSDF's share it
+// by their MIS weights): no noise there. The sphere's silhouette mixes sphere and floor within its
+// pixels, and the sphere mirrors the floor and its own shadow.
+struct GlossySphere {
+  std::vector<Part> parts = {MakePart("ball", MakeSphere(50.0), TessellationOptions{0.02, 0.05})};
+  Scene scene;
+  Camera camera;
+  GlossySphere() {
+    Material metal;
+    metal.surface.base_color = Eigen::Vector3f::Constant(0.9f);
+    metal.surface.metallic = 1;
+    metal.surface.roughness = 0.25f;
+    scene.instances = {
+        Instance{0, "ball", Eigen::Translation3d(0, 0, 50) * Eigen::Isometry3d::Identity()}};
+    scene.materials = {metal};
+    scene.instance_material = {0};
+    scene.floor_material = Lambert(0.1f);
+    scene.light_sources.clear();
+    scene.environment.color = Eigen::Vector3f::Constant(0.4f);
+    camera.intrinsics = Intrinsics::FromFov(96, 72, 0.6);
+    camera.world_from_cam = WorldFromCamOnSphere({0, 0, 50}, 0.4, 0.9, 450.0);
+  }
+};
+
+TEST(AdaptiveSampling, FlatFloorStopsEarlyWhileAGlossyEdgeGoesOn) {
+  const GlossySphere view;
+  const Renderer renderer(view.parts, view.scene, Adaptive(256, 0.02, 8, 3));
+  const Frame frame = renderer.Render(view.camera);
+  const int w = frame.width(), h = frame.height();
+  // Floor pixels at least 12 pixels from the sphere, and the sphere's silhouette pixels.
+  std::vector<uint32_t> floor, edge;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const size_t p = static_cast<size_t>(v) * w + u;
+      bool near_sphere = false, near_floor = false;
+      for (int dv = -12; dv <= 12; ++dv) {
+        for (int du = -12; du <= 12; ++du) {
+          const int x = u + du, y = v + dv;
+          if (x < 0 || y < 0 || x >= w || y >= h) continue;
+          const bool sphere = frame.instance[static_cast<size_t>(y) * w + x] != 0;
+          near_sphere |= sphere;
+          if (std::abs(du) <= 1 && std::abs(dv) <= 1) near_floor |= !sphere;
+        }
+      }
+      if (frame.instance[p] == 0 && frame.depth[p] > 0 && !near_sphere)
+        floor.push_back(frame.samples[p]);
+      if (frame.instance[p] != 0 && near_floor) edge.push_back(frame.samples[p]);
+    }
+  }
+  ASSERT_GT(floor.size(), 500u);
+  ASSERT_GT(edge.size(), 50u);
+  const auto median = [](std::vector<uint32_t> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const uint32_t floor_median = median(floor), edge_median = median(edge);
+  EXPECT_EQ(floor_median, 8u);  // no noise: stopped at the first check
+  EXPECT_GE(edge_median, 3 * floor_median) << "floor " << floor_median;
+  for (uint32_t n : frame.samples) {
+    EXPECT_GE(n, 8u);
+    EXPECT_LE(n, 256u);
+  }
+}
+
+TEST(AdaptiveSampling, SameBytesForAnyThreadCount) {
+  const GlossySphere view;
+  const Renderer renderer(view.parts, view.scene, Adaptive(64, 0.02, 4, 3));
+  Frame one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = renderer.Render(view.camera, 3);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = renderer.Render(view.camera, 3);
+  }
+  EXPECT_EQ(one.rgb, two.rgb);
+  EXPECT_EQ(one.radiance, two.radiance);
+  EXPECT_EQ(one.samples, two.samples);
+  EXPECT_LT(MeanSamples(one), 63.0);
+}
+
+TEST(AdaptiveSampling, AThresholdNoPixelReachesChangesNothing) {
+  // The floor under a disc light: every pixel's paths spread (the points drawn on the disc).
+  LightSource disc;
+  disc.kind = LightSource::Kind::kDisc;
+  disc.radius_mm = 200.0;
+  disc.position = {0, 0, 300.0};
+  disc.direction = {0, 0, -1};
+  disc.power = 50.0;
+  RenderOptions o = Adaptive(6, 0.0, 0, 0);
+  o.exposure = -6.5;  // not clipped to white
+  const Frame fixed = FloorPatch(disc, o);
+  for (uint32_t n : fixed.samples) EXPECT_EQ(n, 6u);
+  // Checked after 2 paths, then path by path: the same paths summed in the same order.
+  o.noise_threshold = 1e-9;
+  o.min_samples = 2;
+  const Frame capped = FloorPatch(disc, o);
+  for (uint32_t n : capped.samples) EXPECT_EQ(n, 6u);
+  EXPECT_EQ(fixed.radiance, capped.radiance);
+}
+
+TEST(AdaptiveSampling, BadOptionsAreRefused) {
+  std::string why;
+  RenderOptions o = Adaptive(16, -0.1, 0, 3);
+  EXPECT_FALSE(o.Check(&why));
+  EXPECT_NE(why.find("noise_threshold"), std::string::npos) << why;
+  o = Adaptive(16, 1.01, 0, 3);
+  EXPECT_FALSE(o.Check(&why));
+  o = Adaptive(16, 0.01, 32, 3);
+  EXPECT_FALSE(o.Check(&why));
+  EXPECT_NE(why.find("min_samples"), std::string::npos) << why;
+  o = Adaptive(16, 0.01, 0, 3);
+  EXPECT_TRUE(o.Check(&why)) << why;
+  EXPECT_EQ(o.FirstSamples(), 4);
+  o.samples = 256;
+  EXPECT_EQ(o.FirstSamples(), 32);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -1,0 +1,320 @@
+#!/usr/bin/env python3
+"""Equal-error speed of the physically based mode (issue 44): for each renderer and scene, the
+error of a frame against that renderer's own many-sample reference, and the time it took, over a
+range of sample counts and adaptive-sampling thresholds; then the time each needs to reach a given
+error (interpolated on the error-time curve, log-log), and a picture of the curves.
+
+    tools/bench/equal_error.py --scene workcell [--renderers cadsynth,cycles] [--out DIR]
+    tools/bench/equal_error.py --scene pbr_demo --renderers cadsynth --reference-samples 1024
+
+Error: the relative RMSE of the displayed values (the linear radiance of rgb_hdr/ or Cycles' EXR,
+exposed and put through the recipe's display transform, standard or filmic, as cadsynth's 8-bit
+images are; values 0-1): sqrt(mean((x - ref)^2)) / mean(ref) over the three channels of a region's
+pixels. Regions: the whole frame, the parts' pixels (the union of the frame's mask_visib/) and the
+parts' edge pixels (parts' pixels with a 4-neighbour of another instance or the background; what
+a denoiser must not blur). The reference is the same renderer at --reference-samples without
+adaptive sampling, with another seed, so its own noise is independent of the runs'.
+
+Time: cadsynth, the whole process as a user runs it (`cadsynth generate`, warm part cache) divided
+by the frames it wrote (workcell: four views, the error is view 0's); Cycles, its render time of
+the one frame from its log, without starting Blender or building the scene (tools/cycles
+cycles_scene.py rebuilds cadsynth's frame: the same meshes, normals, poses, camera, lights and
+materials). Both use every core of the machine.
+
+Scenes: workcell (tools/cycles/compare_with_cycles.py's case: a gear, a bolt, a nut, a peg and a
+washer, metal and Lambert, two area lights and a grey world, 320 x 240); pbr_demo
+(recipes/pbr_demo.yaml's three default scenes, one view each, 640 x 480, cadsynth only: Cycles'
+rebuild has no procedural textures). Writes DIR/equal_error_SCENE.json and
+DIR/equal_error_SCENE.png.
+"""
+import argparse
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools", "cycles"))
+import compare_with_cycles as cwc  # noqa: E402
+
+WORKCELL_VIEWS = [30, 120, 210, 300]  # yaw (deg) of the views one cadsynth run renders
+
+
+def read_exr(path):
+    import cadsynth  # the build's Python module (PYTHONPATH=build/python)
+    return cadsynth.read_image(path).astype(np.float64)
+
+
+def read_png(path):
+    import cadsynth
+    return cadsynth.read_image(path)
+
+
+def display(linear, exposure, filmic):
+    """cadsynth's display transform (render/path_tracer.h DisplayValue) of exposed radiance."""
+    x = np.maximum(linear * 2.0 ** exposure, 0.0)
+    if filmic:
+        x = np.minimum(1.0, x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14))
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def regions(frame_dir, im_id, shape):
+    """The frame's parts' pixels and their edge pixels, from mask_visib/."""
+    ids = np.zeros(shape, dtype=np.int32)
+    masks = sorted(m for m in os.listdir(os.path.join(frame_dir, "mask_visib"))
+                   if m.startswith(f"{im_id:06d}_"))
+    for k, m in enumerate(masks):
+        ids[read_png(os.path.join(frame_dir, "mask_visib", m)) > 0] = k + 1
+    parts = ids > 0
+    edge = np.zeros_like(parts)
+    edge[:, 1:] |= ids[:, 1:] != ids[:, :-1]
+    edge[:, :-1] |= ids[:, 1:] != ids[:, :-1]
+    edge[1:, :] |= ids[1:, :] != ids[:-1, :]
+    edge[:-1, :] |= ids[1:, :] != ids[:-1, :]
+    return {"all": np.ones(shape, dtype=bool), "parts": parts, "edges": edge & parts}
+
+
+def rel_rmse(x, ref, mask):
+    d = x[mask] - ref[mask]
+    return float(math.sqrt(np.mean(d * d)) / max(float(np.mean(ref[mask])), 1e-9))
+
+
+def time_to(points, target):
+    """Seconds to reach `target` error on a curve of (seconds, error) points, interpolated
+    log-log between the first pair that brackets it; None if never reached."""
+    points = sorted(points)
+    best = None
+    for (t0, e0), (t1, e1) in zip(points, points[1:]):
+        if e0 > target >= e1 and e0 > 0 and e1 > 0:
+            f = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            best = math.exp(math.log(t0) + f * (math.log(t1) - math.log(t0)))
+            break
+    if best is None and points and points[0][1] <= target:
+        best = points[0][0]  # the cheapest point is already there
+    return best
+
+
+class Scene:
+    def __init__(self, name, out, cadsynth_bin):
+        self.name, self.out, self.bin = name, out, cadsynth_bin
+        if name == "workcell":
+            case = cwc.CASES["workcell"]
+            self.material, self.lights, self.world = case[0], case[1], case[2]
+            self.shown = dict(case[5])
+            self.exposure, self.filmic = 0.0, False
+        elif name == "pbr_demo":
+            self.exposure, self.filmic = 0.0, True
+        else:
+            raise SystemExit(f"unknown scene '{name}': workcell or pbr_demo")
+
+    def recipe(self, samples, threshold, seed):
+        render = (f"render: {{mode: pbr, samples: {samples}, noise_threshold: {threshold}, "
+                  f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
+                  f"seed: {seed}}}")
+        if self.name == "workcell":
+            text = cwc.recipe(self.material, self.lights, self.world, samples, self.shown)
+            text = re.sub(r"^render: .*$", render, text, flags=re.M)
+            yaw = ", ".join(str(y) for y in WORKCELL_VIEWS)
+            pitch, radius = self.shown["view"][1], self.shown["view"][2]
+            text = re.sub(r"^sweep: .*$", f"sweep: {{yaw: [{yaw}], pitch: [{pitch}], "
+                                          f"radius: [{radius} m]}}", text, flags=re.M)
+            return text
+        lines = []
+        skip = False
+        for line in open(os.path.join(ROOT, "recipes", "pbr_demo.yaml")):
+            if line.startswith(("sweep:", "render:", "output:")):
+                skip = True
+                continue
+            if skip and line.startswith(" "):
+                continue
+            skip = False
+            lines.append(line)
+        return ("".join(lines) + "sweep: {yaw: [0], pitch: [40], radius: [0.65 m]}\n" + render
+                + "\noutput: {formats: [bop], model_points: 0}\n")
+
+    def frames(self):
+        """(folder, im_id) of the frames whose error is measured."""
+        if self.name == "workcell":
+            return [("000000", 0)]
+        return [("000000", 0), ("000001", 0), ("000002", 0)]
+
+    def run(self, tag, samples, threshold, seed=0):
+        path = os.path.join(self.out, f"{self.name}_{tag}.yaml")
+        with open(path, "w") as f:
+            f.write(self.recipe(samples, threshold, seed))
+        dataset = os.path.join(self.out, f"{self.name}_{tag}")
+        start = time.monotonic()
+        done = subprocess.run([self.bin, "generate", path, "-o", dataset, "--overwrite",
+                               "--quiet"], capture_output=True, text=True)
+        seconds = time.monotonic() - start
+        if done.returncode != 0:
+            sys.exit(f"cadsynth failed on {path}: {done.stderr}")
+        count = sum(len(os.listdir(os.path.join(dataset, "train", s, "rgb")))
+                    for s in os.listdir(os.path.join(dataset, "train")))
+        return dataset, seconds / count
+
+
+def cycles_run(scene, dataset, samples, threshold, seed, blender, tag):
+    spec = {"dataset": dataset, "scene_id": 0, "im_id": 0, "width": scene.shown["camera"][0],
+            "height": scene.shown["camera"][1], "samples": samples, "bounces": 3, "seed": seed,
+            "adaptive_threshold": threshold,
+            "output": os.path.join(scene.out, f"cycles_{tag}.exr"),
+            "part_materials": cwc.rules(scene.material), "floor_material": cwc.LAMBERT,
+            "lights": [cwc.blender_light(l) for l in scene.lights], "world": scene.world}
+    spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
+    with open(spec_path, "w") as f:
+        json.dump(spec, f, indent=1)
+    log = os.path.join(scene.out, f"cycles_{tag}.log")
+    with open(log, "w") as f:
+        done = subprocess.run([blender, "-b", "--factory-startup", "--python-exit-code", "1",
+                               "--python", os.path.join(ROOT, "tools", "cycles",
+                                                        "cycles_scene.py"), "--", spec_path],
+                              stdout=f, stderr=f, env=cwc.blender_env())
+    if done.returncode != 0:
+        sys.exit(f"blender failed: see {log}")
+    times = re.findall(r"Time: (\d+):(\d+\.\d+)", open(log).read())
+    return spec["output"], 60 * int(times[-1][0]) + float(times[-1][1])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--cadsynth", default=os.path.join(ROOT, "build", "tools", "cadsynth"))
+    parser.add_argument("--blender", default="blender")
+    parser.add_argument("--scene", default="workcell")
+    parser.add_argument("--renderers", default="cadsynth,cycles")
+    parser.add_argument("--reference-samples", type=int, default=4096)
+    parser.add_argument("--samples", default="1,2,4,8,16,32,64,128",
+                        help="fixed sample counts (no adaptive sampling)")
+    parser.add_argument("--thresholds", default="0.04,0.02,0.01,0.005,0.0025",
+                        help="cadsynth's render.noise_threshold values (samples: --max-samples)")
+    parser.add_argument("--cycles-thresholds", default="0.2,0.1,0.05,0.02,0.01",
+                        help="Cycles' adaptive_threshold values (samples: --max-samples)")
+    parser.add_argument("--max-samples", type=int, default=1024)
+    parser.add_argument("--targets", default="0.1,0.05")
+    parser.add_argument("--out", default="equal_error")
+    args = parser.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    out = os.path.abspath(args.out)
+    scene = Scene(args.scene, out, args.cadsynth)
+    renderers = args.renderers.split(",")
+    result = {"scene": args.scene, "reference_samples": args.reference_samples, "curves": {}}
+
+    # cadsynth: the reference (another seed), then the curves.
+    ref_dataset, ref_seconds = scene.run("reference", args.reference_samples, 0.0, seed=7)
+    masks = {}
+    refs = {}
+    for folder, im in scene.frames():
+        frame_dir = os.path.join(ref_dataset, "train", folder)
+        linear = read_exr(os.path.join(frame_dir, "rgb_hdr", f"{im:06d}.exr"))
+        refs[(folder, im)] = display(linear, scene.exposure, scene.filmic)
+        masks[(folder, im)] = regions(frame_dir, im, linear.shape[:2])
+    print(f"{args.scene}: cadsynth reference {args.reference_samples} spp, "
+          f"{ref_seconds:.1f} s per frame")
+
+    def errors(images):
+        """Pooled over the measured frames: RMSE over their regions' values / mean value."""
+        e = {}
+        for region in ("all", "parts", "edges"):
+            num = den = total = 0.0
+            for key, x in images.items():
+                m = masks[key][region]
+                d = x[m] - refs[key][m]
+                num += float(np.sum(d * d))
+                den += float(np.sum(refs[key][m]))
+                total += float(m.sum() * 3)
+            e[region] = math.sqrt(num / total) / (den / total) if total else float("nan")
+        return e
+
+    def cadsynth_point(tag, samples, threshold):
+        dataset, seconds = scene.run(tag, samples, threshold)
+        images = {}
+        for folder, im in scene.frames():
+            linear = read_exr(os.path.join(dataset, "train", folder, "rgb_hdr", f"{im:06d}.exr"))
+            images[(folder, im)] = display(linear, scene.exposure, scene.filmic)
+        point = {"samples": samples, "threshold": threshold, "seconds": seconds,
+                 **errors(images)}
+        print(f"  cadsynth {tag:>12s}: {seconds:7.3f} s/frame  rel. RMSE all {point['all']:.4f}"
+              f"  parts {point['parts']:.4f}  edges {point['edges']:.4f}", flush=True)
+        return point
+
+    if "cadsynth" in renderers:
+        fixed = [cadsynth_point(f"spp{n}", n, 0.0) for n in map(int, args.samples.split(","))]
+        adaptive = [cadsynth_point(f"t{t}", args.max_samples, float(t))
+                    for t in args.thresholds.split(",")]
+        result["curves"]["cadsynth"] = fixed
+        result["curves"]["cadsynth adaptive"] = adaptive
+
+    if "cycles" in renderers:
+        if args.scene != "workcell":
+            sys.exit("Cycles runs on the workcell scene only")
+        ref_path, ref_t = cycles_run(scene, ref_dataset, args.reference_samples, 0.0, 7,
+                                     args.blender, "reference")
+        key = scene.frames()[0]
+        cycles_ref = display(read_exr(ref_path), scene.exposure, scene.filmic)
+        print(f"  Cycles reference {args.reference_samples} spp: {ref_t:.1f} s")
+
+        def cycles_point(tag, samples, threshold):
+            path, seconds = cycles_run(scene, ref_dataset, samples, threshold, 0, args.blender,
+                                       tag)
+            x = display(read_exr(path), scene.exposure, scene.filmic)
+            point = {"samples": samples, "threshold": threshold, "seconds": seconds}
+            for region in ("all", "parts", "edges"):
+                point[region] = rel_rmse(x, cycles_ref, masks[key][region])
+            print(f"  Cycles   {tag:>12s}: {seconds:7.3f} s/frame  rel. RMSE all "
+                  f"{point['all']:.4f}  parts {point['parts']:.4f}  edges {point['edges']:.4f}",
+                  flush=True)
+            return point
+
+        result["curves"]["Cycles"] = [cycles_point(f"spp{n}", n, 0.0)
+                                      for n in map(int, args.samples.split(","))]
+        result["curves"]["Cycles adaptive"] = [
+            cycles_point(f"t{t}", args.max_samples, float(t))
+            for t in args.cycles_thresholds.split(",")]
+
+    result["time_to"] = {}
+    for target in map(float, args.targets.split(",")):
+        row = {}
+        for name, points in result["curves"].items():
+            for region in ("all", "parts"):
+                row[f"{name} {region}"] = time_to([(p["seconds"], p[region]) for p in points],
+                                                  target)
+        result["time_to"][str(target)] = row
+        print(f"time to rel. RMSE {target}: " + ", ".join(
+            f"{k} {v:.3f} s" if v else f"{k} not reached" for k, v in row.items()))
+    with open(os.path.join(out, f"equal_error_{args.scene}.json"), "w") as f:
+        json.dump(result, f, indent=1)
+    plot(result, os.path.join(out, f"equal_error_{args.scene}.png"))
+
+
+def plot(result, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    styles = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o", "Cycles": "C3--",
+              "Cycles adaptive": "C3-o"}
+    for ax, region in zip(axes, ("parts", "all")):
+        for name, points in result["curves"].items():
+            points = sorted(points, key=lambda p: p["seconds"])
+            ax.loglog([p["seconds"] for p in points], [p[region] for p in points],
+                      styles.get(name, "-"), label=name, markersize=4)
+        for target in (0.05, 0.1):
+            ax.axhline(target, color="grey", linewidth=0.5)
+        ax.set_xlabel("seconds per frame (2 cores)")
+        ax.set_ylabel(f"relative RMSE, {region} pixels")
+        ax.set_title(f"{result['scene']}: {region}")
+        ax.grid(True, which="both", linewidth=0.2)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+if __name__ == "__main__":
+    main()

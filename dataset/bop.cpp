@@ -126,10 +126,11 @@ DecodedImage ToDecoded(const cv::Mat& image, const std::string& origin) {
   if (image.empty()) throw Error(origin + ": not an image OpenCV can read");
   const int depth = image.depth();
   if ((depth != CV_8U && depth != CV_16U && depth != CV_32F) ||
-      (image.channels() != 1 && image.channels() != 3))
+      (image.channels() != 1 && image.channels() != 3 && image.channels() != 4))
     throw Error(origin + ": not an 8- or 16-bit or float grey or colour image");
   cv::Mat rgb = image;
   if (image.channels() == 3) cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
+  if (image.channels() == 4) cv::cvtColor(image, rgb, cv::COLOR_BGRA2RGB);  // alpha dropped
   DecodedImage out;
   out.width = rgb.cols;
   out.height = rgb.rows;

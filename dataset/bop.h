@@ -304,8 +304,8 @@ inline uint16_t EncodeGray(float value, int bits) {
 std::string EncodeImagePng(const void* pixels, int width, int height, int channels, int bits);
 
 // An image file (PNG, JPEG, EXR) as the writers' images read back: 8 or 16 bits per value, or 32
-// for float EXR (rgb_hdr/; native-endian floats), 1 or 3 channels (R, G, B order), rows packed.
-// Throws Error naming the file.
+// for float EXR (rgb_hdr/; native-endian floats), 1 or 3 channels (R, G, B order; an alpha
+// channel is dropped), rows packed. Throws Error naming the file.
 struct DecodedImage {
   int width = 0, height = 0, channels = 0, bits = 0;
   std::vector<uint8_t> bytes;

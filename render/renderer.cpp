@@ -63,7 +63,7 @@ bool RenderOptions::Check(std::string* why) const {
   } else if (!(noise_threshold >= 0 && noise_threshold <= 1)) {
     *why = "noise_threshold must be 0 (off) or a display-value error in (0, 1]";
   } else if (min_samples < 0 || min_samples > samples) {
-    *why = "min_samples must be 0 (samples / 8) to samples";
+    *why = "min_samples must be 0 (automatic) to samples";
   } else if (bounces < 0 || bounces > 64) {
     *why = "bounces must be 0 to 64";
   } else if (!(exposure >= -20 && exposure <= 20)) {

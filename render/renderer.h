@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -44,7 +45,7 @@ struct RenderOptions {
   int samples = 16;  // pbr: paths per pixel (with noise_threshold: at most)
   // pbr: adaptive sampling (render/path_tracer.h, AdaptiveSampling): a pixel stops once the
   // standard error of its displayed value (0-1) is at most noise_threshold, after min_samples
-  // (0: samples / 8, at least 4). 0: off, every pixel gets `samples`.
+  // (0: the square root of samples, at least 8). 0: off, every pixel gets `samples`.
   double noise_threshold = 0.0;
   int min_samples = 0;
   int bounces = 3;        // pbr: surface interactions after the first (Blender's max bounces)
@@ -64,7 +65,11 @@ struct RenderOptions {
 
   bool Check(std::string* why) const;
   // The paths a pixel gets before adaptive sampling's first check.
-  int FirstSamples() const { return min_samples > 0 ? min_samples : std::max(4, samples / 8); }
+  int FirstSamples() const {
+    if (min_samples > 0) return min_samples;
+    return std::min(samples,
+                    std::max(8, static_cast<int>(std::sqrt(static_cast<double>(samples)))));
+  }
 
   // Every field, once (cad/core/schema.h): the recipe's `render:` section, the run key, the shard
   // file.
@@ -90,9 +95,10 @@ struct RenderOptions {
           Field{"noise_threshold", "number",
                 "pbr: adaptive sampling: a pixel stops when the standard error of its displayed "
                 "value (0-1) is at most this (0: off; samples is then the most)"});
-    visit(o.min_samples, Field{"min_samples", "integer",
-                               "pbr: adaptive sampling: paths before the first check (0: samples "
-                               "/ 8, at least 4)"});
+    visit(o.min_samples,
+          Field{"min_samples", "integer",
+                "pbr: adaptive sampling: paths before the first check (0: sqrt(samples), "
+                "at least 8)"});
     visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
     visit(o.exposure, Field{"exposure", "number", "pbr: exposure in stops (-20 to 20)"});
     visit(o.view, Field{"view", "choice", "pbr: display transform", {"standard", "filmic"}});

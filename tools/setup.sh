@@ -11,7 +11,8 @@
 #                             by tools/kubernetes/package-lock.json, fetched from npm's registry
 #                             by tools/kubernetes/fetch_packages.py into tools/kubernetes/
 #                             node_modules): the Kubernetes API schema the manifests are checked
-#                             against
+#                             against, and blender (3.4: the physically based mode checked
+#                             against Cycles, tools/cycles/; the test skips without it)
 #   tools/setup.sh --image    the container image's build stage (Dockerfile): what building
 #                             needs, without PyTorch (the image leaves it out: 1.5 GB for the
 #                             optional cadsynth.torch)
@@ -30,7 +31,7 @@ packages=(
 )
 case "${1:-}" in
   --tests) packages+=(slurm-wlm munge clang-format clang libclang-rt-14-dev python3-pytest
-                     python3-jsonschema python3-yaml)
+                     python3-jsonschema python3-yaml blender)
            # Debian's nodejs, unless a Node.js is already installed (another vendor's). Not
            # Debian's npm, which brings about 400 packages: fetch_packages.py does its work here.
            command -v node > /dev/null || packages+=(nodejs) ;;

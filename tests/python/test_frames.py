@@ -275,3 +275,25 @@ def test_the_stub_names_what_the_module_has():
         for name, method in methods.items():
             if not any(ast.unparse(d) == "property" for d in method.decorator_list):
                 assert parameters(method) == signature(getattr(cls, name)), f"{node.name}.{name}"
+
+
+def test_pbr_frames_give_the_paths_each_pixel_got():
+    # Adaptive sampling: every pixel gets between min_samples and samples paths; a flat lit floor
+    # far from the part stops at the first check more often than not.
+    recipe = cadsynth.Recipe.from_dict({
+        "parts": [{"family": "round_peg"}],
+        "camera": {"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5},
+        "sweep": {"yaw": [0], "pitch": [60], "radius": ["0.3 m"]},
+        "render": {"mode": "pbr", "samples": 32, "min_samples": 4, "noise_threshold": 0.05},
+    })
+    frame = recipe.prepare(cache=False).frame(0, masks=False)
+    samples = frame["samples"]
+    assert samples.dtype == np.int32 and samples.shape == (48, 64)
+    assert samples.min() >= 4 and samples.max() <= 32
+    assert samples.min() < samples.max()
+    fast = cadsynth.Recipe.from_dict({
+        "parts": [{"family": "round_peg"}],
+        "camera": {"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5},
+        "sweep": {"yaw": [0], "pitch": [60], "radius": ["0.3 m"]},
+    }).prepare(cache=False).frame(0, masks=False)
+    assert "samples" not in fast

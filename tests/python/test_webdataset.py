@@ -26,7 +26,7 @@ def written(tmp_path_factory):
 
 def expect_frame_equal(archived, frame):
     # Every key of the frames iterator is decoded, except the two the files do not hold exactly.
-    assert set(frame) - set(archived) == {"normals", "radiance"} & set(frame)
+    assert set(frame) - set(archived) == {"normals", "radiance", "samples"} & set(frame)
     assert set(archived) <= set(frame)
     for key, value in frame.items():
         if key not in archived:

@@ -283,9 +283,11 @@ TEST(AdaptiveSampling, BadOptionsAreRefused) {
   EXPECT_NE(why.find("min_samples"), std::string::npos) << why;
   o = Adaptive(16, 0.01, 0, 3);
   EXPECT_TRUE(o.Check(&why)) << why;
-  EXPECT_EQ(o.FirstSamples(), 4);
-  o.samples = 256;
+  EXPECT_EQ(o.FirstSamples(), 8);  // sqrt(samples), at least 8, at most samples
+  o.samples = 1024;
   EXPECT_EQ(o.FirstSamples(), 32);
+  o.samples = 4;
+  EXPECT_EQ(o.FirstSamples(), 4);
 }
 
 }  // namespace

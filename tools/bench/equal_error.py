@@ -15,8 +15,10 @@ parts' edge pixels (parts' pixels with a 4-neighbour of another instance or the 
 a denoiser must not blur). The reference is the same renderer at --reference-samples without
 adaptive sampling, with another seed, so its own noise is independent of the runs'.
 
-Time: cadsynth, the whole process as a user runs it (`cadsynth generate`, warm part cache) divided
-by the frames it wrote (workcell: four views, the error is view 0's); Cycles, its render time of
+Time: cadsynth, the path tracer's seconds per frame: the whole process as a user runs it
+(`cadsynth generate`, warm part cache) less the same run in the fast mode (start-up, exact labels,
+writing: what an exact frame costs anyway), divided by the frames it wrote (workcell: four views,
+the error is view 0's; the whole process's time is in the JSON too); Cycles, its render time of
 the one frame from its log, without starting Blender or building the scene (tools/cycles
 cycles_scene.py rebuilds cadsynth's frame: the same meshes, normals, poses, camera, lights and
 materials). Both use every core of the machine.
@@ -104,6 +106,9 @@ def time_to(points, target):
 class Scene:
     def __init__(self, name, out, cadsynth_bin):
         self.name, self.out, self.bin = name, out, cadsynth_bin
+        self.fast_seconds = None  # per frame, the same views in the fast mode
+        self.min_samples = 0  # adaptive sampling's (0: cadsynth's default)
+        self.denoise = False
         if name == "workcell":
             case = cwc.CASES["workcell"]
             self.material, self.lights, self.world = case[0], case[1], case[2]
@@ -114,14 +119,16 @@ class Scene:
         else:
             raise SystemExit(f"unknown scene '{name}': workcell or pbr_demo")
 
-    def recipe(self, samples, threshold, seed):
-        render = (f"render: {{mode: pbr, samples: {samples}, noise_threshold: {threshold}, "
+    def recipe(self, samples, threshold, seed, mode="pbr", views=None):
+        render = (f"render: {{mode: {mode}, samples: {samples}, noise_threshold: {threshold}, "
+                  f"denoise: {'true' if self.denoise and mode == 'pbr' else 'false'}, "
+                  f"min_samples: {min(self.min_samples, samples) if threshold else 0}, "
                   f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
                   f"seed: {seed}}}")
         if self.name == "workcell":
             text = cwc.recipe(self.material, self.lights, self.world, samples, self.shown)
             text = re.sub(r"^render: .*$", render, text, flags=re.M)
-            yaw = ", ".join(str(y) for y in WORKCELL_VIEWS)
+            yaw = ", ".join(str(y) for y in (views or WORKCELL_VIEWS))
             pitch, radius = self.shown["view"][1], self.shown["view"][2]
             text = re.sub(r"^sweep: .*$", f"sweep: {{yaw: [{yaw}], pitch: [{pitch}], "
                                           f"radius: [{radius} m]}}", text, flags=re.M)
@@ -145,11 +152,15 @@ class Scene:
             return [("000000", 0)]
         return [("000000", 0), ("000001", 0), ("000002", 0)]
 
-    def run(self, tag, samples, threshold, seed=0):
+    def run(self, tag, samples, threshold, seed=0, mode="pbr", views=None, reuse=False):
+        """The dataset and its seconds per frame: the whole process's, and the path tracer's
+        share (less the same run in the fast mode: the start-up, the labels and the writing)."""
         path = os.path.join(self.out, f"{self.name}_{tag}.yaml")
         with open(path, "w") as f:
-            f.write(self.recipe(samples, threshold, seed))
+            f.write(self.recipe(samples, threshold, seed, mode, views))
         dataset = os.path.join(self.out, f"{self.name}_{tag}")
+        if reuse and os.path.isdir(os.path.join(dataset, "train")):
+            return dataset, float("nan"), float("nan")
         start = time.monotonic()
         done = subprocess.run([self.bin, "generate", path, "-o", dataset, "--overwrite",
                                "--quiet"], capture_output=True, text=True)
@@ -158,7 +169,12 @@ class Scene:
             sys.exit(f"cadsynth failed on {path}: {done.stderr}")
         count = sum(len(os.listdir(os.path.join(dataset, "train", s, "rgb")))
                     for s in os.listdir(os.path.join(dataset, "train")))
-        return dataset, seconds / count
+        if mode == "fast":
+            return dataset, seconds / count
+        if self.fast_seconds is None:
+            self.fast_seconds = sorted(self.run("fast", 1, 0.0, mode="fast")[1]
+                                       for _ in range(3))[1]
+        return dataset, seconds / count, max(seconds / count - self.fast_seconds, 1e-3)
 
 
 def cycles_run(scene, dataset, samples, threshold, seed, blender, tag):
@@ -197,17 +213,27 @@ def main():
     parser.add_argument("--cycles-thresholds", default="0.2,0.1,0.05,0.02,0.01",
                         help="Cycles' adaptive_threshold values (samples: --max-samples)")
     parser.add_argument("--max-samples", type=int, default=1024)
+    parser.add_argument("--min-samples", type=int, default=0,
+                        help="cadsynth's render.min_samples for the adaptive runs (0: default)")
     parser.add_argument("--targets", default="0.1,0.05")
+    parser.add_argument("--denoise", action="store_true",
+                        help="also cadsynth's fixed sample counts with render.denoise")
+    parser.add_argument("--reuse-reference", action="store_true",
+                        help="keep DIR's cadsynth reference when it is there")
+    parser.add_argument("--cycles-from", help="take the Cycles curves from an earlier JSON")
     parser.add_argument("--out", default="equal_error")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
     out = os.path.abspath(args.out)
     scene = Scene(args.scene, out, args.cadsynth)
+    scene.min_samples = args.min_samples
     renderers = args.renderers.split(",")
     result = {"scene": args.scene, "reference_samples": args.reference_samples, "curves": {}}
 
     # cadsynth: the reference (another seed), then the curves.
-    ref_dataset, ref_seconds = scene.run("reference", args.reference_samples, 0.0, seed=7)
+    ref_dataset, ref_seconds, _ = scene.run("reference", args.reference_samples, 0.0, seed=7,
+                                            views=WORKCELL_VIEWS[:1],
+                                            reuse=args.reuse_reference)
     masks = {}
     refs = {}
     for folder, im in scene.frames():
@@ -233,14 +259,15 @@ def main():
         return e
 
     def cadsynth_point(tag, samples, threshold):
-        dataset, seconds = scene.run(tag, samples, threshold)
+        dataset, whole, seconds = scene.run(tag, samples, threshold)
         images = {}
         for folder, im in scene.frames():
             linear = read_exr(os.path.join(dataset, "train", folder, "rgb_hdr", f"{im:06d}.exr"))
             images[(folder, im)] = display(linear, scene.exposure, scene.filmic)
         point = {"samples": samples, "threshold": threshold, "seconds": seconds,
-                 **errors(images)}
-        print(f"  cadsynth {tag:>12s}: {seconds:7.3f} s/frame  rel. RMSE all {point['all']:.4f}"
+                 "whole_seconds": whole, **errors(images)}
+        print(f"  cadsynth {tag:>12s}: {seconds:7.3f} s/frame ({whole:.3f} s whole)  "
+              f"rel. RMSE all {point['all']:.4f}"
               f"  parts {point['parts']:.4f}  edges {point['edges']:.4f}", flush=True)
         return point
 
@@ -250,6 +277,15 @@ def main():
                     for t in args.thresholds.split(",")]
         result["curves"]["cadsynth"] = fixed
         result["curves"]["cadsynth adaptive"] = adaptive
+        if args.denoise:
+            scene.denoise = True
+            result["curves"]["cadsynth denoised"] = [
+                cadsynth_point(f"dn{n}", n, 0.0) for n in map(int, args.samples.split(","))]
+            scene.denoise = False
+    if args.cycles_from:
+        earlier = json.load(open(args.cycles_from))
+        for name in ("Cycles", "Cycles adaptive"):
+            result["curves"][name] = earlier["curves"][name]
 
     if "cycles" in renderers:
         if args.scene != "workcell":
@@ -298,8 +334,8 @@ def plot(result, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    styles = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o", "Cycles": "C3--",
-              "Cycles adaptive": "C3-o"}
+    styles = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o", "cadsynth denoised": "C2-s",
+              "Cycles": "C3--", "Cycles adaptive": "C3-o"}
     for ax, region in zip(axes, ("parts", "all")):
         for name, points in result["curves"].items():
             points = sorted(points, key=lambda p: p["seconds"])

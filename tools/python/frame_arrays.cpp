@@ -194,6 +194,11 @@ void AddImages(py::dict& d, Frame& frame, const BopOptions& bop) {
     d["normals"] = Own(std::move(normals), {h, w, 3});
   }
   if (!frame.radiance.empty()) d["radiance"] = Own(std::move(frame.radiance), {h, w, 3});
+  if (!frame.samples.empty()) {
+    // int32, which PyTorch converts (it has no uint32 tensors); at most 65,536 paths.
+    std::vector<int32_t> samples(frame.samples.begin(), frame.samples.end());
+    d["samples"] = Own(std::move(samples), {h, w});
+  }
   if (!frame.randomization.empty()) d["randomization"] = frame.randomization;
 }
 

@@ -121,6 +121,9 @@ class Frame(TypedDict):
     radiance: NotRequired[NDArray[np.float32]]
     """(H, W, 3) render.hdr (rgb_hdr/): in pbr mode the linear radiance, W/(m^2 sr), before
     exposure; in fast mode the colour before rounding."""
+    samples: NotRequired[NDArray[np.int32]]
+    """(H, W) pbr mode: the paths each pixel's colour averages (render.samples, fewer where
+    adaptive sampling stopped early, render.noise_threshold). Not written to the dataset."""
     randomization: NotRequired[str]
     """The frame's draws as a JSON object (scene_randomization.json); only when the recipe
     randomises something."""

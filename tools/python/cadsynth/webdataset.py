@@ -16,7 +16,8 @@ SCENEID_IMID) decodes to the keys of class Frame (_cadsynth.pyi) that its files 
 - depth and depth_gt as the PNG holds them: encode_depth(depth, depth_scale) * depth_scale, that
   is, rounded to depth_scale (0.1 mm by default); rgb as its file holds it (lossy with
   output.rgb: jpg);
-- normals (8-bit PNG) and radiance (EXR) are not decoded (their files are in the archive).
+- normals (8-bit PNG) and radiance (EXR) are not decoded (their files are in the archive), and
+  samples (pbr: paths per pixel) is not written to datasets.
 
 Only the standard library's tarfile, numpy and the module's PNG decoder are used.
 """

@@ -22,35 +22,15 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+using testing::Dark;
+using testing::Lambert;
 using testing::LookingDown;
 
-Material Lambert(float albedo) {
-  Material m;
-  m.surface.base_color = Eigen::Vector3f::Constant(albedo);
-  m.surface.metallic = 0;
-  m.surface.specular = 0;
-  m.surface.roughness = 1;
-  return m;
-}
-
 RenderOptions Adaptive(int samples, double threshold, int min_samples, int bounces) {
-  RenderOptions o;
-  o.mode = RenderOptions::Mode::kPbr;
-  o.samples = samples;
+  RenderOptions o = testing::Pbr(samples, bounces);
   o.noise_threshold = threshold;
   o.min_samples = min_samples;
-  o.bounces = bounces;
-  o.hdr = true;
-  o.view = RenderOptions::View::kStandard;
-  o.amodal_masks = false;
   return o;
-}
-
-Scene Dark() {
-  Scene scene;
-  scene.light_sources.clear();
-  scene.environment.color.setZero();
-  return scene;
 }
 
 double MeanRed(const Frame& frame) {

@@ -22,16 +22,10 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+using testing::Dark;
+using testing::Lambert;
 using testing::LookingDown;
-
-Material Lambert(float albedo) {
-  Material m;
-  m.surface.base_color = Eigen::Vector3f::Constant(albedo);
-  m.surface.metallic = 0;
-  m.surface.specular = 0;  // no dielectric layer: pure Lambert
-  m.surface.roughness = 1;
-  return m;
-}
+using testing::Pbr;
 
 Material Metal(float roughness) {
   Material m;
@@ -39,24 +33,6 @@ Material Metal(float roughness) {
   m.surface.metallic = 1;
   m.surface.roughness = roughness;
   return m;
-}
-
-RenderOptions Pbr(int samples, int bounces) {
-  RenderOptions o;
-  o.mode = RenderOptions::Mode::kPbr;
-  o.samples = samples;
-  o.bounces = bounces;
-  o.hdr = true;
-  o.view = RenderOptions::View::kStandard;
-  o.amodal_masks = false;
-  return o;
-}
-
-Scene Dark() {
-  Scene scene;
-  scene.light_sources.clear();
-  scene.environment.color.setZero();
-  return scene;
 }
 
 // Radiance (red channel) of pixel (u, v).

@@ -1,7 +1,11 @@
-// Cameras shared by the render tests.
+// Cameras, materials, scenes and options shared by the render tests.
 #pragma once
 
 #include <Eigen/Geometry>
+
+#include "render/material.h"
+#include "render/renderer.h"
+#include "render/scene.h"
 
 namespace cadsynth::testing {
 
@@ -11,6 +15,37 @@ inline Eigen::Isometry3d LookingDown(const Eigen::Vector3d& eye) {
   T.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
   T.translation() = eye;
   return T;
+}
+
+// Pure Lambert of the given albedo: no dielectric layer.
+inline Material Lambert(float albedo) {
+  Material m;
+  m.surface.base_color = Eigen::Vector3f::Constant(albedo);
+  m.surface.metallic = 0;
+  m.surface.specular = 0;
+  m.surface.roughness = 1;
+  return m;
+}
+
+// A scene with no light: no light sources, a black environment.
+inline Scene Dark() {
+  Scene scene;
+  scene.light_sources.clear();
+  scene.environment.color.setZero();
+  return scene;
+}
+
+// The physically based mode at `samples` paths per pixel (every pixel gets them all), the linear
+// radiance kept (Frame::radiance), the standard display transform, no amodal masks.
+inline RenderOptions Pbr(int samples, int bounces) {
+  RenderOptions o;
+  o.mode = RenderOptions::Mode::kPbr;
+  o.samples = samples;
+  o.bounces = bounces;
+  o.hdr = true;
+  o.view = RenderOptions::View::kStandard;
+  o.amodal_masks = false;
+  return o;
 }
 
 }  // namespace cadsynth::testing

@@ -180,6 +180,64 @@ float Importance(const PreparedLight& l, const Eigen::Vector3f& p, const Eigen::
   return value;
 }
 
+// A rectangular light as seen from a point: the spherical rectangle it covers (Urena, Fajardo
+// and King 2013, "An area-preserving parametrization for spherical rectangles"), for sampling
+// directions uniformly in its solid angle. Sampling by area instead weights each point by
+// cos / d^2, which varies over a panel that is large and near (a work cell's light over its
+// parts), and that variation is noise; sampled by solid angle only the receiver's cosine and
+// the visibility are left. In double: the solid angle is a small difference of angles near
+// pi / 2. Far-away panels (solid angle below kMinSolidAngle) are sampled by area in both
+// SampleLight and HitLight, where the two ways agree and the angles lose precision.
+struct SphericalRect {
+  static constexpr double kMinSolidAngle = 1e-5;
+  Eigen::Vector3d o, x, y, z;  // the point; the light's unit axes; z its normal
+  double x0, x1, y0, y1, z0;   // the rectangle in that frame, z0 < 0
+  double b0, b1, k, solid_angle;
+
+  // False when o is behind the light's plane (or in it).
+  bool Init(const PreparedLight& l, const Eigen::Vector3f& point) {
+    o = point.cast<double>();
+    const Eigen::Vector3d u = l.axis_u.cast<double>(), v = l.axis_v.cast<double>();
+    const double half_x = u.norm(), half_y = v.norm();
+    x = u / half_x;
+    y = v / half_y;
+    z = l.normal.cast<double>();  // x cross y
+    const Eigen::Vector3d d = l.position.cast<double>() - u - v - o;
+    z0 = d.dot(z);
+    if (!(z0 < 0)) return false;
+    x0 = d.dot(x), y0 = d.dot(y);
+    x1 = x0 + 2 * half_x, y1 = y0 + 2 * half_y;
+    const Eigen::Vector3d v00(x0, y0, z0), v01(x0, y1, z0), v10(x1, y0, z0), v11(x1, y1, z0);
+    const Eigen::Vector3d n0 = v00.cross(v10).normalized(), n1 = v10.cross(v11).normalized(),
+                          n2 = v11.cross(v01).normalized(), n3 = v01.cross(v00).normalized();
+    const auto angle = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return std::acos(std::clamp(-a.dot(b), -1.0, 1.0));
+    };
+    const double g0 = angle(n0, n1), g1 = angle(n1, n2), g2 = angle(n2, n3), g3 = angle(n3, n0);
+    b0 = n0.z();
+    b1 = n2.z();
+    k = 2 * M_PI - g2 - g3;
+    solid_angle = g0 + g1 - k;
+    return true;
+  }
+
+  // The point of the rectangle in direction (u, v) of the unit square, uniform in solid angle.
+  Eigen::Vector3d Sample(const Eigen::Vector2f& uv) const {
+    const double au = uv.x() * solid_angle + k;
+    const double s = std::sin(au);
+    const double fu = s != 0 ? (std::cos(au) * b0 - b1) / s : 0.0;
+    double cu = std::copysign(1.0, fu) / std::sqrt(fu * fu + b0 * b0);
+    cu = std::clamp(cu, -1.0, 1.0);
+    const double xu = std::clamp(-(cu * z0) / std::max(1e-12, std::sqrt(1 - cu * cu)), x0, x1);
+    const double dist = std::sqrt(xu * xu + z0 * z0);
+    const double h0 = y0 / std::sqrt(dist * dist + y0 * y0);
+    const double h1 = y1 / std::sqrt(dist * dist + y1 * y1);
+    const double hv = h0 + uv.y() * (h1 - h0), hv2 = hv * hv;
+    const double yv = hv2 < 1 - 1e-12 ? std::clamp(hv * dist / std::sqrt(1 - hv2), y0, y1) : y1;
+    return o + xu * x + yv * y + z0 * z;
+  }
+};
+
 struct LightSample {
   Eigen::Vector3f wi;
   float distance = kInf;  // to the emitting point (shadow ray length)
@@ -227,6 +285,18 @@ bool SampleLight(const PreparedLight& l, const Eigen::Vector3f& p, const Eigen::
     case K::kDisc: {
       Eigen::Vector3f q;
       if (l.kind == K::kRect) {
+        SphericalRect rect;
+        if (!rect.Init(l, p)) return false;  // behind the light
+        if (rect.solid_angle >= SphericalRect::kMinSolidAngle) {
+          const Eigen::Vector3d d = rect.Sample(u) - rect.o;
+          const double dist = d.norm();
+          if (!(dist > 0)) return false;
+          out->wi = (d / dist).cast<float>();
+          out->distance = static_cast<float>(dist);
+          out->value = l.radiance;
+          out->pdf = static_cast<float>(1 / rect.solid_angle);
+          return true;
+        }
         q = l.position + (2 * u.x() - 1) * l.axis_u + (2 * u.y() - 1) * l.axis_v;
       } else {
         const Eigen::Vector2f d = ConcentricDisc(u) * l.radius;
@@ -307,6 +377,12 @@ bool HitLight(const PreparedLight& l, const Eigen::Vector3f& o, const Eigen::Vec
       }
       *radiance = l.radiance;
       *pdf = t * t / (l.area * -denom);
+      if (l.kind == K::kRect) {
+        SphericalRect rect;
+        if (rect.Init(l, o) && rect.solid_angle >= SphericalRect::kMinSolidAngle) {
+          *pdf = static_cast<float>(1 / rect.solid_angle);
+        }
+      }
       return true;
     }
     case K::kSun: {

@@ -23,6 +23,7 @@ constexpr double kGravity = 9810.0 * kUnitsPerMm;  // 9.81 m/s^2
 constexpr double kMargin = 0.1 * kUnitsPerMm;      // 0.1 mm: the tote's corner prisms
 constexpr double kMaxMarginMm = 0.5;               // parts: up to 0.5 mm
 constexpr int kCornerSegments = 8;
+constexpr double kMinColliderMm = 10.0;  // a tote's walls and floor collide at least this thick
 constexpr double kLinearDamping = 0.1, kAngularDamping = 0.3;  // fractions of speed lost per s
 constexpr double kCalmDamping = 0.9, kCalmRampS = 1.0;
 constexpr double kSpinningFrictionMm = 0.5;
@@ -109,8 +110,15 @@ void AddContainer(const Container& c, World* w) {
   if (c.kind != Container::Kind::kTote) return;
   auto compound = std::make_unique<btCompoundShape>();
   std::vector<std::unique_ptr<btCollisionShape>> children;
-  const double a = 0.5 * c.inner_mm.x(), b = 0.5 * c.inner_mm.y(), t = c.wall_mm;
+  // The walls and the floor collide as if at least kMinColliderMm thick, the extra thickness
+  // outside (under the floor, beyond the walls) where the images show none: a thin part that
+  // reaches past the middle of a thin slab in one step is pushed out of its far side (M3 and M4
+  // washers dropped from 400 mm fell through a 1 mm floor despite continuous collision detection,
+  // whose swept sphere must fit inside a 0.8 mm washer).
+  const double a = 0.5 * c.inner_mm.x(), b = 0.5 * c.inner_mm.y();
+  const double t = std::max(c.wall_mm, kMinColliderMm);
   const double top = c.floor_mm + c.height_mm;
+  const double bottom = c.floor_mm - std::max(c.floor_mm, kMinColliderMm);
   const auto box = [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
     auto shape = std::make_unique<btBoxShape>(ToBt(0.5 * (hi - lo) * kUnitsPerMm));
     btTransform at = btTransform::getIdentity();
@@ -118,11 +126,11 @@ void AddContainer(const Container& c, World* w) {
     compound->addChildShape(at, shape.get());
     children.push_back(std::move(shape));
   };
-  box({-a, -b, 0}, {a, b, c.floor_mm});        // floor
-  box({-a - t, b, 0}, {a + t, b + t, top});    // +y wall
-  box({-a - t, -b - t, 0}, {a + t, -b, top});  // -y wall
-  box({a, -b, 0}, {a + t, b, top});            // +x wall
-  box({-a - t, -b, 0}, {-a, b, top});          // -x wall
+  box({-a, -b, bottom}, {a, b, c.floor_mm});        // floor
+  box({-a - t, b, bottom}, {a + t, b + t, top});    // +y wall
+  box({-a - t, -b - t, bottom}, {a + t, -b, top});  // -y wall
+  box({a, -b, bottom}, {a + t, b, top});            // +x wall
+  box({-a - t, -b, bottom}, {-a, b, top});          // -x wall
   // Rounded inner corners: the space between each square corner and the arc, as a fan of prisms
   // from the corner (the same polygon as the tote's mesh).
   if (c.corner_radius_mm > 0) {

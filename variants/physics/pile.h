@@ -41,7 +41,9 @@ struct PhysicsMaterial {
 // What the parts fall into. A tote stands on the floor centred on the origin: its inner floor is
 // at z = floor_mm, its rim at floor_mm + height_mm; inner corners are rounded with
 // corner_radius_mm (as a polygon of 8 segments per corner, the same for the collision and the
-// images), outer corners with corner_radius_mm + wall_mm. A mesh container (a bin, a tray, a
+// images), outer corners with corner_radius_mm + wall_mm. Its walls and floor collide as if at
+// least 10 mm thick (the extra outside, where nothing is drawn) so that nothing tunnels through
+// thin ones. A mesh container (a bin, a tray, a
 // fixture from a CAD or mesh file) is its triangles in the world frame, exactly as they are for
 // the collision (Bullet's static triangle mesh: no convexity needed, no thickness either, so thin
 // walls rely on the parts' continuous collision detection).

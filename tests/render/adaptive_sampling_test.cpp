@@ -7,8 +7,6 @@
 #include <cmath>
 #include <vector>
 
-#include <tbb/global_control.h>
-
 #include <gtest/gtest.h>
 
 #include "tests/render/render_support.h"
@@ -25,6 +23,7 @@ constexpr double kPi = 3.14159265358979323846;
 using testing::Dark;
 using testing::Lambert;
 using testing::LookingDown;
+using testing::RenderOnThreads;
 
 RenderOptions Adaptive(int samples, double threshold, int min_samples, int bounces) {
   RenderOptions o = testing::Pbr(samples, bounces);
@@ -216,15 +215,8 @@ TEST(AdaptiveSampling, FlatFloorStopsEarlyWhileAGlossyEdgeGoesOn) {
 TEST(AdaptiveSampling, SameBytesForAnyThreadCount) {
   const GlossySphere view;
   const Renderer renderer(view.parts, view.scene, Adaptive(64, 0.02, 4, 3));
-  Frame one, two;
-  {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
-    one = renderer.Render(view.camera, 3);
-  }
-  {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
-    two = renderer.Render(view.camera, 3);
-  }
+  const Frame one = RenderOnThreads(renderer, view.camera, 3, 1);
+  const Frame two = RenderOnThreads(renderer, view.camera, 3, 2);
   EXPECT_EQ(one.rgb, two.rgb);
   EXPECT_EQ(one.radiance, two.radiance);
   EXPECT_EQ(one.samples, two.samples);

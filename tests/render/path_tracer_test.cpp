@@ -5,8 +5,6 @@
 
 #include <cmath>
 
-#include <tbb/global_control.h>
-
 #include <gtest/gtest.h>
 
 #include "tests/render/render_support.h"
@@ -26,6 +24,7 @@ using testing::Dark;
 using testing::Lambert;
 using testing::LookingDown;
 using testing::Pbr;
+using testing::RenderOnThreads;
 
 Material Metal(float roughness) {
   Material m;
@@ -422,15 +421,8 @@ TEST(PathTracer, SameBytesForAnyThreadCountAndTileOrder) {
   view.scene.light_sources = Scene::DefaultLightSources();
   view.camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.4, 0.7, 500.0);
   const Renderer renderer(view.parts, view.scene, Pbr(8, 3));
-  Frame one, two;
-  {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
-    one = renderer.Render(view.camera, 5);
-  }
-  {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
-    two = renderer.Render(view.camera, 5);
-  }
+  const Frame one = RenderOnThreads(renderer, view.camera, 5, 1);
+  const Frame two = RenderOnThreads(renderer, view.camera, 5, 2);
   EXPECT_EQ(one.rgb, two.rgb);
   EXPECT_EQ(one.radiance, two.radiance);
   // Another view number is another noise pattern; the labels stay the same.

@@ -1,6 +1,7 @@
 // Cameras, materials, scenes and options shared by the render tests.
 #pragma once
 
+#include <tbb/global_control.h>
 #include <Eigen/Geometry>
 
 #include "render/material.h"
@@ -46,6 +47,14 @@ inline RenderOptions Pbr(int samples, int bounces) {
   o.view = RenderOptions::View::kStandard;
   o.amodal_masks = false;
   return o;
+}
+
+// Renders view `view` with TBB limited to `threads` threads (same-bytes tests).
+inline Frame RenderOnThreads(const Renderer& renderer, const Camera& camera, uint64_t view,
+                             int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<size_t>(threads));
+  return renderer.Render(camera, view);
 }
 
 }  // namespace cadsynth::testing

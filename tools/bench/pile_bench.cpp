@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -55,7 +56,7 @@ int Usage() {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   std::string family, file;
   ParamValues params;
   int count = 60, jobs = 1, first = 1, last = 24;
@@ -191,4 +192,6 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+} catch (const std::logic_error&) {  // std::stoi on a word that is not a number
+  return Usage();
 }

@@ -28,8 +28,10 @@ bool ArrangementOptions::Check(std::string* why) const {
     *why = "settle_time must lie in (0, 600] s";
   } else if (!(time_step_s > 0.0 && time_step_s <= 0.02)) {
     *why = "time_step must lie in (0, 0.02] s";
-  } else if (!container.Check(why) || !physics.Check(why)) {
+  } else if (!container.Check(why) || !physics.Check(why) || !sequence.Check(why)) {
     return false;
+  } else if (sequence.picks > 0 && layout != Layout::kPile) {
+    *why = "only a pile (layout: pile) has a pick sequence";
   } else {
     for (const PhysicsDraw& p : part_physics) {
       if (!p.Check(why)) return false;
@@ -37,6 +39,14 @@ bool ArrangementOptions::Check(std::string* why) const {
     return true;
   }
   return false;
+}
+
+bool PickSequence::Check(std::string* why) const {
+  if (picks < 0 || picks > 1000) {
+    *why = "sequence.picks must be 0 to 1000";
+    return false;
+  }
+  return true;
 }
 
 bool PhysicsDraw::Check(std::string* why) const {
@@ -331,10 +341,8 @@ void SortOutPile(const ArrangementOptions& o, const PileResult& r, const std::ve
 
 // layout: pile. Every copy of every (single-part) group and the distractors fall together into
 // the container.
-Arrangement ArrangePile(const std::vector<Part>& parts, const ArrangementOptions& o,
-                        const std::vector<Body>& groups,
-                        const std::vector<CollisionShape>* shapes) {
-  Arrangement out;
+// A pile's physics from its arrangement options (no bodies yet).
+PileOptions PileSettings(const std::vector<Part>& parts, const ArrangementOptions& o) {
   PileOptions pile;
   pile.container = o.container;
   for (size_t p = 0; p < parts.size(); ++p)
@@ -349,6 +357,14 @@ Arrangement ArrangePile(const std::vector<Part>& parts, const ArrangementOptions
     const double side = std::sqrt(M_PI) * o.clutter_radius_mm;  // the clutter disc's area
     pile.drop_size_mm = Eigen::Vector2d(side, side);
   }
+  return pile;
+}
+
+Arrangement ArrangePile(const std::vector<Part>& parts, const ArrangementOptions& o,
+                        const std::vector<Body>& groups,
+                        const std::vector<CollisionShape>* shapes) {
+  Arrangement out;
+  PileOptions pile = PileSettings(parts, o);
   for (const Body& g : groups) {
     if (g.instances.size() != 1) {
       throw Error("arrangement: a pile drops single parts, but one group is an assembly of " +
@@ -665,6 +681,75 @@ Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>&
   out.restless_distractors = r.restless;
   out.distractor_seconds = r.seconds;
   return out;
+}
+
+int ChoosePick(const std::vector<Part>& parts, const Arrangement& pile, PickRule rule,
+               uint64_t seed, int step) {
+  const size_t n = pile.instances.size();
+  if (n == 0) throw Error("arrangement: nothing left to pick");
+  if (rule == PickRule::kRandom) {
+    const double u = UniformDraw(seed, streams::kPickRandom, static_cast<uint64_t>(step));
+    return static_cast<int>(std::min(n - 1, static_cast<size_t>(u * static_cast<double>(n))));
+  }
+  int best = 0;
+  double best_z = -1e300;
+  for (size_t i = 0; i < n; ++i) {
+    const Instance& instance = pile.instances[i];
+    const Part& part = parts[static_cast<size_t>(instance.part)];
+    double top = -1e300;
+    if (part.hull) {
+      for (const Eigen::Vector3d& v : part.hull->vertices)
+        top = std::max(top, (instance.world_from_model * v).z());
+    } else {
+      for (const Eigen::Vector3f& v : part.mesh.positions)
+        top = std::max(top, (instance.world_from_model * v.cast<double>()).z());
+    }
+    if (top > best_z) best_z = top, best = static_cast<int>(i);
+  }
+  return best;
+}
+
+PickStep PickFromPile(const std::vector<Part>& parts, const Arrangement& pile,
+                      const ArrangementOptions& o, int picked,
+                      const std::vector<CollisionShape>& shapes) {
+  if (picked < 0 || static_cast<size_t>(picked) >= pile.instances.size())
+    throw Error("arrangement: pick of instance " + std::to_string(picked) + ", which does not exist");
+  PileOptions settings = PileSettings(parts, o);
+  std::vector<Eigen::Isometry3d> poses;
+  for (const Instance& instance : pile.instances) {
+    settings.bodies.push_back(instance.part);
+    poses.push_back(instance.world_from_model);
+  }
+  for (const Instance& d : pile.distractors) settings.fixed.push_back({d.part, d.world_from_model});
+  PickStep step;
+  step.picked = picked;
+  const PileResult r = SettleAfterPick(parts, shapes, settings, poses, picked, &step.freed);
+  Arrangement& out = step.arranged;
+  out.distractors = pile.distractors;
+  out.settle_seconds = r.seconds;
+  out.restless = r.restless;
+  out.escaped = r.escaped;
+  size_t k = 0;
+  for (size_t i = 0; i < pile.instances.size(); ++i) {
+    if (static_cast<int>(i) == picked) continue;
+    Instance instance = pile.instances[i];
+    double moved = 0;
+    const Part& part = parts[static_cast<size_t>(instance.part)];
+    const Eigen::Isometry3d& now = r.world_from_model[k];
+    if (part.hull) {
+      for (const Eigen::Vector3d& v : part.hull->vertices)
+        moved = std::max(moved, (now * v - instance.world_from_model * v).norm());
+    } else {
+      for (const Eigen::Vector3f& v : part.mesh.positions)
+        moved = std::max(moved, (now * v.cast<double>() - instance.world_from_model * v.cast<double>()).norm());
+    }
+    instance.world_from_model = now;
+    out.instances.push_back(instance);
+    if (!pile.group.empty()) out.group.push_back(pile.group[i]);
+    step.moved_mm.push_back(moved);
+    ++k;
+  }
+  return step;
 }
 
 }  // namespace cadsynth

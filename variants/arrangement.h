@@ -47,6 +47,30 @@ struct PhysicsDraw {
   PhysicsMaterial Draw(uint64_t seed, uint64_t part) const;
 };
 
+// A pick sequence (issue 45): after a pile rests, parts are taken out one at a time, the pile
+// settling again after each (SettleAfterPick), by a rule: the part whose highest point is highest
+// (what a bin picker sees first and reaches most easily), or one drawn at random (stream
+// sequence.pick, from the pile's seed).
+enum class PickRule { kHighest, kRandom };
+
+struct PickSequence {
+  int picks = 0;  // 0: no sequence
+  PickRule rule = PickRule::kHighest;
+
+  bool Check(std::string* why) const;
+  // A scene's `sequence` keys (cad/core/schema.h).
+  template <class Self, class Visit>
+  static void Fields(Self& o, Visit&& visit) {
+    visit(o.picks, Field{"picks", "integer",
+                         "parts taken out one at a time after the pile rests, the pile settling "
+                         "again after each (fewer than the pile's parts)"});
+    visit(o.rule, Field{"pick",
+                        "choice",
+                        "which part each pick takes: the one reaching highest, or one at random",
+                        {"highest", "random"}});
+  }
+};
+
 struct ArrangementOptions {
   Layout layout = Layout::kAssembled;
   PoseMode pose = PoseMode::kAuto;
@@ -72,6 +96,7 @@ struct ArrangementOptions {
   // bodies). Their physics is `physics` (or part_physics) like the parts'.
   std::vector<int> distractors;
   uint64_t distractor_seed = 0;
+  PickSequence sequence;  // a pile's pick sequence (its own recipe section, `sequence`)
 
   bool Check(std::string* why) const;
 
@@ -122,6 +147,26 @@ struct Arrangement {
   std::vector<int> restless_distractors, escaped_distractors;
   double distractor_seconds = 0;  // the simulated time of their drop (a pile's: settle_seconds)
 };
+
+// One pick of a sequence: which instance of the pile was taken (its index there), and the pile
+// after it settled again (the other instances in their order, distractors where they were).
+struct PickStep {
+  int picked = -1;
+  Arrangement arranged;
+  std::vector<bool> freed;       // per instance left: free to move after the pick (the others held)
+  std::vector<double> moved_mm;  // per instance left: the largest move of a point of it
+};
+
+// The instance of `pile` the rule takes at step `step` (1 for the first pick); `seed` the pile's.
+int ChoosePick(const std::vector<Part>& parts, const Arrangement& pile, PickRule rule,
+               uint64_t seed, int step);
+
+// `pile` (arranged from `options`, a pile) with instance `picked` taken out and settled again
+// (SettleAfterPick; its distractors held where they are). `parts` and `shapes` as Arrange's (with
+// the distractors' parts).
+PickStep PickFromPile(const std::vector<Part>& parts, const Arrangement& pile,
+                      const ArrangementOptions& options, int picked,
+                      const std::vector<CollisionShape>& shapes);
 
 // Arranges `instances` (`group[i]` is the group of instance i; empty: one group per instance).
 // Throws Error when a clutter does not fit, saying how many groups did. A pile drops single parts

@@ -64,6 +64,10 @@ inline constexpr RandomStream kDropSeed{
 inline constexpr RandomStream kDistractorOrder{
     "arrange.distractor_order",
     "where a distractor falls in a pile's drop order (before which copy); index = distractor"};
+// scenes: a pile's seed (layout: pile with a sequence)
+inline constexpr RandomStream kPickRandom{
+    "sequence.pick",
+    "the part a pick sequence's random rule takes (among those left); index = step"};
 // grasps: the grasp seed (per part)
 inline constexpr RandomStream kGraspPoint{
     "grasp.point",
@@ -172,7 +176,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kSensorInfrared, streams::kSensorDots,     streams::kImageFrame,
     streams::kImageNoise,     streams::kImageNoiseGrey, streams::kRandomizeFrame,
     streams::kRandomizeDraw,  streams::kGraspPoint,     streams::kGraspApproach,
-    streams::kSuctionPoint,
+    streams::kSuctionPoint,   streams::kPickRandom,
 };
 
 namespace random_detail {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 
 #include <LinearMath/btConvexHullComputer.h>
@@ -490,6 +491,43 @@ void CheckInputs(const std::vector<Part>& parts, const std::vector<CollisionShap
   }
 }
 
+// Confirms a rest `result` found (see PileOptions::confirm_seconds; nothing without a
+// confirmation or a rest). Where it fails, that world goes on until it rests again (its bodies
+// keep their motion), then a new confirmation; result's poses, time and restless bodies follow.
+void Confirm(const std::vector<Part>& parts, const std::vector<CollisionShape>& shapes,
+             const PileOptions& o, PileResult* result) {
+  if (!result->restless.empty() || !(o.confirm_seconds > 0)) return;
+  std::vector<Eigen::Isometry3d> poses = result->world_from_model;
+  while (true) {
+    Restart check(parts, shapes, o, poses, o.confirm_iterations);
+    const int steps = check.Step(o.confirm_seconds);
+    result->steps += steps;
+    result->seconds += steps * o.time_step_s;
+    const std::vector<double> drift = check.Drift();
+    result->drift_mm = *std::max_element(drift.begin(), drift.end());
+    if (result->drift_mm <= o.confirm_drift_mm) break;  // `poses` held: they are the pile
+    PileOptions more = check.options;
+    more.max_seconds = o.max_seconds - result->seconds;
+    if (!(more.max_seconds > 0)) {
+      for (size_t i = 0; i < drift.size(); ++i) {
+        if (drift[i] > o.confirm_drift_mm) result->restless.push_back(static_cast<int>(i));
+      }
+      poses = check.Poses();
+      break;
+    }
+    PileResult settled;
+    check.sim.Run(more, &settled);
+    result->steps += settled.steps;
+    result->seconds += settled.seconds;
+    poses = settled.world_from_model;
+    if (!settled.restless.empty()) {
+      result->restless = settled.restless;
+      break;
+    }
+  }
+  result->world_from_model = poses;
+}
+
 }  // namespace
 
 bool PhysicsMaterial::Check(std::string* why) const {
@@ -680,39 +718,7 @@ PileResult DropPile(const std::vector<Part>& parts, const std::vector<CollisionS
   }
   PileResult result;
   sim.Run(o, &result);
-  if (result.restless.empty() && o.confirm_seconds > 0) {
-    // Confirm the rest in a new world (see PileOptions::confirm_seconds). Where it fails, that
-    // world goes on until it rests again (its bodies keep their motion), then a new confirmation.
-    std::vector<Eigen::Isometry3d> poses = result.world_from_model;
-    while (true) {
-      Restart check(parts, shapes, o, poses, o.confirm_iterations);
-      const int steps = check.Step(o.confirm_seconds);
-      result.steps += steps;
-      result.seconds += steps * o.time_step_s;
-      const std::vector<double> drift = check.Drift();
-      result.drift_mm = *std::max_element(drift.begin(), drift.end());
-      if (result.drift_mm <= o.confirm_drift_mm) break;  // `poses` held: they are the pile
-      PileOptions more = check.options;
-      more.max_seconds = o.max_seconds - result.seconds;
-      if (!(more.max_seconds > 0)) {
-        for (size_t i = 0; i < drift.size(); ++i) {
-          if (drift[i] > o.confirm_drift_mm) result.restless.push_back(static_cast<int>(i));
-        }
-        poses = check.Poses();
-        break;
-      }
-      PileResult settled;
-      check.sim.Run(more, &settled);
-      result.steps += settled.steps;
-      result.seconds += settled.seconds;
-      poses = settled.world_from_model;
-      if (!settled.restless.empty()) {
-        result.restless = settled.restless;
-        break;
-      }
-    }
-    result.world_from_model = poses;
-  }
+  Confirm(parts, shapes, o, &result);
   result.escaped = sim.Escaped(o, result.world_from_model);
   return result;
 }
@@ -732,6 +738,127 @@ PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<Collis
   result.world_from_model = again.Poses();
   const std::vector<double> drift = again.Drift();
   result.drift_mm = *std::max_element(drift.begin(), drift.end());
+  return result;
+}
+
+
+std::vector<PileContact> PileContacts(const std::vector<Part>& parts,
+                                      const std::vector<CollisionShape>& shapes,
+                                      const PileOptions& o,
+                                      const std::vector<Eigen::Isometry3d>& poses) {
+  CheckInputs(parts, shapes, o);
+  if (poses.size() != o.bodies.size()) throw Error("pile: one pose per body needed");
+  Simulation sim(parts, shapes, o);
+  for (size_t i = 0; i < poses.size(); ++i) sim.AddBody(o.bodies[i], poses[i], o);
+  sim.world.world.performDiscreteCollisionDetection();
+  std::map<const btCollisionObject*, int> index;
+  for (size_t i = 0; i < sim.bodies.size(); ++i) index[sim.bodies[i]] = static_cast<int>(i);
+  constexpr double kWithinMm = 0.5, kCarries = 0.1;
+  // Per pair (a < b): -1 side by side, 0 a rests on b, 1 b rests on a (a pair touching at
+  // several points with normals of both kinds: the first kind found that carries weight).
+  std::map<std::pair<int, int>, int> pairs;
+  btCollisionDispatcher& dispatcher = sim.world.dispatcher;
+  for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+    const btPersistentManifold* manifold = dispatcher.getManifoldByIndexInternal(m);
+    const auto a = index.find(manifold->getBody0()), b = index.find(manifold->getBody1());
+    if (a == index.end() || b == index.end()) continue;  // the container or a fixed part
+    for (int k = 0; k < manifold->getNumContacts(); ++k) {
+      const btManifoldPoint& point = manifold->getContactPoint(k);
+      if (point.getDistance() > kWithinMm * kUnitsPerMm) continue;
+      // m_normalWorldOnB points from body 1 towards body 0.
+      const double up = point.m_normalWorldOnB.z();
+      int kind = -1;
+      if (up > kCarries) kind = 0;        // body 0 rests on body 1
+      if (up < -kCarries) kind = 1;       // body 1 rests on body 0
+      int lo = a->second, hi = b->second;
+      if (lo > hi) {
+        std::swap(lo, hi);
+        if (kind >= 0) kind = 1 - kind;
+      }
+      auto [at, added] = pairs.emplace(std::make_pair(lo, hi), kind);
+      if (!added && at->second < 0) at->second = kind;
+    }
+  }
+  std::vector<PileContact> contacts;
+  for (const auto& [pair, kind] : pairs) {
+    const auto [a, b] = pair;
+    if (kind < 0) {
+      contacts.push_back({a, -1, b});
+    } else if (kind == 0) {
+      contacts.push_back({b, a, -1});
+    } else {
+      contacts.push_back({a, b, -1});
+    }
+  }
+  return contacts;
+}
+
+PileResult SettleAfterPick(const std::vector<Part>& parts,
+                           const std::vector<CollisionShape>& shapes, const PileOptions& o,
+                           const std::vector<Eigen::Isometry3d>& poses, int picked,
+                           std::vector<bool>* freed_out) {
+  if (picked < 0 || static_cast<size_t>(picked) >= o.bodies.size())
+    throw Error("pile: pick of body " + std::to_string(picked) + ", which does not exist");
+  // Free: what touched the picked body, then whatever rests on something free.
+  const std::vector<PileContact> contacts = PileContacts(parts, shapes, o, poses);
+  std::vector<bool> free(o.bodies.size(), false);
+  for (const PileContact& c : contacts) {
+    const int a = c.lower, b = c.upper >= 0 ? c.upper : c.other;
+    if (a == picked) free[b] = true;
+    if (b == picked) free[a] = true;
+  }
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (const PileContact& c : contacts) {
+      if (c.upper >= 0 && c.upper != picked && !free[c.upper] &&
+          (free[c.lower] || c.lower == picked)) {
+        free[c.upper] = true;
+        grew = true;
+      }
+    }
+  }
+  free[picked] = false;
+  // The remaining bodies, the free ones simulated, the held ones fixed where they are.
+  std::vector<int> remaining;
+  PileOptions settle = o;
+  settle.bodies.clear();
+  std::vector<Eigen::Isometry3d> start;
+  std::vector<int> free_index;  // per free body: its index in `remaining`
+  for (size_t i = 0; i < o.bodies.size(); ++i) {
+    if (static_cast<int>(i) == picked) continue;
+    remaining.push_back(static_cast<int>(i));
+    if (free[i]) {
+      free_index.push_back(static_cast<int>(remaining.size()) - 1);
+      settle.bodies.push_back(o.bodies[i]);
+      start.push_back(poses[i]);
+    } else {
+      settle.fixed.push_back({o.bodies[i], poses[i]});
+    }
+  }
+  PileResult result;
+  for (int i : remaining) result.world_from_model.push_back(poses[i]);
+  freed_out->assign(remaining.size(), false);
+  for (int k : free_index) (*freed_out)[k] = true;
+  if (settle.bodies.empty()) return result;  // nothing leaned on it
+  CheckInputs(parts, shapes, settle);
+  Simulation sim(parts, shapes, settle);
+  for (size_t k = 0; k < start.size(); ++k) sim.AddBody(settle.bodies[k], start[k], settle);
+  PileResult moved;
+  sim.Run(settle, &moved);
+  Confirm(parts, shapes, settle, &moved);
+  moved.escaped = sim.Escaped(settle, moved.world_from_model);
+  for (size_t k = 0; k < free_index.size(); ++k) {
+    const int i = free_index[k];
+    result.world_from_model[i] = moved.world_from_model[k];
+    double d = 0;
+    for (const Eigen::Vector3d& corner : sim.models[settle.bodies[k]].corners_in_model)
+      d = std::max(d, (moved.world_from_model[k] * corner - start[k] * corner).norm());
+    result.drift_mm = std::max(result.drift_mm, d);
+  }
+  for (int k : moved.restless) result.restless.push_back(free_index[k]);
+  for (int k : moved.escaped) result.escaped.push_back(free_index[k]);
+  result.seconds = moved.seconds;
+  result.steps = moved.steps;
   return result;
 }
 

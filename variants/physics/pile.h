@@ -176,6 +176,32 @@ PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<Collis
                         const PileOptions& options, const std::vector<Eigen::Isometry3d>& poses,
                         double seconds);
 
+// Bodies in contact in a pile at `poses` (options.bodies' order): `upper` rests on `lower` where
+// their contact can carry its weight (the contact normal from lower to upper rises more than
+// 5.7 degrees above the horizontal, z > 0.1); `upper` = -1 for a contact that carries none
+// (side by side), then `lower` and `other` are the two bodies. Contacts within 0.5 mm count.
+struct PileContact {
+  int lower = 0, upper = 0;  // upper == -1: side by side, `lower` touches `other`
+  int other = -1;
+};
+std::vector<PileContact> PileContacts(const std::vector<Part>& parts,
+                                      const std::vector<CollisionShape>& shapes,
+                                      const PileOptions& options,
+                                      const std::vector<Eigen::Isometry3d>& poses);
+
+// A pick (issue 45): body `picked` taken out of a pile at rest at `poses`, and the pile let settle
+// again. The bodies that touched it, and every body resting on those (transitively), are free:
+// they fall and settle in a new world until rest (confirmed as DropPile's when
+// options.confirm_seconds > 0), under options' solver and limits. The other bodies are held where
+// they are (static bodies): nothing they leaned on has gone, and a real pile's static friction
+// holds them, where the solver would only add its creep (docs/scenes.md). Returns the remaining
+// bodies (options.bodies without `picked`, in order): poses, restless and escaped ones, the
+// simulated time; `freed` says which of them were free, drift_mm the largest move of a point.
+PileResult SettleAfterPick(const std::vector<Part>& parts,
+                           const std::vector<CollisionShape>& shapes, const PileOptions& options,
+                           const std::vector<Eigen::Isometry3d>& poses, int picked,
+                           std::vector<bool>* freed);
+
 // A rotation drawn uniformly on SO(3) from three uniform numbers in [0, 1) (Shoemake 1992).
 Eigen::Quaterniond UniformRotation(double u1, double u2, double u3);
 

@@ -3,6 +3,7 @@
 // alone for another second, a fair die, and the same bytes from the same seed.
 #include "variants/physics/pile.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -385,6 +386,107 @@ TEST(Pile, FixedPartsStayPutAndCarryWhatFallsOnThem) {
   EXPECT_LT(worst, 0.5) << "mm";
   o.fixed[0].part = 7;
   EXPECT_THROW(DropPile(parts, shapes, o), Error);
+}
+
+// A pick worked out by hand: on the floor, block B (40 mm cube) lies on block A (60 x 60 x 20
+// mm), beside them block C touches A's side, and block D stands alone. Picking A frees B (it rested
+// on A) and C (it touched A); B falls 20 mm onto the floor, C stays on the floor where it was, D is
+// held exactly. Picking D frees nothing.
+TEST(Pile, PickFreesWhatTouchedOrRestedOnThePickedPartAndHoldsTheRest) {
+  const TessellationOptions t;
+  const std::vector<Part> parts = {MakePart("a", MakeBox(60, 60, 20), t),
+                                   MakePart("cube", MakeBox(40, 40, 40), t)};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0]),
+                                              MakeCollisionShape(parts[1])};
+  PileOptions o;
+  o.bodies = {0, 1, 1, 1};  // A, B, C, D
+  const auto at = [](double x, double y, double z) {
+    return Eigen::Isometry3d(Eigen::Translation3d(x, y, z));
+  };
+  // Resting poses (model frames at the boxes' centres): B on A, C against A's +x side, D apart.
+  const std::vector<Eigen::Isometry3d> poses = {at(0, 0, 10), at(0, 0, 40), at(50.05, 0, 20),
+                                                at(-150, 0, 20)};
+  const std::vector<PileContact> contacts = PileContacts(parts, shapes, o, poses);
+  bool b_on_a = false, c_by_a = false;
+  for (const PileContact& c : contacts) {
+    b_on_a = b_on_a || (c.lower == 0 && c.upper == 1);
+    c_by_a = c_by_a || (c.upper < 0 && ((c.lower == 0 && c.other == 2) ||
+                                        (c.lower == 2 && c.other == 0)));
+    EXPECT_NE(c.lower, 3) << "D touches nothing";
+    EXPECT_NE(c.upper, 3) << "D touches nothing";
+  }
+  EXPECT_TRUE(b_on_a);
+  EXPECT_TRUE(c_by_a);
+
+  std::vector<bool> freed;
+  const PileResult r = SettleAfterPick(parts, shapes, o, poses, 0, &freed);
+  ASSERT_EQ(r.world_from_model.size(), 3u);  // B, C, D
+  EXPECT_EQ(freed, (std::vector<bool>{true, true, false}));
+  EXPECT_TRUE(r.restless.empty());
+  // B fell 20 mm onto the floor, upright, about where it was.
+  EXPECT_NEAR(r.world_from_model[0].translation().z(), 20.0, 0.5);
+  EXPECT_LT(r.world_from_model[0].translation().head<2>().norm(), 2.0);
+  EXPECT_GT(r.drift_mm, 19.0);
+  // C, on the floor all along, stays within 0.5 mm; D is held exactly.
+  EXPECT_LT((r.world_from_model[1].translation() - poses[2].translation()).norm(), 0.5);
+  EXPECT_EQ(r.world_from_model[2].matrix(), poses[3].matrix());
+
+  const PileResult lone = SettleAfterPick(parts, shapes, o, poses, 3, &freed);
+  EXPECT_EQ(freed, (std::vector<bool>{false, false, false}));
+  EXPECT_EQ(lone.seconds, 0.0);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(lone.world_from_model[i].matrix(), poses[i].matrix());
+  EXPECT_THROW(SettleAfterPick(parts, shapes, o, poses, 4, &freed), Error);
+}
+
+// Three picks from a pile of 30 nuts, each the nut reaching highest: each pick frees only a part
+// of the pile (the rest is held exactly), the freed nuts settle again without reaching more than
+// 0.5 mm into another (exact mesh test) and stay inside the tote, and the same pile picked again
+// gives the same poses bit for bit.
+TEST(Pile, PicksFromANutPileSettleWithoutOverlapsAndRepeat) {
+  const std::vector<Part> parts = {FamilyPart("hex_nut", {{"size", std::string("M12")}})};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
+  PileOptions o = ToteOptions(std::vector<int>(30, 0), 11);
+  const PileResult dropped = DropPile(parts, shapes, o);
+  ASSERT_TRUE(dropped.restless.empty());
+  std::vector<Eigen::Isometry3d> poses = dropped.world_from_model;
+  for (int pick = 0; pick < 3; ++pick) {
+    // The highest nut.
+    int top = 0;
+    double top_z = -1e300;
+    for (size_t i = 0; i < poses.size(); ++i) {
+      for (const Eigen::Vector3f& v : parts[0].mesh.positions) {
+        const double z = (poses[i] * v.cast<double>()).z();
+        if (z > top_z) top_z = z, top = static_cast<int>(i);
+      }
+    }
+    std::vector<bool> freed;
+    const PileResult r = SettleAfterPick(parts, shapes, o, poses, top, &freed);
+    std::vector<bool> again_freed;
+    const PileResult again = SettleAfterPick(parts, shapes, o, poses, top, &again_freed);
+    ASSERT_EQ(r.world_from_model.size(), poses.size() - 1);
+    EXPECT_TRUE(r.restless.empty()) << "pick " << pick;
+    EXPECT_TRUE(r.escaped.empty()) << "pick " << pick;
+    const long n_freed = std::count(freed.begin(), freed.end(), true);
+    EXPECT_LT(n_freed, static_cast<long>(freed.size()) / 2) << "pick " << pick;
+    std::vector<Placed> placed;
+    for (size_t k = 0, i = 0; i < poses.size(); ++i) {
+      if (static_cast<int>(i) == top) continue;
+      EXPECT_EQ(again.world_from_model[k].matrix(), r.world_from_model[k].matrix());
+      if (!freed[k]) EXPECT_EQ(r.world_from_model[k].matrix(), poses[i].matrix());
+      placed.push_back(Place(parts[0], r.world_from_model[k]));
+      ++k;
+    }
+    double worst = 0;
+    for (size_t i = 0; i < placed.size(); ++i) {
+      for (size_t j = 0; j < placed.size(); ++j) {
+        if (i != j && (freed[i] || freed[j]))
+          worst = std::max(worst, Penetration(placed[i], placed[j]));
+      }
+    }
+    EXPECT_LT(worst, 0.5) << "mm, pick " << pick;
+    poses = r.world_from_model;
+    o.bodies.pop_back();
+  }
 }
 
 TEST(Pile, ImpossibleOptionsAndRestlessPilesAreReported) {

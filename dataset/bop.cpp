@@ -607,6 +607,43 @@ void BopSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
   WriteJson(scene_dir_ / "scene_gt_world.json", list);
 }
 
+void BopSceneWriter::WriteSequence(const SequenceStep& step) {
+  if (step.instance_ids.size() != obj_ids_.size() || step.freed.size() != obj_ids_.size() ||
+      step.moved_mm.size() != obj_ids_.size())
+    throw Error("bop: a sequence step for a different number of instances");
+  Json instances = Json::array();
+  for (size_t i = 0; i < obj_ids_.size(); ++i) {
+    instances.push_back({{"inst_id", step.instance_ids[i]},
+                         {"obj_id", obj_ids_[i]},
+                         {"freed", static_cast<bool>(step.freed[i])},
+                         {"moved_mm", step.moved_mm[i]}});
+  }
+  Json pick = nullptr;
+  if (step.picked_id >= 0) {
+    Json grasps = Json::array();
+    for (const SequenceStep::Grasp& g : step.grasps) {
+      grasps.push_back({{"kind", g.kind},
+                        {"index", g.index},
+                        {"quality", g.quality},
+                        {"world_R_t2w", RowMajor(g.world_from_tool.linear())},
+                        {"world_t_t2w", Vec(g.world_from_tool.translation())}});
+    }
+    pick = {{"inst_id", step.picked_id},
+            {"obj_id", step.picked_obj_id},
+            {"world_R_m2w", RowMajor(step.picked_world_from_model.linear())},
+            {"world_t_m2w", Vec(step.picked_world_from_model.translation())},
+            {"grasps", grasps},
+            {"settle_seconds", step.settle_seconds},
+            {"restless", step.restless}};
+  }
+  WriteJson(scene_dir_ / "scene_sequence.json", Json{{"first_scene_id", step.first_scene},
+                                                     {"step", step.step},
+                                                     {"picks", step.picks},
+                                                     {"rule", step.rule},
+                                                     {"pick", pick},
+                                                     {"instances", instances}});
+}
+
 SceneSplit BopSceneWriter::Finish() {
   std::lock_guard<std::mutex> lock(mutex_);
   SceneSplit split;

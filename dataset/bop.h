@@ -314,6 +314,39 @@ DecodedImage ReadImageFile(const std::filesystem::path& path);
 // The same from an image file's bytes (a webdataset member); `origin` names it in errors.
 DecodedImage DecodeImage(std::string_view bytes, const std::string& origin);
 
+// One scene of a pick sequence (issue 45): a pile that rested, then had parts taken out one at a
+// time, settling again after each; every step is a scene of its own (scene_sequence.json).
+struct SequenceStep {
+  int first_scene = 0;  // the scene id of step 0 (the pile as it fell)
+  int step = 0;         // 0, 1, ... picks
+  int picks = 0;        // the sequence's number of picks
+  std::string rule;     // how each pick chose its part
+  // Per instance of this scene (scene_gt order): its instance id, which is its index in step 0's
+  // scene_gt and stays the same in every step.
+  std::vector<int> instance_ids;
+  // The pick that led to this step (none at step 0): the instance id taken, its obj_id and its
+  // world pose in the step before.
+  int picked_id = -1;
+  int picked_obj_id = 0;
+  Eigen::Isometry3d picked_world_from_model = Eigen::Isometry3d::Identity();
+  // The picked instance's grasp in the step before (grasp labels only, where it had a free one):
+  // the kind ("parallel_jaw" or "suction"), its index in the object's grasp list and the tool's
+  // world pose (the gripper's frame; the suction cup's contact frame, +z the approach).
+  struct Grasp {
+    std::string kind;
+    int index = -1;
+    double quality = 0;
+    Eigen::Isometry3d world_from_tool = Eigen::Isometry3d::Identity();
+  };
+  std::vector<Grasp> grasps;
+  // Per instance of this scene: whether the pick left it free to settle again (it touched the
+  // picked part, or rested on one that did), and the largest move of a point of it (mm).
+  std::vector<bool> freed;
+  std::vector<double> moved_mm;
+  double settle_seconds = 0;  // simulated, to rest after the pick
+  std::vector<int> restless;  // instance ids still moving when settle_time ran out
+};
+
 // Writes the images of one scene as frames arrive (from any thread) and its JSON files at the end.
 class BopSceneWriter {
  public:
@@ -351,6 +384,9 @@ class BopSceneWriter {
   // in scene_gt order: obj_id, world_R_m2w (row-major) and world_t_m2w (mm), so that
   // world_from_model = [world_R_m2w, world_t_m2w]; and the instance's name.
   void WriteWorldPoses(const std::vector<Instance>& instances);
+
+  // Writes scene_sequence.json (cadsynth): this scene's place in a pick sequence (SequenceStep).
+  void WriteSequence(const SequenceStep& step);
 
   // Names of the COCO categories of scene_gt_coco.json (category id = obj_id, as BOP); by default
   // each is named after its obj_id.
@@ -400,6 +436,7 @@ class RigSceneWriter {
   std::vector<SceneSplit> Finish();
   void RemoveFragments();
   void WriteWorldPoses(const std::vector<Instance>& instances);
+  void WriteSequence(const SequenceStep& step);
   void SetCocoCategories(const std::vector<BopSceneWriter::CocoCategory>& categories);
 
   size_t size() const { return sensors_.size(); }

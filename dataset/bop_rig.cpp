@@ -86,6 +86,8 @@ void RigSceneWriter::RemoveFragments() {
   for (const auto& sensor : sensors_) sensor->RemoveFragments();
 }
 
+void RigSceneWriter::WriteSequence(const SequenceStep& step) { sensors_[0]->WriteSequence(step); }
+
 void RigSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
   sensors_[0]->WriteWorldPoses(instances);
 }

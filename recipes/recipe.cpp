@@ -104,6 +104,12 @@ void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
            "only a pile (layout: pile) or dropped parts (pose: dropped) have physics");
   }
   if (node["container"]) ReadContainer(r, node["container"], key + ".container", scene);
+  if (const YAML::Node sequence = node["sequence"]) {
+    if (!pile) r.Fail(sequence, key + ".sequence", "only a pile (layout: pile) has a pick sequence");
+    ReadFields(r, sequence, key + ".sequence", &scene->arrangement.sequence,
+               SchemaAt("scene.sequence"));
+    r.Check(scene->arrangement.sequence, sequence, key + ".sequence");
+  }
   if (const YAML::Node physics = node["physics"]; physics && physics.IsSequence()) {
     // Rules: the first whose patterns match a part gives its physics.
     for (size_t i = 0; i < physics.size(); ++i) {

@@ -200,7 +200,12 @@ std::vector<Key> SceneKeys() {
       "family | file, density, friction, restitution}, the first match wins",
       Join(PhysicsKeys(), PartPatterns()));
   physics.scalar_kind = "list";  // (the rules' form)
-  return Join(KeysOf<ArrangementOptions>(), {container, physics});
+  const Key sequence = Section(
+      "sequence",
+      "a pile's pick sequence: after the pile rests, parts are taken out one at a time and the "
+      "pile settles again; each step is a scene of its own (NAME_pick_01, ...)",
+      KeysOf<PickSequence>());
+  return Join(KeysOf<ArrangementOptions>(), {container, physics, sequence});
 }
 
 // A camera's keys (`camera:`, or each entry of `cameras:`).

@@ -306,7 +306,7 @@ const SceneGrasps& FrameSource::PlacedGrasps(size_t s) const {
     }
     if (options_.info) {
       std::ostringstream line;
-      line << "scene '" << spec_.scenes[s].name
+      line << "scene '" << prepared_.scene_names[s]
            << "': grasps free of the scene: " << out.jaw_placed.size();
       if (spec.labels.suctionnet) line << " + " << out.suction_placed.size() << " suction";
       line << " ("

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -25,6 +26,7 @@
 #include "render/randomize.h"
 #include "render/renderer.h"
 #include "tools/pipeline/journal.h"
+#include "variants/grasp/scene_grasps.h"
 
 namespace cadsynth {
 
@@ -209,7 +211,7 @@ void WarnPlacements(const Run& run) {
     for (const std::string& warning :
          PlacementWarnings(run.parts, run.prepared.scenes[s].instances, run.sensors[0].intrinsics,
                            run.spec.sweep)) {
-      Warn("scene '" + run.spec.scenes[s].name + "': " + warning);
+      Warn("scene '" + run.prepared.scene_names[s] + "': " + warning);
     }
   }
 }
@@ -281,6 +283,57 @@ struct SceneFormats {
   std::vector<std::unique_ptr<GraspLabelWriter>> grasps;
 };
 
+// The free grasps of instance `instance` of scene `s` (a pick's part in the step before it),
+// for scene_sequence.json: per kind, the best one whose approach comes from above (within 45
+// degrees of straight down, as a bin picker reaches in), else the best of any approach.
+std::vector<SequenceStep::Grasp> PickGrasps(const Run& run, size_t s, int instance) {
+  std::vector<SequenceStep::Grasp> out;
+  const SceneGrasps& placed = run.source.PlacedGrasps(s);
+  const Eigen::Isometry3d& world_from_model =
+      run.prepared.scenes[s].instances[static_cast<size_t>(instance)].world_from_model;
+  const auto best = [&](const char* kind, const std::vector<PlacedGrasp>& list, auto tool,
+                        auto quality) {
+    SequenceStep::Grasp chosen;
+    bool from_above = false;
+    for (const PlacedGrasp& g : list) {
+      if (g.instance != instance || g.approach_blocked) continue;
+      const Eigen::Isometry3d world_from_tool = world_from_model * tool(g.grasp);
+      const bool above = world_from_tool.linear().col(2).z() < -std::sqrt(0.5);
+      const double q = quality(g.grasp);
+      if (chosen.index < 0 || (above && !from_above) || (above == from_above && q > chosen.quality)) {
+        chosen = {kind, g.grasp, q, world_from_tool};
+        from_above = above;
+      }
+    }
+    if (chosen.index >= 0) out.push_back(chosen);
+  };
+  const int part = run.prepared.scenes[s].instances[static_cast<size_t>(instance)].part;
+  if (placed.jaw != nullptr) {
+    const std::vector<ParallelJawGrasp>& grasps = (*placed.jaw)[static_cast<size_t>(part)];
+    best("parallel_jaw", placed.jaw_placed,
+         [&](int g) { return grasps[static_cast<size_t>(g)].model_from_gripper; },
+         [&](int g) { return grasps[static_cast<size_t>(g)].quality; });
+  }
+  if (placed.suction != nullptr) {
+    const std::vector<SuctionGrasp>& grasps = (*placed.suction)[static_cast<size_t>(part)];
+    best("suction", placed.suction_placed,
+         [&](int g) { return ModelFromSuctionTool(grasps[static_cast<size_t>(g)]); },
+         [&](int g) { return grasps[static_cast<size_t>(g)].quality(); });
+  }
+  return out;
+}
+
+// scene_sequence.json of scene s (a step of a pick sequence), with the pick's grasps.
+void WriteSequence(const Run& run, size_t s, RigSceneWriter* writer) {
+  SequenceStep step = *run.prepared.sequence[s];
+  if (step.step > 0 && run.spec.grasps.enabled) {
+    const std::vector<int>& before = run.prepared.sequence[s - 1]->instance_ids;
+    const auto at = std::find(before.begin(), before.end(), step.picked_id);
+    step.grasps = PickGrasps(run, s - 1, static_cast<int>(at - before.begin()));
+  }
+  writer->WriteSequence(step);
+}
+
 // Scene s's writers: its RigSceneWriter, appended to `writers`, and its entries of `formats`.
 void OpenScene(const Run& run, const std::filesystem::path& root, size_t s,
                const std::vector<BopSceneWriter::CocoCategory>& categories,
@@ -290,6 +343,7 @@ void OpenScene(const Run& run, const std::filesystem::path& root, size_t s,
   auto& writer = *writers->emplace_back(std::make_unique<RigSceneWriter>(
       root, static_cast<int>(s), spec.bop, prepared.obj_ids[s], run.bop_sensors));
   if (run.common) writer.WriteWorldPoses(prepared.scenes[s].instances);
+  if (run.common && prepared.sequence[s]) WriteSequence(run, s, &writer);
   writer.SetCocoCategories(categories);
   FormatScene format_scene{root, static_cast<int>(s), spec.bop, {}};
   for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {

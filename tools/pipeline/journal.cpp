@@ -141,6 +141,8 @@ void KeySensors(const RunSpec& spec, KeyWriter& w) {
 void KeyScenes(const RunSpec& spec, KeyWriter& w) {
   for (const SceneSpec& scene : spec.scenes) {
     w.Fields("scene", scene.arrangement);
+    // (Recipes without a pick sequence keep their run keys.)
+    if (scene.arrangement.sequence.picks > 0) w.Fields("sequence", scene.arrangement.sequence);
     if (scene.arrangement.layout != Layout::kPile && scene.arrangement.pose != PoseMode::kDropped)
       continue;
     const Container& c = scene.arrangement.container;

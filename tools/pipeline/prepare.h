@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,8 @@ namespace cadsynth {
 
 // Everything a run renders, before rendering: the objects (all scenes share them), their classes,
 // each scene arranged on the floor with the obj_id of each instance, and variants.json's text.
+// A recipe's scene is one scene here, or 1 + picks scenes when it is a pile with a pick sequence
+// (its steps follow it).
 struct PreparedRun {
   std::vector<Part> parts;
   std::vector<ObjectClass> classes;
@@ -24,6 +27,10 @@ struct PreparedRun {
   // Per scene, its domain randomisation with instance_rule and instance_part resolved.
   std::vector<Randomization> randomization;
   std::string variants_json;
+  // Per scene: its name (the recipe's; a pick sequence's steps add _pick_01, _pick_02, ...), and
+  // for the steps of a pick sequence (the pile as it fell is step 0) where it stands in it.
+  std::vector<std::string> scene_names;
+  std::vector<std::optional<SequenceStep>> sequence;
 };
 
 // Reads the files and builds the family variants of every scene (in parallel), merges repeated

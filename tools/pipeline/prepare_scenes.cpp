@@ -333,6 +333,42 @@ void ReportDistractors(const SceneSpec& scene_spec, const Arrangement& arranged,
   }
 }
 
+// A pile's pick sequence (ArrangementOptions::sequence): each pick from the pile as the last one
+// left it, one after the other, with the instance ids of what is left.
+void RunPickSequence(const SceneSpec& scene_spec, const std::vector<Part>& parts,
+                  const ArrangementOptions& arrangement, const std::vector<CollisionShape>& shapes,
+                  SceneLog* log, Placement* placement) {
+  const PickSequence& sequence = arrangement.sequence;
+  if (sequence.picks <= 0) return;
+  const Arrangement* pile = &placement->arranged;
+  if (static_cast<size_t>(sequence.picks) >= pile->instances.size()) {
+    throw Error("sequence.picks is " + std::to_string(sequence.picks) + " but the pile has " +
+                std::to_string(pile->instances.size()) + " parts: at most " +
+                std::to_string(pile->instances.size() - 1) + " picks");
+  }
+  std::vector<int> ids(pile->instances.size());
+  for (size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int>(i);
+  placement->picks.reserve(static_cast<size_t>(sequence.picks));
+  for (int k = 1; k <= sequence.picks; ++k) {
+    const int picked = ChoosePick(parts, *pile, sequence.rule, arrangement.seed, k);
+    placement->picks.push_back(PickFromPile(parts, *pile, arrangement, picked, shapes));
+    const PickStep& step = placement->picks.back();
+    std::ostringstream m;
+    m << "scene '" << scene_spec.name << "': pick " << k << " took instance " << ids[picked]
+      << "; " << std::count(step.freed.begin(), step.freed.end(), true)
+      << " parts free to settle again (" << step.arranged.settle_seconds << " s, simulated)";
+    log->Say(false, m.str());
+    if (!step.arranged.restless.empty()) {
+      log->Say(true, "scene '" + scene_spec.name + "': after pick " + std::to_string(k) + ", " +
+                         std::to_string(step.arranged.restless.size()) +
+                         " parts still moving after settle_time");
+    }
+    ids.erase(ids.begin() + picked);
+    placement->pick_ids.push_back(ids);
+    pile = &step.arranged;
+  }
+}
+
 // Scene `s` arranged into `placement`: its parts dropped, piled or laid out, and its
 // distractors among them. Throws what fails.
 void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
@@ -379,6 +415,7 @@ void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
     arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
     ReportPile(scene_spec, arranged, log);
     AddTote(scene_spec, arrangement.container, &placement->scene);
+    RunPickSequence(scene_spec, arranged_parts, arrangement, shapes, log, placement);
   } else {
     arranged =
         Arrange(arranged_parts, instances, arrangement, groups, picks.empty() ? nullptr : &shapes);
@@ -552,13 +589,8 @@ PreparedRun RecordScenes(const Context& context, const PrepareState& state,
   std::vector<bool> used_rules(spec.material_rules.size(), false);
   std::vector<bool> used_randomize_rules(spec.randomize.part_rules.size(), false);
   bool recipe_randomize_used = false;
-  for (size_t s = 0; s < spec.scenes.size(); ++s) {
-    Placement& placement = (*placements)[s];
-    for (const auto& [warning, text] : placement.messages)
-      warning ? Warn(text) : context.info(text);
-    if (!placement.error.empty()) throw Error(placement.error);
-    if (placement.exception) std::rethrow_exception(placement.exception);
-    const SceneSpec& scene_spec = spec.scenes[s];
+  // One placement as a scene of the run.
+  const auto record = [&](const SceneSpec& scene_spec, Placement& placement) {
     Scene& scene = placement.scene;
     scene.instances = placement.arranged.instances;
     AssignMaterials(spec, state, placement.arranged.group, &scene, &used_rules);
@@ -578,6 +610,65 @@ PreparedRun RecordScenes(const Context& context, const PrepareState& state,
     prepared.scenes.push_back(std::move(scene));
     prepared.obj_ids.push_back(std::move(obj_ids));
     prepared.randomization.push_back(std::move(randomization));
+  };
+  for (size_t s = 0; s < spec.scenes.size(); ++s) {
+    Placement& placement = (*placements)[s];
+    for (const auto& [warning, text] : placement.messages)
+      warning ? Warn(text) : context.info(text);
+    if (!placement.error.empty()) throw Error(placement.error);
+    if (placement.exception) std::rethrow_exception(placement.exception);
+    const SceneSpec& scene_spec = spec.scenes[s];
+    // A pick sequence's steps: the scene as placed (the look, the tote, the distractors) with
+    // each step's instances.
+    std::vector<Placement> steps(placement.picks.size());
+    for (size_t k = 0; k < steps.size(); ++k) {
+      steps[k].scene = placement.scene;
+      steps[k].arranged = placement.picks[k].arranged;
+      steps[k].distractor_record = placement.distractor_record;
+      steps[k].first_distractor = placement.first_distractor;
+    }
+    const int first = static_cast<int>(prepared.scenes.size());
+    const PickSequence& sequence = scene_spec.arrangement.sequence;
+    const std::string rule = sequence.rule == PickRule::kRandom ? "random" : "highest";
+    const auto step_record = [&](int k) {
+      SequenceStep step;
+      step.first_scene = first;
+      step.step = k;
+      step.picks = static_cast<int>(placement.picks.size());
+      step.rule = rule;
+      const Arrangement& now = k == 0 ? placement.arranged : placement.picks[k - 1].arranged;
+      if (k == 0) {
+        for (size_t i = 0; i < now.instances.size(); ++i)
+          step.instance_ids.push_back(static_cast<int>(i));
+        step.freed.assign(now.instances.size(), false);
+        step.moved_mm.assign(now.instances.size(), 0.0);
+        step.settle_seconds = now.settle_seconds;
+        return step;
+      }
+      const PickStep& pick = placement.picks[k - 1];
+      const std::vector<int>& before = k == 1 ? std::vector<int>() : placement.pick_ids[k - 2];
+      step.instance_ids = placement.pick_ids[k - 1];
+      step.picked_id = k == 1 ? pick.picked : before[pick.picked];
+      const Arrangement& was = k == 1 ? placement.arranged : placement.picks[k - 2].arranged;
+      step.picked_obj_id = was.instances[pick.picked].part + 1;
+      step.picked_world_from_model = was.instances[pick.picked].world_from_model;
+      step.freed = pick.freed;
+      step.moved_mm = pick.moved_mm;
+      step.settle_seconds = now.settle_seconds;
+      for (int i : now.restless) step.restless.push_back(step.instance_ids[i]);
+      return step;
+    };
+    record(scene_spec, placement);
+    prepared.scene_names.push_back(scene_spec.name);
+    prepared.sequence.push_back(steps.empty() ? std::nullopt
+                                              : std::optional<SequenceStep>(step_record(0)));
+    for (size_t k = 0; k < steps.size(); ++k) {
+      record(scene_spec, steps[k]);
+      char suffix[16];
+      std::snprintf(suffix, sizeof(suffix), "_pick_%02zu", k + 1);
+      prepared.scene_names.push_back(scene_spec.name + suffix);
+      prepared.sequence.push_back(step_record(static_cast<int>(k) + 1));
+    }
   }
   WarnUnusedRules(spec, used_rules, recipe_randomize_used, used_randomize_rules);
   return prepared;

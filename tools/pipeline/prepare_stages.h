@@ -97,6 +97,10 @@ struct Placement {
   std::vector<std::pair<bool, std::string>> messages;  // (a warning?, the text)
   std::string error;
   std::exception_ptr exception;  // anything else thrown
+  // A pile's pick sequence: each pick, and per step the instance id (index in `arranged`) of
+  // each instance left.
+  std::vector<PickStep> picks;
+  std::vector<std::vector<int>> pick_ids;
 };
 
 using Json = nlohmann::ordered_json;

@@ -12,7 +12,9 @@
 // --jobs runs piles side by side (each on one thread). --drift-profile also prints each pile's
 // resimulated drift after 0.02, 0.1, 0.25, 0.5 and 2 s (a creep grows linearly, a topple faster,
 // a restart's jolt is there at once). --iterations, --confirm-rest and --confirm-iterations set
-// PileOptions' solver_iterations, confirm_seconds (1 s) and confirm_iterations.
+// PileOptions' solver_iterations, confirm_seconds (1 s) and confirm_iterations. --picks N then
+// takes N parts out of each pile, the highest first, as a pick sequence does (SettleAfterPick):
+// the wall time of each pick step and how many parts it freed, median and worst.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -38,6 +40,8 @@ struct Row {
   uint64_t seed = 0;
   double wall_s = 0, simulated_s = 0, drift_mm = 0, resim_wall_s = 0;
   size_t restless = 0, escaped = 0;
+  std::vector<double> pick_wall_s;
+  std::vector<int> pick_freed;
 };
 
 double Median(std::vector<double> v) {
@@ -50,7 +54,7 @@ int Usage() {
   std::fprintf(stderr,
                "usage: cadsynth_bench_pile (--family NAME [--param KEY=VALUE]... | --file PATH)\n"
                "       [--count 60] [--seeds 1-24] [--jobs 1] [--no-resim] [--drift-profile]\n"
-               "       [--iterations 50] [--confirm-rest] [--confirm-iterations 200]\n");
+               "       [--iterations 50] [--confirm-rest] [--confirm-iterations 200] [--picks 0]\n");
   return 2;
 }
 
@@ -59,7 +63,7 @@ int Usage() {
 int main(int argc, char** argv) try {
   std::string family, file;
   ParamValues params;
-  int count = 60, jobs = 1, first = 1, last = 24;
+  int count = 60, jobs = 1, first = 1, last = 24, picks = 0;
   bool resim = true, profile = false, confirm = false;
   int iterations = cadsynth::PileOptions{}.solver_iterations;
   int confirm_iterations = cadsynth::PileOptions{}.confirm_iterations;
@@ -104,11 +108,15 @@ int main(int argc, char** argv) try {
       confirm = true;
     } else if (a == "--confirm-iterations") {
       confirm_iterations = std::stoi(next());
+    } else if (a == "--picks") {
+      picks = std::stoi(next());
     } else {
       return Usage();
     }
   }
-  if (family.empty() == file.empty() || count < 1 || last < first || jobs < 1) return Usage();
+  if (family.empty() == file.empty() || count < 1 || last < first || jobs < 1 || picks < 0 ||
+      picks >= count)
+    return Usage();
   try {
     cadsynth::Part part;
     if (!family.empty()) {
@@ -161,8 +169,28 @@ int main(int argc, char** argv) try {
         row.resim_wall_s =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       }
+      // Picks, the highest part first.
+      std::vector<Eigen::Isometry3d> poses = r.world_from_model;
+      for (int k = 0; k < picks; ++k) {
+        size_t top = 0;
+        double top_z = -1e300;
+        for (size_t i = 0; i < poses.size(); ++i) {
+          for (const Eigen::Vector3f& v : part.mesh.positions) {
+            const double z = (poses[i] * v.cast<double>()).z();
+            if (z > top_z) top_z = z, top = i;
+          }
+        }
+        std::vector<bool> freed;
+        start = std::chrono::steady_clock::now();
+        poses = cadsynth::SettleAfterPick(parts, shapes, o, poses, static_cast<int>(top), &freed)
+                    .world_from_model;
+        row.pick_wall_s.push_back(
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        row.pick_freed.push_back(static_cast<int>(std::count(freed.begin(), freed.end(), true)));
+        o.bodies.pop_back();
+      }
     });
-    std::vector<double> wall, simulated, drift;
+    std::vector<double> wall, simulated, drift, pick_wall;
     int over = 0, restless = 0;
     for (const Row& row : rows) {
       std::printf("seed %3llu: %6.2f s wall, %5.2f s simulated, %zu restless, %zu escaped",
@@ -170,6 +198,14 @@ int main(int argc, char** argv) try {
                   row.restless, row.escaped);
       if (resim)
         std::printf(", resimulated 1 s: %6.2f mm (%.2f s)", row.drift_mm, row.resim_wall_s);
+      if (picks > 0) {
+        std::printf(", %d picks: median %.3f s, worst %.3f s, freed median %.0f, most %d", picks,
+                    Median(row.pick_wall_s),
+                    *std::max_element(row.pick_wall_s.begin(), row.pick_wall_s.end()),
+                    Median(std::vector<double>(row.pick_freed.begin(), row.pick_freed.end())),
+                    *std::max_element(row.pick_freed.begin(), row.pick_freed.end()));
+        pick_wall.insert(pick_wall.end(), row.pick_wall_s.begin(), row.pick_wall_s.end());
+      }
       std::printf("\n");
       wall.push_back(row.wall_s);
       simulated.push_back(row.simulated_s);
@@ -186,6 +222,10 @@ int main(int argc, char** argv) try {
           "more than 0.5 mm: %d of %zu; declared restless: %d\n",
           Median(drift), *std::max_element(drift.begin(), drift.end()), over, rows.size(),
           restless);
+    }
+    if (picks > 0) {
+      std::printf("pick steps: median %.3f s, worst %.3f s wall (%zu steps)\n", Median(pick_wall),
+                  *std::max_element(pick_wall.begin(), pick_wall.end()), pick_wall.size());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -105,7 +105,8 @@ void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key,
   }
   if (node["container"]) ReadContainer(r, node["container"], key + ".container", scene);
   if (const YAML::Node sequence = node["sequence"]) {
-    if (!pile) r.Fail(sequence, key + ".sequence", "only a pile (layout: pile) has a pick sequence");
+    if (!pile)
+      r.Fail(sequence, key + ".sequence", "only a pile (layout: pile) has a pick sequence");
     ReadFields(r, sequence, key + ".sequence", &scene->arrangement.sequence,
                SchemaAt("scene.sequence"));
     r.Check(scene->arrangement.sequence, sequence, key + ".sequence");

@@ -713,7 +713,8 @@ PickStep PickFromPile(const std::vector<Part>& parts, const Arrangement& pile,
                       const ArrangementOptions& o, int picked,
                       const std::vector<CollisionShape>& shapes) {
   if (picked < 0 || static_cast<size_t>(picked) >= pile.instances.size())
-    throw Error("arrangement: pick of instance " + std::to_string(picked) + ", which does not exist");
+    throw Error("arrangement: pick of instance " + std::to_string(picked) +
+                ", which does not exist");
   PileOptions settings = PileSettings(parts, o);
   std::vector<Eigen::Isometry3d> poses;
   for (const Instance& instance : pile.instances) {
@@ -741,7 +742,8 @@ PickStep PickFromPile(const std::vector<Part>& parts, const Arrangement& pile,
         moved = std::max(moved, (now * v - instance.world_from_model * v).norm());
     } else {
       for (const Eigen::Vector3f& v : part.mesh.positions)
-        moved = std::max(moved, (now * v.cast<double>() - instance.world_from_model * v.cast<double>()).norm());
+        moved = std::max(
+            moved, (now * v.cast<double>() - instance.world_from_model * v.cast<double>()).norm());
     }
     instance.world_from_model = now;
     out.instances.push_back(instance);

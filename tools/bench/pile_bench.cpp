@@ -51,10 +51,11 @@ double Median(std::vector<double> v) {
 }
 
 int Usage() {
-  std::fprintf(stderr,
-               "usage: cadsynth_bench_pile (--family NAME [--param KEY=VALUE]... | --file PATH)\n"
-               "       [--count 60] [--seeds 1-24] [--jobs 1] [--no-resim] [--drift-profile]\n"
-               "       [--iterations 50] [--confirm-rest] [--confirm-iterations 200] [--picks 0]\n");
+  std::fprintf(
+      stderr,
+      "usage: cadsynth_bench_pile (--family NAME [--param KEY=VALUE]... | --file PATH)\n"
+      "       [--count 60] [--seeds 1-24] [--jobs 1] [--no-resim] [--drift-profile]\n"
+      "       [--iterations 50] [--confirm-rest] [--confirm-iterations 200] [--picks 0]\n");
   return 2;
 }
 

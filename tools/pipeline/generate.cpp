@@ -300,7 +300,8 @@ std::vector<SequenceStep::Grasp> PickGrasps(const Run& run, size_t s, int instan
       const Eigen::Isometry3d world_from_tool = world_from_model * tool(g.grasp);
       const bool above = world_from_tool.linear().col(2).z() < -std::sqrt(0.5);
       const double q = quality(g.grasp);
-      if (chosen.index < 0 || (above && !from_above) || (above == from_above && q > chosen.quality)) {
+      if (chosen.index < 0 || (above && !from_above) ||
+          (above == from_above && q > chosen.quality)) {
         chosen = {kind, g.grasp, q, world_from_tool};
         from_above = above;
       }
@@ -310,15 +311,17 @@ std::vector<SequenceStep::Grasp> PickGrasps(const Run& run, size_t s, int instan
   const int part = run.prepared.scenes[s].instances[static_cast<size_t>(instance)].part;
   if (placed.jaw != nullptr) {
     const std::vector<ParallelJawGrasp>& grasps = (*placed.jaw)[static_cast<size_t>(part)];
-    best("parallel_jaw", placed.jaw_placed,
-         [&](int g) { return grasps[static_cast<size_t>(g)].model_from_gripper; },
-         [&](int g) { return grasps[static_cast<size_t>(g)].quality; });
+    best(
+        "parallel_jaw", placed.jaw_placed,
+        [&](int g) { return grasps[static_cast<size_t>(g)].model_from_gripper; },
+        [&](int g) { return grasps[static_cast<size_t>(g)].quality; });
   }
   if (placed.suction != nullptr) {
     const std::vector<SuctionGrasp>& grasps = (*placed.suction)[static_cast<size_t>(part)];
-    best("suction", placed.suction_placed,
-         [&](int g) { return ModelFromSuctionTool(grasps[static_cast<size_t>(g)]); },
-         [&](int g) { return grasps[static_cast<size_t>(g)].quality(); });
+    best(
+        "suction", placed.suction_placed,
+        [&](int g) { return ModelFromSuctionTool(grasps[static_cast<size_t>(g)]); },
+        [&](int g) { return grasps[static_cast<size_t>(g)].quality(); });
   }
   return out;
 }

@@ -336,8 +336,9 @@ void ReportDistractors(const SceneSpec& scene_spec, const Arrangement& arranged,
 // A pile's pick sequence (ArrangementOptions::sequence): each pick from the pile as the last one
 // left it, one after the other, with the instance ids of what is left.
 void RunPickSequence(const SceneSpec& scene_spec, const std::vector<Part>& parts,
-                  const ArrangementOptions& arrangement, const std::vector<CollisionShape>& shapes,
-                  SceneLog* log, Placement* placement) {
+                     const ArrangementOptions& arrangement,
+                     const std::vector<CollisionShape>& shapes, SceneLog* log,
+                     Placement* placement) {
   const PickSequence& sequence = arrangement.sequence;
   if (sequence.picks <= 0) return;
   const Arrangement* pile = &placement->arranged;
@@ -354,9 +355,9 @@ void RunPickSequence(const SceneSpec& scene_spec, const std::vector<Part>& parts
     placement->picks.push_back(PickFromPile(parts, *pile, arrangement, picked, shapes));
     const PickStep& step = placement->picks.back();
     std::ostringstream m;
-    m << "scene '" << scene_spec.name << "': pick " << k << " took instance " << ids[picked]
-      << "; " << std::count(step.freed.begin(), step.freed.end(), true)
-      << " parts free to settle again (" << step.arranged.settle_seconds << " s, simulated)";
+    m << "scene '" << scene_spec.name << "': pick " << k << " took instance " << ids[picked] << "; "
+      << std::count(step.freed.begin(), step.freed.end(), true) << " parts free to settle again ("
+      << step.arranged.settle_seconds << " s, simulated)";
     log->Say(false, m.str());
     if (!step.arranged.restless.empty()) {
       log->Say(true, "scene '" + scene_spec.name + "': after pick " + std::to_string(k) + ", " +

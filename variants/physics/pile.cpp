@@ -741,7 +741,6 @@ PileResult ContinuePile(const std::vector<Part>& parts, const std::vector<Collis
   return result;
 }
 
-
 std::vector<PileContact> PileContacts(const std::vector<Part>& parts,
                                       const std::vector<CollisionShape>& shapes,
                                       const PileOptions& o,
@@ -768,8 +767,8 @@ std::vector<PileContact> PileContacts(const std::vector<Part>& parts,
       // m_normalWorldOnB points from body 1 towards body 0.
       const double up = point.m_normalWorldOnB.z();
       int kind = -1;
-      if (up > kCarries) kind = 0;        // body 0 rests on body 1
-      if (up < -kCarries) kind = 1;       // body 1 rests on body 0
+      if (up > kCarries) kind = 0;   // body 0 rests on body 1
+      if (up < -kCarries) kind = 1;  // body 1 rests on body 0
       int lo = a->second, hi = b->second;
       if (lo > hi) {
         std::swap(lo, hi);

@@ -1178,7 +1178,7 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
   testing::ExpectSameTree(dir / "whole", dir / "tree");
 
   const std::filesystem::path train = dir / "whole" / "train";
-  std::map<int, Eigen::Vector3d> where;  // instance id -> the previous step's world_t_m2w
+  std::map<int, Eigen::Vector3d> where;       // instance id -> the previous step's world_t_m2w
   std::map<int, std::vector<double>> turned;  // and world_R_m2w
   std::set<int> gone;
   for (int s = 0; s <= 3; ++s) {
@@ -1248,8 +1248,8 @@ TEST(Generate, PickSequenceNeedsAPileAndFewerPicksThanParts) {
     EXPECT_NE(std::string(e.what()).find("r.yaml:5"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("only a pile"), std::string::npos) << e.what();
   }
-  const RunSpec spec = ParseRecipe(base + "    layout: pile\n    copies: 3\n    sequence: {picks: 3}\n",
-                                   "r.yaml", dir.path());
+  const RunSpec spec = ParseRecipe(
+      base + "    layout: pile\n    copies: 3\n    sequence: {picks: 3}\n", "r.yaml", dir.path());
   try {
     Prepare(spec);
     ADD_FAILURE() << "3 picks from 3 parts";

@@ -410,8 +410,8 @@ TEST(Pile, PickFreesWhatTouchedOrRestedOnThePickedPartAndHoldsTheRest) {
   bool b_on_a = false, c_by_a = false;
   for (const PileContact& c : contacts) {
     b_on_a = b_on_a || (c.lower == 0 && c.upper == 1);
-    c_by_a = c_by_a || (c.upper < 0 && ((c.lower == 0 && c.other == 2) ||
-                                        (c.lower == 2 && c.other == 0)));
+    c_by_a = c_by_a ||
+             (c.upper < 0 && ((c.lower == 0 && c.other == 2) || (c.lower == 2 && c.other == 0)));
     EXPECT_NE(c.lower, 3) << "D touches nothing";
     EXPECT_NE(c.upper, 3) << "D touches nothing";
   }

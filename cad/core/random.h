@@ -64,7 +64,7 @@ inline constexpr RandomStream kDropSeed{
 inline constexpr RandomStream kDistractorOrder{
     "arrange.distractor_order",
     "where a distractor falls in a pile's drop order (before which copy); index = distractor"};
-// scenes: a pile's seed (layout: pile with a sequence)
+// recipes: scene.seed (a pile's pick sequence, pick: random)
 inline constexpr RandomStream kPickRandom{
     "sequence.pick",
     "the part a pick sequence's random rule takes (among those left); index = step"};

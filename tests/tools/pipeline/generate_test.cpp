@@ -1153,7 +1153,7 @@ sweep: {yaw: [0], pitch: [60], radius: [400 mm]}
 namespace cadsynth {
 namespace {
 
-// A pick sequence (issue 45): 20 bolts in a tote, three picks of the highest. Each step is a scene
+// A pick sequence (issue 45): 16 bolts in a tote, three picks of the highest. Each step is a scene
 // of its own with scene_sequence.json; the run is the same bytes in one process and in two shards
 // merged. Read from the files alone: the picked instance is gone from every later step, no other
 // instance changes its id, and every instance the pick did not free (it neither touched the
@@ -1163,12 +1163,12 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
   ScratchDir dir;
   const std::string recipe =
       "scenes:\n  - name: bin\n    parts: [{family: hex_bolt, params: {size: M8, length: 40 "
-      "mm}}]\n    layout: pile\n    copies: 20\n    seed: 3\n"
+      "mm}}]\n    layout: pile\n    copies: 16\n    seed: 3\n"
       "    container: {type: tote, inner: [150 mm, 110 mm], height: 80 mm}\n"
       "    sequence: {picks: 3, pick: highest}\n"
       "camera: {width: 160, height: 120, fx: 150, fy: 150, cx: 79.5, cy: 59.5}\n"
       "sweep: {yaw: [0], pitch: [90], radius: [500 mm]}\n"
-      "grasps: {gripper: franka, depths: [3 mm, 8.8 mm, 20 mm]}\n";
+      "grasps: {gripper: franka, depths: [3 mm, 8.8 mm, 20 mm], samples: 300}\n";
   const RunSpec spec = ParseRecipe(recipe, "r.yaml", dir.path());
   const GenerateSummary whole = testing::RunJob(spec, dir / "whole");
   EXPECT_EQ(whole.scenes, 4u);
@@ -1181,6 +1181,7 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
   std::map<int, Eigen::Vector3d> where;       // instance id -> the previous step's world_t_m2w
   std::map<int, std::vector<double>> turned;  // and world_R_m2w
   std::set<int> gone;
+  int ever_freed = 0;
   for (int s = 0; s <= 3; ++s) {
     char id[8];
     std::snprintf(id, sizeof(id), "%06d", s);
@@ -1189,9 +1190,9 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
     const json gt = ReadJson(train / id / "scene_gt.json");
     EXPECT_EQ(seq["first_scene_id"], 0);
     EXPECT_EQ(seq["step"], s);
-    ASSERT_EQ(world.size(), 20u - s);
-    ASSERT_EQ(seq["instances"].size(), 20u - s);
-    ASSERT_EQ(gt["0"].size(), 20u - s);
+    ASSERT_EQ(world.size(), 16u - s);
+    ASSERT_EQ(seq["instances"].size(), 16u - s);
+    ASSERT_EQ(gt["0"].size(), 16u - s);
     if (s == 0) {
       EXPECT_TRUE(seq["pick"].is_null());
     } else {
@@ -1231,11 +1232,13 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
         }
       }
     }
-    if (s > 0) EXPECT_LT(freed, 10) << "a pick frees the bolts around it, not the pile";
+    if (s > 0) EXPECT_LT(freed, 8) << "a pick frees the bolts around it, not the pile";
+    ever_freed += freed;
     where = now;
     turned = now_turned;
   }
   EXPECT_EQ(gone.size(), 3u);
+  EXPECT_GT(ever_freed, 0) << "no pick freed a bolt: the test checks nothing that moved";
 }
 
 TEST(Generate, PickSequenceNeedsAPileAndFewerPicksThanParts) {

@@ -615,6 +615,14 @@ Arrangement ArrangeParts(const std::vector<Part>& parts, const std::vector<Insta
   return Collect(parts, bodies, clutter);
 }
 
+// The points that bound a part: its hull's corners (all of its mesh without a hull).
+std::vector<Eigen::Vector3d> HullPoints(const Part& part) {
+  if (part.hull) return part.hull->vertices;
+  std::vector<Eigen::Vector3d> points;
+  for (const Eigen::Vector3f& v : part.mesh.positions) points.push_back(v.cast<double>());
+  return points;
+}
+
 }  // namespace
 
 Arrangement Arrange(const std::vector<Part>& parts, const std::vector<Instance>& instances,
@@ -695,15 +703,9 @@ int ChoosePick(const std::vector<Part>& parts, const Arrangement& pile, PickRule
   double best_z = -1e300;
   for (size_t i = 0; i < n; ++i) {
     const Instance& instance = pile.instances[i];
-    const Part& part = parts[static_cast<size_t>(instance.part)];
     double top = -1e300;
-    if (part.hull) {
-      for (const Eigen::Vector3d& v : part.hull->vertices)
-        top = std::max(top, (instance.world_from_model * v).z());
-    } else {
-      for (const Eigen::Vector3f& v : part.mesh.positions)
-        top = std::max(top, (instance.world_from_model * v.cast<double>()).z());
-    }
+    for (const Eigen::Vector3d& v : HullPoints(parts[static_cast<size_t>(instance.part)]))
+      top = std::max(top, (instance.world_from_model * v).z());
     if (top > best_z) best_z = top, best = static_cast<int>(i);
   }
   return best;
@@ -735,16 +737,9 @@ PickStep PickFromPile(const std::vector<Part>& parts, const Arrangement& pile,
     if (static_cast<int>(i) == picked) continue;
     Instance instance = pile.instances[i];
     double moved = 0;
-    const Part& part = parts[static_cast<size_t>(instance.part)];
     const Eigen::Isometry3d& now = r.world_from_model[k];
-    if (part.hull) {
-      for (const Eigen::Vector3d& v : part.hull->vertices)
-        moved = std::max(moved, (now * v - instance.world_from_model * v).norm());
-    } else {
-      for (const Eigen::Vector3f& v : part.mesh.positions)
-        moved = std::max(
-            moved, (now * v.cast<double>() - instance.world_from_model * v.cast<double>()).norm());
-    }
+    for (const Eigen::Vector3d& v : HullPoints(parts[static_cast<size_t>(instance.part)]))
+      moved = std::max(moved, (now * v - instance.world_from_model * v).norm());
     instance.world_from_model = now;
     out.instances.push_back(instance);
     if (!pile.group.empty()) out.group.push_back(pile.group[i]);

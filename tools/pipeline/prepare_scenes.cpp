@@ -541,6 +541,36 @@ void WarnUnusedRules(const RunSpec& spec, const std::vector<bool>& used_rules,
   }
 }
 
+// Step k of a pile's pick sequence (0: the pile as it fell) as scene_sequence.json records it;
+// `first` is the prepared scene index of step 0.
+SequenceStep StepRecord(const SceneSpec& scene_spec, const Placement& placement, int first, int k) {
+  SequenceStep step;
+  step.first_scene = first;
+  step.step = k;
+  step.picks = static_cast<int>(placement.picks.size());
+  step.rule = scene_spec.arrangement.sequence.rule == PickRule::kRandom ? "random" : "highest";
+  if (k == 0) {
+    const Arrangement& pile = placement.arranged;
+    for (size_t i = 0; i < pile.instances.size(); ++i)
+      step.instance_ids.push_back(static_cast<int>(i));
+    step.freed.assign(pile.instances.size(), false);
+    step.moved_mm.assign(pile.instances.size(), 0.0);
+    step.settle_seconds = pile.settle_seconds;
+    return step;
+  }
+  const PickStep& pick = placement.picks[k - 1];
+  const Arrangement& was = k == 1 ? placement.arranged : placement.picks[k - 2].arranged;
+  step.instance_ids = placement.pick_ids[k - 1];
+  step.picked_id = k == 1 ? pick.picked : placement.pick_ids[k - 2][pick.picked];
+  step.picked_obj_id = was.instances[pick.picked].part + 1;
+  step.picked_world_from_model = was.instances[pick.picked].world_from_model;
+  step.freed = pick.freed;
+  step.moved_mm = pick.moved_mm;
+  step.settle_seconds = pick.arranged.settle_seconds;
+  for (int i : pick.arranged.restless) step.restless.push_back(step.instance_ids[i]);
+  return step;
+}
+
 }  // namespace
 
 PileShapes MakePileShapes(const Context& context, const PrepareState& state) {
@@ -629,46 +659,18 @@ PreparedRun RecordScenes(const Context& context, const PrepareState& state,
       steps[k].first_distractor = placement.first_distractor;
     }
     const int first = static_cast<int>(prepared.scenes.size());
-    const PickSequence& sequence = scene_spec.arrangement.sequence;
-    const std::string rule = sequence.rule == PickRule::kRandom ? "random" : "highest";
-    const auto step_record = [&](int k) {
-      SequenceStep step;
-      step.first_scene = first;
-      step.step = k;
-      step.picks = static_cast<int>(placement.picks.size());
-      step.rule = rule;
-      const Arrangement& now = k == 0 ? placement.arranged : placement.picks[k - 1].arranged;
-      if (k == 0) {
-        for (size_t i = 0; i < now.instances.size(); ++i)
-          step.instance_ids.push_back(static_cast<int>(i));
-        step.freed.assign(now.instances.size(), false);
-        step.moved_mm.assign(now.instances.size(), 0.0);
-        step.settle_seconds = now.settle_seconds;
-        return step;
-      }
-      const PickStep& pick = placement.picks[k - 1];
-      const std::vector<int>& before = k == 1 ? std::vector<int>() : placement.pick_ids[k - 2];
-      step.instance_ids = placement.pick_ids[k - 1];
-      step.picked_id = k == 1 ? pick.picked : before[pick.picked];
-      const Arrangement& was = k == 1 ? placement.arranged : placement.picks[k - 2].arranged;
-      step.picked_obj_id = was.instances[pick.picked].part + 1;
-      step.picked_world_from_model = was.instances[pick.picked].world_from_model;
-      step.freed = pick.freed;
-      step.moved_mm = pick.moved_mm;
-      step.settle_seconds = now.settle_seconds;
-      for (int i : now.restless) step.restless.push_back(step.instance_ids[i]);
-      return step;
-    };
     record(scene_spec, placement);
     prepared.scene_names.push_back(scene_spec.name);
-    prepared.sequence.push_back(steps.empty() ? std::nullopt
-                                              : std::optional<SequenceStep>(step_record(0)));
+    prepared.sequence.push_back(
+        steps.empty() ? std::nullopt
+                      : std::optional<SequenceStep>(StepRecord(scene_spec, placement, first, 0)));
     for (size_t k = 0; k < steps.size(); ++k) {
       record(scene_spec, steps[k]);
       char suffix[16];
       std::snprintf(suffix, sizeof(suffix), "_pick_%02zu", k + 1);
       prepared.scene_names.push_back(scene_spec.name + suffix);
-      prepared.sequence.push_back(step_record(static_cast<int>(k) + 1));
+      prepared.sequence.push_back(
+          StepRecord(scene_spec, placement, first, static_cast<int>(k) + 1));
     }
   }
   WarnUnusedRules(spec, used_rules, recipe_randomize_used, used_randomize_rules);

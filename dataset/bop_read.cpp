@@ -251,4 +251,43 @@ std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::st
   return out;
 }
 
+std::string BopSceneFolder::Relative(const std::string& name) const {
+  char id[16];
+  std::snprintf(id, sizeof id, "%06d", scene_id);
+  return split + "/" + id + "/" + name;
+}
+
+std::vector<BopSceneFolder> FindBopScenes(const std::filesystem::path& root) {
+  namespace fs = std::filesystem;
+  std::vector<BopSceneFolder> out;
+  std::error_code ec;
+  std::vector<fs::path> splits;
+  for (const auto& e : fs::directory_iterator(root, ec)) {
+    if (e.is_directory(ec) && !e.path().filename().string().starts_with("."))
+      splits.push_back(e.path());
+  }
+  std::sort(splits.begin(), splits.end());
+  for (const fs::path& split : splits) {
+    std::vector<std::pair<int, fs::path>> scenes;
+    for (const auto& e : fs::directory_iterator(split, ec)) {
+      const std::string name = e.path().filename().string();
+      const std::optional<int> id = ParseBopId(name);
+      if (id && name.size() == 6 && e.is_directory(ec)) scenes.push_back({*id, e.path()});
+    }
+    std::sort(scenes.begin(), scenes.end());
+    for (const auto& [id, dir] : scenes) {
+      std::vector<std::string> suffixes;
+      for (const auto& e : fs::directory_iterator(dir, ec)) {
+        const std::string name = e.path().filename().string();
+        if (name.starts_with("scene_camera") && name.ends_with(".json"))
+          suffixes.push_back(name.substr(12, name.size() - 12 - 5));
+      }
+      std::sort(suffixes.begin(), suffixes.end());
+      for (const std::string& suffix : suffixes)
+        out.push_back({split.filename().string(), id, suffix, dir});
+    }
+  }
+  return out;
+}
+
 }  // namespace cadsynth

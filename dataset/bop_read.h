@@ -5,6 +5,7 @@
 #pragma once
 
 #include <exception>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -60,5 +61,19 @@ struct BopModelInfo {
 
 // models_info.json: {"obj_id": {"diameter", ["symmetries_discrete"], ["symmetries_continuous"]}}.
 std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::string& origin);
+
+// One scene folder of a BOP dataset and one of its sensors.
+struct BopSceneFolder {
+  std::string split;  // the folder under the dataset root (train, test, ...)
+  int scene_id = 0;
+  std::string suffix;         // "" for the only camera, "_NAME" for a rig's sensor
+  std::filesystem::path dir;  // ROOT/SPLIT/NNNNNN
+  // SPLIT/NNNNNN/NAME: a path relative to the dataset root.
+  std::string Relative(const std::string& name) const;
+};
+
+// Every scene folder (ROOT/SPLIT/NNNNNN holding a scene_camera[_NAME].json) with each sensor, by
+// split, scene id and sensor. Hidden folders are skipped.
+std::vector<BopSceneFolder> FindBopScenes(const std::filesystem::path& root);
 
 }  // namespace cadsynth

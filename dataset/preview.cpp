@@ -377,9 +377,14 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
   }
   cv::Mat sheet;
   cv::vconcat(rows, sheet);
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", sheet, png)) throw Error("preview: PNG encoding failed");
-  return std::string(png.begin(), png.end());
+  std::vector<uchar> bytes;
+  const bool jpeg = options.jpeg_quality > 0;
+  if (!cv::imencode(
+          jpeg ? ".jpg" : ".png", sheet, bytes,
+          jpeg ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, std::min(options.jpeg_quality, 100)}
+               : std::vector<int>{}))
+    throw Error("preview: image encoding failed");
+  return std::string(bytes.begin(), bytes.end());
 }
 
 }  // namespace

@@ -27,6 +27,8 @@ struct PreviewOptions {
   // image in a last panel (parallel jaws as a U of
   // the fingers and the hand's axis, suction cups as their rim's circle and axis); 0: none.
   int grasps = 10;
+  // 1-100: the sheet as a JPEG of this quality (a report's gallery); 0: PNG.
+  int jpeg_quality = 0;
 };
 
 // The 8 corners of `box` (model frame, mm) projected with `k` at pose `cam_from_model`, in pixel
@@ -35,7 +37,8 @@ std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k,
                                         const Eigen::Isometry3d& cam_from_model,
                                         const Eigen::AlignedBox3d& box);
 
-// Reads DATASET (BOP layout) and returns the contact sheet as PNG bytes: one row per frame.
+// Reads DATASET (BOP layout) and returns the contact sheet as PNG (or JPEG) bytes: one row per
+// frame.
 // With `versus`, that dataset must have the same scene folder and images.
 // Sets *shown to the frames it shows. Throws Error naming the file on missing or bad input.
 std::string RenderPreview(const std::filesystem::path& dataset, const PreviewOptions& options,

@@ -64,7 +64,9 @@ inline std::string ReadFile(const std::filesystem::path& path) {
 inline std::map<std::string, std::string> ReadTree(const std::filesystem::path& root) {
   std::map<std::string, std::string> files;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
-    if (!entry.is_regular_file()) continue;
+    // run.json records how the run went (its time, threads and shards): the one file that
+    // differs between runs of one recipe (dataset/manifest.h).
+    if (!entry.is_regular_file() || entry.path() == root / "run.json") continue;
     files[std::filesystem::relative(entry.path(), root).string()] = ReadFile(entry.path());
   }
   return files;

@@ -51,7 +51,9 @@ def cut(recipe, views):
 
 
 def files(tree):
-    return sorted(p.relative_to(tree) for p in tree.rglob("*") if p.is_file())
+    """Every file of the tree but run.json (how the run went: its time differs every run)."""
+    return sorted(p.relative_to(tree) for p in tree.rglob("*")
+                  if p.is_file() and p != tree / "run.json")
 
 
 def main():

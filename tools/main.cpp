@@ -18,7 +18,9 @@
 #include "cad/core/error.h"
 #include "cad/part_cache.h"
 #include "dataset/file_io.h"
+#include "dataset/manifest.h"
 #include "dataset/preview.h"
+#include "dataset/verify.h"
 #include "recipes/recipe.h"
 #include "recipes/recipe_schema.h"
 #include "tools/pipeline/eval.h"
@@ -27,6 +29,7 @@
 #include "tools/pipeline/guarded_import.h"
 #include "tools/pipeline/inspect.h"
 #include "tools/pipeline/progress.h"
+#include "tools/pipeline/report.h"
 #include "tools/pipeline/shards.h"
 
 namespace {
@@ -50,7 +53,7 @@ struct Args {
   bool overwrite = false, quiet = false, help_recipe = false, recipe_schema = false,
        no_cache = false;
   int threads = 0, shards = 0;
-  // merge, preview
+  // merge, preview, verify, report
   std::string dir;
   // inspect
   std::string file, unit, encoding;
@@ -66,6 +69,10 @@ struct Args {
   // eval, preview: a multi-sensor dataset's sensor
   std::string sensor;
   int count = 4, width = 320, grasps = 10;
+  // verify, report
+  std::string certificate, data_file;
+  bool verify_first = false;
+  int pixels = cadsynth::VerifyOptions{}.pixels_per_image;
 };
 
 // This executable, to read CAD and mesh files in child processes (a reader that crashes or hangs
@@ -238,6 +245,51 @@ int RunPreview(const Args& a) {
   return 0;
 }
 
+int RunVerify(const Args& a) {
+  cadsynth::VerifyOptions options;
+  options.pixels_per_image = a.pixels;
+  const cadsynth::VerifyReport report = cadsynth::VerifyDataset(a.dir, options);
+  const std::filesystem::path certificate =
+      !a.certificate.empty() ? std::filesystem::path(a.certificate)
+                             : std::filesystem::path(a.dir) / cadsynth::kCertificateFile;
+  cadsynth::WriteFileAtomic(certificate, report.CertificateJson());
+  if (!report.passed()) {
+    const size_t shown = std::min<size_t>(report.problems.size(), 20);
+    for (size_t k = 0; k < shown; ++k)
+      std::cout << report.problems[k].file << ": " << report.problems[k].reason << "\n";
+    if (report.problem_count > shown)
+      std::cout << "... and " << report.problem_count - shown << " more (" << certificate.string()
+                << " lists " << report.problems.size() << ")\n";
+  }
+  for (const std::string& note : report.notes) std::cout << "note: " << note << "\n";
+  std::cout << report.Verdict() << "\n";
+  return report.passed() ? 0 : 1;
+}
+
+int RunReport(const Args& a) {
+  if (a.verify_first) {
+    cadsynth::VerifyOptions options;
+    options.pixels_per_image = a.pixels;
+    const cadsynth::VerifyReport report = cadsynth::VerifyDataset(a.dir, options);
+    cadsynth::WriteFileAtomic(std::filesystem::path(a.dir) / cadsynth::kCertificateFile,
+                              report.CertificateJson());
+    std::cout << report.Verdict() << "\n";
+  }
+  const std::filesystem::path out = !a.output.empty()
+                                        ? std::filesystem::path(a.output)
+                                        : std::filesystem::path(a.dir) / cadsynth::kReportFile;
+  if (!a.data_file.empty()) {
+    cadsynth::WriteFileAtomic(a.data_file, cadsynth::ReportData(a.dir));
+    std::cout << "wrote " << a.data_file << "\n";
+    return 0;
+  }
+  cadsynth::WriteReport(a.dir, out);
+  std::error_code ec;
+  std::cout << "wrote " << out.string() << " (" << std::filesystem::file_size(out, ec) / 1024
+            << " KiB)\n";
+  return 0;
+}
+
 // The subcommands and their options, each described once: CLI11 parses them and writes each
 // subcommand's --help from the descriptions.
 struct Command {
@@ -394,6 +446,40 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
       ->check(CLI::Range(0, 1000))
       ->type_name("N")
       ->capture_default_str();
+
+  CLI::App* verify = add(
+      "verify",
+      "Checks a dataset on its own: every file against the manifest (size, CRC-32), every "
+      "scene_gt_info entry and COCO mask against the mask PNGs, models_info against the models, "
+      "and a sample of pixels re-cast through the models at the written poses against the depth "
+      "and masks. Prints a one-line verdict, writes a JSON certificate; exit 1 on any problem.",
+      RunVerify);
+  verify->add_option("DATASET", a.dir, "a dataset cadsynth wrote")->required();
+  verify
+      ->add_option("--certificate", a.certificate,
+                   "where to write the JSON certificate (default: DATASET/verify.json)")
+      ->type_name("FILE");
+  verify->add_option("--pixels", a.pixels, "pixels re-cast per image and sensor (0: none)")
+      ->check(CLI::Range(0, 100000))
+      ->type_name("N")
+      ->capture_default_str();
+
+  CLI::App* report = add(
+      "report",
+      "Writes one self-contained HTML page about a dataset: the run, the verifier's verdict, per "
+      "object its viewpoint coverage (folded by its symmetries), in-plane rotation, distance and "
+      "visibility, per image occlusion and depth range, the randomised draws, grasps, pick "
+      "sequences and a gallery of the extreme frames. Plots need Python with matplotlib.",
+      RunReport);
+  report->add_option("DATASET", a.dir, "a dataset cadsynth wrote")->required();
+  report->add_option("-o,--output", a.output, "output HTML (default: DATASET/report.html)")
+      ->type_name("FILE");
+  report->add_flag("--verify", a.verify_first,
+                   "run the verifier first (writes DATASET/verify.json; the report shows it)");
+  report
+      ->add_option("--data", a.data_file,
+                   "write the report's data (JSON) to FILE instead of the page")
+      ->type_name("FILE");
   return commands;
 }
 

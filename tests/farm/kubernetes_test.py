@@ -115,11 +115,14 @@ def check_schema(source):
 
 
 def tree_digest(root, skip=()):
-    """Relative path -> SHA-256 of every file under root (but the folders named in skip)."""
+    """Relative path -> SHA-256 of every file under root (but the folders named in skip, and
+    run.json: how the run went, its time and shards)."""
     digest = {}
     for folder, folders, files in os.walk(root):
         folders[:] = [f for f in folders if f not in skip]
         for name in files:
+            if name == "run.json" and os.path.samefile(folder, root):
+                continue
             path = os.path.join(folder, name)
             with open(path, "rb") as f:
                 digest[os.path.relpath(path, root)] = hashlib.sha256(f.read()).hexdigest()

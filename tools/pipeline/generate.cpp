@@ -11,6 +11,7 @@
 #include <sstream>
 #include <system_error>
 
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
@@ -26,6 +27,7 @@
 #include "render/randomize.h"
 #include "render/renderer.h"
 #include "tools/pipeline/journal.h"
+#include "tools/pipeline/run_record.h"
 #include "variants/grasp/scene_grasps.h"
 
 namespace cadsynth {
@@ -273,6 +275,8 @@ void WriteShardRunInfo(const Run& run, const ShardTree& tree,
   info.obj_ids = run.prepared.obj_ids;
   info.categories = categories;
   info.classes = run.prepared.classes;
+  info.recipe_path = run.spec.recipe.string();
+  info.recipe_text = run.spec.recipe_text;
   tree.WriteRunInfo(info);
 }
 
@@ -473,19 +477,34 @@ void PackArchives(const Run& run, const std::filesystem::path& root,
 void Finish(const Run& run, const Output& out, const std::filesystem::path& output,
             const std::vector<std::filesystem::path>& inputs,
             const std::vector<std::unique_ptr<RigSceneWriter>>& writers, const Counts& counts,
+            const std::string& run_key, size_t frames,
             std::chrono::steady_clock::time_point start) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const int threads = static_cast<int>(
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   if (run.shard) {
     std::ostringstream marker;
     marker << "{\"shard\": " << run.shard->index << ", \"of\": " << run.shard->count
            << ", \"units\": " << counts.total << ", \"frames\": " << counts.frames
            << ", \"skipped_empty\": " << counts.empty_views
            << ", \"skipped_sparse\": " << counts.sparse_views << ", \"seconds\": " << seconds
-           << "}";
+           << ", \"threads\": " << threads << ", \"started_utc\": \"" << UtcTime(seconds) << "\"}";
     out.tree->MarkDone(marker.str());
   } else {
     for (const auto& writer : writers) writer->RemoveFragments();
+    RunRecord record;
+    record.version = CadsynthVersion();
+    record.run_key = RunKeyHash(run_key);
+    record.recipe_path = run.spec.recipe.string();
+    record.recipe_text = run.spec.recipe_text;
+    record.started_utc = UtcTime(seconds);
+    record.frames = frames;
+    record.shards.push_back({0, seconds, frames, threads});
+    // Checksumming every file takes a moment: the run's time includes it.
+    record.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    WriteDatasetRecords(out.root, record);
     out.staging->Publish(output, run.options.overwrite, inputs);
   }
 }
@@ -523,6 +542,7 @@ GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& o
   const Output out = OpenOutput(run, output, run_key);
   // The staging folder (or shard tree) is kept on errors from here on: a rerun resumes from it.
   std::vector<std::unique_ptr<RigSceneWriter>> writers;
+  size_t frames = 0;  // in the finished dataset (a single run)
   try {
     if (run.common) WriteCommonFiles(run, out.root);
     const std::vector<BopSceneWriter::CocoCategory> categories = CocoCategories(run);
@@ -548,12 +568,12 @@ GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& o
     for (size_t s = 0; s < prepared.scenes.size(); ++s)
       RenderScene(run, s, *writers[s], formats, to_render, &counts);
     if (spec.bop.webdataset) PackArchives(run, out.root, writers);
-    if (!run.shard) FinishDataset(out.root, spec.bop, writers, prepared.classes);
+    if (!run.shard) frames = FinishDataset(out.root, spec.bop, writers, prepared.classes);
   } catch (const Error& e) {
     throw Error(std::string(e.what()) + "\n(the complete frames are kept in " + out.root.string() +
                 ": the same command continues from them)");
   }
-  Finish(run, out, output, inputs, writers, counts, start);
+  Finish(run, out, output, inputs, writers, counts, run_key, frames, start);
   if (counts.resumed > 0)
     run.Info("resumed: " + std::to_string(counts.resumed) + " frames were already written");
   if (counts.damaged > 0)

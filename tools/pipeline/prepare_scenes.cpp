@@ -666,7 +666,7 @@ PreparedRun RecordScenes(const Context& context, const PrepareState& state,
                       : std::optional<SequenceStep>(StepRecord(scene_spec, placement, first, 0)));
     for (size_t k = 0; k < steps.size(); ++k) {
       record(scene_spec, steps[k]);
-      char suffix[16];
+      char suffix[32];
       std::snprintf(suffix, sizeof(suffix), "_pick_%02zu", k + 1);
       prepared.scene_names.push_back(scene_spec.name + suffix);
       prepared.sequence.push_back(

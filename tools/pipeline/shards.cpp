@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -24,6 +25,7 @@
 #include "dataset/file_io.h"
 #include "dataset/webdataset.h"
 #include "tools/pipeline/journal.h"
+#include "tools/pipeline/run_record.h"
 
 namespace cadsynth {
 namespace {
@@ -99,6 +101,8 @@ ShardRunInfo ReadRunInfo(const fs::path& path) {
       for (const Json& sensor : j.at("sensors"))
         info.sensors.push_back({sensor.at("name"), sensor.at("gray_bits")});
     }
+    info.recipe_path = j.value("recipe_path", "");
+    info.recipe_text = j.value("recipe_text", "");
     if (info.shards < 1 || info.views < 1 || info.obj_ids.empty()) throw Error("impossible counts");
     return info;
   } catch (const Json::exception& e) {
@@ -385,7 +389,9 @@ void ShardTree::WriteRunInfo(const ShardRunInfo& info) const {
             {"views", info.views},
             {"output", OptionsJson(info.bop)},
             {"scenes", scenes},
-            {"objects", objects}};
+            {"objects", objects},
+            {"recipe_path", info.recipe_path},
+            {"recipe_text", info.recipe_text}};
   if (!info.sensors.empty()) {
     Json sensors = Json::array();
     for (const BopSensor& sensor : info.sensors)
@@ -459,7 +465,9 @@ struct MergeTree {
   std::vector<bool> running;  // per shard: another process holds its lock
   // Frames per shard: written (fragments) and declared (done markers), and its units.
   std::vector<size_t> written, units, declared;
-  std::vector<std::string> not_ready;  // why the shards cannot be merged yet
+  std::vector<RunRecord::Shard> records;  // per shard, from its done marker (run.json)
+  std::string first_start;                // the earliest shard's start (ISO 8601 UTC)
+  std::vector<std::string> not_ready;     // why the shards cannot be merged yet
 };
 
 // Locks are tried one at a time: a farm may have more shards than a process may open files.
@@ -521,11 +529,42 @@ void ReadDoneMarkers(MergeTree* tree) {
       continue;
     }
     try {
-      tree->declared[i] = Json::parse(ReadFileText(marker)).at("frames").get<size_t>();
+      const Json done = Json::parse(ReadFileText(marker));
+      tree->declared[i] = done.at("frames").get<size_t>();
+      tree->records.push_back(
+          {i, done.value("seconds", 0.0), tree->declared[i], done.value("threads", 0)});
+      const std::string started = done.value("started_utc", "");
+      if (!started.empty() && (tree->first_start.empty() || started < tree->first_start))
+        tree->first_start = started;
     } catch (const Json::exception&) {
       tree->not_ready.push_back(marker.string() + ": unreadable");
     }
   }
+}
+
+// run.json and the manifest of the merged dataset: the run key without its shard count (the
+// key of the same run in one process), the shards' times from their done markers.
+void WriteMergedRecords(const MergeTree& tree, size_t frames,
+                        std::chrono::steady_clock::time_point start) {
+  const std::string key = ReadFileText(tree.meta / "run_key");
+  RunRecord record;
+  record.version = CadsynthVersion();
+  record.run_key = RunKeyHash(key.substr(0, key.rfind("shards ")));
+  record.recipe_path = tree.run.recipe_path;
+  record.recipe_text = tree.run.recipe_text;
+  record.frames = frames;
+  record.shards = tree.records;
+  const double merge_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  record.started_utc = tree.first_start.empty() ? UtcTime(merge_seconds) : tree.first_start;
+  // From the first shard's start to the end of the merge (unknown start: the merge alone).
+  record.seconds = merge_seconds;
+  if (!tree.first_start.empty()) {
+    std::tm tm{};
+    if (strptime(tree.first_start.c_str(), "%Y-%m-%dT%H:%M:%SZ", &tm) != nullptr)
+      record.seconds = std::max(merge_seconds, std::difftime(std::time(nullptr), timegm(&tm)));
+  }
+  WriteDatasetRecords(tree.dir, record);
 }
 
 void ThrowUnlessReady(const MergeTree& tree) {
@@ -629,6 +668,7 @@ MergeSummary Merge(const fs::path& dir_in,
   // What a single process does at its end, in the same order: the same bytes.
   const size_t scenes = run.obj_ids.size();
   const size_t frame_count = FinishDataset(dir, run.bop, tree.writers, run.classes);
+  WriteMergedRecords(tree, frame_count, start);
   // From here the dataset is complete: a merge interrupted while cleaning up only cleans up.
   WriteFileAtomic(meta / "merged", std::to_string(frame_count) + "\n");
   for (const auto& writer : tree.writers) writer->RemoveFragments();

@@ -64,6 +64,7 @@ struct ShardRunInfo {
   std::vector<BopSceneWriter::CocoCategory> categories;  // per object (id = obj_id)
   std::vector<ObjectClass> classes;                      // per object
   std::vector<BopSensor> sensors;                        // a rig's sensors; empty: one camera
+  std::string recipe_path, recipe_text;                  // for run.json (run_record.h)
 };
 
 // The output options as the shard file holds them (JSON, each option by its described name) and

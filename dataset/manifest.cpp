@@ -4,8 +4,8 @@
 #include <sstream>
 #include <system_error>
 
-#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <nlohmann/json.hpp>
 
 #include "cad/core/error.h"
 #include "dataset/bop_read.h"
@@ -58,8 +58,8 @@ void WriteManifest(const fs::path& root, const DatasetManifest& manifest) {
       << ",\n  \"frames\": " << manifest.frames << ",\n  \"files\": [";
   for (size_t i = 0; i < manifest.files.size(); ++i) {
     const FileRecord& f = manifest.files[i];
-    out << (i ? ",\n    [" : "\n    [") << Json(f.path).dump() << ", " << f.size << ", "
-        << f.crc32 << "]";
+    out << (i ? ",\n    [" : "\n    [") << Json(f.path).dump() << ", " << f.size << ", " << f.crc32
+        << "]";
   }
   out << (manifest.files.empty() ? "]\n}\n" : "\n  ]\n}\n");
   WriteFileAtomic(root / kManifestFile, out.str());
@@ -85,8 +85,7 @@ DatasetManifest ReadManifest(const fs::path& root) {
     for (const Json& f : j.at("files")) {
       if (!f.is_array() || f.size() != 3)
         throw Error(path.string() + ": files: each entry is [path, size, crc32], not " + f.dump());
-      m.files.push_back(
-          {f[0].get<std::string>(), f[1].get<uint64_t>(), f[2].get<uint32_t>()});
+      m.files.push_back({f[0].get<std::string>(), f[1].get<uint64_t>(), f[2].get<uint32_t>()});
     }
   } catch (const Json::exception& e) {
     throw Error(JsonErrorMessage(path.string(), text, e));

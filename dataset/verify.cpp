@@ -16,10 +16,10 @@
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
+#include <tbb/parallel_for.h>
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <tbb/parallel_for.h>
 
 #include "cad/core/error.h"
 #include "dataset/bop_read.h"
@@ -311,7 +311,8 @@ Findings CheckModels(const fs::path& root, Models* models) {
         expect(("min_" + std::string(axes[a])).c_str(), min[a]);
         expect(("size_" + std::string(axes[a])).c_str(), size[a]);
       }
-      for (const std::string& w : wrong) g.Fail(kModels, origin, "obj " + std::to_string(id) + ": " + w);
+      for (const std::string& w : wrong)
+        g.Fail(kModels, origin, "obj " + std::to_string(id) + ": " + w);
       if (wrong.empty()) read[i] = std::move(m);
     } catch (const Error& e) {
       g.Fail(kModels, file, e.what());
@@ -347,9 +348,9 @@ std::optional<cv::Mat> ReadImage(const fs::path& path, std::string* why) {
   }
   cv::Mat image;
   try {
-    image = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1,
-                                 const_cast<char*>(bytes.data())),
-                         cv::IMREAD_UNCHANGED);
+    image = cv::imdecode(
+        cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
+        cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception&) {
   }
   if (image.empty() || image.channels() != 1) {
@@ -496,7 +497,8 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
     const Json& k = c.at("cam_K");
     camera.fx = k.at(0), camera.cx = k.at(2), camera.fy = k.at(4), camera.cy = k.at(5);
     camera.depth_scale = c.at("depth_scale");
-    if (c.contains("cam_dist_coeffs")) camera.dist = c["cam_dist_coeffs"].get<std::vector<double>>();
+    if (c.contains("cam_dist_coeffs"))
+      camera.dist = c["cam_dist_coeffs"].get<std::vector<double>>();
     for (size_t i = 0; i < n; ++i) {
       const Json& g = (*task.gt)[i];
       obj_ids[i] = g.at("obj_id");
@@ -526,13 +528,12 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
     if (!exact) f.Fail(kRecast, exact_rel, why);
   }
 
-  const uint64_t seed = Mix(Mix(static_cast<uint64_t>(scene.scene_id) * 1000003u +
-                                static_cast<uint64_t>(task.im_id)) ^
-                            std::hash<std::string>{}(scene.split + scene.suffix));
-  const int per_instance =
-      n == 0 || options.pixels_per_image <= 0
-          ? 0
-          : std::max(1, options.pixels_per_image / 2 / static_cast<int>(n));
+  const uint64_t seed = Mix(
+      Mix(static_cast<uint64_t>(scene.scene_id) * 1000003u + static_cast<uint64_t>(task.im_id)) ^
+      std::hash<std::string>{}(scene.split + scene.suffix));
+  const int per_instance = n == 0 || options.pixels_per_image <= 0
+                               ? 0
+                               : std::max(1, options.pixels_per_image / 2 / static_cast<int>(n));
   std::vector<InstanceMasks> masks(n);
   std::vector<bool> readable(n, false);
   for (size_t i = 0; i < n; ++i) {
@@ -592,8 +593,8 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
     if (!readable[i]) continue;
     ++f.checked[kGtInfo];
     const InstanceMasks& m = masks[i];
-    const std::string where = "image " + std::to_string(task.im_id) + " instance " +
-                              std::to_string(i) + ": ";
+    const std::string where =
+        "image " + std::to_string(task.im_id) + " instance " + std::to_string(i) + ": ";
     if (task.gt_info == nullptr || i >= task.gt_info->size()) {
       f.Fail(kGtInfo, info_file, where + "no entry");
       continue;
@@ -619,8 +620,8 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
       // the part in the image (the mask) lies in its box.
       const int w = m.mask.cols, h = m.mask.rows;
       if (m.visible > 0) {
-        const bool inside = bbox_obj[0] >= 0 && bbox_obj[1] >= 0 &&
-                            bbox_obj[0] + bbox_obj[2] < w && bbox_obj[1] + bbox_obj[3] < h;
+        const bool inside = bbox_obj[0] >= 0 && bbox_obj[1] >= 0 && bbox_obj[0] + bbox_obj[2] < w &&
+                            bbox_obj[1] + bbox_obj[3] < h;
         const std::array<int, 4>& b = m.mask_box;
         const bool contained = b[0] >= bbox_obj[0] && b[1] >= bbox_obj[1] &&
                                b[2] <= bbox_obj[0] + bbox_obj[2] &&
@@ -632,12 +633,13 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
           wrong.push_back("px_count_all is " + std::to_string(all) + ", the mask has " +
                           std::to_string(m.all) + " pixels");
       } else if (bbox_obj != std::array<int, 4>{-1, -1, -1, -1}) {
-        wrong.push_back("bbox_obj is " + BoxText(bbox_obj) + " for an instance without a visible pixel");
+        wrong.push_back("bbox_obj is " + BoxText(bbox_obj) +
+                        " for an instance without a visible pixel");
       }
       const double expected = all > 0 ? static_cast<double>(visible) / static_cast<double>(all) : 0;
       if (std::abs(fract - expected) > 1e-9)
-        wrong.push_back("visib_fract is " + std::to_string(fract) + ", px_count_visib / px_count_all is " +
-                        std::to_string(expected));
+        wrong.push_back("visib_fract is " + std::to_string(fract) +
+                        ", px_count_visib / px_count_all is " + std::to_string(expected));
       for (const std::string& reason : wrong) f.Fail(kGtInfo, info_file, where + reason);
     } catch (const Json::exception& e) {
       f.Fail(kGtInfo, info_file, where + "unreadable entry (" + e.what() + ")");
@@ -721,7 +723,8 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
   if (n == 0 || !exact || std::find(readable.begin(), readable.end(), false) != readable.end())
     return f;
   std::vector<std::pair<int, int>> pixels;
-  for (const InstanceMasks& m : masks) pixels.insert(pixels.end(), m.samples.begin(), m.samples.end());
+  for (const InstanceMasks& m : masks)
+    pixels.insert(pixels.end(), m.samples.begin(), m.samples.end());
   uint64_t state = Mix(seed ^ 0x5bd1e995u);
   const int w = masks[0].mask.cols, h = masks[0].mask.rows;
   for (int k = 0; k < options.pixels_per_image / 2; ++k) {
@@ -739,21 +742,22 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
     double spread = 0;
     for (const auto& [du, dv] : {std::pair{0.02, 0.0}, {-0.02, 0.0}, {0.0, 0.02}, {0.0, -0.02}}) {
       bool near_ok = true;
-      const CastResult o = CastAll(instance_models, poses, camera, u + 0.5 + du, v + 0.5 + dv,
-                                   &near_ok);
+      const CastResult o =
+          CastAll(instance_models, poses, camera, u + 0.5 + du, v + 0.5 + dv, &near_ok);
       if (!near_ok || o.nearest != c.nearest) edge = true;
       for (size_t i = 0; i < n && !edge; ++i) {
         if (o.z[i].has_value() != c.z[i].has_value()) edge = true;
       }
-      if (!edge && c.nearest >= 0) spread = std::max(spread, std::abs(*o.z[c.nearest] - *c.z[c.nearest]));
+      if (!edge && c.nearest >= 0)
+        spread = std::max(spread, std::abs(*o.z[c.nearest] - *c.z[c.nearest]));
     }
     if (edge) continue;
     ++f.checked[kRecast];
     // The models at the written poses disagree with a mask or the depth: the pose, the mask or
     // the depth is wrong; scene_gt is named, the image in the reason.
     const std::string gt_file = scene.Relative("scene_gt" + scene.suffix + ".json");
-    const std::string at = "image " + std::to_string(task.im_id) + " pixel (" +
-                           std::to_string(u) + ", " + std::to_string(v) + ")";
+    const std::string at = "image " + std::to_string(task.im_id) + " pixel (" + std::to_string(u) +
+                           ", " + std::to_string(v) + ")";
     const auto mask_name = [&](const char* folder, int i) {
       return std::string(folder) + scene.suffix + "/" + im + "_" + Id6(i) + ".png";
     };
@@ -762,13 +766,15 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
       if (instance_models[i] == nullptr) continue;
       const bool on = masks[i].mask.at<uint8_t>(v, u) != 0, hit = c.z[i].has_value() && *c.z[i] > 0;
       if (on != hit) {
-        wrong.push_back({gt_file, at + ": instance " + std::to_string(i) + " at this pose " +
-                                      (hit ? "covers it, its mask (" : "does not cover it, its mask (") +
-                                      mask_name("mask", static_cast<int>(i)) +
-                                      (hit ? ") does not" : ") does")});
+        wrong.push_back(
+            {gt_file, at + ": instance " + std::to_string(i) + " at this pose " +
+                          (hit ? "covers it, its mask (" : "does not cover it, its mask (") +
+                          mask_name("mask", static_cast<int>(i)) +
+                          (hit ? ") does not" : ") does")});
       }
     }
-    const double stored = exact->depth() == CV_16U ? exact->at<uint16_t>(v, u) : exact->at<uint8_t>(v, u);
+    const double stored =
+        exact->depth() == CV_16U ? exact->at<uint16_t>(v, u) : exact->at<uint8_t>(v, u);
     const double z = stored * camera.depth_scale;
     int visible_instance = -1;
     for (size_t i = 0; i < n; ++i) {
@@ -844,7 +850,8 @@ std::string VerifyReport::CertificateJson() const {
   for (const Check& c : checks)
     checks_json.push_back(
         {{"name", c.name}, {"checked", c.checked}, {"failed", c.failed}, {"unit", c.unit}});
-  for (const Problem& p : problems) problems_json.push_back({{"file", p.file}, {"reason", p.reason}});
+  for (const Problem& p : problems)
+    problems_json.push_back({{"file", p.file}, {"reason", p.reason}});
   const Json j = {{"verdict", passed() ? "pass" : "fail"},
                   {"summary", Verdict()},
                   {"dataset", dataset},

@@ -46,8 +46,8 @@ struct VerifyReport {
   std::string dataset;
   std::string run_key;  // the manifest's (empty without one)
   std::vector<Check> checks;
-  std::vector<Problem> problems;  // the first max_problems, in file order
-  size_t problem_count = 0;       // all of them
+  std::vector<Problem> problems;   // the first max_problems, in file order
+  size_t problem_count = 0;        // all of them
   std::vector<std::string> notes;  // facts that are not failures (unlisted files, skipped checks)
   size_t images = 0, instances = 0;
 

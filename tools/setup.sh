@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages cadsynth builds with, if any are missing. Run as root (or with
 # sudo available). Does nothing, and needs no network, when everything is already there.
-#   tools/setup.sh            what building and running cadsynth needs
+#   tools/setup.sh            what building and running cadsynth needs (python3-matplotlib
+#                             draws `cadsynth report`'s plots)
 #   tools/setup.sh --tests    also Slurm and munge (a test starts a single-node Slurm cluster),
 #                             clang-format (a test checks the formatting), clang and its
 #                             sanitizer runtimes (the sanitizer build, tools/sanitize.sh),
@@ -11,8 +12,9 @@
 #                             by tools/kubernetes/package-lock.json, fetched from npm's registry
 #                             by tools/kubernetes/fetch_packages.py into tools/kubernetes/
 #                             node_modules): the Kubernetes API schema the manifests are checked
-#                             against, and blender (3.4: the physically based mode checked
-#                             against Cycles, tools/cycles/; the test skips without it)
+#                             against, blender (3.4: the physically based mode checked
+#                             against Cycles, tools/cycles/; the test skips without it) and
+#                             chromium (headless: `cadsynth report`'s page opened in a browser)
 #   tools/setup.sh --image    the container image's build stage (Dockerfile): what building
 #                             needs, without PyTorch (the image leaves it out: 1.5 GB for the
 #                             optional cadsynth.torch)
@@ -27,15 +29,16 @@ packages=(
   libyaml-cpp-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libmatio-dev zlib1g-dev
   libcli11-dev libxxhash-dev libbullet-dev libbullet-extras-dev libfcl-dev
   libhdf5-dev libssl-dev libfontconfig-dev
-  pybind11-dev python3-dev python3-numpy python3-torch
+  pybind11-dev python3-dev python3-numpy python3-torch python3-matplotlib
 )
 case "${1:-}" in
   --tests) packages+=(slurm-wlm munge clang-format clang libclang-rt-14-dev python3-pytest
-                     python3-jsonschema python3-yaml blender)
+                     python3-jsonschema python3-yaml blender chromium)
            # Debian's nodejs, unless a Node.js is already installed (another vendor's). Not
            # Debian's npm, which brings about 400 packages: fetch_packages.py does its work here.
            command -v node > /dev/null || packages+=(nodejs) ;;
-  --image) packages=("${packages[@]/python3-torch}") ;;
+  --image) packages=("${packages[@]/python3-torch}")
+           packages=("${packages[@]/python3-matplotlib}") ;;
   "") ;;
   *) echo "usage: $0 [--tests | --image]" >&2; exit 2 ;;
 esac

@@ -160,7 +160,9 @@ TEST(OutputFormats, EveryFormatIsOneRowWithAUniqueNameAndAFlag) {
     EXPECT_TRUE(names.insert(format.name).second) << format.name;
     // Only bop is unconditional; every other format has its BopOptions flag.
     EXPECT_EQ(format.enabled == nullptr, std::string(format.name) == "bop") << format.name;
-    if (format.implies != nullptr) EXPECT_NE(FindOutputFormat(format.implies), nullptr);
+    if (format.implies != nullptr) {
+      EXPECT_NE(FindOutputFormat(format.implies), nullptr);
+    }
   }
   EXPECT_EQ(FindOutputFormat("dexnet"), nullptr);
   // No flag, no writer: a dataset of BOP and COCO alone has no derived writers.

@@ -48,7 +48,8 @@ Json Hist(const std::vector<double>& values, double lo, double hi, int bins,
   std::vector<size_t> counts(bins, 0);
   for (double v : values) {
     if (!std::isfinite(v)) continue;
-    const double f = log ? std::log(std::max(v, lo) / lo) / std::log(hi / lo) : (v - lo) / (hi - lo);
+    const double f =
+        log ? std::log(std::max(v, lo) / lo) / std::log(hi / lo) : (v - lo) / (hi - lo);
     counts[std::clamp(static_cast<int>(std::floor(f * bins)), 0, bins - 1)]++;
   }
   return {{"edges", edges}, {"counts", counts}, {"label", label}, {"log", log}};
@@ -128,9 +129,9 @@ void AddView(ObjectStats* o, const Eigen::Isometry3d& cam_from_model, double vis
 struct ImageStats {
   int scene_id = 0, im_id = 0;
   int instances = 0, visible = 0;
-  double occlusion = 0;          // mean 1 - visib_fract over instances
-  double z_min = 0, z_max = 0;   // nearest / farthest model box corner of a visible instance
-  size_t px_visible = 0;         // object pixels
+  double occlusion = 0;              // mean 1 - visib_fract over instances
+  double z_min = 0, z_max = 0;       // nearest / farthest model box corner of a visible instance
+  size_t px_visible = 0;             // object pixels
   size_t smallest = 0, largest = 0;  // visible pixels of its least and most visible instance
 };
 
@@ -148,8 +149,10 @@ std::string SymmetryText(const Json& entry) {
   if (entry.contains("symmetries_continuous")) {
     for (const Json& c : entry["symmetries_continuous"]) {
       const std::vector<double> a = c.at("axis");
-      const char* name = std::abs(a.at(2)) > 0.99 ? "z" : std::abs(a.at(1)) > 0.99 ? "y"
-                         : std::abs(a.at(0)) > 0.99 ? "x" : "axis";
+      const char* name = std::abs(a.at(2)) > 0.99   ? "z"
+                         : std::abs(a.at(1)) > 0.99 ? "y"
+                         : std::abs(a.at(0)) > 0.99 ? "x"
+                                                    : "axis";
       parts.push_back(std::string("continuous (") + name + ")");
     }
   }
@@ -237,9 +240,9 @@ std::vector<SensorStats> ReadImages(const fs::path& root, std::map<int, ObjectSt
             image.largest = std::max(image.largest, px);
             if (object != objects->end()) {
               for (int c = 0; c < 8; ++c) {
-                const double z =
-                    (pose * object->second.box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)))
-                        .z();
+                const double z = (pose * object->second.box.corner(
+                                             static_cast<Eigen::AlignedBox3d::CornerType>(c)))
+                                     .z();
                 image.z_min = seen ? std::min(image.z_min, z) : z;
                 image.z_max = seen ? std::max(image.z_max, z) : z;
                 seen = true;
@@ -307,19 +310,20 @@ Json SensorJson(const SensorStats& s, int sparse_percent) {
     lo = *std::min_element(both.begin(), both.end());
     hi = *std::max_element(both.begin(), both.end());
   }
-  return {{"name", s.name},
-          {"images", s.images.size()},
-          {"width", s.width},
-          {"height", s.height},
-          {"instances_per_image", AutoHist(instances, 40, "instances per image", true)},
-          {"visible_instances_per_image", AutoHist(visible, 40, "visible instances per image", true)},
-          {"occlusion_per_image", Hist(occlusion, 0, 1, 20, "mean occluded fraction per image")},
-          {"depth_min_mm", Hist(z_min, lo, hi, 30, "nearest object depth (mm, model boxes)")},
-          {"depth_max_mm", Hist(z_max, lo, hi, 30, "farthest object depth (mm, model boxes)")},
-          {"empty_images", empty},
-          {"sparse_images", sparse},
-          {"sparse_threshold_px", threshold},
-          {"empty_examples", examples}};
+  return {
+      {"name", s.name},
+      {"images", s.images.size()},
+      {"width", s.width},
+      {"height", s.height},
+      {"instances_per_image", AutoHist(instances, 40, "instances per image", true)},
+      {"visible_instances_per_image", AutoHist(visible, 40, "visible instances per image", true)},
+      {"occlusion_per_image", Hist(occlusion, 0, 1, 20, "mean occluded fraction per image")},
+      {"depth_min_mm", Hist(z_min, lo, hi, 30, "nearest object depth (mm, model boxes)")},
+      {"depth_max_mm", Hist(z_max, lo, hi, 30, "farthest object depth (mm, model boxes)")},
+      {"empty_images", empty},
+      {"sparse_images", sparse},
+      {"sparse_threshold_px", threshold},
+      {"empty_examples", examples}};
 }
 
 Json ObjectJson(const ObjectStats& o, int image_pixels) {
@@ -361,7 +365,8 @@ Json RandomizationJson(const fs::path& root, const std::string& suffix) {
   static const std::regex index(R"(\.\d+(?=\.|$))");
   for (const BopSceneFolder& scene : FindBopScenes(root)) {
     if (scene.suffix != suffix) continue;
-    const auto draws = ReadJsonIfThere(root, scene.Relative("scene_randomization" + suffix + ".json"));
+    const auto draws =
+        ReadJsonIfThere(root, scene.Relative("scene_randomization" + suffix + ".json"));
     if (!draws) continue;
     for (const auto& [im, record] : draws->items()) {
       if (!record.is_object()) continue;
@@ -382,7 +387,9 @@ Json RandomizationJson(const fs::path& root, const std::string& suffix) {
   Json out = Json::array();
   for (const auto& [key, values] : numbers) {
     if (choices.count(key)) continue;
-    out.push_back({{"key", key}, {"kind", "number"}, {"hist", AutoHist(values, 20, key)},
+    out.push_back({{"key", key},
+                   {"kind", "number"},
+                   {"hist", AutoHist(values, 20, key)},
                    {"asked", nullptr}});
   }
   for (const auto& [key, counts] : choices)
@@ -396,7 +403,8 @@ std::vector<std::vector<float>> ReadNpyRows(const fs::path& path) {
   if (bytes.size() < 12 || bytes.compare(0, 6, "\x93NUMPY") != 0)
     throw Error(path.string() + ": not a .npy file");
   const bool v1 = bytes[6] == 1;
-  const size_t header_len = v1 ? static_cast<uint8_t>(bytes[8]) | static_cast<uint8_t>(bytes[9]) << 8
+  const size_t header_len = v1 ? static_cast<uint8_t>(bytes[8]) | static_cast<uint8_t>(bytes[9])
+                                                                      << 8
                                : static_cast<size_t>(static_cast<uint8_t>(bytes[8])) |
                                      static_cast<size_t>(static_cast<uint8_t>(bytes[9])) << 8 |
                                      static_cast<size_t>(static_cast<uint8_t>(bytes[10])) << 16;
@@ -466,15 +474,15 @@ Json PhysicsJson(const fs::path& root) {
       moved = std::max(moved, i.value("moved_mm", 0.0));
     }
     const Json pick = step->value("pick", Json());
-    rows.push_back({scene.scene_id, step->value("step", 0),
-                    pick.is_object() ? pick.value("obj_id", 0) : 0,
-                    pick.is_object() ? pick.value("settle_seconds", 0.0) : 0.0,
-                    pick.is_object() ? pick.value("restless", Json::array()).size() : 0, freed,
-                    moved});
+    rows.push_back(
+        {scene.scene_id, step->value("step", 0), pick.is_object() ? pick.value("obj_id", 0) : 0,
+         pick.is_object() ? pick.value("settle_seconds", 0.0) : 0.0,
+         pick.is_object() ? pick.value("restless", Json::array()).size() : 0, freed, moved});
   }
   if (rows.empty()) return nullptr;
-  return {{"columns", {"scene", "step", "picked obj_id", "settle time (s, simulated)",
-                       "still moving", "freed by the pick", "largest move (mm)"}},
+  return {{"columns",
+           {"scene", "step", "picked obj_id", "settle time (s, simulated)", "still moving",
+            "freed by the pick", "largest move (mm)"}},
           {"rows", rows}};
 }
 
@@ -515,7 +523,8 @@ Json GalleryJson(const fs::path& root, const SensorStats& s, const ReportOptions
   best("most occluded", [](const auto& a, const auto& b) { return a.occlusion > b.occlusion; });
   best("smallest instance", [](const auto& a, const auto& b) { return a.smallest < b.smallest; });
   best("largest instance", [](const auto& a, const auto& b) { return a.largest > b.largest; });
-  best("most instances in view", [](const auto& a, const auto& b) { return a.visible > b.visible; });
+  best("most instances in view",
+       [](const auto& a, const auto& b) { return a.visible > b.visible; });
   best("least occluded", [](const auto& a, const auto& b) { return a.occlusion < b.occlusion; });
   picks.push_back({"first frame", &s.images.front()});
   picks.push_back({"middle frame", &s.images[s.images.size() / 2]});
@@ -624,20 +633,20 @@ std::string ReportData(const fs::path& root, const ReportOptions& options) {
     sensors_json.push_back(SensorJson(s, options.sparse_percent));
     for (const ImageStats& im : s.images) scenes.insert({s.split, im.scene_id});
   }
-  Json data = {{"report_data", 1},
-               {"title", "cadsynth report: " + root.filename().string()},
-               {"dataset", fs::absolute(root).lexically_normal().string()},
-               {"generated_by", std::string("cadsynth ") + CadsynthVersion()},
-               {"run", RunJson(root, scenes.size(), objects.size(), instances)},
-               {"sensors", sensors_json},
-               {"objects", objects_json},
-               {"randomization", RandomizationJson(
-                                     root, sensors.empty() || sensors[0].name.empty()
-                                               ? ""
-                                               : "_" + sensors[0].name)},
-               {"grasps", GraspsJson(root)},
-               {"physics", PhysicsJson(root)},
-               {"gallery", sensors.empty() ? Json::array() : GalleryJson(root, sensors[0], options)}};
+  Json data = {
+      {"report_data", 1},
+      {"title", "cadsynth report: " + root.filename().string()},
+      {"dataset", fs::absolute(root).lexically_normal().string()},
+      {"generated_by", std::string("cadsynth ") + CadsynthVersion()},
+      {"run", RunJson(root, scenes.size(), objects.size(), instances)},
+      {"sensors", sensors_json},
+      {"objects", objects_json},
+      {"randomization",
+       RandomizationJson(root,
+                         sensors.empty() || sensors[0].name.empty() ? "" : "_" + sensors[0].name)},
+      {"grasps", GraspsJson(root)},
+      {"physics", PhysicsJson(root)},
+      {"gallery", sensors.empty() ? Json::array() : GalleryJson(root, sensors[0], options)}};
   data["verify"] = VerifyJson(root, data["run"].value("run_key", ""));
   return data.dump() + "\n";
 }
@@ -706,10 +715,9 @@ void WriteReport(const fs::path& root, const fs::path& output, const ReportOptio
                 "has them");
   }
   const fs::path absolute = fs::absolute(output);
-  const int status =
-      Spawn({python, (work / "report.py").string(), (work / "report_data.json").string(),
-             absolute.string()},
-            env, false);
+  const int status = Spawn({python, (work / "report.py").string(),
+                            (work / "report_data.json").string(), absolute.string()},
+                           env, false);
   if (status != 0)
     throw Error("report: " + python + " report.py failed (exit " + std::to_string(status) +
                 ") writing " + output.string());

@@ -11,10 +11,10 @@
 namespace cadsynth {
 
 struct ReportOptions {
-  int gallery = 6;           // frames in the gallery, chosen to show the extremes
-  int panel_width = 320;     // of each panel of a gallery row
-  int sparse_percent = 1;    // an image is nearly empty below this share of object pixels (%)
-  std::string python;        // the Python to run; empty: $CADSYNTH_PYTHON, /usr/bin/python3, python3
+  int gallery = 6;         // frames in the gallery, chosen to show the extremes
+  int panel_width = 320;   // of each panel of a gallery row
+  int sparse_percent = 1;  // an image is nearly empty below this share of object pixels (%)
+  std::string python;      // the Python to run; empty: $CADSYNTH_PYTHON, /usr/bin/python3, python3
 };
 
 // The report data of the dataset at `root` (JSON text). Throws Error naming a missing or damaged

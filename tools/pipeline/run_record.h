@@ -11,8 +11,8 @@
 namespace cadsynth {
 
 struct RunRecord {
-  std::string version;  // cadsynth's
-  std::string run_key;  // RunKeyHash of the run key
+  std::string version;                   // cadsynth's
+  std::string run_key;                   // RunKeyHash of the run key
   std::string recipe_path, recipe_text;  // empty: the built-in default job
   std::string started_utc;               // ISO 8601, e.g. 2026-12-02T14:25:48Z
   double seconds = 0;                    // wall time to the end of the merge / run

@@ -1232,7 +1232,9 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
         }
       }
     }
-    if (s > 0) EXPECT_LT(freed, 8) << "a pick frees the bolts around it, not the pile";
+    if (s > 0) {
+      EXPECT_LT(freed, 8) << "a pick frees the bolts around it, not the pile";
+    }
     ever_freed += freed;
     where = now;
     turned = now_turned;

@@ -1,0 +1,274 @@
+// `cadsynth verify` and `cadsynth report`'s data on datasets the pipeline wrote: every check
+// passes on a run, a rig and a merged farm run, and each kind of damage (a flipped mask pixel, a
+// wrong box, a truncated PNG, a moved instance, a changed image byte, a wrong diameter) fails
+// with the file and the reason, also where the manifest was written again after the damage (so
+// that the content checks, not the checksums, must find it).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <set>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "dataset/file_io.h"
+#include "dataset/manifest.h"
+#include "dataset/verify.h"
+#include "tests/test_support.h"
+#include "tests/tools/pipeline/small_job.h"
+#include "tools/pipeline/report.h"
+#include "tools/pipeline/run_record.h"
+#include "tools/pipeline/shards.h"
+
+namespace cadsynth {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using testing::RunJob;
+using testing::ScratchDir;
+using testing::SmallJob;
+
+Json ReadJson(const fs::path& path) { return Json::parse(ReadFileText(path)); }
+void WriteJson(const fs::path& path, const Json& j) { WriteFileAtomic(path, j.dump()); }
+
+// Every problem as "FILE: REASON" lines, for messages and searches.
+std::string Problems(const VerifyReport& report) {
+  std::string text;
+  for (const auto& p : report.problems) text += p.file + ": " + p.reason + "\n";
+  return text;
+}
+
+const VerifyReport::Check& CheckOf(const VerifyReport& report, const std::string& name) {
+  for (const auto& c : report.checks) {
+    if (c.name == name) return c;
+  }
+  throw std::runtime_error("no check " + name);
+}
+
+// The manifest as a run writes it, listing the files as they are now.
+void RewriteManifest(const fs::path& root) {
+  DatasetManifest m = ReadManifest(root);
+  m.files = ListDatasetFiles(root);
+  WriteManifest(root, m);
+}
+
+TEST(Verify, ARunPassesEveryCheck) {
+  ScratchDir dir;
+  RunJob(SmallJob(), dir / "out");
+  const VerifyReport report = VerifyDataset(dir / "out");
+  EXPECT_TRUE(report.passed()) << Problems(report);
+  EXPECT_EQ(report.images, 6u);
+  EXPECT_EQ(report.instances, 30u);  // five parts in each scene
+  EXPECT_GT(CheckOf(report, "manifest").checked, 60u);
+  EXPECT_EQ(CheckOf(report, "gt_info").checked, report.instances);
+  EXPECT_GT(CheckOf(report, "coco").checked, 0u);
+  EXPECT_EQ(CheckOf(report, "models_info").checked, 13u);
+  EXPECT_GT(CheckOf(report, "recast").checked, 6u * 20);
+  EXPECT_EQ(report.Verdict().rfind("PASS: 6 images", 0), 0u) << report.Verdict();
+  // The certificate names the run it checked.
+  const Json certificate = Json::parse(report.CertificateJson());
+  EXPECT_EQ(certificate["verdict"], "pass");
+  EXPECT_EQ(certificate["run_key"], ReadManifest(dir / "out").run_key);
+  EXPECT_EQ(certificate["run_key"].get<std::string>().size(), 32u);
+}
+
+struct Damage {
+  std::string what;
+  std::function<void(const fs::path&)> apply;
+  std::string file, reason;  // a problem names this file and holds this text
+};
+
+TEST(Verify, EachDamageFailsWithTheFileAndTheReason) {
+  ScratchDir dir;
+  RunJob(SmallJob(), dir / "clean");
+  const fs::path scene = fs::path("train") / "000001";
+  const std::vector<Damage> damages = {
+      {"a flipped mask pixel",
+       [&](const fs::path& root) {
+         const fs::path path = root / scene / "mask_visib" / "000000_000001.png";
+         cv::Mat mask = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+         cv::Point on;
+         for (int v = 0; v < mask.rows && on.x == 0; ++v) {
+           for (int u = 0; u < mask.cols; ++u) {
+             if (mask.at<uint8_t>(v, u) != 0) on = {u, v};
+           }
+         }
+         mask.at<uint8_t>(on) = 0;  // the last visible pixel of the first visible row goes
+         cv::imwrite(path.string(), mask);
+       },
+       (scene / "scene_gt_info.json").string(), "px_count_visib is"},
+      {"the same pixel, seen by COCO",
+       [&](const fs::path& root) {
+         const fs::path path = root / scene / "mask_visib" / "000000_000001.png";
+         cv::Mat mask = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+         for (int v = 0; v < mask.rows; ++v) {
+           for (int u = 0; u < mask.cols; ++u) {
+             if (mask.at<uint8_t>(v, u) != 0) {
+               mask.at<uint8_t>(v, u) = 0;
+               cv::imwrite(path.string(), mask);
+               return;
+             }
+           }
+         }
+       },
+       (scene / "scene_gt_coco.json").string(), "its RLE differs from mask_visib in 1 pixels"},
+      {"a wrong box",
+       [&](const fs::path& root) {
+         Json info = ReadJson(root / scene / "scene_gt_info.json");
+         info["1"][2]["bbox_visib"][2] = info["1"][2]["bbox_visib"][2].get<int>() + 1;
+         WriteJson(root / scene / "scene_gt_info.json", info);
+       },
+       (scene / "scene_gt_info.json").string(), "image 1 instance 2: bbox_visib is"},
+      {"a truncated PNG",
+       [&](const fs::path& root) {
+         const fs::path path = root / scene / "mask" / "000001_000000.png";
+         const std::string bytes = ReadFileText(path);
+         WriteFileAtomic(path, bytes.substr(0, bytes.size() / 2));
+       },
+       (scene / "mask" / "000001_000000.png").string(), "truncated"},
+      {"a moved instance",
+       [&](const fs::path& root) {
+         Json gt = ReadJson(root / scene / "scene_gt.json");
+         Json& t = gt["0"][0]["cam_t_m2c"];
+         t[2] = t[2].get<double>() + 5.0;  // 5 mm farther
+         WriteJson(root / scene / "scene_gt.json", gt);
+       },
+       (scene / "scene_gt.json").string(), "image 0 pixel"},
+      {"a wrong diameter",
+       [&](const fs::path& root) {
+         Json info = ReadJson(root / "models" / "models_info.json");
+         info["3"]["diameter"] = info["3"]["diameter"].get<double>() + 0.5;
+         WriteJson(root / "models" / "models_info.json", info);
+       },
+       "models/models_info.json", "obj 3: diameter is"},
+  };
+  for (const Damage& damage : damages) {
+    SCOPED_TRACE(damage.what);
+    const fs::path root = dir / "damaged";
+    fs::remove_all(root);
+    fs::copy(dir / "clean", root, fs::copy_options::recursive);
+    damage.apply(root);
+    // Against the manifest the run wrote: the checksum and the content both fail.
+    VerifyReport report = VerifyDataset(root);
+    EXPECT_FALSE(report.passed());
+    EXPECT_GE(CheckOf(report, "manifest").failed, 1u) << Problems(report);
+    // With a manifest written again over the damage, the content checks alone find it.
+    RewriteManifest(root);
+    report = VerifyDataset(root);
+    EXPECT_FALSE(report.passed()) << report.Verdict();
+    bool found = false;
+    for (const auto& p : report.problems)
+      found |= p.file == damage.file && p.reason.find(damage.reason) != std::string::npos;
+    EXPECT_TRUE(found) << "expected " << damage.file << ": ..." << damage.reason << " in\n"
+                       << Problems(report);
+    EXPECT_EQ(CheckOf(report, "manifest").failed, 0u);
+    EXPECT_EQ(report.Verdict().rfind("FAIL: ", 0), 0u) << report.Verdict();
+  }
+
+  // A changed byte of a colour image: only the checksum can tell.
+  const fs::path root = dir / "damaged";
+  fs::remove_all(root);
+  fs::copy(dir / "clean", root, fs::copy_options::recursive);
+  const fs::path rgb = root / scene / "rgb" / "000000.png";
+  std::string bytes = ReadFileText(rgb);
+  bytes[bytes.size() / 2] ^= 1;
+  WriteFileAtomic(rgb, bytes);
+  const VerifyReport report = VerifyDataset(root);
+  ASSERT_EQ(report.problem_count, 1u) << Problems(report);
+  EXPECT_EQ(report.problems[0].file, (scene / "rgb" / "000000.png").string());
+  EXPECT_EQ(report.problems[0].reason, "checksum differs from the manifest");
+  // A file the manifest does not list is noted, not failed.
+  WriteFileAtomic(dir / "clean" / "notes.txt", "mine");
+  const VerifyReport noted = VerifyDataset(dir / "clean");
+  EXPECT_TRUE(noted.passed()) << Problems(noted);
+  ASSERT_EQ(noted.notes.size(), 1u);
+  EXPECT_NE(noted.notes[0].find("notes.txt"), std::string::npos) << noted.notes[0];
+}
+
+TEST(Verify, ARigAndAMergedFarmRunPassAndReportTheirRuns) {
+  ScratchDir dir;
+  RunSpec spec = testing::SmallFarmJob();
+  RigSensor a{"a", spec.intrinsics, {}};
+  a.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
+  RigSensor b{"b", Intrinsics{120, 90, 100.0, 100.0, 59.5, 44.5}, {}};
+  b.sensor.image = SensorOptions::Image::kGray;
+  b.rig_from_cam.translation() = Eigen::Vector3d(50, 0, 0);
+  spec.rig = {a, b};
+  spec.sensor = a.sensor;
+  for (int i : {1, 0}) RunJob(spec, dir / "farm", ShardSpec{i, 2});
+  EXPECT_EQ(Merge(dir / "farm").frames, 12u);
+  const VerifyReport report = VerifyDataset(dir / "farm");
+  EXPECT_TRUE(report.passed()) << Problems(report);
+  EXPECT_EQ(report.images, 24u);  // 12 views, two sensors
+  EXPECT_GT(CheckOf(report, "recast").checked, 24u * 20);
+
+  // run.json: both shards, their frames adding up to the run's.
+  const std::optional<RunRecord> run = ReadRunRecord(dir / "farm");
+  ASSERT_TRUE(run);
+  ASSERT_EQ(run->shards.size(), 2u);
+  EXPECT_EQ(run->shards[0].frames + run->shards[1].frames, 12u);
+  EXPECT_EQ(run->frames, 12u);
+  EXPECT_EQ(run->run_key, ReadManifest(dir / "farm").run_key);
+
+  // The report's data: both sensors' images, each object's views counted once (the first
+  // sensor's), the extremes in the gallery as JPEG, the verifier's certificate once written.
+  WriteFileAtomic(dir / "farm" / kCertificateFile, report.CertificateJson());
+  const Json data = Json::parse(ReportData(dir / "farm"));
+  ASSERT_EQ(data["sensors"].size(), 2u);
+  EXPECT_EQ(data["sensors"][0]["name"], "a");
+  EXPECT_EQ(data["sensors"][1]["name"], "b");
+  EXPECT_EQ(data["sensors"][0]["images"], 12);
+  EXPECT_EQ(data["sensors"][1]["width"], 120);
+  EXPECT_EQ(data["run"]["shards"].size(), 2u);
+  EXPECT_EQ(data["run"]["frames"], 12);
+  size_t views = 0, instances = 0;
+  for (const Json& o : data["objects"]) {
+    instances += o["instances"].get<size_t>();
+    for (const Json& row : o["coverage"]["counts"]) {
+      for (const Json& n : row) views += n.get<size_t>();
+    }
+    EXPECT_LE(o["visible"].get<size_t>(), o["instances"].get<size_t>());
+  }
+  EXPECT_EQ(instances, report.instances / 2);  // one sensor's
+  size_t visible = 0;
+  for (const Json& o : data["objects"]) visible += o["visible"].get<size_t>();
+  EXPECT_EQ(views, visible);
+  ASSERT_GE(data["gallery"].size(), 3u);
+  EXPECT_EQ(data["gallery"][0]["title"], "most occluded");
+  EXPECT_EQ(data["gallery"][0]["image"].get<std::string>().rfind("data:image/jpeg;base64,/9j/", 0),
+            0u);
+  EXPECT_EQ(data["verify"]["verdict"], "pass");
+}
+
+TEST(Report, ViewsAreFoldedByTheObjectsSymmetries) {
+  // The default job's gears have 18 and more teeth (discrete symmetries): every view of a gear
+  // lands in one fundamental region, so its coverage map fills a sector of at most 360 / 18
+  // degrees of azimuth (two bins of 10 degrees); the carrier (2-fold) may use half the circle.
+  ScratchDir dir;
+  RunJob(SmallJob({0.0, 0.7, 1.4, 2.1, 2.8, 3.5, 4.2, 4.9, 5.6}), dir / "out");
+  const Json data = Json::parse(ReportData(dir / "out"));
+  bool checked = false;
+  for (const Json& o : data["objects"]) {
+    if (o["name"] != "sun_z18") continue;
+    checked = true;
+    EXPECT_EQ(o["symmetry"], "discrete (35)");
+    std::set<int> columns;
+    const Json& counts = o["coverage"]["counts"];
+    for (const Json& row : counts) {
+      for (size_t x = 0; x < row.size(); ++x) {
+        if (row[x].get<int>() > 0) columns.insert(static_cast<int>(x));
+      }
+    }
+    EXPECT_LE(columns.size(), 3u) << o["coverage"].dump();
+    EXPECT_EQ(o["visible"], 9);
+  }
+  EXPECT_TRUE(checked);
+}
+
+}  // namespace
+}  // namespace cadsynth

@@ -14,6 +14,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh" --tests
 "$root/tools/build.sh" -DCADSYNTH_BUILD_TESTS=OFF
 "$root/build/tools/cadsynth" generate -o "$root/out/default" --overwrite
+"$root/build/tools/cadsynth" report "$root/out/default" --verify
 "$root/tools/seed_test_costs.sh" "$root/build"
 (cd "$root/build" && ctest --output-on-failure --parallel "$(nproc)" --timeout 900)
 "$root/tools/sanitize.sh"

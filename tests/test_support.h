@@ -82,7 +82,18 @@ inline void ExpectSameTree(const std::filesystem::path& expected_dir,
       ADD_FAILURE() << name << " is missing from " << actual_dir;
       continue;
     }
-    EXPECT_TRUE(actual.at(name) == bytes) << name << " differs";
+    const std::string& other = actual.at(name);
+    if (other == bytes) continue;
+    // Where they part, for text files: the line of each.
+    size_t at = 0;
+    while (at < bytes.size() && at < other.size() && bytes[at] == other[at]) ++at;
+    const auto line = [at](const std::string& text) {
+      const size_t begin = text.rfind('\n', at == 0 ? 0 : at - 1);
+      const size_t start = begin == std::string::npos ? 0 : begin + 1;
+      return text.substr(start, std::min<size_t>(text.find('\n', at) - start, 200));
+    };
+    ADD_FAILURE() << name << " differs at byte " << at << ": " << line(bytes) << " vs "
+                  << line(other);
   }
 }
 

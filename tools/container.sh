@@ -116,7 +116,7 @@ print("python", cadsynth.__version__, frame["rgb"].shape, zlib.crc32(frame["rgb"
   if [ -x "$host" ]; then
     rm -rf "$work/host"
     CADSYNTH_CACHE=$work/host_cache "$host" generate -o "$work/host/default" --quiet
-    diff -r -x .cadsynth_cache "$work/host/default" "$out/default" > "$work/diff.txt" ||
+    diff -r -x .cadsynth_cache -x run.json "$work/host/default" "$out/default" > "$work/diff.txt" ||
       fail "the dataset written in the container differs from $host's ($work/diff.txt)"
     local frames
     frames=$(find "$out/default" -path '*/rgb/*.png' | wc -l)

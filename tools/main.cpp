@@ -245,14 +245,21 @@ int RunPreview(const Args& a) {
   return 0;
 }
 
-int RunVerify(const Args& a) {
+// Verifies DATASET (a.dir) and writes the certificate (--certificate, default
+// DATASET/verify.json), where `report` finds it too.
+cadsynth::VerifyReport VerifyAndCertify(const Args& a, std::filesystem::path* certificate) {
   cadsynth::VerifyOptions options;
   options.pixels_per_image = a.pixels;
   const cadsynth::VerifyReport report = cadsynth::VerifyDataset(a.dir, options);
-  const std::filesystem::path certificate =
-      !a.certificate.empty() ? std::filesystem::path(a.certificate)
-                             : std::filesystem::path(a.dir) / cadsynth::kCertificateFile;
-  cadsynth::WriteFileAtomic(certificate, report.CertificateJson());
+  *certificate = !a.certificate.empty() ? std::filesystem::path(a.certificate)
+                                        : std::filesystem::path(a.dir) / cadsynth::kCertificateFile;
+  cadsynth::WriteFileAtomic(*certificate, report.CertificateJson());
+  return report;
+}
+
+int RunVerify(const Args& a) {
+  std::filesystem::path certificate;
+  const cadsynth::VerifyReport report = VerifyAndCertify(a, &certificate);
   if (!report.passed()) {
     const size_t shown = std::min<size_t>(report.problems.size(), 20);
     for (size_t k = 0; k < shown; ++k)
@@ -268,12 +275,8 @@ int RunVerify(const Args& a) {
 
 int RunReport(const Args& a) {
   if (a.verify_first) {
-    cadsynth::VerifyOptions options;
-    options.pixels_per_image = a.pixels;
-    const cadsynth::VerifyReport report = cadsynth::VerifyDataset(a.dir, options);
-    cadsynth::WriteFileAtomic(std::filesystem::path(a.dir) / cadsynth::kCertificateFile,
-                              report.CertificateJson());
-    std::cout << report.Verdict() << "\n";
+    std::filesystem::path certificate;
+    std::cout << VerifyAndCertify(a, &certificate).Verdict() << "\n";
   }
   const std::filesystem::path out = !a.output.empty()
                                         ? std::filesystem::path(a.output)

@@ -27,6 +27,7 @@ using testing::ExpectSameTree;
 using testing::RunJob;
 using testing::ScratchDir;
 using testing::SmallFarmJob;
+using testing::SmallRigFarmJob;
 
 std::string MergeError(const std::filesystem::path& dir) {
   try {
@@ -207,14 +208,7 @@ TEST(Shards, CameraRigShardsMergeToOneProcessesBytes) {
   // shard stopped between the sensors) is not written: merge names the shard, which renders it
   // again.
   ScratchDir dir;
-  RunSpec spec = SmallFarmJob();
-  RigSensor a{"a", spec.intrinsics, {}};
-  a.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
-  RigSensor b{"b", Intrinsics{120, 90, 100.0, 100.0, 59.5, 44.5}, {}};
-  b.sensor.image = SensorOptions::Image::kGray;
-  b.rig_from_cam.translation() = Eigen::Vector3d(50, 0, 0);
-  spec.rig = {a, b};
-  spec.sensor = a.sensor;
+  const RunSpec spec = SmallRigFarmJob();
   EXPECT_EQ(RunJob(spec, dir / "whole").frames, 12u);
   for (int i : {1, 2, 0}) RunJob(spec, dir / "tree", ShardSpec{i, 3});
   const std::filesystem::path scene = dir / "tree" / "train" / "000001";

@@ -30,6 +30,20 @@ inline RunSpec SmallFarmJob() {
   return spec;
 }
 
+// SmallFarmJob seen by a rig of two sensors: "a", the camera with a Kinect v1 depth model, and
+// "b", a 120 x 90 grey camera 50 mm to its right.
+inline RunSpec SmallRigFarmJob() {
+  RunSpec spec = SmallFarmJob();
+  RigSensor a{"a", spec.intrinsics, {}};
+  a.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
+  RigSensor b{"b", Intrinsics{120, 90, 100.0, 100.0, 59.5, 44.5}, {}};
+  b.sensor.image = SensorOptions::Image::kGray;
+  b.rig_from_cam.translation() = Eigen::Vector3d(50, 0, 0);
+  spec.rig = {a, b};
+  spec.sensor = a.sensor;
+  return spec;
+}
+
 // Runs `spec` into `out` (as shard `shard` of a farm run when given), as `cadsynth generate` does.
 inline GenerateSummary RunJob(const RunSpec& spec, const std::filesystem::path& out,
                               std::optional<ShardSpec> shard = {}) {

@@ -192,14 +192,7 @@ TEST(Verify, EachDamageFailsWithTheFileAndTheReason) {
 
 TEST(Verify, ARigAndAMergedFarmRunPassAndReportTheirRuns) {
   ScratchDir dir;
-  RunSpec spec = testing::SmallFarmJob();
-  RigSensor a{"a", spec.intrinsics, {}};
-  a.sensor.depth = DepthModel::Defaults(DepthModel::Kind::kKinectV1);
-  RigSensor b{"b", Intrinsics{120, 90, 100.0, 100.0, 59.5, 44.5}, {}};
-  b.sensor.image = SensorOptions::Image::kGray;
-  b.rig_from_cam.translation() = Eigen::Vector3d(50, 0, 0);
-  spec.rig = {a, b};
-  spec.sensor = a.sensor;
+  const RunSpec spec = testing::SmallRigFarmJob();
   for (int i : {1, 0}) RunJob(spec, dir / "farm", ShardSpec{i, 2});
   EXPECT_EQ(Merge(dir / "farm").frames, 12u);
   const VerifyReport report = VerifyDataset(dir / "farm");

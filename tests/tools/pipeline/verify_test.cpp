@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cad/core/error.h"
 #include "dataset/file_io.h"
 #include "dataset/manifest.h"
 #include "dataset/verify.h"
@@ -261,6 +262,28 @@ TEST(Report, ViewsAreFoldedByTheObjectsSymmetries) {
     EXPECT_EQ(o["visible"], 9);
   }
   EXPECT_TRUE(checked);
+}
+
+TEST(Report, APythonWithoutMatplotlibIsOneMessageWithTheFixAndNoPage) {
+  ScratchDir dir;
+  RunJob(SmallJob(), dir / "out");
+  ReportOptions options;
+  options.python = "/bin/false";  // exits 1 on `-c "import numpy, matplotlib"`
+  try {
+    WriteReport(dir / "out", dir / "page.html", options);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("apt install python3-matplotlib"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "page.html"));
+  // Not a dataset: one message naming the folder.
+  try {
+    WriteReport(dir / "nothing", dir / "page.html", options);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("nothing: no such folder"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -230,7 +230,8 @@ def verify_section(verify, dataset: str) -> str:
                      [[c.get("name"), c.get("checked"), c.get("failed")] for c in checks])
     problems = verify.get("problems") or []
     if problems:
-        out += f"<h3>problems ({len(problems):,})</h3>"
+        total = verify.get("problem_count") or len(problems)  # the certificate lists the first
+        out += f"<h3>problems ({total:,})</h3>"
         out += listing(problems,
                        lambda p: f"<code>{esc(p.get('file'))}</code>: {esc(p.get('reason'))}")
     return out

@@ -26,7 +26,7 @@ inline constexpr const char* kReportFile = "report.html";
 
 struct DatasetManifest {
   std::string version;  // of the cadsynth that wrote the dataset
-  std::string run_key;  // hex XXH3-128 of the run key (journal.h RunKey): equal runs, equal keys
+  std::string run_key;  // hex XXH3-128 of the run key (journal.h RunKey) but its build line
   size_t frames = 0;    // images per sensor, over all scenes
   std::vector<FileRecord> files;  // sorted by path
 };

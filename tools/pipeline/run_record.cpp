@@ -19,8 +19,16 @@ using Json = nlohmann::json;
 const char* CadsynthVersion() { return CADSYNTH_VERSION; }
 
 std::string RunKeyHash(const std::string& run_key) {
+  // Without its "build SIZE CRC" line (journal.cpp RunKey): two builds of one source write the
+  // same bytes, and so the same manifest (the container check compares them).
+  std::string key = run_key;
+  const size_t build = key.rfind("\nbuild ");  // the last line; a recipe holds none after it
+  if (build != std::string::npos) {
+    const size_t end = key.find('\n', build + 1);
+    key.erase(build + 1, end == std::string::npos ? std::string::npos : end - build);
+  }
   KeyHasher hasher;
-  hasher.Bytes(run_key.data(), run_key.size());
+  hasher.Bytes(key.data(), key.size());
   return hasher.Key().Hex();
 }
 

@@ -29,7 +29,9 @@ struct RunRecord {
 // The cadsynth version this build writes into its records.
 const char* CadsynthVersion();
 
-// Hex XXH3-128 of a run key's text (journal.h RunKey; a shard tree's key without its shard count).
+// Hex XXH3-128 of a run key's text (journal.h RunKey; a shard tree's key without its shard
+// count), leaving out the key's build line: another build of the same source that writes the
+// same bytes writes the same manifest.
 std::string RunKeyHash(const std::string& run_key);
 
 // The current time as ISO 8601 UTC, `seconds_ago` earlier.

@@ -213,7 +213,7 @@ Model ReadPly(const fs::path& path) {
     const int n = static_cast<unsigned char>(bytes[at++]);
     if (at + 4 * static_cast<size_t>(n) > bytes.size()) throw Error("truncated face data");
     std::vector<uint32_t> index(n);
-    std::memcpy(index.data(), bytes.data() + at, 4 * static_cast<size_t>(n));
+    if (n > 0) std::memcpy(index.data(), bytes.data() + at, 4 * static_cast<size_t>(n));
     at += 4 * static_cast<size_t>(n);
     for (uint32_t i : index) {
       if (i >= vertices) throw Error("face " + std::to_string(f) + " has a bad vertex index");

@@ -50,7 +50,7 @@ Json Hist(const std::vector<double>& values, double lo, double hi, int bins,
     if (!std::isfinite(v)) continue;
     const double f =
         log ? std::log(std::max(v, lo) / lo) / std::log(hi / lo) : (v - lo) / (hi - lo);
-    counts[std::clamp(static_cast<int>(std::floor(f * bins)), 0, bins - 1)]++;
+    counts[std::min(static_cast<int>(std::clamp(f, 0.0, 1.0) * bins), bins - 1)]++;
   }
   return {{"edges", edges}, {"counts", counts}, {"label", label}, {"log", log}};
 }
@@ -417,7 +417,7 @@ std::vector<std::vector<float>> ReadNpyRows(const fs::path& path) {
   const size_t rows = std::stoul(m[1]), cols = std::stoul(m[2]);
   if (bytes.size() < start + rows * cols * 4) throw Error(path.string() + ": truncated");
   std::vector<std::vector<float>> out(rows, std::vector<float>(cols));
-  for (size_t r = 0; r < rows; ++r)
+  for (size_t r = 0; r < rows && cols > 0; ++r)
     std::memcpy(out[r].data(), bytes.data() + start + r * cols * 4, cols * 4);
   return out;
 }

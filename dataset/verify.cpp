@@ -284,7 +284,9 @@ Findings CheckModels(const fs::path& root, Models* models) {
   std::vector<std::optional<Model>> read(entries.size());
   std::vector<Findings> found(entries.size());
   tbb::parallel_for(size_t{0}, entries.size(), [&](size_t i) {
-    const auto& [id, value] = entries[i];
+    // Not a structured binding: clang 14 cannot capture one in the lambda below.
+    const int id = entries[i].first;
+    const Json& value = entries[i].second;
     Findings& g = found[i];
     const std::string file = "models/obj_" + Id6(id) + ".ply";
     ++g.checked[kModels];

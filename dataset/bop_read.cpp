@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cad/core/error.h"
+#include "dataset/file_io.h"
 
 namespace cadsynth {
 
@@ -252,9 +253,7 @@ std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::st
 }
 
 std::string BopSceneFolder::Relative(const std::string& name) const {
-  char id[16];
-  std::snprintf(id, sizeof id, "%06d", scene_id);
-  return split + "/" + id + "/" + name;
+  return split + "/" + Id6(scene_id) + "/" + name;
 }
 
 std::vector<BopSceneFolder> FindBopScenes(const std::filesystem::path& root) {

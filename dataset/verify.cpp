@@ -60,12 +60,6 @@ struct Findings {
   }
 };
 
-std::string Id6(int id) {
-  char text[16];
-  std::snprintf(text, sizeof text, "%06d", id);
-  return text;
-}
-
 std::string BoxText(const std::array<int, 4>& b) {
   std::ostringstream s;
   s << "[" << b[0] << ", " << b[1] << ", " << b[2] << ", " << b[3] << "]";
@@ -485,15 +479,33 @@ CastResult CastAll(const std::vector<const Model*>& models,
   return r;
 }
 
-Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOptions& options) {
-  Findings f;
-  const SceneSensor& scene = *task.scene;
-  const std::string im = Id6(task.im_id);
-  const std::string info_file = scene.Relative("scene_gt_info" + scene.suffix + ".json");
-  const size_t n = task.gt->size();
+// What ReadImageData reads of one image, for the checks after it.
+struct ImageData {
+  std::string im;  // the image id as a file name stem (NNNNNN)
+  size_t n = 0;    // instances
   Camera camera;
-  std::vector<Eigen::Isometry3d> poses(n, Eigen::Isometry3d::Identity());
-  std::vector<int> obj_ids(n, 0);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<int> obj_ids;
+  std::optional<cv::Mat> depth, exact;  // the written depth; the exact one (depth_gt or depth)
+  std::string exact_file;               // the exact depth's path, relative to the root
+  std::vector<InstanceMasks> masks;
+  std::vector<bool> readable;  // per instance: both masks read
+  uint64_t seed = 0;           // of the image's pixel samples
+};
+
+// Reads an image's camera, poses, depth and masks, counting and sampling the masks' pixels on
+// the way; false (with the problem in *out) when its JSON entries are unreadable.
+bool ReadImageData(const ImageTask& task, const VerifyOptions& options, ImageData* d,
+                   Findings* out) {
+  Findings& f = *out;
+  const SceneSensor& scene = *task.scene;
+  const std::string& im = d->im = Id6(task.im_id);
+  const size_t n = d->n = task.gt->size();
+  Camera& camera = d->camera;
+  std::vector<Eigen::Isometry3d>& poses = d->poses;
+  std::vector<int>& obj_ids = d->obj_ids;
+  poses.assign(n, Eigen::Isometry3d::Identity());
+  obj_ids.assign(n, 0);
   try {
     const Json& c = *task.camera;
     const Json& k = c.at("cam_K");
@@ -513,7 +525,7 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
   } catch (const Json::exception& e) {
     f.Fail(kGtInfo, scene.Relative("scene_gt" + scene.suffix + ".json"),
            "image " + std::to_string(task.im_id) + ": unreadable entry (" + e.what() + ")");
-    return f;
+    return false;
   }
   // Depth: the exact one (depth_gt, beside a sensor's) for the re-cast; the written one for
   // px_count_valid.
@@ -522,22 +534,27 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
   const std::string exact_rel = scene.Relative("depth_gt" + scene.suffix + "/" + im + ".png");
   std::error_code ec;
   const fs::path root = scene.dir.parent_path().parent_path();
-  const std::optional<cv::Mat> depth = ReadImage(root / depth_rel, &why);
+  std::optional<cv::Mat>& depth = d->depth;
+  depth = ReadImage(root / depth_rel, &why);
   if (!depth) f.Fail(kGtInfo, depth_rel, why);
-  std::optional<cv::Mat> exact = depth;
+  d->exact = depth;
+  d->exact_file = depth_rel;
   if (fs::exists(root / exact_rel, ec)) {
-    exact = ReadImage(root / exact_rel, &why);
-    if (!exact) f.Fail(kRecast, exact_rel, why);
+    d->exact = ReadImage(root / exact_rel, &why);
+    d->exact_file = exact_rel;
+    if (!d->exact) f.Fail(kRecast, exact_rel, why);
   }
 
-  const uint64_t seed = Mix(
+  const uint64_t seed = d->seed = Mix(
       Mix(static_cast<uint64_t>(scene.scene_id) * 1000003u + static_cast<uint64_t>(task.im_id)) ^
       std::hash<std::string>{}(scene.split + scene.suffix));
   const int per_instance = n == 0 || options.pixels_per_image <= 0
                                ? 0
                                : std::max(1, options.pixels_per_image / 2 / static_cast<int>(n));
-  std::vector<InstanceMasks> masks(n);
-  std::vector<bool> readable(n, false);
+  std::vector<InstanceMasks>& masks = d->masks;
+  std::vector<bool>& readable = d->readable;
+  masks.assign(n, {});
+  readable.assign(n, false);
   for (size_t i = 0; i < n; ++i) {
     InstanceMasks& m = masks[i];
     const std::string name = im + "_" + Id6(static_cast<int>(i)) + ".png";
@@ -589,8 +606,18 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
       }
     }
   }
+  return true;
+}
 
-  // scene_gt_info, as bop_toolkit computes it from these masks.
+// scene_gt_info, as bop_toolkit computes it from the masks.
+void CheckGtInfo(const ImageTask& task, const ImageData& d, Findings* out) {
+  Findings& f = *out;
+  const SceneSensor& scene = *task.scene;
+  const std::string info_file = scene.Relative("scene_gt_info" + scene.suffix + ".json");
+  const size_t n = d.n;
+  const std::vector<InstanceMasks>& masks = d.masks;
+  const std::vector<bool>& readable = d.readable;
+  const std::optional<cv::Mat>& depth = d.depth;
   for (size_t i = 0; i < n; ++i) {
     if (!readable[i]) continue;
     ++f.checked[kGtInfo];
@@ -647,9 +674,17 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
       f.Fail(kGtInfo, info_file, where + "unreadable entry (" + e.what() + ")");
     }
   }
+}
 
-  // COCO: each annotation's RLE against mask_visib.
-  if (task.has_coco) {
+// COCO: each annotation's RLE against mask_visib, and an annotation for each visible instance.
+void CheckCoco(const ImageTask& task, const ImageData& d, Findings* out) {
+  Findings& f = *out;
+  const SceneSensor& scene = *task.scene;
+  const size_t n = d.n;
+  const std::vector<InstanceMasks>& masks = d.masks;
+  const std::vector<bool>& readable = d.readable;
+  if (!task.has_coco) return;
+  {
     const std::string coco_file = scene.Relative("scene_gt_coco" + scene.suffix + ".json");
     std::vector<bool> annotated(n, false);
     for (const Json* a : task.coco) {
@@ -715,26 +750,39 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
                    " is visible but has no annotation");
     }
   }
+}
 
-  // The re-cast: rays through the models at the poses as written.
+// The re-cast: rays through the models at the poses as written, against the masks and the
+// exact depth.
+void Recast(const ImageTask& task, const ImageData& d, const Models& models,
+            const VerifyOptions& options, Findings* out) {
+  Findings& f = *out;
+  const SceneSensor& scene = *task.scene;
+  const size_t n = d.n;
+  const std::string& im = d.im;
+  const Camera& camera = d.camera;
+  const std::vector<Eigen::Isometry3d>& poses = d.poses;
+  const std::vector<InstanceMasks>& masks = d.masks;
+  const std::vector<bool>& readable = d.readable;
+  const std::optional<cv::Mat>& exact = d.exact;
   std::vector<const Model*> instance_models(n, nullptr);
   for (size_t i = 0; i < n; ++i) {
-    const auto it = models.by_id.find(obj_ids[i]);
+    const auto it = models.by_id.find(d.obj_ids[i]);
     if (it != models.by_id.end()) instance_models[i] = &it->second;
   }
   if (n == 0 || !exact || std::find(readable.begin(), readable.end(), false) != readable.end())
-    return f;
+    return;
   std::vector<std::pair<int, int>> pixels;
   for (const InstanceMasks& m : masks)
     pixels.insert(pixels.end(), m.samples.begin(), m.samples.end());
-  uint64_t state = Mix(seed ^ 0x5bd1e995u);
+  uint64_t state = Mix(d.seed ^ 0x5bd1e995u);
   const int w = masks[0].mask.cols, h = masks[0].mask.rows;
   for (int k = 0; k < options.pixels_per_image / 2; ++k) {
     state = Mix(state);
     pixels.push_back({static_cast<int>(state % static_cast<uint64_t>(w)),
                       static_cast<int>((state >> 32) % static_cast<uint64_t>(h))});
   }
-  const std::string exact_file = fs::exists(root / exact_rel, ec) ? exact_rel : depth_rel;
+  const std::string& exact_file = d.exact_file;
   for (const auto& [u, v] : pixels) {
     bool ok = true;
     const CastResult c = CastAll(instance_models, poses, camera, u + 0.5, v + 0.5, &ok);
@@ -811,6 +859,15 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
       for (auto& [file, reason] : wrong) f.problems.push_back({file, reason});
     }
   }
+}
+
+Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOptions& options) {
+  Findings f;
+  ImageData d;
+  if (!ReadImageData(task, options, &d, &f)) return f;
+  CheckGtInfo(task, d, &f);
+  CheckCoco(task, d, &f);
+  Recast(task, d, models, options, &f);
   return f;
 }
 

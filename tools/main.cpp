@@ -250,9 +250,14 @@ int RunPreview(const Args& a) {
 cadsynth::VerifyReport VerifyAndCertify(const Args& a, std::filesystem::path* certificate) {
   cadsynth::VerifyOptions options;
   options.pixels_per_image = a.pixels;
-  const cadsynth::VerifyReport report = cadsynth::VerifyDataset(a.dir, options);
   *certificate = !a.certificate.empty() ? std::filesystem::path(a.certificate)
                                         : std::filesystem::path(a.dir) / cadsynth::kCertificateFile;
+  // A certificate that cannot be written is known before the dataset is read.
+  std::error_code ec;
+  const std::filesystem::path folder = std::filesystem::absolute(*certificate).parent_path();
+  if (std::filesystem::is_directory(a.dir, ec) && !std::filesystem::is_directory(folder, ec))
+    throw cadsynth::Error(certificate->string() + ": cannot write: no folder " + folder.string());
+  const cadsynth::VerifyReport report = cadsynth::VerifyDataset(a.dir, options);
   cadsynth::WriteFileAtomic(*certificate, report.CertificateJson());
   return report;
 }

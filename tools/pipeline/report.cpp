@@ -694,6 +694,10 @@ std::string ChoosePython(const ReportOptions& options) {
 }  // namespace
 
 void WriteReport(const fs::path& root, const fs::path& output, const ReportOptions& options) {
+  std::error_code ec;
+  const fs::path folder = fs::absolute(output).parent_path();
+  if (!fs::is_directory(folder, ec))
+    throw Error(output.string() + ": cannot write: no folder " + folder.string());
   const std::string data = ReportData(root, options);
   const std::string python = ChoosePython(options);
   const fs::path work = fs::temp_directory_path() / ("cadsynth-report-" + std::to_string(getpid()));

@@ -277,6 +277,14 @@ TEST(Report, APythonWithoutMatplotlibIsOneMessageWithTheFixAndNoPage) {
         << e.what();
   }
   EXPECT_FALSE(fs::exists(dir / "page.html"));
+  // An output folder that is not there: named before any work.
+  try {
+    WriteReport(dir / "out", dir / "missing" / "page.html");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("page.html: cannot write: no folder"), std::string::npos)
+        << e.what();
+  }
   // Not a dataset: one message naming the folder.
   try {
     WriteReport(dir / "nothing", dir / "page.html", options);

@@ -5,6 +5,7 @@
 #include <map>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -31,6 +32,8 @@ Json ReadJsonFile(const fs::path& path) {
 }
 
 cv::Mat ReadImage(const fs::path& path, int flags) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": no such image");
   cv::Mat image = cv::imread(path.string(), flags);
   if (image.empty()) throw Error(path.string() + ": missing or not an image");
   return image;
@@ -287,9 +290,12 @@ cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const f
   if (!fs::exists(rgb_path)) rgb_path = image_dir / (name + ".jpg");
   cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
   if (!options.versus.empty()) {
-    return VersusRow(dataset, options, rgb,
-                     options.versus / split_dir.filename() / Id6(scene) / ("rgb" + sfx), name,
-                     where);
+    // The other dataset's image of the same kind (grey against grey), else whichever it has.
+    const fs::path other = options.versus / split_dir.filename() / Id6(scene);
+    fs::path other_dir = other / image_dir.filename();
+    if (!fs::exists(other_dir))
+      other_dir = fs::exists(other / ("rgb" + sfx)) ? other / ("rgb" + sfx) : other / ("gray" + sfx);
+    return VersusRow(dataset, options, rgb, other_dir, name, where);
   }
   const cv::Mat depth = ReadImage(dir / ("depth" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
   const Json& gt = scenes.gts.at(scene).at(std::to_string(im));
@@ -397,6 +403,10 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
     // A value of the wrong type in a scene's JSON files (the syntax was checked on reading).
     throw Error(JsonErrorMessage(dataset.string() + ": damaged BOP files", "", e));
   }
+}
+
+void SilenceOpenCvWarnings() {
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
 }
 
 }  // namespace cadsynth

@@ -86,7 +86,11 @@ void ReadSweep(const Reader& r, const YAML::Node& node, RunSpec* spec) {
   SweepOptions& s = spec->sweep;
   if (node["yaw"]) s.yaw_rad = r.Series(node["yaw"], "sweep.yaw", angle);
   if (node["pitch"]) s.pitch_rad = r.Series(node["pitch"], "sweep.pitch", angle);
-  if (node["radius"]) s.radius_mm = r.Series(node["radius"], "sweep.radius", length);
+  if (node["radius"]) {
+    // (A camera closer than 10 mm is no sweep: 0.8 meant metres.)
+    r.CheckMetresMeant(node["radius"], "sweep.radius", 10.0);
+    s.radius_mm = r.Series(node["radius"], "sweep.radius", length);
+  }
   ReadDescribed(r, node, "sweep", &s);
   r.Check(s, node, "sweep");
   ViewSampler& v = spec->sampler;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 #include <string_view>
 #include <system_error>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
@@ -137,6 +139,26 @@ class Reader {
     return *mm;
   }
 
+  // A length the context expects in metres' range (a camera's distance, a tote's size), where a
+  // bare number below `below_mm` is far more likely metres than millimetres: an error at the
+  // number, "0.8 read as 0.8 mm (a bare number is millimetres): did you mean '0.8 m'?". Looks at
+  // every number of a value, a list or a range; numbers with a unit pass.
+  void CheckMetresMeant(const YAML::Node& node, const std::string& key, double below_mm) const {
+    if (node.IsSequence() || node.IsMap()) {
+      for (auto it = node.begin(); it != node.end(); ++it)
+        CheckMetresMeant(node.IsMap() ? it->second : *it, key, below_mm);
+      return;
+    }
+    if (!node.IsScalar()) return;
+    const std::string text = node.Scalar();
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0' || !(value > 0.0) || value >= below_mm) return;
+    Fail(node, key,
+         text + " is read as " + text + " mm (a bare number is millimetres): did you mean '" + text +
+             " m'? Give the unit");
+  }
+
   double Angle(const YAML::Node& node, const std::string& key) const {
     std::string why;
     const std::optional<double> rad = ParseAngleRad(Scalar(node, key), &why);
@@ -205,10 +227,51 @@ class Reader {
     return values;
   }
 
+  // Options::Check's verdict at the key it names: the first word of `why` (a key, or a dotted
+  // path such as "sequence.picks") that is a key under `node` is where the message points
+  // ("copies must be 1 to 10000" at `copies: -3`, not at the section); else at `node`.
   template <typename Options>
   void Check(const Options& options, const YAML::Node& node, const std::string& key) const {
     std::string why;
-    if (!options.Check(&why)) Fail(node, key, why);
+    if (!options.Check(&why)) FailAtNamedKey(node, key, why);
+  }
+
+  [[noreturn]] void FailAtNamedKey(const YAML::Node& node, const std::string& key,
+                                   const std::string& why) const {
+    if (node.IsMap()) {
+      const auto word_char = [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.';
+      };
+      for (size_t i = 0; i < why.size();) {
+        if (!word_char(why[i])) {
+          ++i;
+          continue;
+        }
+        size_t end = i;
+        while (end < why.size() && word_char(why[end])) ++end;
+        std::string word = why.substr(i, end - i);
+        while (!word.empty() && word.back() == '.') word.pop_back();  // a sentence's full stop
+        i = end;
+        // Walk the dotted path down the mappings; the whole path must be there.
+        // (Looked up through const nodes and moved with reset(): yaml-cpp's operator= on a node
+        // would rewrite the recipe's tree, and a non-const operator[] may add keys to it.)
+        YAML::Node at = node;
+        bool found = !word.empty() && std::isalpha(static_cast<unsigned char>(word[0]));
+        for (size_t a = 0; found && a < word.size();) {
+          const size_t dot = std::min(word.find('.', a), word.size());
+          const std::string part = word.substr(a, dot - a);
+          found = at.IsMap() && !part.empty();
+          if (found) {
+            const YAML::Node child = std::as_const(at)[part];
+            found = child.IsDefined();
+            if (found) at.reset(child);
+          }
+          a = dot + 1;
+        }
+        if (found) Fail(at, key.empty() ? word : key + "." + word, why);
+      }
+    }
+    Fail(node, key, why);
   }
 
   std::filesystem::path ResolvePath(const YAML::Node& node, const std::string& key) const {

@@ -24,6 +24,21 @@ using namespace recipe_detail;  // the reader and its sections (recipes/reader.h
 
 namespace {
 
+// A density in kg/m3 that a solid part could have: from rigid foam (about 100) to osmium (22,590).
+// 7.85 meant g/cm3 (steel); the message says what it was read as and what was likely meant.
+void CheckDensity(const Reader& r, const YAML::Node& node, const std::string& key, double value) {
+  if (value >= 100.0 && value <= 25000.0) return;
+  std::ostringstream m;
+  m << node.Scalar() << " is read as kg/m3, ";
+  if (value < 100.0) {
+    m << "lighter than any solid part (steel is 7850, aluminium 2700, ABS 1050)";
+    if (value >= 0.1 && value <= 25.0) m << ": did you mean " << value * 1000.0 << " (" << node.Scalar() << " g/cm3)?";
+  } else {
+    m << "denser than any material (osmium is 22590)";
+  }
+  r.Fail(node, key, m.str());
+}
+
 // How a part or a container behaves in contact: density (kg/m3), friction, restitution; each a
 // number or, where `ranges`, [low, high] drawn per scene.
 void ReadPhysics(const Reader& r, const YAML::Node& node, const std::string& key, PhysicsDraw* d,
@@ -45,9 +60,14 @@ void ReadPhysics(const Reader& r, const YAML::Node& node, const std::string& key
       if (v.size() != 2) r.Fail(v, at, "expected a number or a range [low, high]");
       ReadField(r, v[0], at, field, &low);
       ReadField(r, v[1], at, field, &hi);
+      if (field.key == "density") {
+        CheckDensity(r, v[0], at, low);
+        CheckDensity(r, v[1], at, hi);
+      }
       if (low > hi) r.Fail(v, at, "the range's low end exceeds its high end");
     } else {
       ReadField(r, v, at, field, &low);
+      if (field.key == "density") CheckDensity(r, v, at, low);
       hi = low;
     }
   });
@@ -74,6 +94,11 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
     ReadFileSource(r, node, key, &source);
     scene->container_file = std::move(source);
   }
+  // A tote's inside below 10 mm holds no part: [0.4, 0.3] meant metres.
+  for (const char* size : {"inner", "height"}) {
+    if (node[size] && c.kind == Container::Kind::kTote)
+      r.CheckMetresMeant(node[size], key + "." + size, 10.0);
+  }
   if (const YAML::Node inner = node["inner"]) {
     if (!inner.IsSequence() || inner.size() != 2)
       r.Fail(inner, key + ".inner", "expected [length, width], e.g. [355 mm, 265 mm]");
@@ -86,7 +111,7 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
         ReadMaterial(r, node["material"], key + ".material", SchemaAt("scene.container.material"));
   std::string why;
   if (!(c.kind == Container::Kind::kMesh ? c.material.Check(&why) : c.Check(&why)))
-    r.Fail(node, key, why);
+    r.FailAtNamedKey(node, key, why);
 }
 
 // A scene's arrangement keys (ArrangementOptions::Fields) and a pile's `container` and
@@ -94,7 +119,11 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
 // keys, read elsewhere).
 void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, SceneSpec* scene,
                 const Key& schema) {
+  if (node["radius"]) r.CheckMetresMeant(node["radius"], key + ".radius", 10.0);  // the clutter disc
   ReadFields(r, node, key, &scene->arrangement, schema);
+  scene->where = r.Where(node);
+  if (node["container"]) scene->container_where = r.Where(node["container"]);
+  if (node["copies"]) scene->copies_where = r.Where(node["copies"]);
   const bool pile = scene->arrangement.layout == Layout::kPile;
   const bool dropped = pile || scene->arrangement.pose == PoseMode::kDropped;
   if (node["container"] && !pile)

@@ -106,6 +106,9 @@ struct SceneSpec {
   // This scene's `randomize:` (the recipe's, with the groups the scene gives replaced); unset:
   // the recipe's.
   std::optional<RandomizeSpec> randomize;
+  // Where the recipe gives the scene, its container and its copies ("recipe.yaml:12:7"; empty
+  // when built in or not given): what the checks before a run point at.
+  std::string where, container_where, copies_where;
 };
 
 // Grasp labels (`grasps:`): antipodal parallel-jaw grasps (and, with a cup, suction grasps)

@@ -50,7 +50,7 @@ std::string Shortened(const std::string& message) {
 struct Args {
   // generate
   std::string recipe, output, shard, progress = "auto", cache;
-  bool overwrite = false, quiet = false, help_recipe = false, recipe_schema = false,
+  bool overwrite = false, strict = false, quiet = false, help_recipe = false, recipe_schema = false,
        no_cache = false;
   int threads = 0, shards = 0;
   // merge, preview, verify, report
@@ -123,6 +123,7 @@ int RunGenerate(const Args& a) {
   options.output = !a.output.empty() ? std::filesystem::path(a.output)
                                      : (!spec.output.empty() ? spec.output : "cadsynth_dataset");
   options.overwrite = a.overwrite;
+  options.strict = a.strict;
   options.shard = shard;
   options.reader = SelfExecutable();
   if (!a.no_cache) {
@@ -143,6 +144,10 @@ int RunGenerate(const Args& a) {
     auto reporter = std::make_shared<cadsynth::ProgressReporter>(mode, stderr);
     if (shard) reporter->SetShard(shard->Name());
     options.progress = [reporter](size_t done, size_t total) { reporter->Update(done, total); };
+    options.stage_progress = [reporter](const std::string& scene, double done, double total,
+                                        const std::string& detail) {
+      reporter->Stage(scene, done, total, detail);
+    };
   }
   const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);
   if (summary.skipped_empty + summary.skipped_sparse > 0) {
@@ -151,13 +156,13 @@ int RunGenerate(const Args& a) {
                 summary.skipped_sparse, spec.min_visible_pixels);
   }
   const size_t rendered = summary.frames - summary.resumed;
-  std::printf(
-      "wrote %zu frames (%zu scene%s) of %zu objects (%zu instances)%s to %s in %.1f s (%.1f "
-      "frames/s)\n",
-      summary.frames, summary.scenes, summary.scenes == 1 ? "" : "s", summary.objects,
-      summary.instances, shard ? (" as shard " + shard->Name()).c_str() : "",
-      std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,
-      summary.seconds > 0 ? rendered / summary.seconds : 0.0);
+  std::printf("wrote %zu frame%s (%zu scene%s) of %zu object%s (%zu instance%s)%s to %s in %.1f s (%s)\n",
+              summary.frames, summary.frames == 1 ? "" : "s", summary.scenes,
+              summary.scenes == 1 ? "" : "s", summary.objects, summary.objects == 1 ? "" : "s",
+              summary.instances, summary.instances == 1 ? "" : "s",
+              shard ? (" as shard " + shard->Name()).c_str() : "",
+              std::filesystem::absolute(options.output).lexically_normal().c_str(),
+              summary.seconds, cadsynth::FormatRate(rendered, summary.seconds).c_str());
   return 0;
 }
 
@@ -327,6 +332,10 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
       ->type_name("DIR");
   gen->add_flag("--overwrite", a.overwrite,
                 "replace DIR if it exists (the old one stays until the new one is complete)");
+  gen->add_flag("--strict", a.strict,
+                "warnings that describe a broken dataset are errors: parts kept outside their "
+                "container, parts still moving after settle_time, a camera inside or touching "
+                "the scene");
   gen->add_option(
          "--shard", a.shard,
          "render only shard I of N (0 <= I < N) into DIR, beside the other shards; join them with "
@@ -347,7 +356,7 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
   gen->add_option(
          "--progress", a.progress,
          "auto (a bar on a terminal, lines in a log), bar, lines, or json: one JSON line every 5 s "
-         "(done, total, seconds, frames_per_s, eta_s) for cluster logs")
+         "(done, total, seconds, frames_per_s, s_per_frame, eta_s) for cluster logs")
       ->check(CLI::IsMember({"auto", "bar", "lines", "json"}))
       ->type_name("MODE");
   gen->add_flag(
@@ -539,6 +548,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   app.get_formatter()->column_width(24);
   Args args;
+  cadsynth::SilenceOpenCvWarnings();
   const std::vector<Command> commands = DefineCommands(app, args);
   const std::string first = argc > 1 ? argv[1] : "";
   // The child of a guarded read (tools/pipeline/guarded_import.h): not a user command.

@@ -353,6 +353,7 @@ PileOptions PileSettings(const std::vector<Part>& parts, const ArrangementOption
   pile.time_step_s = o.time_step_s;
   pile.confirm_seconds = o.confirm_rest ? 1.0 : 0.0;
   pile.seed = o.seed;
+  pile.progress = o.pile_progress;
   if (o.container.kind == Container::Kind::kFloor) {
     const double side = std::sqrt(M_PI) * o.clutter_radius_mm;  // the clutter disc's area
     pile.drop_size_mm = Eigen::Vector2d(side, side);
@@ -747,6 +748,62 @@ PickStep PickFromPile(const std::vector<Part>& parts, const Arrangement& pile,
     ++k;
   }
   return step;
+}
+
+void RedropEscaped(const std::vector<Part>& parts, const ArrangementOptions& o,
+                   const std::vector<CollisionShape>& shapes, Arrangement* pile, int rounds) {
+  for (int round = 0; round < rounds && !pile->escaped.empty(); ++round) {
+    PileOptions settings = PileSettings(parts, o);
+    settings.seed =
+        static_cast<uint64_t>(UniformDraw(o.seed, streams::kRedropSeed, round) * 0x1p53);
+    const std::vector<int> falling = pile->escaped;  // sorted
+    for (size_t i = 0, f = 0; i < pile->instances.size(); ++i) {
+      const Instance& instance = pile->instances[i];
+      if (f < falling.size() && falling[f] == static_cast<int>(i)) {
+        settings.bodies.push_back(instance.part);
+        ++f;
+      } else {
+        settings.fixed.push_back({instance.part, instance.world_from_model});
+      }
+    }
+    for (const Instance& d : pile->distractors) settings.fixed.push_back({d.part, d.world_from_model});
+    const PileResult r = DropPile(parts, shapes, settings);
+    for (size_t f = 0; f < falling.size(); ++f)
+      pile->instances[falling[f]].world_from_model = r.world_from_model[f];
+    pile->escaped.clear();
+    for (int f : r.escaped) pile->escaped.push_back(falling[f]);
+    for (int f : r.restless) pile->restless.push_back(falling[f]);
+    std::sort(pile->restless.begin(), pile->restless.end());
+    pile->restless.erase(std::unique(pile->restless.begin(), pile->restless.end()),
+                         pile->restless.end());
+    pile->settle_seconds += r.seconds;
+  }
+}
+
+std::vector<Instance> RemoveEscaped(Arrangement* pile) {
+  std::vector<Instance> removed;
+  if (pile->escaped.empty()) return removed;
+  std::vector<int> new_index(pile->instances.size(), -1);
+  Arrangement kept = *pile;
+  kept.instances.clear();
+  kept.group.clear();
+  kept.restless.clear();
+  kept.escaped.clear();
+  for (size_t i = 0, e = 0; i < pile->instances.size(); ++i) {
+    if (e < pile->escaped.size() && pile->escaped[e] == static_cast<int>(i)) {
+      removed.push_back(pile->instances[i]);
+      ++e;
+      continue;
+    }
+    new_index[i] = static_cast<int>(kept.instances.size());
+    kept.instances.push_back(pile->instances[i]);
+    if (!pile->group.empty()) kept.group.push_back(pile->group[i]);
+  }
+  for (int i : pile->restless) {
+    if (new_index[i] >= 0) kept.restless.push_back(new_index[i]);
+  }
+  *pile = std::move(kept);
+  return removed;
 }
 
 }  // namespace cadsynth

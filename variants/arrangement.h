@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,13 @@ struct PhysicsDraw {
 // sequence.pick, from the pile's seed).
 enum class PickRule { kHighest, kRandom };
 
+// What becomes of a pile's parts that end outside its container (on the floor beside a tote):
+// taken out of the scene (not drawn, not labelled), kept where they lie (drawn and labelled as
+// instances of the scene), or dropped again onto the pile, up to three times, the rest then taken
+// out. Remove is the default: a part on the floor is no part of the bin, and a dataset should not
+// teach that it is.
+enum class OutOfContainer { kRemove, kKeep, kRedrop };
+
 struct PickSequence {
   int picks = 0;  // 0: no sequence
   PickRule rule = PickRule::kHighest;
@@ -97,6 +105,9 @@ struct ArrangementOptions {
   std::vector<int> distractors;
   uint64_t distractor_seed = 0;
   PickSequence sequence;  // a pile's pick sequence (its own recipe section, `sequence`)
+  OutOfContainer out_of_container = OutOfContainer::kRemove;  // a pile's
+  // A pile's (and a drop's) progress: PileOptions::progress. Not a recipe key; changes nothing.
+  std::function<void(double seconds, int moving, int outside)> pile_progress;
 
   bool Check(std::string* why) const;
 
@@ -131,6 +142,13 @@ struct ArrangementOptions {
           Field{"confirm_rest", "bool",
                 "pile: a rest counts once a new world started from it moves no "
                 "part by more than 0.4 mm in a second (false: the rest test alone)"});
+    visit(o.out_of_container,
+          Field{"out_of_container",
+                "choice",
+                "pile: parts that end outside the container are taken out of the scene, kept "
+                "(drawn and labelled where they lie), or dropped again onto the pile (up to three "
+                "times, then taken out)",
+                {"remove", "keep", "redrop"}});
   }
 };
 
@@ -167,6 +185,18 @@ int ChoosePick(const std::vector<Part>& parts, const Arrangement& pile, PickRule
 PickStep PickFromPile(const std::vector<Part>& parts, const Arrangement& pile,
                       const ArrangementOptions& options, int picked,
                       const std::vector<CollisionShape>& shapes);
+
+// A pile's parts that ended outside its container (pile->escaped) dropped again from above onto
+// the pile as it lies, its other parts and distractors held where they are (static bodies, as a
+// pick's untouched parts), up to `rounds` times, each round's seed drawn from stream
+// arrange.redrop_seed; those still outside stay in pile->escaped, those still moving join
+// pile->restless. `parts` and `shapes` as Arrange's.
+void RedropEscaped(const std::vector<Part>& parts, const ArrangementOptions& options,
+                   const std::vector<CollisionShape>& shapes, Arrangement* pile, int rounds = 3);
+
+// The instances in pile->escaped taken out of the pile (restless renumbered, escaped emptied).
+// Returns the instances taken out, in order.
+std::vector<Instance> RemoveEscaped(Arrangement* pile);
 
 // Arranges `instances` (`group[i]` is the group of instance i; empty: one group per instance).
 // Throws Error when a clutter does not fit, saying how many groups did. A pile drops single parts

@@ -60,6 +60,10 @@ inline constexpr RandomStream kDropSeed{
     "arrange.drop_seed",
     "the seed of one copy's fall onto the floor (pose: dropped), for its pile.rotation and "
     "pile.position draws; index as arrange.copy_pose"};
+inline constexpr RandomStream kRedropSeed{
+    "arrange.redrop_seed",
+    "the seed of a drop again of the parts that left a pile's container (out_of_container: "
+    "redrop); index = round"};
 // recipes: randomize.seed (distractors, per scene)
 inline constexpr RandomStream kDistractorOrder{
     "arrange.distractor_order",
@@ -176,7 +180,7 @@ inline constexpr RandomStream kRandomStreams[] = {
     streams::kSensorInfrared, streams::kSensorDots,     streams::kImageFrame,
     streams::kImageNoise,     streams::kImageNoiseGrey, streams::kRandomizeFrame,
     streams::kRandomizeDraw,  streams::kGraspPoint,     streams::kGraspApproach,
-    streams::kSuctionPoint,   streams::kPickRandom,
+    streams::kSuctionPoint,   streams::kPickRandom,     streams::kRedropSeed,
 };
 
 namespace random_detail {

@@ -35,4 +35,8 @@ std::string JoinNames(const std::vector<std::string>& names, const std::string& 
   return out;
 }
 
+std::string Count(size_t n, const std::string& singular, const std::string& plural) {
+  return std::to_string(n) + " " + (n == 1 ? singular : plural.empty() ? singular + "s" : plural);
+}
+
 }  // namespace cadsynth

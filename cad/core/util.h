@@ -17,4 +17,7 @@ std::string NearestName(const std::string& name, const std::vector<std::string>&
 // "a, b, c": names for a message ("known: ..."), `separator` between them.
 std::string JoinNames(const std::vector<std::string>& names, const std::string& separator = ", ");
 
+// "1 part", "3 parts": a count and its noun for a message (`plural` empty: `singular` + "s").
+std::string Count(size_t n, const std::string& singular, const std::string& plural = "");
+
 }  // namespace cadsynth

@@ -176,7 +176,7 @@ camera:
   EXPECT_EQ(imager.sensor.imager.vignetting, 0.3);
   EXPECT_EQ(imager.sensor.imager.seed, 2u);
   EXPECT_EQ(ErrorOf("camera:\n  imager: {vignetting: 2}\n"),
-            "r.yaml:2:11: camera.imager: vignetting must lie between 0 and 1");
+            "r.yaml:2:24: camera.imager.vignetting: vignetting must lie between 0 and 1");
   const RunSpec stereo =
       ParseRecipe("camera: {depth: {model: active_stereo, baseline: 95 mm, block: 7}}\n", "r", ".");
   EXPECT_EQ(stereo.sensor.depth.kind, DepthModel::Kind::kActiveStereo);
@@ -184,10 +184,10 @@ camera:
   EXPECT_EQ(stereo.sensor.depth.block, 7);
   EXPECT_EQ(stereo.sensor.depth.dot_spacing_px, 3.0);  // the model's default
   EXPECT_EQ(ErrorOf("camera:\n  depth: {model: active_stereo, block: 4}\n"),
-            "r.yaml:2:10: camera.depth: block must be odd, between 3 and 11");
+            "r.yaml:2:40: camera.depth.block: block must be odd, between 3 and 11");
   EXPECT_EQ(ErrorOf("camera:\n  depth: {model: kinect_v1, baseline: 0}\n"),
-            "r.yaml:2:10: camera.depth: baseline must not be 0 for kinect_v1 (its disparity is f "
-            "B / z)");
+            "r.yaml:2:39: camera.depth.baseline: baseline must not be 0 for kinect_v1 (its disparity "
+            "is f B / z)");
   EXPECT_EQ(ErrorOf("camera:\n  depth: {baseline: 5 cm}\n"),
             "r.yaml:2:10: camera.depth: give the sensor's 'model'");
   EXPECT_EQ(ErrorOf("camera:\n  depth: {model: azure_kinect, basline: 5 cm}\n"),
@@ -275,8 +275,8 @@ cameras:
             "r.yaml:2:22: cameras[0].image: the paper and pvn3d formats need colour images "
             "(image: rgb)");
   EXPECT_EQ(ErrorOf("cameras:\n  - {name: a, depth: {model: kinect_v1, baseline: 0}}\n"),
-            "r.yaml:2:22: cameras[0].depth: baseline must not be 0 for kinect_v1 (its disparity is "
-            "f B / z)");
+            "r.yaml:2:51: cameras[0].depth.baseline: baseline must not be 0 for kinect_v1 (its "
+            "disparity is f B / z)");
 }
 
 TEST(Recipe, LensEffects) {
@@ -322,7 +322,7 @@ cameras:
             "r.yaml:2:16: camera.lens: give the lens's 'focal_length' (with f_number: the "
             "aperture)");
   EXPECT_EQ(ErrorOf("render: {mode: pbr}\ncamera: {lens: {focal_length: 8, f_number: 0.1}}\n"),
-            "r.yaml:2:16: camera.lens: f_number must lie between 0.5 and 128");
+            "r.yaml:2:44: camera.lens.f_number: f_number must lie between 0.5 and 128");
   EXPECT_EQ(ErrorOf("render: {mode: pbr}\ncamera: {motion: {velocity_mm_s: [1, 0, 0]}}\n"),
             "r.yaml:2:18: camera.motion: give 'exposure_ms', how long the shutter is open");
   EXPECT_EQ(ErrorOf("render: {mode: pbr}\ncameras:\n  - {name: a}\n  - {name: b, motion: "
@@ -463,7 +463,7 @@ TEST(Recipe, ErrorsPointAtLineAndColumn) {
   EXPECT_EQ(ErrorOf("sweep: {pitch: {from: 0, to: 90}}\n"),
             "r.yaml:1:16: sweep.pitch: a range needs 'from', 'to' and 'step' (no 'step')");
   EXPECT_EQ(ErrorOf("sweep: {pitch: 120}\n"),
-            "r.yaml:1:8: sweep: pitch must lie between -90 and 90 degrees");
+            "r.yaml:1:16: sweep.pitch: pitch must lie between -90 and 90 degrees");
   EXPECT_EQ(ErrorOf("camera: [1, 2\n").rfind("r.yaml:", 0), 0u);  // YAML syntax errors too
   EXPECT_EQ(ErrorOf("- just\n- a list\n"),
             "r.yaml: a recipe is a mapping of sections (parts, sweep, ...)");
@@ -560,7 +560,7 @@ TEST(Recipe, DuplicateKeysAreErrors) {
 // A camera a light-year away made Embree abort the process; the sweep refuses it.
 TEST(Recipe, FarCamerasAndTargetsAreRefused) {
   EXPECT_EQ(ErrorOf("sweep: {radius: 1e19 mm}\n"),
-            "r.yaml:1:8: sweep: radius must be at most 1 km (the tracer's single precision would "
+            "r.yaml:1:17: sweep.radius: radius must be at most 1 km (the tracer's single precision would "
             "lose the parts)");
   SweepOptions sweep;
   sweep.yaw_rad = {0};
@@ -608,15 +608,15 @@ TEST(Recipe, LimitsStopRunawayRecipes) {
       "r.yaml", ".");
   EXPECT_EQ(raised.limits.max_count, 1500);
   EXPECT_EQ(ErrorOf("limits: {max_variants: 0}\n"),
-            "r.yaml:1:9: limits: max_variants and max_count must be at least 1");
+            "r.yaml:1:24: limits.max_variants: max_variants and max_count must be at least 1");
 }
 
 // A split name becomes a folder and JSON text: raw bytes (not UTF-8) ended in "internal:
 // json.exception"; now only plain names pass.
 TEST(Recipe, SplitNamesArePlainFolderNames) {
   EXPECT_EQ(ErrorOf("output: {split: \"tr\xe9in\"}\n"),
-            "r.yaml:1:9: output: split must be a plain folder name: up to 64 letters, digits, "
-            "'_', '-' or '.'");
+            "r.yaml:1:17: output.split: split must be a plain folder name: up to 64 letters, "
+            "digits, '_', '-' or '.'");
   EXPECT_NE(ErrorOf("output: {split: \"a b\"}\n").find("plain folder name"), std::string::npos);
   EXPECT_EQ(ParseRecipe("output: {split: train_pbr}\n", "r.yaml", ".").bop.split, "train_pbr");
 }
@@ -751,11 +751,11 @@ TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {
             "floor, file)");
   EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, physics: {friction: "
                     "-1}}\n"),
-            "r.yaml:2:57: scenes[0].physics: friction must lie in [0, 10]");
+            "r.yaml:2:68: scenes[0].physics.friction: friction must lie in [0, 10]");
   EXPECT_EQ(ErrorOf("scenes:\n  - {parts: [{family: hex_nut}], layout: pile, container: {type: "
                     "tote, inner: [100 mm, 50 mm], corner_radius: 40 mm}}\n"),
-            "r.yaml:2:59: scenes[0].container: a tote's corner radius must lie between 0 and half "
-            "its inner width");
+            "r.yaml:2:111: scenes[0].container.corner_radius: corner_radius must lie between 0 and "
+            "half the tote's inner width (25 mm)");
 }
 
 // Physics per part (rules matched like material rules) with values drawn from ranges, and
@@ -841,7 +841,7 @@ TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
   EXPECT_EQ(ErrorOf("render: {mode: photoreal}\n").substr(0, 38),
             "r.yaml:1:16: render.mode: expected 'fa");
   EXPECT_EQ(ErrorOf("render: {samples: 0}\n"),
-            "r.yaml:1:9: render: samples must be 1 to 65536 paths per pixel");
+            "r.yaml:1:19: render.samples: samples must be 1 to 65536 paths per pixel");
 
   // An environment image that is not one: a named file, line and column.
   testing::ScratchDir dir;
@@ -1178,6 +1178,14 @@ TEST(Recipe, ShippedRecipesParse) {
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (!have_data && text.find("shared/data") != std::string::npos)
       continue;  // needs the shared data
+    if (entry.path().filename() == "my_part_in_a_tote.yaml") {
+      // The template for the user's own file: read beside a stand-in my_part.step.
+      testing::ScratchDir dir;
+      std::ofstream(dir / "my_part.step") << "ISO-10303-21;\n";
+      EXPECT_NO_THROW(ParseRecipe(text, "my_part_in_a_tote.yaml", dir.path()));
+      ++parsed;
+      continue;
+    }
     EXPECT_NO_THROW(LoadRecipe(entry.path())) << entry.path();
     ++parsed;
   }

@@ -69,7 +69,11 @@ FrameSource::FrameSource(const RunSpec& spec, const FrameSourceOptions& options)
   std::optional<ReaderProcess> reader;
   if (!options_.reader.empty())
     reader = ReaderProcess{options_.reader, spec_.limits.read_timeout_s};
-  prepared_ = Prepare(spec_, options_.info, cache ? &*cache : nullptr, reader ? &*reader : nullptr);
+  PrepareControls controls;
+  controls.strict = options_.strict;
+  controls.progress = options_.stage_progress;
+  prepared_ = Prepare(spec_, options_.info, cache ? &*cache : nullptr, reader ? &*reader : nullptr,
+                      controls);
   if (!spec_.sampler.Check(&why)) throw Error("sweep: " + why);
   views_ = SampleViews(spec_.sampler, spec_.sweep);
   if (spec_.grasps.enabled) {

@@ -27,6 +27,9 @@ struct FrameSourceOptions {
   std::optional<std::filesystem::path> cache;
   // A cadsynth executable to read CAD and mesh files in child processes; empty: in this process.
   std::filesystem::path reader;
+  // Broken-dataset warnings as errors, and the long stages' progress (PrepareControls).
+  bool strict = false;
+  StageProgress stage_progress;
 };
 
 // One work unit rendered: every sensor of the rig at one view of one scene.

@@ -142,6 +142,8 @@ GenerateSummary Generate(const RunSpec& spec, const GenerateOptions& options) {
   source_options.info = options.info;
   source_options.cache = options.cache;
   source_options.reader = options.reader;
+  source_options.strict = options.strict;
+  source_options.stage_progress = options.stage_progress;
   const FrameSource source(spec, source_options);
   return GenerateFrom(source, options, start);  // its times count the preparation too
 }
@@ -208,12 +210,17 @@ size_t OwnedUnits(const Run& run) {
   return total_frames;
 }
 
-void WarnPlacements(const Run& run) {
+// The placement warnings (shard 0 says them); under --strict, a camera inside or touching the
+// scene is an error in every shard.
+void WarnPlacements(const Run& run, bool strict) {
   for (size_t s = 0; s < run.prepared.scenes.size(); ++s) {
     for (const std::string& warning :
          PlacementWarnings(run.parts, run.prepared.scenes[s].instances, run.sensors[0].intrinsics,
                            run.spec.sweep)) {
-      Warn("scene '" + run.prepared.scene_names[s] + "': " + warning);
+      const std::string text = "scene '" + run.prepared.scene_names[s] + "': " + warning;
+      if (strict && warning.find(kCameraInsideScene) != std::string::npos)
+        throw Error(text + " (an error under --strict)");
+      if (run.common) Warn(text);
     }
   }
 }
@@ -531,7 +538,7 @@ GenerateSummary GenerateFrom(const FrameSource& source, const GenerateOptions& o
   const std::vector<std::filesystem::path> inputs = RunInputs(spec);
   const Run run = MakeRun(source, options);
   const PreparedRun& prepared = run.prepared;
-  if (run.common) WarnPlacements(run);
+  if (run.common || options.strict) WarnPlacements(run, options.strict);
   Counts counts;
   counts.total = OwnedUnits(run);
 

@@ -34,6 +34,11 @@ struct GenerateOptions {
   // A cadsynth executable to read CAD and mesh files in child processes (guarded_import.h), so
   // a reader that crashes or hangs on a file ends in an error; empty: read in this process.
   std::filesystem::path reader;
+  // Warnings that describe a broken dataset (parts kept outside their container, parts still
+  // moving, a camera that sees the scene from inside or touching it) are errors.
+  bool strict = false;
+  // Progress of the long preparation stages (a pile's simulation), per scene; may be empty.
+  StageProgress stage_progress;
 };
 
 struct GenerateSummary {

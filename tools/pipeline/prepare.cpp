@@ -15,6 +15,12 @@ namespace {
 // A length for a message: whole millimetres (lround overflows past 9e18: printed as a huge
 // negative number), or three significant digits when it is that large.
 std::string Mm(double x) {
+  if (std::abs(x) < 10.0) {  // 0.8 mm is not "1 mm"
+    std::ostringstream out;
+    out.precision(2);
+    out << std::round(x * 100.0) / 100.0 + 0.0;  // (+ 0.0: no "-0")
+    return out.str();
+  }
   if (std::abs(x) < 1e12) return std::to_string(std::llround(x));
   std::ostringstream out;
   out.precision(3);
@@ -46,7 +52,7 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
   if (reach >= nearest) {
     out << "the scene reaches " << Mm(reach)
         << " mm from the target, beyond the nearest camera radius " << Mm(nearest)
-        << " mm: the camera will be inside or touching it";
+        << " mm: " << kCameraInsideScene;
     warnings.push_back(out.str());
   } else if (std::asin(reach / nearest) > half_fov) {
     out << "the scene reaches " << Mm(reach) << " mm from the target; at the nearest radius "
@@ -73,13 +79,17 @@ std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
 }
 
 PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info_sink,
-                    const PartCache* cache, const ReaderProcess* reader) {
+                    const PartCache* cache, const ReaderProcess* reader,
+                    const PrepareControls& controls) {
   using namespace prepare_stages;
   if (spec.scenes.empty()) throw Error("no scenes to render");
   const auto info = [&](const std::string& line) {
     if (info_sink) info_sink(line);
   };
-  const Context context{spec, info, cache, reader};
+  const Context context{spec,           info,
+                        cache,          reader,
+                        controls.strict, controls.progress,
+                        controls.progress_interval_s};
   // The parts: read and built, gathered into one list, measured, merged, named and classed.
   PrepareState state;
   state.jobs = BuildParts(context);
@@ -92,9 +102,11 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   RenameRepeatedNames(&state.all.parts);
   ComputeHulls(context, &state.all.parts);
   state.classes = AssignPartClasses(context, state);
-  // The scenes: arranged in parallel, then recorded in scene order.
+  // The scenes: checked, arranged in parallel, then recorded in scene order.
+  CheckScenesCanBeMade(context, state);
   state.pile_shapes = MakePileShapes(context, state);
   std::vector<Placement> placements = ArrangeScenes(context, state);
+  CheckCamerasOutsideParts(context, state, placements);
   PreparedRun prepared = RecordScenes(context, state, &placements);
   prepared.variants_json = VariantsRecord(spec, state);
   prepared.parts = std::move(state.all.parts);

@@ -33,6 +33,21 @@ struct PreparedRun {
   std::vector<std::optional<SequenceStep>> sequence;
 };
 
+// Progress of a long stage of one scene (a pile's simulation): the scene's name, how far it is
+// and how far it may go (simulated seconds of settle_time), and what is going on ("37 of 60
+// parts moving"). Called from the scene's thread.
+using StageProgress = std::function<void(const std::string& scene, double done, double total,
+                                         const std::string& detail)>;
+
+// What Prepare does beyond its info lines.
+struct PrepareControls {
+  // Warnings that describe a broken dataset (parts kept outside their container, parts still
+  // moving at the end of settle_time) are errors, "(an error under --strict)".
+  bool strict = false;
+  StageProgress progress;  // may be empty
+  double progress_interval_s = 2.0;  // of wall time between two calls for one scene
+};
+
 // Reads the files and builds the family variants of every scene (in parallel), merges repeated
 // shapes, computes each part's convex hull, assigns classes and arranges each scene. With a
 // cache, imported files, built variants, hulls and repeated-shape checks are read from it where
@@ -40,7 +55,12 @@ struct PreparedRun {
 // come in recipe order. Throws Error naming the recipe entry.
 // With `reader`, files are read in a child process (tools/pipeline/guarded_import.h).
 PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::string&)>& info = {},
-                    const PartCache* cache = nullptr, const ReaderProcess* reader = nullptr);
+                    const PartCache* cache = nullptr, const ReaderProcess* reader = nullptr,
+                    const PrepareControls& controls = {});
+
+// How the placement warning of a camera closer to the target than the scene's reach ends (an
+// error under --strict).
+inline constexpr const char* kCameraInsideScene = "the camera will be inside or touching it";
 
 // What a user should hear about a scene before rendering it: whether its objects fit the view at
 // the nearest camera radius, and whether the smallest is still a few pixels at the farthest.

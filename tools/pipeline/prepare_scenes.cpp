@@ -4,6 +4,7 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <chrono>
 #include <exception>
 #include <filesystem>
 #include <optional>
@@ -13,6 +14,7 @@
 #include <tbb/parallel_for.h>
 
 #include "cad/core/error.h"
+#include "cad/core/util.h"
 #include "cad/part_cache.h"
 #include "cad/shape.h"
 #include "render/image.h"
@@ -84,6 +86,12 @@ class SceneLog {
   void Say(bool warning, std::string text) {
     Flush();
     messages_->emplace_back(warning, std::move(text));
+  }
+  // A warning that describes a broken dataset (parts outside the container kept, parts still
+  // moving): with --strict an error (the scene's error, prefixed with its name by PlaceScene).
+  void Broken(bool strict, const std::string& scene, const std::string& text) {
+    if (strict) throw Error(text + " (an error under --strict)");
+    Say(true, "scene '" + scene + "': " + text);
   }
 
  private:
@@ -250,23 +258,86 @@ void AssignPhysics(const SceneSpec& scene_spec, const PrepareState& state,
   }
 }
 
-// What a pile did: at rest or still moving, and parts that bounced out of the tote.
-void ReportPile(const SceneSpec& scene_spec, const Arrangement& arranged, SceneLog* log) {
+// "#4 'bracket', #17 'bracket' and 3 more": instances of a pile (their drop order) for a message.
+std::string NameInstances(const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                          const std::vector<int>& which) {
+  constexpr size_t kNamed = 8;
+  std::vector<std::string> names;
+  for (size_t k = 0; k < which.size() && k < kNamed; ++k)
+    names.push_back("#" + std::to_string(which[k]) + " '" + parts[instances[which[k]].part].name +
+                    "'");
+  std::string text = JoinNames(names);
+  if (which.size() > kNamed) text += " and " + std::to_string(which.size() - kNamed) + " more";
+  return text;
+}
+
+// The container as a message names it.
+std::string ContainerName(const Container& container) {
+  return container.kind == Container::Kind::kTote ? "the tote" : "the container";
+}
+
+// What a pile did: at rest or still moving.
+void ReportPile(const SceneSpec& scene_spec, const std::vector<Part>& parts,
+                const Arrangement& arranged, bool strict, SceneLog* log) {
   std::ostringstream m;
-  m << "scene '" << scene_spec.name << "': " << arranged.instances.size() << " parts dropped; ";
+  m << "scene '" << scene_spec.name << "': " << Count(arranged.instances.size(), "part")
+    << " in the pile; ";
   if (arranged.restless.empty()) {
     m << "at rest after " << arranged.settle_seconds << " s (simulated)";
     log->Say(false, m.str());
   } else {
-    m << arranged.restless.size() << " still moving after settle_time ("
-      << scene_spec.arrangement.settle_time_s
-      << " s, simulated): raise settle_time, or drop fewer parts";
-    log->Say(true, m.str());
+    std::ostringstream broken;
+    broken << Count(arranged.restless.size(), "part") << " ("
+           << NameInstances(parts, arranged.instances, arranged.restless)
+           << ") still moving after settle_time (" << scene_spec.arrangement.settle_time_s
+           << " s, simulated): raise settle_time, or drop fewer parts";
+    log->Broken(strict, scene_spec.name, broken.str());
   }
-  if (!arranged.escaped.empty()) {
-    log->Say(true, "scene '" + scene_spec.name + "': " + std::to_string(arranged.escaped.size()) +
-                       " parts bounced out of the tote (they are kept where they landed)");
+}
+
+// The parts that ended outside a pile's container (arranged->escaped), as the scene's
+// out_of_container says: named, then dropped again (redrop), taken out (remove, and what a redrop
+// left outside) or kept where they lie (keep: a broken dataset, an error under --strict).
+void SortOutEscaped(const SceneSpec& scene_spec, const std::vector<Part>& parts,
+                    const ArrangementOptions& arrangement,
+                    const std::vector<CollisionShape>& shapes, bool strict, SceneLog* log,
+                    Arrangement* arranged) {
+  if (arranged->escaped.empty()) return;
+  const std::string container = ContainerName(arrangement.container);
+  const size_t dropped = arranged->instances.size();
+  std::ostringstream m;
+  m << Count(arranged->escaped.size(), "part") << " of " << dropped << " ended outside "
+    << container << " (" << NameInstances(parts, arranged->instances, arranged->escaped) << ")";
+  switch (arrangement.out_of_container) {
+    case OutOfContainer::kKeep:
+      m << "; kept where they lie, drawn and labelled as parts of the scene (out_of_container: "
+           "keep; remove takes them out, redrop drops them again)";
+      log->Broken(strict, scene_spec.name, m.str());
+      return;
+    case OutOfContainer::kRedrop: {
+      const size_t before = arranged->escaped.size();
+      RedropEscaped(parts, arrangement, shapes, arranged);
+      m << "; dropped again (out_of_container: redrop): " << before - arranged->escaped.size()
+        << " landed inside";
+      if (arranged->escaped.empty()) {
+        log->Say(true, "scene '" + scene_spec.name + "': " + m.str());
+        return;
+      }
+      m << ", " << arranged->escaped.size() << " still outside after three drops ("
+        << NameInstances(parts, arranged->instances, arranged->escaped)
+        << ") taken out of the scene";
+      break;
+    }
+    case OutOfContainer::kRemove:
+      m << "; taken out of the scene, neither drawn nor labelled (out_of_container: remove; keep "
+           "labels them where they lie, redrop drops them again)";
+      break;
   }
+  RemoveEscaped(arranged);
+  if (arranged->instances.empty())
+    throw Error("every one of its " + Count(dropped, "part") + " ended outside " + container +
+                ": the container is too small for them, or they bounce too much");
+  log->Say(true, "scene '" + scene_spec.name + "': " + m.str());
 }
 
 // A pile's tote (or container file) as a fixture of the scene, unless it has no walls or floor.
@@ -314,20 +385,21 @@ void ReportDistractors(const SceneSpec& scene_spec, const Arrangement& arranged,
                        SceneLog* log) {
   if (!arranged.distractors.empty() && !pile) {
     std::ostringstream m;
-    m << "scene '" << scene_spec.name << "': " << arranged.distractors.size()
-      << " distractors dropped among the parts in " << arranged.distractor_seconds
+    m << "scene '" << scene_spec.name << "': " << Count(arranged.distractors.size(), "distractor")
+      << " dropped among the parts in " << arranged.distractor_seconds
       << " s (simulated)";
     log->Say(false, m.str());
   }
   if (!arranged.escaped_distractors.empty()) {
     log->Say(true, "scene '" + scene_spec.name +
-                       "': " + std::to_string(arranged.escaped_distractors.size()) +
-                       " distractors bounced out of the tote (they are kept where they landed)");
+                       "': " + Count(arranged.escaped_distractors.size(), "distractor") +
+                       " ended outside the container (kept where they lie: distractors are "
+                       "drawn, never labelled)");
   }
   if (!arranged.restless_distractors.empty()) {
     log->Say(true, "scene '" + scene_spec.name +
-                       "': " + std::to_string(arranged.restless_distractors.size()) +
-                       " distractors still moving after settle_time (" +
+                       "': " + Count(arranged.restless_distractors.size(), "distractor") +
+                       " still moving after settle_time (" +
                        std::to_string(scene_spec.arrangement.settle_time_s) +
                        " s, simulated): they are kept where they were");
   }
@@ -337,7 +409,7 @@ void ReportDistractors(const SceneSpec& scene_spec, const Arrangement& arranged,
 // left it, one after the other, with the instance ids of what is left.
 void RunPickSequence(const SceneSpec& scene_spec, const std::vector<Part>& parts,
                      const ArrangementOptions& arrangement,
-                     const std::vector<CollisionShape>& shapes, SceneLog* log,
+                     const std::vector<CollisionShape>& shapes, bool strict, SceneLog* log,
                      Placement* placement) {
   const PickSequence& sequence = arrangement.sequence;
   if (sequence.picks <= 0) return;
@@ -356,18 +428,150 @@ void RunPickSequence(const SceneSpec& scene_spec, const std::vector<Part>& parts
     const PickStep& step = placement->picks.back();
     std::ostringstream m;
     m << "scene '" << scene_spec.name << "': pick " << k << " took instance " << ids[picked] << "; "
-      << std::count(step.freed.begin(), step.freed.end(), true) << " parts free to settle again ("
+      << Count(static_cast<size_t>(std::count(step.freed.begin(), step.freed.end(), true)), "part")
+      << " free to settle again ("
       << step.arranged.settle_seconds << " s, simulated)";
     log->Say(false, m.str());
     if (!step.arranged.restless.empty()) {
-      log->Say(true, "scene '" + scene_spec.name + "': after pick " + std::to_string(k) + ", " +
-                         std::to_string(step.arranged.restless.size()) +
-                         " parts still moving after settle_time");
+      log->Broken(strict, scene_spec.name,
+                  "after pick " + std::to_string(k) + ", " +
+                      Count(step.arranged.restless.size(), "part") + " still moving after settle_time");
     }
     ids.erase(ids.begin() + picked);
     placement->pick_ids.push_back(ids);
     pile = &step.arranged;
   }
+}
+
+// A pile's simulated result in the part cache: the key holds everything that decides it (the
+// arranged parts' geometry, mass and names, the instances, every pile option, the distractors,
+// --strict), the value the pile, its pick sequence and the messages they gave, so that a second
+// shard or a DataLoader worker reads the pile instead of simulating it again (the same bytes).
+void PutInstance(ByteWriter* w, const Instance& instance) {
+  w->Put(instance.part);
+  w->PutText(instance.name);
+  w->Put(Eigen::Matrix4d(instance.world_from_model.matrix()));
+  w->Put(instance.color.has_value());
+  w->Put(instance.color.value_or(Eigen::Vector3f::Zero()));
+  w->PutText(instance.path);
+}
+
+Instance GetInstance(ByteReader* r) {
+  Instance instance;
+  instance.part = r->Get<int>();
+  instance.name = r->GetText();
+  instance.world_from_model.matrix() = r->Get<Eigen::Matrix4d>();
+  const bool has_color = r->Get<bool>();
+  const Eigen::Vector3f color = r->Get<Eigen::Vector3f>();
+  if (has_color) instance.color = color;
+  instance.path = r->GetText();
+  return instance;
+}
+
+void PutArrangement(ByteWriter* w, const Arrangement& a) {
+  for (const std::vector<Instance>* list : {&a.instances, &a.distractors}) {
+    w->Put(static_cast<uint64_t>(list->size()));
+    for (const Instance& instance : *list) PutInstance(w, instance);
+  }
+  for (const std::vector<int>* list :
+       {&a.group, &a.restless, &a.escaped, &a.restless_distractors, &a.escaped_distractors})
+    w->PutArray(*list);
+  w->Put(a.settle_seconds);
+  w->Put(a.distractor_seconds);
+}
+
+Arrangement GetArrangement(ByteReader* r) {
+  Arrangement a;
+  for (std::vector<Instance>* list : {&a.instances, &a.distractors}) {
+    const auto n = r->Get<uint64_t>();
+    if (n > (1u << 24)) throw Error("pile cache: damaged");
+    for (uint64_t i = 0; i < n; ++i) list->push_back(GetInstance(r));
+  }
+  for (std::vector<int>* list :
+       {&a.group, &a.restless, &a.escaped, &a.restless_distractors, &a.escaped_distractors})
+    *list = r->GetArray<int>();
+  a.settle_seconds = r->Get<double>();
+  a.distractor_seconds = r->Get<double>();
+  return a;
+}
+
+std::string EncodePile(const Placement& placement,
+                       const std::vector<std::pair<bool, std::string>>& messages) {
+  ByteWriter w;
+  PutArrangement(&w, placement.arranged);
+  w.Put(static_cast<uint64_t>(placement.picks.size()));
+  for (size_t k = 0; k < placement.picks.size(); ++k) {
+    const PickStep& step = placement.picks[k];
+    w.Put(step.picked);
+    PutArrangement(&w, step.arranged);
+    w.PutArray(std::vector<uint8_t>(step.freed.begin(), step.freed.end()));
+    w.PutArray(step.moved_mm);
+    w.PutArray(placement.pick_ids[k]);
+  }
+  w.Put(static_cast<uint64_t>(messages.size()));
+  for (const auto& [warning, text] : messages) {
+    w.Put(warning);
+    w.PutText(text);
+  }
+  return w.bytes();
+}
+
+void DecodePile(std::string_view bytes, Placement* placement,
+                std::vector<std::pair<bool, std::string>>* messages) {
+  ByteReader r(bytes);
+  placement->arranged = GetArrangement(&r);
+  const auto picks = r.Get<uint64_t>();
+  if (picks > 1000) throw Error("pile cache: damaged");
+  placement->picks.clear();
+  placement->pick_ids.clear();
+  for (uint64_t k = 0; k < picks; ++k) {
+    PickStep step;
+    step.picked = r.Get<int>();
+    step.arranged = GetArrangement(&r);
+    const std::vector<uint8_t> freed = r.GetArray<uint8_t>();
+    step.freed.assign(freed.begin(), freed.end());
+    step.moved_mm = r.GetArray<double>();
+    placement->picks.push_back(std::move(step));
+    placement->pick_ids.push_back(r.GetArray<int>());
+  }
+  const auto n = r.Get<uint64_t>();
+  if (n > (1u << 20)) throw Error("pile cache: damaged");
+  for (uint64_t i = 0; i < n; ++i) {
+    const bool warning = r.Get<bool>();
+    messages->emplace_back(warning, r.GetText());
+  }
+}
+
+CacheKey PileKey(const PartCache& cache, const SceneSpec& scene_spec,
+                 const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                 const std::vector<int>& groups, const ArrangementOptions& a, bool strict) {
+  KeyHasher hasher;
+  cache.Start(&hasher, "pile 1");
+  hasher.Text(scene_spec.name).Value(strict);
+  std::vector<int> used;
+  for (const Instance& instance : instances) used.push_back(instance.part);
+  used.insert(used.end(), a.distractors.begin(), a.distractors.end());
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  for (int p : used) {
+    const Part& part = parts[static_cast<size_t>(p)];
+    hasher.Value(p).Text(part.name).Geometry(part.mesh).Value(part.watertight);
+    hasher.Value(part.mass.volume_mm3).Value(part.mass.center_of_mass).Value(part.mass.inertia);
+  }
+  for (size_t i = 0; i < instances.size(); ++i) {
+    const Instance& instance = instances[i];
+    hasher.Value(instance.part).Text(instance.name).Text(instance.path);
+    hasher.Value(Eigen::Matrix4d(instance.world_from_model.matrix()));
+    hasher.Value(instance.color.has_value()).Value(instance.color.value_or(Eigen::Vector3f::Zero()));
+    hasher.Value(i < groups.size() ? groups[i] : -1);
+  }
+  hasher.Fields(a).Fields(a.container).Fields(a.container.material).Fields(a.sequence);
+  hasher.Geometry(a.container.mesh);
+  hasher.Fields(a.physics.low).Fields(a.physics.high);
+  for (const PhysicsDraw& d : a.part_physics) hasher.Fields(d.low).Fields(d.high);
+  for (int d : a.distractors) hasher.Value(d);
+  hasher.Value(a.distractor_seed);
+  return hasher.Key();
 }
 
 // Scene `s` arranged into `placement`: its parts dropped, piled or laid out, and its
@@ -384,6 +588,24 @@ void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
   if (pile || dropped) shapes = FallingShapes(state.pile_shapes, s, instances);
   ArrangementOptions arrangement = scene_spec.arrangement;
   if (scene_spec.container_file) arrangement.container.mesh = state.container_mesh[s];
+  if (pile && context.progress) {
+    // At most one line every progress_interval_s of wall time (2 s: a pile of 60 bolts takes
+    // 1-5 s).
+    // (The copies and the distractors, added below: `arrangement` outlives every call.)
+    arrangement.pile_progress = [&context, &scene_spec, &instances, a = &arrangement,
+                                 last = std::chrono::steady_clock::now()](
+                                    double seconds, int moving, int outside) mutable {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last).count() < context.progress_interval_s) return;
+      last = now;
+      const size_t bodies =
+          instances.size() * static_cast<size_t>(a->copies) + a->distractors.size();
+      std::string detail =
+          std::to_string(moving) + " of " + std::to_string(bodies) + " bodies moving";
+      if (outside > 0) detail += ", " + std::to_string(outside) + " beside the container";
+      context.progress(scene_spec.name, seconds, scene_spec.arrangement.settle_time_s, detail);
+    };
+  }
   // Distractors: drawn for the scene, made (primitives) or taken (file and family parts),
   // given collision shapes, and dropped with (a pile) or onto (other layouts) the parts.
   const RandomizeSpec& randomize_spec =
@@ -406,17 +628,49 @@ void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
     arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
     if (!arranged.restless.empty()) {
       std::ostringstream m;
-      m << "scene '" << scene_spec.name << "': " << arranged.restless.size()
-        << " dropped parts still moving after settle_time (" << scene_spec.arrangement.settle_time_s
+      m << Count(arranged.restless.size(), "dropped part") << " still moving after settle_time ("
+        << scene_spec.arrangement.settle_time_s
         << " s, simulated): raise settle_time; each is put on the stable face nearest its "
            "last pose (or left as it was, tilted more than 5 degrees from any)";
-      log->Say(true, m.str());
+      log->Broken(context.strict, scene_spec.name, m.str());
     }
   } else if (pile) {
-    arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
-    ReportPile(scene_spec, arranged, log);
+    // From the part cache where an earlier process (a shard, a worker) simulated it.
+    std::optional<CacheKey> key;
+    bool cached = false;
+    if (context.cache) {
+      key = PileKey(*context.cache, scene_spec, arranged_parts, instances, groups, arrangement,
+                    context.strict);
+      if (const std::optional<std::string> bytes = context.cache->Load("pile", *key)) {
+        try {
+          std::vector<std::pair<bool, std::string>> messages;
+          DecodePile(*bytes, placement, &messages);
+          for (auto& [warning, text] : messages) log->Say(warning, std::move(text));
+          cached = true;
+        } catch (const Error&) {  // damaged: simulated again below
+          placement->picks.clear();
+          placement->pick_ids.clear();
+        }
+      }
+    }
+    if (!cached) {
+      log->Flush();
+      const size_t first_message = placement->messages.size();
+      arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
+      SortOutEscaped(scene_spec, arranged_parts, arrangement, shapes, context.strict, log,
+                     &arranged);
+      ReportPile(scene_spec, arranged_parts, arranged, context.strict, log);
+      RunPickSequence(scene_spec, arranged_parts, arrangement, shapes, context.strict, log,
+                      placement);
+      log->Flush();
+      if (key) {
+        const std::vector<std::pair<bool, std::string>> messages(
+            placement->messages.begin() + static_cast<std::ptrdiff_t>(first_message),
+            placement->messages.end());
+        context.cache->Store("pile", *key, EncodePile(*placement, messages));
+      }
+    }
     AddTote(scene_spec, arrangement.container, &placement->scene);
-    RunPickSequence(scene_spec, arranged_parts, arrangement, shapes, log, placement);
   } else {
     arranged =
         Arrange(arranged_parts, instances, arrangement, groups, picks.empty() ? nullptr : &shapes);
@@ -526,11 +780,40 @@ Randomization ResolveRandomization(const RunSpec& spec, const SceneSpec& scene_s
   return randomization;
 }
 
+// "the parts are 'a', 'b' (family gear) and 'c' (file c.step)": what a rule could have matched.
+std::string PartNames(const PrepareState& state) {
+  constexpr size_t kNamed = 12;
+  std::vector<std::string> names;
+  std::set<int> seen;
+  for (size_t i = 0; i < state.all.instances.size() && names.size() < kNamed; ++i) {
+    const int p = state.all.instances[i].part;
+    if (!seen.insert(p).second) continue;
+    const PartSource& source = *state.jobs[state.job_of_instance[i]].source;
+    names.push_back("'" + state.all.parts[p].name + "' (" +
+                    (source.kind == PartSource::Kind::kFile
+                         ? "file " + source.path.filename().string()
+                         : "family " + source.family) +
+                    ")");
+  }
+  std::string text = "the parts are " + JoinNames(names);
+  if (state.all.parts.size() > kNamed) text += " and " + std::to_string(state.all.parts.size() - kNamed) + " more";
+  return text;
+}
+
 // The recipe's material rules and (when a scene uses them) part rules that matched no part.
-void WarnUnusedRules(const RunSpec& spec, const std::vector<bool>& used_rules,
-                     bool recipe_randomize_used, const std::vector<bool>& used_randomize_rules) {
+void WarnUnusedRules(const RunSpec& spec, const PrepareState& state,
+                     const std::vector<bool>& used_rules, bool recipe_randomize_used,
+                     const std::vector<bool>& used_randomize_rules) {
   for (size_t r = 0; r < used_rules.size(); ++r) {
-    if (!used_rules[r]) Warn("materials.assign[" + std::to_string(r) + "] matches no part");
+    if (used_rules[r]) continue;
+    const MaterialRule& rule = spec.material_rules[r];
+    std::vector<std::string> patterns;
+    if (!rule.name.empty()) patterns.push_back("name '" + rule.name + "'");
+    if (!rule.family.empty()) patterns.push_back("family '" + rule.family + "'");
+    if (!rule.file.empty()) patterns.push_back("file '" + rule.file + "'");
+    Warn((rule.where.empty() ? "" : rule.where + ": ") + "materials.assign[" + std::to_string(r) +
+         "] (" + JoinNames(patterns) + ") matches no part, so no part takes its material; " +
+         PartNames(state) + " (patterns are shell globs, case-insensitive)");
   }
   for (size_t r = 0; recipe_randomize_used && r < used_randomize_rules.size(); ++r) {
     if (!used_randomize_rules[r]) {
@@ -673,7 +956,7 @@ PreparedRun RecordScenes(const Context& context, const PrepareState& state,
           StepRecord(scene_spec, placement, first, static_cast<int>(k) + 1));
     }
   }
-  WarnUnusedRules(spec, used_rules, recipe_randomize_used, used_randomize_rules);
+  WarnUnusedRules(spec, state, used_rules, recipe_randomize_used, used_randomize_rules);
   return prepared;
 }
 

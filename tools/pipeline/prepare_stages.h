@@ -37,6 +37,9 @@ struct Context {
   std::function<void(const std::string&)> info;  // never empty (drops lines without a sink)
   const PartCache* cache = nullptr;
   const ReaderProcess* reader = nullptr;
+  bool strict = false;     // PrepareControls' strict, progress and progress_interval_s
+  StageProgress progress;  // (may be empty)
+  double progress_interval_s = 2.0;
 };
 
 // One thing to build: a file, or one variant of a family; a rigid group in its scene.
@@ -126,6 +129,17 @@ void MergeRepeatedShapes(const Context& context, PrepareState* state);
 void RenameRepeatedNames(std::vector<Part>* parts);
 void ComputeHulls(const Context& context, std::vector<Part>* parts);
 std::vector<ObjectClass> AssignPartClasses(const Context& context, const PrepareState& state);
+
+// The checks before simulation and rendering (preflight.cpp): Errors naming the recipe line.
+
+// Each pile in a tote: every part fits inside it (its thinnest width between the walls, its
+// length within the inner diagonal), all of them together fit at the densest random packing (64 %
+// of the inner volume), and no camera of the sweep sits inside the tote.
+void CheckScenesCanBeMade(const Context& context, const PrepareState& state);
+// No camera of the sweep inside the bounding box of an arranged part (for a part from a file
+// whose unit the recipe overrides, the message asks about the unit).
+void CheckCamerasOutsideParts(const Context& context, const PrepareState& state,
+                              const std::vector<Placement>& placements);
 
 // The scene stages (prepare_scenes.cpp).
 

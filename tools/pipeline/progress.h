@@ -8,10 +8,14 @@
 
 namespace cadsynth {
 
+// "87.4 frames/s", or below one frame a second "27.3 s/frame" (a physically based bin: "0.0
+// frames/s" says nothing); "0 frames/s" before the first frame.
+std::string FormatRate(size_t frames, double seconds);
 // "[##########----------]  50%  1665/3330 frames  87.4 frames/s  ETA 0:19" (width = bar cells;
-// 0: no bar). When done, "ETA" becomes "in" and the total time.
+// 0: no bar; the rate as FormatRate). When done, "ETA" becomes "in" and the total time.
 std::string FormatProgressBar(size_t done, size_t total, double seconds, int width = 30);
-// One JSON object (no newline): {"done":..,"total":..,"seconds":..,"frames_per_s":..,"eta_s":..},
+// One JSON object (no newline): {"done":..,"total":..,"seconds":..,"frames_per_s":..,"s_per_frame":..,
+// "eta_s":..},
 // led by "shard":"I/N" when `shard` is not empty (cluster logs mix many shards).
 std::string FormatProgressJson(size_t done, size_t total, double seconds,
                                const std::string& shard = "");
@@ -30,6 +34,11 @@ class ProgressReporter {
 
   // Thread-safe; call with the running count of finished frames.
   void Update(size_t done, size_t total);
+  // Thread-safe: a line on a preparation stage of a scene (a pile's simulation: `done` and
+  // `total` simulated seconds), before the frames: "pile_1: simulating the pile, 2.0 of 10 s
+  // simulated, 37 of 60 bodies moving", or in JSON mode {"stage":"pile","scene":"pile_1",
+  // "simulated_s":2.0,"settle_time_s":10.0,"detail":"..."} (led by the shard's name).
+  void Stage(const std::string& scene, double done, double total, const std::string& detail);
   // Names the shard in JSON lines ("I/N"); call before the first Update.
   void SetShard(std::string shard) { shard_ = std::move(shard); }
   // The terminal's width for the bar (default: asked of the terminal, 80 when it does not say).

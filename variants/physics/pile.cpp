@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <sstream>
 
 #include <LinearMath/btConvexHullComputer.h>
 #include <btBulletDynamicsCommon.h>
@@ -391,6 +392,16 @@ struct Simulation {
       moving = Moving(o, before, window * o.time_step_s);
       rest = moving.empty();
       for (size_t i = 0; i < bodies.size(); ++i) before[i] = bodies[i]->getWorldTransform();
+      const int outside = Outside(o);
+      if (o.progress) o.progress(step * o.time_step_s, static_cast<int>(moving.size()), outside);
+      if (o.give_up_outside < 1.0 && outside > o.give_up_outside * bodies.size()) {
+        std::ostringstream m;
+        m << outside << " of " << bodies.size() << " parts lie beside the "
+          << (o.container.kind == Container::Kind::kTote ? "tote" : "container") << " after "
+          << step * o.time_step_s << " s (simulated): stopped. The container is too small for "
+          << "them, or they bounce out: use a larger one or fewer copies";
+        throw Error(m.str());
+      }
     }
     out->steps = step;
     out->seconds = step * o.time_step_s;
@@ -402,6 +413,29 @@ struct Simulation {
     }
     out->world_from_model.clear();
     for (size_t i = 0; i < bodies.size(); ++i) out->world_from_model.push_back(Pose(i));
+  }
+
+  // The bodies lying beside the container now: centre of mass below its rim and outside its
+  // walls (a tote's outer size, a mesh container's bounding box). None on the bare floor.
+  int Outside(const PileOptions& o) const {
+    if (o.container.kind == Container::Kind::kFloor) return 0;
+    Eigen::AlignedBox2d box;
+    if (o.container.kind == Container::Kind::kTote) {
+      const Eigen::Vector2d half =
+          0.5 * o.container.inner_mm + Eigen::Vector2d::Constant(o.container.wall_mm);
+      box = Eigen::AlignedBox2d(-half, half);
+    } else {
+      const Eigen::AlignedBox3d b = o.container.mesh.Bounds();
+      box = Eigen::AlignedBox2d(b.min().head<2>(), b.max().head<2>());
+    }
+    const double rim = o.container.RimZ();
+    int outside = 0;
+    for (const btRigidBody* b : bodies) {
+      const btVector3 c = b->getCenterOfMassPosition();
+      const Eigen::Vector3d mm(c.x() / kUnitsPerMm, c.y() / kUnitsPerMm, c.z() / kUnitsPerMm);
+      if (mm.z() < rim && !box.contains(mm.head<2>())) ++outside;
+    }
+    return outside;
   }
 
   // The bodies at `poses` whose centre of mass lies outside the tote (or beside a mesh container's
@@ -563,11 +597,18 @@ bool Container::Check(std::string* why) const {
     return material.Check(why);
   }
   if (!(inner_mm.minCoeff() > 0) || !inner_mm.allFinite()) {
-    *why = "a tote's inner size must be positive";
-  } else if (!(height_mm > 0) || !(wall_mm > 0) || !(floor_mm > 0)) {
-    *why = "a tote's height, wall and floor must be positive";
+    *why = "inner: a tote's inner size must be positive";
+  } else if (!(height_mm > 0)) {
+    *why = "height of a tote must be positive";
+  } else if (!(wall_mm > 0)) {
+    *why = "wall of a tote must be positive";
+  } else if (!(floor_mm > 0)) {
+    *why = "floor of a tote must be positive";
   } else if (!(corner_radius_mm >= 0) || 2 * corner_radius_mm > inner_mm.minCoeff()) {
-    *why = "a tote's corner radius must lie between 0 and half its inner width";
+    std::ostringstream m;
+    m << "corner_radius must lie between 0 and half the tote's inner width ("
+      << 0.5 * inner_mm.minCoeff() << " mm)";
+    *why = m.str();
   } else {
     return material.Check(why);
   }

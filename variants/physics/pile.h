@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -144,6 +145,13 @@ struct PileOptions {
   double confirm_drift_mm = 0.4;
   int confirm_iterations = 200;
   uint64_t seed = 0;
+  // Called after every rest window (rest_seconds simulated) with the simulated time, the bodies
+  // still moving and those lying beside the container (below its rim, outside its walls); may be
+  // empty. It only reports: the pile is the same with or without it.
+  std::function<void(double seconds, int moving, int outside)> progress;
+  // More than this fraction of the bodies lying beside the container stops the drop at once with
+  // an Error saying how many (the container is too small for them, or they bounce out); 1: never.
+  double give_up_outside = 0.5;
 
   bool Check(std::string* why) const;
 };

@@ -13,5 +13,13 @@ TEST(EditDistance, CountsInsertionsDeletionsAndSubstitutions) {
   EXPECT_EQ(NearestName("exposure", {"yaw", "pitch", "radius"}), "");
 }
 
+TEST(Count, OneIsSingularEverythingElsePlural) {
+  EXPECT_EQ(Count(1, "part"), "1 part");
+  EXPECT_EQ(Count(0, "part"), "0 parts");
+  EXPECT_EQ(Count(30, "part"), "30 parts");
+  EXPECT_EQ(Count(1, "was", "were"), "1 was");
+  EXPECT_EQ(Count(2, "was", "were"), "2 were");
+}
+
 }  // namespace
 }  // namespace cadsynth

@@ -13,7 +13,14 @@ TEST(Progress, BarShowsShareRateAndEta) {
   EXPECT_EQ(FormatProgressBar(1665, 3330, 19.0, 10),
             "[#####-----]  50%  1665/3330 frames  87.6 frames/s  ETA 0:19");
   EXPECT_EQ(FormatProgressBar(3330, 3330, 3725.0, 4),
-            "[####] 100%  3330/3330 frames  0.9 frames/s  in 1:02:05");
+            "[####] 100%  3330/3330 frames  1.1 s/frame  in 1:02:05");
+  // Below one frame a second the rate is the time of a frame (27.3 s a frame: "0.0 frames/s"
+  // said nothing).
+  EXPECT_EQ(FormatProgressBar(3, 10, 81.9, 0), " 30%  3/10 frames  27.3 s/frame  ETA 3:11");
+  EXPECT_EQ(FormatRate(10, 4.0), "2.5 frames/s");
+  EXPECT_EQ(FormatRate(10, 10.0), "1.0 frames/s");
+  EXPECT_EQ(FormatRate(2, 95.0), "47.5 s/frame");
+  EXPECT_EQ(FormatRate(0, 3.0), "0 frames/s");
   EXPECT_EQ(FormatProgressBar(0, 10, 0.0, 0),
             "  0%  0/10 frames");  // no rate before the first frame
 }
@@ -24,7 +31,13 @@ TEST(Progress, JsonLineHasTheNumbersAClusterLogNeeds) {
   EXPECT_EQ(j["total"], 1000);
   EXPECT_DOUBLE_EQ(j["frames_per_s"].get<double>(), 25.0);
   EXPECT_DOUBLE_EQ(j["eta_s"].get<double>(), 30.0);
+  EXPECT_DOUBLE_EQ(j["s_per_frame"].get<double>(), 0.04);
   EXPECT_TRUE(nlohmann::json::parse(FormatProgressJson(0, 1000, 0.0))["eta_s"].is_null());
+  EXPECT_TRUE(nlohmann::json::parse(FormatProgressJson(0, 1000, 0.0))["s_per_frame"].is_null());
+  // A physically based bin: 2 frames in 60 s is 0.033 frames/s (not 0.0), 30 s a frame.
+  const auto slow = nlohmann::json::parse(FormatProgressJson(2, 10, 60.0));
+  EXPECT_DOUBLE_EQ(slow["frames_per_s"].get<double>(), 0.033);
+  EXPECT_DOUBLE_EQ(slow["s_per_frame"].get<double>(), 30.0);
   EXPECT_EQ(
       FormatProgressJson(250, 1000, 10.0, "3/100").rfind("{\"shard\":\"3/100\",\"done\":250,", 0),
       0u);

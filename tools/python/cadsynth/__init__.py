@@ -13,6 +13,20 @@ cadsynth.webdataset reads the archives of output format `webdataset`, and
 cadsynth.torch.ArchiveDataset feeds them to a DataLoader.
 """
 
+import sys as _sys
+
+# Frames are numpy arrays: without numpy the first frame would fail after seconds of preparing,
+# so say it now, naming this interpreter (often a second Python without the packages).
+try:
+    import numpy as _numpy  # noqa: F401
+except ImportError as _missing:
+    raise ImportError(
+        f"cadsynth needs numpy, which {_sys.executable} (Python "
+        f"{_sys.version.split()[0]}) cannot import ({_missing}). Install it for this "
+        "interpreter (Debian: apt install python3-numpy, then use /usr/bin/python3), or run "
+        "the Python that has it"
+    ) from None
+
 from ._cadsynth import (  # noqa: F401
     Error,
     FrameIterator,

@@ -5,8 +5,8 @@
 #include <map>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -294,7 +294,8 @@ cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const f
     const fs::path other = options.versus / split_dir.filename() / Id6(scene);
     fs::path other_dir = other / image_dir.filename();
     if (!fs::exists(other_dir))
-      other_dir = fs::exists(other / ("rgb" + sfx)) ? other / ("rgb" + sfx) : other / ("gray" + sfx);
+      other_dir =
+          fs::exists(other / ("rgb" + sfx)) ? other / ("rgb" + sfx) : other / ("gray" + sfx);
     return VersusRow(dataset, options, rgb, other_dir, name, where);
   }
   const cv::Mat depth = ReadImage(dir / ("depth" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);

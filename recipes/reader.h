@@ -155,8 +155,8 @@ class Reader {
     const double value = std::strtod(text.c_str(), &end);
     if (end == text.c_str() || *end != '\0' || !(value > 0.0) || value >= below_mm) return;
     Fail(node, key,
-         text + " is read as " + text + " mm (a bare number is millimetres): did you mean '" + text +
-             " m'? Give the unit");
+         text + " is read as " + text + " mm (a bare number is millimetres): did you mean '" +
+             text + " m'? Give the unit");
   }
 
   double Angle(const YAML::Node& node, const std::string& key) const {

@@ -32,7 +32,8 @@ void CheckDensity(const Reader& r, const YAML::Node& node, const std::string& ke
   m << node.Scalar() << " is read as kg/m3, ";
   if (value < 100.0) {
     m << "lighter than any solid part (steel is 7850, aluminium 2700, ABS 1050)";
-    if (value >= 0.1 && value <= 25.0) m << ": did you mean " << value * 1000.0 << " (" << node.Scalar() << " g/cm3)?";
+    if (value >= 0.1 && value <= 25.0)
+      m << ": did you mean " << value * 1000.0 << " (" << node.Scalar() << " g/cm3)?";
   } else {
     m << "denser than any material (osmium is 22590)";
   }
@@ -119,7 +120,8 @@ void ReadContainer(const Reader& r, const YAML::Node& node, const std::string& k
 // keys, read elsewhere).
 void ReadLayout(const Reader& r, const YAML::Node& node, const std::string& key, SceneSpec* scene,
                 const Key& schema) {
-  if (node["radius"]) r.CheckMetresMeant(node["radius"], key + ".radius", 10.0);  // the clutter disc
+  if (node["radius"])
+    r.CheckMetresMeant(node["radius"], key + ".radius", 10.0);  // the clutter disc
   ReadFields(r, node, key, &scene->arrangement, schema);
   scene->where = r.Where(node);
   if (node["container"]) scene->container_where = r.Where(node["container"]);

@@ -156,13 +156,14 @@ int RunGenerate(const Args& a) {
                 summary.skipped_sparse, spec.min_visible_pixels);
   }
   const size_t rendered = summary.frames - summary.resumed;
-  std::printf("wrote %zu frame%s (%zu scene%s) of %zu object%s (%zu instance%s)%s to %s in %.1f s (%s)\n",
-              summary.frames, summary.frames == 1 ? "" : "s", summary.scenes,
-              summary.scenes == 1 ? "" : "s", summary.objects, summary.objects == 1 ? "" : "s",
-              summary.instances, summary.instances == 1 ? "" : "s",
-              shard ? (" as shard " + shard->Name()).c_str() : "",
-              std::filesystem::absolute(options.output).lexically_normal().c_str(),
-              summary.seconds, cadsynth::FormatRate(rendered, summary.seconds).c_str());
+  std::printf(
+      "wrote %zu frame%s (%zu scene%s) of %zu object%s (%zu instance%s)%s to %s in %.1f s (%s)\n",
+      summary.frames, summary.frames == 1 ? "" : "s", summary.scenes,
+      summary.scenes == 1 ? "" : "s", summary.objects, summary.objects == 1 ? "" : "s",
+      summary.instances, summary.instances == 1 ? "" : "s",
+      shard ? (" as shard " + shard->Name()).c_str() : "",
+      std::filesystem::absolute(options.output).lexically_normal().c_str(), summary.seconds,
+      cadsynth::FormatRate(rendered, summary.seconds).c_str());
   return 0;
 }
 

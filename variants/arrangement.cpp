@@ -756,6 +756,7 @@ void RedropEscaped(const std::vector<Part>& parts, const ArrangementOptions& o,
     PileOptions settings = PileSettings(parts, o);
     settings.seed =
         static_cast<uint64_t>(UniformDraw(o.seed, streams::kRedropSeed, round) * 0x1p53);
+    settings.give_up_outside = 1.0;  // a few parts falling again: what lands outside is reported
     const std::vector<int> falling = pile->escaped;  // sorted
     for (size_t i = 0, f = 0; i < pile->instances.size(); ++i) {
       const Instance& instance = pile->instances[i];
@@ -766,7 +767,8 @@ void RedropEscaped(const std::vector<Part>& parts, const ArrangementOptions& o,
         settings.fixed.push_back({instance.part, instance.world_from_model});
       }
     }
-    for (const Instance& d : pile->distractors) settings.fixed.push_back({d.part, d.world_from_model});
+    for (const Instance& d : pile->distractors)
+      settings.fixed.push_back({d.part, d.world_from_model});
     const PileResult r = DropPile(parts, shapes, settings);
     for (size_t f = 0; f < falling.size(); ++f)
       pile->instances[falling[f]].world_from_model = r.world_from_model[f];

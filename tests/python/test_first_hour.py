@@ -24,10 +24,10 @@ def run(*args, cwd=None):
 
 @pytest.fixture(scope="module")
 def part(tmp_path_factory):
-    """An L-less stand-in for the user's STEP file: an M12 x 40 bolt written as STEP."""
+    """A stand-in for the user's STEP file: an M12 x 40 bolt written as STEP by cadsynth."""
     folder = tmp_path_factory.mktemp("part")
     (folder / "bolt.yaml").write_text(
-        "scene:\n  parts: [{family: hex_bolt, params: {size: M12, length: 40 mm}}]\n")
+        "parts: [{family: hex_bolt, params: {size: M12, length: 40 mm}}]\n")
     done = run("variants", folder / "bolt.yaml", "--export-step", folder / "step")
     assert done.returncode == 0, done.stderr
     steps = sorted((folder / "step").glob("*.step"))
@@ -51,9 +51,9 @@ def test_the_template_runs_with_a_part_of_ones_own_and_previews(tmp_path, part):
     assert done.returncode == 0, done.stderr
     out = tmp_path / "out" / "my_part_in_a_tote"
     assert "wrote 3 frames (1 scene) of 1 object (" in done.stdout, done.stdout
-    frames = sorted((out / "train_pbr" / "000000" / "gray").glob("*"))
+    frames = sorted(out.glob("*/000000/gray/*.png"))  # grey images, in train/ (and test/)
     assert len(frames) == 3
-    assert len(list((out / "train_pbr" / "000000" / "depth").glob("*.png"))) == 3
+    assert len(list(out.glob("*/000000/depth/*.png"))) == 3
     assert (out / "graspnet").is_dir() and (out / "suctionnet").is_dir()
     verify = run("verify", out)
     assert verify.returncode == 0, verify.stdout + verify.stderr
@@ -72,22 +72,23 @@ def test_the_template_runs_with_a_part_of_ones_own_and_previews(tmp_path, part):
 # the recipe's line, with exit status 1 and no output folder.
 BAD = {
     "a part wider than the tote": (
-        {"inner: [355 mm, 265 mm], height: 150 mm": "inner: [80 mm, 15 mm], height: 50 mm"},
-        r"my_part_in_a_tote\.yaml:20:\d+: scene 'tote': part '.*' is \d+ mm across at its "
+        {"inner: [355 mm, 265 mm], height: 150 mm": "inner: [80 mm, 15 mm], height: 50 mm",
+         "corner_radius: 15 mm": "corner_radius: 5 mm"},
+        r"my_part_in_a_tote\.yaml:\d+:\d+: scene 'tote': part '.*' is \d+ mm across at its "
         r"thinnest, wider than the tote's inside"),
     "more parts than the tote holds": (
-        {"copies: 30 ": "copies: 5000 "},
-        r"my_part_in_a_tote\.yaml:18:13: scene 'tote': 5000 parts of \d+ cm3 of solid cannot fit"),
+        {"copies: 30\n": "copies: 5000\n"},
+        r"my_part_in_a_tote\.yaml:\d+:13: scene 'tote': 5000 parts of \d+ cm3 of solid cannot fit"),
     "a sweep radius in metres without its unit": (
         {"radius: {from: 0.75 m, to: 0.9 m, step: 0.01 m}": "radius: {from: 0.8, to: 0.95}"},
-        r"my_part_in_a_tote\.yaml:35:\d+: sweep.radius: 0.8 is read as 0.8 mm .*did you mean "
+        r"my_part_in_a_tote\.yaml:\d+:\d+: sweep.radius: 0.8 is read as 0.8 mm .*did you mean "
         r"'0.8 m'\?"),
     "a tote in metres without its unit": (
         {"inner: [355 mm, 265 mm]": "inner: [0.4, 0.3]"},
-        r"my_part_in_a_tote\.yaml:20:\d+: scenes\[0\]\.container\.inner: 0.4 is read as 0.4 mm"),
+        r"my_part_in_a_tote\.yaml:\d+:\d+: scenes\[0\]\.container\.inner: 0.4 is read as 0.4 mm"),
     "a density in g/cm3": (
         {"density: 7850, friction": "density: 7.85, friction"},
-        r"my_part_in_a_tote\.yaml:22:\d+: scenes\[0\]\.physics\.density: 7.85 is read as kg/m3.*"
+        r"my_part_in_a_tote\.yaml:\d+:\d+: scenes\[0\]\.physics\.density: 7.85 is read as kg/m3.*"
         r"did you mean 7850"),
     "a camera inside the tote": (
         {"radius: {from: 0.75 m, to: 0.9 m, step: 0.01 m}": "radius: 100 mm"},

@@ -185,9 +185,10 @@ camera:
   EXPECT_EQ(stereo.sensor.depth.dot_spacing_px, 3.0);  // the model's default
   EXPECT_EQ(ErrorOf("camera:\n  depth: {model: active_stereo, block: 4}\n"),
             "r.yaml:2:40: camera.depth.block: block must be odd, between 3 and 11");
-  EXPECT_EQ(ErrorOf("camera:\n  depth: {model: kinect_v1, baseline: 0}\n"),
-            "r.yaml:2:39: camera.depth.baseline: baseline must not be 0 for kinect_v1 (its disparity "
-            "is f B / z)");
+  EXPECT_EQ(
+      ErrorOf("camera:\n  depth: {model: kinect_v1, baseline: 0}\n"),
+      "r.yaml:2:39: camera.depth.baseline: baseline must not be 0 for kinect_v1 (its disparity "
+      "is f B / z)");
   EXPECT_EQ(ErrorOf("camera:\n  depth: {baseline: 5 cm}\n"),
             "r.yaml:2:10: camera.depth: give the sensor's 'model'");
   EXPECT_EQ(ErrorOf("camera:\n  depth: {model: azure_kinect, basline: 5 cm}\n"),
@@ -559,9 +560,10 @@ TEST(Recipe, DuplicateKeysAreErrors) {
 
 // A camera a light-year away made Embree abort the process; the sweep refuses it.
 TEST(Recipe, FarCamerasAndTargetsAreRefused) {
-  EXPECT_EQ(ErrorOf("sweep: {radius: 1e19 mm}\n"),
-            "r.yaml:1:17: sweep.radius: radius must be at most 1 km (the tracer's single precision would "
-            "lose the parts)");
+  EXPECT_EQ(
+      ErrorOf("sweep: {radius: 1e19 mm}\n"),
+      "r.yaml:1:17: sweep.radius: radius must be at most 1 km (the tracer's single precision would "
+      "lose the parts)");
   SweepOptions sweep;
   sweep.yaw_rad = {0};
   sweep.pitch_rad = {0.5};

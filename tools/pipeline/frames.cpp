@@ -210,6 +210,28 @@ CacheKey GraspKey(const PartCache& cache, const Part& part, const GraspSpec& spe
   return hasher.Key();
 }
 
+// A scene's placed grasps in the part cache (kind "scene_grasps"): keyed by each object's grasp
+// key (what decides its grasps), the scene's instances and fixtures, the floor, the tools and the
+// labels asked for, so a second shard or worker reads them instead of placing them again.
+CacheKey SceneGraspKey(const PartCache& cache, const std::vector<Part>& parts,
+                       const cadsynth::Scene& scene, const GraspSpec& spec) {
+  KeyHasher hasher;
+  cache.Start(&hasher, "scene grasps 1");
+  for (size_t p = 0; p < parts.size(); ++p) {
+    AntipodalOptions jaw = spec.sampling;
+    jaw.seed = Hash(spec.sampling.seed, p);
+    SuctionOptions suction = spec.suction_sampling;
+    suction.seed = Hash(spec.suction_sampling.seed, p);
+    const CacheKey part = GraspKey(cache, parts[p], spec, jaw, spec.suction ? &suction : nullptr);
+    hasher.Value(part.high).Value(part.low);
+  }
+  hasher.Fields(spec.scene).Fields(spec.labels).Value(scene.floor);
+  for (const cadsynth::Scene::Fixture& fixture : scene.fixtures) hasher.Geometry(fixture.mesh);
+  for (const Instance& instance : scene.instances)
+    hasher.Value(instance.part).Value(Eigen::Matrix4d(instance.world_from_model.matrix()));
+  return hasher.Key();
+}
+
 }  // namespace
 
 void FrameSource::SampleGraspsOnce() const {
@@ -300,13 +322,37 @@ const SceneGrasps& FrameSource::PlacedGrasps(size_t s) const {
     out.obj_id_of_instance = prepared_.obj_ids[s];
     out.gripper = spec.gripper;
     out.cup = spec.cup;
-    if (spec.labels.graspnet) {
-      out.jaw = &grasps_->jaw;
-      out.jaw_placed = PlaceParallelJawGrasps(obstacles, grasps_->jaw, spec.gripper, spec.scene);
+    if (spec.labels.graspnet) out.jaw = &grasps_->jaw;
+    if (spec.labels.suctionnet) out.suction = &grasps_->suction;
+    std::optional<PartCache> cache;
+    std::optional<CacheKey> key;
+    bool cached = false;
+    if (options_.cache) {
+      cache.emplace(*options_.cache, BuildId());
+      key = SceneGraspKey(*cache, prepared_.parts, scene, spec);
+      if (const std::optional<std::string> bytes = cache->Load("scene_grasps", *key)) {
+        try {
+          ByteReader reader(*bytes);
+          out.jaw_placed = reader.GetArray<PlacedGrasp>();
+          out.suction_placed = reader.GetArray<PlacedGrasp>();
+          cached = true;
+        } catch (const Error&) {  // damaged: placed again below
+        }
+      }
     }
-    if (spec.labels.suctionnet) {
-      out.suction = &grasps_->suction;
-      out.suction_placed = PlaceSuctionGrasps(obstacles, grasps_->suction, spec.cup, spec.scene);
+    if (!cached) {
+      out.jaw_placed.clear();
+      out.suction_placed.clear();
+      if (spec.labels.graspnet)
+        out.jaw_placed = PlaceParallelJawGrasps(obstacles, grasps_->jaw, spec.gripper, spec.scene);
+      if (spec.labels.suctionnet)
+        out.suction_placed = PlaceSuctionGrasps(obstacles, grasps_->suction, spec.cup, spec.scene);
+      if (key) {
+        ByteWriter writer;
+        writer.PutArray(out.jaw_placed);
+        writer.PutArray(out.suction_placed);
+        cache->Store("scene_grasps", *key, writer.bytes());
+      }
     }
     if (options_.info) {
       std::ostringstream line;

@@ -54,7 +54,8 @@ double FilledVolume(const Part& part) {
   if (part.watertight && part.mass.volume_mm3 > 0) return part.mass.volume_mm3;
   double six = 0;
   for (const std::array<int, 3>& t : part.hull->triangles)
-    six += part.hull->vertices[t[0]].dot(part.hull->vertices[t[1]].cross(part.hull->vertices[t[2]]));
+    six +=
+        part.hull->vertices[t[0]].dot(part.hull->vertices[t[1]].cross(part.hull->vertices[t[2]]));
   return std::abs(six) / 6.0;
 }
 
@@ -73,7 +74,8 @@ void CheckTote(const Context& context, const PrepareState& state, size_t s) {
   const Container& tote = scene.arrangement.container;
   const double length = std::max(tote.inner_mm.x(), tote.inner_mm.y());
   const double width = std::min(tote.inner_mm.x(), tote.inner_mm.y());
-  const double diagonal = std::sqrt(length * length + width * width + tote.height_mm * tote.height_mm);
+  const double diagonal =
+      std::sqrt(length * length + width * width + tote.height_mm * tote.height_mm);
   std::ostringstream inner;
   inner << "inner " << Mm(tote.inner_mm.x()) << " x " << Mm(tote.inner_mm.y()) << " x "
         << Mm(tote.height_mm) << " mm";
@@ -86,7 +88,8 @@ void CheckTote(const Context& context, const PrepareState& state, size_t s) {
     if (!part.hull || part.hull->empty()) continue;  // flat: Arrange refuses it
     const double thinnest = FacetWidth(*part.hull);
     const double reach = part.hull->diameter;
-    const std::string where = At(scene.container_where.empty() ? scene.where : scene.container_where);
+    const std::string where =
+        At(scene.container_where.empty() ? scene.where : scene.container_where);
     if (thinnest > 1.02 * width) {
       throw Error(where + "scene '" + scene.name + "': part '" + part.name + "' is " +
                   Mm(thinnest) + " mm across at its thinnest, wider than the tote's inside (" +
@@ -115,9 +118,10 @@ void CheckTote(const Context& context, const PrepareState& state, size_t s) {
     m << At(scene.copies_where.empty() ? scene.where : scene.copies_where) << "scene '"
       << scene.name << "': " << Count(copies, "part") << " of " << Mm(volume / 1000.0)
       << " cm3 of solid cannot fit a tote of " << Mm(room / 1000.0) << " cm3 (" << inner.str()
-      << "): poured parts fill at most 64 % of a container up to its rim (random close packing of spheres; "
-         "real parts less), here " << Mm(kRandomClosePacking * room / 1000.0)
-      << " cm3: use fewer copies or a larger tote";
+      << "): poured parts fill at most 64 % of a container up to its rim (random close packing of "
+         "spheres; "
+         "real parts less), here "
+      << Mm(kRandomClosePacking * room / 1000.0) << " cm3: use fewer copies or a larger tote";
     throw Error(m.str());
   }
 }
@@ -179,9 +183,8 @@ void CheckCamerasOutsideParts(const Context& context, const PrepareState& state,
               arranged.group.empty() ? nullptr : state.jobs[arranged.group[i]].source;
           std::ostringstream m;
           m << "sweep: view " << v << " of scene '" << spec.scenes[s].name << "' puts the camera"
-            << (sensors.size() > 1 ? " '" + sensor.name + "'" : "") << " inside part '"
-            << part.name << "' (" << Mm(box.sizes().maxCoeff()) << " mm long), "
-            << Mm(views[v].radius_mm)
+            << (sensors.size() > 1 ? " '" + sensor.name + "'" : "") << " inside part '" << part.name
+            << "' (" << Mm(box.sizes().maxCoeff()) << " mm long), " << Mm(views[v].radius_mm)
             << " mm from the target: give a sweep.radius beyond the scene"
             << (source ? UnitHint(*source, box.sizes().maxCoeff()) : "");
           throw Error(m.str());

@@ -86,10 +86,8 @@ PreparedRun Prepare(const RunSpec& spec, const std::function<void(const std::str
   const auto info = [&](const std::string& line) {
     if (info_sink) info_sink(line);
   };
-  const Context context{spec,           info,
-                        cache,          reader,
-                        controls.strict, controls.progress,
-                        controls.progress_interval_s};
+  const Context context{
+      spec, info, cache, reader, controls.strict, controls.progress, controls.progress_interval_s};
   // The parts: read and built, gathered into one list, measured, merged, named and classed.
   PrepareState state;
   state.jobs = BuildParts(context);

@@ -44,7 +44,7 @@ struct PrepareControls {
   // Warnings that describe a broken dataset (parts kept outside their container, parts still
   // moving at the end of settle_time) are errors, "(an error under --strict)".
   bool strict = false;
-  StageProgress progress;  // may be empty
+  StageProgress progress;            // may be empty
   double progress_interval_s = 2.0;  // of wall time between two calls for one scene
 };
 

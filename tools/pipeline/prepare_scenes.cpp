@@ -386,8 +386,7 @@ void ReportDistractors(const SceneSpec& scene_spec, const Arrangement& arranged,
   if (!arranged.distractors.empty() && !pile) {
     std::ostringstream m;
     m << "scene '" << scene_spec.name << "': " << Count(arranged.distractors.size(), "distractor")
-      << " dropped among the parts in " << arranged.distractor_seconds
-      << " s (simulated)";
+      << " dropped among the parts in " << arranged.distractor_seconds << " s (simulated)";
     log->Say(false, m.str());
   }
   if (!arranged.escaped_distractors.empty()) {
@@ -429,13 +428,13 @@ void RunPickSequence(const SceneSpec& scene_spec, const std::vector<Part>& parts
     std::ostringstream m;
     m << "scene '" << scene_spec.name << "': pick " << k << " took instance " << ids[picked] << "; "
       << Count(static_cast<size_t>(std::count(step.freed.begin(), step.freed.end(), true)), "part")
-      << " free to settle again ("
-      << step.arranged.settle_seconds << " s, simulated)";
+      << " free to settle again (" << step.arranged.settle_seconds << " s, simulated)";
     log->Say(false, m.str());
     if (!step.arranged.restless.empty()) {
       log->Broken(strict, scene_spec.name,
                   "after pick " + std::to_string(k) + ", " +
-                      Count(step.arranged.restless.size(), "part") + " still moving after settle_time");
+                      Count(step.arranged.restless.size(), "part") +
+                      " still moving after settle_time");
     }
     ids.erase(ids.begin() + picked);
     placement->pick_ids.push_back(ids);
@@ -562,7 +561,8 @@ CacheKey PileKey(const PartCache& cache, const SceneSpec& scene_spec,
     const Instance& instance = instances[i];
     hasher.Value(instance.part).Text(instance.name).Text(instance.path);
     hasher.Value(Eigen::Matrix4d(instance.world_from_model.matrix()));
-    hasher.Value(instance.color.has_value()).Value(instance.color.value_or(Eigen::Vector3f::Zero()));
+    hasher.Value(instance.color.has_value())
+        .Value(instance.color.value_or(Eigen::Vector3f::Zero()));
     hasher.Value(i < groups.size() ? groups[i] : -1);
   }
   hasher.Fields(a).Fields(a.container).Fields(a.container.material).Fields(a.sequence);
@@ -796,7 +796,8 @@ std::string PartNames(const PrepareState& state) {
                     ")");
   }
   std::string text = "the parts are " + JoinNames(names);
-  if (state.all.parts.size() > kNamed) text += " and " + std::to_string(state.all.parts.size() - kNamed) + " more";
+  if (state.all.parts.size() > kNamed)
+    text += " and " + std::to_string(state.all.parts.size() - kNamed) + " more";
   return text;
 }
 

@@ -106,8 +106,8 @@ void ProgressReporter::Stage(const std::string& scene, double done, double total
     j["detail"] = detail;
     std::fprintf(out_, "%s\n", j.dump().c_str());
   } else {
-    std::fprintf(out_, "%s: simulating the pile, %.1f of %g s simulated, %s\n", scene.c_str(),
-                 done, total, detail.c_str());
+    std::fprintf(out_, "%s: simulating the pile, %.1f of %g s simulated, %s\n", scene.c_str(), done,
+                 total, detail.c_str());
   }
   std::fflush(out_);
 }
@@ -143,8 +143,7 @@ void ProgressReporter::Update(size_t done, size_t total) {
         if (now > 0 && done > 0) {
           const double rate = done / now;
           std::string short_rate = FormatRate(done, now);
-          short_rate.replace(short_rate.find(' '), std::string::npos,
-                             done >= now ? "/s" : " s/f");
+          short_rate.replace(short_rate.find(' '), std::string::npos, done >= now ? "/s" : " s/f");
           std::snprintf(text, sizeof(text), " %s %s %s", short_rate.c_str(), last ? "in" : "ETA",
                         Duration(last ? now : (total - done) / rate).c_str());
           line += text;

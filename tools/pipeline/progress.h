@@ -14,9 +14,9 @@ std::string FormatRate(size_t frames, double seconds);
 // "[##########----------]  50%  1665/3330 frames  87.4 frames/s  ETA 0:19" (width = bar cells;
 // 0: no bar; the rate as FormatRate). When done, "ETA" becomes "in" and the total time.
 std::string FormatProgressBar(size_t done, size_t total, double seconds, int width = 30);
-// One JSON object (no newline): {"done":..,"total":..,"seconds":..,"frames_per_s":..,"s_per_frame":..,
-// "eta_s":..},
-// led by "shard":"I/N" when `shard` is not empty (cluster logs mix many shards).
+// One JSON object (no newline):
+// {"done":..,"total":..,"seconds":..,"frames_per_s":..,"s_per_frame":.., "eta_s":..}, led by
+// "shard":"I/N" when `shard` is not empty (cluster logs mix many shards).
 std::string FormatProgressJson(size_t done, size_t total, double seconds,
                                const std::string& shard = "");
 

@@ -12,6 +12,7 @@
 
 #include "cad/core/error.h"
 #include "cad/core/random.h"
+#include "cad/core/util.h"
 #include "cad/mesh_analysis.h"
 
 namespace cadsynth {
@@ -396,7 +397,7 @@ struct Simulation {
       if (o.progress) o.progress(step * o.time_step_s, static_cast<int>(moving.size()), outside);
       if (o.give_up_outside < 1.0 && outside > o.give_up_outside * bodies.size()) {
         std::ostringstream m;
-        m << outside << " of " << bodies.size() << " parts lie beside the "
+        m << outside << " of " << Count(bodies.size(), "part") << " lie beside the "
           << (o.container.kind == Container::Kind::kTote ? "tote" : "container") << " after "
           << step * o.time_step_s << " s (simulated): stopped. The container is too small for "
           << "them, or they bounce out: use a larger one or fewer copies";

@@ -1,9 +1,12 @@
 // A new user's first hour (issue 49): impossible scenes refused before any simulation or
 // rendering, with the recipe line and the reason; what becomes of parts that leave the tote;
 // --strict; progress during a pile's simulation; piles read back from the part cache.
+#include <sys/stat.h>
+
 #include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -16,8 +19,10 @@
 #include "cad/part_cache.h"
 #include "recipes/recipe.h"
 #include "tests/test_support.h"
+#include "tools/pipeline/generate.h"
 #include "tools/pipeline/prepare.h"
 #include "tools/pipeline/progress.h"
+#include "tools/pipeline/shards.h"
 
 namespace cadsynth {
 namespace {
@@ -83,8 +88,9 @@ TEST(Preflight, PartsThatCannotFitTheToteAreRefusedWithTheirLine) {
           "    copies: 500\n    container: {type: tote, inner: [200 mm, 150 mm], height: 100 "
           "mm}\n",
       controls);
-  EXPECT_TRUE(Has(crowded, "r.yaml:5:13: scene 'bin': 500 parts of 7854 cm3 of solid cannot fit "
-                           "a tote of 3000 cm3"))
+  EXPECT_TRUE(Has(crowded,
+                  "r.yaml:5:13: scene 'bin': 500 parts of 7854 cm3 of solid cannot fit "
+                  "a tote of 3000 cm3"))
       << crowded;
   EXPECT_TRUE(Has(crowded, "here 1920 cm3")) << crowded;
   EXPECT_EQ(progress, 0);  // refused before the simulation started
@@ -105,14 +111,16 @@ TEST(Preflight, CamerasInsideTheToteOrAPartAreRefused) {
       std::string(kPegPile) +
       "    copies: 2\n    container: {type: tote, inner: [200 mm, 150 mm], height: 150 mm}\n"
       "sweep: {yaw: 0, pitch: 90, radius: 50 mm}\n");
-  EXPECT_TRUE(Has(in_tote, "sweep: view 0 of scene 'bin' puts the camera at (0, 0, 50) mm, "
-                           "inside the tote"))
+  EXPECT_TRUE(Has(in_tote,
+                  "sweep: view 0 of scene 'bin' puts the camera at (0, 0, 50) mm, "
+                  "inside the tote"))
       << in_tote;
-  const std::string in_part =
-      PrepareError("parts: [{family: round_peg, params: {diameter: 3000 mm, length: 3000 mm}}]\n"
-                   "scene: {layout: single}\nsweep: {yaw: 0, pitch: 45, radius: 650 mm}\n");
-  EXPECT_TRUE(Has(in_part, "sweep: view 0 of scene 'scene' puts the camera inside part "
-                           "'round_peg"))
+  const std::string in_part = PrepareError(
+      "parts: [{family: round_peg, params: {diameter: 3000 mm, length: 3000 mm}}]\n"
+      "scene: {layout: single}\nsweep: {yaw: 0, pitch: 45, radius: 650 mm}\n");
+  EXPECT_TRUE(Has(in_part,
+                  "sweep: view 0 of scene 'scene' puts the camera inside part "
+                  "'round_peg"))
       << in_part;
   EXPECT_TRUE(Has(in_part, "(3000 mm long), 650 mm from the target")) << in_part;
 }
@@ -176,11 +184,11 @@ TEST(Preflight, StrictMakesAPileStillMovingAnError) {
 // poses bit for bit, as does a run without a cache.
 TEST(Preflight, PileProgressComesWhileItIsSimulatedAndNotWhenItIsCached) {
   testing::ScratchDir dir;
-  const RunSpec spec = ParseRecipe(
-      std::string(kPegPile) +
-          "    copies: 12\n    seed: 2\n"
-          "    container: {type: tote, inner: [160 mm, 120 mm], height: 80 mm}\n",
-      "r.yaml", dir.path());
+  const RunSpec spec =
+      ParseRecipe(std::string(kPegPile) +
+                      "    copies: 12\n    seed: 2\n"
+                      "    container: {type: tote, inner: [160 mm, 120 mm], height: 80 mm}\n",
+                  "r.yaml", dir.path());
   std::mutex mutex;
   std::vector<double> times;
   std::vector<std::string> details;
@@ -235,6 +243,109 @@ TEST(Preflight, PileProgressComesWhileItIsSimulatedAndNotWhenItIsCached) {
   EXPECT_DOUBLE_EQ(j["simulated_s"].get<double>(), 2.5);
   EXPECT_DOUBLE_EQ(j["settle_time_s"].get<double>(), 10.0);
   EXPECT_EQ(j["detail"], "7 of 12 bodies moving");
+}
+
+// Eight bouncy pegs dropped from 250 mm into a 12 mm deep tray: two of them (#4 and #5) end on the
+// floor beside it. remove (the default) takes them out, keep labels them where they lie (an
+// error under --strict), redrop drops them again onto the pile and takes out what still lands
+// outside; the warning names them every time.
+TEST(Preflight, PartsOutsideTheToteAreRemovedKeptOrDroppedAgain) {
+  const auto recipe = [](const std::string& mode) {
+    return std::string(kPegPile) +
+           "    copies: 8\n    seed: 1\n    drop_height: 250 mm\n"
+           "    container: {type: tote, inner: [140 mm, 120 mm], height: 12 mm}\n"
+           "    physics: {restitution: 0.9, friction: 0.2}\n" +
+           (mode.empty() ? "" : "    out_of_container: " + mode + "\n");
+  };
+  const auto inside = [](const Instance& instance) {
+    const Eigen::Vector3d t = instance.world_from_model.translation();
+    return std::abs(t.x()) <= 70.0 && std::abs(t.y()) <= 60.0;
+  };
+  const auto prepare = [&](const std::string& mode, std::string* warning) {
+    testing::ScratchDir dir;
+    const RunSpec spec = ParseRecipe(recipe(mode), "r.yaml", dir.path());
+    WarningCapture capture;
+    PreparedRun run = Prepare(spec);
+    const std::vector<std::string> warnings = capture.Take();
+    *warning = warnings.empty() ? "" : warnings[0];
+    return run;
+  };
+  std::string warning;
+  const PreparedRun keep = prepare("keep", &warning);
+  ASSERT_EQ(keep.scenes[0].instances.size(), 8u);
+  EXPECT_TRUE(Has(warning, "scene 'bin': 2 parts of 8 ended outside the tote (#4 'round_peg"))
+      << warning;
+  EXPECT_TRUE(Has(warning, "kept where they lie, drawn and labelled")) << warning;
+  std::vector<Instance> kept_inside;
+  for (size_t i = 0; i < 8; ++i) {
+    EXPECT_EQ(inside(keep.scenes[0].instances[i]), i != 4 && i != 5) << i;
+    if (i != 4 && i != 5) kept_inside.push_back(keep.scenes[0].instances[i]);
+  }
+  const PreparedRun removed = prepare("", &warning);  // the default
+  EXPECT_TRUE(Has(warning, "taken out of the scene, neither drawn nor labelled")) << warning;
+  ASSERT_EQ(removed.scenes[0].instances.size(), 6u);
+  for (size_t i = 0; i < 6; ++i) {  // the same pile without the two
+    EXPECT_EQ(removed.scenes[0].instances[i].world_from_model.matrix(),
+              kept_inside[i].world_from_model.matrix())
+        << i;
+  }
+  const PreparedRun redropped = prepare("redrop", &warning);
+  EXPECT_TRUE(Has(warning, "dropped again (out_of_container: redrop)")) << warning;
+  EXPECT_GE(redropped.scenes[0].instances.size(), 6u);
+  for (const Instance& instance : redropped.scenes[0].instances) EXPECT_TRUE(inside(instance));
+  PrepareControls strict;
+  strict.strict = true;
+  const std::string error = PrepareError(recipe("keep"), strict);
+  EXPECT_TRUE(Has(error, "scene 'bin': 2 parts of 8 ended outside the tote")) << error;
+  EXPECT_TRUE(Has(error, "(an error under --strict)")) << error;
+}
+
+// Prepare once per farm: the first shard simulates the pile and places the scene's grasps and
+// stores both in the part cache; the second shard reads them (it stores nothing again: the
+// entries keep their inodes, where a store renames a new file into place). The merged farm run
+// is the same bytes as a run without any cache.
+TEST(Preflight, ASecondShardReadsThePileAndItsGraspsFromTheCache) {
+  testing::ScratchDir dir;
+  const RunSpec spec =
+      ParseRecipe(std::string(kPegPile) +
+                      "    copies: 10\n    seed: 3\n"
+                      "    container: {type: tote, inner: [160 mm, 120 mm], height: 80 mm}\n"
+                      "camera: {width: 160, height: 120, fx: 150, fy: 150, cx: 79.5, cy: 59.5}\n"
+                      "sweep: {yaw: [0, 120, 240], pitch: 80, radius: 600 mm}\n"
+                      "grasps: {gripper: franka, suction: {diameter: 10 mm}}\n",
+                  "r.yaml", dir.path());
+  GenerateOptions plain;
+  plain.output = dir / "plain";
+  Generate(spec, plain);
+
+  // Each entry of a kind of the cache, by its inode.
+  const auto entries = [&](const std::string& kind) {
+    std::map<std::string, ino_t> found;
+    if (!std::filesystem::exists(dir / "cache" / kind)) return found;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache" / kind)) {
+      struct stat st {};
+      if (e.is_regular_file() && ::stat(e.path().c_str(), &st) == 0) found[e.path()] = st.st_ino;
+    }
+    return found;
+  };
+  std::map<std::string, ino_t> piles, grasps;
+  for (int shard = 0; shard < 2; ++shard) {
+    GenerateOptions options;
+    options.output = dir / "farm";
+    options.shard = ShardSpec{shard, 2};
+    options.cache = dir / "cache";
+    Generate(spec, options);
+    if (shard == 0) {
+      piles = entries("pile");
+      grasps = entries("scene_grasps");
+      EXPECT_EQ(piles.size(), 1u);
+      EXPECT_EQ(grasps.size(), 1u);
+    }
+  }
+  EXPECT_EQ(entries("pile"), piles) << "the second shard simulated the pile again";
+  EXPECT_EQ(entries("scene_grasps"), grasps) << "the second shard placed the grasps again";
+  Merge(dir / "farm");
+  testing::ExpectSameTree(dir / "plain", dir / "farm");
 }
 
 }  // namespace

@@ -275,7 +275,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
   EXPECT_EQ(
       ForEachChange<ArrangementOptions>(
           spec, [](RunSpec& s) -> ArrangementOptions& { return s.scenes[0].arrangement; }, check),
-      10);
+      11);
   // Domain randomisation as the scene resolved it (the run keys the prepared run's): every group
   // set (unset, a group's fields do not reach the key), then every field of each.
   {
@@ -424,8 +424,9 @@ TEST(Schema, EverySceneKeyIsRead) {
         all(changed.scenes[0].arrangement, &want);
         EXPECT_EQ(got, want) << name;
       });
-  // layout, pose, gap, copies, radius, seed, drop_height, settle_time, time_step, confirm_rest
-  EXPECT_EQ(n, 10);
+  // layout, pose, gap, copies, radius, seed, drop_height, settle_time, time_step, confirm_rest,
+  // out_of_container
+  EXPECT_EQ(n, 11);
 }
 
 TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {

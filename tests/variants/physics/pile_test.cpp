@@ -503,7 +503,7 @@ TEST(Pile, ImpossibleOptionsAndRestlessPilesAreReported) {
     DropPile(parts, shapes, o);
     ADD_FAILURE();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("corner radius"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("corner_radius"), std::string::npos) << e.what();
   }
   // Too little time to land: the body is reported, not silently placed in the air.
   PileOptions quick;

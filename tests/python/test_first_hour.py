@@ -80,7 +80,7 @@ BAD = {
         {"copies: 30\n": "copies: 5000\n"},
         r"my_part_in_a_tote\.yaml:\d+:13: scene 'tote': 5000 parts of \d+ cm3 of solid cannot fit"),
     "a sweep radius in metres without its unit": (
-        {"radius: {from: 0.75 m, to: 0.9 m, step: 0.01 m}": "radius: {from: 0.8, to: 0.95}"},
+        {"radius: {from: 0.8 m, to: 0.95 m, step: 0.01 m}": "radius: {from: 0.8, to: 0.95}"},
         r"my_part_in_a_tote\.yaml:\d+:\d+: sweep.radius: 0.8 is read as 0.8 mm .*did you mean "
         r"'0.8 m'\?"),
     "a tote in metres without its unit": (
@@ -91,7 +91,7 @@ BAD = {
         r"my_part_in_a_tote\.yaml:\d+:\d+: scenes\[0\]\.physics\.density: 7.85 is read as kg/m3.*"
         r"did you mean 7850"),
     "a camera inside the tote": (
-        {"radius: {from: 0.75 m, to: 0.9 m, step: 0.01 m}": "radius: 100 mm"},
+        {"radius: {from: 0.8 m, to: 0.95 m, step: 0.01 m}": "radius: 100 mm"},
         r"sweep: view 0 of scene 'tote' puts the camera at .* inside the tote"),
 }
 

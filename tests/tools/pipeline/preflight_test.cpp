@@ -300,6 +300,25 @@ TEST(Preflight, PartsOutsideTheToteAreRemovedKeptOrDroppedAgain) {
   EXPECT_TRUE(Has(error, "(an error under --strict)")) << error;
 }
 
+// A material rule that matches no part says so at its line, and names the parts it could have
+// matched.
+TEST(Preflight, AMaterialRuleMatchingNoPartNamesItsLineAndTheParts) {
+  testing::ScratchDir dir;
+  const RunSpec spec = ParseRecipe(
+      "scenes:\n  - name: s\n    parts: [{family: hex_nut}, {family: washer}]\n"
+      "    layout: row\nrender: {mode: pbr}\nmaterials:\n"
+      "  assign:\n    - {name: 'bolt*', preset: steel}\n",
+      "r.yaml", dir.path());
+  WarningCapture capture;
+  Prepare(spec);
+  const std::vector<std::string> warnings = capture.Take();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(Has(warnings[0], "r.yaml:8:7: materials.assign[0] (name 'bolt*') matches no part"))
+      << warnings[0];
+  EXPECT_TRUE(Has(warnings[0], "the parts are 'hex_nut")) << warnings[0];
+  EXPECT_TRUE(Has(warnings[0], "(family hex_nut), 'washer")) << warnings[0];
+}
+
 // Prepare once per farm: the first shard simulates the pile and places the scene's grasps and
 // stores both in the part cache; the second shard reads them (it stores nothing again: the
 // entries keep their inodes, where a store renames a new file into place). The merged farm run

@@ -144,9 +144,8 @@ int RunGenerate(const Args& a) {
     auto reporter = std::make_shared<cadsynth::ProgressReporter>(mode, stderr);
     if (shard) reporter->SetShard(shard->Name());
     options.progress = [reporter](size_t done, size_t total) { reporter->Update(done, total); };
-    options.stage_progress = [reporter](const std::string& scene, double done, double total,
-                                        const std::string& detail) {
-      reporter->Stage(scene, done, total, detail);
+    options.stage_progress = [reporter](const cadsynth::StageReport& report) {
+      reporter->Stage(report);
     };
   }
   const cadsynth::GenerateSummary summary = cadsynth::Generate(spec, options);

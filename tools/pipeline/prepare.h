@@ -33,11 +33,17 @@ struct PreparedRun {
   std::vector<std::optional<SequenceStep>> sequence;
 };
 
-// Progress of a long stage of one scene (a pile's simulation): the scene's name, how far it is
-// and how far it may go (simulated seconds of settle_time), and what is going on ("37 of 60
-// parts moving"). Called from the scene's thread.
-using StageProgress = std::function<void(const std::string& scene, double done, double total,
-                                         const std::string& detail)>;
+// Progress of a long preparation stage: a pile's simulation ("pile": `scene`, simulated seconds
+// `done` of settle_time `total`, "37 of 60 bodies moving"), or the collision shapes of concave
+// parts ("collision_shapes": parts `done` of `total`, "'bracket': 12 convex pieces in 1.3 s").
+struct StageReport {
+  std::string stage;  // "pile" or "collision_shapes"
+  std::string scene;  // a pile's scene (empty for collision shapes)
+  double done = 0, total = 0;
+  std::string detail;
+};
+// Called from the stage's threads, at most every progress_interval_s per pile.
+using StageProgress = std::function<void(const StageReport&)>;
 
 // What Prepare does beyond its info lines.
 struct PrepareControls {

@@ -4,7 +4,9 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <filesystem>
 #include <optional>
@@ -603,7 +605,8 @@ void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
       std::string detail =
           std::to_string(moving) + " of " + std::to_string(bodies) + " bodies moving";
       if (outside > 0) detail += ", " + std::to_string(outside) + " beside the container";
-      context.progress(scene_spec.name, seconds, scene_spec.arrangement.settle_time_s, detail);
+      context.progress(
+          {"pile", scene_spec.name, seconds, scene_spec.arrangement.settle_time_s, detail});
     };
   }
   // Distractors: drawn for the scene, made (primitives) or taken (file and family parts),
@@ -872,15 +875,31 @@ PileShapes MakePileShapes(const Context& context, const PrepareState& state) {
     int& first = pile.first_dropping[state.all.instances[i].part];
     if (first < 0 || s < first) first = s;
   }
+  // Progress as each part's shape is made (a concave part's decomposition takes up to seconds).
+  const auto needed =
+      static_cast<size_t>(std::count_if(pile.first_dropping.begin(), pile.first_dropping.end(),
+                                        [](int first) { return first >= 0; }));
+  std::atomic<size_t> made{0};
   tbb::parallel_for(size_t{0}, parts.size(), [&](size_t p) {
     if (pile.first_dropping[p] < 0) return;
     WarningCapture capture;
+    const auto start = std::chrono::steady_clock::now();
     try {
       pile.shapes[p] = PartCollisionShape(parts[p], context.cache);
     } catch (...) {
       pile.failures[p] = std::current_exception();
     }
     pile.warnings[p] = capture.Take();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const size_t done = ++made;
+    if (context.progress && seconds >= context.progress_interval_s) {
+      std::ostringstream detail;
+      detail << "'" << parts[p].name << "': " << Count(pile.shapes[p].pieces.size(), "convex piece")
+             << " in " << std::round(seconds * 10) / 10 << " s";
+      context.progress({"collision_shapes", "", static_cast<double>(done),
+                        static_cast<double>(needed), detail.str()});
+    }
   });
   return pile;
 }

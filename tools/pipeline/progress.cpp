@@ -93,21 +93,24 @@ ProgressReporter::ProgressReporter(Mode mode, std::FILE* out, double interval_s,
   }
 }
 
-void ProgressReporter::Stage(const std::string& scene, double done, double total,
-                             const std::string& detail) {
+void ProgressReporter::Stage(const StageReport& report) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (mode_ == Mode::kJson) {
     nlohmann::ordered_json j = nlohmann::ordered_json::object();
     if (!shard_.empty()) j["shard"] = shard_;
-    j["stage"] = "pile";
-    j["scene"] = scene;
-    j["simulated_s"] = std::round(done * 100) / 100;
-    j["settle_time_s"] = total;
-    j["detail"] = detail;
+    j["stage"] = report.stage;
+    if (!report.scene.empty()) j["scene"] = report.scene;
+    j["done"] = std::round(report.done * 100) / 100;
+    j["total"] = report.total;
+    j["detail"] = report.detail;
     std::fprintf(out_, "%s\n", j.dump().c_str());
+  } else if (report.stage == "pile") {
+    std::fprintf(out_, "%s: simulating the pile, %.1f of %g s simulated, %s\n",
+                 report.scene.c_str(), report.done, report.total, report.detail.c_str());
   } else {
-    std::fprintf(out_, "%s: simulating the pile, %.1f of %g s simulated, %s\n", scene.c_str(), done,
-                 total, detail.c_str());
+    std::fprintf(out_, "%s: %g of %g parts, %s\n",
+                 report.stage == "collision_shapes" ? "collision shapes" : report.stage.c_str(),
+                 report.done, report.total, report.detail.c_str());
   }
   std::fflush(out_);
 }

@@ -6,6 +6,8 @@
 #include <mutex>
 #include <string>
 
+#include "tools/pipeline/prepare.h"
+
 namespace cadsynth {
 
 // "87.4 frames/s", or below one frame a second "27.3 s/frame" (a physically based bin: "0.0
@@ -34,11 +36,11 @@ class ProgressReporter {
 
   // Thread-safe; call with the running count of finished frames.
   void Update(size_t done, size_t total);
-  // Thread-safe: a line on a preparation stage of a scene (a pile's simulation: `done` and
-  // `total` simulated seconds), before the frames: "pile_1: simulating the pile, 2.0 of 10 s
-  // simulated, 37 of 60 bodies moving", or in JSON mode {"stage":"pile","scene":"pile_1",
-  // "simulated_s":2.0,"settle_time_s":10.0,"detail":"..."} (led by the shard's name).
-  void Stage(const std::string& scene, double done, double total, const std::string& detail);
+  // Thread-safe: a line on a preparation stage (StageReport), before the frames: "pile_1:
+  // simulating the pile, 2.0 of 10 s simulated, 37 of 60 bodies moving" or "collision shapes: 2
+  // of 3 parts, 'bracket': 12 convex pieces in 1.3 s"; in JSON mode {"stage":"pile",
+  // "scene":"pile_1","done":2.0,"total":10.0,"detail":"..."} (led by the shard's name).
+  void Stage(const StageReport& report);
   // Names the shard in JSON lines ("I/N"); call before the first Update.
   void SetShard(std::string shard) { shard_ = std::move(shard); }
   // The terminal's width for the bar (default: asked of the terminal, 80 when it does not say).

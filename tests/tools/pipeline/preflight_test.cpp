@@ -63,7 +63,9 @@ const char* const kPegPile =
 TEST(Preflight, PartsThatCannotFitTheToteAreRefusedWithTheirLine) {
   std::atomic<int> progress{0};
   PrepareControls controls;
-  controls.progress = [&](const std::string&, double, double, const std::string&) { ++progress; };
+  controls.progress = [&](const StageReport& report) {
+    if (report.stage == "pile") ++progress;
+  };
   controls.progress_interval_s = 0;
   // 15 mm between the walls: the 20 mm peg cannot lie in any orientation.
   const std::string narrow = PrepareError(
@@ -191,23 +193,31 @@ TEST(Preflight, PileProgressComesWhileItIsSimulatedAndNotWhenItIsCached) {
                   "r.yaml", dir.path());
   std::mutex mutex;
   std::vector<double> times;
-  std::vector<std::string> details;
+  std::vector<std::string> details, shapes;
   PrepareControls controls;
   controls.progress_interval_s = 0;
-  controls.progress = [&](const std::string& scene, double done, double total,
-                          const std::string& detail) {
+  controls.progress = [&](const StageReport& report) {
     std::lock_guard<std::mutex> lock(mutex);
-    EXPECT_EQ(scene, "bin");
-    EXPECT_EQ(total, 10.0);
-    times.push_back(done);
-    details.push_back(detail);
+    if (report.stage == "collision_shapes") {  // the peg's: one piece, its hull
+      shapes.push_back(report.detail);
+      EXPECT_EQ(report.total, 1.0);
+      return;
+    }
+    EXPECT_EQ(report.scene, "bin");
+    EXPECT_EQ(report.total, 10.0);
+    times.push_back(report.done);
+    details.push_back(report.detail);
   };
+
   PartCache cache(dir / "cache", "test");
   const PreparedRun cold = Prepare(spec, {}, &cache, nullptr, controls);
   ASSERT_GE(times.size(), 2u);
   for (size_t k = 1; k < times.size(); ++k) EXPECT_GT(times[k], times[k - 1]);
   EXPECT_LE(times.back(), 10.0);
   EXPECT_TRUE(Has(details[0], " of 12 bodies moving")) << details[0];
+  ASSERT_EQ(shapes.size(), 1u);
+  EXPECT_TRUE(Has(shapes[0], "'round_peg")) << shapes[0];
+  EXPECT_TRUE(Has(shapes[0], "': 1 convex piece in ")) << shapes[0];
   EXPECT_TRUE(std::filesystem::exists(dir / "cache" / "pile"));
 
   times.clear();
@@ -231,7 +241,7 @@ TEST(Preflight, PileProgressComesWhileItIsSimulatedAndNotWhenItIsCached) {
   {
     ProgressReporter reporter(ProgressReporter::Mode::kJson, out);
     reporter.SetShard("1/4");
-    reporter.Stage("bin", 2.5, 10.0, "7 of 12 bodies moving");
+    reporter.Stage({"pile", "bin", 2.5, 10.0, "7 of 12 bodies moving"});
   }
   std::fclose(out);
   const std::string text(buffer, size);
@@ -240,8 +250,8 @@ TEST(Preflight, PileProgressComesWhileItIsSimulatedAndNotWhenItIsCached) {
   EXPECT_EQ(j["shard"], "1/4");
   EXPECT_EQ(j["stage"], "pile");
   EXPECT_EQ(j["scene"], "bin");
-  EXPECT_DOUBLE_EQ(j["simulated_s"].get<double>(), 2.5);
-  EXPECT_DOUBLE_EQ(j["settle_time_s"].get<double>(), 10.0);
+  EXPECT_DOUBLE_EQ(j["done"].get<double>(), 2.5);
+  EXPECT_DOUBLE_EQ(j["total"].get<double>(), 10.0);
   EXPECT_EQ(j["detail"], "7 of 12 bodies moving");
 }
 

@@ -156,7 +156,8 @@ int RunGenerate(const Args& a) {
   }
   const size_t rendered = summary.frames - summary.resumed;
   std::printf(
-      "wrote %zu frame%s (%zu scene%s) of %zu object%s (%zu instance%s)%s to %s in %.1f s (%s)\n",
+      "wrote %zu frame%s (%zu scene%s) of %zu object%s (%zu instance%s)%s to %s in %.1f s (%s "
+      "overall)\n",
       summary.frames, summary.frames == 1 ? "" : "s", summary.scenes,
       summary.scenes == 1 ? "" : "s", summary.objects, summary.objects == 1 ? "" : "s",
       summary.instances, summary.instances == 1 ? "" : "s",

@@ -12,19 +12,22 @@
 #include "tools/pipeline/prepare_stages.h"
 
 namespace cadsynth::prepare_stages {
-namespace {
 
-// A length for a message: "0.8" below 10 mm, whole millimetres above.
 std::string Mm(double x) {
   std::ostringstream out;
-  if (std::abs(x) < 10.0) {
+  if (std::abs(x) < 10.0) {  // 0.8 mm is not "1 mm"
     out.precision(2);
     out << std::round(x * 100.0) / 100.0 + 0.0;  // (+ 0.0: no "-0")
-  } else {
+  } else if (std::abs(x) < 1e12) {
     out << std::llround(x);
+  } else {  // (llround overflows past 9e18)
+    out.precision(3);
+    out << x;
   }
   return out.str();
 }
+
+namespace {
 
 std::string At(const std::string& where) { return where.empty() ? "" : where + ": "; }
 

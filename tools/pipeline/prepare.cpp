@@ -10,25 +10,7 @@
 #include "tools/pipeline/prepare_stages.h"
 
 namespace cadsynth {
-namespace {
-
-// A length for a message: whole millimetres (lround overflows past 9e18: printed as a huge
-// negative number), or three significant digits when it is that large.
-std::string Mm(double x) {
-  if (std::abs(x) < 10.0) {  // 0.8 mm is not "1 mm"
-    std::ostringstream out;
-    out.precision(2);
-    out << std::round(x * 100.0) / 100.0 + 0.0;  // (+ 0.0: no "-0")
-    return out.str();
-  }
-  if (std::abs(x) < 1e12) return std::to_string(std::llround(x));
-  std::ostringstream out;
-  out.precision(3);
-  out << x;
-  return out.str();
-}
-
-}  // namespace
+using prepare_stages::Mm;
 
 std::vector<std::string> PlacementWarnings(const std::vector<Part>& parts,
                                            const std::vector<Instance>& instances,

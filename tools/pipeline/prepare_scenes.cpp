@@ -444,136 +444,65 @@ void RunPickSequence(const SceneSpec& scene_spec, const std::vector<Part>& parts
   }
 }
 
-// A pile's simulated result in the part cache: the key holds everything that decides it (the
-// arranged parts' geometry, mass and names, the instances, every pile option, the distractors,
-// --strict), the value the pile, its pick sequence and the messages they gave, so that a second
-// shard or a DataLoader worker reads the pile instead of simulating it again (the same bytes).
-void PutInstance(ByteWriter* w, const Instance& instance) {
-  w->Put(instance.part);
-  w->PutText(instance.name);
-  w->Put(Eigen::Matrix4d(instance.world_from_model.matrix()));
-  w->Put(instance.color.has_value());
-  w->Put(instance.color.value_or(Eigen::Vector3f::Zero()));
-  w->PutText(instance.path);
+// A pile's progress (ArrangementOptions::pile_progress) as the stage's reports, at most one every
+// progress_interval_s of wall time (2 s: a pile of 60 bolts takes 1-5 s). `arrangement` (its
+// copies, and the distractors added after this) outlives every call.
+std::function<void(double, int, int)> PileProgress(const Context& context,
+                                                   const SceneSpec& scene_spec,
+                                                   const std::vector<Instance>& instances,
+                                                   const ArrangementOptions* arrangement) {
+  return [&context, &scene_spec, &instances, arrangement, last = std::chrono::steady_clock::now()](
+             double seconds, int moving, int outside) mutable {
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last).count() < context.progress_interval_s) return;
+    last = now;
+    const size_t bodies = instances.size() * static_cast<size_t>(arrangement->copies) +
+                          arrangement->distractors.size();
+    std::string detail =
+        std::to_string(moving) + " of " + std::to_string(bodies) + " bodies moving";
+    if (outside > 0) detail += ", " + std::to_string(outside) + " beside the container";
+    context.progress(
+        {"pile", scene_spec.name, seconds, scene_spec.arrangement.settle_time_s, detail});
+  };
 }
 
-Instance GetInstance(ByteReader* r) {
-  Instance instance;
-  instance.part = r->Get<int>();
-  instance.name = r->GetText();
-  instance.world_from_model.matrix() = r->Get<Eigen::Matrix4d>();
-  const bool has_color = r->Get<bool>();
-  const Eigen::Vector3f color = r->Get<Eigen::Vector3f>();
-  if (has_color) instance.color = color;
-  instance.path = r->GetText();
-  return instance;
-}
-
-void PutArrangement(ByteWriter* w, const Arrangement& a) {
-  for (const std::vector<Instance>* list : {&a.instances, &a.distractors}) {
-    w->Put(static_cast<uint64_t>(list->size()));
-    for (const Instance& instance : *list) PutInstance(w, instance);
+// A pile dropped and settled into placement->arranged, what left the container sorted out, its
+// pick sequence run; or all of it, with its messages, read from the part cache where an earlier
+// process (a shard, a worker) simulated it (and stored there when not).
+void SettlePile(const Context& context, const SceneSpec& scene_spec, const std::vector<Part>& parts,
+                const std::vector<Instance>& instances, const std::vector<int>& groups,
+                const ArrangementOptions& arrangement, const std::vector<CollisionShape>& shapes,
+                SceneLog* log, Placement* placement) {
+  std::optional<CacheKey> key;
+  if (context.cache) {
+    key =
+        PileKey(*context.cache, scene_spec, parts, instances, groups, arrangement, context.strict);
+    if (const std::optional<std::string> bytes = context.cache->Load("pile", *key)) {
+      try {
+        std::vector<std::pair<bool, std::string>> messages;
+        DecodePile(*bytes, placement, &messages);
+        for (auto& [warning, text] : messages) log->Say(warning, std::move(text));
+        return;
+      } catch (const Error&) {  // damaged: simulated again below
+        placement->picks.clear();
+        placement->pick_ids.clear();
+      }
+    }
   }
-  for (const std::vector<int>* list :
-       {&a.group, &a.restless, &a.escaped, &a.restless_distractors, &a.escaped_distractors})
-    w->PutArray(*list);
-  w->Put(a.settle_seconds);
-  w->Put(a.distractor_seconds);
-}
-
-Arrangement GetArrangement(ByteReader* r) {
-  Arrangement a;
-  for (std::vector<Instance>* list : {&a.instances, &a.distractors}) {
-    const auto n = r->Get<uint64_t>();
-    if (n > (1u << 24)) throw Error("pile cache: damaged");
-    for (uint64_t i = 0; i < n; ++i) list->push_back(GetInstance(r));
+  log->Flush();
+  const size_t first_message = placement->messages.size();
+  Arrangement& arranged = placement->arranged;
+  arranged = Arrange(parts, instances, arrangement, groups, &shapes);
+  SortOutEscaped(scene_spec, parts, arrangement, shapes, context.strict, log, &arranged);
+  ReportPile(scene_spec, parts, arranged, context.strict, log);
+  RunPickSequence(scene_spec, parts, arrangement, shapes, context.strict, log, placement);
+  log->Flush();
+  if (key) {
+    const std::vector<std::pair<bool, std::string>> messages(
+        placement->messages.begin() + static_cast<std::ptrdiff_t>(first_message),
+        placement->messages.end());
+    context.cache->Store("pile", *key, EncodePile(*placement, messages));
   }
-  for (std::vector<int>* list :
-       {&a.group, &a.restless, &a.escaped, &a.restless_distractors, &a.escaped_distractors})
-    *list = r->GetArray<int>();
-  a.settle_seconds = r->Get<double>();
-  a.distractor_seconds = r->Get<double>();
-  return a;
-}
-
-std::string EncodePile(const Placement& placement,
-                       const std::vector<std::pair<bool, std::string>>& messages) {
-  ByteWriter w;
-  PutArrangement(&w, placement.arranged);
-  w.Put(static_cast<uint64_t>(placement.picks.size()));
-  for (size_t k = 0; k < placement.picks.size(); ++k) {
-    const PickStep& step = placement.picks[k];
-    w.Put(step.picked);
-    PutArrangement(&w, step.arranged);
-    w.PutArray(std::vector<uint8_t>(step.freed.begin(), step.freed.end()));
-    w.PutArray(step.moved_mm);
-    w.PutArray(placement.pick_ids[k]);
-  }
-  w.Put(static_cast<uint64_t>(messages.size()));
-  for (const auto& [warning, text] : messages) {
-    w.Put(warning);
-    w.PutText(text);
-  }
-  return w.bytes();
-}
-
-void DecodePile(std::string_view bytes, Placement* placement,
-                std::vector<std::pair<bool, std::string>>* messages) {
-  ByteReader r(bytes);
-  placement->arranged = GetArrangement(&r);
-  const auto picks = r.Get<uint64_t>();
-  if (picks > 1000) throw Error("pile cache: damaged");
-  placement->picks.clear();
-  placement->pick_ids.clear();
-  for (uint64_t k = 0; k < picks; ++k) {
-    PickStep step;
-    step.picked = r.Get<int>();
-    step.arranged = GetArrangement(&r);
-    const std::vector<uint8_t> freed = r.GetArray<uint8_t>();
-    step.freed.assign(freed.begin(), freed.end());
-    step.moved_mm = r.GetArray<double>();
-    placement->picks.push_back(std::move(step));
-    placement->pick_ids.push_back(r.GetArray<int>());
-  }
-  const auto n = r.Get<uint64_t>();
-  if (n > (1u << 20)) throw Error("pile cache: damaged");
-  for (uint64_t i = 0; i < n; ++i) {
-    const bool warning = r.Get<bool>();
-    messages->emplace_back(warning, r.GetText());
-  }
-}
-
-CacheKey PileKey(const PartCache& cache, const SceneSpec& scene_spec,
-                 const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                 const std::vector<int>& groups, const ArrangementOptions& a, bool strict) {
-  KeyHasher hasher;
-  cache.Start(&hasher, "pile 1");
-  hasher.Text(scene_spec.name).Value(strict);
-  std::vector<int> used;
-  for (const Instance& instance : instances) used.push_back(instance.part);
-  used.insert(used.end(), a.distractors.begin(), a.distractors.end());
-  std::sort(used.begin(), used.end());
-  used.erase(std::unique(used.begin(), used.end()), used.end());
-  for (int p : used) {
-    const Part& part = parts[static_cast<size_t>(p)];
-    hasher.Value(p).Text(part.name).Geometry(part.mesh).Value(part.watertight);
-    hasher.Value(part.mass.volume_mm3).Value(part.mass.center_of_mass).Value(part.mass.inertia);
-  }
-  for (size_t i = 0; i < instances.size(); ++i) {
-    const Instance& instance = instances[i];
-    hasher.Value(instance.part).Text(instance.name).Text(instance.path);
-    hasher.Value(Eigen::Matrix4d(instance.world_from_model.matrix()));
-    hasher.Value(instance.color.has_value())
-        .Value(instance.color.value_or(Eigen::Vector3f::Zero()));
-    hasher.Value(i < groups.size() ? groups[i] : -1);
-  }
-  hasher.Fields(a).Fields(a.container).Fields(a.container.material).Fields(a.sequence);
-  hasher.Geometry(a.container.mesh);
-  hasher.Fields(a.physics.low).Fields(a.physics.high);
-  for (const PhysicsDraw& d : a.part_physics) hasher.Fields(d.low).Fields(d.high);
-  for (int d : a.distractors) hasher.Value(d);
-  hasher.Value(a.distractor_seed);
-  return hasher.Key();
 }
 
 // Scene `s` arranged into `placement`: its parts dropped, piled or laid out, and its
@@ -590,25 +519,8 @@ void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
   if (pile || dropped) shapes = FallingShapes(state.pile_shapes, s, instances);
   ArrangementOptions arrangement = scene_spec.arrangement;
   if (scene_spec.container_file) arrangement.container.mesh = state.container_mesh[s];
-  if (pile && context.progress) {
-    // At most one line every progress_interval_s of wall time (2 s: a pile of 60 bolts takes
-    // 1-5 s).
-    // (The copies and the distractors, added below: `arrangement` outlives every call.)
-    arrangement.pile_progress = [&context, &scene_spec, &instances, a = &arrangement,
-                                 last = std::chrono::steady_clock::now()](
-                                    double seconds, int moving, int outside) mutable {
-      const auto now = std::chrono::steady_clock::now();
-      if (std::chrono::duration<double>(now - last).count() < context.progress_interval_s) return;
-      last = now;
-      const size_t bodies =
-          instances.size() * static_cast<size_t>(a->copies) + a->distractors.size();
-      std::string detail =
-          std::to_string(moving) + " of " + std::to_string(bodies) + " bodies moving";
-      if (outside > 0) detail += ", " + std::to_string(outside) + " beside the container";
-      context.progress(
-          {"pile", scene_spec.name, seconds, scene_spec.arrangement.settle_time_s, detail});
-    };
-  }
+  if (pile && context.progress)
+    arrangement.pile_progress = PileProgress(context, scene_spec, instances, &arrangement);
   // Distractors: drawn for the scene, made (primitives) or taken (file and family parts),
   // given collision shapes, and dropped with (a pile) or onto (other layouts) the parts.
   const RandomizeSpec& randomize_spec =
@@ -638,41 +550,8 @@ void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
       log->Broken(context.strict, scene_spec.name, m.str());
     }
   } else if (pile) {
-    // From the part cache where an earlier process (a shard, a worker) simulated it.
-    std::optional<CacheKey> key;
-    bool cached = false;
-    if (context.cache) {
-      key = PileKey(*context.cache, scene_spec, arranged_parts, instances, groups, arrangement,
-                    context.strict);
-      if (const std::optional<std::string> bytes = context.cache->Load("pile", *key)) {
-        try {
-          std::vector<std::pair<bool, std::string>> messages;
-          DecodePile(*bytes, placement, &messages);
-          for (auto& [warning, text] : messages) log->Say(warning, std::move(text));
-          cached = true;
-        } catch (const Error&) {  // damaged: simulated again below
-          placement->picks.clear();
-          placement->pick_ids.clear();
-        }
-      }
-    }
-    if (!cached) {
-      log->Flush();
-      const size_t first_message = placement->messages.size();
-      arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
-      SortOutEscaped(scene_spec, arranged_parts, arrangement, shapes, context.strict, log,
-                     &arranged);
-      ReportPile(scene_spec, arranged_parts, arranged, context.strict, log);
-      RunPickSequence(scene_spec, arranged_parts, arrangement, shapes, context.strict, log,
-                      placement);
-      log->Flush();
-      if (key) {
-        const std::vector<std::pair<bool, std::string>> messages(
-            placement->messages.begin() + static_cast<std::ptrdiff_t>(first_message),
-            placement->messages.end());
-        context.cache->Store("pile", *key, EncodePile(*placement, messages));
-      }
-    }
+    SettlePile(context, scene_spec, arranged_parts, instances, groups, arrangement, shapes, log,
+               placement);
     AddTote(scene_spec, arrangement.container, &placement->scene);
   } else {
     arranged =

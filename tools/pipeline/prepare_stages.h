@@ -13,6 +13,7 @@
 #include <exception>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -130,6 +131,10 @@ void RenameRepeatedNames(std::vector<Part>* parts);
 void ComputeHulls(const Context& context, std::vector<Part>* parts);
 std::vector<ObjectClass> AssignPartClasses(const Context& context, const PrepareState& state);
 
+// A length in millimetres for a message: "0.8" below 10 mm (not "1"), whole millimetres above,
+// three significant digits past 1e12 (preflight.cpp).
+std::string Mm(double x);
+
 // The checks before simulation and rendering (preflight.cpp): Errors naming the recipe line.
 
 // Each pile in a tote: every part fits inside it (its thinnest width between the walls, its
@@ -140,6 +145,21 @@ void CheckScenesCanBeMade(const Context& context, const PrepareState& state);
 // whose unit the recipe overrides, the message asks about the unit).
 void CheckCamerasOutsideParts(const Context& context, const PrepareState& state,
                               const std::vector<Placement>& placements);
+
+// A pile in the part cache (pile_cache.cpp), kind "pile": its key holds everything that decides
+// the pile (the arranged parts' geometry, mass and names, the instances and their groups, every
+// pile option, the distractors, --strict); its value the pile, its pick sequence (placement's
+// arranged, picks and pick_ids) and the messages they gave, so that a second shard or a
+// DataLoader worker reads the pile instead of simulating it again (the same bytes). Decode throws
+// Error for a damaged entry.
+CacheKey PileKey(const PartCache& cache, const SceneSpec& scene_spec,
+                 const std::vector<Part>& parts, const std::vector<Instance>& instances,
+                 const std::vector<int>& groups, const ArrangementOptions& arrangement,
+                 bool strict);
+std::string EncodePile(const Placement& placement,
+                       const std::vector<std::pair<bool, std::string>>& messages);
+void DecodePile(std::string_view bytes, Placement* placement,
+                std::vector<std::pair<bool, std::string>>* messages);
 
 // The scene stages (prepare_scenes.cpp).
 

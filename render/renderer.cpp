@@ -157,7 +157,8 @@ struct Renderer::Impl {
   // projector at `projector` (world; its axes are the camera's) where it lights the point, plus
   // the ambient share of the Lambert shading.
   std::vector<float> InfraredPass(const PathTracer* tracer, const Camera& camera,
-                                  const DepthModel& model, const Eigen::Vector3f& projector) const;
+                                  const DotTable& dots, const DepthModel& model,
+                                  const Eigen::Vector3f& projector) const;
   unsigned floor_id = kInvalid;
   // Fixtures: top-level geometry ids first_fixture_id + f, their triangles and normals (world).
   unsigned first_fixture_id = kInvalid;
@@ -744,7 +745,7 @@ void Renderer::Impl::ProjectorPacket(const PathTracer* tracer, const RTCRayHit16
 }
 
 std::vector<float> Renderer::Impl::InfraredPass(const PathTracer* tracer, const Camera& camera,
-                                                const DepthModel& m,
+                                                const DotTable& pattern, const DepthModel& m,
                                                 const Eigen::Vector3f& projector) const {
   const Intrinsics& k = camera.intrinsics;
   const int w = k.width, h = k.height;
@@ -786,7 +787,7 @@ std::vector<float> Renderer::Impl::InfraredPass(const PathTracer* tracer, const 
               const Eigen::Vector3f q = projector_from_world * (shaded[j].point - projector);
               const float distance_m = q.norm() / 1000.0f;
               if (q.z() > 0.0f && distance_m > 0.0f) {
-                const float dots = DotPattern(m, k.fx, q.x() / q.z(), q.y() / q.z());
+                const float dots = pattern(q.x() / q.z(), q.y() / q.z());
                 value += static_cast<float>(m.dot_power) * signal[pixel] * dots /
                          (distance_m * distance_m);
               }
@@ -1277,11 +1278,17 @@ void Renderer::Impl::FramePasses::SimulateSensorDepth() {
     const Eigen::Vector3f dots =
         (camera.world_from_cam * Eigen::Vector3d(0.5 * depth_model.baseline_mm, 0.0, 0.0))
             .cast<float>();
-    const std::vector<float> left = im.InfraredPass(tracer, camera, depth_model, dots);
+    // The pattern's dots over the directions the projector lights in the cameras' field of
+    // view, widened by the parallax of points down to min_depth (closer ones draw as they go).
+    const double parallax = depth_model.baseline_mm / std::max(depth_model.min_depth_mm, 1.0);
+    const DotTable pattern(depth_model, k.fx, -k.cx / k.fx - parallax,
+                           (k.width - k.cx) / k.fx + parallax, -k.cy / k.fy - parallax,
+                           (k.height - k.cy) / k.fy + parallax);
+    const std::vector<float> left = im.InfraredPass(tracer, camera, pattern, depth_model, dots);
     const double gain = InfraredGain(left);
-    ir_left = InfraredImage(depth_model, view, 0, left, gain);
-    ir_right = InfraredImage(depth_model, view, 1,
-                             im.InfraredPass(tracer, right, depth_model, dots), gain);
+    std::array<std::vector<uint8_t>, 2> ir = InfraredImages(
+        depth_model, view, left, im.InfraredPass(tracer, right, pattern, depth_model, dots), gain);
+    ir_left = std::move(ir[0]), ir_right = std::move(ir[1]);
     input.ir_left = ir_left.data();
     input.ir_right = ir_right.data();
   }

@@ -3,6 +3,7 @@
 #include "render/pixel_rays.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -142,11 +143,6 @@ Eigen::Vector2d GaussianPair(uint64_t seed, const RandomStream& stream, uint64_t
   return z;
 }
 
-// One standard normal number: the first of the pair.
-double Gaussian(uint64_t seed, const RandomStream& stream, uint64_t index) {
-  return GaussianPair(seed, stream, index).x();
-}
-
 // Standard normal number `index` of a stream, numbers 2k and 2k + 1 from Box-Muller pair k: a
 // loop over consecutive indices (a row of pixels) draws one pair for every two numbers.
 class PairedNormals {
@@ -214,21 +210,27 @@ bool Returns(const DepthModel& m, const DepthSensorInput& in, int u, int v, size
   return true;
 }
 
-// The rows a matcher strip computes around the rows it keeps: the 5-path SGBM aggregates costs
-// from the rows above, so a strip starts this far above its first kept row.
-constexpr int kStripRows = 64;
+// The matcher's strips: an even number of them (two cores share them evenly), each at most 256
+// rows, and the rows a strip computes above the rows it keeps (SGBM aggregates costs from the
+// rows above, so a strip starts this far up). Fixed by the image's height alone.
+int StereoStrips(int height) { return 2 * std::max(1, (height + 511) / 512); }
 constexpr int kStripMarginAbove = 48;
 
-// active_stereo: OpenCV's StereoSGBM on the left and right IR images, then z = f B / d. The image
-// is cut into strips of kStripRows rows matched in parallel, each with kStripMarginAbove rows
-// above it (and the window's half below) so that its paths start well before its first kept row:
-// a fixed cut, the same on any thread count.
+// active_stereo: OpenCV's StereoSGBM (its three-direction variant, MODE_SGBM_3WAY: left to right,
+// right to left and top down, vectorised) on the left and right IR images, then z = f B / d. The
+// image is cut into StereoStrips(h) strips matched in parallel, each with kStripMarginAbove rows
+// above it (and the window's half below) so that its paths start before its first kept row: a
+// fixed cut, the same on any thread count.
 std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) {
   const Intrinsics& k = in.intrinsics;
   const int w = k.width, h = k.height;
   std::vector<float> out(static_cast<size_t>(w) * h, 0.0f);
   const int disparities = StereoDisparities(m, k);
-  const int strips = (h + kStripRows - 1) / kStripRows;
+  // Every column lies in the invalid band: nothing to match (and OpenCV's 3-way matcher fails on
+  // images no wider than its search).
+  if (disparities >= w) return out;
+  const int strips = StereoStrips(h);
+  const int strip_rows = (h + strips - 1) / strips;
   const double fb = k.fx * m.baseline_mm;
   // The texture test: the grey standard deviation of each pixel's window in the left image.
   cv::Mat texture;
@@ -243,24 +245,42 @@ std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) 
   }
   const auto min_variance = static_cast<float>(m.min_texture * m.min_texture);
   tbb::parallel_for(0, strips, [&](int s) {
-    const int keep0 = s * kStripRows, keep1 = std::min(h, keep0 + kStripRows);
+    const int keep0 = std::min(h, s * strip_rows), keep1 = std::min(h, keep0 + strip_rows);
+    if (keep0 >= keep1) return;
     const int row0 = std::max(0, keep0 - kStripMarginAbove);
     const int row1 = std::min(h, keep1 + m.block / 2 + 1);
     // OpenCV reads the strips in place; it writes only `disparity`.
     const cv::Mat left(row1 - row0, w, CV_8U, const_cast<uint8_t*>(in.ir_left) + size_t(row0) * w);
     const cv::Mat right(row1 - row0, w, CV_8U,
                         const_cast<uint8_t*>(in.ir_right) + size_t(row0) * w);
+    // The disparities the strip's surfaces lie at (the exact depth), 2 px either side, within the
+    // sensor's own range [0, disparities): the matcher searches only those. Its matches are the
+    // ones a search of the whole range finds except where that would have matched a disparity no
+    // surface has; the invalid band of `disparities` columns on the left is kept below.
+    float z_near = std::numeric_limits<float>::infinity(), z_far = 0.0f;
+    for (size_t p = size_t(row0) * w; p < size_t(row1) * w; ++p) {
+      if (in.depth[p] > 0.0f)
+        z_near = std::min(z_near, in.depth[p]), z_far = std::max(z_far, in.depth[p]);
+    }
+    if (!(z_far > 0.0f)) return;  // nothing in the strip
+    const double d_far = fb / z_far, d_near = fb / z_near;
+    const int high = std::min(disparities, static_cast<int>(std::ceil(d_near)) + 3);
+    int low = std::max(0, static_cast<int>(std::floor(d_far)) - 2);
+    if (low >= high) return;  // every surface nearer than min_depth: no match
+    const int count = std::max(16, 16 * ((high - low + 15) / 16));
+    low = std::max(0, std::min(low, disparities - count));
     const int area = m.block * m.block;
     cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-        0, disparities, m.block, 8 * area, 32 * area, /*disp12MaxDiff=*/1,
+        low, count, m.block, 8 * area, 32 * area, /*disp12MaxDiff=*/1,
         /*preFilterCap=*/63, /*uniquenessRatio=*/10,
-        /*speckleWindowSize=*/100, /*speckleRange=*/2, cv::StereoSGBM::MODE_SGBM);
+        /*speckleWindowSize=*/100, /*speckleRange=*/2, cv::StereoSGBM::MODE_SGBM_3WAY);
     cv::Mat disparity;
-    sgbm->compute(left, right, disparity);  // CV_16S, 1/16 px; invalid: (0 - 1) * 16
+    sgbm->compute(left, right, disparity);  // CV_16S, 1/16 px; invalid: (low - 1) * 16
+    const int invalid = (low - 1) * 16;
     for (int v = keep0; v < keep1; ++v) {
       const int16_t* row = disparity.ptr<int16_t>(v - row0);
-      for (int u = 0; u < w; ++u) {
-        if (row[u] <= 0) continue;
+      for (int u = disparities; u < w; ++u) {
+        if (row[u] <= 0 || row[u] == invalid) continue;
         if (!texture.empty() && texture.at<float>(v, u) < min_variance) continue;
         out[static_cast<size_t>(v) * w + u] = static_cast<float>(fb * 16.0 / row[u]);
       }
@@ -302,7 +322,12 @@ std::vector<float> GreyImageNoise(uint64_t frame_seed, size_t pixels) {
   return noise;
 }
 
-float DotPattern(const DepthModel& m, double fx, double x, double y) {
+namespace {
+
+// DotPattern at (x, y) with the dots of the cells around it given by `dot(i, j, &cx, &cy)` (false:
+// cell (i, j) holds no dot): the hash of DotPattern or DotTable's table.
+template <class Dots>
+float PatternAt(const DepthModel& m, double fx, double x, double y, Dots&& dot) {
   const double pitch = m.dot_spacing_px / fx;
   const double gx = x / pitch, gy = y / pitch;
   const double fi = std::floor(gx), fj = std::floor(gy);
@@ -314,8 +339,6 @@ float DotPattern(const DepthModel& m, double fx, double x, double y) {
   const double footprint = 1.0 / m.dot_spacing_px;
   const double sigma2 = kSigma2 + footprint * footprint / 12.0;
   const double peak = kSigma2 / sigma2;
-  constexpr uint64_t kDots = streams::kSensorDots.id();  // hashed at compile time
-  const auto draw = [&](uint64_t index) { return random_detail::Draw(m.seed, kDots, index); };
   double sum = 0.0;
   for (int j = j0 - 1; j <= j0 + 1; ++j) {
     for (int i = i0 - 1; i <= i0 + 1; ++i) {
@@ -323,17 +346,93 @@ float DotPattern(const DepthModel& m, double fx, double x, double y) {
       const double ex = std::max({i - gx, gx - (i + 1), 0.0});
       const double ey = std::max({j - gy, gy - (j + 1), 0.0});
       if (ex * ex + ey * ey > 9.0 * sigma2) continue;
-      const uint64_t cell =
-          ((static_cast<uint64_t>(i + (1 << 20))) << 21) + static_cast<uint64_t>(j + (1 << 20));
-      if (draw(cell << 2) >= 0.5) continue;
-      const double cx = i + draw((cell << 2) + 1);
-      const double cy = j + draw((cell << 2) + 2);
+      double cx, cy;
+      if (!dot(i, j, &cx, &cy)) continue;
       const double r2 = (gx - cx) * (gx - cx) + (gy - cy) * (gy - cy);
       if (r2 > 9.0 * sigma2) continue;
       sum += peak * std::exp(-r2 / (2.0 * sigma2));
     }
   }
   return static_cast<float>(std::min(sum, 1.0));
+}
+
+// The dot of cell (i, j), drawn from the sensor's seed: present with probability 1/2, at a uniform
+// place in the cell.
+bool HashedDot(uint64_t seed, int i, int j, double* cx, double* cy) {
+  constexpr uint64_t kDots = streams::kSensorDots.id();  // hashed at compile time
+  const auto draw = [&](uint64_t index) { return random_detail::Draw(seed, kDots, index); };
+  const uint64_t cell =
+      ((static_cast<uint64_t>(i + (1 << 20))) << 21) + static_cast<uint64_t>(j + (1 << 20));
+  if (draw(cell << 2) >= 0.5) return false;
+  *cx = i + draw((cell << 2) + 1);
+  *cy = j + draw((cell << 2) + 2);
+  return true;
+}
+
+}  // namespace
+
+float DotPattern(const DepthModel& m, double fx, double x, double y) {
+  return PatternAt(m, fx, x, y, [&](int i, int j, double* cx, double* cy) {
+    return HashedDot(m.seed, i, j, cx, cy);
+  });
+}
+
+DotTable::DotTable(const DepthModel& model, double fx, double x0, double x1, double y0, double y1)
+    : model_(model), fx_(fx) {
+  const double pitch = model.dot_spacing_px / fx;
+  inv_pitch_ = 1.0 / pitch;
+  // PatternAt's dot: peak exp(-r^2 / (2 sigma^2)) out to 3 sigma, in cells.
+  constexpr double kSigma2 = 0.35 * 0.35;
+  const double footprint = 1.0 / model.dot_spacing_px;
+  const double sigma2 = kSigma2 + footprint * footprint / 12.0;
+  peak_ = static_cast<float>(kSigma2 / sigma2);
+  exponent_ = static_cast<float>(-0.5 / sigma2);
+  cut2_ = static_cast<float>(9.0 * sigma2);
+  const auto cell = [&](double t) {
+    return static_cast<int>(std::clamp(std::floor(t / pitch), -1048575.0, 1048575.0));
+  };
+  i0_ = cell(std::min(x0, x1)) - 1, j0_ = cell(std::min(y0, y1)) - 1;
+  ni_ = cell(std::max(x0, x1)) + 2 - i0_, nj_ = cell(std::max(y0, y1)) + 2 - j0_;
+  if (static_cast<double>(ni_) * nj_ > 64e6) ni_ = nj_ = 0;  // a window too wide: hash every dot
+  centres_.assign(static_cast<size_t>(ni_) * nj_, Eigen::Vector2f(kNone, kNone));
+  tbb::parallel_for(0, nj_, [&](int b) {
+    for (int a = 0; a < ni_; ++a) {
+      double cx, cy;
+      if (HashedDot(model.seed, i0_ + a, j0_ + b, &cx, &cy)) {
+        // Kept relative to the cell's corner: the float keeps 1e-7 of a cell.
+        centres_[static_cast<size_t>(b) * ni_ + a] =
+            Eigen::Vector2f(static_cast<float>(cx - (i0_ + a)), static_cast<float>(cy - (j0_ + b)));
+      }
+    }
+  });
+}
+
+float DotTable::operator()(double x, double y) const {
+  const double gx = x * inv_pitch_, gy = y * inv_pitch_;
+  const double fi = std::floor(gx), fj = std::floor(gy);
+  const double a = fi - i0_, b = fj - j0_;
+  if (!(a >= 1.0 && b >= 1.0 && a + 2.0 <= ni_ && b + 2.0 <= nj_)) {
+    return PatternAt(model_, fx_, x, y, [&](int i, int j, double* cx, double* cy) {
+      return HashedDot(model_.seed, i, j, cx, cy);
+    });
+  }
+  // Inside the table: the 3 x 3 cells around the point, in single precision relative to its cell.
+  const float px = static_cast<float>(gx - fi), py = static_cast<float>(gy - fj);
+  const Eigen::Vector2f* row =
+      &centres_[(static_cast<size_t>(b) - 1) * ni_ + static_cast<size_t>(a)];
+  float sum = 0.0f;
+  for (int dj = -1; dj <= 1; ++dj, row += ni_) {
+    for (int di = -1; di <= 1; ++di) {
+      const Eigen::Vector2f& c = row[di];
+      if (c.x() == kNone) continue;
+      const float dx = px - (static_cast<float>(di) + c.x()),
+                  dy = py - (static_cast<float>(dj) + c.y());
+      const float r2 = dx * dx + dy * dy;
+      if (r2 > cut2_) continue;
+      sum += std::exp(r2 * exponent_);
+    }
+  }
+  return std::min(sum * peak_, 1.0f);
 }
 
 double InfraredGain(const std::vector<float>& linear) {
@@ -345,18 +444,31 @@ double InfraredGain(const std::vector<float>& linear) {
   return top > 0.0 ? std::clamp(0.8 / top, 0.25, 64.0) : 1.0;
 }
 
-std::vector<uint8_t> InfraredImage(const DepthModel& m, uint64_t view, int camera,
-                                   const std::vector<float>& linear, double gain) {
+std::array<std::vector<uint8_t>, 2> InfraredImages(const DepthModel& m, uint64_t view,
+                                                   const std::vector<float>& left,
+                                                   const std::vector<float>& right, double gain) {
+  if (left.size() != right.size()) throw std::invalid_argument("IR images of different sizes");
   const auto frame_seed =
       static_cast<uint64_t>(UniformDraw(m.seed, streams::kSensorFrame, view) * 9007199254740992.0);
-  std::vector<uint8_t> out(linear.size());
-  tbb::parallel_for(size_t{0}, linear.size(), [&](size_t p) {
-    double value = gain * linear[p];
-    if (m.ir_noise > 0.0) {
-      value += m.ir_noise * Gaussian(frame_seed, streams::kSensorInfrared, (p << 1) + camera);
-    }
-    out[p] = static_cast<uint8_t>(std::clamp(std::lround(255.0 * value), 0l, 255l));
-  });
+  std::array<std::vector<uint8_t>, 2> out{std::vector<uint8_t>(left.size()),
+                                          std::vector<uint8_t>(left.size())};
+  const auto eight_bits = [](double value) {
+    return static_cast<uint8_t>(std::clamp(std::lround(255.0 * value), 0l, 255l));
+  };
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, left.size(), 4096),
+                    [&](const tbb::blocked_range<size_t>& pixels) {
+                      for (size_t p = pixels.begin(); p < pixels.end(); ++p) {
+                        double l = gain * left[p], r = gain * right[p];
+                        if (m.ir_noise > 0.0) {
+                          constexpr uint64_t kStream = streams::kSensorInfrared.id();
+                          double zl, zr;
+                          NormalPair(random_detail::Draw(frame_seed, kStream, 2 * p),
+                                     random_detail::Draw(frame_seed, kStream, 2 * p + 1), &zl, &zr);
+                          l += m.ir_noise * zl, r += m.ir_noise * zr;
+                        }
+                        out[0][p] = eight_bits(l), out[1][p] = eight_bits(r);
+                      }
+                    });
   return out;
 }
 

@@ -39,10 +39,10 @@
 //                     `dot_power` signal dots (1 m / distance)^2 of the projector's random-dot
 //                     pattern where the projector lights the point, plus `ambient` times the
 //                     Lambert shading of the scene's lights, plus N(0, `ir_noise`) read noise,
-//                     rounded to 8 bits. OpenCV's StereoSGBM (5 paths, `block` x `block`
-//                     windows, P1 = 8 block^2, P2 = 32 block^2, uniqueness 10 %, left-right check
-//                     1 px, speckle filter of 100 px within 2 px) matches them with disparities
-//                     up to f B / `min_depth`, and z = f B / d (d in 1/16 px); like the
+//                     rounded to 8 bits. OpenCV's StereoSGBM (3 paths, MODE_SGBM_3WAY; `block` x
+//                     `block` windows, P1 = 8 block^2, P2 = 32 block^2, uniqueness 10 %, left-right
+//                     check 1 px, speckle filter of 100 px within 2 px) matches them with
+//                     disparities up to f B / `min_depth`, and z = f B / d (d in 1/16 px); like the
 //                     texture threshold of RealSense's and OpenCV's block matchers, pixels whose
 //                     `block` x `block` window in the left image has a grey standard deviation
 //                     under `min_texture` are holes (SGBM alone would match the noise there).
@@ -59,6 +59,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -242,13 +243,32 @@ std::vector<float> SimulateDepth(const DepthModel& model, const DepthSensorInput
 // Gaussian of sigma = 0.35 pitch cut at 3 sigma. Fixed per sensor (seeded by `seed` only), like a
 // real DOE.
 float DotPattern(const DepthModel& model, double fx, double x, double y);
+// active_stereo: DotPattern with the dots of the cells over a window of the projector's
+// directions, [x0, x1] x [y0, y1], drawn once (a frame looks at each dot from many pixels);
+// outside it, drawn as DotPattern draws them. Close to DotPattern's values: a dot's place within
+// its cell, and the dot's shape inside the table, are worked out in single precision.
+class DotTable {
+ public:
+  DotTable(const DepthModel& model, double fx, double x0, double x1, double y0, double y1);
+  float operator()(double x, double y) const;
+
+ private:
+  static constexpr float kNone = -1.0f;  // a cell without a dot
+  DepthModel model_;
+  double fx_, inv_pitch_;
+  float peak_, exponent_, cut2_;
+  int i0_ = 0, j0_ = 0, ni_ = 0, nj_ = 0;
+  std::vector<Eigen::Vector2f> centres_;  // per cell: the dot's place in it, or kNone
+};
 // active_stereo: the sensor's auto exposure, one gain for both IR images: the one that brings the
 // 99th percentile of `linear` (the left image) to 0.8 of full scale, within [1/4, 64].
 double InfraredGain(const std::vector<float>& linear);
-// active_stereo: IR image `camera` (0 left, 1 right) of frame `view` from its noiseless linear
-// values: times `gain`, plus read noise N(0, ir_noise), rounded to 8 bits.
-std::vector<uint8_t> InfraredImage(const DepthModel& model, uint64_t view, int camera,
-                                   const std::vector<float>& linear, double gain);
+// active_stereo: the left and right IR images of frame `view` from their noiseless linear values:
+// times `gain`, plus read noise N(0, ir_noise) (one Box-Muller pair per pixel: left, right),
+// rounded to 8 bits.
+std::array<std::vector<uint8_t>, 2> InfraredImages(const DepthModel& model, uint64_t view,
+                                                   const std::vector<float>& left,
+                                                   const std::vector<float>& right, double gain);
 // active_stereo: the number of disparities the matcher searches (a multiple of 16).
 int StereoDisparities(const DepthModel& model, const Intrinsics& intrinsics);
 

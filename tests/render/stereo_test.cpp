@@ -112,6 +112,24 @@ TEST(ActiveStereo, HolesWhereThePatternIsOccluded) {
   EXPECT_LT(row_sd(290, 370), 5.0);
 }
 
+TEST(ActiveStereo, TheDotTableGivesThePatternsValues) {
+  // The table covers [-0.5, 0.5] x [-0.4, 0.4]; points inside and outside it (drawn as they go)
+  // agree with DotPattern's hashed dots within single precision.
+  DepthModel m = DepthModel::Defaults(DepthModel::Kind::kActiveStereo);
+  m.seed = 99;
+  const double fx = 525.0;
+  const DotTable table(m, fx, -0.5, 0.5, -0.4, 0.4);
+  int lit = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = -0.7 + 1.4 * ((i * 7919) % 20000) / 20000.0;
+    const double y = -0.6 + 1.2 * ((i * 104729) % 20000) / 20000.0;
+    const float exact = DotPattern(m, fx, x, y);
+    ASSERT_NEAR(table(x, y), exact, 2e-5f) << x << " " << y;
+    lit += exact > 0.05f;
+  }
+  EXPECT_GT(lit, 2000);  // the test sees dots, not only the dark between them
+}
+
 TEST(ActiveStereo, SearchesAtMostTheImageWidth) {
   DepthModel m = DepthModel::Defaults(DepthModel::Kind::kActiveStereo);
   // f B / min_depth = 337.2 * 50 / 280 = 60.2 px: 64 disparities.

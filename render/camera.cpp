@@ -37,6 +37,9 @@ const std::vector<CameraPreset>& CameraPresets() {
       {"azure_kinect_nfov",
        "Azure Kinect depth, narrow field of view unbinned, 640 x 576, 75 degrees",
        fov(640, 576, 75.0)},
+      {"azure_kinect_wfov",
+       "Azure Kinect depth, wide field of view unbinned, 1024 x 1024, 120 degrees",
+       fov(1024, 1024, 120.0)},
       {"xyz_ibd",
        "XYZ-IBD's XYZ structured-light sensor, grey 1440 x 1080 (BOP's size); f = 1800 is "
        "our assumption (44 degrees across)",
@@ -45,6 +48,10 @@ const std::vector<CameraPreset>& CameraPresets() {
        "Photoneo PhoXi 3D Scanner M, grey 2064 x 1544; 590 mm across at 650 mm "
        "(48.8 degrees)",
        Intrinsics{2064, 1544, 2275.0, 2275.0, 1031.5, 771.5}, true},
+      {"photoneo_phoxi_l",
+       "Photoneo PhoXi 3D Scanner L, grey 2064 x 1544; 1082 mm across at 1239 mm "
+       "(47.2 degrees)",
+       Intrinsics{2064, 1544, 2363.5, 2363.5, 1031.5, 771.5}, true},
       {"itodd",
        "MVTec ITODD's 3D sensor, grey 1280 x 960, K as we recall BOP's itodd camera.json (not "
        "checked here; 24 degrees across)",

@@ -78,6 +78,8 @@ const std::map<std::string, Material>& Presets() {
     p["aluminium"] = Make({0.91f, 0.92f, 0.92f}, 1.0f, 0.32f, 0.5f, 0.4f);
     p["aluminium"].texture = Tex(K::kBrushed, 6.0, 0.04f, 0.06f);
     p["aluminium"].tangent = Material::Tangent::kModelX;
+    // A ground and polished plate: the mirror-like metal that real depth sensors lose.
+    p["polished_steel"] = Make({0.56f, 0.57f, 0.58f}, 1.0f, 0.05f);
     p["brass"] = Make({0.91f, 0.78f, 0.42f}, 1.0f, 0.28f);
     p["brass"].texture = Tex(K::kNoise, 8.0, 0.08f, 0.10f);
     p["cast_iron"] = Make({0.42f, 0.41f, 0.40f}, 1.0f, 0.62f);

@@ -102,6 +102,10 @@ bool DepthModel::Check(std::string* why) const {
     out << "block must be odd, between 3 and 11";
   } else if (!finite_nonneg(min_texture) || min_texture > 255.0) {
     out << "min_texture must lie between 0 and 255";
+  } else if (!finite_nonneg(min_range_mm) || !finite_nonneg(max_range_mm) || max_range_mm > 1e6) {
+    out << "min_range and max_range must be lengths between 0 and 1 km";
+  } else if (max_range_mm > 0.0 && max_range_mm <= min_range_mm) {
+    out << "max_range must be 0 (none) or larger than min_range";
   } else {
     return true;
   }
@@ -126,9 +130,21 @@ bool ImageSensor::Check(std::string* why) const {
   return false;
 }
 
-double KinectV1AxialSigma(double z_mm) {
+double KinectV1AxialSigma(double z_mm, double theta_rad) {
   const double d = z_mm / 1000.0 - 0.4;
-  return 1.2 + 1.9 * d * d;
+  double sigma = 1.2 + 1.9 * d * d;
+  if (theta_rad > M_PI / 3.0) {
+    const double t = std::min(theta_rad, 89.0 * M_PI / 180.0);
+    const double r = t / (0.5 * M_PI - t);
+    sigma += 0.1 * r * r / std::sqrt(std::max(z_mm, 1.0) / 1000.0);
+  }
+  return sigma;
+}
+
+double StructuredLightSigma(double noise_mm, double z_mm, double signal) {
+  const double z = z_mm / 1000.0;
+  const double weak = signal < 1.0 ? 1.0 / std::sqrt(std::max(signal, 1e-6)) : 1.0;
+  return noise_mm * z * z * weak;
 }
 
 double AzureKinectSigma(double z_mm) { return 0.5 + std::max(z_mm - 500.0, 0.0) / 1000.0; }
@@ -200,7 +216,7 @@ bool Jump(const float* depth, int w, int h, int u, int v, double jump) {
 bool Returns(const DepthModel& m, const DepthSensorInput& in, int u, int v, size_t p,
              float min_cos) {
   const int w = in.intrinsics.width, h = in.intrinsics.height;
-  if (!(in.depth[p] > 0.0f)) return false;
+  if (!(in.depth[p] > 0.0f) || !m.InRange(in.depth[p])) return false;
   if (in.projector_seen != nullptr && !in.projector_seen[p]) return false;
   const float signal = in.signal != nullptr ? in.signal[p] : 1.0f;
   if (signal < m.min_signal) return false;
@@ -256,7 +272,8 @@ std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) 
     // The disparities the strip's surfaces lie at (the exact depth), 2 px either side, within the
     // sensor's own range [0, disparities): the matcher searches only those. Its matches are the
     // ones a search of the whole range finds except where that would have matched a disparity no
-    // surface has; the invalid band of `disparities` columns on the left is kept below.
+    // surface has. OpenCV leaves the columns left of the largest disparity searched without a
+    // match: about the band a real sensor loses, where the right imager sees nothing (f B / z).
     float z_near = std::numeric_limits<float>::infinity(), z_far = 0.0f;
     for (size_t p = size_t(row0) * w; p < size_t(row1) * w; ++p) {
       if (in.depth[p] > 0.0f)
@@ -279,10 +296,12 @@ std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) 
     const int invalid = (low - 1) * 16;
     for (int v = keep0; v < keep1; ++v) {
       const int16_t* row = disparity.ptr<int16_t>(v - row0);
-      for (int u = disparities; u < w; ++u) {
+      for (int u = 0; u < w; ++u) {
         if (row[u] <= 0 || row[u] == invalid) continue;
         if (!texture.empty() && texture.at<float>(v, u) < min_variance) continue;
-        out[static_cast<size_t>(v) * w + u] = static_cast<float>(fb * 16.0 / row[u]);
+        const size_t p = static_cast<size_t>(v) * w + u;
+        if (in.depth[p] > 0.0f && !m.InRange(in.depth[p])) continue;
+        out[p] = static_cast<float>(fb * 16.0 / row[u]);
       }
     }
   });
@@ -511,7 +530,8 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
         const double z = in.depth[sp];
         // Axial noise: the formula's total, less what the quantisation below adds.
         const double q = z * z / fb * step;  // the depth step of one disparity quantum at z
-        const double sigma = KinectV1AxialSigma(z);
+        const double cos_sp = std::clamp<double>(CosIncidence(in, su, sv, sp), 0.0, 1.0);
+        const double sigma = KinectV1AxialSigma(z, cos_sp < 0.5 ? std::acos(cos_sp) : 0.0);
         const double added = std::sqrt(std::max(0.0, sigma * sigma - q * q / 12.0));
         const double noisy = z + added * axial(p);
         if (!(noisy > 0.0)) continue;
@@ -555,7 +575,7 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
     tbb::parallel_for(0, h, [&](int v) {
       for (int u = 0; u < w; ++u) {
         const size_t p = static_cast<size_t>(v) * w + u;
-        if (!(noisy[p] > 0.0f)) continue;
+        if (!(noisy[p] > 0.0f) || !m.InRange(in.depth[p])) continue;
         if (m.jump_mm > 0.0 && Jump(noisy.data(), w, h, u, v, m.jump_mm)) continue;
         if (in.rgb != nullptr && m.dark_gray > 0) {
           const uint8_t* c = in.rgb + 3 * p;
@@ -576,7 +596,8 @@ std::vector<float> SimulateDepth(const DepthModel& m, const DepthSensorInput& in
       const size_t p = static_cast<size_t>(v) * w + u;
       if (!Returns(m, in, u, v, p, min_cos)) continue;
       const double z = in.depth[p];
-      const double sigma = m.noise_mm * (z / 1000.0) * (z / 1000.0);
+      const double sigma =
+          StructuredLightSigma(m.noise_mm, z, in.signal != nullptr ? in.signal[p] : 1.0);
       const double noisy = z + sigma * axial(p);
       out[p] = static_cast<float>(std::max(noisy, 0.0));
     }

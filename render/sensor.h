@@ -11,14 +11,15 @@
 //                     2012 for the disparity): each pixel reads the depth of a pixel shifted by
 //                     lateral noise of sigma_L = lateral + 0.035 theta / (pi/2 - theta) px (theta:
 //                     the angle between the surface normal and the camera ray); axial noise
-//                     sigma_z = 1.2 mm + 1.9 mm (z - 0.4 m)^2 / m^2 in total, of which the
-//                     disparity quantisation supplies q^2 / 12 (q: the depth step below); then the
-//                     disparity d = f B / z is rounded to `disparity_step` px (1/8) and z = f B /
-//                     d, with f = `focal` (580 px) and B = `baseline` (75 mm). Holes where the
-//                     projector is shadowed (a ray from the point to the projector at (baseline, 0,
-//                     0) in the camera frame hits something), on grazing surfaces (theta >
-//                     `max_incidence`), at depth jumps (the 3 x 3 neighbourhood spans more than
-//                     `jump`) and where the surface returns too little of the pattern
+//                     sigma_z = 1.2 mm + 1.9 mm (z - 0.4 m)^2 / m^2 (plus, beyond 60 degrees of
+//                     incidence, 0.1 mm theta^2 / (pi/2 - theta)^2 / sqrt(z / m)) in total, of
+//                     which the disparity quantisation supplies q^2 / 12 (q: the depth step below);
+//                     then the disparity d = f B / z is rounded to `disparity_step` px (1/8) and z
+//                     = f B / d, with f = `focal` (580 px) and B = `baseline` (75 mm). Holes where
+//                     the projector is shadowed (a ray from the point to the projector at
+//                     (baseline, 0, 0) in the camera frame hits something), on grazing surfaces
+//                     (theta > `max_incidence`), at depth jumps (the 3 x 3 neighbourhood spans more
+//                     than `jump`) and where the surface returns too little of the pattern
 //                     (`min_signal`).
 //   azure_kinect      time of flight, BlenderProc's add_kinect_azure_noise (after Tölgyessy et
 //                     al. 2021): the depth resampled (bilinearly) at positions shifted by
@@ -28,11 +29,11 @@
 //                     0.299 R + 0.587 G + 0.114 B) is below `dark_gray` (15).
 //   structured_light  Photoneo, Zivid, the XYZ sensor of XYZ-IBD: the exact depth where both the
 //                     camera and the projector at (baseline, 0, 0) see the point, plus N(0,
-//                     noise (z / 1 m)^2) (triangulation error grows with the square of the
-//                     range); holes where the projector is shadowed, on grazing surfaces, and
-//                     where the surface sends back too little of the pattern (dark, or a polished
-//                     metal reflecting it away: `min_signal`) or so much that the camera saturates
-//                     (a specular glint: `max_signal`).
+//                     noise (z / 1 m)^2 / sqrt(min(signal, 1))) (triangulation error grows with the
+//                     square of the range, and as the return weakens); holes where the projector is
+//                     shadowed, on grazing surfaces, and where the surface sends back too little of
+//                     the pattern (dark, or a polished metal reflecting it away: `min_signal`) or
+//                     so much that the camera saturates (a specular glint: `max_signal`).
 //   active_stereo     RealSense D4xx style: two IR cameras `baseline` apart (the left one is the
 //                     camera, the right one at (baseline, 0, 0)) and a dot projector between them
 //                     at (baseline / 2, 0, 0). The renderer traces both IR images: each pixel sees
@@ -50,6 +51,8 @@
 //                     holes where the pattern is occluded or too faint (dark, shiny, far), the
 //                     invalid band at the left edge and the 1/16 px disparity steps all come from
 //                     the matcher, as on the real sensor.
+//
+// Every model but ideal has holes outside its operating range [min_range, max_range] when given.
 //
 // The signal is the projector's light the surface reflects towards the camera, relative to a
 // white Lambertian surface facing the projector: pi f(camera, projector) cos(theta_projector), with
@@ -95,6 +98,9 @@ struct DepthModel {
   double min_depth_mm = 0.0;    // nearest depth matched: disparities up to f B / min_depth
   int block = 0;                // SGBM window (odd, 3-11)
   double min_texture = 0.0;     // holes where the left window's grey sd is lower (0-255)
+  // The operating range: holes where the exact depth lies nearer or farther (0: no limit).
+  double min_range_mm = 0.0;
+  double max_range_mm = 0.0;
   uint64_t seed = 0;
 
   // The published defaults of `kind` (the table in docs/sensors.md).
@@ -140,7 +146,14 @@ struct DepthModel {
     visit(o.block, Field{"block", "integer", "active_stereo: SGBM window (odd, 3-11)"});
     visit(o.min_texture, Field{"min_texture", "number",
                                "active_stereo: holes where the window's grey sd is lower (0-255)"});
+    visit(o.min_range_mm,
+          Field{"min_range", "length", "holes nearer than this (the operating range; 0: none)"});
+    visit(o.max_range_mm, Field{"max_range", "length", "holes farther than this (0: none)"});
     visit(o.seed, RunSeed("seed", "seed of the noise"));
+  }
+  // Whether exact depth z (mm, > 0) lies in the operating range.
+  bool InRange(double z) const {
+    return z >= min_range_mm && (max_range_mm <= 0.0 || z <= max_range_mm);
   }
 };
 
@@ -272,8 +285,14 @@ std::array<std::vector<uint8_t>, 2> InfraredImages(const DepthModel& model, uint
 // active_stereo: the number of disparities the matcher searches (a multiple of 16).
 int StereoDisparities(const DepthModel& model, const Intrinsics& intrinsics);
 
-// Kinect v1's axial noise sigma (mm) at depth z (mm): 1.2 + 1.9 (z / 1000 - 0.4)^2.
-double KinectV1AxialSigma(double z_mm);
+// Kinect v1's axial noise sigma (mm) at depth z (mm) on a surface seen at incidence theta (rad,
+// between its normal and the camera ray): 1.2 + 1.9 (z / 1 m - 0.4)^2, and beyond 60 degrees
+// Nguyen et al.'s angle term 0.1 / sqrt(z / 1 m) theta^2 / (pi / 2 - theta)^2.
+double KinectV1AxialSigma(double z_mm, double theta_rad = 0.0);
+// structured_light's sigma (mm) at depth z with return `signal`: noise (z / 1 m)^2, growing as
+// 1 / sqrt(signal) where the surface sends back less than a white one facing the projector
+// (fewer photons per decoded code: dark, oblique and shiny surfaces are noisier).
+double StructuredLightSigma(double noise_mm, double z_mm, double signal);
 // BlenderProc's Azure Kinect noise sigma (mm): 0.5 + max(z - 500, 0) / 1000.
 double AzureKinectSigma(double z_mm);
 

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -16,6 +17,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cad/core/error.h"
+#include "cad/core/util.h"
 #include "cad/part_cache.h"
 #include "dataset/file_io.h"
 #include "dataset/manifest.h"
@@ -30,6 +32,7 @@
 #include "tools/pipeline/inspect.h"
 #include "tools/pipeline/progress.h"
 #include "tools/pipeline/report.h"
+#include "tools/pipeline/sensor_test.h"
 #include "tools/pipeline/shards.h"
 
 namespace {
@@ -73,6 +76,12 @@ struct Args {
   std::string certificate, data_file;
   bool verify_first = false;
   int pixels = cadsynth::VerifyOptions{}.pixels_per_image;
+  // sensor-test
+  std::string material;
+  std::vector<double> distances_mm, tilts_deg;
+  double albedo = -1.0, roi = 0.8, step_mm = 100.0;
+  int test_frames = 10;
+  bool check = false, list = false;
 };
 
 // This executable, to read CAD and mesh files in child processes (a reader that crashes or hangs
@@ -304,6 +313,82 @@ int RunReport(const Args& a) {
   return 0;
 }
 
+int RunSensorTest(const Args& a) {
+  if (a.list) {
+    for (const cadsynth::SensorPreset& p : cadsynth::SensorPresets()) {
+      std::cout << p.name << ": " << p.what << " (camera preset " << p.camera << ", "
+                << cadsynth::Count(p.figures.size(), "published figure", "published figures")
+                << ")\n";
+    }
+    return 0;
+  }
+  if (a.file.empty()) throw UsageError{"give a sensor preset (--list shows them) or a recipe"};
+  cadsynth::PlaneTestOptions options;
+  const std::filesystem::path path(a.file);
+  if (path.extension() == ".yaml" || path.extension() == ".yml") {
+    const cadsynth::RunSpec spec = cadsynth::LoadRecipe(a.file);
+    options.name = path.filename().string();
+    options.intrinsics = spec.intrinsics;
+    options.sensor = spec.sensor;
+    if (!a.sensor.empty()) {
+      const auto it =
+          std::find_if(spec.rig.begin(), spec.rig.end(),
+                       [&](const cadsynth::RigSensor& r) { return r.name == a.sensor; });
+      if (it == spec.rig.end()) {
+        throw cadsynth::Error(a.file + ": no camera called '" + a.sensor + "' in its cameras:");
+      }
+      options.intrinsics = it->intrinsics;
+      options.sensor = it->sensor;
+      options.name += " " + a.sensor;
+    }
+    if (options.sensor.depth.kind == cadsynth::DepthModel::Kind::kIdeal) {
+      throw cadsynth::Error(a.file + ": camera.depth is ideal (exact depth): nothing to test");
+    }
+  } else {
+    const cadsynth::SensorPreset* preset = cadsynth::FindSensorPreset(a.file);
+    if (preset == nullptr) {
+      std::string names;
+      for (const cadsynth::SensorPreset& p : cadsynth::SensorPresets()) {
+        names += (names.empty() ? "" : ", ") + p.name;
+      }
+      throw UsageError{"no sensor preset called '" + a.file + "' (presets: " + names +
+                       "; or give a recipe, FILE.yaml)"};
+    }
+    options = cadsynth::PlaneTestFor(*preset);
+  }
+  if (!a.distances_mm.empty()) options.distances_mm = a.distances_mm;
+  if (!a.tilts_deg.empty()) {
+    options.tilts_rad.clear();
+    for (const double t : a.tilts_deg) options.tilts_rad.push_back(t * M_PI / 180.0);
+  }
+  if (a.albedo >= 0.0 || !a.material.empty())
+    options.figures.clear();  // measured on another target
+  if (a.albedo >= 0.0) options.albedo = a.albedo;
+  options.material = a.material;
+  options.frames = a.test_frames;
+  options.roi = a.roi;
+  options.step_mm = a.step_mm;
+  const cadsynth::PlaneTestResult result = cadsynth::RunPlaneTest(options);
+  if (a.json) {
+    std::cout << cadsynth::PlaneTestJson(result);
+  } else {
+    std::cout << cadsynth::PlaneTestTable(result);
+  }
+  if (!a.output.empty()) {
+    const std::filesystem::path dir(a.output);
+    std::filesystem::create_directories(dir);
+    cadsynth::WriteFileAtomic(dir / "sensor_test.json", cadsynth::PlaneTestJson(result));
+    cadsynth::WriteFileAtomic(dir / "sensor_test.svg", cadsynth::PlaneTestSvg(result));
+    if (!a.json)
+      std::cout << "wrote " << (dir / "sensor_test.json").string() << " and sensor_test.svg\n";
+  }
+  if (a.check && !result.AllMet()) {
+    std::cerr << "error: " << options.name << " misses published figures (NOT MET above)\n";
+    return 1;
+  }
+  return 0;
+}
+
 // The subcommands and their options, each described once: CLI11 parses them and writes each
 // subcommand's --help from the descriptions.
 struct Command {
@@ -498,6 +583,55 @@ std::vector<Command> DefineCommands(CLI::App& app, Args& a) {
       ->add_option("--data", a.data_file,
                    "write the report's data (JSON) to FILE instead of the page")
       ->type_name("FILE");
+
+  CLI::App* sensor = add(
+      "sensor-test",
+      "Measures a depth sensor the way its makers do: a flat target at a series of distances "
+      "(and tilts), rendered several times through the sensor's depth model, and reports temporal "
+      "noise, plane-fit RMS, bias, fill rate and the holes and wrong pixels at a step, with the "
+      "sensor preset's published figures beside them. SENSOR is a sensor preset (--list) or a "
+      "recipe, whose camera is tested.",
+      RunSensorTest);
+  sensor->add_option("SENSOR", a.file, "a sensor preset, or a recipe (FILE.yaml)");
+  sensor->add_flag("--list", a.list, "list the sensor presets");
+  sensor->add_option("--camera", a.sensor, "a recipe's rig: the camera called NAME")
+      ->type_name("NAME");
+  sensor
+      ->add_option("--distances", a.distances_mm,
+                   "distances to the target along the optical axis, mm (default: the preset's "
+                   "figures' distances, else 500,1000,2000,3000)")
+      ->delimiter(',')
+      ->type_name("MM,...");
+  sensor
+      ->add_option("--tilts", a.tilts_deg,
+                   "tilts of the target, degrees; positive turns it towards the projector "
+                   "(default 0)")
+      ->delimiter(',')
+      ->type_name("DEG,...");
+  sensor
+      ->add_option("--albedo", a.albedo,
+                   "the target's diffuse reflectance (default: the preset's, 0.8); another "
+                   "target than the figures' drops them")
+      ->check(CLI::Range(0.0, 1.0))
+      ->type_name("A");
+  sensor
+      ->add_option("--material", a.material,
+                   "a material preset for the target instead (path-traced return: polished "
+                   "metals lose depth)")
+      ->type_name("NAME");
+  sensor->add_option("--frames", a.test_frames, "repeated frames for the temporal noise")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+  sensor->add_option("--roi", a.roi, "central share of the image's width and height measured")
+      ->check(CLI::Range(0.01, 1.0))
+      ->capture_default_str();
+  sensor->add_option("--step", a.step_mm, "height of the edge test's step, mm (0: none)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  sensor->add_option("-o,--output", a.output, "also write DIR/sensor_test.json and .svg (a plot)")
+      ->type_name("DIR");
+  sensor->add_flag("--json", a.json, "print JSON instead of the table");
+  sensor->add_flag("--check", a.check, "exit 1 when a published figure is not met");
   return commands;
 }
 

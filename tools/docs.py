@@ -28,7 +28,7 @@ def run(cadsynth, *args):
 def subcommands(help_text):
     """The commands the top-level help's usage lines name ("  cadsynth NAME ..."), in order."""
     names = []
-    for m in re.finditer(r"^  cadsynth ([a-z]+)\b", help_text, re.M):
+    for m in re.finditer(r"^  cadsynth ([a-z][a-z-]*)\b", help_text, re.M):
         if m.group(1) not in names:
             names.append(m.group(1))
     return names

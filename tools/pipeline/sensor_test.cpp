@@ -482,7 +482,9 @@ void Panel(std::ostringstream& svg, double left, double top, double width, doubl
   svg << "<text x='" << left - 44 << "' y='" << top + height / 2 << "' font-size='11' "
       << "text-anchor='middle' transform='rotate(-90 " << left - 44 << " " << top + height / 2
       << ")'>" << Escape(y_label) << "</text>\n";
-  double legend_y = top + 14;
+  // The legend in the top left, or the bottom left for a fixed scale (fill rates near its top).
+  double legend_y =
+      y_fixed > 0.0 ? top + height - 14.0 * (series.size() + (marks.empty() ? 0 : 1)) : top + 14;
   for (const Series& s : series) {
     svg << "<polyline fill='none' stroke='" << s.colour << "' stroke-width='2' points='";
     for (const auto& [x, y] : s.points) {

@@ -121,10 +121,12 @@ sweep:
               400.0, 1e-9);
   EXPECT_EQ(ErrorOf("sweep: {sampler: spiral}\n"),
             "r.yaml:1:18: sweep.sampler: expected 'grid', 'fibonacci' or 'random', got 'spiral'");
-  EXPECT_EQ(ErrorOf("camera: {preset: kinect_v2}\n"),
-            "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, "
-            "realsense_d435, realsense_d435_640, realsense_d435_depth, realsense_l515, "
-            "azure_kinect_nfov, xyz_ibd, photoneo_phoxi_m, itodd, zivid2_m70)");
+  EXPECT_EQ(
+      ErrorOf("camera: {preset: kinect_v2}\n"),
+      "r.yaml:1:18: camera.preset: unknown preset 'kinect_v2' (known: kinect_v1, "
+      "realsense_d435, realsense_d435_640, realsense_d435_depth, realsense_l515, "
+      "azure_kinect_nfov, azure_kinect_wfov, xyz_ibd, photoneo_phoxi_m, photoneo_phoxi_l, itodd, "
+      "zivid2_m70)");
   // Industrial presets are grey cameras unless the recipe says otherwise; sizes as BOP's.
   const RunSpec phoxi = ParseRecipe("camera: {preset: photoneo_phoxi_m}\n", "r", ".");
   EXPECT_EQ(phoxi.intrinsics.width, 2064);

@@ -89,7 +89,8 @@ TEST(ActiveStereo, HolesWhereThePatternIsOccluded) {
       const size_t p = size_t(v) * 640 + u;
       ASSERT_EQ(frame.instance[p], 0);  // the floor everywhere
       const bool hole = frame.sensor_depth[p] == 0.0f;
-      if (u < band / 2) ++left, left_holes += hole;  // no match in the right image's view
+      // The right imager does not see the floor left of u = f B / z = 525 * 50 / 1200 = 21.9 px.
+      if (u < 21) ++left, left_holes += hole;
       if (u < band + 8) continue;
       if (u >= 281 && u <= 380) ++shadow, shadow_holes += hole;
       if (u <= 270 || u >= 390) ++lit, lit_holes += hole;

@@ -56,6 +56,7 @@ TEST(Cli, EverySubcommandHasHelp) {
       {"variants", {"RECIPE", "--export-step", "--overwrite"}},
       {"eval", {"DATASET", "RESULTS", "--json"}},
       {"preview", {"DATASET", "--output", "--count", "--frames", "--width"}},
+      {"sensor-test", {"SENSOR", "--list", "--distances", "--tilts", "--material", "--check"}},
   };
   for (const auto& [command, names] : options) {
     for (const char* flag : {"--help", "-h"}) {
@@ -141,6 +142,35 @@ TEST(Cli, EvalAndPreviewErrorsAreOneLine) {
   EXPECT_EQ(Lines(preview.err), 1u) << preview.err;
   EXPECT_NE(preview.err.find("nowhere: no such dataset folder"), std::string::npos) << preview.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "sheet.png"));
+}
+
+TEST(Cli, SensorTestReportsAndRefuses) {
+  ScratchDir dir;
+  const CliRun list = Cadsynth("sensor-test --list", dir);
+  EXPECT_EQ(list.code, 0);
+  EXPECT_NE(list.out.find("realsense_d435: "), std::string::npos) << list.out;
+  const CliRun unknown = Cadsynth("sensor-test kinect_v9 -o out", dir);
+  EXPECT_EQ(unknown.code, 2);
+  EXPECT_EQ(
+      unknown.err.rfind("error: no sensor preset called 'kinect_v9' (presets: kinect_v1, ", 0), 0u)
+      << unknown.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  // A recipe whose camera has exact depth has nothing to test; one with a sensor is measured.
+  std::ofstream(dir / "ideal.yaml") << "camera: {preset: kinect_v1}\n";
+  const CliRun ideal = Cadsynth("sensor-test ideal.yaml", dir);
+  EXPECT_EQ(ideal.code, 1);
+  EXPECT_EQ(ideal.err, "error: ideal.yaml: camera.depth is ideal (exact depth): nothing to test\n");
+  std::ofstream(dir / "sl.yaml") << "camera: {preset: kinect_v1, depth: structured_light}\n";
+  const CliRun run =
+      Cadsynth("sensor-test sl.yaml --distances 1000 --frames 2 --step 0 -o out --check", dir);
+  EXPECT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find("plane test of sl.yaml: 640 x 480"), std::string::npos) << run.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "sensor_test.svg"));
+  std::ifstream json(dir / "out" / "sensor_test.json");
+  std::stringstream text;
+  text << json.rdbuf();
+  EXPECT_NE(text.str().find("\"fill_rate\": 1.0"), std::string::npos) << text.str();
+  EXPECT_EQ(Cadsynth("sensor-test kinect_v1 --frames 1", dir).code, 2);  // out of range
 }
 
 // Kill a run three times at random moments (SIGKILL), start it again each time: the finished

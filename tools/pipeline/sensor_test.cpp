@@ -88,7 +88,8 @@ Camera PlaneCamera(const Intrinsics& k, double distance, double tilt) {
   return Camera{k, pose};
 }
 
-// The depth the sensor returned (the ideal model returns the exact one, which the frame keeps once).
+// The depth the sensor returned (the ideal model returns the exact one, which the frame keeps
+// once).
 const std::vector<float>& SensedDepth(const Frame& frame) {
   return frame.sensor_depth.empty() ? frame.depth : frame.sensor_depth;
 }

@@ -232,8 +232,8 @@ bool Returns(const DepthModel& m, const DepthSensorInput& in, int u, int v, size
 int StereoStrips(int height) { return 2 * std::max(1, (height + 511) / 512); }
 constexpr int kStripMarginAbove = 48;
 
-// active_stereo: OpenCV's StereoSGBM (its three-direction variant, MODE_SGBM_3WAY: left to right,
-// right to left and top down, vectorised) on the left and right IR images, then z = f B / d. The
+// active_stereo: OpenCV's StereoSGBM (its vectorised three-path variant, MODE_SGBM_3WAY) on the
+// left and right IR images, then z = f B / d. The
 // image is cut into StereoStrips(h) strips matched in parallel, each with kStripMarginAbove rows
 // above it (and the window's half below) so that its paths start before its first kept row: a
 // fixed cut, the same on any thread count.

@@ -188,12 +188,12 @@ PlaneTestRow MeasurePlane(const PlaneTestOptions& o, const Renderer& renderer, d
   const Region r = RegionOfInterest(k, o.roi);
   const Camera camera = PlaneCamera(k, distance, tilt);
   const size_t n = r.Pixels();
-  // Per pixel of the region: frames with a value, their sum and sum of squares (Welford would
-  // not change the figures at these magnitudes: depths are floats).
+  // Per pixel of the region: frames with a value, and their running mean and sum of squared
+  // deviations (Welford's update: depths of metres with noise of micrometres keep their digits).
   std::vector<int> count(n, 0);
   std::vector<double> mean(n, 0.0), m2(n, 0.0);
   double bias_sum = 0.0, rms_sum = 0.0;
-  size_t valid = 0;
+  size_t valid = 0, seen = 0;
   int rms_frames = 0;
   for (int f = 0; f < o.frames; ++f) {
     const Frame frame = renderer.Render(camera, static_cast<uint64_t>(f), o.sensor);
@@ -202,8 +202,10 @@ PlaneTestRow MeasurePlane(const PlaneTestOptions& o, const Renderer& renderer, d
     for (int v = r.v0; v < r.v1; ++v) {
       for (int u = r.u0; u < r.u1; ++u, ++i) {
         const size_t p = static_cast<size_t>(v) * k.width + u;
+        if (!(frame.depth[p] > 0.0f)) continue;  // beyond the target (a steep tilt's horizon)
+        ++seen;
         const float z = sensed[p];
-        if (!(z > 0.0f) || !(frame.depth[p] > 0.0f)) continue;
+        if (!(z > 0.0f)) continue;
         ++valid;
         bias_sum += z - frame.depth[p];
         const double delta = z - mean[i];
@@ -214,7 +216,7 @@ PlaneTestRow MeasurePlane(const PlaneTestOptions& o, const Renderer& renderer, d
     const double rms = PlaneFitRms(k, r, sensed);
     if (std::isfinite(rms)) rms_sum += rms, ++rms_frames;
   }
-  row.fill = static_cast<double>(valid) / (static_cast<double>(n) * o.frames);
+  row.fill = seen > 0 ? static_cast<double>(valid) / static_cast<double>(seen) : 0.0;
   row.bias_mm = valid > 0 ? bias_sum / static_cast<double>(valid) : std::nan("");
   row.plane_rms_mm = rms_frames > 0 ? rms_sum / rms_frames : std::nan("");
   double var_sum = 0.0;

@@ -9,7 +9,7 @@
 //                    the RMS of depth about it after trimming 0.5 % at each end (Intel's "RMS
 //                    error"; Khoshelham's random error); the mean over frames
 //   bias             the mean of measured minus true depth over the region and the frames
-//   fill rate        the share of the region with a depth value, over the frames
+//   fill rate        the share of the region's pixels on the target with a depth value
 //   edge             a step of `step_mm` towards the camera across the middle of the view (tilt 0
 //                    only): per image row within 16 px of the step, the pixels without depth and
 //                    the pixels whose depth is off the true one by more than max(4 x the plane-fit

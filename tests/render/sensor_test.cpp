@@ -188,6 +188,34 @@ TEST(DepthSensor, ChecksItsParameters) {
   m.max_incidence_rad = 0;
   m.dark_gray = 300;
   EXPECT_FALSE(m.Check(&why));
+  m = DepthModel::Defaults(DepthModel::Kind::kAzureKinect);
+  m.min_range_mm = 500, m.max_range_mm = 400;
+  EXPECT_FALSE(m.Check(&why));
+  EXPECT_EQ(why, "max_range must be 0 (none) or larger than min_range");
+  m.max_range_mm = -1;
+  EXPECT_FALSE(m.Check(&why));
+  EXPECT_EQ(why, "min_range and max_range must be lengths between 0 and 1 km");
+}
+
+TEST(DepthSensor, NoDepthOutsideTheOperatingRange) {
+  // A plane at 1 m: every pixel returns inside [500, 1500] mm, none with the range below or
+  // beyond it, for every model with a range.
+  const Plane plane(1000.0f);
+  for (const auto kind : {DepthModel::Kind::kKinectV1, DepthModel::Kind::kAzureKinect,
+                          DepthModel::Kind::kStructuredLight}) {
+    DepthModel m = DepthModel::Defaults(kind);
+    const auto returns = [&] {
+      int n = 0;
+      for (float z : SimulateDepth(m, plane.Input(), 0)) n += z > 0.0f;
+      return n;
+    };
+    m.min_range_mm = 500, m.max_range_mm = 1500;
+    EXPECT_EQ(returns(), 640 * 480);
+    m.max_range_mm = 900;
+    EXPECT_EQ(returns(), 0);
+    m.min_range_mm = 1100, m.max_range_mm = 0;
+    EXPECT_EQ(returns(), 0);
+  }
 }
 
 // A 100 x 100 x 400 mm box standing on the floor under a camera 1200 mm up: its top at depth

@@ -11,10 +11,20 @@
 # docs/testing.md says why the GoogleTest programs run only under the sanitizers.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-"$root/tools/setup.sh" --tests
-"$root/tools/build.sh" -DCADSYNTH_BUILD_TESTS=OFF
-"$root/build/tools/cadsynth" generate -o "$root/out/default" --overwrite
-"$root/build/tools/cadsynth" report "$root/out/default" --verify
+# Each step's wall time is printed as it ends ("ci: build took 455 s"), so a slow CI log says where
+# its time went (docs/testing.md keeps the budget).
+step() {
+  local name="$1" start=$SECONDS
+  shift
+  "$@"
+  echo "ci: $name took $((SECONDS - start)) s"
+}
+release_checks() { (cd "$root/build" && ctest --output-on-failure --parallel "$(nproc)" --timeout 900); }
+step setup "$root/tools/setup.sh" --tests
+step build "$root/tools/build.sh" -DCADSYNTH_BUILD_TESTS=OFF
+step default_job "$root/build/tools/cadsynth" generate -o "$root/out/default" --overwrite
+step report "$root/build/tools/cadsynth" report "$root/out/default" --verify
 "$root/tools/seed_test_costs.sh" "$root/build"
-(cd "$root/build" && ctest --output-on-failure --parallel "$(nproc)" --timeout 900)
-"$root/tools/sanitize.sh"
+step release_checks release_checks
+step sanitized_build_and_suite "$root/tools/sanitize.sh"
+echo "ci: all steps took $SECONDS s"

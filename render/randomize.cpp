@@ -168,7 +168,9 @@ Material DrawMaterial(const MaterialRandomization& m, const Material& base,
   return out;
 }
 
-const char* KindName(LightSource::Kind kind) {
+}  // namespace
+
+const char* LightKindName(LightSource::Kind kind) {
   switch (kind) {
     case LightSource::Kind::kPoint:
       return "point";
@@ -183,8 +185,6 @@ const char* KindName(LightSource::Kind kind) {
   }
   return "";
 }
-
-}  // namespace
 
 bool Distribution::Check(std::string* why) const {
   const auto finite = [](double v) { return std::isfinite(v); };
@@ -491,7 +491,7 @@ FrameDraw DrawFrame(const Randomization& r, const FrameLook& base,
       const std::string p = "light." + std::to_string(i);
       LightSource s;
       s.kind = l.kinds[draw.Pick(seed, l.kinds.size(), p + ".type")];
-      draw.Text(p + ".type", KindName(s.kind));
+      draw.Text(p + ".type", LightKindName(s.kind));
       const double el = draw(seed, l.elevation_deg, p + ".elevation", 0, 90) * kDeg;
       const double az = draw(seed, l.azimuth_deg, p + ".azimuth") * kDeg;
       const double dist = draw(seed, l.distance_mm, p + ".distance", 1, kFar);

@@ -74,6 +74,9 @@ struct Distribution {
   }
 };
 
+// A light kind's name as recipes and randomisation records write it ("rect").
+const char* LightKindName(LightSource::Kind kind);
+
 // How often a group's quantities are drawn anew: every frame, or once per scene (all its frames
 // share the draw).
 enum class DrawPer { kFrame, kScene };

@@ -275,3 +275,34 @@ def test_many_randomised_keys_share_figures():
     page = report.build_html(data)
     section = page.split('id="randomization"')[1].split("<section>")[0]
     assert len(img_tags(section)) == 3  # 12 + 12 + 1 keys
+
+
+def test_draws_against_the_recipe():
+    """Tested draws say whether they agree (a summary names those that differ); the expected
+    counts are drawn over the draws; a note says why draws were not compared."""
+    data = make_data(objects=0, sensors=False)
+    rng = np.random.default_rng(3)
+    power = hist(rng, 20, 80, label="W")
+    data["randomization"] = [
+        {"key": "light.*.power", "kind": "number", "hist": power, "asked": "{uniform: [20, 80]}",
+         "per": "frame", "samples": 40, "expected": [40 / len(power["counts"])] * len(
+             power["counts"]),
+         "check": {"test": "Kolmogorov-Smirnov", "statistic": 0.05, "p_value": 0.9,
+                   "samples": 40, "agrees": True}},
+        {"key": "part.*.preset", "kind": "choice", "counts": {"steel": 30, "gold": 10},
+         "asked": "{choice: [steel, abs]}", "per": "scene", "samples": 40,
+         "expected": {"steel": 20.0, "abs": 20.0, "gold": 0.0},
+         "check": {"test": "chi-square", "statistic": float("inf"), "p_value": 0.0,
+                   "samples": 40, "agrees": False}},
+        {"key": "distractor.*.color[0]", "kind": "number", "hist": hist(rng, 0, 1),
+         "asked": None, "check": None, "expected": None},
+    ]
+    page = report.build_html(data)
+    section = page.split('id="randomization"')[1].split("<section>")[0]
+    assert "2 of 3 randomised quantities tested against the recipe: 1 differ (part.*.preset)" \
+        in section
+    assert "as asked (Kolmogorov-Smirnov, p = 0.9)" in section
+    assert "DIFFERS (chi-square, p = 0)" in section
+    assert len(img_tags(section)) == 1
+    data["randomization_note"] = "the recipe in run.json could not be read again, so ..."
+    assert "could not be read again" in report.build_html(data)

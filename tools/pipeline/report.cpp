@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -23,6 +24,8 @@
 #include "dataset/file_io.h"
 #include "dataset/manifest.h"
 #include "dataset/preview.h"
+#include "recipes/recipe.h"
+#include "render/randomize.h"
 #include "tools/pipeline/run_record.h"
 
 extern char** environ;
@@ -357,9 +360,321 @@ Json ObjectJson(const ObjectStats& o, int image_pixels) {
            Hist(o.px_visib, 1, std::max(2, image_pixels), 30, "visible pixels", true)}};
 }
 
+// What the recipe asked for one randomised quantity (a folded draw key, "part.*.roughness"): a
+// number's distribution, or names picked equally likely, drawn per frame or once per scene.
+struct AskedDraw {
+  std::string text;                    // as a recipe writes it
+  std::optional<Distribution> number;  // a number's distribution
+  std::vector<std::string> names;      // or the names picked from
+  bool per_scene = false;
+  bool operator==(const AskedDraw&) const = default;
+};
+// Per folded key, the distinct things asked (several where rules or scenes differ).
+using AskedDraws = std::map<std::string, std::vector<AskedDraw>>;
+
+void AddAsked(AskedDraws* asked, const std::string& key, AskedDraw a) {
+  std::vector<AskedDraw>& list = (*asked)[key];
+  if (std::find(list.begin(), list.end(), a) == list.end()) list.push_back(std::move(a));
+}
+
+AskedDraw AskedNumber(const Distribution& d, bool per_scene) {
+  return {d.Text(), d, {}, per_scene};
+}
+
+AskedDraw AskedNames(const std::vector<std::string>& names, bool per_scene) {
+  std::string text = "{choice: [";
+  for (size_t i = 0; i < names.size(); ++i) text += (i ? ", " : "") + names[i];
+  return {text + "]}", std::nullopt, names, per_scene};
+}
+
+// A material randomisation's keys under `prefix` ("part.*", "floor", "fixture.*").
+void AddAskedMaterial(AskedDraws* asked, const std::string& prefix, const MaterialRandomization& m,
+                      bool per_scene) {
+  if (!m.preset_names.empty())
+    AddAsked(asked, prefix + ".preset", AskedNames(m.preset_names, per_scene));
+  if (!m.texture_names.empty())
+    AddAsked(asked, prefix + ".texture", AskedNames(m.texture_names, per_scene));
+  const std::pair<const char*, const std::optional<Distribution>*> numbers[] = {
+      {"hue", &m.hue},
+      {"saturation", &m.saturation},
+      {"value", &m.value},
+      {"metallic", &m.metallic},
+      {"roughness", &m.roughness},
+      {"specular", &m.specular},
+      {"texture_scale", &m.texture_scale}};
+  for (const auto& [name, d] : numbers) {
+    if (*d) AddAsked(asked, prefix + "." + name, AskedNumber(**d, per_scene));
+  }
+}
+
+// The draw keys (folded as RandomizationJson folds them) of one scene's randomisation, with what
+// the recipe asked for each: render/randomize.cpp names them as it draws.
+void AddAskedScene(AskedDraws* asked, const RandomizeSpec& spec) {
+  const Randomization& r = spec.draws;
+  const auto scene = [](DrawPer per) { return per == DrawPer::kScene; };
+  for (const PartRandomization& p : r.parts)
+    AddAskedMaterial(asked, p.per_instance ? "instance.*" : "part.*", p.material, scene(p.per));
+  if (r.floor) AddAskedMaterial(asked, "floor", *r.floor, scene(r.floor_per));
+  if (r.fixtures) AddAskedMaterial(asked, "fixture.*", *r.fixtures, scene(r.fixtures_per));
+  if (r.lights) {
+    const LightRandomization& l = *r.lights;
+    const bool per = scene(r.lights_per);
+    AddAsked(asked, "light.count", AskedNumber(l.count, per));
+    std::vector<std::string> kinds;
+    for (LightSource::Kind k : l.kinds) kinds.push_back(LightKindName(k));
+    AddAsked(asked, "light.*.type", AskedNames(kinds, per));
+    const std::pair<const char*, const Distribution*> numbers[] = {
+        {"elevation", &l.elevation_deg},   {"azimuth", &l.azimuth_deg},
+        {"distance", &l.distance_mm},      {"power", &l.power},
+        {"temperature", &l.temperature_k}, {"size", &l.size_mm}};
+    for (const auto& [name, d] : numbers)
+      AddAsked(asked, std::string("light.*.") + name, AskedNumber(*d, per));
+  }
+  if (r.environment) {
+    const EnvironmentRandomization& e = *r.environment;
+    const bool per = scene(r.environment_per);
+    if (e.images) AddAsked(asked, "environment.image", AskedNames(e.images->names, per));
+    if (e.strength) AddAsked(asked, "environment.strength", AskedNumber(*e.strength, per));
+    if (e.rotation_deg) AddAsked(asked, "environment.rotation", AskedNumber(*e.rotation_deg, per));
+    if (e.temperature_k)
+      AddAsked(asked, "environment.temperature", AskedNumber(*e.temperature_k, per));
+  }
+  if (r.background)
+    AddAsked(asked, "background", AskedNames(r.background->images.names, scene(r.background_per)));
+  if (r.camera) {
+    const CameraRandomization& c = *r.camera;
+    const std::pair<const char*, const std::optional<Distribution>*> numbers[] = {
+        {"exposure", &c.exposure},
+        {"white_balance", &c.white_balance_k},
+        {"noise_gain", &c.noise_gain},
+        {"focus_distance", &c.focus_distance_mm},
+        {"f_number", &c.f_number},
+        {"rotation[0]", &c.rotation_deg},  // recorded with its axis: [angle, x, y, z]
+        {"translation[0]", &c.translation_mm}};
+    for (const auto& [name, d] : numbers) {
+      if (*d) AddAsked(asked, std::string("camera.") + name, AskedNumber(**d, false));
+    }
+  }
+  if (r.distractors) {
+    const DistractorRandomization& d = *r.distractors;
+    AddAsked(asked, "distractor.count", AskedNumber(d.count, true));
+    AddAsked(asked, "distractor.*.size[0]", AskedNumber(d.size_mm, true));
+    if (d.material) AddAskedMaterial(asked, "distractor.*", *d.material, scene(d.material_per));
+  }
+}
+
+// What the dataset's recipe (run.json's text, read again) asked for each randomised quantity;
+// empty without a recipe or a randomisation. `note` says why when the recipe cannot be read again
+// (a file it names is gone).
+AskedDraws ReadAsked(const fs::path& root, std::string* note) {
+  AskedDraws asked;
+  const std::optional<RunRecord> run = ReadRunRecord(root);
+  if (!run || run->recipe_text.empty()) return asked;
+  try {
+    const fs::path path = run->recipe_path;
+    const RunSpec spec = ParseRecipe(run->recipe_text, path.string(), path.parent_path());
+    for (const SceneSpec& scene : spec.scenes)
+      AddAskedScene(&asked, scene.randomize ? *scene.randomize : spec.randomize);
+    if (spec.scenes.empty()) AddAskedScene(&asked, spec.randomize);
+  } catch (const Error& e) {
+    *note = std::string(
+                "the recipe in run.json could not be read again, so the draws are not "
+                "compared with it: ") +
+            e.what();
+    asked.clear();
+  }
+  return asked;
+}
+
+// The regularised upper incomplete gamma function Q(a, x) (a series below a + 1, Lentz's
+// continued fraction above): the chi-square test's p-value is Q(dof / 2, statistic / 2).
+double GammaQ(double a, double x) {
+  if (x <= 0) return 1.0;
+  const double front = std::exp(-x + a * std::log(x) - std::lgamma(a));
+  if (x < a + 1) {
+    double term = 1 / a, sum = term;
+    for (int n = 1; n < 1000 && std::abs(term) > std::abs(sum) * 1e-15; ++n) {
+      term *= x / (a + n);
+      sum += term;
+    }
+    return std::clamp(1 - sum * front, 0.0, 1.0);
+  }
+  constexpr double kTiny = 1e-300;
+  double b = x + 1 - a, c = 1 / kTiny, d = 1 / b, h = d;
+  for (int i = 1; i < 1000; ++i) {
+    const double an = -i * (i - a);
+    b += 2;
+    d = an * d + b;
+    d = std::abs(d) < kTiny ? kTiny : d;
+    c = b + an / c;
+    c = std::abs(c) < kTiny ? kTiny : c;
+    d = 1 / d;
+    h *= d * c;
+    if (std::abs(d * c - 1) < 1e-15) break;
+  }
+  return std::clamp(front * h, 0.0, 1.0);
+}
+
+// The Kolmogorov-Smirnov test's p-value for statistic D on n samples (Stephens' correction of
+// the asymptotic Kolmogorov distribution, good from n = 5 on).
+double KolmogorovP(double d, size_t n) {
+  const double sn = std::sqrt(static_cast<double>(n));
+  const double lambda = (sn + 0.12 + 0.11 / sn) * d;
+  if (lambda < 0.2) return 1.0;
+  double sum = 0, sign = 1;
+  for (int j = 1; j <= 100; ++j, sign = -sign) {
+    const double term = sign * 2 * std::exp(-2.0 * j * j * lambda * lambda);
+    sum += term;
+    if (std::abs(term) < 1e-12) break;
+  }
+  return std::clamp(sum, 0.0, 1.0);
+}
+
+// P(X < x) for a number's distribution (a choice: the share of its values below x).
+double CdfBelow(const Distribution& d, double x) {
+  using Kind = Distribution::Kind;
+  switch (d.kind) {
+    case Kind::kFixed:
+      return x > d.a ? 1.0 : 0.0;
+    case Kind::kUniform:
+      return d.b > d.a ? std::clamp((x - d.a) / (d.b - d.a), 0.0, 1.0) : (x > d.a ? 1.0 : 0.0);
+    case Kind::kLogUniform:
+      return x <= d.a ? 0.0 : std::clamp(std::log(x / d.a) / std::log(d.b / d.a), 0.0, 1.0);
+    case Kind::kNormal:
+      return d.b > 0 ? 0.5 * std::erfc(-(x - d.a) / (d.b * std::numbers::sqrt2))
+                     : (x > d.a ? 1.0 : 0.0);
+    case Kind::kChoice: {
+      if (d.values.empty()) return 0.0;
+      const auto below =
+          std::count_if(d.values.begin(), d.values.end(), [&](double v) { return v < x; });
+      return static_cast<double>(below) / static_cast<double>(d.values.size());
+    }
+  }
+  return 0.0;
+}
+
+// A goodness-of-fit test of the draws against what was asked: Kolmogorov-Smirnov for a
+// continuous distribution, chi-square for a choice (of numbers or names), equality for a fixed
+// value. Draws agree with the recipe unless p < 0.001 (draws are seeded, so a check that passes
+// passes every time). Null when nothing was asked or nothing was drawn.
+constexpr double kAgreeP = 1e-3;
+
+Json CheckAgainst(const AskedDraw& asked, std::vector<double> numbers,
+                  const std::map<std::string, size_t>& names) {
+  Json check;
+  const auto result = [&](const char* test, double statistic, double p, size_t n) {
+    check = {{"test", test},
+             {"statistic", statistic},
+             {"p_value", p},
+             {"samples", n},
+             {"agrees", p >= kAgreeP}};
+  };
+  const auto chi_square = [&](const std::vector<double>& counts, size_t n) {
+    const double expected = static_cast<double>(n) / static_cast<double>(counts.size());
+    double x2 = 0;
+    for (double c : counts) x2 += (c - expected) * (c - expected) / expected;
+    result("chi-square", x2, counts.size() < 2 ? 1.0 : GammaQ(0.5 * (counts.size() - 1), 0.5 * x2),
+           n);
+  };
+  if (!asked.names.empty()) {
+    size_t n = 0, other = 0;
+    std::vector<double> counts;
+    for (const std::string& name : asked.names) {
+      const auto it = names.find(name);
+      counts.push_back(it == names.end() ? 0.0 : static_cast<double>(it->second));
+    }
+    for (const auto& [name, c] : names) {
+      n += c;
+      if (std::find(asked.names.begin(), asked.names.end(), name) == asked.names.end()) other += c;
+    }
+    if (n == 0) return nullptr;
+    if (other > 0)
+      result("chi-square", std::numeric_limits<double>::infinity(), 0.0, n);
+    else
+      chi_square(counts, n);
+    return check;
+  }
+  if (!asked.number || numbers.empty()) return nullptr;
+  const Distribution& d = *asked.number;
+  const size_t n = numbers.size();
+  if (d.kind == Distribution::Kind::kFixed) {
+    const bool all = std::all_of(numbers.begin(), numbers.end(), [&](double v) {
+      return std::abs(v - d.a) <= 1e-9 * std::max(1.0, std::abs(d.a));
+    });
+    result("equality", all ? 0.0 : 1.0, all ? 1.0 : 0.0, n);
+  } else if (d.kind == Distribution::Kind::kChoice) {
+    std::vector<double> counts(d.values.size(), 0.0);
+    size_t other = 0;
+    for (double v : numbers) {
+      const auto it = std::find_if(d.values.begin(), d.values.end(), [&](double c) {
+        return std::abs(v - c) <= 1e-9 * std::max(1.0, std::abs(c));
+      });
+      if (it == d.values.end())
+        ++other;
+      else
+        ++counts[static_cast<size_t>(it - d.values.begin())];
+    }
+    if (other > 0)
+      result("chi-square", std::numeric_limits<double>::infinity(), 0.0, n);
+    else
+      chi_square(counts, n);
+  } else {
+    std::sort(numbers.begin(), numbers.end());
+    double dmax = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const double f = CdfBelow(d, std::nextafter(numbers[i], HUGE_VAL));
+      dmax = std::max({dmax, f - static_cast<double>(i) / n, static_cast<double>(i + 1) / n - f});
+    }
+    result("Kolmogorov-Smirnov", dmax, KolmogorovP(dmax, n), n);
+  }
+  return check;
+}
+
+// Expected counts in a histogram's bins ([e_k, e_k+1), the last closed) for n draws of `d`.
+std::vector<double> ExpectedCounts(const Distribution& d, const Json& hist, size_t n) {
+  const std::vector<double> edges = hist.at("edges").get<std::vector<double>>();
+  std::vector<double> out;
+  for (size_t k = 0; k + 1 < edges.size(); ++k) {
+    const double hi = k + 2 == edges.size() ? std::nextafter(edges[k + 1], HUGE_VAL) : edges[k + 1];
+    out.push_back(static_cast<double>(n) * (CdfBelow(d, hi) - CdfBelow(d, edges[k])));
+  }
+  return out;
+}
+
+// A histogram of a quantity's draws over their range and, where the recipe asked for a
+// distribution, over its support too (a normal's mean +- 4 sigma; a choice's values, a bin each
+// when they are whole numbers), so that a part of the asked range never drawn shows.
+Json DrawHist(const std::vector<double>& values, const std::string& key, const AskedDraw* asked) {
+  if (asked == nullptr || !asked->number || values.empty()) return AutoHist(values, 20, key);
+  const Distribution& d = *asked->number;
+  auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  double a = *lo, b = *hi;
+  int bins = 20;
+  if (d.kind == Distribution::Kind::kNormal) {
+    a = std::min(a, d.a - 4 * d.b), b = std::max(b, d.a + 4 * d.b);
+  } else if (d.kind == Distribution::Kind::kChoice && !d.values.empty()) {
+    const auto [vlo, vhi] = std::minmax_element(d.values.begin(), d.values.end());
+    a = std::min(a, *vlo), b = std::max(b, *vhi);
+    const bool whole =
+        std::all_of(d.values.begin(), d.values.end(), [](double v) { return v == std::round(v); });
+    if (whole && b - a < 20) a -= 0.5, b += 0.5, bins = static_cast<int>(b - a);
+  } else {
+    a = std::min(a, d.Lowest()), b = std::max(b, d.Highest());
+  }
+  if (b - a < 1e-9) a -= 0.5, b += 0.5;
+  return Hist(values, a, b, bins, key);
+}
+
 // scene_randomization*.json of the first sensor: each drawn key with its index ("part.3.hue")
-// folded to "part.*.hue"; numbers as histograms, anything else as choices.
-Json RandomizationJson(const fs::path& root, const std::string& suffix) {
+// folded to "part.*.hue"; numbers as histograms, anything else as choices. With what the recipe
+// asked (ReadAsked), a quantity drawn once per scene is counted once per scene, and the draws are
+// tested against it (CheckAgainst) and the expected counts given beside the drawn ones.
+Json RandomizationJson(const fs::path& root, const std::string& suffix, std::string* note) {
+  const AskedDraws asked = ReadAsked(root, note);
+  const auto asked_of = [&](const std::string& key) -> const AskedDraw* {
+    const auto it = asked.find(key);
+    return it != asked.end() && it->second.size() == 1 ? &it->second[0] : nullptr;
+  };
   std::map<std::string, std::vector<double>> numbers;
   std::map<std::string, std::map<std::string, size_t>> choices;
   static const std::regex index(R"(\.\d+(?=\.|$))");
@@ -368,32 +683,77 @@ Json RandomizationJson(const fs::path& root, const std::string& suffix) {
     const auto draws =
         ReadJsonIfThere(root, scene.Relative("scene_randomization" + suffix + ".json"));
     if (!draws) continue;
+    bool first = true;
     for (const auto& [im, record] : draws->items()) {
       if (!record.is_object()) continue;
       for (const auto& [key, value] : record.items()) {
         const std::string folded = std::regex_replace(key, index, ".*");
+        // A list's first value (a one-value list is written as a number: a sphere's one size
+        // among boxes' three).
+        const bool listed = value.is_array() || (value.is_number() && !asked.count(folded) &&
+                                                 asked.count(folded + "[0]"));
+        const std::string name = listed ? folded + "[0]" : folded;
+        const AskedDraw* a = asked_of(name);
+        if (!first && a != nullptr && a->per_scene) continue;  // the scene's one draw
         if (value.is_number()) {
-          numbers[folded].push_back(value.get<double>());
+          numbers[name].push_back(value.get<double>());
         } else if (value.is_array() && !value.empty() && value[0].is_number()) {
-          numbers[folded + "[0]"].push_back(value[0].get<double>());
+          numbers[name].push_back(value[0].get<double>());
         } else if (value.is_string()) {
           ++choices[folded][value.get<std::string>()];
         } else if (value.is_boolean()) {
           ++choices[folded][value.get<bool>() ? "true" : "false"];
         }
       }
+      first = false;
     }
   }
+  const auto asked_text = [&](const std::string& key) -> Json {
+    const auto it = asked.find(key);
+    if (it == asked.end()) return nullptr;
+    std::string text;
+    for (const AskedDraw& a : it->second) text += (text.empty() ? "" : " or ") + a.text;
+    return text;
+  };
+  const auto per = [&](const std::string& key) -> Json {
+    const AskedDraw* a = asked_of(key);
+    return a == nullptr ? Json(nullptr) : Json(a->per_scene ? "scene" : "frame");
+  };
   Json out = Json::array();
   for (const auto& [key, values] : numbers) {
     if (choices.count(key)) continue;
-    out.push_back({{"key", key},
-                   {"kind", "number"},
-                   {"hist", AutoHist(values, 20, key)},
-                   {"asked", nullptr}});
+    Json entry = {{"key", key},
+                  {"kind", "number"},
+                  {"hist", DrawHist(values, key, asked_of(key))},
+                  {"asked", asked_text(key)},
+                  {"per", per(key)},
+                  {"samples", values.size()},
+                  {"check", nullptr},
+                  {"expected", nullptr}};
+    if (const AskedDraw* a = asked_of(key)) {
+      entry["check"] = CheckAgainst(*a, values, {});
+      if (a->number) entry["expected"] = ExpectedCounts(*a->number, entry["hist"], values.size());
+    }
+    out.push_back(std::move(entry));
   }
-  for (const auto& [key, counts] : choices)
-    out.push_back({{"key", key}, {"kind", "choice"}, {"counts", counts}, {"asked", nullptr}});
+  for (auto [key, counts] : choices) {
+    size_t n = 0;
+    for (const auto& [name, c] : counts) n += c;
+    Json entry = {{"key", key},   {"kind", "choice"}, {"asked", asked_text(key)}, {"per", per(key)},
+                  {"samples", n}, {"check", nullptr}, {"expected", nullptr}};
+    if (const AskedDraw* a = asked_of(key); a != nullptr && !a->names.empty()) {
+      entry["check"] = CheckAgainst(*a, {}, counts);
+      for (const std::string& name : a->names) counts.emplace(name, 0);  // never drawn: 0
+      Json expected = Json::object();
+      for (const auto& [name, c] : counts) {
+        const bool listed = std::find(a->names.begin(), a->names.end(), name) != a->names.end();
+        expected[name] = listed ? static_cast<double>(n) / a->names.size() : 0.0;
+      }
+      entry["expected"] = expected;
+    }
+    entry["counts"] = counts;
+    out.push_back(std::move(entry));
+  }
   return out;
 }
 
@@ -633,6 +993,7 @@ std::string ReportData(const fs::path& root, const ReportOptions& options) {
     sensors_json.push_back(SensorJson(s, options.sparse_percent));
     for (const ImageStats& im : s.images) scenes.insert({s.split, im.scene_id});
   }
+  std::string randomization_note;
   Json data = {
       {"report_data", 1},
       {"title", "cadsynth report: " + root.filename().string()},
@@ -643,11 +1004,13 @@ std::string ReportData(const fs::path& root, const ReportOptions& options) {
       {"objects", objects_json},
       {"randomization",
        RandomizationJson(root,
-                         sensors.empty() || sensors[0].name.empty() ? "" : "_" + sensors[0].name)},
+                         sensors.empty() || sensors[0].name.empty() ? "" : "_" + sensors[0].name,
+                         &randomization_note)},
       {"grasps", GraspsJson(root)},
       {"physics", PhysicsJson(root)},
       {"gallery", sensors.empty() ? Json::array() : GalleryJson(root, sensors[0], options)}};
   data["verify"] = VerifyJson(root, data["run"].value("run_key", ""));
+  if (!randomization_note.empty()) data["randomization_note"] = randomization_note;
   return data.dump() + "\n";
 }
 

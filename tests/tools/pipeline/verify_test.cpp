@@ -264,6 +264,96 @@ TEST(Report, ViewsAreFoldedByTheObjectsSymmetries) {
   EXPECT_TRUE(checked);
 }
 
+// The key of the report's randomisation entry `key`.
+const Json& DrawEntry(const Json& data, const std::string& key) {
+  for (const Json& k : data["randomization"]) {
+    if (k["key"] == key) return k;
+  }
+  static const Json none;
+  ADD_FAILURE() << "no randomisation entry " << key;
+  return none;
+}
+
+TEST(Report, RandomisedDrawsAreTestedAgainstTheRecipe) {
+  ScratchDir dir;
+  std::ofstream(dir / "r.yaml") << R"(scenes:
+  - name: crank
+    parts: [{family: slider_crank}]
+camera: {width: 48, height: 36, hfov: 60}
+sweep: {sampler: random, count: 40, pitch: {from: 40, to: 80, step: 1},
+        yaw: {from: 0, to: 359, step: 1}, radius: {from: 0.5 m, to: 0.7 m, step: 0.01 m}}
+render: {mode: pbr, samples: 1, bounces: 1}
+randomize:
+  seed: 5
+  parts:
+    - {name: "*", preset: {choice: [steel, abs, brass]}}
+  lights: {count: {choice: [1, 2, 3]}, type: {choice: [rect, point]},
+           power: {log_uniform: [15, 120]}}
+  camera: {exposure: {normal: [0, 0.4]}}
+  distractors: {count: {uniform: [2, 4]}}
+)";
+  RunJob(LoadRecipe(dir / "r.yaml"), dir / "out");
+  Json data = Json::parse(ReportData(dir / "out"));
+  EXPECT_FALSE(data.contains("randomization_note")) << data["randomization_note"];
+  // Every quantity the recipe asked for is tested, and the seeded draws agree with it.
+  size_t tested = 0;
+  for (const Json& k : data["randomization"]) {
+    if (k["asked"].is_null()) continue;
+    ++tested;
+    ASSERT_TRUE(k["check"].is_object()) << k.dump();
+    EXPECT_TRUE(k["check"]["agrees"].get<bool>()) << k.dump();
+  }
+  EXPECT_GE(tested, 6u);  // presets, light count, type, power, exposure, distractor count
+  const Json& power = DrawEntry(data, "light.*.power");
+  EXPECT_EQ(power["asked"], "{log_uniform: [15, 120]}");
+  EXPECT_EQ(power["check"]["test"], "Kolmogorov-Smirnov");
+  EXPECT_EQ(power["per"], "frame");
+  // The expected counts over the histogram's bins: all draws lie in [15, 120].
+  double expected = 0;
+  for (const Json& e : power["expected"]) expected += e.get<double>();
+  EXPECT_NEAR(expected, power["samples"].get<double>(), 1e-6 * expected);
+  // Distractors are drawn once per scene: one scene, one draw (not one per frame).
+  EXPECT_EQ(DrawEntry(data, "distractor.count")["per"], "scene");
+  EXPECT_EQ(DrawEntry(data, "distractor.count")["samples"], 1);
+  EXPECT_EQ(DrawEntry(data, "part.*.preset")["check"]["test"], "chi-square");
+
+  // Draws that are not what the recipe asked for: every light at 100 W, a preset never offered,
+  // and light counts of 30, 5 and 5 in 40 frames (expected 40 / 3 each: chi-square
+  // (16.67^2 + 2 x 8.33^2) / 13.33 = 31.25 on 2 degrees of freedom, p = exp(-31.25 / 2)).
+  const fs::path draws_file = dir / "out" / "train" / "000000" / "scene_randomization.json";
+  Json draws = Json::parse(ReadFileText(draws_file));
+  int frame = 0;
+  for (Json& record : draws) {
+    for (auto it = record.begin(); it != record.end(); ++it) {
+      const std::string& key = it.key();
+      if (key.ends_with(".power")) it.value() = 100.0;
+      if (frame == 0 && key.starts_with("part.") && key.ends_with(".preset")) it.value() = "gold";
+    }
+    record["light.count"] = frame < 30 ? 1.0 : frame < 35 ? 2.0 : 3.0;
+    ++frame;
+  }
+  ASSERT_EQ(frame, 40);
+  WriteFileAtomic(draws_file, draws.dump());
+  data = Json::parse(ReportData(dir / "out"));
+  EXPECT_FALSE(DrawEntry(data, "light.*.power")["check"]["agrees"].get<bool>());
+  EXPECT_LT(DrawEntry(data, "light.*.power")["check"]["p_value"].get<double>(), 1e-6);
+  EXPECT_FALSE(DrawEntry(data, "part.*.preset")["check"]["agrees"].get<bool>());
+  const Json& count = DrawEntry(data, "light.count")["check"];
+  EXPECT_NEAR(count["statistic"].get<double>(), 31.25, 1e-9);
+  EXPECT_NEAR(count["p_value"].get<double>(), std::exp(-31.25 / 2), 1e-12);
+  EXPECT_FALSE(count["agrees"].get<bool>());
+  EXPECT_TRUE(DrawEntry(data, "camera.exposure")["check"]["agrees"].get<bool>());
+
+  // A recipe that cannot be read again (run.json edited): the draws are shown, not compared.
+  Json run = Json::parse(ReadFileText(dir / "out" / "run.json"));
+  run["recipe_text"] = "scenes: [";
+  WriteFileAtomic(dir / "out" / "run.json", run.dump());
+  data = Json::parse(ReportData(dir / "out"));
+  EXPECT_NE(data.value("randomization_note", "").find("could not be read again"),
+            std::string::npos);
+  EXPECT_TRUE(DrawEntry(data, "light.*.power")["check"].is_null());
+}
+
 TEST(Report, APythonWithoutMatplotlibIsOneMessageWithTheFixAndNoPage) {
   ScratchDir dir;
   RunJob(SmallJob(), dir / "out");

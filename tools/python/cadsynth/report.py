@@ -311,12 +311,48 @@ def images_section(sensors) -> str:
     return out
 
 
-def randomization_section(keys) -> str:
-    """A table of the randomised keys and what was asked, then their draws in grids of plots."""
+def verdict(check) -> str:
+    """A draw test's result as a table cell: its p-value and whether the draws agree."""
+    if not isinstance(check, dict):
+        return ""
+    p = check.get("p_value")
+    word = "as asked" if check.get("agrees") else "DIFFERS"
+    return f"{word} ({check.get('test')}, p = {fmt(p)})"
+
+
+def draw_expected(ax, key: dict) -> None:
+    """What the recipe asked for KEY, drawn over its draws: the expected count of each bin (a
+    number) or option (a choice), as a dashed line."""
+    expected = key.get("expected")
+    if key.get("kind") == "choice" and isinstance(expected, dict):
+        counts = key.get("counts") or {}
+        values = [float(expected.get(name, 0.0)) for name in counts]
+        if values:
+            ax.plot(range(len(values)), values, "k_", markersize=14, markeredgewidth=1.5,
+                    label="asked")
+    elif isinstance(expected, list):
+        arrays = hist_arrays(key.get("hist"))
+        if arrays is not None and len(expected) == arrays[1].size:
+            ax.stairs(np.asarray(expected, dtype=float), arrays[0], color="k", linestyle="--",
+                      linewidth=1.0, label="asked")
+
+
+def randomization_section(keys, note_text=None) -> str:
+    """A table of the randomised keys, what the recipe asked and whether the draws agree with it,
+    then their draws in grids of plots with the expected counts over them."""
     if not keys:
         return note("no randomisation")
-    out = table(["key", "kind", "asked"], [[k.get("key"), k.get("kind"), k.get("asked") or ""]
-                                           for k in keys])
+    out = note(note_text) if note_text else ""
+    differ = [str(k.get("key")) for k in keys
+              if isinstance(k.get("check"), dict) and not k["check"].get("agrees")]
+    tested = sum(isinstance(k.get("check"), dict) for k in keys)
+    if tested:
+        out += note(f"{tested} of {len(keys)} randomised quantities tested against the recipe: "
+                    + (f"{len(differ)} differ ({', '.join(differ)})" if differ
+                       else "all drawn as asked (p >= 0.001)"))
+    out += table(["key", "kind", "asked", "drawn per", "draws", "against the recipe"],
+                 [[k.get("key"), k.get("kind"), k.get("asked") or "", k.get("per") or "",
+                   k.get("samples"), verdict(k.get("check"))] for k in keys])
     for start in range(0, len(keys), KEYS_PER_FIGURE):
         chunk = keys[start:start + KEYS_PER_FIGURE]
         rows = -(-len(chunk) // GRID_COLUMNS)
@@ -330,6 +366,7 @@ def randomization_section(keys) -> str:
                 draw_choice(ax, key.get("counts"), title)
             else:
                 draw_hist(ax, key.get("hist"), title)
+            draw_expected(ax, key)
         for ax in axes[len(chunk):]:
             ax.set_visible(False)
         names = ", ".join(str(k.get("key")) for k in chunk)
@@ -388,7 +425,8 @@ def build_html(data: dict) -> str:
               "verify": verify_section(data.get("verify"), dataset or "DATASET"),
               "objects": objects_section(data.get("objects")),
               "images": images_section(data.get("sensors")),
-              "randomization": randomization_section(data.get("randomization"))}
+              "randomization": randomization_section(data.get("randomization"),
+                                                   data.get("randomization_note"))}
     if data.get("grasps") is not None:
         bodies["grasps"] = grasps_section(data["grasps"])
     if data.get("physics") is not None:

@@ -644,6 +644,27 @@ void BopSceneWriter::WriteSequence(const SequenceStep& step) {
                                                      {"instances", instances}});
 }
 
+void BopSceneWriter::WriteRest(const SceneRest& rest) {
+  for (const std::vector<int>* ids : {&rest.restless, &rest.outside}) {
+    for (int id : *ids) {
+      if (id < 0 || static_cast<size_t>(id) >= obj_ids_.size())
+        throw Error("bop: a rest record naming instance " + std::to_string(id) + " of " +
+                    std::to_string(obj_ids_.size()));
+    }
+  }
+  WriteJson(scene_dir_ / "scene_physics.json",
+            Json{{"kind", rest.kind},
+                 {"at_rest", rest.restless.empty()},
+                 {"settle_seconds", rest.settle_seconds},
+                 {"settle_time", rest.settle_time},
+                 {"restless", rest.restless},
+                 {"parts_dropped", rest.dropped},
+                 {"removed_outside", rest.removed_outside},
+                 {"kept_outside", rest.outside},
+                 {"distractors", rest.distractors},
+                 {"restless_distractors", rest.restless_distractors}});
+}
+
 SceneSplit BopSceneWriter::Finish() {
   std::lock_guard<std::mutex> lock(mutex_);
   SceneSplit split;

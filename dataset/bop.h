@@ -347,6 +347,20 @@ struct SequenceStep {
   std::vector<int> restless;  // instance ids still moving when settle_time ran out
 };
 
+// How a pile (layout: pile) or a scene's dropped parts (pose: dropped) came to rest, as
+// scene_physics.json (cadsynth) records it. Instance ids are scene_gt indices.
+struct SceneRest {
+  std::string kind;              // "pile" or "dropped"
+  int dropped = 0;               // parts dropped
+  int removed_outside = 0;       // taken out of the scene: they ended outside the container
+  std::vector<int> outside;      // kept where they lie outside it (out_of_container: keep)
+  double settle_seconds = 0;     // simulated, until rest or settle_time
+  double settle_time = 0;        // the limit
+  std::vector<int> restless;     // still moving when settle_time ran out
+  int distractors = 0;           // dropped with the parts
+  int restless_distractors = 0;  // of them, still moving
+};
+
 // Writes the images of one scene as frames arrive (from any thread) and its JSON files at the end.
 class BopSceneWriter {
  public:
@@ -387,6 +401,9 @@ class BopSceneWriter {
 
   // Writes scene_sequence.json (cadsynth): this scene's place in a pick sequence (SequenceStep).
   void WriteSequence(const SequenceStep& step);
+
+  // Writes scene_physics.json (cadsynth): how the scene's pile or dropped parts came to rest.
+  void WriteRest(const SceneRest& rest);
 
   // Names of the COCO categories of scene_gt_coco.json (category id = obj_id, as BOP); by default
   // each is named after its obj_id.
@@ -437,6 +454,7 @@ class RigSceneWriter {
   void RemoveFragments();
   void WriteWorldPoses(const std::vector<Instance>& instances);
   void WriteSequence(const SequenceStep& step);
+  void WriteRest(const SceneRest& rest);
   void SetCocoCategories(const std::vector<BopSceneWriter::CocoCategory>& categories);
 
   size_t size() const { return sensors_.size(); }

@@ -88,6 +88,8 @@ void RigSceneWriter::RemoveFragments() {
 
 void RigSceneWriter::WriteSequence(const SequenceStep& step) { sensors_[0]->WriteSequence(step); }
 
+void RigSceneWriter::WriteRest(const SceneRest& rest) { sensors_[0]->WriteRest(rest); }
+
 void RigSceneWriter::WriteWorldPoses(const std::vector<Instance>& instances) {
   sensors_[0]->WriteWorldPoses(instances);
 }

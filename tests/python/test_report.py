@@ -306,3 +306,27 @@ def test_draws_against_the_recipe():
     assert len(img_tags(section)) == 1
     data["randomization_note"] = "the recipe in run.json could not be read again, so ..."
     assert "could not be read again" in report.build_html(data)
+
+
+def test_pile_rest_tables_and_gallery_per_sensor():
+    """Physics as tables (piles with their summary and settle-time histogram, pick sequences), and
+    a rig's gallery under a heading per sensor."""
+    data = make_data(objects=0, sensors=False)
+    rng = np.random.default_rng(4)
+    data["physics"] = {"tables": [
+        {"title": "Piles and dropped parts", "summary": "1 of 2 piles and drops at rest",
+         "columns": ["scene", "at rest"], "rows": [[0, "no"], [1, "yes"]], "more": 3,
+         "settle_seconds": hist(rng, 0.5, 3)},
+        {"title": "Pick sequences", "columns": ["scene", "step"], "rows": [[0, 0], [1, 1]],
+         "more": 0}]}
+    image = data["gallery"][0]["image"]
+    data["gallery"] = [{"title": t, "caption": "", "scene_id": 0, "im_id": 0, "sensor": s,
+                        "image": image} for s in ("rgb", "depth") for t in ("first", "middle")]
+    page = report.build_html(data)
+    physics = page.split('id="physics"')[1].split("<section>")[0]
+    assert "<h3>Piles and dropped parts</h3>" in physics and "<h3>Pick sequences</h3>" in physics
+    assert "1 of 2 piles and drops at rest" in physics and "and 3 more rows" in physics
+    assert len(img_tags(physics)) == 1  # the settle-time histogram
+    gallery = page.split('id="gallery"')[1]
+    assert gallery.index("<h3>sensor rgb</h3>") < gallery.index("<h3>sensor depth</h3>")
+    assert len(img_tags(gallery)) == 4

@@ -358,6 +358,8 @@ void OpenScene(const Run& run, const std::filesystem::path& root, size_t s,
       root, static_cast<int>(s), spec.bop, prepared.obj_ids[s], run.bop_sensors));
   if (run.common) writer.WriteWorldPoses(prepared.scenes[s].instances);
   if (run.common && prepared.sequence[s]) WriteSequence(run, s, &writer);
+  if (run.common && s < prepared.rest.size() && prepared.rest[s])
+    writer.WriteRest(*prepared.rest[s]);
   writer.SetCocoCategories(categories);
   FormatScene format_scene{root, static_cast<int>(s), spec.bop, {}};
   for (size_t i = 0; i < prepared.scenes[s].instances.size(); ++i) {

@@ -31,6 +31,9 @@ struct PreparedRun {
   // for the steps of a pick sequence (the pile as it fell is step 0) where it stands in it.
   std::vector<std::string> scene_names;
   std::vector<std::optional<SequenceStep>> sequence;
+  // Per scene: how its pile or dropped parts came to rest (none for other layouts and for the
+  // steps after a pick, whose scene_sequence.json says it).
+  std::vector<std::optional<SceneRest>> rest;
 };
 
 // Progress of a long preparation stage: a pile's simulation ("pile": `scene`, simulated seconds

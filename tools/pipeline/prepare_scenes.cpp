@@ -539,6 +539,8 @@ void ArrangeScene(const Context& context, const PrepareState& state, size_t s,
     AssignPhysics(scene_spec, state, instances, groups, arranged_parts.size(), &arrangement);
   }
   Arrangement& arranged = placement->arranged;
+  placement->dropped = instances.size() * static_cast<size_t>(std::max(1, arrangement.copies));
+  placement->distractors = picks.size();
   if (dropped) {
     arranged = Arrange(arranged_parts, instances, arrangement, groups, &shapes);
     if (!arranged.restless.empty()) {
@@ -794,6 +796,26 @@ std::vector<Placement> ArrangeScenes(const Context& context, const PrepareState&
   return placements;
 }
 
+// How scene_spec's pile or dropped parts came to rest (scene_physics.json); none for the other
+// layouts.
+std::optional<SceneRest> RestRecord(const SceneSpec& scene_spec, const Placement& placement) {
+  const ArrangementOptions& a = scene_spec.arrangement;
+  const bool pile = a.layout == Layout::kPile;
+  if (!pile && a.pose != PoseMode::kDropped) return std::nullopt;
+  const Arrangement& arranged = placement.arranged;
+  SceneRest rest;
+  rest.kind = pile ? "pile" : "dropped";
+  rest.dropped = static_cast<int>(placement.dropped);
+  rest.removed_outside = static_cast<int>(placement.dropped - arranged.instances.size());
+  rest.outside = arranged.escaped;
+  rest.settle_seconds = arranged.settle_seconds;
+  rest.settle_time = a.settle_time_s;
+  rest.restless = arranged.restless;
+  rest.distractors = static_cast<int>(placement.distractors);
+  rest.restless_distractors = static_cast<int>(arranged.restless_distractors.size());
+  return rest;
+}
+
 PreparedRun RecordScenes(const Context& context, const PrepareState& state,
                          std::vector<Placement>* placements) {
   const RunSpec& spec = context.spec;
@@ -842,12 +864,14 @@ PreparedRun RecordScenes(const Context& context, const PrepareState& state,
     }
     const int first = static_cast<int>(prepared.scenes.size());
     record(scene_spec, placement);
+    prepared.rest.push_back(RestRecord(scene_spec, placement));
     prepared.scene_names.push_back(scene_spec.name);
     prepared.sequence.push_back(
         steps.empty() ? std::nullopt
                       : std::optional<SequenceStep>(StepRecord(scene_spec, placement, first, 0)));
     for (size_t k = 0; k < steps.size(); ++k) {
       record(scene_spec, steps[k]);
+      prepared.rest.push_back(std::nullopt);
       char suffix[32];
       std::snprintf(suffix, sizeof(suffix), "_pick_%02zu", k + 1);
       prepared.scene_names.push_back(scene_spec.name + suffix);

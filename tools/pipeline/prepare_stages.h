@@ -105,6 +105,8 @@ struct Placement {
   // each instance left.
   std::vector<PickStep> picks;
   std::vector<std::vector<int>> pick_ids;
+  // A pile's or dropped scene's parts before any was taken out, and its distractors.
+  size_t dropped = 0, distractors = 0;
 };
 
 using Json = nlohmann::ordered_json;

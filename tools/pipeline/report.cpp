@@ -278,7 +278,7 @@ std::vector<SensorStats> ReadImages(const fs::path& root, std::map<int, ObjectSt
     });
     out.push_back(std::move(stats));
   }
-  // The first sensor first: the objects' views and the gallery are its.
+  // The first sensor first: the objects' views are its.
   std::stable_partition(out.begin(), out.end(), [&](const SensorStats& s) {
     return (s.name.empty() ? "" : "_" + s.name) == first_sensor;
   });
@@ -819,12 +819,44 @@ Json GraspsJson(const fs::path& root) {
             {"suction", AutoHist(per_frame[1], 30, "free suction grasps per frame")}}}};
 }
 
-// Pick sequences (scene_sequence.json): a row per step.
+// Median of `v` (0 when empty).
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Physics: how piles and dropped parts came to rest (scene_physics.json, a row per scene, with a
+// summary), and pick sequences (scene_sequence.json, a row per step). Null when there are none.
 Json PhysicsJson(const fs::path& root) {
-  Json rows = Json::array();
+  constexpr size_t kListed = 200;  // rows per table (piles not at rest first)
+  Json rest_rows = Json::array(), moving_rows = Json::array(), step_rows = Json::array();
+  std::vector<double> settle;
+  size_t piles = 0, at_rest = 0, removed = 0, kept = 0;
   std::set<std::pair<std::string, int>> done;
   for (const BopSceneFolder& scene : FindBopScenes(root)) {
     if (!done.insert({scene.split, scene.scene_id}).second) continue;
+    if (const auto rest = ReadJsonIfThere(root, scene.Relative("scene_physics.json"))) {
+      ++piles;
+      const bool still = rest->value("at_rest", true);
+      at_rest += still ? 1 : 0;
+      const double seconds = rest->value("settle_seconds", 0.0);
+      settle.push_back(seconds);
+      removed += rest->value("removed_outside", 0);
+      kept += rest->value("kept_outside", Json::array()).size();
+      Json row = {scene.scene_id,
+                  rest->value("kind", ""),
+                  rest->value("parts_dropped", 0),
+                  still ? "yes" : "no",
+                  seconds,
+                  rest->value("settle_time", 0.0),
+                  rest->value("restless", Json::array()).size(),
+                  rest->value("removed_outside", 0),
+                  rest->value("kept_outside", Json::array()).size(),
+                  rest->value("distractors", 0)};
+      (still ? rest_rows : moving_rows).push_back(std::move(row));
+    }
     const auto step = ReadJsonIfThere(root, scene.Relative("scene_sequence.json"));
     if (!step) continue;
     size_t freed = 0;
@@ -834,16 +866,45 @@ Json PhysicsJson(const fs::path& root) {
       moved = std::max(moved, i.value("moved_mm", 0.0));
     }
     const Json pick = step->value("pick", Json());
-    rows.push_back(
+    step_rows.push_back(
         {scene.scene_id, step->value("step", 0), pick.is_object() ? pick.value("obj_id", 0) : 0,
          pick.is_object() ? pick.value("settle_seconds", 0.0) : 0.0,
          pick.is_object() ? pick.value("restless", Json::array()).size() : 0, freed, moved});
   }
-  if (rows.empty()) return nullptr;
-  return {{"columns",
-           {"scene", "step", "picked obj_id", "settle time (s, simulated)", "still moving",
-            "freed by the pick", "largest move (mm)"}},
-          {"rows", rows}};
+  if (piles == 0 && step_rows.empty()) return nullptr;
+  Json tables = Json::array();
+  if (piles > 0) {
+    Json rows = moving_rows;
+    for (Json& r : rest_rows) rows.push_back(std::move(r));
+    const size_t total = rows.size();
+    if (rows.size() > kListed) rows.erase(rows.begin() + kListed, rows.end());
+    char summary[300];
+    std::snprintf(summary, sizeof summary,
+                  "%zu of %zu piles and drops at rest; simulated settle time median %.2f s, "
+                  "longest %.2f s; %zu parts taken out (outside the container), %zu kept outside",
+                  at_rest, piles, Median(settle), *std::max_element(settle.begin(), settle.end()),
+                  removed, kept);
+    tables.push_back({{"title", "Piles and dropped parts"},
+                      {"summary", summary},
+                      {"columns",
+                       {"scene", "kind", "parts dropped", "at rest", "settle time (s, simulated)",
+                        "settle_time (s)", "still moving", "taken out (outside)", "kept outside",
+                        "distractors"}},
+                      {"rows", rows},
+                      {"more", total - rows.size()},
+                      {"settle_seconds", AutoHist(settle, 20, "simulated settle time (s)")}});
+  }
+  if (!step_rows.empty()) {
+    const size_t total = step_rows.size();
+    if (step_rows.size() > kListed) step_rows.erase(step_rows.begin() + kListed, step_rows.end());
+    tables.push_back({{"title", "Pick sequences"},
+                      {"columns",
+                       {"scene", "step", "picked obj_id", "settle time (s, simulated)",
+                        "still moving", "freed by the pick", "largest move (mm)"}},
+                      {"rows", step_rows},
+                      {"more", total - step_rows.size()}});
+  }
+  return {{"tables", tables}};
 }
 
 std::string Base64(const std::string& bytes) {
@@ -863,7 +924,7 @@ std::string Base64(const std::string& bytes) {
   return out;
 }
 
-// The frames that show the extremes of the first sensor's images: the most occluded, the one with
+// The frames that show the extremes of a sensor's images: the most occluded, the one with
 // the smallest and the largest visible instance, the most crowded, and the first.
 Json GalleryJson(const fs::path& root, const SensorStats& s, const ReportOptions& options) {
   Json gallery = Json::array();
@@ -994,21 +1055,25 @@ std::string ReportData(const fs::path& root, const ReportOptions& options) {
     for (const ImageStats& im : s.images) scenes.insert({s.split, im.scene_id});
   }
   std::string randomization_note;
-  Json data = {
-      {"report_data", 1},
-      {"title", "cadsynth report: " + root.filename().string()},
-      {"dataset", fs::absolute(root).lexically_normal().string()},
-      {"generated_by", std::string("cadsynth ") + CadsynthVersion()},
-      {"run", RunJson(root, scenes.size(), objects.size(), instances)},
-      {"sensors", sensors_json},
-      {"objects", objects_json},
-      {"randomization",
-       RandomizationJson(root,
-                         sensors.empty() || sensors[0].name.empty() ? "" : "_" + sensors[0].name,
-                         &randomization_note)},
-      {"grasps", GraspsJson(root)},
-      {"physics", PhysicsJson(root)},
-      {"gallery", sensors.empty() ? Json::array() : GalleryJson(root, sensors[0], options)}};
+  Json data = {{"report_data", 1},
+               {"title", "cadsynth report: " + root.filename().string()},
+               {"dataset", fs::absolute(root).lexically_normal().string()},
+               {"generated_by", std::string("cadsynth ") + CadsynthVersion()},
+               {"run", RunJson(root, scenes.size(), objects.size(), instances)},
+               {"sensors", sensors_json},
+               {"objects", objects_json},
+               {"randomization",
+                RandomizationJson(
+                    root, sensors.empty() || sensors[0].name.empty() ? "" : "_" + sensors[0].name,
+                    &randomization_note)},
+               {"grasps", GraspsJson(root)},
+               {"physics", PhysicsJson(root)},
+               {"gallery", Json::array()}};
+  // Every sensor's extremes (a rig's sensors see the scene differently: a grey or depth camera
+  // beside the colour one).
+  for (const SensorStats& s : sensors) {
+    for (Json& entry : GalleryJson(root, s, options)) data["gallery"].push_back(std::move(entry));
+  }
   data["verify"] = VerifyJson(root, data["run"].value("run_key", ""));
   if (!randomization_note.empty()) data["randomization_note"] = randomization_note;
   return data.dump() + "\n";

@@ -26,6 +26,7 @@
 #include "tools/pipeline/eval.h"
 #include "tools/pipeline/journal.h"
 #include "tools/pipeline/prepare.h"
+#include "tools/pipeline/report.h"
 #include "tools/pipeline/shards.h"
 #include "variants/families.h"
 
@@ -1242,6 +1243,45 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
   }
   EXPECT_EQ(gone.size(), 3u);
   EXPECT_GT(ever_freed, 0) << "no pick freed a bolt: the test checks nothing that moved";
+
+  // How the pile came to rest (scene_physics.json), for the pile as it fell only: the steps after
+  // a pick say it in scene_sequence.json.
+  const json rest = ReadJson(train / "000000" / "scene_physics.json");
+  EXPECT_EQ(rest["kind"], "pile");
+  EXPECT_EQ(rest["parts_dropped"], 16);
+  EXPECT_EQ(rest["removed_outside"], 0);  // all 16 are in scene 0's scene_gt
+  EXPECT_TRUE(rest["at_rest"].get<bool>());
+  EXPECT_TRUE(rest["restless"].empty());
+  EXPECT_GT(rest["settle_seconds"].get<double>(), 0.0);
+  EXPECT_LE(rest["settle_seconds"].get<double>(), rest["settle_time"].get<double>() + 1.0);
+  for (const char* later : {"000001", "000002", "000003"})
+    EXPECT_FALSE(std::filesystem::exists(train / later / "scene_physics.json")) << later;
+}
+
+// A scene's dropped parts given too little time to settle: scene_physics.json names the parts
+// still moving and says the scene is not at rest, and the report's physics table says so.
+TEST(Generate, DroppedPartsNotAtRestAreRecordedSo) {
+  ScratchDir dir;
+  const RunSpec spec = ParseRecipe(
+      "scenes:\n  - name: drop\n    parts: [{family: hex_nut, params: {size: M8}}]\n"
+      "    layout: clutter\n    copies: 4\n    pose: dropped\n    settle_time: 0.01\n"
+      "camera: {width: 64, height: 48, fx: 60, fy: 60, cx: 31.5, cy: 23.5}\n"
+      "sweep: {yaw: [0], pitch: [90], radius: [500 mm]}\n",
+      "r.yaml", dir.path());
+  testing::RunJob(spec, dir / "out");
+  const json rest = ReadJson(dir / "out" / "train" / "000000" / "scene_physics.json");
+  EXPECT_EQ(rest["kind"], "dropped");
+  EXPECT_EQ(rest["parts_dropped"], 4);
+  EXPECT_FALSE(rest["at_rest"].get<bool>());
+  EXPECT_FALSE(rest["restless"].empty());
+  EXPECT_NEAR(rest["settle_time"].get<double>(), 0.01, 1e-12);
+  for (const json& id : rest["restless"]) EXPECT_LT(id.get<int>(), 4);
+  const json physics = json::parse(ReportData(dir / "out"))["physics"];
+  ASSERT_EQ(physics["tables"].size(), 1u);
+  EXPECT_EQ(physics["tables"][0]["summary"].get<std::string>().rfind("0 of 1 piles and drops", 0),
+            0u)
+      << physics.dump();
+  EXPECT_EQ(physics["tables"][0]["rows"][0][3], "no");
 }
 
 TEST(Generate, PickSequenceNeedsAPileAndFewerPicksThanParts) {

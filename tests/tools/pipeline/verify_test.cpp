@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <set>
 #include <string>
 
@@ -236,6 +237,18 @@ TEST(Verify, ARigAndAMergedFarmRunPassAndReportTheirRuns) {
   EXPECT_EQ(data["gallery"][0]["title"], "most occluded");
   EXPECT_EQ(data["gallery"][0]["image"].get<std::string>().rfind("data:image/jpeg;base64,/9j/", 0),
             0u);
+  // Each sensor's own extremes: sensor a's first, then b's (the grey camera).
+  std::map<std::string, int> per_sensor;
+  std::string last;
+  for (const Json& g : data["gallery"]) {
+    const std::string sensor = g["sensor"];
+    if (sensor != last) EXPECT_EQ(per_sensor.count(sensor), 0u) << "sensors in turn";
+    ++per_sensor[sensor];
+    last = sensor;
+  }
+  EXPECT_GE(per_sensor["a"], 3);
+  EXPECT_GE(per_sensor["b"], 3);
+  EXPECT_EQ(data["gallery"][0]["sensor"], "a");
   EXPECT_EQ(data["verify"]["verdict"], "pass");
 }
 

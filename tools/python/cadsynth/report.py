@@ -391,9 +391,28 @@ def grasps_section(grasps: dict) -> str:
 
 
 def physics_section(physics: dict) -> str:
-    """The scenes' rest statistics as a table."""
-    rows = physics.get("rows") or []
-    return table(physics.get("columns") or [], rows) if rows else note("no physics statistics")
+    """Tables of how piles came to rest and of pick sequences' steps, each with its summary and
+    (piles) a histogram of the settle times."""
+    tables = physics.get("tables")
+    if tables is None and physics.get("rows"):  # one table (older report data)
+        tables = [{"columns": physics.get("columns") or [], "rows": physics["rows"]}]
+    out = ""
+    for t in tables or []:
+        rows = t.get("rows") or []
+        if not rows:
+            continue
+        if t.get("title"):
+            out += f"<h3>{esc(t['title'])}</h3>"
+        if t.get("summary"):
+            out += f"<p>{esc(t['summary'])}</p>"
+        out += table(t.get("columns") or [], rows)
+        if t.get("more"):
+            out += note(f"... and {fmt(t['more'])} more rows (not at rest first)")
+        if has_data(t.get("settle_seconds")) and len(rows) > 1:
+            fig = figure(5, 2.6)
+            draw_hist(fig.subplots(), t["settle_seconds"], "settle time per pile")
+            out += img(fig, "histogram of the piles' simulated settle times")
+    return out or note("no physics statistics")
 
 
 def gallery_section(gallery) -> str:
@@ -401,7 +420,13 @@ def gallery_section(gallery) -> str:
     if not gallery:
         return note("no gallery")
     out = ""
+    sensors = {str(entry.get("sensor") or "") for entry in gallery}
+    shown = None
     for entry in gallery:
+        sensor = str(entry.get("sensor") or "")
+        if len(sensors) > 1 and sensor != shown:
+            out += f"<h3>{esc('sensor ' + sensor if sensor else 'camera')}</h3>"
+            shown = sensor
         title, caption = entry.get("title") or "", entry.get("caption") or ""
         where = f"scene {entry.get('scene_id')} image {entry.get('im_id')}"
         if entry.get("sensor"):

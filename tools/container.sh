@@ -5,13 +5,15 @@
 #   tools/container.sh          build the base and the image, then check the image
 #   tools/container.sh check    check an image built before
 # 1. Base: `debootstrap --variant=minbase bookworm` from this machine's Debian mirror, with the
-#    bookworm-updates and security suites it uses, committed as localhost/cadsynth-base:bookworm
+#    bookworm-updates and security suites it uses, without documentation, manuals or
+#    translations (tools/container/dpkg-slim.cfg), committed as localhost/cadsynth-base:bookworm
 #    (made once; remove the image to make it again).
 # 2. Image: `buildah bud --isolation chroot` of the Dockerfile on that base, tagged
 #    localhost/cadsynth:latest (podman's runtime cannot set its resource limits on the project's
 #    machines; chroot isolation needs none).
 # 3. Check, each a failure when it does not hold: the image runs as user cadsynth, has no
-#    compiler, and writes only under /out; the default job written in it equals, byte for byte,
+#    compiler and no Mesa, and writes only under /out; a STEP file it writes reads back as
+#    outside it; the default job written in it equals, byte for byte,
 #    the one this tree's build/tools/cadsynth writes (when built); the Python module renders a
 #    frame in it. Prints the build's minutes and the image's size.
 # The test container_image (tests/CMakeLists.txt) runs this where buildah and debootstrap are
@@ -61,6 +63,12 @@ deb $url bookworm-updates main
 deb $security bookworm-security main
 SOURCES
   rm -rf "$rootfs"/var/cache/apt/archives/*.deb "$rootfs"/var/lib/apt/lists/*
+  # The base keeps no documentation, manuals or translations either, and its dpkg leaves them out
+  # of what the image installs later (tools/container/dpkg-slim.cfg; the licences stay).
+  cp "$root/tools/container/dpkg-slim.cfg" "$rootfs/etc/dpkg/dpkg.cfg.d/cadsynth-slim"
+  find "$rootfs/usr/share/doc" -mindepth 1 -not -name copyright -not -type d -delete
+  find "$rootfs/usr/share/locale" -mindepth 1 -maxdepth 1 -not -name locale.alias -exec rm -rf {} +
+  rm -rf "$rootfs"/usr/share/man/* "$rootfs"/usr/share/info/*
   ctr=$(buildah from scratch)
   tar -C "$rootfs" -cf "$work/rootfs.tar" .
   buildah add "$ctr" "$work/rootfs.tar" / > /dev/null
@@ -97,6 +105,9 @@ check_image() {
   touch "$marker"
   sleep 1
   run cadsynth generate -o /out/default --quiet
+  # STEP written and read back through OpenCASCADE's XDE, whose resources the image keeps.
+  run cadsynth variants --export-step /out/steps > /dev/null
+  run cadsynth inspect /out/steps/planetary_gearbox_0_planetary_0.step | tail -n +2 > "$work/inspect.txt"
   run python3 -c '
 import cadsynth, zlib
 frame = next(iter(cadsynth.Recipe.default().prepare().frames(masks=False)))
@@ -111,6 +122,10 @@ print("python", cadsynth.__version__, frame["rgb"].shape, zlib.crc32(frame["rgb"
           head -20)
   [ -z "$stray" ] || fail "the container wrote outside /out: $stray"
   [ -f "$out/default/camera.json" ] || fail "no dataset in /out/default"
+  # No Mesa: its DRI drivers and LLVM (tools/container/no-mesa.control) are not in the image.
+  local mesa
+  mesa=$(find "$mnt/usr/lib" \( -name 'libLLVM*' -o -name '*_dri.so' -o -name 'libGLX_mesa*' \) | head -3)
+  [ -z "$mesa" ] || fail "the image holds Mesa: $mesa"
 
   local host=$root/build/tools/cadsynth
   if [ -x "$host" ]; then
@@ -121,6 +136,11 @@ print("python", cadsynth.__version__, frame["rgb"].shape, zlib.crc32(frame["rgb"
     local frames
     frames=$(find "$out/default" -path '*/rgb/*.png' | wc -l)
     say "the default job in the container equals this machine's build, byte for byte ($frames frames)"
+    "$host" variants --export-step "$work/host/steps" > /dev/null
+    "$host" inspect "$work/host/steps/planetary_gearbox_0_planetary_0.step" | tail -n +2 |
+      diff - "$work/inspect.txt" > "$work/inspect_diff.txt" ||
+      fail "cadsynth inspect of a STEP file differs in the container ($work/inspect_diff.txt)"
+    say "a STEP file written and read in the container is read as outside it"
     local py
     py=$(PYTHONPATH=$root/build/python /usr/bin/python3 -c '
 import cadsynth, zlib

@@ -68,6 +68,7 @@ int main(int argc, char** argv) try {
   bool resim = true, profile = false, confirm = false;
   int iterations = cadsynth::PileOptions{}.solver_iterations;
   int confirm_iterations = cadsynth::PileOptions{}.confirm_iterations;
+  double rest_speed = cadsynth::PileOptions{}.rest_speed_mm_s;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto next = [&]() -> std::string {
@@ -109,6 +110,8 @@ int main(int argc, char** argv) try {
       confirm = true;
     } else if (a == "--confirm-iterations") {
       confirm_iterations = std::stoi(next());
+    } else if (a == "--rest-speed") {
+      rest_speed = std::stod(next());
     } else if (a == "--picks") {
       picks = std::stoi(next());
     } else {
@@ -148,6 +151,7 @@ int main(int argc, char** argv) try {
       o.solver_iterations = iterations;
       o.confirm_seconds = confirm ? 1.0 : 0.0;
       o.confirm_iterations = confirm_iterations;
+      o.rest_speed_mm_s = rest_speed;
       auto start = std::chrono::steady_clock::now();
       const cadsynth::PileResult r = cadsynth::DropPile(parts, shapes, o);
       row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -18,9 +18,8 @@
 namespace cadsynth {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 using testing::Dark;
+using testing::kPi;
 using testing::Lambert;
 using testing::LookingDown;
 using testing::RenderOnThreads;

@@ -9,10 +9,12 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/render/render_support.h"
+
 namespace cadsynth {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using testing::kPi;
 
 Eigen::Vector3f Direction(double mu, double phi) {
   const double s = std::sqrt(std::max(0.0, 1 - mu * mu));

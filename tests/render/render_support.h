@@ -1,6 +1,8 @@
 // Cameras, materials, scenes and options shared by the render tests.
 #pragma once
 
+#include <numbers>
+
 #include <tbb/global_control.h>
 #include <Eigen/Geometry>
 
@@ -9,6 +11,8 @@
 #include "render/scene.h"
 
 namespace cadsynth::testing {
+
+inline constexpr double kPi = std::numbers::pi;
 
 // A camera at `eye` looking straight down (-z), image x along world +x, image y along world -y.
 inline Eigen::Isometry3d LookingDown(const Eigen::Vector3d& eye) {

@@ -8,13 +8,14 @@
 namespace cadsynth {
 namespace {
 
-const TessellationOptions kFine{0.02, 0.2};
+const TessellationOptions kFineStandard{0.02, 0.2};
 
 double Volume(const Component& c) { return ComputeMassProperties(c.shape).volume_mm3; }
 
 // Every declared symmetry maps the tessellated part onto itself (within the mesh's own error).
 void ExpectSymmetriesHold(const Component& c, double tolerance = 0.05) {
-  const Mesh mesh = Tessellate(c.shape, kFine);  // CAD frame, where the symmetries are declared
+  const Mesh mesh =
+      Tessellate(c.shape, kFineStandard);  // CAD frame, where the symmetries are declared
   for (size_t i = 0; i < c.symmetries.discrete.size(); ++i) {
     EXPECT_LT(MaxSurfaceDistance(mesh, mesh, c.symmetries.discrete[i]), tolerance)
         << c.name << " discrete " << i;
@@ -41,7 +42,7 @@ TEST(IsoParts, HexBoltHeadAndShankHaveTheTableDimensions) {
   for (const std::string name : {"M3", "M8", "M24"}) {
     const MetricSize& m = IsoMetric(name);
     const Component bolt = MakeHexBolt(name, 40);
-    const Eigen::Vector3d size = Tessellate(bolt.shape, kFine).Bounds().sizes();
+    const Eigen::Vector3d size = Tessellate(bolt.shape, kFineStandard).Bounds().sizes();
     EXPECT_NEAR(size.y(), m.s, 1e-5) << name;  // across flats (mesh positions are floats)
     EXPECT_NEAR(size.x(), 2 * m.s / std::sqrt(3.0), 1e-5) << name;  // across corners
     EXPECT_NEAR(size.z(), m.k + 40, 1e-5) << name;
@@ -95,12 +96,12 @@ TEST(StandardParts, PegsPlateShaftShoulderBoltBearing) {
 
   const Component shoulder = MakeShoulderBolt(10, 30);
   const ShoulderSize& s = IsoShoulder(10);
-  EXPECT_NEAR(Tessellate(shoulder.shape, kFine).Bounds().sizes().z(),
+  EXPECT_NEAR(Tessellate(shoulder.shape, kFineStandard).Bounds().sizes().z(),
               s.head_k + 30 + s.thread_length, 1e-6);
   ExpectSymmetriesHold(shoulder);
 
   const Component bearing = MakeBallBearing(20, 47, 14);  // a 6204's envelope
-  const Eigen::Vector3d size = Tessellate(bearing.shape, kFine).Bounds().sizes();
+  const Eigen::Vector3d size = Tessellate(bearing.shape, kFineStandard).Bounds().sizes();
   EXPECT_NEAR(size.x(), 47, 0.01);
   EXPECT_NEAR(size.z(), 14, 1e-6);
   ExpectSymmetriesHold(bearing, 0.1);

@@ -12,7 +12,8 @@
 // --jobs runs piles side by side (each on one thread). --drift-profile also prints each pile's
 // resimulated drift after 0.02, 0.1, 0.25, 0.5 and 2 s (a creep grows linearly, a topple faster,
 // a restart's jolt is there at once). --iterations, --confirm-rest and --confirm-iterations set
-// PileOptions' solver_iterations, confirm_seconds (1 s) and confirm_iterations. --picks N then
+// PileOptions' solver_iterations, confirm_seconds (1 s) and confirm_iterations, --rest-speed its
+// rest_speed_mm_s. --picks N then
 // takes N parts out of each pile, the highest first, as a pick sequence does (SettleAfterPick):
 // the wall time of each pick step and how many parts it freed, median and worst.
 #include <algorithm>
@@ -55,7 +56,8 @@ int Usage() {
       stderr,
       "usage: cadsynth_bench_pile (--family NAME [--param KEY=VALUE]... | --file PATH)\n"
       "       [--count 60] [--seeds 1-24] [--jobs 1] [--no-resim] [--drift-profile]\n"
-      "       [--iterations 50] [--confirm-rest] [--confirm-iterations 200] [--picks 0]\n");
+      "       [--iterations 50] [--confirm-rest] [--confirm-iterations 200] [--rest-speed 2]\n"
+      "       [--picks 0]\n");
   return 2;
 }
 

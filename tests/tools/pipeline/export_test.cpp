@@ -5,19 +5,13 @@
 #include "cad/core/error.h"
 #include "cad/import.h"
 #include "tests/test_support.h"
+#include "tests/tools/pipeline/small_job.h"
 #include "variants/families.h"
 
 namespace cadsynth {
 namespace {
 
-PartSource Family(const std::string& name, const std::vector<ParamValues>& variants) {
-  PartSource source;
-  source.kind = PartSource::Kind::kFamily;
-  source.family = name;
-  for (const ParamValues& v : variants)
-    source.variants.push_back(CompleteParams(*FindFamily(name), v));
-  return source;
-}
+using testing::Family;
 
 TEST(ExportVariants, EveryVariantReimportsWithTheSameVolume) {
   testing::ScratchDir dir;

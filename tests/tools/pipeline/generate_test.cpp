@@ -40,17 +40,7 @@ using testing::ScratchDir;
 // The default job at a small size: 2 views of 160x120.
 RunSpec SmallDefault() { return testing::SmallJob(); }
 
-// A family entry with the given variants (parameters completed with the family's defaults).
-PartSource Family(const std::string& name, const std::vector<ParamValues>& variants,
-                  bool one_class = false) {
-  PartSource source;
-  source.kind = PartSource::Kind::kFamily;
-  source.family = name;
-  for (const ParamValues& v : variants)
-    source.variants.push_back(CompleteParams(*FindFamily(name), v));
-  source.one_class = one_class;
-  return source;
-}
+using testing::Family;
 
 RunSpec OneScene(std::vector<PartSource> sources, Layout layout = Layout::kAssembled) {
   RunSpec spec = SmallDefault();

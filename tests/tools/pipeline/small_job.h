@@ -5,12 +5,26 @@
 
 #include <filesystem>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "recipes/recipe.h"
 #include "tools/pipeline/generate.h"
+#include "variants/families.h"
 
 namespace cadsynth::testing {
+
+// A family entry with the given variants (parameters completed with the family's defaults).
+inline PartSource Family(const std::string& name, const std::vector<ParamValues>& variants,
+                         bool one_class = false) {
+  PartSource source;
+  source.kind = PartSource::Kind::kFamily;
+  source.family = name;
+  for (const ParamValues& v : variants)
+    source.variants.push_back(CompleteParams(*FindFamily(name), v));
+  source.one_class = one_class;
+  return source;
+}
 
 inline RunSpec SmallJob(std::vector<double> yaws_rad = {0.0, 2.0}) {
   RunSpec spec = DefaultRunSpec();

@@ -472,7 +472,9 @@ TEST(Pile, PicksFromANutPileSettleWithoutOverlapsAndRepeat) {
     for (size_t k = 0, i = 0; i < poses.size(); ++i) {
       if (static_cast<int>(i) == top) continue;
       EXPECT_EQ(again.world_from_model[k].matrix(), r.world_from_model[k].matrix());
-      if (!freed[k]) EXPECT_EQ(r.world_from_model[k].matrix(), poses[i].matrix());
+      if (!freed[k]) {
+        EXPECT_EQ(r.world_from_model[k].matrix(), poses[i].matrix());
+      }
       placed.push_back(Place(parts[0], r.world_from_model[k]));
       ++k;
     }

@@ -153,12 +153,39 @@ struct Renderer::Impl {
   void ProjectorPacket(const PathTracer* tracer, const RTCRayHit16& rh, const int valid[16],
                        const Shaded shaded[16], const Eigen::Vector3f& projector, float spread,
                        int u0, int v0, int w, uint8_t* seen, float* signal) const;
-  // active_stereo: the noiseless IR image `camera` sees (render/sensor.h): the dots of the
-  // projector at `projector` (world; its axes are the camera's) where it lights the point, plus
-  // the ambient share of the Lambert shading.
+  // active_stereo: the noiseless IR values of a traced and shaded packet (render/sensor.h), written
+  // to pixel (u0 + j % 4, v0 + j / 4) of the w-wide `out`: the dots of the projector at `projector`
+  // (world; `projector_from_world` turns world directions into its frame, whose axes are the
+  // camera's) where it lights the point (`seen`, `signal`: ProjectorPacket's), plus the ambient
+  // share of the Lambert shading.
+  void InfraredPacket(const RTCRayHit16& rh, const int valid[16], const Shaded shaded[16],
+                      const uint8_t* seen, const float* signal, int u0, int v0, int w,
+                      const DotTable& dots, const DepthModel& model,
+                      const Eigen::Vector3f& projector, const Eigen::Matrix3f& projector_from_world,
+                      float* out) const;
+  // active_stereo: the noiseless IR image `camera` sees: every tile traced, shaded, lit by the
+  // projector and InfraredPacket.
   std::vector<float> InfraredPass(const PathTracer* tracer, const Camera& camera,
                                   const DotTable& dots, const DepthModel& model,
                                   const Eigen::Vector3f& projector) const;
+  // active_stereo: the projector's dots over the directions it lights in the field of view of a
+  // camera with intrinsics `k` and of the second camera beside it, widened by the parallax of
+  // points down to min_depth (closer ones are drawn as they go). Built once and kept while the
+  // frames' sensor and camera stay the same.
+  mutable std::mutex dots_mutex;
+  mutable std::shared_ptr<const DotTable> dots_cache;
+  std::shared_ptr<const DotTable> DotsOf(const DepthModel& model, const Intrinsics& k) const;
+  // Per 4 x 4 tile of a w x h image seen through `rays` from `cam_from_world`: 1 where an instance
+  // or a fixture may be seen. The other tiles see the floor or nothing, and skip the scene's
+  // traversal (TracePacket). Exact: the rectangle of a box's projected corners holds its whole
+  // projection, with a pixel of margin.
+  std::vector<uint8_t> ReachableTiles(const PixelRays& rays,
+                                      const Eigen::Isometry3d& cam_from_world,
+                                      const std::vector<Eigen::Isometry3d>& cam_from_model) const;
+  // The first hits of a packet of camera rays in a tile: the scene's traversal where `reachable`,
+  // else the floor's plane alone.
+  void TracePacket(bool reachable, RTCIntersectContext* context, const int* valid,
+                   RTCRayHit16* rh) const;
   unsigned floor_id = kInvalid;
   // Fixtures: top-level geometry ids first_fixture_id + f, their triangles and normals (world).
   unsigned first_fixture_id = kInvalid;
@@ -744,6 +771,38 @@ void Renderer::Impl::ProjectorPacket(const PathTracer* tracer, const RTCRayHit16
   }
 }
 
+void Renderer::Impl::InfraredPacket(const RTCRayHit16& rh, const int valid[16],
+                                    const Shaded shaded[16], const uint8_t* seen,
+                                    const float* signal, int u0, int v0, int w,
+                                    const DotTable& pattern, const DepthModel& m,
+                                    const Eigen::Vector3f& projector,
+                                    const Eigen::Matrix3f& projector_from_world, float* out) const {
+  // The directions of the lit points in the projector's frame, then their dots all at once.
+  int lane[16], n = 0;
+  double xs[16], ys[16];
+  float weight[16];
+  for (int j = 0; j < 16; ++j) {
+    if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
+    const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
+    out[pixel] = static_cast<float>(m.ambient) * Luminance(shaded[j].color);
+    if (!seen[pixel]) continue;
+    const Eigen::Vector3f q = projector_from_world * (shaded[j].point - projector);
+    const float distance_m = q.norm() / 1000.0f;
+    if (!(q.z() > 0.0f && distance_m > 0.0f)) continue;
+    lane[n] = j;
+    xs[n] = q.x() / q.z(), ys[n] = q.y() / q.z();
+    weight[n] = static_cast<float>(m.dot_power) * signal[pixel] / (distance_m * distance_m);
+    ++n;
+  }
+  if (n == 0) return;
+  float dots[16];
+  pattern(n, xs, ys, dots);
+  for (int i = 0; i < n; ++i) {
+    const int j = lane[i];
+    out[static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile)] += weight[i] * dots[i];
+  }
+}
+
 std::vector<float> Renderer::Impl::InfraredPass(const PathTracer* tracer, const Camera& camera,
                                                 const DotTable& pattern, const DepthModel& m,
                                                 const Eigen::Vector3f& projector) const {
@@ -765,6 +824,11 @@ std::vector<float> Renderer::Impl::InfraredPass(const PathTracer* tracer, const 
               tfar = static_cast<float>(options.far_mm);
   const float spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
   const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  const Eigen::Isometry3d cam_from_world = camera.world_from_cam.inverse();
+  std::vector<Eigen::Isometry3d> cam_from_model(scene.instances.size());
+  for (size_t i = 0; i < scene.instances.size(); ++i)
+    cam_from_model[i] = cam_from_world * scene.instances[i].world_from_model;
+  const std::vector<uint8_t> reachable = ReachableTiles(*rays, cam_from_world, cam_from_model);
   tbb::parallel_for(
       tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
         RTCIntersectContext context;
@@ -774,29 +838,60 @@ std::vector<float> Renderer::Impl::InfraredPass(const PathTracer* tracer, const 
         for (int tile = range.begin(); tile < range.end(); ++tile) {
           const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
           InitPacket(gen, u0, v0, w, h, pxs, pys, 0.5f, 0.5f, tnear, tfar, &rh, valid);
-          rtcInitIntersectContext(&context);
-          rtcIntersect16(valid, world, &context, &rh);
+          TracePacket(reachable[tile], &context, valid, &rh);
           ShadePacket(rh, valid, shaded, m.ambient > 0.0);
           ProjectorPacket(tracer, rh, valid, shaded, projector, spread, u0, v0, w, seen.data(),
                           signal.data());
-          for (int j = 0; j < 16; ++j) {
-            if (!valid[j] || rh.hit.geomID[j] == kInvalid) continue;
-            const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
-            float value = static_cast<float>(m.ambient) * Luminance(shaded[j].color);
-            if (seen[pixel]) {
-              const Eigen::Vector3f q = projector_from_world * (shaded[j].point - projector);
-              const float distance_m = q.norm() / 1000.0f;
-              if (q.z() > 0.0f && distance_m > 0.0f) {
-                const float dots = pattern(q.x() / q.z(), q.y() / q.z());
-                value += static_cast<float>(m.dot_power) * signal[pixel] * dots /
-                         (distance_m * distance_m);
-              }
-            }
-            out[pixel] = value;
-          }
+          InfraredPacket(rh, valid, shaded, seen.data(), signal.data(), u0, v0, w, pattern, m,
+                         projector, projector_from_world, out.data());
         }
       });
   return out;
+}
+
+std::shared_ptr<const DotTable> Renderer::Impl::DotsOf(const DepthModel& m,
+                                                       const Intrinsics& k) const {
+  const double parallax = m.baseline_mm / std::max(m.min_depth_mm, 1.0);
+  const double x0 = -k.cx / k.fx - parallax, x1 = (k.width - k.cx) / k.fx + parallax;
+  const double y0 = -k.cy / k.fy - parallax, y1 = (k.height - k.cy) / k.fy + parallax;
+  std::lock_guard<std::mutex> lock(dots_mutex);
+  if (dots_cache == nullptr || !dots_cache->Is(m, k.fx, x0, x1, y0, y1)) {
+    // Built under the lock, isolated (as RaysOf's tables): its rows run in parallel.
+    tbb::this_task_arena::isolate(
+        [&] { dots_cache = std::make_shared<const DotTable>(m, k.fx, x0, x1, y0, y1); });
+  }
+  return dots_cache;
+}
+
+std::vector<uint8_t> Renderer::Impl::ReachableTiles(
+    const PixelRays& rays, const Eigen::Isometry3d& cam_from_world,
+    const std::vector<Eigen::Isometry3d>& cam_from_model) const {
+  const Intrinsics& k = rays.intrinsics();
+  const int w = k.width, h = k.height;
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  std::vector<uint8_t> reachable(static_cast<size_t>(tiles_x) * tiles_y, 0);
+  const auto mark = [&](const PixelRect& r) {
+    for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
+      for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
+        reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
+    }
+  };
+  for (size_t i = 0; i < scene.instances.size(); ++i)
+    mark(ImageRect(rays, model_bounds[scene.instances[i].part], cam_from_model[i],
+                   PixelRect{0, 0, w, h}));
+  for (const Scene::Fixture& fixture : scene.fixtures)
+    mark(ImageRect(rays, fixture.mesh.Bounds(), cam_from_world, PixelRect{0, 0, w, h}));
+  return reachable;
+}
+
+void Renderer::Impl::TracePacket(bool reachable, RTCIntersectContext* context, const int* valid,
+                                 RTCRayHit16* rh) const {
+  if (reachable) {
+    rtcInitIntersectContext(context);
+    rtcIntersect16(valid, world, context, rh);
+  } else if (floor_id != kInvalid) {
+    IntersectFloor(valid, static_cast<float>(scene.floor_half_size_mm), floor_id, rh);
+  }
 }
 
 namespace {
@@ -888,9 +983,6 @@ struct Renderer::Impl::FramePasses {
   [[gnu::always_inline]] inline void Shade(int tile, int u0, int v0, TilePacket* p,
                                            Eigen::Vector3f radiance[16], Eigen::Vector3f color[16]);
   inline void SenseAndDisplay(int u, int v, Eigen::Vector3f radiance, Eigen::Vector3f color);
-  inline void Trace(int tile, RTCIntersectContext* context, const int* valid,
-                    RTCRayHit16* rh) const;
-  void MarkReachableTiles();
 
   const Impl& im;
   const Camera& camera;
@@ -910,10 +1002,19 @@ struct Renderer::Impl::FramePasses {
   // Normals also for the depth model (incidence angles), kept in the frame only when asked for.
   const bool need_normals;
   std::vector<Eigen::Vector3f> normals;
+  // What the projector sees (ProjectorPacket): the depth model's (projector), or active_stereo's
+  // dot projector's (stereo).
   std::vector<uint8_t> projector_seen;
   std::vector<float> signal;
   const Eigen::Vector3f projector_world;
   const float pixel_spread;
+  // active_stereo: the left IR camera is the camera, whose centre rays give its IR image as they
+  // give the labels; the dot projector sits half the baseline along its x axis, the right IR
+  // camera the whole baseline (SimulateSensorDepth).
+  const bool stereo;
+  const Eigen::Vector3f dots_world;
+  std::shared_ptr<const DotTable> dots;
+  std::vector<float> infrared_left;  // noiseless, linear
 
   const bool gray;
   const ImageSensor& imager;
@@ -938,8 +1039,7 @@ struct Renderer::Impl::FramePasses {
   const float tnear, tfar;
   const int ss;
   const Eigen::Isometry3d cam_from_world;
-  std::vector<uint8_t> reachable;  // per tile (MarkReachableTiles)
-  const float floor_half;
+  std::vector<uint8_t> reachable;  // per tile (Impl::ReachableTiles)
 
   // The denoiser (pbr) needs every pixel's radiance and guides first; the colour follows.
   const bool denoising;
@@ -969,6 +1069,9 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
       projector_world((camera.world_from_cam * Eigen::Vector3d(depth_model.baseline_mm, 0.0, 0.0))
                           .cast<float>()),
       pixel_spread(static_cast<float>(1.0 / std::min(k.fx, k.fy))),
+      stereo(depth_model.kind == DepthModel::Kind::kActiveStereo),
+      dots_world((camera.world_from_cam * Eigen::Vector3d(0.5 * depth_model.baseline_mm, 0.0, 0.0))
+                     .cast<float>()),
       gray(sensor.image != SensorOptions::Image::kRgb),
       imager(sensor.imager),
       noise_seed(ImageNoiseSeed(imager, view)),
@@ -992,14 +1095,13 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
       tfar(static_cast<float>(o.far_mm)),
       ss(o.supersampling),
       cam_from_world(camera.world_from_cam.inverse()),
-      floor_half(static_cast<float>(im.scene.floor_half_size_mm)),
       denoising(pbr && o.shade && o.denoise) {
   frame.camera = camera;
   frame.rgb.assign(3 * num_pixels, 0);
   frame.depth.assign(num_pixels, 0.0f);
   frame.instance.assign(num_pixels, 0);
   if (need_normals) normals.assign(num_pixels, Eigen::Vector3f::Zero());
-  if (projector) projector_seen.assign(num_pixels, 0), signal.assign(num_pixels, 0.0f);
+  if (projector || stereo) projector_seen.assign(num_pixels, 0), signal.assign(num_pixels, 0.0f);
   if (gray) frame.gray.assign(num_pixels, 0.0f);
   if (o.hdr) frame.radiance.assign(3 * num_pixels, 0.0f);
   if (pbr && o.shade) frame.samples.assign(num_pixels, 0);
@@ -1020,7 +1122,14 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
   for (size_t i = 0; i < im.scene.instances.size(); ++i) {
     frame.instances[i].cam_from_model = cam_from_world * im.scene.instances[i].world_from_model;
   }
-  MarkReachableTiles();
+  std::vector<Eigen::Isometry3d> cam_from_model(frame.instances.size());
+  for (size_t i = 0; i < frame.instances.size(); ++i)
+    cam_from_model[i] = frame.instances[i].cam_from_model;
+  reachable = im.ReachableTiles(*rays, cam_from_world, cam_from_model);
+  if (stereo) {
+    dots = im.DotsOf(depth_model, k);
+    infrared_left.assign(num_pixels, 0.0f);
+  }
   if (gray && imager.full_well > 0.0) grey_noise = GreyImageNoise(noise_seed, num_pixels);
   if (denoising) {
     radiance_plane.assign(3 * num_pixels, 0.0f);
@@ -1028,39 +1137,6 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
     normal_plane.assign(3 * num_pixels, 0.0f);
     variance_plane.assign(num_pixels, 0.0f);
     coloured.assign(num_pixels, 0);
-  }
-}
-
-// Tiles that no instance can reach (outside the projected rectangles of every instance's model
-// box) see the floor or nothing, and skip the scene's traversal. Exact: the rectangle of a box's
-// projected corners holds its whole projection, with a pixel of margin.
-void Renderer::Impl::FramePasses::MarkReachableTiles() {
-  reachable.assign(static_cast<size_t>(tiles_x) * tiles_y, 0);
-  for (size_t i = 0; i < im.scene.instances.size(); ++i) {
-    const PixelRect r = ImageRect(*rays, im.model_bounds[im.scene.instances[i].part],
-                                  frame.instances[i].cam_from_model, PixelRect{0, 0, w, h});
-    for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
-      for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
-        reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
-    }
-  }
-  for (const Scene::Fixture& fixture : im.scene.fixtures) {
-    const PixelRect r =
-        ImageRect(*rays, fixture.mesh.Bounds(), cam_from_world, PixelRect{0, 0, w, h});
-    for (int ty = r.v0 / kTile; ty * kTile < r.v1; ++ty) {
-      for (int tx = r.u0 / kTile; tx * kTile < r.u1; ++tx)
-        reachable[static_cast<size_t>(ty) * tiles_x + tx] = 1;
-    }
-  }
-}
-
-void Renderer::Impl::FramePasses::Trace(int tile, RTCIntersectContext* context, const int* valid,
-                                        RTCRayHit16* rh) const {
-  if (reachable[tile]) {
-    rtcInitIntersectContext(context);
-    rtcIntersect16(valid, im.world, context, rh);
-  } else if (im.floor_id != kInvalid) {
-    IntersectFloor(valid, floor_half, im.floor_id, rh);
   }
 }
 
@@ -1078,12 +1154,14 @@ void Renderer::Impl::FramePasses::CastLabels(int tile, int u0, int v0, TilePacke
   // Incoherent packet traversal: Embree's coherent mode
   // (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) lost parts near the image centre of straight-down
   // views, also with robust scenes.
-  Trace(tile, &p->context, valid, &rh);
+  im.TracePacket(reachable[tile], &p->context, valid, &rh);
   std::copy(valid, valid + 16, centre_valid);
   // The fast mode's colour needs the lights; normals, albedo and points (for the sensor)
   // do not.
   const bool fast_colour = o.shade && ss == 1 && !pbr;
-  if (fast_colour || need_normals) im.ShadePacket(rh, valid, shaded, fast_colour);
+  // The IR image's ambient share is the Lambert shading too.
+  const bool lights = fast_colour || (stereo && depth_model.ambient > 0.0);
+  if (fast_colour || need_normals) im.ShadePacket(rh, valid, shaded, lights);
   for (int j = 0; j < 16; ++j) {
     if (!valid[j]) continue;
     const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
@@ -1097,6 +1175,12 @@ void Renderer::Impl::FramePasses::CastLabels(int tile, int u0, int v0, TilePacke
   if (projector) {
     im.ProjectorPacket(tracer, rh, valid, shaded, projector_world, pixel_spread, u0, v0, w,
                        projector_seen.data(), signal.data());
+  }
+  if (stereo) {
+    im.ProjectorPacket(tracer, rh, valid, shaded, dots_world, pixel_spread, u0, v0, w,
+                       projector_seen.data(), signal.data());
+    im.InfraredPacket(rh, valid, shaded, projector_seen.data(), signal.data(), u0, v0, w, *dots,
+                      depth_model, dots_world, cam_from_world_rotation, infrared_left.data());
   }
 }
 
@@ -1145,7 +1229,7 @@ void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
       InitPacket(gen, u0, v0, w, h, distorted ? nullptr : &sample_xs[n],
                  distorted ? nullptr : &sample_ys[n], (sx + 0.5f) / ss, (sy + 0.5f) / ss, tnear,
                  tfar, &rh, valid);
-      Trace(tile, &p->context, valid, &rh);
+      im.TracePacket(reachable[tile], &p->context, valid, &rh);
       im.ShadePacket(rh, valid, shaded);
       for (int j = 0; j < 16; ++j) {
         if (!valid[j]) continue;
@@ -1270,24 +1354,14 @@ void Renderer::Impl::FramePasses::SimulateSensorDepth() {
   input.signal = projector ? signal.data() : nullptr;
   input.rgb = frame.rgb.data();
   std::vector<uint8_t> ir_left, ir_right;
-  if (depth_model.kind == DepthModel::Kind::kActiveStereo) {
-    // The left IR camera is the camera; the right one and the projector sit on its x axis.
+  if (stereo) {
     Camera right = camera;
     right.world_from_cam =
         camera.world_from_cam * Eigen::Translation3d(depth_model.baseline_mm, 0, 0);
-    const Eigen::Vector3f dots =
-        (camera.world_from_cam * Eigen::Vector3d(0.5 * depth_model.baseline_mm, 0.0, 0.0))
-            .cast<float>();
-    // The pattern's dots over the directions the projector lights in the cameras' field of
-    // view, widened by the parallax of points down to min_depth (closer ones draw as they go).
-    const double parallax = depth_model.baseline_mm / std::max(depth_model.min_depth_mm, 1.0);
-    const DotTable pattern(depth_model, k.fx, -k.cx / k.fx - parallax,
-                           (k.width - k.cx) / k.fx + parallax, -k.cy / k.fy - parallax,
-                           (k.height - k.cy) / k.fy + parallax);
-    const std::vector<float> left = im.InfraredPass(tracer, camera, pattern, depth_model, dots);
-    const double gain = InfraredGain(left);
-    std::array<std::vector<uint8_t>, 2> ir = InfraredImages(
-        depth_model, view, left, im.InfraredPass(tracer, right, pattern, depth_model, dots), gain);
+    const double gain = InfraredGain(infrared_left);
+    std::array<std::vector<uint8_t>, 2> ir =
+        InfraredImages(depth_model, view, infrared_left,
+                       im.InfraredPass(tracer, right, *dots, depth_model, dots_world), gain);
     ir_left = std::move(ir[0]), ir_right = std::move(ir[1]);
     input.ir_left = ir_left.data();
     input.ir_right = ir_right.data();

@@ -397,7 +397,7 @@ float DotPattern(const DepthModel& m, double fx, double x, double y) {
 }
 
 DotTable::DotTable(const DepthModel& model, double fx, double x0, double x1, double y0, double y1)
-    : model_(model), fx_(fx) {
+    : model_(model), fx_(fx), x0_(x0), x1_(x1), y0_(y0), y1_(y1) {
   const double pitch = model.dot_spacing_px / fx;
   inv_pitch_ = 1.0 / pitch;
   // PatternAt's dot: peak exp(-r^2 / (2 sigma^2)) out to 3 sigma, in cells.
@@ -426,32 +426,55 @@ DotTable::DotTable(const DepthModel& model, double fx, double x0, double x1, dou
   });
 }
 
+bool DotTable::Is(const DepthModel& model, double fx, double x0, double x1, double y0,
+                  double y1) const {
+  return model.seed == model_.seed && model.dot_spacing_px == model_.dot_spacing_px && fx == fx_ &&
+         x0 == x0_ && x1 == x1_ && y0 == y0_ && y1 == y1_;
+}
+
 float DotTable::operator()(double x, double y) const {
-  const double gx = x * inv_pitch_, gy = y * inv_pitch_;
-  const double fi = std::floor(gx), fj = std::floor(gy);
-  const double a = fi - i0_, b = fj - j0_;
-  if (!(a >= 1.0 && b >= 1.0 && a + 2.0 <= ni_ && b + 2.0 <= nj_)) {
-    return PatternAt(model_, fx_, x, y, [&](int i, int j, double* cx, double* cy) {
-      return HashedDot(model_.seed, i, j, cx, cy);
-    });
-  }
-  // Inside the table: the 3 x 3 cells around the point, in single precision relative to its cell.
-  const float px = static_cast<float>(gx - fi), py = static_cast<float>(gy - fj);
-  const Eigen::Vector2f* row =
-      &centres_[(static_cast<size_t>(b) - 1) * ni_ + static_cast<size_t>(a)];
-  float sum = 0.0f;
-  for (int dj = -1; dj <= 1; ++dj, row += ni_) {
-    for (int di = -1; di <= 1; ++di) {
-      const Eigen::Vector2f& c = row[di];
-      if (c.x() == kNone) continue;
-      const float dx = px - (static_cast<float>(di) + c.x()),
-                  dy = py - (static_cast<float>(dj) + c.y());
-      const float r2 = dx * dx + dy * dy;
-      if (r2 > cut2_) continue;
-      sum += std::exp(r2 * exponent_);
+  float out;
+  (*this)(1, &x, &y, &out);
+  return out;
+}
+
+void DotTable::operator()(int n, const double* x, const double* y, float* out) const {
+  // Per point (row) and cell around it (column): the point's offset from the cell's dot, in cells,
+  // single precision relative to the point's cell. A cell without a dot, and a point outside the
+  // table (drawn by the hash below), sit kNone away.
+  using Offsets = Eigen::Array<float, 16, 9>;
+  Offsets dx = Offsets::Constant(kNone), dy = Offsets::Constant(kNone);
+  bool hashed[16] = {};
+  n = std::min(n, 16);
+  for (int l = 0; l < n; ++l) {
+    const double gx = x[l] * inv_pitch_, gy = y[l] * inv_pitch_;
+    const double fi = std::floor(gx), fj = std::floor(gy);
+    const double a = fi - i0_, b = fj - j0_;
+    if (!(a >= 1.0 && b >= 1.0 && a + 2.0 <= ni_ && b + 2.0 <= nj_)) {
+      hashed[l] = true;
+      continue;
+    }
+    const float px = static_cast<float>(gx - fi), py = static_cast<float>(gy - fj);
+    const Eigen::Vector2f* row =
+        &centres_[(static_cast<size_t>(b) - 1) * ni_ + static_cast<size_t>(a)];
+    for (int dj = -1, c = 0; dj <= 1; ++dj, row += ni_) {
+      for (int di = -1; di <= 1; ++di, ++c) {
+        dx(l, c) = px - (static_cast<float>(di) + row[di].x());
+        dy(l, c) = py - (static_cast<float>(dj) + row[di].y());
+      }
     }
   }
-  return std::min(sum * peak_, 1.0f);
+  // Every dot of every point at once: a dot ends at 3 sigma (cut2_).
+  const Offsets r2 = dx.square() + dy.square();
+  const Offsets dots = (r2 <= cut2_).select((r2.min(cut2_) * exponent_).exp(), 0.0f);
+  const Eigen::Array<float, 16, 1> sum = dots.rowwise().sum() * peak_;
+  for (int l = 0; l < n; ++l) {
+    out[l] = hashed[l] ? PatternAt(model_, fx_, x[l], y[l],
+                                   [&](int i, int j, double* cx, double* cy) {
+                                     return HashedDot(model_.seed, i, j, cx, cy);
+                                   })
+                       : std::min(sum[l], 1.0f);
+  }
 }
 
 double InfraredGain(const std::vector<float>& linear) {

@@ -264,11 +264,19 @@ class DotTable {
  public:
   DotTable(const DepthModel& model, double fx, double x0, double x1, double y0, double y1);
   float operator()(double x, double y) const;
+  // The values at the n <= 16 points (x[i], y[i]), each as operator() gives it: the dots of the
+  // nine cells around the points summed for all of them at once (SIMD over the points).
+  void operator()(int n, const double* x, const double* y, float* out) const;
+  // Whether this is the table DotTable(model, fx, x0, x1, y0, y1) would build (the same dots over
+  // the same window): a renderer keeps one for its frames.
+  bool Is(const DepthModel& model, double fx, double x0, double x1, double y0, double y1) const;
 
  private:
-  static constexpr float kNone = -1.0f;  // a cell without a dot
+  // A cell without a dot: a centre this far away is beyond every cut.
+  static constexpr float kNone = 1e4f;
   DepthModel model_;
   double fx_, inv_pitch_;
+  double x0_, x1_, y0_, y1_;
   float peak_, exponent_, cut2_;
   int i0_ = 0, j0_ = 0, ni_ = 0, nj_ = 0;
   std::vector<Eigen::Vector2f> centres_;  // per cell: the dot's place in it, or kNone

@@ -285,8 +285,8 @@ class DotTable {
 // 99th percentile of `linear` (the left image) to 0.8 of full scale, within [1/4, 64].
 double InfraredGain(const std::vector<float>& linear);
 // active_stereo: the left and right IR images of frame `view` from their noiseless linear values:
-// times `gain`, plus read noise N(0, ir_noise) (one Box-Muller pair per pixel: left, right),
-// rounded to 8 bits.
+// times `gain`, plus read noise N(0, ir_noise) (one Box-Muller pair per pixel: left, right, in
+// single precision: NormalPairsFloat), rounded to 8 bits.
 std::array<std::vector<uint8_t>, 2> InfraredImages(const DepthModel& model, uint64_t view,
                                                    const std::vector<float>& left,
                                                    const std::vector<float>& right, double gain);

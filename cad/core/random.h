@@ -137,8 +137,8 @@ inline constexpr RandomStream kSensorAxial{
     "Box-Muller pair for pixels 2k and 2k + 1: the cosine's number, then the sine's)"};
 inline constexpr RandomStream kSensorInfrared{
     "sensor.infrared",
-    "active_stereo: an IR pixel's read noise, seeded by sensor.frame; index = (((pixel << 1) + "
-    "camera) << 1) + draw"};
+    "active_stereo: an IR pixel's read noise in the left and right images (one draw, a normal "
+    "pair), seeded by sensor.frame; index = pixel"};
 inline constexpr RandomStream kSensorDots{
     "sensor.dots",
     "active_stereo: the projector's dot pattern, seeded by camera.depth.seed; index = (cell << 2) "
@@ -184,8 +184,8 @@ inline constexpr RandomStream kRandomStreams[] = {
 };
 
 namespace random_detail {
-// Two SplitMix64 rounds over (seed, stream id, index).
-inline double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
+// Two SplitMix64 rounds over (seed, stream id, index): 64 random bits.
+inline uint64_t DrawBits(uint64_t seed, uint64_t stream, uint64_t index) {
   uint64_t x = seed * 0x9E3779B97F4A7C15ull ^
                (stream + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
                (index + 0x85EBCA77C2B2AE63ull) * 0x94D049BB133111EBull;
@@ -195,7 +195,11 @@ inline double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
     x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
     x ^= x >> 31;
   }
-  return static_cast<double>(x >> 11) * 0x1.0p-53;
+  return x;
+}
+// Their top 53 bits as a number in [0, 1).
+inline double Draw(uint64_t seed, uint64_t stream, uint64_t index) {
+  return static_cast<double>(DrawBits(seed, stream, index) >> 11) * 0x1.0p-53;
 }
 }  // namespace random_detail
 
@@ -242,6 +246,13 @@ inline void NormalPair(double u1, double u2, double* z0, double* z1) {
   *z0 = r * c;
   *z1 = r * sn;
 }
+
+// Box-Muller in single precision for many pairs at once, where a pair needs less than
+// NormalPair's 1e-10 and many are drawn (an image's read noise): z0[i] and z1[i] from the 64 bits
+// of bits[i] (random_detail::DrawBits), u1 from the top 23 bits and u2 from the next 23, each the
+// centre of its 2^-23 step, so |z| < 5.8. Within 2e-6 of the formula; about one tenth of
+// NormalPair's time per pair (the loops run 4 pairs at a time).
+void NormalPairsFloat(const uint64_t* bits, int n, float* z0, float* z1);
 
 // A uniform number in [0, 1) from (seed, stream, index): SplitMix64 rounds, the same on every
 // machine and compiler (std:: distributions are not). Inline, so that the stream's id (a hash of

@@ -233,11 +233,49 @@ bool Returns(const DepthModel& m, const DepthSensorInput& in, int u, int v, size
 int StereoStrips(int height) { return 2 * std::max(1, (height + 511) / 512); }
 constexpr int kStripMarginAbove = 48;
 
+// The columns a strip's match keeps clear of its surfaces on either side: the matcher's paths
+// start this far from the first surface pixel (through the dark around it, as on the whole
+// image) and pixels beside a surface, whose windows overlap it, can still match (edge fattening).
+constexpr int kCropMargin = 16;
+
+// The texture test's window sums at row v of the w-wide 8-bit `image` of height h: for every
+// column, the sum and the sum of squares of the block x block window around (u, v), with the
+// image mirrored at its edges (OpenCV's BORDER_REFLECT: ...cba|abc...). Exact in integers.
+void WindowSums(const uint8_t* image, int w, int h, int v, int block, std::vector<int32_t>* sum,
+                std::vector<int32_t>* sum2) {
+  const int half = block / 2;
+  const auto reflect = [](int i, int n) {
+    while (i < 0 || i >= n) i = i < 0 ? -i - 1 : 2 * n - i - 1;
+    return i;
+  };
+  // Column sums over the window's rows, then their running sum along the row.
+  std::vector<int32_t> column(static_cast<size_t>(w) + 2 * half), column2(column.size());
+  for (int u = -half; u < w + half; ++u) {
+    int32_t c = 0, c2 = 0;
+    const int x = reflect(u, w);
+    for (int dv = -half; dv <= half; ++dv) {
+      const int32_t g = image[static_cast<size_t>(reflect(v + dv, h)) * w + x];
+      c += g, c2 += g * g;
+    }
+    column[u + half] = c, column2[u + half] = c2;
+  }
+  int32_t run = 0, run2 = 0;
+  for (int i = 0; i < block; ++i) run += column[i], run2 += column2[i];
+  for (int u = 0; u < w; ++u) {
+    (*sum)[u] = run, (*sum2)[u] = run2;
+    if (u + block < static_cast<int>(column.size())) {
+      run += column[u + block] - column[u], run2 += column2[u + block] - column2[u];
+    }
+  }
+}
+
 // active_stereo: OpenCV's StereoSGBM (its vectorised three-path variant, MODE_SGBM_3WAY) on the
-// left and right IR images, then z = f B / d. The
-// image is cut into StereoStrips(h) strips matched in parallel, each with kStripMarginAbove rows
-// above it (and the window's half below) so that its paths start before its first kept row: a
-// fixed cut, the same on any thread count.
+// left and right IR images, then z = f B / d. The image is cut into StereoStrips(h) strips matched
+// in parallel, each with kStripMarginAbove rows above it (and the window's half below) so that its
+// paths start before its first kept row: a fixed cut, the same on any thread count. A strip
+// matches only the rectangle around its surfaces (the exact depth), kStripMarginAbove rows above
+// and kCropMargin columns either side of them, and searches only the disparities they lie at:
+// where no surface is, the projector lights nothing, and the IR images hold read noise alone.
 std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) {
   const Intrinsics& k = in.intrinsics;
   const int w = k.width, h = k.height;
@@ -249,45 +287,54 @@ std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) 
   const int strips = StereoStrips(h);
   const int strip_rows = (h + strips - 1) / strips;
   const double fb = k.fx * m.baseline_mm;
-  // The texture test: the grey standard deviation of each pixel's window in the left image.
-  cv::Mat texture;
-  if (m.min_texture > 0.0) {
-    cv::Mat image(h, w, CV_8U, const_cast<uint8_t*>(in.ir_left)), grey, mean, mean2;
-    image.convertTo(grey, CV_32F);
-    const cv::Size window(m.block, m.block);
-    cv::boxFilter(grey, mean, CV_32F, window, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-    cv::boxFilter(grey.mul(grey), mean2, CV_32F, window, cv::Point(-1, -1), true,
-                  cv::BORDER_REFLECT);
-    texture = mean2 - mean.mul(mean);  // the variance
-  }
-  const auto min_variance = static_cast<float>(m.min_texture * m.min_texture);
+  // The texture test: the grey variance of each pixel's block x block window in the left image.
+  const double min_variance = m.min_texture * m.min_texture;
+  const int area = m.block * m.block;
   tbb::parallel_for(0, strips, [&](int s) {
     const int keep0 = std::min(h, s * strip_rows), keep1 = std::min(h, keep0 + strip_rows);
     if (keep0 >= keep1) return;
-    const int row0 = std::max(0, keep0 - kStripMarginAbove);
-    const int row1 = std::min(h, keep1 + m.block / 2 + 1);
-    // OpenCV reads the strips in place; it writes only `disparity`.
-    const cv::Mat left(row1 - row0, w, CV_8U, const_cast<uint8_t*>(in.ir_left) + size_t(row0) * w);
-    const cv::Mat right(row1 - row0, w, CV_8U,
-                        const_cast<uint8_t*>(in.ir_right) + size_t(row0) * w);
-    // The disparities the strip's surfaces lie at (the exact depth), 2 px either side, within the
-    // sensor's own range [0, disparities): the matcher searches only those. Its matches are the
-    // ones a search of the whole range finds except where that would have matched a disparity no
-    // surface has. OpenCV leaves the columns left of the largest disparity searched without a
-    // match: about the band a real sensor loses, where the right imager sees nothing (f B / z).
+    // The surfaces' rows and columns in the kept rows, and the depths over the rows matched.
+    int v_first = h, v_last = -1, u_first = w, u_last = -1;
+    for (int v = keep0; v < keep1; ++v) {
+      const float* row = in.depth + static_cast<size_t>(v) * w;
+      int first = 0, last = w - 1;
+      while (first < w && !(row[first] > 0.0f)) ++first;
+      if (first == w) continue;
+      while (!(row[last] > 0.0f)) --last;
+      v_first = std::min(v_first, v), v_last = v;
+      u_first = std::min(u_first, first), u_last = std::max(u_last, last);
+    }
+    if (v_last < 0) return;  // nothing in the strip
+    const int row0 = std::max(0, v_first - kStripMarginAbove);
+    const int row1 = std::min(h, v_last + 1 + m.block / 2 + 1);
     float z_near = std::numeric_limits<float>::infinity(), z_far = 0.0f;
     for (size_t p = size_t(row0) * w; p < size_t(row1) * w; ++p) {
       if (in.depth[p] > 0.0f)
         z_near = std::min(z_near, in.depth[p]), z_far = std::max(z_far, in.depth[p]);
     }
-    if (!(z_far > 0.0f)) return;  // nothing in the strip
+    // The disparities the strip's surfaces lie at (the exact depth), 2 px either side, within the
+    // sensor's own range [0, disparities): the matcher searches only those. Its matches are the
+    // ones a search of the whole range finds except where that would have matched a disparity no
+    // surface has. OpenCV leaves the columns left of the largest disparity searched without a
+    // match: about the band a real sensor loses, where the right imager sees nothing (f B / z).
     const double d_far = fb / z_far, d_near = fb / z_near;
     const int high = std::min(disparities, static_cast<int>(std::ceil(d_near)) + 3);
     int low = std::max(0, static_cast<int>(std::floor(d_far)) - 2);
     if (low >= high) return;  // every surface nearer than min_depth: no match
     const int count = std::max(16, 16 * ((high - low + 15) / 16));
     low = std::max(0, std::min(low, disparities - count));
-    const int area = m.block * m.block;
+    // The columns: from the first surface less the margin and the search (the right image's
+    // columns it matches against), to the last surface and the margin. At least the search and
+    // 16 more wide (OpenCV's 3-way matcher needs more columns than it searches).
+    int col0 = std::max(0, u_first - kCropMargin - (low + count));
+    const int col1 = std::min(w, std::max(u_last + 1 + kCropMargin, col0 + low + count + 16));
+    col0 = std::max(0, std::min(col0, col1 - (low + count + 16)));
+    // OpenCV reads the rectangle in place; it writes only `disparity`.
+    const size_t corner = static_cast<size_t>(row0) * w + col0;
+    const cv::Mat left(row1 - row0, col1 - col0, CV_8U, const_cast<uint8_t*>(in.ir_left) + corner,
+                       static_cast<size_t>(w));
+    const cv::Mat right(row1 - row0, col1 - col0, CV_8U, const_cast<uint8_t*>(in.ir_right) + corner,
+                        static_cast<size_t>(w));
     cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
         low, count, m.block, 8 * area, 32 * area, /*disp12MaxDiff=*/1,
         /*preFilterCap=*/63, /*uniquenessRatio=*/10,
@@ -295,14 +342,20 @@ std::vector<float> StereoDepth(const DepthModel& m, const DepthSensorInput& in) 
     cv::Mat disparity;
     sgbm->compute(left, right, disparity);  // CV_16S, 1/16 px; invalid: (low - 1) * 16
     const int invalid = (low - 1) * 16;
-    for (int v = keep0; v < keep1; ++v) {
+    std::vector<int32_t> sum(w), sum2(w);
+    for (int v = std::max(keep0, row0); v < std::min(keep1, row1); ++v) {
       const int16_t* row = disparity.ptr<int16_t>(v - row0);
-      for (int u = 0; u < w; ++u) {
-        if (row[u] <= 0 || row[u] == invalid) continue;
-        if (!texture.empty() && texture.at<float>(v, u) < min_variance) continue;
+      if (min_variance > 0.0) WindowSums(in.ir_left, w, h, v, m.block, &sum, &sum2);
+      for (int u = col0; u < col1; ++u) {
+        const int16_t d = row[u - col0];
+        if (d <= 0 || d == invalid) continue;
+        if (min_variance > 0.0) {
+          const double mean = static_cast<double>(sum[u]) / area;
+          if (static_cast<double>(sum2[u]) / area - mean * mean < min_variance) continue;
+        }
         const size_t p = static_cast<size_t>(v) * w + u;
         if (in.depth[p] > 0.0f && !m.InRange(in.depth[p])) continue;
-        out[p] = static_cast<float>(fb * 16.0 / row[u]);
+        out[p] = static_cast<float>(fb * 16.0 / d);
       }
     }
   });

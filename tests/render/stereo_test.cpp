@@ -149,6 +149,46 @@ TEST(ActiveStereo, SearchesAtMostTheImageWidth) {
   for (float z : frame.sensor_depth) EXPECT_EQ(z, 0.0f);
 }
 
+TEST(ActiveStereo, ASmallPlateAloneInTheDarkIsMatchedAndNothingAroundIt) {
+  // The matcher searches only the rectangle around the surfaces: a 120 x 80 mm plate facing the
+  // camera at 800 mm with no floor (u in 319.5 +- 337.2 * 60 / 800 = [294.2, 344.8], v in
+  // 239.5 +- 16.9) is all the image holds. Inside it the depth is there and within the z^2 law's
+  // error (as on the whole floor: 0.25 px, 800^2 * 0.25 / (337.2 * 50) = 9.5 mm); beyond a few
+  // pixels of its edge nothing is returned.
+  const std::vector<Part> parts = {MakePart("plate", MakeBox(120, 80, 2), TessellationOptions{})};
+  Scene scene;
+  scene.floor = false;
+  scene.instances = {Instance{0, "plate", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 200))}};
+  scene.part_colors = {Eigen::Vector3f::Constant(0.6f)};
+  SensorOptions sensor;
+  sensor.depth = DepthModel::Defaults(DepthModel::Kind::kActiveStereo);
+  const Renderer renderer(parts, scene);
+  const Intrinsics k = DepthCamera();
+  const Frame frame = renderer.Render(Camera{k, LookingDown({0, 0, 1002})}, 5, sensor);
+  int inside = 0, matched = 0, outside_returns = 0;
+  double sum2 = 0;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const size_t p = size_t(v) * k.width + u;
+      const bool interior = u >= 300 && u <= 339 && v >= 228 && v <= 251;
+      const bool near_edge = u >= 286 && u <= 353 && v >= 215 && v <= 264;
+      if (interior) {
+        ++inside;
+        ASSERT_GT(frame.depth[p], 0.0f);
+        if (frame.sensor_depth[p] > 0.0f) {
+          ++matched;
+          sum2 += std::pow(frame.sensor_depth[p] - frame.depth[p], 2);
+        }
+      } else if (!near_edge && frame.sensor_depth[p] > 0.0f) {
+        ++outside_returns;
+      }
+    }
+  }
+  EXPECT_GT(matched, 0.9 * inside);
+  EXPECT_LT(std::sqrt(sum2 / matched), 800.0 * 800.0 * 0.25 / (k.fx * 50.0));
+  EXPECT_EQ(outside_returns, 0);
+}
+
 TEST(ActiveStereo, TheSameBytesOnAnyThreadCount) {
   Scene scene;
   scene.floor_color.setConstant(0.6f);

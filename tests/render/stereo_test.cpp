@@ -1,12 +1,14 @@
 // Active stereo (render/sensor.h): IR images with a projected dot pattern, matched by SGBM.
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
 
 #include "tests/render/render_support.h"
 
+#include "cad/core/random.h"
 #include "cad/shape.h"
 #include "render/renderer.h"
 #include "render/sensor.h"
@@ -187,6 +189,30 @@ TEST(ActiveStereo, ASmallPlateAloneInTheDarkIsMatchedAndNothingAroundIt) {
   EXPECT_GT(matched, 0.9 * inside);
   EXPECT_LT(std::sqrt(sum2 / matched), 800.0 * 800.0 * 0.25 / (k.fx * 50.0));
   EXPECT_EQ(outside_returns, 0);
+}
+
+TEST(ActiveStereo, AutoExposureBringsThe99thPercentileTo80PercentOfFullScale) {
+  // 1000 values 0.000, 0.001, ..., 0.999 in a shuffled order: the 99th percentile (rank 990) is
+  // 0.99, so the gain is 0.8 / 0.99.
+  std::vector<float> values(1000);
+  for (int i = 0; i < 1000; ++i) values[(i * 7919) % 1000] = i / 1000.0f;
+  EXPECT_DOUBLE_EQ(InfraredGain(values), 0.8 / static_cast<double>(0.99f));
+  // A dark image with a few bright dots: most values 0 (the bins' first), the 99th percentile
+  // among the dots; an image of 300 x 200 draws matches a full sort's.
+  std::vector<float> image(60000, 0.0f);
+  for (size_t p = 0; p < image.size(); p += 37) image[p] = 0.25f + 0.5f * UniformDraw(1, "t", p);
+  std::vector<float> sorted = image;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_GT(sorted[59400], 0.25f);
+  EXPECT_DOUBLE_EQ(InfraredGain(image), 0.8 / static_cast<double>(sorted[59400]));
+  image.assign(60000, 0.0f);
+  for (size_t p = 0; p < image.size(); ++p) image[p] = static_cast<float>(UniformDraw(2, "t", p));
+  sorted = image;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_DOUBLE_EQ(InfraredGain(image), 0.8 / static_cast<double>(sorted[59400]));
+  // Nothing lit: gain 1; a very dim image: at most 64.
+  EXPECT_EQ(InfraredGain(std::vector<float>(500, 0.0f)), 1.0);
+  EXPECT_EQ(InfraredGain(std::vector<float>(500, 1e-4f)), 64.0);
 }
 
 TEST(ActiveStereo, TheSameBytesOnAnyThreadCount) {

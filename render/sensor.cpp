@@ -14,7 +14,6 @@
 #include <tbb/parallel_reduce.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "cad/core/random.h"
 

@@ -19,7 +19,6 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "cad/core/error.h"
@@ -29,6 +28,7 @@
 #include "dataset/bop_read.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"
+#include "dataset/image_mat.h"
 #include "dataset/mask_png.h"
 
 namespace cadsynth {
@@ -100,9 +100,7 @@ bool BopOptions::IsTest(int index, int count) const {
 namespace {
 
 std::string EncodePng(const cv::Mat& image, const std::filesystem::path& where) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image, bytes)) throw Error(where.string() + ": PNG encoding failed");
-  return std::string(bytes.begin(), bytes.end());
+  return image_mat::Png(image, where.string());
 }
 
 }  // namespace
@@ -112,46 +110,38 @@ std::string EncodeImagePng(const void* pixels, int width, int height, int channe
     throw Error("PNG: an image must be 1 or 3 channels of 8 or 16 bits, " + std::to_string(width) +
                 " x " + std::to_string(height) + " x " + std::to_string(channels) + " x " +
                 std::to_string(bits) + " bits given");
-  const int type = CV_MAKETYPE(bits == 16 ? CV_16U : CV_8U, channels);
-  const cv::Mat image(height, width, type, const_cast<void*>(pixels));
-  if (channels == 1) return EncodePng(image, "image");
-  cv::Mat bgr;
-  cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
-  return EncodePng(bgr, "image");
+  ImageView view;
+  view.pixels = pixels;
+  view.width = width;
+  view.height = height;
+  view.channels = channels;
+  view.bits = bits;
+  return EncodePng(view);
 }
 
 namespace {
 
-DecodedImage ToDecoded(const cv::Mat& image, const std::string& origin) {
-  if (image.empty()) throw Error(origin + ": not an image OpenCV can read");
-  const int depth = image.depth();
-  if ((depth != CV_8U && depth != CV_16U && depth != CV_32F) ||
-      (image.channels() != 1 && image.channels() != 3 && image.channels() != 4))
-    throw Error(origin + ": not an 8- or 16-bit or float grey or colour image");
-  cv::Mat rgb = image;
-  if (image.channels() == 3) cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
-  if (image.channels() == 4) cv::cvtColor(image, rgb, cv::COLOR_BGRA2RGB);  // alpha dropped
-  DecodedImage out;
-  out.width = rgb.cols;
-  out.height = rgb.rows;
-  out.channels = rgb.channels();
-  out.bits = depth == CV_32F ? 32 : depth == CV_16U ? 16 : 8;
-  const size_t row = static_cast<size_t>(rgb.cols) * rgb.elemSize();
-  out.bytes.resize(row * static_cast<size_t>(rgb.rows));
-  for (int v = 0; v < rgb.rows; ++v)
-    std::memcpy(out.bytes.data() + row * static_cast<size_t>(v), rgb.ptr(v), row);
-  return out;
+// An alpha channel dropped: grey and alpha to grey, RGBA to RGB.
+DecodedImage WithoutAlpha(DecodedImage image) {
+  if (image.channels != 2 && image.channels != 4) return image;
+  const size_t size = static_cast<size_t>(image.bits / 8);
+  const size_t from = image.channels * size, to = (image.channels - 1) * size;
+  const size_t count = static_cast<size_t>(image.width) * image.height;
+  for (size_t i = 0; i < count; ++i)
+    std::memmove(image.bytes.data() + i * to, image.bytes.data() + i * from, to);
+  image.bytes.resize(count * to);
+  image.channels -= 1;
+  return image;
 }
 
 }  // namespace
 
 DecodedImage ReadImageFile(const std::filesystem::path& path) {
-  return ToDecoded(cv::imread(path.string(), cv::IMREAD_UNCHANGED), path.string());
+  return WithoutAlpha(ReadImageBytesFile(path));
 }
 
 DecodedImage DecodeImage(std::string_view bytes, const std::string& origin) {
-  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
-  return ToDecoded(cv::imdecode(buffer, cv::IMREAD_UNCHANGED), origin);
+  return WithoutAlpha(DecodeImageBytes(bytes, origin));
 }
 
 uint16_t EncodeDepth(float depth_mm, double depth_scale) {
@@ -347,38 +337,38 @@ struct FrameOut {
 std::filesystem::path WriteCameraImage(const Frame& frame, const BopOptions& options,
                                        const FrameOut& out) {
   const int w = frame.width(), h = frame.height();
-  cv::Mat image;
+  cv::Mat grey;
+  ImageView image;
   if (options.gray_bits > 0) {
     if (frame.gray.size() != static_cast<size_t>(w) * h)
       throw Error("bop: a grey camera's frame has no grey image");
     const bool deep = options.gray_bits == 16;
-    image.create(h, w, deep ? CV_16UC1 : CV_8UC1);
+    grey.create(h, w, deep ? CV_16UC1 : CV_8UC1);
     for (int v = 0; v < h; ++v) {
       for (int u = 0; u < w; ++u) {
         const uint16_t value =
             EncodeGray(frame.gray[static_cast<size_t>(v) * w + u], options.gray_bits);
         if (deep) {
-          image.at<uint16_t>(v, u) = value;
+          grey.at<uint16_t>(v, u) = value;
         } else {
-          image.at<uint8_t>(v, u) = static_cast<uint8_t>(value);
+          grey.at<uint8_t>(v, u) = static_cast<uint8_t>(value);
         }
       }
     }
+    image = image_mat::ViewOf(grey);
   } else {
-    cv::Mat rgb(h, w, CV_8UC3, const_cast<uint8_t*>(frame.rgb.data()));
-    cv::cvtColor(rgb, image, cv::COLOR_RGB2BGR);
+    image.pixels = frame.rgb.data();
+    image.width = w;
+    image.height = h;
+    image.channels = 3;
   }
   const std::filesystem::path rgb_path =
       out.folder(options.ImageFolder()) / (out.im + options.RgbExtension());
-  if (options.jpeg_quality > 0) {
-    std::vector<uchar> bytes;
-    if (!cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality})) {
-      throw Error(rgb_path.string() + ": JPEG encoding failed");
-    }
-    out.files->Write(rgb_path,
-                     std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
-  } else {
-    out.files->Write(rgb_path, EncodePng(image, rgb_path));
+  try {
+    out.files->Write(rgb_path, options.jpeg_quality > 0 ? EncodeJpeg(image, options.jpeg_quality)
+                                                        : EncodePng(image));
+  } catch (const Error& e) {
+    throw Error(rgb_path.string() + ": " + e.what());
   }
   return rgb_path;
 }
@@ -441,20 +431,18 @@ void WriteExtraImages(const Frame& frame, const BopOptions& options, const Frame
 
   if (!frame.radiance.empty()) {  // pbr with hdr: linear radiance as 32-bit float EXR
     CreateFolder(out.folder("rgb_hdr"));
-    cv::Mat radiance(h, w, CV_32FC3);
-    for (int v = 0; v < h; ++v) {
-      auto* row = radiance.ptr<cv::Vec3f>(v);
-      for (int u = 0; u < w; ++u) {
-        const float* c = &frame.radiance[3 * (static_cast<size_t>(v) * w + u)];
-        row[u] = cv::Vec3f(c[2], c[1], c[0]);  // BGR
-      }
-    }
+    ImageView radiance;
+    radiance.pixels = frame.radiance.data();
+    radiance.width = w;
+    radiance.height = h;
+    radiance.channels = 3;
+    radiance.bits = 32;
     const std::filesystem::path hdr_path = out.folder("rgb_hdr") / (out.im + ".exr");
-    std::vector<uchar> bytes;
-    if (!cv::imencode(".exr", radiance, bytes, {cv::IMWRITE_EXR_TYPE, cv::IMWRITE_EXR_TYPE_FLOAT}))
-      throw Error(hdr_path.string() + ": EXR encoding failed");
-    out.files->Write(hdr_path,
-                     std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    try {
+      out.files->Write(hdr_path, EncodeExr(radiance));
+    } catch (const Error& e) {
+      throw Error(hdr_path.string() + ": " + e.what());
+    }
   }
 }
 

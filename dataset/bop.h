@@ -44,6 +44,7 @@
 #include "dataset/frame_writer.h"
 #include "render/camera.h"
 #include "render/frame.h"
+#include "render/image_codec.h"
 
 namespace cadsynth {
 
@@ -303,13 +304,9 @@ inline uint16_t EncodeGray(float value, int bits) {
 // order), `bits` 8 or 16 per value, rows packed. Throws Error.
 std::string EncodeImagePng(const void* pixels, int width, int height, int channels, int bits);
 
-// An image file (PNG, JPEG, EXR) as the writers' images read back: 8 or 16 bits per value, or 32
-// for float EXR (rgb_hdr/; native-endian floats), 1 or 3 channels (R, G, B order; an alpha
-// channel is dropped), rows packed. Throws Error naming the file.
-struct DecodedImage {
-  int width = 0, height = 0, channels = 0, bits = 0;
-  std::vector<uint8_t> bytes;
-};
+// An image file (PNG, JPEG, EXR; render/image_codec.h) as the writers' images read back: 8 or 16
+// bits per value, or 32 for float EXR (rgb_hdr/; native-endian floats), 1 or 3 channels (R, G, B
+// order; an alpha channel is dropped), rows packed. Throws Error naming the file.
 DecodedImage ReadImageFile(const std::filesystem::path& path);
 // The same from an image file's bytes (a webdataset member); `origin` names it in errors.
 DecodedImage DecodeImage(std::string_view bytes, const std::string& origin);

@@ -6,10 +6,10 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "cad/core/error.h"
 #include "dataset/file_io.h"
+#include "dataset/image_mat.h"
 #include "dataset/output_formats.h"
 
 namespace cadsynth {
@@ -152,10 +152,8 @@ class PaperLayoutWriter : public FrameWriter {
         }
       }
     }
-    std::vector<uchar> png;
     const std::filesystem::path mask_path = paper_dir_ / "mask" / (im + ".png");
-    if (!cv::imencode(".png", mask, png)) throw Error(mask_path.string() + ": PNG encoding failed");
-    files.Write(mask_path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+    files.Write(mask_path, image_mat::Png(mask, mask_path.string()));
     files.Write(paper_dir_ / "meta" / (im + ".json"), Meta(frame).dump(2) + "\n");
   }
 

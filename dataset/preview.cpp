@@ -7,7 +7,6 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utils/logger.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "cad/core/error.h"
@@ -15,6 +14,7 @@
 #include "dataset/bop_read.h"
 #include "dataset/file_io.h"
 #include "dataset/grasp.h"
+#include "dataset/image_mat.h"
 
 namespace cadsynth {
 namespace {
@@ -31,12 +31,10 @@ Json ReadJsonFile(const fs::path& path) {
   }
 }
 
-cv::Mat ReadImage(const fs::path& path, int flags) {
+cv::Mat ReadImage(const fs::path& path, image_mat::Want want) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": no such image");
-  cv::Mat image = cv::imread(path.string(), flags);
-  if (image.empty()) throw Error(path.string() + ": missing or not an image");
-  return image;
+  return image_mat::MatOf(ReadImageBytesFile(path), want, path.string());
 }
 
 // Distinct, saturated colours (BGR) for instance i.
@@ -214,7 +212,7 @@ cv::Mat VersusRow(const fs::path& dataset, const PreviewOptions& options, const 
                   const fs::path& other_dir, const std::string& name, const std::string& where) {
   fs::path other_path = other_dir / (name + ".png");
   if (!fs::exists(other_path)) other_path = other_dir / (name + ".jpg");
-  std::vector<cv::Mat> panels = {rgb, ReadImage(other_path, cv::IMREAD_COLOR)};
+  std::vector<cv::Mat> panels = {rgb, ReadImage(other_path, image_mat::Want::kColour8)};
   const double scale = static_cast<double>(options.panel_width) / rgb.cols;
   const cv::Size size(options.panel_width, std::max(1, cvRound(rgb.rows * scale)));
   const std::string labels[2] = {dataset.filename().string(), options.versus.filename().string()};
@@ -288,7 +286,7 @@ cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const f
       fs::exists(dir / ("rgb" + sfx)) ? dir / ("rgb" + sfx) : dir / ("gray" + sfx);
   fs::path rgb_path = image_dir / (name + ".png");
   if (!fs::exists(rgb_path)) rgb_path = image_dir / (name + ".jpg");
-  cv::Mat rgb = ReadImage(rgb_path, cv::IMREAD_COLOR);
+  cv::Mat rgb = ReadImage(rgb_path, image_mat::Want::kColour8);
   if (!options.versus.empty()) {
     // The other dataset's image of the same kind (grey against grey), else whichever it has.
     const fs::path other = options.versus / split_dir.filename() / Id6(scene);
@@ -298,7 +296,8 @@ cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const f
           fs::exists(other / ("rgb" + sfx)) ? other / ("rgb" + sfx) : other / ("gray" + sfx);
     return VersusRow(dataset, options, rgb, other_dir, name, where);
   }
-  const cv::Mat depth = ReadImage(dir / ("depth" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
+  const cv::Mat depth =
+      ReadImage(dir / ("depth" + sfx) / (name + ".png"), image_mat::Want::kUnchanged);
   const Json& gt = scenes.gts.at(scene).at(std::to_string(im));
   const Json& camera = scenes.cameras.at(scene).at(std::to_string(im));
   const Eigen::Matrix3d kmat = Matrix3(camera.at("cam_K"));
@@ -314,7 +313,7 @@ cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const f
   for (size_t i = 0; i < gt.size(); ++i) {
     const fs::path mask_path =
         dir / ("mask_visib" + sfx) / (name + "_" + Id6(static_cast<int>(i)) + ".png");
-    const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_GRAYSCALE);
+    const cv::Mat mask = ReadImage(mask_path, image_mat::Want::kGrey8);
     masks.setTo(InstanceColour(i), mask > 0);
   }
   // Grasp labels on a copy of the colour image, the last panel.
@@ -331,7 +330,7 @@ cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const f
   std::vector<cv::Mat> panels = {rgb};
   if (fs::exists(dir / ("depth_gt" + sfx))) {
     const cv::Mat exact =
-        ReadImage(dir / ("depth_gt" + sfx) / (name + ".png"), cv::IMREAD_UNCHANGED);
+        ReadImage(dir / ("depth_gt" + sfx) / (name + ".png"), image_mat::Want::kUnchanged);
     panels.push_back(ColourDepth(exact));
     panels.push_back(ColourDepth(depth, exact));
   } else {
@@ -384,14 +383,13 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
   }
   cv::Mat sheet;
   cv::vconcat(rows, sheet);
-  std::vector<uchar> bytes;
-  const bool jpeg = options.jpeg_quality > 0;
-  if (!cv::imencode(
-          jpeg ? ".jpg" : ".png", sheet, bytes,
-          jpeg ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, std::min(options.jpeg_quality, 100)}
-               : std::vector<int>{}))
-    throw Error("preview: image encoding failed");
-  return std::string(bytes.begin(), bytes.end());
+  try {
+    const ImageView view = image_mat::ViewOf(sheet);
+    return options.jpeg_quality > 0 ? EncodeJpeg(view, std::min(options.jpeg_quality, 100))
+                                    : EncodePng(view);
+  } catch (const Error& e) {
+    throw Error(std::string("preview: ") + e.what());
+  }
 }
 
 }  // namespace

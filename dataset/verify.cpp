@@ -19,12 +19,12 @@
 #include <tbb/parallel_for.h>
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "cad/core/error.h"
 #include "dataset/bop_read.h"
 #include "dataset/coco.h"
 #include "dataset/file_io.h"
+#include "dataset/image_mat.h"
 #include "dataset/manifest.h"
 
 namespace cadsynth {
@@ -344,10 +344,9 @@ std::optional<cv::Mat> ReadImage(const fs::path& path, std::string* why) {
   }
   cv::Mat image;
   try {
-    image = cv::imdecode(
-        cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
-        cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception&) {
+    image = image_mat::MatOf(DecodeImageBytes(bytes, path.string()), image_mat::Want::kUnchanged,
+                             path.string());
+  } catch (const Error&) {
   }
   if (image.empty() || image.channels() != 1) {
     *why = image.empty() ? "does not decode (a damaged or truncated PNG)" : "is not one channel";

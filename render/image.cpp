@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include <cstring>
 
 #include "cad/core/error.h"
+#include "render/image_codec.h"
 
 namespace cadsynth {
 
@@ -20,34 +20,34 @@ float LinearToSrgb(float c) {
 }
 
 std::shared_ptr<const LinearImage> LoadLinearImage(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path.string() + ": no such file");
-  cv::Mat image;
-  try {
-    image = cv::imread(path.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    throw Error(path.string() + ": not an image OpenCV can read (" + e.msg + ")");
-  }
-  if (image.empty()) throw Error(path.string() + ": not an image OpenCV can read");
-  const int depth = image.depth();
-  const bool encoded = depth == CV_8U || depth == CV_16U;
-  cv::Mat rgb;
-  image.convertTo(rgb, CV_32F,
-                  depth == CV_8U ? 1.0 / 255.0 : (depth == CV_16U ? 1.0 / 65535.0 : 1.0));
+  const DecodedImage image = ReadImageBytesFile(path);
+  const int n = image.channels;
+  const bool encoded = image.bits != 32;
+  const float scale = image.bits == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
   auto out = std::make_shared<LinearImage>();
-  out->width = rgb.cols;
-  out->height = rgb.rows;
-  out->rgb.resize(3 * static_cast<size_t>(rgb.cols) * rgb.rows);
-  for (int y = 0; y < rgb.rows; ++y) {
-    const cv::Vec3f* row = rgb.ptr<cv::Vec3f>(y);
-    for (int x = 0; x < rgb.cols; ++x) {
+  out->width = image.width;
+  out->height = image.height;
+  out->rgb.resize(3 * static_cast<size_t>(image.width) * image.height);
+  for (int y = 0; y < image.height; ++y) {
+    const uint8_t* row = image.bytes.data() + image.RowBytes() * static_cast<size_t>(y);
+    for (int x = 0; x < image.width; ++x) {
       for (int c = 0; c < 3; ++c) {
-        float value = row[x][2 - c];  // OpenCV stores BGR
+        const int k = x * n + (n <= 2 ? 0 : c);  // grey (and alpha): the grey value thrice
+        float value;
+        if (image.bits == 8) {
+          value = row[k] * scale;
+        } else if (image.bits == 16) {
+          uint16_t v;
+          std::memcpy(&v, row + 2 * k, 2);
+          value = v * scale;
+        } else {
+          std::memcpy(&value, row + 4 * k, 4);
+        }
         if (!std::isfinite(value) || value < 0) {
           throw Error(path.string() + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                       ") holds a negative or non-finite value");
         }
-        out->rgb[3 * (static_cast<size_t>(y) * rgb.cols + x) + c] =
+        out->rgb[3 * (static_cast<size_t>(y) * image.width + x) + c] =
             encoded ? SrgbToLinear(value) : value;
       }
     }

@@ -17,7 +17,7 @@ struct LinearImage {
   const float* at(int x, int y) const { return &rgb[3 * (static_cast<size_t>(y) * width + x)]; }
 };
 
-// Reads an image with OpenCV (PNG, JPEG, TIFF, Radiance .hdr, OpenEXR, ...): 8- and 16-bit images
+// Reads an image (PNG, JPEG, OpenEXR, Radiance .hdr; render/image_codec.h): 8- and 16-bit images
 // are decoded from sRGB, float images are taken as linear. Throws Error naming the file when it is
 // missing, not an image, or holds negative or non-finite values.
 std::shared_ptr<const LinearImage> LoadLinearImage(const std::filesystem::path& path);

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "render/image_codec.h"
+
 namespace cadsynth::testing {
 
 // ../shared/data by default; CADSYNTH_TEST_DATA in the environment overrides it.
@@ -95,6 +97,19 @@ inline void ExpectSameTree(const std::filesystem::path& expected_dir,
     ADD_FAILURE() << name << " differs at byte " << at << ": " << line(bytes) << " vs "
                   << line(other);
   }
+}
+
+// A small 8-bit RGB PNG of one colour (texture and environment images for recipe tests).
+inline void WriteSolidPng(const std::filesystem::path& path, int width, int height, uint8_t value) {
+  const std::string pixels(3 * static_cast<size_t>(width) * height, static_cast<char>(value));
+  ImageView view;
+  view.pixels = pixels.data();
+  view.width = width;
+  view.height = height;
+  view.channels = 3;
+  const std::string bytes = EncodePng(view);
+  std::ofstream(path, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
 }  // namespace cadsynth::testing

@@ -28,7 +28,7 @@ packages=(
   libcgal-dev libeigen3-dev libassimp-dev libembree-dev libopencv-dev libtbb-dev
   libyaml-cpp-dev libgtest-dev libbenchmark-dev nlohmann-json3-dev libmatio-dev zlib1g-dev
   libcli11-dev libxxhash-dev libbullet-dev libbullet-extras-dev libfcl-dev
-  libhdf5-dev libssl-dev libfontconfig-dev
+  libhdf5-dev libssl-dev libfontconfig-dev libpng-dev libjpeg62-turbo-dev libopenexr-dev
   pybind11-dev python3-dev python3-numpy python3-torch python3-matplotlib
 )
 case "${1:-}" in

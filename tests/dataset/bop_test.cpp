@@ -5,7 +5,9 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+
 #include <opencv2/imgproc.hpp>
+#include "tests/image_support.h"
 
 #include <gtest/gtest.h>
 
@@ -297,7 +299,8 @@ TEST(Bop, JpegColourWhenAsked) {
   writer.Finish();
   const auto scene_dir = dir / "train" / "000000";
   EXPECT_FALSE(std::filesystem::exists(scene_dir / "rgb" / "000000.png"));
-  const cv::Mat bgr = cv::imread((scene_dir / "rgb" / "000000.jpg").string(), cv::IMREAD_COLOR);
+  const cv::Mat bgr =
+      testing::Imread((scene_dir / "rgb" / "000000.jpg").string(), cv::IMREAD_COLOR);
   ASSERT_EQ(bgr.type(), CV_8UC3);
   double error = 0;  // mean absolute error per channel: small at quality 90
   for (int v = 0; v < bgr.rows; ++v) {
@@ -321,8 +324,8 @@ TEST(Bop, NormalsAreWrittenWhenRendered) {
   const Frame frame = Renderer({}, scene, options).Render(camera);
   BopSceneWriter writer(dir.path(), 0, BopOptions{}, {});
   writer.WriteFrame(0, frame);
-  const cv::Mat normals =
-      cv::imread((dir / "train" / "000000" / "normal" / "000000.png").string(), cv::IMREAD_COLOR);
+  const cv::Mat normals = testing::Imread(
+      (dir / "train" / "000000" / "normal" / "000000.png").string(), cv::IMREAD_COLOR);
   ASSERT_EQ(normals.type(), CV_8UC3);
   const cv::Vec3b n = normals.at<cv::Vec3b>(240, 320);  // BGR of (0, 0, -1) -> (128, 128, 0)
   EXPECT_EQ(n[2], 128);
@@ -402,18 +405,20 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
       char name[32];
       std::snprintf(name, sizeof(name), "%06d_%06d.png", im, i);
       const cv::Mat mask =
-          cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+          testing::Imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
       ASSERT_FALSE(mask.empty()) << name;
       EXPECT_EQ(cv::countNonZero(mask), frames[im].instances[i].px_count_visib);
-      const cv::Mat full = cv::imread((scene_dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
+      const cv::Mat full =
+          testing::Imread((scene_dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
       EXPECT_EQ(cv::countNonZero(full), frames[im].instances[i].px_count_all);
     }
     char image[16];
     std::snprintf(image, sizeof(image), "%06d.png", im);
-    const cv::Mat depth = cv::imread((scene_dir / "depth" / image).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat depth =
+        testing::Imread((scene_dir / "depth" / image).string(), cv::IMREAD_UNCHANGED);
     ASSERT_EQ(depth.type(), CV_16UC1);
     EXPECT_EQ(depth.at<uint16_t>(240, 320), EncodeDepth(frames[im].depth[240 * 640 + 320], 0.1));
-    const cv::Mat rgb = cv::imread((scene_dir / "rgb" / image).string(), cv::IMREAD_COLOR);
+    const cv::Mat rgb = testing::Imread((scene_dir / "rgb" / image).string(), cv::IMREAD_COLOR);
     ASSERT_EQ(rgb.type(), CV_8UC3);
     EXPECT_EQ(rgb.at<cv::Vec3b>(240, 320)[0], frames[im].rgb[3 * (240 * 640 + 320) + 2]);  // BGR
   }
@@ -437,7 +442,7 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
     char name[32];
     std::snprintf(name, sizeof(name), "%06d_%06d.png", im, inst);
     const cv::Mat mask =
-        cv::imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+        testing::Imread((scene_dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
     ASSERT_FALSE(mask.empty());
     int differ = 0;
     for (int v = 0; v < 480; ++v) {
@@ -448,7 +453,8 @@ TEST(Bop, WritesEveryFileWithTheKeysBopToolkitReads) {
     EXPECT_EQ(a["area"], cv::countNonZero(mask));
     // bop_toolkit's calc_gt_coco.py: the amodal box, bbox_from_binary_mask of the full mask
     // (width max - min + 1), and "ignore" below 10% visibility.
-    const cv::Mat full = cv::imread((scene_dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat full =
+        testing::Imread((scene_dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
     const cv::Rect box = cv::boundingRect(full);
     EXPECT_EQ(a["bbox"], json::array({box.x, box.y, box.width, box.height}));
     EXPECT_EQ(a["ignore"], gt_info[std::to_string(im)][inst]["visib_fract"].get<double>() < 0.1);

@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/image_support.h"
+
 #include <gtest/gtest.h>
 
 #include "cad/shape.h"
@@ -117,7 +119,8 @@ TEST(PaperLayout, MaskMetaAndPvn3dMatchTheFrame) {
   EXPECT_TRUE(std::filesystem::equivalent(root / "rgb" / "000005.png",
                                           bop.scene_dir() / "rgb" / "000005.png"));
   // The mask carries each object's obj_id where that object is visible.
-  const cv::Mat mask = cv::imread((root / "mask" / "000005.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat mask =
+      testing::Imread((root / "mask" / "000005.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(mask.type(), CV_8UC1);
   for (int i = 0; i < 2; ++i)
     EXPECT_EQ(cv::countNonZero(mask == i + 1), s.frame.instances[i].px_count_visib);

@@ -854,12 +854,10 @@ TEST(Recipe, PhysicallyBasedErrorsPointAtTheKey) {
       ErrorOf("lighting:\n  environment: {type: image, file: sky.hdr}\n", dir.path());
   EXPECT_EQ(error.rfind("r.yaml:2:36: lighting.environment.file: ", 0), 0u) << error;
   EXPECT_NE(error.find("sky.hdr"), std::string::npos) << error;
-  EXPECT_NE(error.find("not an image"), std::string::npos) << error;
+  EXPECT_NE(error.find("not a readable Radiance HDR image"), std::string::npos) << error;
 
   // Projections: only image textures have one, the floor has no texture coordinates.
-  std::ofstream(dir / "tile.png", std::ios::binary)  // a binary PPM (OpenCV reads it by content)
-      << "P6\n2 2\n255\n"
-      << std::string(12, '\x80');
+  testing::WriteSolidPng(dir / "tile.png", 2, 2, 0x80);
   EXPECT_EQ(ErrorOf("materials:\n  floor: {texture: {type: image, file: tile.png, projection: "
                     "uv}}\n",
                     dir.path()),
@@ -932,9 +930,7 @@ TEST(Recipe, RandomizeTexturesComeFromAFolder) {
   std::filesystem::create_directories(dir / "tex");
   std::filesystem::create_directories(dir / "empty");
   for (const char* name : {"b.png", "a.png"}) {
-    std::ofstream(dir / "tex" / name, std::ios::binary)  // a binary PPM (read by content)
-        << "P6\n2 2\n255\n"
-        << std::string(12, '\x40');
+    testing::WriteSolidPng(dir / "tex" / name, 2, 2, 0x40);
   }
   std::ofstream(dir / "tex" / "notes.txt") << "not an image\n";
   const RunSpec spec = ParseRecipe(

@@ -6,6 +6,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/image_support.h"
+
 #include <gtest/gtest.h>
 
 #include "cad/core/error.h"
@@ -181,13 +183,13 @@ TEST(Material, ScratchesAreThinLinesWhoseNumberFollowsTheAmount) {
 TEST(Material, ImagesAreLinearAndBadOnesAreNamed) {
   testing::ScratchDir dir;
   // sRGB 128 is linear ((128/255 + 0.055) / 1.055)^2.4 = 0.2158.
-  cv::imwrite((dir / "grey.png").string(), cv::Mat(4, 8, CV_8UC3, cv::Scalar(128, 128, 128)));
+  testing::Imwrite((dir / "grey.png").string(), cv::Mat(4, 8, CV_8UC3, cv::Scalar(128, 128, 128)));
   const auto image = LoadLinearImage(dir / "grey.png");
   EXPECT_EQ(image->width, 8);
   EXPECT_EQ(image->height, 4);
   EXPECT_NEAR(image->at(3, 2)[1], 0.2158f, 1e-4);
   // Float images are taken as they are (EXR: linear radiance).
-  cv::imwrite((dir / "sky.exr").string(), cv::Mat(2, 4, CV_32FC3, cv::Scalar(0.5, 2.0, 7.5)));
+  testing::Imwrite((dir / "sky.exr").string(), cv::Mat(2, 4, CV_32FC3, cv::Scalar(0.5, 2.0, 7.5)));
   const auto hdr = LoadLinearImage(dir / "sky.exr");
   EXPECT_FLOAT_EQ(hdr->at(1, 1)[0], 7.5f);  // R (OpenCV writes BGR)
   EXPECT_FLOAT_EQ(hdr->at(1, 1)[2], 0.5f);

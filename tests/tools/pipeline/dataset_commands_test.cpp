@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/image_support.h"
+
 #include <gtest/gtest.h>
 
 #include "cad/core/error.h"
@@ -188,7 +190,7 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   const std::string png = RenderPreview(dataset, options, &shown);
   EXPECT_EQ(shown,
             (std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {2, 0}}));  // spread over 6 frames
-  const cv::Mat sheet = cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR);
+  const cv::Mat sheet = testing::Imdecode(png, cv::IMREAD_COLOR);
   EXPECT_EQ(sheet.cols, 300);
   EXPECT_EQ(sheet.rows, 3 * 75);  // 160 x 120 images at 100 px wide
   // Against another dataset of the same views: two colour panels per row.
@@ -196,7 +198,7 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
     PreviewOptions versus = options;
     versus.versus = dataset;
     const std::string two = RenderPreview(dataset, versus);
-    const cv::Mat pair = cv::imdecode(std::vector<uchar>(two.begin(), two.end()), cv::IMREAD_COLOR);
+    const cv::Mat pair = testing::Imdecode(two, cv::IMREAD_COLOR);
     EXPECT_EQ(pair.cols, 200);
     EXPECT_EQ(pair.rows, 3 * 75);
     versus.versus = dir / "nowhere";
@@ -206,15 +208,11 @@ TEST(Preview, BoxesEncloseTheObjectsAndTheSheetHasARowPerFrame) {
   EXPECT_THROW(RenderPreview(dataset, options), Error);  // no such image
   // The folder of scenes is found whatever its name (output.split).
   std::filesystem::rename(dataset / "train", dataset / "val");
-  EXPECT_EQ(cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR).size(),
-            cv::imdecode(
-                [&] {
-                  const std::string again =
-                      RenderPreview(dataset, PreviewOptions{.count = 3, .panel_width = 100});
-                  return std::vector<uchar>(again.begin(), again.end());
-                }(),
-                cv::IMREAD_COLOR)
-                .size());
+  EXPECT_EQ(
+      testing::Imdecode(png, cv::IMREAD_COLOR).size(),
+      testing::Imdecode(RenderPreview(dataset, PreviewOptions{.count = 3, .panel_width = 100}),
+                        cv::IMREAD_COLOR)
+          .size());
 }
 
 // A small schema language for the checks below: "int", "number", "string", "bool",

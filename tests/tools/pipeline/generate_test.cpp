@@ -13,6 +13,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/image_support.h"
+
 #include <gtest/gtest.h>
 
 #include "cad/core/error.h"
@@ -263,12 +265,14 @@ TEST(Generate, GreyCameraAndDepthSensorWriteGrayDepthAndDepthGt) {
   for (const auto& [name, bytes] : one) EXPECT_TRUE(two.at(name) == bytes) << name;
   const std::filesystem::path scene = dir / "one" / "train" / "000000";
   EXPECT_FALSE(std::filesystem::exists(scene / "rgb"));
-  const cv::Mat gray = cv::imread((scene / "gray" / "000000.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat gray =
+      testing::Imread((scene / "gray" / "000000.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(gray.empty());
   EXPECT_EQ(gray.type(), CV_16UC1);
-  const cv::Mat depth = cv::imread((scene / "depth" / "000000.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat depth =
+      testing::Imread((scene / "depth" / "000000.png").string(), cv::IMREAD_UNCHANGED);
   const cv::Mat exact =
-      cv::imread((scene / "depth_gt" / "000000.png").string(), cv::IMREAD_UNCHANGED);
+      testing::Imread((scene / "depth_gt" / "000000.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(depth.type(), CV_16UC1);
   ASSERT_EQ(exact.type(), CV_16UC1);
   int differ = 0, holes = 0;
@@ -294,7 +298,7 @@ TEST(Generate, GreyCameraAndDepthSensorWriteGrayDepthAndDepthGt) {
   preview.count = 1;
   preview.panel_width = 160;
   const std::string png = RenderPreview(dir / "one", preview);
-  const cv::Mat sheet = cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_COLOR);
+  const cv::Mat sheet = testing::Imdecode(png, cv::IMREAD_COLOR);
   ASSERT_EQ(sheet.cols, 4 * 160);
   const auto black = [&](int panel) {
     const cv::Mat p = sheet(cv::Rect(panel * 160, 0, 160, sheet.rows));
@@ -351,7 +355,7 @@ cv::Mat VisibleIds(const std::filesystem::path& scene, const std::string& sensor
     char name[32];
     std::snprintf(name, sizeof(name), "%06d_%06zu.png", im, i);
     const cv::Mat mask =
-        cv::imread((scene / ("mask_visib_" + sensor) / name).string(), cv::IMREAD_GRAYSCALE);
+        testing::Imread((scene / ("mask_visib_" + sensor) / name).string(), cv::IMREAD_GRAYSCALE);
     if (ids.empty()) ids = cv::Mat::zeros(mask.size(), CV_32S);
     ids.setTo(static_cast<int>(i + 1), mask > 0);
   }
@@ -680,8 +684,8 @@ TEST(Generate, ActiveStereoCameraWritesItsIrImageWhenAsked) {
   GenerateOptions options;
   options.output = dir / "out";
   Generate(spec, options);
-  const cv::Mat ir = cv::imread((dir / "out" / "train" / "000000" / "ir" / "000000.png").string(),
-                                cv::IMREAD_UNCHANGED);
+  const cv::Mat ir = testing::Imread(
+      (dir / "out" / "train" / "000000" / "ir" / "000000.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(ir.empty());
   EXPECT_EQ(ir.type(), CV_8UC1);
   EXPECT_EQ(ir.cols, 160);
@@ -800,8 +804,8 @@ TEST(Generate, CameraRigWritesBopMultiSensorLayout) {
     const cv::Mat ids_left = VisibleIds(scene, "left", image, instances);
     const cv::Mat ids_right = VisibleIds(scene, "right", image, instances);
     const cv::Mat depth =
-        cv::imread((scene / "depth_left" / (std::string(5, '0') + im_key + ".png")).string(),
-                   cv::IMREAD_UNCHANGED);
+        testing::Imread((scene / "depth_left" / (std::string(5, '0') + im_key + ".png")).string(),
+                        cv::IMREAD_UNCHANGED);
     int object = 0, same = 0, same_wrong_way = 0;
     for (int v = 0; v < depth.rows; ++v) {
       for (int u = 0; u < depth.cols; ++u) {

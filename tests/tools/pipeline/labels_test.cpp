@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/image_support.h"
+
 #include <gtest/gtest.h>
 
 #include "dataset/coco.h"
@@ -78,9 +80,9 @@ Totals CheckAgainstMasks(const std::filesystem::path& root, bool exact,
         const std::string name =
             std::string(6 - im.size(), '0') + im + "_00000" + std::to_string(i) + ".png";
         SCOPED_TRACE(dir.string() + " " + name);
-        const cv::Mat mask = cv::imread((dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
+        const cv::Mat mask = testing::Imread((dir / "mask" / name).string(), cv::IMREAD_UNCHANGED);
         const cv::Mat mask_visib =
-            cv::imread((dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
+            testing::Imread((dir / "mask_visib" / name).string(), cv::IMREAD_UNCHANGED);
         if (owner.empty()) owner = cv::Mat::zeros(mask.size(), CV_8UC1);
         const json& info = list[i];
         int visib_count = 0, full_count = 0;

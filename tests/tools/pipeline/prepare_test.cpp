@@ -265,7 +265,7 @@ TEST(Prepare, SameNamesMadeUniqueAndFlatSheetsLieFlat) {
 // without them is refused with the rule's place in the recipe.
 TEST(Prepare, UvProjectionNeedsTextureCoordinates) {
   testing::ScratchDir dir;
-  std::ofstream(dir / "tile.ppm", std::ios::binary) << "P6\n2 2\n255\n" << std::string(12, '\x80');
+  testing::WriteSolidPng(dir / "tile.png", 2, 2, 0x80);
   std::ofstream(dir / "label.obj") << "v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nv 0 0 4\n"
                                       "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\n"
                                       "f 1/1 4/4 3/3 2/2\nf 1/1 2/2 5/5\nf 2/2 3/3 5/5\n"
@@ -273,7 +273,7 @@ TEST(Prepare, UvProjectionNeedsTextureCoordinates) {
   const std::string recipe =
       "scenes:\n  - name: s\n    parts: [{file: label.obj}, {family: hex_nut}]\n"
       "render: {mode: pbr}\nmaterials:\n"
-      "  assign:\n    - {name: '*', texture: {type: image, file: tile.ppm, projection: uv}}\n";
+      "  assign:\n    - {name: '*', texture: {type: image, file: tile.png, projection: uv}}\n";
   const RunSpec spec = ParseRecipe(recipe, (dir / "r.yaml").string(), dir.path());
   try {
     Prepare(spec);

@@ -449,9 +449,9 @@ TEST(Schema, EveryOutputOptionSurvivesTheShardFile) {
 // Each option with a recipe key is read from it: the recipe that writes the changed value (as
 // the reference prints it) gives the changed options.
 TEST(Schema, EveryRecipeKeyIsRead) {
-  // An image for an image environment (a binary PPM: read by its content).
+  // An image for an image environment.
   testing::ScratchDir dir;
-  std::ofstream(dir / "sky.png", std::ios::binary) << "P6\n2 2\n255\n" << std::string(12, '\x40');
+  testing::WriteSolidPng(dir / "sky.png", 2, 2, 0x40);
   int read = 0;
   // Each field of the options `select` finds in `base` (or only the one keyed `only`), written
   // as "KEY: VALUE" in place of the {} of `recipe(key)` (the recipe text the key needs).

@@ -16,6 +16,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/image_support.h"
+
 #include "cad/core/error.h"
 #include "dataset/file_io.h"
 #include "dataset/manifest.h"
@@ -93,7 +95,7 @@ TEST(Verify, EachDamageFailsWithTheFileAndTheReason) {
       {"a flipped mask pixel",
        [&](const fs::path& root) {
          const fs::path path = root / scene / "mask_visib" / "000000_000001.png";
-         cv::Mat mask = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+         cv::Mat mask = testing::Imread(path.string(), cv::IMREAD_UNCHANGED);
          cv::Point on;
          for (int v = 0; v < mask.rows && on.x == 0; ++v) {
            for (int u = 0; u < mask.cols; ++u) {
@@ -101,18 +103,18 @@ TEST(Verify, EachDamageFailsWithTheFileAndTheReason) {
            }
          }
          mask.at<uint8_t>(on) = 0;  // the last visible pixel of the first visible row goes
-         cv::imwrite(path.string(), mask);
+         testing::Imwrite(path.string(), mask);
        },
        (scene / "scene_gt_info.json").string(), "px_count_visib is"},
       {"the same pixel, seen by COCO",
        [&](const fs::path& root) {
          const fs::path path = root / scene / "mask_visib" / "000000_000001.png";
-         cv::Mat mask = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+         cv::Mat mask = testing::Imread(path.string(), cv::IMREAD_UNCHANGED);
          for (int v = 0; v < mask.rows; ++v) {
            for (int u = 0; u < mask.cols; ++u) {
              if (mask.at<uint8_t>(v, u) != 0) {
                mask.at<uint8_t>(v, u) = 0;
-               cv::imwrite(path.string(), mask);
+               testing::Imwrite(path.string(), mask);
                return;
              }
            }

@@ -4,8 +4,8 @@
 
 #include <cmath>
 #include <cstring>
-#include <utility>
 #include <string>
+#include <utility>
 
 #include <opencv2/core.hpp>
 
@@ -81,9 +81,8 @@ inline cv::Mat MatOf(const DecodedImage& image, Want want, const std::string& or
   out.create(image.height, image.width, CV_8UC1);
   for (size_t i = 0; i < count; ++i) {
     out.data[i] = n <= 2 ? value(i, 0)
-                         : static_cast<uint8_t>(std::lround(0.299 * value(i, 0) +
-                                                            0.587 * value(i, 1) +
-                                                            0.114 * value(i, 2)));
+                         : static_cast<uint8_t>(std::lround(
+                               0.299 * value(i, 0) + 0.587 * value(i, 1) + 0.114 * value(i, 2)));
   }
   return out;
 }

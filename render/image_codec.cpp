@@ -287,8 +287,8 @@ DecodedImage ExrDecode(std::string_view bytes) {
   out.width = window.max.x - window.min.x + 1;
   out.height = window.max.y - window.min.y + 1;
   const Imf::ChannelList& channels = file.header().channels();
-  const bool colour = channels.findChannel("R") != nullptr || channels.findChannel("G") != nullptr ||
-                      channels.findChannel("B") != nullptr;
+  const bool colour = channels.findChannel("R") != nullptr ||
+                      channels.findChannel("G") != nullptr || channels.findChannel("B") != nullptr;
   if (!colour && channels.findChannel("Y") == nullptr)
     throw Iex::InputExc("no R, G, B or Y channel");
   out.channels = colour ? 3 : 1;
@@ -297,8 +297,8 @@ DecodedImage ExrDecode(std::string_view bytes) {
   // The slices' base points at pixel (0, 0) of the data window's coordinates.
   const ptrdiff_t pixel = out.channels * static_cast<ptrdiff_t>(sizeof(float));
   const ptrdiff_t row = static_cast<ptrdiff_t>(out.RowBytes());
-  char* origin = reinterpret_cast<char*>(out.bytes.data()) - window.min.x * pixel -
-                 window.min.y * row;
+  char* origin =
+      reinterpret_cast<char*>(out.bytes.data()) - window.min.x * pixel - window.min.y * row;
   Imf::FrameBuffer frame;
   static const char* const kColour[] = {"R", "G", "B"};
   for (int c = 0; c < out.channels; ++c) {
@@ -327,8 +327,7 @@ DecodedImage HdrDecode(std::string_view bytes) {
   std::string_view text = line();
   while (!(text = line()).empty()) {
     if (text.substr(0, 7) == "FORMAT=" && text != "FORMAT=32-bit_rle_rgbe")
-      throw Error("only the RGBE format is read, not " +
-                  std::string(text.substr(7)));
+      throw Error("only the RGBE format is read, not " + std::string(text.substr(7)));
   }
   const std::string resolution(line());
   int width = 0, height = 0;
@@ -356,8 +355,8 @@ DecodedImage HdrDecode(std::string_view bytes) {
       at += 2;
       const int stated = (byte() << 8) | byte();
       if (stated != width)
-        throw Error("row " + std::to_string(y) + " states width " +
-                    std::to_string(stated) + ", not " + std::to_string(width));
+        throw Error("row " + std::to_string(y) + " states width " + std::to_string(stated) +
+                    ", not " + std::to_string(width));
       for (int c = 0; c < 4; ++c) {
         for (int x = 0; x < width;) {
           int count = byte();

@@ -6,9 +6,9 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <zlib.h>
 
 #include "cad/core/error.h"
 
@@ -19,7 +19,9 @@
 namespace cadsynth {
 namespace {
 
-std::vector<uint8_t> Bytes(const std::string& s) { return std::vector<uint8_t>(s.begin(), s.end()); }
+std::vector<uint8_t> Bytes(const std::string& s) {
+  return std::vector<uint8_t>(s.begin(), s.end());
+}
 
 // A smooth test image with some structure: w x h x channels values of type T.
 template <typename T>
@@ -186,7 +188,8 @@ TEST(ImageCodec, ExrKeepsFloatsExactlyBothWays) {
   EXPECT_TRUE(Same(AsMat(DecodeImageBytes(ours, "test")), Swapped(image)));
   // OpenCV's read by us.
   std::vector<uchar> theirs;
-  ASSERT_TRUE(cv::imencode(".exr", image, theirs, {cv::IMWRITE_EXR_TYPE, cv::IMWRITE_EXR_TYPE_FLOAT}));
+  ASSERT_TRUE(
+      cv::imencode(".exr", image, theirs, {cv::IMWRITE_EXR_TYPE, cv::IMWRITE_EXR_TYPE_FLOAT}));
   const DecodedImage back =
       DecodeImageBytes(std::string(theirs.begin(), theirs.end()), "opencv.exr");
   EXPECT_TRUE(Same(AsMat(back), Swapped(image)));
@@ -249,9 +252,9 @@ TEST(ImageCodec, BrokenAndUnknownFilesAreErrorsThatNameThem) {
     }
     return std::string("no error");
   };
-  for (const std::string& bytes : {png.substr(0, png.size() / 2), jpeg.substr(0, 40),
-                                   exr.substr(0, exr.size() / 2), std::string("GIF89a......"),
-                                   std::string("#?RADIANCE\n\n-Y 4 +X 4\n")}) {
+  for (const std::string& bytes :
+       {png.substr(0, png.size() / 2), jpeg.substr(0, 40), exr.substr(0, exr.size() / 2),
+        std::string("GIF89a......"), std::string("#?RADIANCE\n\n-Y 4 +X 4\n")}) {
     const std::string what = message(bytes);
     EXPECT_EQ(what.rfind("parts/texture.img: ", 0), 0u) << what;
   }

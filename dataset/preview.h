@@ -44,9 +44,10 @@ std::vector<Eigen::Vector2d> ProjectBox(const Eigen::Matrix3d& k,
 std::string RenderPreview(const std::filesystem::path& dataset, const PreviewOptions& options,
                           std::vector<std::pair<int, int>>* shown = nullptr);
 
-// OpenCV's own warnings off (its errors still print): a missing image is our error, named once,
-// not a raw "[ WARN:0@0.1] global loadsave.cpp imread_(...)" line before it. The command line
-// calls it at start.
+// OpenCV's own warnings off (its errors still print): what cadsynth reports it names once, without
+// raw "[ WARN:0@0.1] global ..." lines from OpenCV's core before it. Images no longer go through
+// OpenCV (render/image_codec.h), whose readers were the usual source. The command line calls it
+// at start.
 void SilenceOpenCvWarnings();
 
 }  // namespace cadsynth

@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cad/core/error.h"
+#include "dataset/image_mat.h"
 
 // The codecs are checked against OpenCV's imgcodecs, a second implementation the tests still
 // link: its decoder reads our files to the same pixels, and its encoder (what the datasets were
@@ -38,14 +39,9 @@ cv::Mat Pattern(int w, int h, int channels, double full) {
   return image;
 }
 
+// The matrix's pixels with the channel order stated (image_mat::ViewOf assumes OpenCV's B, G, R).
 ImageView View(const cv::Mat& m, bool bgr) {
-  ImageView view;
-  view.pixels = m.data;
-  view.stride = m.step;
-  view.width = m.cols;
-  view.height = m.rows;
-  view.channels = m.channels();
-  view.bits = static_cast<int>(m.elemSize1()) * 8;
+  ImageView view = image_mat::ViewOf(m);
   view.bgr = bgr;
   return view;
 }

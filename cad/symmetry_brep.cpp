@@ -75,7 +75,7 @@ namespace {
 // One surface of a B-rep (model frame): an analytic one (plane, cylinder, cone, sphere, torus)
 // with all the faces that lie on it, so that a cylinder split into halves at its seam is one
 // cylinder; any other face on its own, by its centroid.
-struct Surface {
+struct BrepSurface {
   int kind = 0;  // GeomAbs_SurfaceType
   double area = 0;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();       // plane: a point; axial kinds: the apex or
@@ -84,7 +84,7 @@ struct Surface {
 };
 
 // How far apart two surfaces of one kind are (mm), for a part `size` across: 0 for the same.
-double Apart(const Surface& a, const Surface& b, double size) {
+double Apart(const BrepSurface& a, const BrepSurface& b, double size) {
   const Eigen::Vector3d off = a.point - b.point;
   const double cross = a.direction.cross(b.direction).norm();  // sine of the axes' angle
   const double across = (off - off.dot(b.direction) * b.direction).norm();
@@ -120,7 +120,7 @@ void CompareBrepFaces(const Part& part, DetectedSymmetries* found) {
   const auto at = [&](const gp_Pnt& p) {
     return Eigen::Vector3d(model_from_cad * Eigen::Vector3d(p.X(), p.Y(), p.Z()));
   };
-  std::vector<Surface> surfaces;
+  std::vector<BrepSurface> surfaces;
   try {
     for (TopExp_Explorer e(OcctShape(part.brep), TopAbs_FACE); e.More(); e.Next()) {
       const TopoDS_Face& face = TopoDS::Face(e.Current());
@@ -128,7 +128,7 @@ void CompareBrepFaces(const Part& part, DetectedSymmetries* found) {
       BRepGProp::SurfaceProperties(face, props);
       if (!(props.Mass() > 0)) continue;
       const BRepAdaptor_Surface adaptor(face, /*useTrsf=*/true);
-      Surface f;
+      BrepSurface f;
       f.kind = static_cast<int>(adaptor.GetType());
       f.area = props.Mass();
       switch (adaptor.GetType()) {
@@ -163,7 +163,7 @@ void CompareBrepFaces(const Part& part, DetectedSymmetries* found) {
       // Faces on one analytic surface are that surface.
       bool merged = false;
       if (f.kind <= GeomAbs_Torus) {
-        for (Surface& known : surfaces) {
+        for (BrepSurface& known : surfaces) {
           if (known.kind == f.kind && Apart(f, known, size) < 1e-7 * size) {
             known.area += f.area;
             merged = true;
@@ -178,7 +178,7 @@ void CompareBrepFaces(const Part& part, DetectedSymmetries* found) {
   }
   if (surfaces.empty()) return;
   std::stable_sort(surfaces.begin(), surfaces.end(),
-                   [](const Surface& a, const Surface& b) { return a.area < b.area; });
+                   [](const BrepSurface& a, const BrepSurface& b) { return a.area < b.area; });
   const double inf = std::numeric_limits<double>::infinity();
   // The largest distance from a moved surface to the nearest one of its kind and area. A free-form
   // face without a partner is counted, not failed: files split such faces where they please (an
@@ -186,13 +186,13 @@ void CompareBrepFaces(const Part& part, DetectedSymmetries* found) {
   int skipped = 0;
   const auto mismatch = [&](const Eigen::Isometry3d& t) {
     double worst = 0;
-    for (const Surface& s : surfaces) {
-      Surface moved = s;
+    for (const BrepSurface& s : surfaces) {
+      BrepSurface moved = s;
       moved.point = t * s.point;
       moved.direction = t.linear() * s.direction;
       double best = inf;
       auto it = std::lower_bound(surfaces.begin(), surfaces.end(), s.area * (1 - 1e-3),
-                                 [](const Surface& x, double a) { return x.area < a; });
+                                 [](const BrepSurface& x, double a) { return x.area < a; });
       for (; it != surfaces.end() && it->area <= s.area * (1 + 1e-3); ++it) {
         if (it->kind == s.kind) best = std::min(best, Apart(moved, *it, size));
       }

@@ -14,8 +14,6 @@ namespace cadsynth {
 
 namespace {
 
-using Json = nlohmann::json;
-
 // The reason in nlohmann's wording "[json.exception.x.n] ...: REASON; last read: ...".
 std::string Reason(const std::string& what) {
   std::string reason = what;
@@ -30,15 +28,15 @@ std::string Reason(const std::string& what) {
   return reason;
 }
 
-Json Parse(const std::string& text, const std::string& origin) {
+nlohmann::json Parse(const std::string& text, const std::string& origin) {
   try {
-    return Json::parse(text);
-  } catch (const Json::exception& e) {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
     throw Error(JsonErrorMessage(origin, text, e));
   }
 }
 
-double Number(const Json& value, const std::string& where) {
+double Number(const nlohmann::json& value, const std::string& where) {
   if (!value.is_number())
     throw Error(where + ": expected a number, got " + value.dump().substr(0, 40));
   const double v = value.get<double>();
@@ -61,15 +59,16 @@ Eigen::Isometry3d Pose(const std::vector<double>& r, const std::vector<double>& 
   return pose;
 }
 
-std::vector<double> Numbers(const Json& value, size_t n, const std::string& where) {
+std::vector<double> Numbers(const nlohmann::json& value, size_t n, const std::string& where) {
   if (!value.is_array() || value.size() != n)
     throw Error(where + ": expected " + std::to_string(n) + " numbers");
   std::vector<double> out;
-  for (const Json& v : value) out.push_back(Number(v, where));
+  for (const nlohmann::json& v : value) out.push_back(Number(v, where));
   return out;
 }
 
-const Json& Member(const Json& object, const char* key, const std::string& where) {
+const nlohmann::json& Member(const nlohmann::json& object, const char* key,
+                             const std::string& where) {
   if (!object.is_object()) throw Error(where + ": expected an object");
   const auto found = object.find(key);
   if (found == object.end()) throw Error(where + ": no '" + key + "'");
@@ -80,7 +79,7 @@ const Json& Member(const Json& object, const char* key, const std::string& where
 
 std::string JsonErrorMessage(const std::string& origin, const std::string& text,
                              const std::exception& error) {
-  if (const auto* parse = dynamic_cast<const Json::parse_error*>(&error)) {
+  if (const auto* parse = dynamic_cast<const nlohmann::json::parse_error*>(&error)) {
     // Its byte is 1-based, the one after the last read.
     const size_t byte = std::min(parse->byte > 0 ? parse->byte - 1 : 0, text.size());
     size_t line = 1, column = 1;
@@ -156,7 +155,7 @@ std::vector<BopEstimate> ParseBopResults(const std::string& text, const std::str
 }
 
 BopSceneGt ParseSceneGt(const std::string& text, const std::string& origin) {
-  const Json gt = Parse(text, origin);
+  const nlohmann::json gt = Parse(text, origin);
   if (!gt.is_object()) throw Error(origin + ": expected an object of images");
   BopSceneGt out;
   for (const auto& [key, list] : gt.items()) {
@@ -167,7 +166,7 @@ BopSceneGt ParseSceneGt(const std::string& text, const std::string& origin) {
     out.push_back({*im, {}});
     for (size_t i = 0; i < list.size(); ++i) {
       const std::string at = where + " instance " + std::to_string(i);
-      const Json& id = Member(list[i], "obj_id", at);
+      const nlohmann::json& id = Member(list[i], "obj_id", at);
       if (!id.is_number_integer() || id.get<int64_t>() < 0 || id.get<int64_t>() > 2147483647)
         throw Error(at + ": obj_id must be a whole number");
       BopGroundTruth g;
@@ -181,7 +180,7 @@ BopSceneGt ParseSceneGt(const std::string& text, const std::string& origin) {
 }
 
 std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::string& origin) {
-  const Json info = Parse(text, origin);
+  const nlohmann::json info = Parse(text, origin);
   if (!info.is_object()) throw Error(origin + ": expected an object of models");
   std::vector<BopModelInfo> out;
   for (const auto& [key, entry] : info.items()) {
@@ -201,7 +200,7 @@ std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::st
     // The symmetries themselves, for MSSD.
     std::vector<Eigen::Isometry3d> discrete = {Eigen::Isometry3d::Identity()};
     if (const auto found = entry.find("symmetries_discrete"); found != entry.end()) {
-      for (const Json& matrix : *found) {
+      for (const nlohmann::json& matrix : *found) {
         const std::string at = where + " symmetries_discrete";
         if (!matrix.is_array() || matrix.size() != 16)
           throw Error(at + ": each is a 4 x 4 matrix of 16 numbers");
@@ -221,13 +220,13 @@ std::vector<BopModelInfo> ParseModelsInfo(const std::string& text, const std::st
     std::vector<Eigen::Isometry3d> continuous;
     if (const auto found = entry.find("symmetries_continuous"); found != entry.end()) {
       const int steps = static_cast<int>(std::ceil(M_PI / 0.01));
-      for (const Json& sym : *found) {
+      for (const nlohmann::json& sym : *found) {
         const std::string at = where + " symmetries_continuous";
         if (!sym.is_object()) throw Error(at + ": each is {\"axis\", \"offset\"}");
         Eigen::Vector3d axis, offset;
         for (int k = 0; k < 3; ++k) {
-          const Json& a = Member(sym, "axis", at);
-          const Json& o = Member(sym, "offset", at);
+          const nlohmann::json& a = Member(sym, "axis", at);
+          const nlohmann::json& o = Member(sym, "offset", at);
           if (!a.is_array() || a.size() != 3 || !o.is_array() || o.size() != 3)
             throw Error(at + ": axis and offset are 3 numbers each");
           axis[k] = Number(a[k], at), offset[k] = Number(o[k], at);

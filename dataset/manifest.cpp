@@ -13,7 +13,6 @@
 namespace cadsynth {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::json;
 
 bool IsDatasetContent(const fs::path& relative) {
   for (const fs::path& part : relative) {
@@ -53,13 +52,14 @@ std::vector<FileRecord> ListDatasetFiles(const fs::path& root) {
 
 void WriteManifest(const fs::path& root, const DatasetManifest& manifest) {
   std::ostringstream out;
-  out << "{\n  \"cadsynth_manifest\": 1,\n  \"version\": " << Json(manifest.version).dump()
-      << ",\n  \"run_key\": " << Json(manifest.run_key).dump()
+  out << "{\n  \"cadsynth_manifest\": 1,\n  \"version\": "
+      << nlohmann::json(manifest.version).dump()
+      << ",\n  \"run_key\": " << nlohmann::json(manifest.run_key).dump()
       << ",\n  \"frames\": " << manifest.frames << ",\n  \"files\": [";
   for (size_t i = 0; i < manifest.files.size(); ++i) {
     const FileRecord& f = manifest.files[i];
-    out << (i ? ",\n    [" : "\n    [") << Json(f.path).dump() << ", " << f.size << ", " << f.crc32
-        << "]";
+    out << (i ? ",\n    [" : "\n    [") << nlohmann::json(f.path).dump() << ", " << f.size << ", "
+        << f.crc32 << "]";
   }
   out << (manifest.files.empty() ? "]\n}\n" : "\n  ]\n}\n");
   WriteFileAtomic(root / kManifestFile, out.str());
@@ -75,19 +75,19 @@ DatasetManifest ReadManifest(const fs::path& root) {
   const std::string text = ReadFileText(path);
   DatasetManifest m;
   try {
-    const Json j = Json::parse(text);
+    const nlohmann::json j = nlohmann::json::parse(text);
     if (j.at("cadsynth_manifest").get<int>() != 1)
       throw Error(path.string() + ": cadsynth_manifest: unknown version " +
                   j.at("cadsynth_manifest").dump());
     m.version = j.at("version").get<std::string>();
     m.run_key = j.at("run_key").get<std::string>();
     m.frames = j.at("frames").get<size_t>();
-    for (const Json& f : j.at("files")) {
+    for (const nlohmann::json& f : j.at("files")) {
       if (!f.is_array() || f.size() != 3)
         throw Error(path.string() + ": files: each entry is [path, size, crc32], not " + f.dump());
       m.files.push_back({f[0].get<std::string>(), f[1].get<uint64_t>(), f[2].get<uint32_t>()});
     }
-  } catch (const Json::exception& e) {
+  } catch (const nlohmann::json::exception& e) {
     throw Error(JsonErrorMessage(path.string(), text, e));
   }
   return m;

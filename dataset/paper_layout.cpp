@@ -15,10 +15,8 @@
 namespace cadsynth {
 namespace {
 
-using Json = nlohmann::ordered_json;
-
-Json Matrix4(const Eigen::Isometry3d& t) {
-  Json rows = Json::array();
+nlohmann::ordered_json Matrix4(const Eigen::Isometry3d& t) {
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   for (int r = 0; r < 4; ++r)
     rows.push_back({t.matrix()(r, 0), t.matrix()(r, 1), t.matrix()(r, 2), t.matrix()(r, 3)});
   return rows;
@@ -158,8 +156,8 @@ class PaperLayoutWriter : public FrameWriter {
   }
 
  private:
-  Json Meta(const Frame& frame) const {
-    Json objects = Json::array();
+  nlohmann::ordered_json Meta(const Frame& frame) const {
+    nlohmann::ordered_json objects = nlohmann::ordered_json::array();
     for (size_t i = 0; i < instances_.size(); ++i) {
       const FormatInstance& p = instances_[i];
       objects.push_back({{"inst_id", i},
@@ -173,7 +171,7 @@ class PaperLayoutWriter : public FrameWriter {
                          {"T_O_W", Matrix4(p.world_from_model)}});
     }
     const Eigen::Matrix3d k = frame.camera.intrinsics.K();
-    Json meta = {
+    nlohmann::ordered_json meta = {
         {"K",
          {{k(0, 0), k(0, 1), k(0, 2)}, {k(1, 0), k(1, 1), k(1, 2)}, {k(2, 0), k(2, 1), k(2, 2)}}},
         {"depth_scale", options_.depth_scale},

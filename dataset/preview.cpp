@@ -20,13 +20,12 @@ namespace cadsynth {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::json;
 
-Json ReadJsonFile(const fs::path& path) {
+nlohmann::json ReadJsonFile(const fs::path& path) {
   const std::string text = ReadFileText(path);
   try {
-    return Json::parse(text);
-  } catch (const Json::exception& e) {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
     throw Error(JsonErrorMessage(path.string(), text, e));
   }
 }
@@ -60,7 +59,7 @@ cv::Mat ColourDepth(const cv::Mat& depth, const cv::Mat& range = {}) {
   return coloured;
 }
 
-Eigen::Matrix3d Matrix3(const Json& v) {
+Eigen::Matrix3d Matrix3(const nlohmann::json& v) {
   Eigen::Matrix3d m;
   for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = v.at(i).get<double>();
   return m;
@@ -176,7 +175,7 @@ namespace {
 // scene_camera and scene_gt files by scene id.
 struct Scenes {
   std::vector<std::pair<int, int>> all;
-  std::map<int, Json> cameras, gts;
+  std::map<int, nlohmann::json> cameras, gts;
 };
 
 Scenes ReadScenes(const fs::path& split_dir, const std::string& sfx) {
@@ -228,10 +227,11 @@ cv::Mat VersusRow(const fs::path& dataset, const PreviewOptions& options, const 
 
 // Boxes and axes (x red, y green, z blue) of the instances `gt` lists (models_info.json: `info`)
 // on the colour image.
-void DrawBoxes(const Json& gt, const Json& info, const Intrinsics& k, int thickness, cv::Mat* rgb) {
+void DrawBoxes(const nlohmann::json& gt, const nlohmann::json& info, const Intrinsics& k,
+               int thickness, cv::Mat* rgb) {
   for (size_t i = 0; i < gt.size(); ++i) {
-    const Json& g = gt[i];
-    const Json& m = info.at(std::to_string(g.at("obj_id").get<int>()));
+    const nlohmann::json& g = gt[i];
+    const nlohmann::json& m = info.at(std::to_string(g.at("obj_id").get<int>()));
     const Eigen::Vector3d lo(m.at("min_x"), m.at("min_y"), m.at("min_z"));
     const Eigen::Vector3d size(m.at("size_x"), m.at("size_y"), m.at("size_z"));
     Eigen::Isometry3d m2c = Eigen::Isometry3d::Identity();
@@ -274,8 +274,8 @@ void DrawBoxes(const Json& gt, const Json& info, const Intrinsics& k, int thickn
 // One frame's row of panels: colour with boxes and axes, depth (exact and the sensor's), visible
 // masks, grasps; or, with options.versus, the two colour images.
 cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const fs::path& split_dir,
-                 const std::string& sfx, const Json& info, const Scenes& scenes, int scene,
-                 int im) {
+                 const std::string& sfx, const nlohmann::json& info, const Scenes& scenes,
+                 int scene, int im) {
   const std::string where = "scene " + std::to_string(scene) + " image " + std::to_string(im);
   if (!scenes.gts.count(scene) || !scenes.gts.at(scene).contains(std::to_string(im)))
     throw Error("preview: no " + where + " in " + split_dir.string());
@@ -298,14 +298,14 @@ cv::Mat FrameRow(const fs::path& dataset, const PreviewOptions& options, const f
   }
   const cv::Mat depth =
       ReadImage(dir / ("depth" + sfx) / (name + ".png"), image_mat::Want::kUnchanged);
-  const Json& gt = scenes.gts.at(scene).at(std::to_string(im));
-  const Json& camera = scenes.cameras.at(scene).at(std::to_string(im));
+  const nlohmann::json& gt = scenes.gts.at(scene).at(std::to_string(im));
+  const nlohmann::json& camera = scenes.cameras.at(scene).at(std::to_string(im));
   const Eigen::Matrix3d kmat = Matrix3(camera.at("cam_K"));
   // The lens's distortion, when the camera has one, bends the drawn points as it bends the image.
   Intrinsics k;
   k.fx = kmat(0, 0), k.fy = kmat(1, 1), k.cx = kmat(0, 2), k.cy = kmat(1, 2);
   if (camera.contains("cam_dist_coeffs")) {
-    const Json& d = camera.at("cam_dist_coeffs");
+    const nlohmann::json& d = camera.at("cam_dist_coeffs");
     k.distortion = Distortion{d.at(0), d.at(1), d.at(2), d.at(3), d.at(4)};
   }
 
@@ -358,7 +358,7 @@ std::string RenderPreviewUnchecked(const fs::path& dataset, const PreviewOptions
       options.split.empty() ? FindSceneFolder(dataset, options.sensor) : dataset / options.split;
   const std::string sfx = options.sensor.empty() ? "" : "_" + options.sensor;
   if (!fs::is_directory(split_dir)) throw Error(split_dir.string() + ": no such folder");
-  const Json info = ReadJsonFile(dataset / "models" / "models_info.json");
+  const nlohmann::json info = ReadJsonFile(dataset / "models" / "models_info.json");
 
   const Scenes scenes = ReadScenes(split_dir, sfx);
   const std::vector<std::pair<int, int>>& all = scenes.all;
@@ -398,7 +398,7 @@ std::string RenderPreview(const fs::path& dataset, const PreviewOptions& options
                           std::vector<std::pair<int, int>>* shown) {
   try {
     return RenderPreviewUnchecked(dataset, options, shown);
-  } catch (const Json::exception& e) {
+  } catch (const nlohmann::json::exception& e) {
     // A value of the wrong type in a scene's JSON files (the syntax was checked on reading).
     throw Error(JsonErrorMessage(dataset.string() + ": damaged BOP files", "", e));
   }

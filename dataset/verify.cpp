@@ -30,7 +30,6 @@
 namespace cadsynth {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::json;
 
 namespace {
 
@@ -253,12 +252,12 @@ Findings CheckModels(const fs::path& root, Models* models) {
   Findings f;
   const fs::path info_path = root / "models" / "models_info.json";
   const std::string origin = "models/models_info.json";
-  Json info;
+  nlohmann::json info;
   try {
     const std::string text = ReadFileText(info_path);
     try {
-      info = Json::parse(text);
-    } catch (const Json::exception& e) {
+      info = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
       f.Fail(kModels, origin, JsonErrorMessage(origin, text, e));
       return f;
     }
@@ -266,7 +265,7 @@ Findings CheckModels(const fs::path& root, Models* models) {
     f.Fail(kModels, origin, "cannot be read");
     return f;
   }
-  std::vector<std::pair<int, Json>> entries;
+  std::vector<std::pair<int, nlohmann::json>> entries;
   for (const auto& [key, value] : info.items()) {
     const std::optional<int> id = ParseBopId(key);
     if (!id || !value.is_object()) {
@@ -280,7 +279,7 @@ Findings CheckModels(const fs::path& root, Models* models) {
   tbb::parallel_for(size_t{0}, entries.size(), [&](size_t i) {
     // Not a structured binding: clang 14 cannot capture one in the lambda below.
     const int id = entries[i].first;
-    const Json& value = entries[i].second;
+    const nlohmann::json& value = entries[i].second;
     Findings& g = found[i];
     const std::string file = "models/obj_" + Id6(id) + ".ply";
     ++g.checked[kModels];
@@ -385,7 +384,7 @@ std::array<int, 4> BopBox(const std::array<int, 4>& b) {
   return {b[0], b[1], b[2] - b[0], b[3] - b[1]};
 }
 
-std::array<int, 4> JsonBox(const Json& j) {
+std::array<int, 4> JsonBox(const nlohmann::json& j) {
   std::array<int, 4> b{};
   for (int k = 0; k < 4; ++k) b[k] = j.at(k).get<int>();
   return b;
@@ -448,10 +447,10 @@ std::optional<double> Cast(const Model& model, const Eigen::Isometry3d& pose,
 struct ImageTask {
   const SceneSensor* scene = nullptr;
   int im_id = 0;
-  const Json* gt = nullptr;       // scene_gt entry (array)
-  const Json* gt_info = nullptr;  // scene_gt_info entry (array), may be null
-  const Json* camera = nullptr;   // scene_camera entry
-  std::vector<const Json*> coco;  // scene_gt_coco annotations of this image
+  const nlohmann::json* gt = nullptr;       // scene_gt entry (array)
+  const nlohmann::json* gt_info = nullptr;  // scene_gt_info entry (array), may be null
+  const nlohmann::json* camera = nullptr;   // scene_camera entry
+  std::vector<const nlohmann::json*> coco;  // scene_gt_coco annotations of this image
   bool has_coco = false;
 };
 
@@ -506,14 +505,14 @@ bool ReadImageData(const ImageTask& task, const VerifyOptions& options, ImageDat
   poses.assign(n, Eigen::Isometry3d::Identity());
   obj_ids.assign(n, 0);
   try {
-    const Json& c = *task.camera;
-    const Json& k = c.at("cam_K");
+    const nlohmann::json& c = *task.camera;
+    const nlohmann::json& k = c.at("cam_K");
     camera.fx = k.at(0), camera.cx = k.at(2), camera.fy = k.at(4), camera.cy = k.at(5);
     camera.depth_scale = c.at("depth_scale");
     if (c.contains("cam_dist_coeffs"))
       camera.dist = c["cam_dist_coeffs"].get<std::vector<double>>();
     for (size_t i = 0; i < n; ++i) {
-      const Json& g = (*task.gt)[i];
+      const nlohmann::json& g = (*task.gt)[i];
       obj_ids[i] = g.at("obj_id");
       const std::vector<double> r = g.at("cam_R_m2c"), t = g.at("cam_t_m2c");
       Eigen::Matrix3d rotation;
@@ -521,7 +520,7 @@ bool ReadImageData(const ImageTask& task, const VerifyOptions& options, ImageDat
       poses[i].linear() = rotation;
       poses[i].translation() = Eigen::Vector3d(t.at(0), t.at(1), t.at(2));
     }
-  } catch (const Json::exception& e) {
+  } catch (const nlohmann::json::exception& e) {
     f.Fail(kGtInfo, scene.Relative("scene_gt" + scene.suffix + ".json"),
            "image " + std::to_string(task.im_id) + ": unreadable entry (" + e.what() + ")");
     return false;
@@ -628,7 +627,7 @@ void CheckGtInfo(const ImageTask& task, const ImageData& d, Findings* out) {
       continue;
     }
     try {
-      const Json& g = (*task.gt_info)[i];
+      const nlohmann::json& g = (*task.gt_info)[i];
       const size_t all = g.at("px_count_all"), visible = g.at("px_count_visib"),
                    valid = g.at("px_count_valid");
       const double fract = g.at("visib_fract");
@@ -669,7 +668,7 @@ void CheckGtInfo(const ImageTask& task, const ImageData& d, Findings* out) {
         wrong.push_back("visib_fract is " + std::to_string(fract) +
                         ", px_count_visib / px_count_all is " + std::to_string(expected));
       for (const std::string& reason : wrong) f.Fail(kGtInfo, info_file, where + reason);
-    } catch (const Json::exception& e) {
+    } catch (const nlohmann::json::exception& e) {
       f.Fail(kGtInfo, info_file, where + "unreadable entry (" + e.what() + ")");
     }
   }
@@ -686,7 +685,7 @@ void CheckCoco(const ImageTask& task, const ImageData& d, Findings* out) {
   {
     const std::string coco_file = scene.Relative("scene_gt_coco" + scene.suffix + ".json");
     std::vector<bool> annotated(n, false);
-    for (const Json* a : task.coco) {
+    for (const nlohmann::json* a : task.coco) {
       ++f.checked[kCoco];
       const std::string where = "image " + std::to_string(task.im_id) + " annotation " +
                                 std::to_string(a->value("id", -1)) + ": ";
@@ -699,7 +698,7 @@ void CheckCoco(const ImageTask& task, const ImageData& d, Findings* out) {
         annotated[inst] = true;
         if (!readable[inst]) continue;
         const InstanceMasks& m = masks[inst];
-        const Json& seg = a->at("segmentation");
+        const nlohmann::json& seg = a->at("segmentation");
         RleMask rle;
         rle.height = seg.at("size").at(0), rle.width = seg.at("size").at(1);
         rle.counts = DecompressRleCounts(seg.at("counts").get<std::string>());
@@ -736,7 +735,7 @@ void CheckCoco(const ImageTask& task, const ImageData& d, Findings* out) {
                           BoxText(coco_box(m.mask_box)) + " (full) or " +
                           BoxText(coco_box(m.visib_box)) + " (visible)");
         for (const std::string& reason : wrong) f.Fail(kCoco, coco_file, where + reason);
-      } catch (const Json::exception& e) {
+      } catch (const nlohmann::json::exception& e) {
         f.Fail(kCoco, coco_file, where + "unreadable (" + e.what() + ")");
       } catch (const Error& e) {
         f.Fail(kCoco, coco_file, where + e.what());
@@ -871,8 +870,8 @@ Findings CheckImage(const ImageTask& task, const Models& models, const VerifyOpt
 }
 
 // Reads one of a scene's JSON files; a problem (and nothing) when it is missing or damaged.
-std::optional<Json> ReadSceneJson(const fs::path& root, const std::string& rel, CheckId check,
-                                  Findings* f, bool required = true) {
+std::optional<nlohmann::json> ReadSceneJson(const fs::path& root, const std::string& rel,
+                                            CheckId check, Findings* f, bool required = true) {
   std::error_code ec;
   if (!fs::exists(root / rel, ec)) {
     if (required) f->Fail(check, rel, "missing");
@@ -880,8 +879,8 @@ std::optional<Json> ReadSceneJson(const fs::path& root, const std::string& rel, 
   }
   const std::string text = ReadFileText(root / rel);
   try {
-    return Json::parse(text);
-  } catch (const Json::exception& e) {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
     f->Fail(check, rel, JsonErrorMessage(rel, text, e));
     return std::nullopt;
   }
@@ -904,22 +903,22 @@ std::string VerifyReport::Verdict() const {
 }
 
 std::string VerifyReport::CertificateJson() const {
-  Json checks_json = Json::array(), problems_json = Json::array();
+  nlohmann::json checks_json = nlohmann::json::array(), problems_json = nlohmann::json::array();
   for (const Check& c : checks)
     checks_json.push_back(
         {{"name", c.name}, {"checked", c.checked}, {"failed", c.failed}, {"unit", c.unit}});
   for (const Problem& p : problems)
     problems_json.push_back({{"file", p.file}, {"reason", p.reason}});
-  const Json j = {{"verdict", passed() ? "pass" : "fail"},
-                  {"summary", Verdict()},
-                  {"dataset", dataset},
-                  {"run_key", run_key},
-                  {"images", images},
-                  {"instances", instances},
-                  {"problem_count", problem_count},
-                  {"checks", checks_json},
-                  {"problems", problems_json},
-                  {"notes", notes}};
+  const nlohmann::json j = {{"verdict", passed() ? "pass" : "fail"},
+                            {"summary", Verdict()},
+                            {"dataset", dataset},
+                            {"run_key", run_key},
+                            {"images", images},
+                            {"instances", instances},
+                            {"problem_count", problem_count},
+                            {"checks", checks_json},
+                            {"problems", problems_json},
+                            {"notes", notes}};
   return j.dump(2) + "\n";
 }
 
@@ -948,9 +947,9 @@ VerifyReport VerifyDataset(const fs::path& root, const VerifyOptions& options) {
       all.Merge(std::move(f));
       continue;
     }
-    std::map<int, std::vector<const Json*>> annotations;
+    std::map<int, std::vector<const nlohmann::json*>> annotations;
     if (coco && coco->contains("annotations")) {
-      for (const Json& a : (*coco)["annotations"])
+      for (const nlohmann::json& a : (*coco)["annotations"])
         annotations[a.value("image_id", -1)].push_back(&a);
     }
     std::vector<ImageTask> tasks;

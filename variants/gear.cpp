@@ -29,11 +29,10 @@
 
 #include "cad/core/error.h"
 #include "cad/occt_shape.h"
+#include "variants/occt_boolean.h"
 
 namespace cadsynth {
 namespace {
-
-double Involute(double alpha) { return std::tan(alpha) - alpha; }
 
 // The transverse tooth of an external gear (or of an internal gear's cutter), tooth 0 centred on
 // +x. Angles are polar angles of the upper (y > 0) side; the lower side is its mirror image.
@@ -299,12 +298,6 @@ TopoDS_Shape Cylinder(double radius, double z0, double z1) {
       .Shape();
 }
 
-TopoDS_Shape Boolean(BRepAlgoAPI_BooleanOperation&& op, const char* what) {
-  op.Build();
-  if (!op.IsDone()) throw Error(std::string("gear: OpenCASCADE could not ") + what);
-  return op.Shape();
-}
-
 }  // namespace
 
 double GearOptions::TransverseModule() const { return module_mm / std::cos(helix_angle_rad); }
@@ -433,15 +426,15 @@ Shape MakeGear(const GearOptions& o) {
         gear = ToothedBody(t, o.helix_angle_rad, 0.0, 0.0, o.face_width_mm);
       }
       if (o.hub_diameter_mm > 0) {
-        gear = Boolean(
+        gear = RunBoolean(
             BRepAlgoAPI_Fuse(gear, Cylinder(0.5 * o.hub_diameter_mm, -o.hub_length_mm, 0.0)),
             "add the hub");
       }
       if (o.bore_diameter_mm > 0 && !bored) {
-        gear =
-            Boolean(BRepAlgoAPI_Cut(gear, Cylinder(0.5 * o.bore_diameter_mm, -o.hub_length_mm - 1.0,
-                                                   o.face_width_mm + 1.0)),
-                    "cut the bore");
+        gear = RunBoolean(
+            BRepAlgoAPI_Cut(gear, Cylinder(0.5 * o.bore_diameter_mm, -o.hub_length_mm - 1.0,
+                                           o.face_width_mm + 1.0)),
+            "cut the bore");
       }
       return WrapShape(gear);
     }
@@ -455,7 +448,7 @@ Shape MakeGear(const GearOptions& o) {
     const TopoDS_Shape blank = Cylinder(o.RootRadius() + rim, 0.0, o.face_width_mm);
     const TopoDS_Shape cutter =
         ToothedBody(t, o.helix_angle_rad, M_PI / o.teeth, -1.0, o.face_width_mm + 1.0);
-    return WrapShape(Boolean(BRepAlgoAPI_Cut(blank, cutter), "cut the ring's teeth"));
+    return WrapShape(RunBoolean(BRepAlgoAPI_Cut(blank, cutter), "cut the ring's teeth"));
   } catch (const Standard_Failure& failure) {
     throw Error(std::string("gear: OpenCASCADE failed: ") + failure.GetMessageString());
   }

@@ -5,6 +5,7 @@
 // ring points inward along +x). Lengths in mm, angles in radians.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,10 @@ struct GearOptions {
 // are the ring's tooth spaces) as a closed polygon, counter-clockwise, `per_segment` points on
 // each curved piece. For tests and previews; the B-rep uses the same curves exactly.
 std::vector<Eigen::Vector2d> GearOutline(const GearOptions& options, int per_segment);
+
+// The involute function inv(alpha) = tan(alpha) - alpha (alpha in radians): the polar angle of
+// the involute of a circle at the point where its pressure angle is alpha.
+inline double Involute(double alpha) { return std::tan(alpha) - alpha; }
 
 // Largest distance (mm) between the B-spline the B-rep uses for a flank and the exact involute,
 // measured at 2000 points.

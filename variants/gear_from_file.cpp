@@ -14,16 +14,11 @@
 #include "cad/core/error.h"
 #include "cad/occt_shape.h"
 #include "variants/gear.h"
+#include "variants/occt_boolean.h"
 
 namespace cadsynth {
 
 namespace {
-
-TopoDS_Shape Run(BRepAlgoAPI_BooleanOperation&& op, const char* what) {
-  op.Build();
-  if (!op.IsDone()) throw Error(std::string("OpenCASCADE could not ") + what);
-  return op.Shape();
-}
 
 // A cylinder of radius r about the gear frame's z axis from z0 to z1, in the CAD frame.
 TopoDS_Shape Cylinder(const Eigen::Isometry3d& cad_from_gear, double r, double z0, double z1) {
@@ -122,16 +117,17 @@ Shape RebuildGear(const Part& part, const RecognizedGear& gear, const GearRebuil
     // The old teeth: the ring outside r_cut along the old band. Everything else (the hub, the
     // web, a flange or a second gear beside the band) is kept.
     const TopoDS_Shape old_ring =
-        Run(BRepAlgoAPI_Cut(Cylinder(cad_from_gear, reach + 1, band_lo, band_hi),
-                            Cylinder(cad_from_gear, r_cut, band_lo - 1, band_hi + 1)),
-            "outline the old teeth");
-    const TopoDS_Shape kept = Run(BRepAlgoAPI_Cut(original, old_ring), "cut the old teeth off");
+        RunBoolean(BRepAlgoAPI_Cut(Cylinder(cad_from_gear, reach + 1, band_lo, band_hi),
+                                   Cylinder(cad_from_gear, r_cut, band_lo - 1, band_hi + 1)),
+                   "outline the old teeth");
+    const TopoDS_Shape kept =
+        RunBoolean(BRepAlgoAPI_Cut(original, old_ring), "cut the old teeth off");
     const TopoDS_Shape inner = Cylinder(cad_from_gear, r_cut, lo, hi);
     const TopoDS_Shape teeth =
         BRepBuilderAPI_Transform(OcctShape(MakeGear(o)), ToTrsf(cad_from_gear), /*copy=*/true)
             .Shape();
-    const TopoDS_Shape ring = Run(BRepAlgoAPI_Cut(teeth, inner), "cut the new teeth's ring");
-    TopoDS_Shape fused = Run(BRepAlgoAPI_Fuse(kept, ring), "join the teeth to the body");
+    const TopoDS_Shape ring = RunBoolean(BRepAlgoAPI_Cut(teeth, inner), "cut the new teeth's ring");
+    TopoDS_Shape fused = RunBoolean(BRepAlgoAPI_Fuse(kept, ring), "join the teeth to the body");
     ShapeUpgrade_UnifySameDomain unify(fused, /*UnifyEdges=*/true, /*UnifyFaces=*/true,
                                        /*ConcatBSplines=*/false);
     unify.Build();

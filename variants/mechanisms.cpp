@@ -19,11 +19,10 @@
 
 #include "cad/core/error.h"
 #include "cad/occt_shape.h"
+#include "variants/occt_boolean.h"
 
 namespace cadsynth {
 namespace {
-
-double Involute(double a) { return std::tan(a) - a; }
 
 Eigen::Isometry3d Pose(double x, double y, double z, double turn) {
   return Eigen::Translation3d(x, y, z) * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ());
@@ -37,12 +36,6 @@ Eigen::Isometry3d Pose(double x, double y, double z, double turn) {
 double MeshTurn(double phi, int other_teeth, double other_turn, int teeth) {
   const double u_other = (phi - other_turn) * other_teeth / (2 * M_PI);
   return phi + M_PI - (2 * M_PI / teeth) * (0.5 - u_other);
-}
-
-TopoDS_Shape Boolean(BRepAlgoAPI_BooleanOperation&& op, const char* what) {
-  op.Build();
-  if (!op.IsDone()) throw Error(std::string("OpenCASCADE could not ") + what);
-  return op.Shape();
 }
 
 TopoDS_Shape Cylinder(double radius, double x, double y, double z0, double z1) {
@@ -226,9 +219,9 @@ ShapeAssembly MakePlanetary(const PlanetaryOptions& o) {
       const double phi = 2 * M_PI * i / o.planets;
       planet_turn[i] = MeshTurn(phi, o.sun_teeth, 0.0, o.planet_teeth);
       carrier =
-          Boolean(BRepAlgoAPI_Fuse(carrier, Cylinder(0.5 * o.pin_diameter_mm, a * std::cos(phi),
-                                                     a * std::sin(phi), -gap, o.face_width_mm)),
-                  "add a carrier pin");
+          RunBoolean(BRepAlgoAPI_Fuse(carrier, Cylinder(0.5 * o.pin_diameter_mm, a * std::cos(phi),
+                                                        a * std::sin(phi), -gap, o.face_width_mm)),
+                     "add a carrier pin");
     }
     // Ring phased from planet 0 (along +x). In an internal mesh both gears turn the same way, so
     // the difference of the phases (the planet's pointing outward, the ring's) stays fixed, at

@@ -23,6 +23,7 @@
 
 #include "cad/core/error.h"
 #include "cad/occt_shape.h"
+#include "variants/occt_boolean.h"
 
 namespace cadsynth {
 namespace {
@@ -92,12 +93,6 @@ TopoDS_Shape Revolve(const std::vector<std::pair<double, double>>& profile) {
   polygon.Close();
   const TopoDS_Face face = BRepBuilderAPI_MakeFace(polygon.Wire(), true);
   return BRepPrimAPI_MakeRevol(face, gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 2 * M_PI).Shape();
-}
-
-TopoDS_Shape Boolean(BRepAlgoAPI_BooleanOperation&& op) {
-  op.Build();
-  Require(op.IsDone(), "OpenCASCADE could not combine the shapes");
-  return op.Shape();
 }
 
 template <typename Build>
@@ -241,7 +236,8 @@ Component MakeShoulderBolt(double shoulder_d, double shoulder_length) {
                                        {0.5 * size.thread_d, k + shoulder_length + lt},
                                        {0, k + shoulder_length + lt}});
     const TopoDS_Shape socket = Extrude(Hexagon(size.socket_s), {}, 0.6 * k + 1.0, -1.0);
-    return Component{"shoulder_bolt", WrapShape(Boolean(BRepAlgoAPI_Cut(body, socket))),
+    return Component{"shoulder_bolt",
+                     WrapShape(RunBoolean(BRepAlgoAPI_Cut(body, socket), "cut the socket")),
                      Symmetries::Cyclic(6, false)};
   });
 }
@@ -255,8 +251,10 @@ Component MakeHexBolt(const std::string& name, double length) {
         BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, size.k), gp_Dir(0, 0, 1)), 0.5 * size.d,
                                  length)
             .Shape();
-    return Component{"hex_bolt_" + size.name, WrapShape(Boolean(BRepAlgoAPI_Fuse(head, shank))),
-                     Symmetries::Cyclic(6, false)};
+    return Component{
+        "hex_bolt_" + size.name,
+        WrapShape(RunBoolean(BRepAlgoAPI_Fuse(head, shank), "fuse the head and the shank")),
+        Symmetries::Cyclic(6, false)};
   });
 }
 
@@ -298,12 +296,17 @@ Component MakeBallBearing(double bore, double outer, double width) {
               .Shape();
       return t;
     }();
-    const TopoDS_Shape inner = Boolean(BRepAlgoAPI_Cut(
-        Revolve({{0.5 * bore, 0}, {pitch - gap, 0}, {pitch - gap, width}, {0.5 * bore, width}}),
-        torus));
-    const TopoDS_Shape outer_ring = Boolean(BRepAlgoAPI_Cut(
-        Revolve({{pitch + gap, 0}, {0.5 * outer, 0}, {0.5 * outer, width}, {pitch + gap, width}}),
-        torus));
+    const TopoDS_Shape inner = RunBoolean(
+        BRepAlgoAPI_Cut(
+            Revolve({{0.5 * bore, 0}, {pitch - gap, 0}, {pitch - gap, width}, {0.5 * bore, width}}),
+            torus),
+        "cut the inner race's groove");
+    const TopoDS_Shape outer_ring = RunBoolean(
+        BRepAlgoAPI_Cut(
+            Revolve(
+                {{pitch + gap, 0}, {0.5 * outer, 0}, {0.5 * outer, width}, {pitch + gap, width}}),
+            torus),
+        "cut the outer race's groove");
     BRep_Builder builder;
     TopoDS_Compound all;
     builder.MakeCompound(all);

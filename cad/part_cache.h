@@ -110,7 +110,9 @@ class ByteReader {
   T Get() {
     static_assert(IsPlainBytes<T>::value);
     T value;
-    std::memcpy(&value, Take(sizeof(T)), sizeof(T));
+    // IsPlainBytes admits Eigen's fixed-size matrices, whose user-declared copy makes them not
+    // trivially copyable to the compiler although their bytes are the whole value.
+    std::memcpy(static_cast<void*>(&value), Take(sizeof(T)), sizeof(T));
     return value;
   }
   template <typename T>

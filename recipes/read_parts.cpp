@@ -77,7 +77,8 @@ std::vector<ParamValue> ReadSeries(const Reader& r, const YAML::Node& node, cons
     return std::get<double>(ReadParam(r, n, k, p));
   };
   for (double v : r.Series(node, key, one))
-    values.push_back(p.kind == FamilyParam::Kind::kCount ? std::round(v) : v);
+    values.emplace_back(std::in_place_type<double>,
+                        p.kind == FamilyParam::Kind::kCount ? std::round(v) : v);
   return values;
 }
 

@@ -428,13 +428,13 @@ Shape MakeGear(const GearOptions& o) {
       if (o.hub_diameter_mm > 0) {
         gear = RunBoolean(
             BRepAlgoAPI_Fuse(gear, Cylinder(0.5 * o.hub_diameter_mm, -o.hub_length_mm, 0.0)),
-            "add the hub");
+            "add the gear's hub");
       }
       if (o.bore_diameter_mm > 0 && !bored) {
         gear = RunBoolean(
             BRepAlgoAPI_Cut(gear, Cylinder(0.5 * o.bore_diameter_mm, -o.hub_length_mm - 1.0,
                                            o.face_width_mm + 1.0)),
-            "cut the bore");
+            "cut the gear's bore");
       }
       return WrapShape(gear);
     }
@@ -448,7 +448,7 @@ Shape MakeGear(const GearOptions& o) {
     const TopoDS_Shape blank = Cylinder(o.RootRadius() + rim, 0.0, o.face_width_mm);
     const TopoDS_Shape cutter =
         ToothedBody(t, o.helix_angle_rad, M_PI / o.teeth, -1.0, o.face_width_mm + 1.0);
-    return WrapShape(RunBoolean(BRepAlgoAPI_Cut(blank, cutter), "cut the ring's teeth"));
+    return WrapShape(RunBoolean(BRepAlgoAPI_Cut(blank, cutter), "cut the ring gear's teeth"));
   } catch (const Standard_Failure& failure) {
     throw Error(std::string("gear: OpenCASCADE failed: ") + failure.GetMessageString());
   }

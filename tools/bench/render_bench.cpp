@@ -16,7 +16,8 @@
 //                 every frame (a camera whose K changes), at 640x480 and 1440x1080, 2 threads
 // Each reports ms per frame (real time); compare BM_EndToEnd with BM_Cast + BM_Encode.
 // CADSYNTH_BENCH_RECIPE=RECIPE.yaml measures that recipe's scenes and views instead.
-// CADSYNTH_BENCH_OUT=DIR: BM_EndToEnd writes there instead of /dev/shm (removed before and after).
+// CADSYNTH_BENCH_OUT=DIR: BM_EndToEnd writes under DIR/cadsynth_bench_e2e instead of
+// /dev/shm/cadsynth_bench_e2e (that folder is removed before and after).
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_pipeline.h>
@@ -136,8 +137,10 @@ void BM_Encode(benchmark::State& state) {
 void BM_EndToEnd(benchmark::State& state) {
   Fixture& f = Get();
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(0));
+  // Its own folder under CADSYNTH_BENCH_OUT, so that removing it never touches the user's files.
   const char* out = std::getenv("CADSYNTH_BENCH_OUT");
-  const std::filesystem::path dir = out != nullptr ? out : "/dev/shm/cadsynth_bench_e2e";
+  const std::filesystem::path dir =
+      std::filesystem::path(out != nullptr ? out : "/dev/shm") / "cadsynth_bench_e2e";
   std::filesystem::remove_all(dir);
   std::vector<std::unique_ptr<BopSceneWriter>> writers;
   for (size_t s = 0; s < f.run.scenes.size(); ++s) {

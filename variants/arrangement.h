@@ -95,7 +95,7 @@ struct ArrangementOptions {
   double drop_height_mm = 30.0;
   double settle_time_s = 10.0;  // simulated; parts still moving then are reported
   double time_step_s = PileOptions{}.time_step_s;
-  bool confirm_rest = false;  // PileOptions::confirm_seconds: true 1 s, false 0 (none)
+  bool confirm_rest = true;  // PileOptions::confirm_seconds: true 1 s, false 0 (none)
   // Distractors (domain randomisation): parts that are dropped among the arranged ones but are
   // not instances of the arrangement (indices into `parts`, each falling alone). A pile drops
   // them with its copies, each at a place in the drop order drawn from `distractor_seed` (stream

@@ -11,9 +11,9 @@
 // PileOptions' default container made a tote (355 x 265 x 150 mm inside), as bin_picking.yaml.
 // --jobs runs piles side by side (each on one thread). --drift-profile also prints each pile's
 // resimulated drift after 0.02, 0.1, 0.25, 0.5 and 2 s (a creep grows linearly, a topple faster,
-// a restart's jolt is there at once). --iterations, --confirm-rest and --confirm-iterations set
-// PileOptions' solver_iterations, confirm_seconds (1 s) and confirm_iterations, --rest-speed its
-// rest_speed_mm_s. --picks N then
+// a restart's jolt is there at once). --iterations sets PileOptions' solver_iterations,
+// --no-confirm its confirm_seconds to 0 (the rest test alone), --rest-speed its rest_speed_mm_s.
+// --picks N then
 // takes N parts out of each pile, the highest first, as a pick sequence does (SettleAfterPick):
 // the wall time of each pick step and how many parts it freed, median and worst.
 #include <algorithm>
@@ -52,12 +52,11 @@ double Median(std::vector<double> v) {
 }
 
 int Usage() {
-  std::fprintf(
-      stderr,
-      "usage: cadsynth_bench_pile (--family NAME [--param KEY=VALUE]... | --file PATH)\n"
-      "       [--count 60] [--seeds 1-24] [--jobs 1] [--no-resim] [--drift-profile]\n"
-      "       [--iterations 50] [--confirm-rest] [--confirm-iterations 200] [--rest-speed 2]\n"
-      "       [--picks 0]\n");
+  std::fprintf(stderr,
+               "usage: cadsynth_bench_pile (--family NAME [--param KEY=VALUE]... | --file PATH)\n"
+               "       [--count 60] [--seeds 1-24] [--jobs 1] [--no-resim] [--drift-profile]\n"
+               "       [--iterations 50] [--no-confirm] [--rest-speed 2]\n"
+               "       [--picks 0]\n");
   return 2;
 }
 
@@ -67,9 +66,8 @@ int main(int argc, char** argv) try {
   std::string family, file;
   ParamValues params;
   int count = 60, jobs = 1, first = 1, last = 24, picks = 0;
-  bool resim = true, profile = false, confirm = false;
+  bool resim = true, profile = false, confirm = true;
   int iterations = cadsynth::PileOptions{}.solver_iterations;
-  int confirm_iterations = cadsynth::PileOptions{}.confirm_iterations;
   double rest_speed = cadsynth::PileOptions{}.rest_speed_mm_s;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -108,10 +106,8 @@ int main(int argc, char** argv) try {
       profile = true;
     } else if (a == "--iterations") {
       iterations = std::stoi(next());
-    } else if (a == "--confirm-rest") {
-      confirm = true;
-    } else if (a == "--confirm-iterations") {
-      confirm_iterations = std::stoi(next());
+    } else if (a == "--no-confirm") {
+      confirm = false;
     } else if (a == "--rest-speed") {
       rest_speed = std::stod(next());
     } else if (a == "--picks") {
@@ -151,8 +147,7 @@ int main(int argc, char** argv) try {
       o.container.kind = cadsynth::Container::Kind::kTote;
       o.seed = row.seed;
       o.solver_iterations = iterations;
-      o.confirm_seconds = confirm ? 1.0 : 0.0;
-      o.confirm_iterations = confirm_iterations;
+      if (!confirm) o.confirm_seconds = 0.0;
       o.rest_speed_mm_s = rest_speed;
       auto start = std::chrono::steady_clock::now();
       const cadsynth::PileResult r = cadsynth::DropPile(parts, shapes, o);

@@ -244,7 +244,9 @@ TEST(Verify, ARigAndAMergedFarmRunPassAndReportTheirRuns) {
   std::string last;
   for (const Json& g : data["gallery"]) {
     const std::string sensor = g["sensor"];
-    if (sensor != last) EXPECT_EQ(per_sensor.count(sensor), 0u) << "sensors in turn";
+    if (sensor != last) {
+      EXPECT_EQ(per_sensor.count(sensor), 0u) << "sensors in turn";
+    }
     ++per_sensor[sensor];
     last = sensor;
   }

@@ -295,8 +295,8 @@ TEST(Preflight, PartsOutsideTheToteAreRemovedKeptOrDroppedAgain) {
   ASSERT_GE(outside.size(), 1u);
   ASSERT_LT(outside.size(), 8u);
   const std::string count = std::to_string(outside.size()) + " parts of 8 ended outside the tote";
-  EXPECT_TRUE(Has(warning, "scene 'bin': " + count + " (#" + std::to_string(outside[0]) +
-                               " 'round_peg'"))
+  EXPECT_TRUE(
+      Has(warning, "scene 'bin': " + count + " (#" + std::to_string(outside[0]) + " 'round_peg'"))
       << warning;
   EXPECT_TRUE(Has(warning, "kept where they lie, drawn and labelled")) << warning;
   const PreparedRun removed = prepare("", &warning);  // the default

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <ostream>
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -355,6 +356,9 @@ struct RestCase {
   const char* name;
   std::vector<int> bodies;  // into RestParts()
 };
+
+// (Names the case in gtest's and ctest's listings, which would otherwise print its bytes.)
+void PrintTo(const RestCase& c, std::ostream* os) { *os << c.name; }
 
 const std::vector<Part>& RestParts() {
   static const std::vector<Part> parts = {

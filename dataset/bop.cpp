@@ -640,6 +640,14 @@ void BopSceneWriter::WriteRest(const SceneRest& rest) {
                     std::to_string(obj_ids_.size()));
     }
   }
+  Json shapes = Json::array();
+  for (const SceneRest::Shape& shape : rest.shapes) {
+    shapes.push_back({{"obj_id", shape.obj_id},
+                      {"pieces", shape.pieces},
+                      {"decomposed", shape.decomposed},
+                      {"volume_ratio", shape.volume_ratio},
+                      {"timed_out", shape.timed_out}});
+  }
   WriteJson(scene_dir_ / "scene_physics.json",
             Json{{"kind", rest.kind},
                  {"at_rest", rest.restless.empty()},
@@ -650,7 +658,8 @@ void BopSceneWriter::WriteRest(const SceneRest& rest) {
                  {"removed_outside", rest.removed_outside},
                  {"kept_outside", rest.outside},
                  {"distractors", rest.distractors},
-                 {"restless_distractors", rest.restless_distractors}});
+                 {"restless_distractors", rest.restless_distractors},
+                 {"collision_shapes", shapes}});
 }
 
 SceneSplit BopSceneWriter::Finish() {

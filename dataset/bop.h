@@ -356,6 +356,18 @@ struct SceneRest {
   std::vector<int> restless;     // still moving when settle_time ran out
   int distractors = 0;           // dropped with the parts
   int restless_distractors = 0;  // of them, still moving
+  // The collision shape each object was simulated as, by obj_id: its convex pieces, whether they
+  // are a decomposition (else the part's hull), the pieces' volume over the part's (the shape's
+  // quality: 1 is exact, more fills concavities; 0 when the part has no known volume, an open
+  // mesh), and whether the decomposition was stopped at collision.time_limit.
+  struct Shape {
+    int obj_id = 0;
+    int pieces = 0;
+    bool decomposed = false;
+    double volume_ratio = 0;
+    bool timed_out = false;
+  };
+  std::vector<Shape> shapes;
 };
 
 // Writes the images of one scene as frames arrive (from any thread) and its JSON files at the end.

@@ -579,6 +579,10 @@ RunSpec ParseRecipe(const std::string& text, const std::string& name,
       }
     }
     if (const YAML::Node g = root["grasps"]) spec.grasps = ReadGrasps(r, g);
+    if (root["collision"]) {
+      ReadFields(r, root["collision"], "collision", &spec.collision, SchemaAt("collision"));
+      r.Check(spec.collision, root["collision"], "collision");
+    }
     if (root["limits"]) {
       ReadFields(r, root["limits"], "limits", &spec.limits, SchemaAt("limits"));
       r.Check(spec.limits, root["limits"], "limits");

@@ -208,6 +208,7 @@ struct RunSpec {
   RenderOptions render;
   RandomizeSpec randomize;  // the recipe's `randomize:` (scenes may replace groups of it)
   GraspSpec grasps;
+  CollisionOptions collision;  // the collision shapes of the parts that piles and drops simulate
   BopOptions bop;
   std::filesystem::path output;  // empty: the command line decides
   RunLimits limits;

@@ -245,6 +245,15 @@ const std::vector<FamilyInfo>& Families() {
                  [](const std::string& f, const ParamValues& v) {
                    return Single(f, MakeSquarePeg(Num(v, "side"), Num(v, "length")));
                  }});
+    f.push_back({"casing",
+                 "an open-top box housing with half-round bearing seats in its end walls",
+                 {Length("length", 38.0, "outer length (x)"), Length("width", 15.0, "outer width"),
+                  Length("height", 14.5, "outer height"), Length("wall", 2.0, "wall and floor"),
+                  Length("seat_diameter", 8.0, "bearing seat in each end wall (0: none)")},
+                 [](const std::string& f, const ParamValues& v) {
+                   return Single(f, MakeCasing(Num(v, "length"), Num(v, "width"), Num(v, "height"),
+                                               Num(v, "wall"), Num(v, "seat_diameter")));
+                 }});
     f.push_back(
         {"faceplate",
          "a plate with a grid of holes",

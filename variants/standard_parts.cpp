@@ -158,6 +158,41 @@ Component MakeSquarePeg(double side, double length) {
   });
 }
 
+Component MakeCasing(double length, double width, double height, double wall,
+                     double seat_diameter) {
+  Positive(length, "casing length");
+  Positive(width, "casing width");
+  Positive(height, "casing height");
+  Positive(wall, "casing wall");
+  Require(2 * wall < width && 2 * wall < length && wall < height,
+          "a casing's walls leave no room inside it (2 x wall must be less than its length and "
+          "width, wall less than its height)");
+  Require(
+      seat_diameter >= 0 && seat_diameter < width - 2 * wall && 0.5 * seat_diameter < height - wall,
+      "a casing's bearing seat must be narrower than its inside (width - 2 x wall) and "
+      "shallower than its inside's depth (height - wall)");
+  return Guarded("casing", [&] {
+    const TopoDS_Shape outer = BRepPrimAPI_MakeBox(gp_Pnt(-0.5 * length, -0.5 * width, 0),
+                                                   gp_Pnt(0.5 * length, 0.5 * width, height))
+                                   .Shape();
+    const TopoDS_Shape pocket =
+        BRepPrimAPI_MakeBox(gp_Pnt(-0.5 * length + wall, -0.5 * width + wall, wall),
+                            gp_Pnt(0.5 * length - wall, 0.5 * width - wall, height + 1.0))
+            .Shape();
+    TopoDS_Shape body = RunBoolean(BRepAlgoAPI_Cut(outer, pocket), "hollow the casing");
+    if (seat_diameter > 0) {
+      // One cylinder along x through both end walls, its axis on the casing's top edge.
+      const TopoDS_Shape seat =
+          BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(-0.5 * length - 1.0, 0, height), gp_Dir(1, 0, 0)),
+                                   0.5 * seat_diameter, length + 2.0)
+              .Shape();
+      body = RunBoolean(BRepAlgoAPI_Cut(body, seat), "cut the casing's bearing seats");
+    }
+    // A half turn about z maps it onto itself; it has no flip (its top is open).
+    return Component{"casing", WrapShape(body), Symmetries::Cyclic(2, false)};
+  });
+}
+
 Component MakeFaceplate(double width, double height, double thickness, int rows, int columns,
                         double hole_diameter, double margin) {
   Positive(width, "faceplate width");

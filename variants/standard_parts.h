@@ -34,6 +34,11 @@ using Component = ShapeAssembly::Component;
 
 Component MakeRoundPeg(double diameter, double length);
 Component MakeSquarePeg(double side, double length);
+// An open-top box housing like a gearbox's lower casing (the reference paper's): outer length
+// (along x) x width x height, walls and floor `wall` thick, and a half-round bearing seat of
+// `seat_diameter` (0: none) cut into each end wall, its axis along x on the top edge. Concave and
+// closed: piles decompose it.
+Component MakeCasing(double length, double width, double height, double wall, double seat_diameter);
 // A rectangular plate centred on the origin with a rows x columns grid of through holes, its
 // outer holes `margin` from the edges.
 Component MakeFaceplate(double width, double height, double thickness, int rows, int columns,

@@ -13,7 +13,8 @@
 // resimulated drift after 0.02, 0.1, 0.25, 0.5 and 2 s (a creep grows linearly, a topple faster,
 // a restart's jolt is there at once). --iterations sets PileOptions' solver_iterations,
 // --no-confirm its confirm_seconds to 0 (the rest test alone), --rest-speed its rest_speed_mm_s.
-// --picks N then
+// --concavity and --merge-volume set the collision shape's CollisionOptions (a concave part's
+// pieces). --picks N then
 // takes N parts out of each pile, the highest first, as a pick sequence does (SettleAfterPick):
 // the wall time of each pick step and how many parts it freed, median and worst.
 #include <algorithm>
@@ -56,7 +57,7 @@ int Usage() {
                "usage: cadsynth_bench_pile (--family NAME [--param KEY=VALUE]... | --file PATH)\n"
                "       [--count 60] [--seeds 1-24] [--jobs 1] [--no-resim] [--drift-profile]\n"
                "       [--iterations 50] [--no-confirm] [--rest-speed 2]\n"
-               "       [--picks 0]\n");
+               "       [--concavity 0.03] [--merge-volume 0.1] [--picks 0]\n");
   return 2;
 }
 
@@ -69,6 +70,7 @@ int main(int argc, char** argv) try {
   bool resim = true, profile = false, confirm = true;
   int iterations = cadsynth::PileOptions{}.solver_iterations;
   double rest_speed = cadsynth::PileOptions{}.rest_speed_mm_s;
+  cadsynth::CollisionOptions collision;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto next = [&]() -> std::string {
@@ -110,6 +112,10 @@ int main(int argc, char** argv) try {
       confirm = false;
     } else if (a == "--rest-speed") {
       rest_speed = std::stod(next());
+    } else if (a == "--concavity") {
+      collision.concavity = std::stod(next());
+    } else if (a == "--merge-volume") {
+      collision.merge_volume = std::stod(next());
     } else if (a == "--picks") {
       picks = std::stoi(next());
     } else {
@@ -131,12 +137,14 @@ int main(int argc, char** argv) try {
       part = cadsynth::ImportCad(file, cadsynth::ImportOptions{}).parts[0];
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const std::vector<cadsynth::CollisionShape> shapes = {cadsynth::MakeCollisionShape(part)};
+    const std::vector<cadsynth::CollisionShape> shapes = {
+        cadsynth::MakeCollisionShape(part, collision)};
     const double shape_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::vector<cadsynth::Part> parts = {part};
-    std::printf("%s: %zu collision pieces (%.2f s), %d copies, seeds %d-%d\n", part.name.c_str(),
-                shapes[0].pieces.size(), shape_s, count, first, last);
+    std::printf("%s: %zu collision pieces, %.3f x its volume (%.2f s), %d copies, seeds %d-%d\n",
+                part.name.c_str(), shapes[0].pieces.size(), shapes[0].volume_ratio, shape_s, count,
+                first, last);
     std::vector<Row> rows(static_cast<size_t>(last - first + 1));
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, jobs);
     tbb::parallel_for(size_t{0}, rows.size(), [&](size_t k) {

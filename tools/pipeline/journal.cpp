@@ -268,6 +268,7 @@ std::string RunKey(const RunSpec& spec, const PreparedRun& prepared,
   w.Fields("output", spec.bop);
   w.Fields("render", spec.render);
   w.Fields("tessellation", spec.tessellation);
+  w.Fields("collision", spec.collision);
   KeyScenes(spec, w);
   w.Fields("limits", spec.limits);
   w.Fields("sweep", spec.sweep);

@@ -112,10 +112,11 @@ void DecodePile(std::string_view bytes, Placement* placement,
 
 CacheKey PileKey(const PartCache& cache, const SceneSpec& scene_spec,
                  const std::vector<Part>& parts, const std::vector<Instance>& instances,
-                 const std::vector<int>& groups, const ArrangementOptions& a, bool strict) {
+                 const std::vector<int>& groups, const ArrangementOptions& a,
+                 const CollisionOptions& collision, bool strict) {
   KeyHasher hasher;
-  cache.Start(&hasher, "pile 1");
-  hasher.Text(scene_spec.name).Value(strict);
+  cache.Start(&hasher, "pile 2");
+  hasher.Text(scene_spec.name).Value(strict).Fields(collision);
   std::vector<int> used;
   for (const Instance& instance : instances) used.push_back(instance.part);
   used.insert(used.end(), a.distractors.begin(), a.distractors.end());

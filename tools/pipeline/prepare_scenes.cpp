@@ -9,6 +9,7 @@
 #include <cmath>
 #include <exception>
 #include <filesystem>
+#include <iomanip>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -28,26 +29,29 @@ namespace cadsynth::prepare_stages {
 namespace {
 
 // A part's collision shape for piles, read from the cache or computed (and stored): a concave
-// part's decomposition takes up to a second, once per part for a whole farm.
-CollisionShape PartCollisionShape(const Part& part, const PartCache* cache) {
-  const CollisionOptions options;
+// part's decomposition takes up to seconds, once per part for a whole farm. A decomposition
+// stopped at its time limit is stored too, so that every shard sharing the cache simulates the
+// same shape.
+CollisionShape PartCollisionShape(const Part& part, const CollisionOptions& options,
+                                  const PartCache* cache) {
   std::optional<CacheKey> key;
   if (cache) {
     KeyHasher hasher;
-    cache->Start(&hasher, "collision 3");
-    hasher.Geometry(part.mesh)
-        .Value(part.watertight)
-        .Value(part.mass.volume_mm3)
-        .Value(options.convex_fraction)
-        .Value(options.concavity)
-        .Value(options.max_pieces)
-        .Value(options.max_triangles)
-        .Value(options.max_corners)
-        .Value(options.tolerance_mm);
+    cache->Start(&hasher, "collision 4");
+    hasher.Geometry(part.mesh).Value(part.watertight).Value(part.mass.volume_mm3).Fields(options);
     key = hasher.Key();
     if (const std::optional<std::string> bytes = cache->Load("collision", *key)) {
       try {
-        return DecodeCollisionShape(*bytes);
+        CollisionShape shape = DecodeCollisionShape(*bytes);
+        if (shape.timed_out) {
+          std::ostringstream text;
+          text << "part '" << part.name << "': its convex decomposition did not finish within "
+               << options.time_limit_s
+               << " s (collision.time_limit) when the part cache's copy was made; it is "
+                  "simulated as its convex hull";
+          Warn(text.str());
+        }
+        return shape;
       } catch (const Error&) {  // damaged: computed again below
       }
     }
@@ -182,8 +186,9 @@ std::vector<Part> MakeDistractorParts(const RunSpec& spec,
 
 // Collision shapes of every part that falls or is fallen on (cached where they can be), for
 // those `shapes` does not have yet.
-void CompleteCollisionShapes(const PartCache* cache, const std::vector<Part>& with_distractors,
-                             size_t num_parts, const std::vector<Instance>& instances,
+void CompleteCollisionShapes(const PartCache* cache, const CollisionOptions& collision,
+                             const std::vector<Part>& with_distractors, size_t num_parts,
+                             const std::vector<Instance>& instances,
                              const std::vector<int>& distractors,
                              std::vector<CollisionShape>* shapes) {
   std::vector<size_t> need;
@@ -198,7 +203,7 @@ void CompleteCollisionShapes(const PartCache* cache, const std::vector<Part>& wi
     if (!(*shapes)[need[k]].pieces.empty()) return;
     WarningCapture need_capture;
     try {
-      (*shapes)[need[k]] = PartCollisionShape(with_distractors[need[k]], cache);
+      (*shapes)[need[k]] = PartCollisionShape(with_distractors[need[k]], collision, cache);
     } catch (const Error& e) {
       errors[k] = e.what();
     }
@@ -229,13 +234,13 @@ std::vector<Part> AddDistractors(const Context& context, const std::vector<Part>
     // contact scans them all, so cylinders take 64 and boxes have their 8.
     const DistractorObject::Kind kind = candidates[picks[k].object].kind;
     if (kind != DistractorObject::Kind::kSource) {
-      CollisionOptions round;
+      CollisionOptions round = context.spec.collision;
       round.max_corners = kind == DistractorObject::Kind::kSphere ? 128 : 64;
       (*shapes)[parts.size() + k] = MakeCollisionShape(with_distractors.back(), round);
     }
   }
-  CompleteCollisionShapes(context.cache, with_distractors, parts.size(), instances,
-                          arrangement->distractors, shapes);
+  CompleteCollisionShapes(context.cache, context.spec.collision, with_distractors, parts.size(),
+                          instances, arrangement->distractors, shapes);
   return with_distractors;
 }
 
@@ -475,8 +480,8 @@ void SettlePile(const Context& context, const SceneSpec& scene_spec, const std::
                 SceneLog* log, Placement* placement) {
   std::optional<CacheKey> key;
   if (context.cache) {
-    key =
-        PileKey(*context.cache, scene_spec, parts, instances, groups, arrangement, context.strict);
+    key = PileKey(*context.cache, scene_spec, parts, instances, groups, arrangement,
+                  context.spec.collision, context.strict);
     if (const std::optional<std::string> bytes = context.cache->Load("pile", *key)) {
       try {
         std::vector<std::pair<bool, std::string>> messages;
@@ -766,7 +771,7 @@ PileShapes MakePileShapes(const Context& context, const PrepareState& state) {
     WarningCapture capture;
     const auto start = std::chrono::steady_clock::now();
     try {
-      pile.shapes[p] = PartCollisionShape(parts[p], context.cache);
+      pile.shapes[p] = PartCollisionShape(parts[p], context.spec.collision, context.cache);
     } catch (...) {
       pile.failures[p] = std::current_exception();
     }
@@ -776,8 +781,16 @@ PileShapes MakePileShapes(const Context& context, const PrepareState& state) {
     const size_t done = ++made;
     if (context.progress && seconds >= context.progress_interval_s) {
       std::ostringstream detail;
-      detail << "'" << parts[p].name << "': " << Count(pile.shapes[p].pieces.size(), "convex piece")
-             << " in " << std::round(seconds * 10) / 10 << " s";
+      const CollisionShape& shape = pile.shapes[p];
+      detail << "'" << parts[p].name << "': ";
+      if (shape.decomposed) {
+        detail << Count(shape.pieces.size(), "convex piece");
+      } else {
+        detail << (shape.timed_out ? "its hull (out of time)" : "its hull");
+      }
+      if (shape.volume_ratio > 0)
+        detail << ", " << std::setprecision(3) << shape.volume_ratio << "x its volume";
+      detail << " in " << std::round(seconds * 10) / 10 << " s";
       context.progress({"collision_shapes", "", static_cast<double>(done),
                         static_cast<double>(needed), detail.str()});
     }
@@ -798,7 +811,8 @@ std::vector<Placement> ArrangeScenes(const Context& context, const PrepareState&
 
 // How scene_spec's pile or dropped parts came to rest (scene_physics.json); none for the other
 // layouts.
-std::optional<SceneRest> RestRecord(const SceneSpec& scene_spec, const Placement& placement) {
+std::optional<SceneRest> RestRecord(const SceneSpec& scene_spec, const Placement& placement,
+                                    const PileShapes& pile_shapes) {
   const ArrangementOptions& a = scene_spec.arrangement;
   const bool pile = a.layout == Layout::kPile;
   if (!pile && a.pose != PoseMode::kDropped) return std::nullopt;
@@ -813,6 +827,16 @@ std::optional<SceneRest> RestRecord(const SceneSpec& scene_spec, const Placement
   rest.restless = arranged.restless;
   rest.distractors = static_cast<int>(placement.distractors);
   rest.restless_distractors = static_cast<int>(arranged.restless_distractors.size());
+  std::vector<int> used;
+  for (const Instance& instance : arranged.instances) used.push_back(instance.part);
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  for (int p : used) {
+    const CollisionShape& shape = pile_shapes.shapes[static_cast<size_t>(p)];
+    if (shape.pieces.empty()) continue;
+    rest.shapes.push_back({p + 1, static_cast<int>(shape.pieces.size()), shape.decomposed,
+                           shape.volume_ratio, shape.timed_out});
+  }
   return rest;
 }
 
@@ -864,7 +888,7 @@ PreparedRun RecordScenes(const Context& context, const PrepareState& state,
     }
     const int first = static_cast<int>(prepared.scenes.size());
     record(scene_spec, placement);
-    prepared.rest.push_back(RestRecord(scene_spec, placement));
+    prepared.rest.push_back(RestRecord(scene_spec, placement, state.pile_shapes));
     prepared.scene_names.push_back(scene_spec.name);
     prepared.sequence.push_back(
         steps.empty() ? std::nullopt

@@ -150,14 +150,14 @@ void CheckCamerasOutsideParts(const Context& context, const PrepareState& state,
 
 // A pile in the part cache (pile_cache.cpp), kind "pile": its key holds everything that decides
 // the pile (the arranged parts' geometry, mass and names, the instances and their groups, every
-// pile option, the distractors, --strict); its value the pile, its pick sequence (placement's
-// arranged, picks and pick_ids) and the messages they gave, so that a second shard or a
-// DataLoader worker reads the pile instead of simulating it again (the same bytes). Decode throws
-// Error for a damaged entry.
+// pile option, the collision options, the distractors, --strict); its value the pile, its pick
+// sequence (placement's arranged, picks and pick_ids) and the messages they gave, so that a second
+// shard or a DataLoader worker reads the pile instead of simulating it again (the same bytes).
+// Decode throws Error for a damaged entry.
 CacheKey PileKey(const PartCache& cache, const SceneSpec& scene_spec,
                  const std::vector<Part>& parts, const std::vector<Instance>& instances,
                  const std::vector<int>& groups, const ArrangementOptions& arrangement,
-                 bool strict);
+                 const CollisionOptions& collision, bool strict);
 std::string EncodePile(const Placement& placement,
                        const std::vector<std::pair<bool, std::string>>& messages);
 void DecodePile(std::string_view bytes, Placement* placement,

@@ -835,10 +835,22 @@ Json PhysicsJson(const fs::path& root) {
   std::vector<double> settle;
   size_t piles = 0, at_rest = 0, removed = 0, kept = 0;
   std::set<std::pair<std::string, int>> done;
+  std::map<int, Json> shape_rows;  // by obj_id: the shape it was simulated as (one per run)
   for (const BopSceneFolder& scene : FindBopScenes(root)) {
     if (!done.insert({scene.split, scene.scene_id}).second) continue;
     if (const auto rest = ReadJsonIfThere(root, scene.Relative("scene_physics.json"))) {
       ++piles;
+      for (const Json& shape : rest->value("collision_shapes", Json::array())) {
+        const int pieces = shape.value("pieces", 0);
+        const double ratio = shape.value("volume_ratio", 0.0);
+        shape_rows.emplace(
+            shape.value("obj_id", 0),
+            Json{shape.value("obj_id", 0),
+                 shape.value("decomposed", false) ? std::to_string(pieces) + " convex pieces"
+                                                  : std::string("its convex hull"),
+                 ratio > 0 ? Json(std::round(ratio * 1000) / 1000) : Json("unknown (open mesh)"),
+                 shape.value("timed_out", false) ? "yes: the hull instead" : "no"});
+      }
       const bool still = rest->value("at_rest", true);
       at_rest += still ? 1 : 0;
       const double seconds = rest->value("settle_seconds", 0.0);
@@ -893,6 +905,20 @@ Json PhysicsJson(const fs::path& root) {
                       {"rows", rows},
                       {"more", total - rows.size()},
                       {"settle_seconds", AutoHist(settle, 20, "simulated settle time (s)")}});
+  }
+  if (!shape_rows.empty()) {
+    Json rows = Json::array();
+    for (auto& [obj_id, row] : shape_rows) rows.push_back(std::move(row));
+    tables.push_back(
+        {{"title", "Collision shapes"},
+         {"summary",
+          "what each object was simulated as; the volume of its pieces over its own volume is the "
+          "shape's quality: 1 is exact, above 1 the pieces fill concavities (parts lie on air "
+          "there)"},
+         {"columns",
+          {"obj_id", "simulated as", "pieces' volume / part's", "decomposition out of time"}},
+         {"rows", rows},
+         {"more", 0}});
   }
   if (!step_rows.empty()) {
     const size_t total = step_rows.size();

@@ -81,6 +81,8 @@ double Penetration(const Placed& a, const Placed& b) {
   return deepest;
 }
 
+Part LBracket();  // a concave part made by hand (below)
+
 PileOptions ToteOptions(std::vector<int> bodies, uint64_t seed) {
   PileOptions o;
   o.bodies = std::move(bodies);
@@ -127,6 +129,69 @@ TEST(Collision, ConvexPartsAreTheirHullConcaveOnesArePieces) {
     ADD_FAILURE() << "a flat part got a collision shape";
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()).rfind("part 'sheet': ", 0), 0u) << e.what();
+  }
+}
+
+// The decomposition stops at its time limit (HACD itself cannot be stopped; its progress
+// callback throws out of it): the part is then its hull, with a warning naming the part and the
+// key to raise. A limit already past when HACD starts stops it at its first report, on any
+// machine.
+TEST(Collision, DecompositionStopsAtItsTimeLimitAndTheHullStandsIn) {
+  const Part ring = FamilyPart("ring_gear", {{"teeth", 30.0}, {"module", 1.0}});
+  CollisionOptions hull_only;
+  hull_only.convex_fraction = 1e-9;
+  const CollisionShape hull = MakeCollisionShape(ring, hull_only);
+  CollisionOptions hurried;
+  hurried.time_limit_s = 1e-9;
+  WarningCapture capture;
+  const CollisionShape stopped = MakeCollisionShape(ring, hurried);
+  const std::vector<std::string> warnings = capture.Take();
+  EXPECT_TRUE(stopped.timed_out);
+  EXPECT_FALSE(stopped.decomposed);
+  ASSERT_EQ(stopped.pieces.size(), 1u);
+  EXPECT_EQ(stopped.pieces[0], hull.pieces[0]);
+  EXPECT_EQ(stopped.volume_ratio, hull.volume_ratio);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("part 'ring_gear_z30'"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("collision.time_limit"), std::string::npos) << warnings[0];
+  EXPECT_TRUE(DecodeCollisionShape(EncodeCollisionShape(stopped)).timed_out);
+  // Without the hurry: decomposed, no warning, not timed out (the default limit is a minute).
+  WarningCapture quiet;
+  const CollisionShape whole = MakeCollisionShape(ring);
+  EXPECT_TRUE(quiet.Take().empty());
+  EXPECT_FALSE(whole.timed_out);
+  EXPECT_TRUE(whole.decomposed);
+  EXPECT_FALSE(DecodeCollisionShape(EncodeCollisionShape(whole)).timed_out);
+  CollisionOptions bad;
+  bad.time_limit_s = -1;
+  EXPECT_THROW(MakeCollisionShape(ring, bad), Error);
+  bad = CollisionOptions{};
+  bad.merge_volume = 1.5;
+  EXPECT_THROW(MakeCollisionShape(ring, bad), Error);
+}
+
+// The casing family's volume by hand, and its pieces' quality: a 38 x 15 x 14.5 mm box less its
+// 34 x 11 x 12.5 mm pocket (2 mm walls and floor) less two half-discs of 4 mm radius through the
+// 2 mm end walls. Its pieces must cover it (a wall left out lets parts into each other; HACD's
+// patches on one face of a wall are flat, so they take the wall behind them) and fill little of
+// its pocket; so must the L bracket's. Merging fills at most merge_volume more.
+TEST(Collision, ConcavePartsPiecesCoverThemAndFillLittle) {
+  const Part casing = FamilyPart("casing");
+  const double by_hand = 38 * 15 * 14.5 - 34 * 11 * 12.5 - 2 * 2 * 0.5 * M_PI * 4 * 4;
+  EXPECT_NEAR(casing.mass.volume_mm3, by_hand, 0.005 * by_hand);
+  ASSERT_TRUE(casing.watertight);
+  for (const Part& part : {casing, LBracket()}) {
+    const CollisionShape shape = MakeCollisionShape(part);
+    EXPECT_TRUE(shape.decomposed) << part.name;
+    EXPECT_GT(shape.volume_ratio, 0.95) << part.name;
+    EXPECT_LT(shape.volume_ratio, 1.1) << part.name;
+    CollisionOptions unmerged;
+    unmerged.merge_volume = 0;
+    const CollisionShape apart = MakeCollisionShape(part, unmerged);
+    EXPECT_GE(apart.pieces.size(), shape.pieces.size()) << part.name;
+    // (The grid that measures the cover is good to about 1 %.)
+    EXPECT_LE(shape.volume_ratio, apart.volume_ratio + CollisionOptions{}.merge_volume + 0.02)
+        << part.name;
   }
 }
 
@@ -402,6 +467,52 @@ INSTANTIATE_TEST_SUITE_P(
                       RestCase{"brackets", Copies(4, 16)},
                       RestCase{"mixed", {0, 1, 2, 3, 4, 0, 1, 2, 3, 4, 0, 1, 2, 4, 0, 1}}),
     [](const ::testing::TestParamInfo<RestCase>& info) { return std::string(info.param.name); });
+
+// Issue 45: 60 copies of a concave closed part pile as themselves (their convex pieces, not
+// their hulls): all inside the tote, at rest, and no two overlapping by more than 0.5 mm by the
+// exact mesh test. The casing is the reference paper's kind of part (an open-top housing) made as
+// a closed solid. (Not here yet: 60 of the L brackets above, 4 mm plate, overlap by up to
+// 0.75 mm. Their pieces cover them (1.01 of their volume), but Bullet rounds every piece's
+// corners by its 0.5 mm collision margin, so a plate's corner reaches 0.37 mm past its collision
+// shape, and the solver leaves the rest under the pile's weight. Ring gears, 20 s of wall time
+// for 60, are too slow for the suite.)
+struct ConcaveCase {
+  const char* name;
+  Part (*make)();
+};
+void PrintTo(const ConcaveCase& c, std::ostream* os) { *os << c.name; }
+
+class ConcavePile : public ::testing::TestWithParam<ConcaveCase> {};
+
+TEST_P(ConcavePile, SixtyCopiesRestWithoutOverlaps) {
+  const std::vector<Part> parts = {GetParam().make()};
+  const std::vector<CollisionShape> shapes = {MakeCollisionShape(parts[0])};
+  ASSERT_TRUE(shapes[0].decomposed);
+  PileOptions o = ToteOptions(std::vector<int>(60, 0), 3);
+  o.container.inner_mm = {240, 180};
+  o.container.height_mm = 100;
+  const PileResult r = DropPile(parts, shapes, o);
+  EXPECT_TRUE(r.restless.empty()) << r.restless.size() << " restless";
+  EXPECT_TRUE(r.escaped.empty()) << r.escaped.size() << " outside";
+  std::vector<Placed> placed(r.world_from_model.size());
+  tbb::parallel_for(size_t{0}, placed.size(),
+                    [&](size_t i) { placed[i] = Place(parts[0], r.world_from_model[i]); });
+  std::vector<double> deepest(placed.size(), 0.0);
+  tbb::parallel_for(size_t{0}, placed.size(), [&](size_t a) {
+    for (size_t b = 0; b < placed.size(); ++b) {
+      if (a != b) deepest[a] = std::max(deepest[a], Penetration(placed[a], placed[b]));
+    }
+  });
+  EXPECT_LT(*std::max_element(deepest.begin(), deepest.end()), 0.5) << "mm";
+  int above = 0;
+  for (const Placed& p : placed) above += p.box.min().z() > o.container.floor_mm + 5;
+  EXPECT_GT(above, 10);  // a pile, not a layer
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Pile, ConcavePile,
+    ::testing::Values(ConcaveCase{"casings", [] { return FamilyPart("casing"); }}),
+    [](const ::testing::TestParamInfo<ConcaveCase>& info) { return std::string(info.param.name); });
 
 // Bolts are the hard case: lying across each other they creep or balance on an edge until a
 // restart tips them over; with the rest test alone 19 of 24 60-bolt piles moved 0.5-16 mm in a

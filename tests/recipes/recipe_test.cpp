@@ -713,6 +713,29 @@ TEST(Recipe, PhysicallyBasedColoursAreLinearAndHexIsSrgb) {
             std::string::npos);
 }
 
+// The collision shapes' options (CollisionOptions, one set for the run): read with their units,
+// checked, and an impossible one named at its key and line.
+TEST(Recipe, CollisionShapesReadTheirOptions) {
+  const RunSpec spec = ParseRecipe(
+      "collision: {time_limit: 5, max_pieces: 12, merge_volume: 0, tolerance: 0.02 cm,\n"
+      "            concavity: 0.05}\n",
+      "r.yaml", ".");
+  EXPECT_DOUBLE_EQ(spec.collision.time_limit_s, 5.0);
+  EXPECT_EQ(spec.collision.max_pieces, 12);
+  EXPECT_DOUBLE_EQ(spec.collision.merge_volume, 0.0);
+  EXPECT_DOUBLE_EQ(spec.collision.tolerance_mm, 0.2);
+  EXPECT_DOUBLE_EQ(spec.collision.concavity, 0.05);
+  EXPECT_DOUBLE_EQ(DefaultRunSpec().collision.time_limit_s, 60.0);
+  EXPECT_EQ(ErrorOf("collision:\n  max_pieces: 0\n"),
+            "r.yaml:2:15: collision.max_pieces: max_pieces must be 1 to 256");
+  EXPECT_EQ(ErrorOf("collision: {time_limit: -2}\n"),
+            "r.yaml:1:25: collision.time_limit: must not be negative");
+  EXPECT_EQ(
+      ErrorOf("collision: {pieces: 3}\n").rfind("r.yaml:1:13: unknown key 'collision.pieces'", 0),
+      0u)
+      << ErrorOf("collision: {pieces: 3}\n");
+}
+
 TEST(Recipe, PileScenesReadTheirContainerAndPhysics) {
   const RunSpec spec = ParseRecipe(
       "scenes:\n"

@@ -317,10 +317,10 @@ CollisionShape MakeShape(const Part& part, const CollisionOptions& options,
   }
   // HACD's clusters are patches of the surface: a patch on one side of a wall (a casing's outer
   // face) is flat, and its hull would be a sheet or nothing, leaving the wall uncovered (the
-  // casing's pieces held 74 % of its volume). So each patch also takes its triangles' corners
-  // pushed into the part by the wall's thickness behind the triangle: the least distance, along
-  // the inward normal, to the part's far side from four points of the triangle (its centre and
-  // a point near each corner; inside the triangle, so a ray never grazes an edge and crosses an
+  // casing's pieces held at most 74 % of its volume). So each patch also takes its triangles'
+  // corners pushed into the part by the wall's thickness behind the triangle: the least distance,
+  // along the inward normal, to the part's far side from four points of the triangle (its centre
+  // and a point near each corner; inside the triangle, so a ray never grazes an edge and crosses an
   // open pocket instead).
   const auto depth_along = [&](const Eigen::Vector3d& o, const Eigen::Vector3d& d, size_t self) {
     double nearest = std::numeric_limits<double>::infinity();

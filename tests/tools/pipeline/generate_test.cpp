@@ -1270,12 +1270,28 @@ TEST(Generate, DroppedPartsNotAtRestAreRecordedSo) {
   EXPECT_FALSE(rest["restless"].empty());
   EXPECT_NEAR(rest["settle_time"].get<double>(), 0.01, 1e-12);
   for (const json& id : rest["restless"]) EXPECT_LT(id.get<int>(), 4);
+  // The collision shape the nuts fell as: a nut's hole makes it concave, so pieces, and the
+  // pieces cover it (the volume they hold together over the nut's, about 1).
+  ASSERT_EQ(rest["collision_shapes"].size(), 1u);
+  const json& shape = rest["collision_shapes"][0];
+  EXPECT_EQ(shape["obj_id"], 1);
+  EXPECT_TRUE(shape["decomposed"].get<bool>());
+  EXPECT_GT(shape["pieces"].get<int>(), 1);
+  EXPECT_GT(shape["volume_ratio"].get<double>(), 0.95);
+  EXPECT_LT(shape["volume_ratio"].get<double>(), 1.25);
+  EXPECT_FALSE(shape["timed_out"].get<bool>());
   const json physics = json::parse(ReportData(dir / "out"))["physics"];
-  ASSERT_EQ(physics["tables"].size(), 1u);
+  ASSERT_EQ(physics["tables"].size(), 2u);
   EXPECT_EQ(physics["tables"][0]["summary"].get<std::string>().rfind("0 of 1 piles and drops", 0),
             0u)
       << physics.dump();
   EXPECT_EQ(physics["tables"][0]["rows"][0][3], "no");
+  EXPECT_EQ(physics["tables"][1]["title"], "Collision shapes");
+  ASSERT_EQ(physics["tables"][1]["rows"].size(), 1u);
+  EXPECT_EQ(physics["tables"][1]["rows"][0][0], 1);
+  EXPECT_EQ(physics["tables"][1]["rows"][0][1],
+            std::to_string(shape["pieces"].get<int>()) + " convex pieces");
+  EXPECT_EQ(physics["tables"][1]["rows"][0][3], "no");
 }
 
 TEST(Generate, PickSequenceNeedsAPileAndFewerPicksThanParts) {

@@ -783,7 +783,9 @@ PileShapes MakePileShapes(const Context& context, const PrepareState& state) {
       std::ostringstream detail;
       const CollisionShape& shape = pile.shapes[p];
       detail << "'" << parts[p].name << "': ";
-      if (shape.decomposed) {
+      if (pile.failures[p]) {
+        detail << "no collision shape";  // (the error comes with the scenes that drop it)
+      } else if (shape.decomposed) {
         detail << Count(shape.pieces.size(), "convex piece");
       } else {
         detail << (shape.timed_out ? "its hull (out of time)" : "its hull");

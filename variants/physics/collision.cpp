@@ -235,6 +235,163 @@ std::vector<Eigen::Vector3d> SimplifiedCorners(const std::vector<Eigen::Vector3d
   return chosen;
 }
 
+// HACD's clusters are patches of the surface: a patch on one side of a wall (a casing's outer
+// face) is flat, and its hull would be a sheet or nothing, leaving the wall uncovered (the
+// casing's pieces held at most 74 % of its volume). So each thin patch also takes its triangles'
+// corners pushed into the part by the wall's thickness behind the triangle: the least distance,
+// along the inward normal, to the part's far side from four points of the triangle (its centre
+// and a point near each corner; inside the triangle, so a ray never grazes an edge and crosses an
+// open pocket instead).
+void AddWallsBehindThinPatches(const Simplified& s, const long* partition, size_t n_clusters,
+                               double diameter,
+                               std::vector<std::vector<Eigen::Vector3d>>* members) {
+  const auto depth_along = [&](const Eigen::Vector3d& o, const Eigen::Vector3d& d, size_t self) {
+    double nearest = std::numeric_limits<double>::infinity();
+    bool leaves = false;
+    for (size_t k = 0; k < s.triangles.size(); ++k) {  // Moeller-Trumbore
+      if (k == self) continue;
+      const auto& t = s.triangles[k];
+      const Eigen::Vector3d e1 = s.points[t[1]] - s.points[t[0]];
+      const Eigen::Vector3d e2 = s.points[t[2]] - s.points[t[0]];
+      const Eigen::Vector3d p = d.cross(e2);
+      const double det = e1.dot(p);
+      if (std::abs(det) < 1e-12) continue;
+      const Eigen::Vector3d q = o - s.points[t[0]];
+      const double u = q.dot(p) / det;
+      if (u < 0 || u > 1) continue;
+      const Eigen::Vector3d r = q.cross(e1);
+      const double w = d.dot(r) / det;
+      if (w < 0 || u + w > 1) continue;
+      const double hit = e2.dot(r) / det;
+      if (hit > 1e-6 * diameter && hit < nearest) {
+        nearest = hit;
+        leaves = e1.cross(e2).dot(d) > 0;
+      }
+    }
+    // The first surface met must be one the ray leaves the part through; one it enters by means
+    // the ray left through a gap of the simplified mesh (its clustering drops triangles) and
+    // crossed empty space: no depth there.
+    return leaves ? nearest : std::numeric_limits<double>::infinity();
+  };
+  // Only thin patches: a pushed corner is a corner of the piece, and each piece keeps only
+  // max_corners (a bolt's shank pushed through its head lost the corners that keep its round
+  // within 0.1 mm). Thin: the hull's volume under 5 % of the part's size times half the patch's
+  // area (a slab of thickness t and area A has about A / 2 on each side).
+  std::vector<double> area(n_clusters, 0.0);
+  for (size_t k = 0; k < s.triangles.size(); ++k) {
+    const long c = partition[k];
+    if (c < 0 || static_cast<size_t>(c) >= n_clusters) continue;
+    const auto& t = s.triangles[k];
+    area[static_cast<size_t>(c)] +=
+        0.5 * (s.points[t[1]] - s.points[t[0]]).cross(s.points[t[2]] - s.points[t[0]]).norm();
+  }
+  std::vector<char> thin(n_clusters, 1);
+  for (size_t c = 0; c < n_clusters; ++c) {
+    if ((*members)[c].size() < 4) continue;
+    try {
+      const double v = HullVolume(ComputeConvexHull((*members)[c], false));
+      thin[c] = v < 0.05 * diameter * 0.5 * area[c];
+    } catch (const Error&) {  // flat: thin
+    }
+  }
+  for (size_t k = 0; k < s.triangles.size(); ++k) {
+    const long c = partition[k];
+    if (c < 0 || static_cast<size_t>(c) >= n_clusters || !thin[static_cast<size_t>(c)]) continue;
+    const auto& t = s.triangles[k];
+    const Eigen::Vector3d a = s.points[t[0]], b = s.points[t[1]], e = s.points[t[2]];
+    Eigen::Vector3d n = (b - a).cross(e - a);
+    if (!(n.norm() > 0)) continue;
+    n.normalize();
+    const Eigen::Vector3d centre = (a + b + e) / 3.0;
+    double depth = depth_along(centre, -n, k);
+    for (const Eigen::Vector3d& corner : {a, b, e})
+      depth = std::min(depth, depth_along(corner + 0.1 * (centre - corner), -n, k));
+    if (!std::isfinite(depth)) continue;
+    for (const Eigen::Vector3d& corner : {a, b, e})
+      (*members)[static_cast<size_t>(c)].push_back(corner - depth * n);
+  }
+}
+
+// Merging: two neighbouring pieces (boxes within 2 % of the part's size) become the hull of
+// both, the one that fills the least first (the hull's volume outside both pieces, on a grid),
+// while all the merges together fill at most merge_volume of the part's volume (a gear's tooth
+// gaps, not a casing's pocket); beyond max_pieces, at any cost. Every piece's contacts cost
+// the solver: a pile of 60 ring gears (z30, m1) of 55 pieces took 8.5 s of wall time per
+// simulated second. Merging only ever covers more, never opens a hole.
+std::vector<Solid> MergePieces(std::vector<Solid> pieces, const CollisionOptions& options,
+                               double volume, double diameter) {
+  struct Merged {
+    double fill;  // the merged hull's volume outside both pieces
+    Solid solid;
+  };
+  std::vector<char> alive(pieces.size(), 1);
+  std::map<std::pair<size_t, size_t>, Merged> merges;
+  const double near = 0.02 * diameter;
+  const auto consider = [&](size_t a, size_t b, bool any_distance) {
+    if (!any_distance && pieces[a].box.exteriorDistance(pieces[b].box) > near) return;
+    std::vector<Eigen::Vector3d> both = pieces[a].corners;
+    both.insert(both.end(), pieces[b].corners.begin(), pieces[b].corners.end());
+    Solid merged = MakeSolid(SimplifiedCorners(ComputeConvexHull(both, false).vertices,
+                                               options.tolerance_mm, options.max_corners));
+    const double fill = GridVolume(merged.box, 4096, [&](const Eigen::Vector3d& p) {
+      return Inside(merged, p) && !Inside(pieces[a], p) && !Inside(pieces[b], p);
+    });
+    merges[{std::min(a, b), std::max(a, b)}] = {fill, std::move(merged)};
+  };
+  for (size_t a = 0; a < pieces.size(); ++a) {
+    for (size_t b = a + 1; b < pieces.size(); ++b) consider(a, b, false);
+  }
+  size_t count = pieces.size();
+  double filled = 0;  // by the merges so far
+  while (count > 1) {
+    if (merges.empty()) {
+      if (count <= static_cast<size_t>(options.max_pieces)) break;
+      for (size_t a = 0; a < pieces.size(); ++a) {  // too many, none near: any two
+        for (size_t b = a + 1; b < pieces.size(); ++b) {
+          if (alive[a] && alive[b]) consider(a, b, true);
+        }
+      }
+    }
+    auto best = merges.begin();
+    for (auto it = merges.begin(); it != merges.end(); ++it) {
+      if (it->second.fill < best->second.fill) best = it;
+    }
+    if (count <= static_cast<size_t>(options.max_pieces) &&
+        filled + best->second.fill > options.merge_volume * volume)
+      break;
+    filled += best->second.fill;
+    const auto [a, b] = best->first;
+    pieces[a] = std::move(best->second.solid);
+    alive[b] = 0;
+    --count;
+    for (auto it = merges.begin(); it != merges.end();) {
+      const bool stale = it->first.first == a || it->first.second == a || it->first.first == b ||
+                         it->first.second == b;
+      it = stale ? merges.erase(it) : std::next(it);
+    }
+    for (size_t k = 0; k < pieces.size(); ++k) {
+      if (alive[k] && k != a) consider(a, k, false);
+    }
+  }
+  std::vector<Solid> kept;
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    if (alive[k]) kept.push_back(std::move(pieces[k]));
+  }
+  return kept;
+}
+
+// The volume the pieces cover together, each point once (on a grid of 2^18 cells).
+double CoveredVolume(const std::vector<Solid>& kept) {
+  Eigen::AlignedBox3d all;
+  for (const Solid& piece : kept) all.extend(piece.box);
+  return GridVolume(all, 1 << 18, [&](const Eigen::Vector3d& p) {
+    for (const Solid& piece : kept) {
+      if (Inside(piece, p)) return true;
+    }
+    return false;
+  });
+}
+
 // The shape as MakeCollisionShape makes it, the decomposition stopped at start + time limit.
 CollisionShape MakeShape(const Part& part, const CollisionOptions& options,
                          std::chrono::steady_clock::time_point start) {
@@ -315,78 +472,7 @@ CollisionShape MakeShape(const Part& part, const CollisionOptions& options,
     for (long c : clusters_of[static_cast<size_t>(s.cluster_of[v])])
       members[static_cast<size_t>(c)].push_back(part.mesh.positions[v].cast<double>());
   }
-  // HACD's clusters are patches of the surface: a patch on one side of a wall (a casing's outer
-  // face) is flat, and its hull would be a sheet or nothing, leaving the wall uncovered (the
-  // casing's pieces held at most 74 % of its volume). So each patch also takes its triangles'
-  // corners pushed into the part by the wall's thickness behind the triangle: the least distance,
-  // along the inward normal, to the part's far side from four points of the triangle (its centre
-  // and a point near each corner; inside the triangle, so a ray never grazes an edge and crosses an
-  // open pocket instead).
-  const auto depth_along = [&](const Eigen::Vector3d& o, const Eigen::Vector3d& d, size_t self) {
-    double nearest = std::numeric_limits<double>::infinity();
-    bool leaves = false;
-    for (size_t k = 0; k < s.triangles.size(); ++k) {  // Moeller-Trumbore
-      if (k == self) continue;
-      const auto& t = s.triangles[k];
-      const Eigen::Vector3d e1 = s.points[t[1]] - s.points[t[0]];
-      const Eigen::Vector3d e2 = s.points[t[2]] - s.points[t[0]];
-      const Eigen::Vector3d p = d.cross(e2);
-      const double det = e1.dot(p);
-      if (std::abs(det) < 1e-12) continue;
-      const Eigen::Vector3d q = o - s.points[t[0]];
-      const double u = q.dot(p) / det;
-      if (u < 0 || u > 1) continue;
-      const Eigen::Vector3d r = q.cross(e1);
-      const double w = d.dot(r) / det;
-      if (w < 0 || u + w > 1) continue;
-      const double hit = e2.dot(r) / det;
-      if (hit > 1e-6 * diameter && hit < nearest) {
-        nearest = hit;
-        leaves = e1.cross(e2).dot(d) > 0;
-      }
-    }
-    // The first surface met must be one the ray leaves the part through; one it enters by means
-    // the ray left through a gap of the simplified mesh (its clustering drops triangles) and
-    // crossed empty space: no depth there.
-    return leaves ? nearest : std::numeric_limits<double>::infinity();
-  };
-  // Only thin patches: a pushed corner is a corner of the piece, and each piece keeps only
-  // max_corners (a bolt's shank pushed through its head lost the corners that keep its round
-  // within 0.1 mm). Thin: the hull's volume under 5 % of the part's size times half the patch's
-  // area (a slab of thickness t and area A has about A / 2 on each side).
-  std::vector<double> area(n_clusters, 0.0);
-  for (size_t k = 0; k < s.triangles.size(); ++k) {
-    const long c = partition[k];
-    if (c < 0 || static_cast<size_t>(c) >= n_clusters) continue;
-    const auto& t = s.triangles[k];
-    area[static_cast<size_t>(c)] +=
-        0.5 * (s.points[t[1]] - s.points[t[0]]).cross(s.points[t[2]] - s.points[t[0]]).norm();
-  }
-  std::vector<char> thin(n_clusters, 1);
-  for (size_t c = 0; c < n_clusters; ++c) {
-    if (members[c].size() < 4) continue;
-    try {
-      const double v = HullVolume(ComputeConvexHull(members[c], false));
-      thin[c] = v < 0.05 * diameter * 0.5 * area[c];
-    } catch (const Error&) {  // flat: thin
-    }
-  }
-  for (size_t k = 0; k < s.triangles.size(); ++k) {
-    const long c = partition[k];
-    if (c < 0 || static_cast<size_t>(c) >= n_clusters || !thin[static_cast<size_t>(c)]) continue;
-    const auto& t = s.triangles[k];
-    const Eigen::Vector3d a = s.points[t[0]], b = s.points[t[1]], e = s.points[t[2]];
-    Eigen::Vector3d n = (b - a).cross(e - a);
-    if (!(n.norm() > 0)) continue;
-    n.normalize();
-    const Eigen::Vector3d centre = (a + b + e) / 3.0;
-    double depth = depth_along(centre, -n, k);
-    for (const Eigen::Vector3d& corner : {a, b, e})
-      depth = std::min(depth, depth_along(corner + 0.1 * (centre - corner), -n, k));
-    if (!std::isfinite(depth)) continue;
-    for (const Eigen::Vector3d& corner : {a, b, e})
-      members[static_cast<size_t>(c)].push_back(corner - depth * n);
-  }
+  AddWallsBehindThinPatches(s, partition, n_clusters, diameter, &members);
   std::vector<Solid> pieces;
   for (size_t c = 0; c < n_clusters; ++c) {
     if (members[c].size() < 4) continue;
@@ -400,82 +486,11 @@ CollisionShape MakeShape(const Part& part, const CollisionOptions& options,
   }
   if (pieces.empty())
     throw Error("part '" + part.name + "': the convex decomposition found no solid pieces");
-  // Merging: two neighbouring pieces (boxes within 2 % of the part's size) become the hull of
-  // both, the one that fills the least first (the hull's volume outside both pieces, on a grid),
-  // while all the merges together fill at most merge_volume of the part's volume (a gear's tooth
-  // gaps, not a casing's pocket); beyond max_pieces, at any cost. Every piece's contacts cost
-  // the solver: a pile of 60 ring gears (z30, m1) of 55 pieces took 8.5 s of wall time per
-  // simulated second. Merging only ever covers more, never opens a hole.
-  struct Merged {
-    double fill;  // the merged hull's volume outside both pieces
-    Solid solid;
-  };
-  std::vector<char> alive(pieces.size(), 1);
-  std::map<std::pair<size_t, size_t>, Merged> merges;
-  const double near = 0.02 * diameter;
-  const auto consider = [&](size_t a, size_t b, bool any_distance) {
-    if (!any_distance && pieces[a].box.exteriorDistance(pieces[b].box) > near) return;
-    std::vector<Eigen::Vector3d> both = pieces[a].corners;
-    both.insert(both.end(), pieces[b].corners.begin(), pieces[b].corners.end());
-    Solid merged = MakeSolid(SimplifiedCorners(ComputeConvexHull(both, false).vertices,
-                                               options.tolerance_mm, options.max_corners));
-    const double fill = GridVolume(merged.box, 4096, [&](const Eigen::Vector3d& p) {
-      return Inside(merged, p) && !Inside(pieces[a], p) && !Inside(pieces[b], p);
-    });
-    merges[{std::min(a, b), std::max(a, b)}] = {fill, std::move(merged)};
-  };
-  for (size_t a = 0; a < pieces.size(); ++a) {
-    for (size_t b = a + 1; b < pieces.size(); ++b) consider(a, b, false);
-  }
-  size_t count = pieces.size();
-  double filled = 0;  // by the merges so far
-  while (count > 1) {
-    if (merges.empty()) {
-      if (count <= static_cast<size_t>(options.max_pieces)) break;
-      for (size_t a = 0; a < pieces.size(); ++a) {  // too many, none near: any two
-        for (size_t b = a + 1; b < pieces.size(); ++b) {
-          if (alive[a] && alive[b]) consider(a, b, true);
-        }
-      }
-    }
-    auto best = merges.begin();
-    for (auto it = merges.begin(); it != merges.end(); ++it) {
-      if (it->second.fill < best->second.fill) best = it;
-    }
-    if (count <= static_cast<size_t>(options.max_pieces) &&
-        filled + best->second.fill > options.merge_volume * volume)
-      break;
-    filled += best->second.fill;
-    const auto [a, b] = best->first;
-    pieces[a] = std::move(best->second.solid);
-    alive[b] = 0;
-    --count;
-    for (auto it = merges.begin(); it != merges.end();) {
-      const bool stale = it->first.first == a || it->first.second == a || it->first.first == b ||
-                         it->first.second == b;
-      it = stale ? merges.erase(it) : std::next(it);
-    }
-    for (size_t k = 0; k < pieces.size(); ++k) {
-      if (alive[k] && k != a) consider(a, k, false);
-    }
-  }
-  std::vector<Solid> kept;
-  for (size_t k = 0; k < pieces.size(); ++k) {
-    if (alive[k]) kept.push_back(std::move(pieces[k]));
-  }
-  // The quality: the volume the pieces cover together (each point once) over the part's.
-  Eigen::AlignedBox3d all;
-  for (const Solid& piece : kept) all.extend(piece.box);
-  const double covered = GridVolume(all, 1 << 18, [&](const Eigen::Vector3d& p) {
-    for (const Solid& piece : kept) {
-      if (Inside(piece, p)) return true;
-    }
-    return false;
-  });
+  const std::vector<Solid> kept = MergePieces(std::move(pieces), options, volume, diameter);
   shape.pieces.clear();
-  for (Solid& piece : kept) shape.pieces.push_back(std::move(piece.corners));
+  for (const Solid& piece : kept) shape.pieces.push_back(piece.corners);
   shape.decomposed = true;
-  shape.volume_ratio = covered / volume;
+  shape.volume_ratio = CoveredVolume(kept) / volume;
   return shape;
 }
 

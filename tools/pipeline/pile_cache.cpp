@@ -115,7 +115,7 @@ CacheKey PileKey(const PartCache& cache, const SceneSpec& scene_spec,
                  const std::vector<int>& groups, const ArrangementOptions& a,
                  const CollisionOptions& collision, bool strict) {
   KeyHasher hasher;
-  cache.Start(&hasher, "pile 2");
+  cache.Start(&hasher, "pile 3");
   hasher.Text(scene_spec.name).Value(strict).Fields(collision);
   std::vector<int> used;
   for (const Instance& instance : instances) used.push_back(instance.part);

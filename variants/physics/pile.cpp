@@ -397,8 +397,9 @@ struct Simulation {
            models[part_of[i]].model_from_body.inverse();
   }
 
-  // Steps until rest or max_seconds.
-  void Run(const PileOptions& o, PileResult* out) {
+  // Steps until rest or max_seconds; `start_s` is the simulated time already behind the pile
+  // (a failed confirmation's world goes on from there), for progress and messages.
+  void Run(const PileOptions& o, PileResult* out, double start_s = 0) {
     const int window = std::max(1, static_cast<int>(std::lround(o.rest_seconds / o.time_step_s)));
     const int max_steps = static_cast<int>(std::ceil(o.max_seconds / o.time_step_s));
     std::vector<btTransform> before;
@@ -425,12 +426,14 @@ struct Simulation {
       rest = moving.empty();
       for (size_t i = 0; i < bodies.size(); ++i) before[i] = bodies[i]->getWorldTransform();
       const int outside = Outside(o);
-      if (o.progress) o.progress(step * o.time_step_s, static_cast<int>(moving.size()), outside);
+      if (o.progress)
+        o.progress(start_s + step * o.time_step_s, static_cast<int>(moving.size()), outside);
       if (o.give_up_outside < 1.0 && outside > o.give_up_outside * bodies.size()) {
         std::ostringstream m;
         m << outside << " of " << Count(bodies.size(), "part") << " lie beside the "
           << (o.container.kind == Container::Kind::kTote ? "tote" : "container") << " after "
-          << step * o.time_step_s << " s (simulated): stopped. The container is too small for "
+          << start_s + step * o.time_step_s
+          << " s (simulated): stopped. The container is too small for "
           << "them, or they bounce out: use a larger one or fewer copies";
         throw Error(m.str());
       }
@@ -593,7 +596,7 @@ void Confirm(const std::vector<Part>& parts, const std::vector<CollisionShape>& 
       break;
     }
     PileResult settled;
-    check.sim.Run(more, &settled);
+    check.sim.Run(more, &settled, result->seconds);
     result->steps += settled.steps;
     result->seconds += settled.seconds;
     poses = settled.world_from_model;

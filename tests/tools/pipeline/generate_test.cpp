@@ -1229,7 +1229,9 @@ TEST(Generate, PickSequenceStepsKeepTheirIdsAndRepeatInShards) {
       }
     }
     if (s > 0) {
-      EXPECT_LT(freed, 8) << "a pick frees the bolts around it, not the pile";
+      // (What a pick frees exactly is Pile.PickFreesWhatTouchedOrRestedOnThePickedPart...'s.)
+      EXPECT_LT(freed, static_cast<int>(world.size()) - 3)
+          << "a pick frees the bolts around it, not the pile";
     }
     ever_freed += freed;
     where = now;

@@ -15,6 +15,7 @@
 import fnmatch
 import json
 import math
+import os
 import sys
 
 import bpy
@@ -293,18 +294,21 @@ def compare(c, cycles_path, stats_path):
     ours = load_exr(c["cadsynth"])
     theirs = load_exr(cycles_path)
     part = np.zeros(ours.shape[:2], dtype=bool)
+    each = {}  # every instance's visible pixels, by its mask's file name
     for mask in c["masks"]:
-        part |= load_exr(mask)[:, :, 0] > 0.5
+        each[os.path.basename(mask)] = load_exr(mask)[:, :, 0] > 0.5
+        part |= each[os.path.basename(mask)]
     h, w = part.shape
     regions = {"all": np.ones_like(part), "part": part, "floor": ~part}
-    out = {}
-    for name, m in regions.items():
-        if m.sum() == 0:
-            continue
+
+    def means(m):
         a = ours[m].mean(axis=0)
         b = theirs[m].mean(axis=0)
-        out[name] = {"cadsynth": a.tolist(), "cycles": b.tolist(),
-                     "ratio": float(a.sum() / max(b.sum(), 1e-12)), "pixels": int(m.sum())}
+        return {"cadsynth": a.tolist(), "cycles": b.tolist(),
+                "ratio": float(a.sum() / max(b.sum(), 1e-12)), "pixels": int(m.sum())}
+
+    out = {name: means(m) for name, m in regions.items() if m.sum() > 0}
+    out["instances"] = {name: means(m) for name, m in sorted(each.items()) if m.sum() > 0}
     la, lb = ours.mean(axis=2), theirs.mean(axis=2)
     bh, bw = h // 8, w // 8
     block_a = la[:8 * bh, :8 * bw].reshape(bh, 8, bw, 8).mean(axis=(1, 3))

@@ -62,6 +62,10 @@ GLOSSY = {"parts": "\n  - {family: round_peg, params: {diameter: 16 mm, length: 
                    "length: 50 mm}}",
           "scene": "{layout: clutter, pose: random, copies: 1, radius: 80 mm, gap: 5 mm, seed: 3}",
           "camera": (320, 240, 300.0), "view": (30, 55, 0.35)}
+GLOSSY_METAL = dict(WHITE_METAL, roughness=0.25)
+GLOSSY_LIGHTS = [{"type": "disc", "position_m": [0.15, 0.2, 0.45], "target_m": [0, 0, 0],
+                  "radius_m": 0.1, "power": 40}]
+GLOSSY_WORLD = {"color": [0.3, 0.3, 0.3], "strength": 1.0}
 
 RECT = {"type": "rect", "position_m": [-0.2, 0.1, 0.5], "target_m": [0, 0, 0],
         "size_m": [0.4, 0.2], "power": 60}
@@ -108,16 +112,10 @@ CASES = {
                  {"color": [0.08, 0.08, 0.08], "strength": 1.0}, True,
                  "gear, bolt, nut (steel, dark and bright metal), peg and washer (Lambert), two "
                  "area lights and a grey world: inter-reflections between parts", WORKCELL),
-    "glossy": (dict(WHITE_METAL, roughness=0.25),
-               [{"type": "disc", "position_m": [0.15, 0.2, 0.45], "target_m": [0, 0, 0],
-                 "radius_m": 0.1, "power": 40}],
-               {"color": [0.3, 0.3, 0.3], "strength": 1.0}, False,
+    "glossy": (GLOSSY_METAL, GLOSSY_LIGHTS, GLOSSY_WORLD, False,
                "small curved glossy parts (peg, stepped shaft, bolt), white metal 0.25, one disc "
                "light and a grey world", GLOSSY),
-    "glossy_floor": (dict(WHITE_METAL, roughness=0.25),
-                     [{"type": "disc", "position_m": [0.15, 0.2, 0.45], "target_m": [0, 0, 0],
-                       "radius_m": 0.1, "power": 40}],
-                     {"color": [0.3, 0.3, 0.3], "strength": 1.0}, False,
+    "glossy_floor": (GLOSSY_METAL, GLOSSY_LIGHTS, GLOSSY_WORLD, False,
                      "the same on a metal floor (grey, roughness 0.3): glossy paths between the "
                      "parts and the floor",
                      dict(GLOSSY, floor=dict(METAL, base_color=[0.6, 0.6, 0.6]))),

@@ -169,6 +169,9 @@ PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params)
   coat_ = std::clamp(params.clearcoat, 0.0f, 1.0f);
   coat_r_ = std::clamp(params.clearcoat_roughness, 0.0f, 1.0f);
   coat_alpha_ = std::max(kMinAlpha, coat_r_ * coat_r_);
+  if (coat_ > 0)
+    coat_avg_ =
+        coat_ * (kCoatF0 * LookupAverage(t.a_avg, coat_r_) + LookupAverage(t.b_avg, coat_r_));
 }
 
 float PrincipledBsdf::CoatAlbedo(float mu) const {
@@ -208,18 +211,29 @@ const PrincipledBsdf::ViewTerms& PrincipledBsdf::View(const Eigen::Vector3f& wo)
     view_.p_specular =
         specular + diffuse <= 0 ? 0.5f : std::clamp(specular / (specular + diffuse), 0.1f, 0.9f);
   }
+  // What the base reflects: the metal, or the dielectric layer and the diffuse light under it.
+  const float m = params_.metallic;
+  const float glossy = m * metal_albedo + (1 - m) * e_dielectric;
+  const float diffuse = (1 - m) * Luminance(params_.base_color) * (1 - e_dielectric);
+  const float base = glossy + diffuse;
+  view_.albedo = base;
   view_.p_coat = 0;
   if (coat_ > 0) {
     view_.lambda_coat_o = GgxLambda(wo, coat_alpha_, coat_alpha_);
     view_.e_coat = coat_ * CoatAlbedo(mu_o);
     // The coat's share of what is reflected, against an estimate of what the base reflects.
-    const float m = params_.metallic;
-    const float base = m * metal_albedo + (1 - m) * (e_dielectric + Luminance(params_.base_color) *
-                                                                        (1 - e_dielectric));
     const float under = (1 - view_.e_coat) * base;
     view_.p_coat = std::clamp(view_.e_coat / std::max(1e-6f, view_.e_coat + under), 0.05f, 0.95f);
+    // What the base reflects has passed the coat on its way in too, (1 - c E_c(mu_i)): about at
+    // mu_o for its glossy lobe, and the cosine-weighted mean over the hemisphere for its diffuse.
+    view_.albedo = view_.e_coat +
+                   (1 - view_.e_coat) * (glossy * (1 - view_.e_coat) + diffuse * (1 - coat_avg_));
   }
   return view_;
+}
+
+float PrincipledBsdf::Albedo(const Eigen::Vector3f& wo) const {
+  return wo.z() > 0 ? View(wo).albedo : 0.0f;
 }
 
 float PrincipledBsdf::DiffuseScale(const ViewTerms& view, float mu_i) const {

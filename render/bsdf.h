@@ -90,6 +90,13 @@ class PrincipledBsdf {
 
   float alpha_x() const { return alpha_x_; }
   float alpha_y() const { return alpha_y_; }
+  // An estimate of the directional albedo at wo (luminance: the share of light from every
+  // direction that leaves towards wo), from the lobes' tabulated albedos; what the light
+  // selection weighs a surface's reflectance by, never part of an estimate.
+  float Albedo(const Eigen::Vector3f& wo) const;
+  // Whether a glossy lobe dominates what it reflects (metal, or a clear coat), so that where the
+  // light comes from matters more than how much arrives.
+  bool Glossy() const { return params_.metallic > 0 || coat_ > 0; }
 
  private:
   // What depends only on the outgoing direction, computed once per direction (a shading point
@@ -103,6 +110,7 @@ class PrincipledBsdf {
     float lambda_coat_o = 0;  // the coat's Lambda(wo)
     float e_coat = 0;         // the coat's weight times its directional albedo at wo
     float p_coat = 0;         // probability of sampling the coat
+    float albedo = 0;         // Albedo(wo)
   };
   const ViewTerms& View(const Eigen::Vector3f& wo) const;
   // The diffuse layer's share: (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg), 1 without a layer.
@@ -120,7 +128,8 @@ class PrincipledBsdf {
   float dielectric_favg_ = 0;  // multiscatter: Schlick's mean Fresnel of the dielectric layer
   Eigen::Vector3f metal_favg_ = Eigen::Vector3f::Zero();  // and of the metal, per channel
   float coat_ = 0, coat_r_ = 0, coat_alpha_ = 1;          // clear coat weight, roughness and alpha
-  float CoatAlbedo(float mu) const;                       // the coat's directional albedo (F0 0.04)
+  float coat_avg_ = 0;  // the coat's weight times the cosine-weighted mean of its albedo
+  float CoatAlbedo(float mu) const;  // the coat's directional albedo (F0 0.04)
 };
 
 // The GGX pieces, exposed for tests: the distribution of normals D(m) (1/sr), Smith's Lambda(w)

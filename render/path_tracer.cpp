@@ -635,13 +635,20 @@ struct PathTracer::Impl {
               float spread) const;
 
   // Next-event estimation picks one strategy (a light, or the environment: index lights.size())
-  // per surface point, with probability pdf[k] for a point p with shading normal n: nine tenths in
-  // proportion to Importance (about the irradiance each could give there, so that bright and
-  // near lights get the samples), one tenth evenly (so that nothing that can light p is starved by
-  // a poor estimate). Evenly when more than kMaxRated strategies. The BSDF's sample leaving the
+  // per surface point, with probability pdf[k]: nine tenths in proportion to an estimate of what
+  // each gives the point (Rating below, so that bright and near lights, and those a glossy lobe
+  // sees, get the samples), one tenth evenly (so that nothing that can light p is starved by a
+  // poor estimate). Evenly when more than kMaxRated strategies. The BSDF's sample leaving the
   // same point reuses the numbers for its MIS weights when it finds a light or the sky.
   static constexpr int kMaxRated = 32;
-  void SelectionPdfs(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float* pdf) const;
+  // The point a strategy is rated for: position, shading normal and frame, the direction towards
+  // the viewer (world and the frame's) and its BSDF.
+  struct Receiver {
+    Eigen::Vector3f p, n, wo_world, wo;
+    const Eigen::Vector3f *t, *b;
+    const PrincipledBsdf* bsdf;
+  };
+  void SelectionPdfs(const Receiver& r, float* pdf) const;
 
   // The BSDF's frame at a surface: the shading normal, and a tangent along the brushing
   // direction for anisotropic materials (any tangent otherwise).
@@ -688,17 +695,62 @@ PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
 
 PathTracer::~PathTracer() = default;
 
-void PathTracer::Impl::SelectionPdfs(const Eigen::Vector3f& p, const Eigen::Vector3f& n,
-                                     float* pdf) const {
+void PathTracer::Impl::SelectionPdfs(const Receiver& r, float* pdf) const {
   const int count = num_strategies;
   if (count == 1) {  // nothing to choose between: no estimate to compute at every vertex
     pdf[0] = 1.0f;
     return;
   }
   const int num_lights = static_cast<int>(lights.size());
+  // What each strategy gives the point, about: the light's irradiance bound E times the BSDF
+  // towards the light (where the light's bounding cone comes nearest to the mirror direction, so
+  // that a glossy lobe's highlight is found even off the light's centre), at least a quarter of a
+  // Lambertian surface's albedo / pi (a light the lobe misses still lights the rest), at most the
+  // light's radiance times the albedo (what it gives when it fills the lobe). The environment:
+  // its mean radiance times the albedo. On a surface that is not Glossy() every rating is
+  // E albedo / pi (the BSDF is not evaluated): the lights in proportion to their irradiance.
+  const float albedo = r.bsdf->Albedo(r.wo);
+  const Eigen::Vector3f mirror = 2 * r.n.dot(r.wo_world) * r.n - r.wo_world;
+  const float lambert = albedo / kPiF;
+  const bool glossy = r.bsdf->Glossy();
   float total = 0;
   for (int k = 0; k < count; ++k) {
-    const float w = k < num_lights ? Importance(lights[k], p, n) : environment_importance;
+    float w;
+    if (k == num_lights) {
+      w = environment_importance * lambert;
+    } else {
+      const PreparedLight& l = lights[k];
+      const float e = Importance(l, r.p, r.n);
+      if (!(e > 0) || !glossy) {
+        w = e * lambert;
+      } else {
+        // The light's cone as seen from p: its centre direction c and the sine of its radius.
+        Eigen::Vector3f c;
+        float sin_radius;
+        if (l.kind == LightSource::Kind::kSun) {
+          c = l.to_sun;
+          sin_radius = l.sun_sin_half;
+        } else {
+          const Eigen::Vector3f d = l.position - r.p;
+          const float dist = d.norm();
+          c = d / dist;
+          sin_radius = std::min(1.0f, l.bound_radius / dist);
+        }
+        const float cos_cm = c.dot(mirror);
+        const float cos_radius = std::sqrt(1 - sin_radius * sin_radius);
+        Eigen::Vector3f toward = mirror;
+        if (cos_cm < cos_radius) {  // the mirror direction is outside: the cone's nearest edge
+          const Eigen::Vector3f across = mirror - cos_cm * c;
+          const float norm = across.norm();
+          toward =
+              norm > 1e-6f ? Eigen::Vector3f(cos_radius * c + (sin_radius / norm) * across) : c;
+        }
+        const Eigen::Vector3f wi(toward.dot(*r.t), toward.dot(*r.b), toward.dot(r.n));
+        const float f = std::max(0.25f * lambert, Luminance(r.bsdf->Eval(r.wo, wi)));
+        w = e * f;
+        if (!l.delta) w = std::min(w, Luminance(l.radiance) * albedo);
+      }
+    }
     pdf[k] = std::isfinite(w) ? std::max(0.0f, w) : 0.0f;
     total += pdf[k];
   }
@@ -1005,7 +1057,7 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
           float select_pdf = even;
           if (rated) {
             float* select = selection[j];
-            im.SelectionPdfs(p_off, surf.ns, select);
+            im.SelectionPdfs({p_off, surf.ns, -dir[j], wo, &t, &b, &bsdf}, select);
             for (float below = select[0]; pick + 1 < im.num_strategies && u_choice.x() >= below;
                  below += select[++pick]) {
             }

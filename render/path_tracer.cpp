@@ -636,7 +636,7 @@ struct PathTracer::Impl {
 
   // Next-event estimation picks one strategy (a light, or the environment: index lights.size())
   // per surface point, with probability pdf[k]: nine tenths in proportion to an estimate of what
-  // each gives the point (Rating below, so that bright and near lights, and those a glossy lobe
+  // each gives the point (its definition below: bright and near lights, and those a glossy lobe
   // sees, get the samples), one tenth evenly (so that nothing that can light p is starved by a
   // poor estimate). Evenly when more than kMaxRated strategies. The BSDF's sample leaving the
   // same point reuses the numbers for its MIS weights when it finds a light or the sky.

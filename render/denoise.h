@@ -45,4 +45,29 @@ struct DenoiseOptions {
 // The filtered radiance, 3 per pixel.
 std::vector<float> Denoise(const DenoiseInput& input, const DenoiseOptions& options = {});
 
+// The denoiser network (RenderOptions::Denoiser::kNetwork): a small U-Net (three 2 x 2 strided
+// convolutions down, three transposed ones up, a 3 x 3 convolution at each level, one at full
+// resolution over the input again) trained by
+// tools/denoiser/ on cadsynth's own renders, embedded in the library (render/models/) and run
+// through OpenCV's dnn module. Like the filter it sees the lighting only: it reads, per pixel,
+//
+//   0-2  log(1 + L / s), L the radiance divided by the albedo (at least 0.01 per channel) and s
+//        the median luminance of L over the pixels that see a surface (the frame's scale, so
+//        that exposure and light power do not matter), L / s at most 10^4;
+//   3-5  the albedo (clamped to [0, 1]);
+//   6-8  the shading normal;
+//   9    log(z / z_median), z the depth;
+//   10   log(1 + sigma / s), sigma the standard deviation of the mean luminance, demodulated as
+//        L is, at most 10^4 s;
+//   11   1,
+//
+// all 0 where the pixel sees nothing. It gives back its own estimate of log(1 + L / s) (channels
+// 0-2) and a weight (channel 3, through a sigmoid) that blends that estimate with the input's L /
+// s, so that it can pass on pixels that are clean already; the blend is multiplied by s and the
+// albedo. Pixels that see nothing keep their radiance. tools/denoiser/features.py is the
+// same in numpy: the two must change together. The bytes depend only on the input and on the
+// CPU's vector instructions (OpenCV picks its kernels by them, as Embree does), not on the number
+// of threads.
+std::vector<float> DenoiseWithNetwork(const DenoiseInput& input);
+
 }  // namespace cadsynth

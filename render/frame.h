@@ -35,6 +35,14 @@ struct Frame {
   // pbr mode: the paths each pixel's colour averages (render.samples, or fewer where adaptive
   // sampling stopped early; render.noise_threshold). Empty in the fast mode.
   std::vector<uint32_t> samples;
+  // RenderOptions::denoiser_inputs (pbr): what the denoiser reads, per pixel (the depth is
+  // `depth`): the radiance before denoising (3), the first surface's albedo (3, mean over the
+  // pixel's paths) and shading normal (3, world frame, mean), and the variance of the pixel's mean
+  // luminance (1). Empty otherwise.
+  struct DenoiserInputs {
+    std::vector<float> radiance, albedo, normal, variance;
+  };
+  DenoiserInputs denoiser_inputs;
   // active_stereo: the left IR image the matcher read (8 bit, the dots and the ambient light).
   std::vector<uint8_t> infrared;
 

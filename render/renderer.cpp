@@ -1043,6 +1043,8 @@ struct Renderer::Impl::FramePasses {
 
   // The denoiser (pbr) needs every pixel's radiance and guides first; the colour follows.
   const bool denoising;
+  const bool keep_denoiser_inputs;  // RenderOptions::denoiser_inputs
+  const bool need_denoiser_inputs;  // denoising or keeping them
   std::vector<float> radiance_plane, albedo_plane, normal_plane, variance_plane;
   std::vector<uint8_t> coloured;  // pixels with a colour to finish (a ray through the centre)
 };
@@ -1095,7 +1097,9 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
       tfar(static_cast<float>(o.far_mm)),
       ss(o.supersampling),
       cam_from_world(camera.world_from_cam.inverse()),
-      denoising(pbr && o.shade && o.denoise) {
+      denoising(pbr && o.shade && o.denoise),
+      keep_denoiser_inputs(pbr && o.shade && o.denoiser_inputs),
+      need_denoiser_inputs(denoising || keep_denoiser_inputs) {
   frame.camera = camera;
   frame.rgb.assign(3 * num_pixels, 0);
   frame.depth.assign(num_pixels, 0.0f);
@@ -1131,13 +1135,13 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
     infrared_left.assign(num_pixels, 0.0f);
   }
   if (gray && imager.full_well > 0.0) grey_noise = GreyImageNoise(noise_seed, num_pixels);
-  if (denoising) {
+  if (need_denoiser_inputs) {
     radiance_plane.assign(3 * num_pixels, 0.0f);
     albedo_plane.assign(3 * num_pixels, 1.0f);
     normal_plane.assign(3 * num_pixels, 0.0f);
     variance_plane.assign(num_pixels, 0.0f);
-    coloured.assign(num_pixels, 0);
   }
+  if (denoising) coloured.assign(num_pixels, 0);
 }
 
 // The labels from a tile's pixel centres: depth, instance, normals (through the Lambert shading,
@@ -1201,7 +1205,7 @@ void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
     TileFeatures features;
     int taken[16];
     tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, sampling, frame_seed,
-                      radiance, denoising ? &features : nullptr, taken);
+                      radiance, need_denoiser_inputs ? &features : nullptr, taken);
     for (int j = 0; j < 16; ++j) {
       if (!valid[j]) continue;
       const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
@@ -1209,7 +1213,7 @@ void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
       if (o.hdr) {
         for (int c = 0; c < 3; ++c) frame.radiance[3 * pixel + c] = radiance[j][c];
       }
-      if (denoising) {
+      if (need_denoiser_inputs) {
         for (int c = 0; c < 3; ++c) {
           radiance_plane[3 * pixel + c] = radiance[j][c];
           albedo_plane[3 * pixel + c] = features.albedo[j][c];
@@ -1324,7 +1328,8 @@ void Renderer::Impl::FramePasses::DenoiseColour() {
   input.normal = normal_plane.data();
   input.depth = frame.depth.data();
   input.variance = variance_plane.data();
-  const std::vector<float> clean = Denoise(input);
+  const std::vector<float> clean =
+      o.denoiser == RenderOptions::Denoiser::kNetwork ? DenoiseWithNetwork(input) : Denoise(input);
   tbb::parallel_for(0, h, [&](int v) {
     for (int u = 0; u < w; ++u) {
       const size_t pixel = static_cast<size_t>(v) * w + u;
@@ -1469,6 +1474,10 @@ Frame Renderer::Render(const Camera& camera, uint64_t view, const SensorOptions&
   Impl::FramePasses passes(im, camera, view, sensor, look, tracer, &frame);
   passes.TraceTiles();
   if (passes.denoising) passes.DenoiseColour();
+  if (passes.keep_denoiser_inputs) {
+    frame.denoiser_inputs = {std::move(passes.radiance_plane), std::move(passes.albedo_plane),
+                             std::move(passes.normal_plane), std::move(passes.variance_plane)};
+  }
   passes.CountVisible();
   if (passes.noisy_depth) passes.SimulateSensorDepth();
   if (look != nullptr && look->background && o.shade) passes.PasteBackground();

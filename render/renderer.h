@@ -62,6 +62,15 @@ struct RenderOptions {
   // depth (render/denoise.h): fewer samples for a clean image, at the price of some blur of
   // glossy reflections and soft shadows. Only the colour image (and its HDR) changes.
   bool denoise = false;
+  // pbr with denoise: which denoiser. kFilter: the edge-aware a-trous filter (render/denoise.h,
+  // Denoise); kNetwork: a small convolutional network trained on cadsynth's own renders
+  // (DenoiseWithNetwork; tools/denoiser/ trains it): less error than the filter at 2-4 samples,
+  // more at 1, about 0.1 s more per 640 x 480 frame on 2 cores (docs/rendering.md).
+  enum class Denoiser { kFilter, kNetwork };
+  Denoiser denoiser = Denoiser::kFilter;
+  // Training a denoiser: also keep what it reads (Frame::denoiser_inputs), also where denoise is
+  // off. Not a dataset output: tools/denoiser/ sets it through Python.
+  bool denoiser_inputs = false;
 
   bool Check(std::string* why) const;
   // The paths a pixel gets before adaptive sampling's first check.
@@ -105,13 +114,20 @@ struct RenderOptions {
     visit(o.seed, RunSeed("seed", "pbr: sampler seed"));
     visit(o.hdr,
           Field{"hdr", "bool", "also write the colour as float EXR (rgb_hdr/; pbr: radiance)"});
-    visit(o.denoise, Field{"denoise", "bool",
-                           "pbr: edge-aware denoising guided by albedo, normals and depth"});
+    visit(o.denoise,
+          Field{"denoise", "bool", "pbr: denoise the colour, guided by albedo, normals and depth"});
+    visit(o.denoiser, Field{"denoiser",
+                            "choice",
+                            "pbr with denoise: filter (edge-aware a-trous) or network (trained on "
+                            "cadsynth's renders; best at 2-4 samples)",
+                            {"filter", "network"}});
     visit(o.shade, Field{"", "bool", "profiling: shade the colour image", {}, true, "shade"});
     visit(o.amodal_masks,
           Field{"", "bool", "profiling: trace the full silhouettes", {}, true, "amodal_masks"});
     visit(o.amodal_depth,
           Field{"", "bool", "set by output.visibility: bop19", {}, true, "amodal_depth"});
+    visit(o.denoiser_inputs,
+          Field{"", "bool", "training a denoiser: keep its inputs", {}, true, "denoiser_inputs"});
   }
 };
 

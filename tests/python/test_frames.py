@@ -235,6 +235,9 @@ grasps: {gripper: franka, samples: 200, suction: true}
 """)
     for f in cadsynth.Recipe.load(recipe).prepare(cache=False).frames():
         check_frame(f, keys, seen)
+    # And what training a denoiser reads (pbr, Recipe.prepare(denoiser_inputs=True)).
+    check_frame(pbr_peg(denoise=True).prepare(cache=False, denoiser_inputs=True).frame(0),
+                keys, seen)
     assert seen == set(keys), f"documented but never produced: {set(keys) - seen}"
 
 
@@ -275,6 +278,36 @@ def test_the_stub_names_what_the_module_has():
         for name, method in methods.items():
             if not any(ast.unparse(d) == "property" for d in method.decorator_list):
                 assert parameters(method) == signature(getattr(cls, name)), f"{node.name}.{name}"
+
+
+def pbr_peg(**render):
+    return cadsynth.Recipe.from_dict({
+        "parts": [{"family": "round_peg"}],
+        "camera": {"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5},
+        "sweep": {"yaw": [0], "pitch": [60], "radius": ["0.3 m"]},
+        "render": {"mode": "pbr", "samples": 2, "hdr": True, **render},
+    })
+
+
+def test_pbr_frames_give_what_the_denoiser_reads():
+    # Without the denoiser, its input radiance is the frame's radiance; with it, the frame's is
+    # the denoised one and the input stays the noisy one (the same paths: same seed).
+    plain = pbr_peg().prepare(cache=False, denoiser_inputs=True).frame(0, masks=False)
+    assert np.array_equal(plain["denoiser_radiance"], plain["radiance"])
+    seen = plain["depth"] > 0
+    assert plain["denoiser_albedo"].shape == (48, 64, 3)
+    assert plain["denoiser_albedo"][seen].min() >= 0 and plain["denoiser_albedo"][seen].max() <= 1
+    lengths = np.linalg.norm(plain["denoiser_normal"][seen], axis=1)
+    # A mean of unit normals: unit inside a face, shorter where a pixel's paths hit two faces.
+    assert np.median(lengths) > 0.999 and lengths.max() < 1.001
+    assert plain["denoiser_variance"].shape == (48, 64) and plain["denoiser_variance"].min() >= 0
+    for denoiser in ("network", "filter"):
+        run = pbr_peg(denoise=True, denoiser=denoiser).prepare(cache=False, denoiser_inputs=True)
+        frame = run.frame(0, masks=False)
+        assert np.array_equal(frame["denoiser_radiance"], plain["radiance"])
+        assert not np.array_equal(frame["radiance"], plain["radiance"])
+        assert np.array_equal(frame["depth"], plain["depth"])
+    assert "denoiser_albedo" not in pbr_peg().prepare(cache=False).frame(0, masks=False)
 
 
 def test_pbr_frames_give_the_paths_each_pixel_got():

@@ -112,6 +112,7 @@ class Scene:
         self.fast_seconds = None  # per frame, the same views in the fast mode
         self.min_samples = 0  # adaptive sampling's (0: cadsynth's default)
         self.denoise = False
+        self.denoiser = "network"
         if name == "workcell":
             case = cwc.CASES["workcell"]
             self.material, self.lights, self.world = case[0], case[1], case[2]
@@ -125,6 +126,7 @@ class Scene:
     def recipe(self, samples, threshold, seed, mode="pbr", views=None):
         render = (f"render: {{mode: {mode}, samples: {samples}, noise_threshold: {threshold}, "
                   f"denoise: {'true' if self.denoise and mode == 'pbr' else 'false'}, "
+                  f"denoiser: {self.denoiser}, "
                   f"min_samples: {min(self.min_samples, samples) if threshold else 0}, "
                   f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
                   f"seed: {seed}}}")
@@ -223,6 +225,8 @@ def main():
     parser.add_argument("--targets", default="0.1,0.05")
     parser.add_argument("--denoise", action="store_true",
                         help="also cadsynth's fixed sample counts and thresholds with render.denoise")
+    parser.add_argument("--denoisers", default="network",
+                        help="with --denoise: render.denoiser values, each its own curves")
     parser.add_argument("--reuse-reference", action="store_true",
                         help="keep DIR's cadsynth reference when it is there")
     parser.add_argument("--cycles-from", help="take the Cycles curves from an earlier JSON")
@@ -282,13 +286,13 @@ def main():
                     for t in args.thresholds.split(",") if t]
         result["curves"]["cadsynth"] = fixed
         result["curves"]["cadsynth adaptive"] = adaptive
-        if args.denoise:
-            scene.denoise = True
-            result["curves"]["cadsynth denoised"] = [
-                cadsynth_point(f"dn{n}", n, 0.0) for n in map(int, args.samples.split(","))]
+        for denoiser in (args.denoisers.split(",") if args.denoise else []):
+            scene.denoise, scene.denoiser = True, denoiser
+            result["curves"][f"cadsynth denoised ({denoiser})"] = [
+                cadsynth_point(f"{denoiser}{n}", n, 0.0) for n in map(int, args.samples.split(","))]
             if args.thresholds:
-                result["curves"]["cadsynth adaptive denoised"] = [
-                    cadsynth_point(f"dnt{t}", args.max_samples, float(t))
+                result["curves"][f"cadsynth adaptive denoised ({denoiser})"] = [
+                    cadsynth_point(f"{denoiser}t{t}", args.max_samples, float(t))
                     for t in args.thresholds.split(",")]
             scene.denoise = False
     if args.cycles_from:
@@ -343,8 +347,9 @@ def plot(result, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    styles = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o", "cadsynth denoised": "C2-s",
-              "cadsynth adaptive denoised": "C2-o",
+    styles = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o",
+              "cadsynth denoised (network)": "C2-s", "cadsynth adaptive denoised (network)": "C2-o",
+              "cadsynth denoised (filter)": "C1-s", "cadsynth adaptive denoised (filter)": "C1-o",
               "Cycles": "C3--", "Cycles adaptive": "C3-o"}
     for ax, region in zip(axes, ("parts", "all")):
         for name, points in result["curves"].items():

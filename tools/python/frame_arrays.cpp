@@ -194,6 +194,13 @@ void AddImages(py::dict& d, Frame& frame, const BopOptions& bop) {
     d["normals"] = Own(std::move(normals), {h, w, 3});
   }
   if (!frame.radiance.empty()) d["radiance"] = Own(std::move(frame.radiance), {h, w, 3});
+  if (!frame.denoiser_inputs.radiance.empty()) {
+    Frame::DenoiserInputs& in = frame.denoiser_inputs;
+    d["denoiser_radiance"] = Own(std::move(in.radiance), {h, w, 3});
+    d["denoiser_albedo"] = Own(std::move(in.albedo), {h, w, 3});
+    d["denoiser_normal"] = Own(std::move(in.normal), {h, w, 3});
+    d["denoiser_variance"] = Own(std::move(in.variance), {h, w});
+  }
   if (!frame.samples.empty()) {
     // int32, which PyTorch converts (it has no uint32 tensors); at most 65,536 paths.
     std::vector<int32_t> samples(frame.samples.begin(), frame.samples.end());

@@ -117,7 +117,8 @@ built-in default job). A bad recipe raises cadsynth.Error "FILE:LINE:COLUMN: wha
                              })
       .def(
           "prepare",
-          [](const PyRecipe& r, const py::object& cache, int threads, bool verbose) {
+          [](const PyRecipe& r, const py::object& cache, int threads, bool verbose,
+             bool denoiser_inputs) {
             FrameSourceOptions options;
             options.cache = CacheFolder(cache);
             if (verbose) {
@@ -126,16 +127,20 @@ built-in default job). A bad recipe raises cadsynth.Error "FILE:LINE:COLUMN: wha
                 py::print(line, "file"_a = py::module_::import("sys").attr("stderr"));
               };
             }
+            RunSpec spec = r.spec;
+            spec.render.denoiser_inputs = denoiser_inputs;
             PyRun run;
             run.source = Released(
-                threads, [&] { return std::make_shared<const FrameSource>(r.spec, options); });
+                threads, [&] { return std::make_shared<const FrameSource>(spec, options); });
             return run;
           },
-          "cache"_a = true, "threads"_a = 0, "verbose"_a = false,
+          "cache"_a = true, "threads"_a = 0, "verbose"_a = false, "denoiser_inputs"_a = false,
           R"(Reads and builds the parts, arranges (or drops) every scene and plans the views.
 
 cache: True (the command line's part cache), False/None, or a folder.
-threads: at most this many threads (0: all cores).)")
+threads: at most this many threads (0: all cores).
+denoiser_inputs: pbr mode: frames also hold what the denoiser reads (the denoiser_* keys; for
+training one, tools/denoiser/).)")
       .def(
           "write",
           [](const PyRecipe& r, const std::filesystem::path& output, bool overwrite,

@@ -121,6 +121,16 @@ class Frame(TypedDict):
     radiance: NotRequired[NDArray[np.float32]]
     """(H, W, 3) render.hdr (rgb_hdr/): in pbr mode the linear radiance, W/(m^2 sr), before
     exposure; in fast mode the colour before rounding."""
+    denoiser_radiance: NotRequired[NDArray[np.float32]]
+    """(H, W, 3) Recipe.prepare(denoiser_inputs=True), pbr mode: the linear radiance before
+    denoising (the denoiser's input; training one: tools/denoiser/)."""
+    denoiser_albedo: NotRequired[NDArray[np.float32]]
+    """(H, W, 3) with denoiser_inputs: the first surface's albedo, mean over the pixel's paths."""
+    denoiser_normal: NotRequired[NDArray[np.float32]]
+    """(H, W, 3) with denoiser_inputs: the first surface's shading normal, world frame, mean over
+    the pixel's paths."""
+    denoiser_variance: NotRequired[NDArray[np.float32]]
+    """(H, W) with denoiser_inputs: the variance of the pixel's mean luminance."""
     samples: NotRequired[NDArray[np.int32]]
     """(H, W) pbr mode: the paths each pixel's colour averages (render.samples, fewer where
     adaptive sampling stopped early, render.noise_threshold). Not written to the dataset."""
@@ -166,7 +176,13 @@ class Recipe:
     def scenes(self) -> list[str]: ...
     @property
     def views(self) -> int: ...
-    def prepare(self, cache: _Cache = True, threads: int = 0, verbose: bool = False) -> Run: ...
+    def prepare(
+        self,
+        cache: _Cache = True,
+        threads: int = 0,
+        verbose: bool = False,
+        denoiser_inputs: bool = False,
+    ) -> Run: ...
     def write(
         self,
         output: _StrPath,

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include <tbb/parallel_for.h>
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
-#include <tbb/parallel_for.h>
 
 #include "cad/core/error.h"
 #include "render/denoise.h"
@@ -26,7 +26,7 @@ namespace cadsynth {
 namespace {
 
 constexpr float kNetworkAlbedoFloor = 0.01f;  // as the filter's kAlbedoFloor
-constexpr float kMaxRatio = 1e4f;      // L / s and sigma / s are at most this
+constexpr float kMaxRatio = 1e4f;             // L / s and sigma / s are at most this
 constexpr int kChannels = 12;
 constexpr int kDownsamplings = 3;  // the image is padded to a multiple of 2^3
 
@@ -127,8 +127,7 @@ std::vector<float> DenoiseWithNetwork(const DenoiseInput& in) {
       const float raw = NetworkLuma(r[0], r[1], r[2]), demodulated = NetworkLuma(l[0], l[1], l[2]);
       const float gain = raw > 1e-12f && std::isfinite(raw) ? demodulated / raw
                                                             : 1.0f / NetworkLuma(a[0], a[1], a[2]);
-      const float variance =
-          std::isfinite(in.variance[p]) ? std::max(0.0f, in.variance[p]) : 0.0f;
+      const float variance = std::isfinite(in.variance[p]) ? std::max(0.0f, in.variance[p]) : 0.0f;
       x[10 * plane + q] = std::log1p(std::min(kMaxRatio, std::sqrt(variance) * gain / scale));
       x[11 * plane + q] = 1.0f;
     }
@@ -145,8 +144,9 @@ std::vector<float> DenoiseWithNetwork(const DenoiseInput& in) {
     throw Error(std::string("the denoiser network (render/models/denoiser.onnx): ") + e.what());
   }
   if (!(y.dims == 4 && y.size[1] == 4 && y.size[2] == hp && y.size[3] == wp))
-    throw Error("the denoiser network (render/models/denoiser.onnx) gave an output of the wrong "
-                "shape");
+    throw Error(
+        "the denoiser network (render/models/denoiser.onnx) gave an output of the wrong "
+        "shape");
   const float* yp = y.ptr<float>();
   tbb::parallel_for(0, h, [&](int v) {
     for (int u = 0; u < w; ++u) {

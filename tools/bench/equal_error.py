@@ -225,7 +225,7 @@ def main():
     parser.add_argument("--targets", default="0.1,0.05")
     parser.add_argument("--denoise", action="store_true",
                         help="also cadsynth's fixed sample counts and thresholds with render.denoise")
-    parser.add_argument("--denoisers", default="network",
+    parser.add_argument("--denoisers", default="filter",
                         help="with --denoise: render.denoiser values, each its own curves")
     parser.add_argument("--reuse-reference", action="store_true",
                         help="keep DIR's cadsynth reference when it is there")

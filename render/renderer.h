@@ -64,8 +64,9 @@ struct RenderOptions {
   bool denoise = false;
   // pbr with denoise: which denoiser. kFilter: the edge-aware a-trous filter (render/denoise.h,
   // Denoise); kNetwork: a small convolutional network trained on cadsynth's own renders
-  // (DenoiseWithNetwork; tools/denoiser/ trains it): less error than the filter at 2-4 samples,
-  // more at 1, about 0.1 s more per 640 x 480 frame on 2 cores (docs/rendering.md).
+  // (DenoiseWithNetwork; tools/denoiser/ trains it): a lower RMSE than the filter at 2-4 samples
+  // but blotchier glossy detail to the eye, a higher one at 1, about 0.1 s more per 640 x 480
+  // frame on 2 cores (docs/rendering.md).
   enum class Denoiser { kFilter, kNetwork };
   Denoiser denoiser = Denoiser::kFilter;
   // Training a denoiser: also keep what it reads (Frame::denoiser_inputs), also where denoise is

@@ -10,10 +10,6 @@ namespace cadsynth {
 
 namespace {
 
-constexpr float kAlbedoFloor = 0.01f;  // divide by at least this (black paint keeps its highlights)
-
-float Luma(const float* c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
-
 // The edge-stopping falloff: (1 - x / 16)^16 for x in [0, 16), 0 beyond; exp(-x)'s limit form,
 // within 0.018 of it everywhere, and four multiplications instead of a library call.
 float Falloff(float x) {
@@ -26,6 +22,21 @@ float Falloff(float x) {
 
 }  // namespace
 
+DemodulatedPixel Demodulate(const DenoiseInput& in, size_t p) {
+  DemodulatedPixel d;
+  const float* radiance = &in.radiance[3 * p];
+  for (int c = 0; c < 3; ++c) {
+    d.albedo[c] = std::max(kDenoiseAlbedoFloor, in.albedo[3 * p + c]);
+    d.light[c] = std::isfinite(radiance[c]) ? std::max(0.0f, radiance[c]) / d.albedo[c] : 0.0f;
+  }
+  const float raw = DenoiseLuma(radiance), demodulated = DenoiseLuma(d.light);
+  const float gain =
+      raw > 1e-12f && std::isfinite(raw) ? demodulated / raw : 1.0f / DenoiseLuma(d.albedo);
+  const float variance = std::isfinite(in.variance[p]) ? std::max(0.0f, in.variance[p]) : 0.0f;
+  d.variance = variance * gain * gain;
+  return d;
+}
+
 std::vector<float> Denoise(const DenoiseInput& in, const DenoiseOptions& options) {
   const int w = in.width, h = in.height;
   if (w <= 0 || h <= 0) return {};
@@ -37,24 +48,13 @@ std::vector<float> Denoise(const DenoiseInput& in, const DenoiseOptions& options
   // Demodulated radiance (the lighting), its luminance's variance, and the depth slope.
   std::vector<float> light(3 * n), light_next(3 * n), var(n), var_next(n), slope(2 * n, 0.0f),
       luma(n);
-  const auto albedo = [&](size_t p, int c) { return std::max(kAlbedoFloor, in.albedo[3 * p + c]); };
+  std::vector<float> albedo(3 * n);
   tbb::parallel_for(0, h, [&](int v) {
     for (int u = 0; u < w; ++u) {
       const size_t p = static_cast<size_t>(v) * w + u;
-      // (A value that is not finite, which the tracer never gives, would spread over the kernel:
-      // it counts as black.)
-      for (int c = 0; c < 3; ++c) {
-        const float value = in.radiance[3 * p + c];
-        light[3 * p + c] = std::isfinite(value) ? value / albedo(p, c) : 0.0f;
-      }
-      // The luminance's noise grows as demodulation grows the luminance (per channel, so a
-      // coloured albedo amplifies the channels it lacks): by the ratio of the two luminances, or
-      // by the albedo's where the pixel is black.
-      const float a[3] = {albedo(p, 0), albedo(p, 1), albedo(p, 2)};
-      const float raw = Luma(&in.radiance[3 * p]), demodulated = Luma(&light[3 * p]);
-      const float gain = raw > 1e-12f && std::isfinite(raw) ? demodulated / raw : 1.0f / Luma(a);
-      const float variance = std::isfinite(in.variance[p]) ? std::max(0.0f, in.variance[p]) : 0.0f;
-      var[p] = variance * gain * gain;
+      const DemodulatedPixel d = Demodulate(in, p);
+      for (int c = 0; c < 3; ++c) light[3 * p + c] = d.light[c], albedo[3 * p + c] = d.albedo[c];
+      var[p] = d.variance;
       // Depth change per pixel along u and v: the smaller one-sided difference (not across an
       // edge), 0 where a neighbour sees nothing.
       const float z = in.depth[p];
@@ -81,7 +81,7 @@ std::vector<float> Denoise(const DenoiseInput& in, const DenoiseOptions& options
     const int step = 1 << pass;
     tbb::parallel_for(0, h, [&](int v) {
       for (size_t p = static_cast<size_t>(v) * w; p < static_cast<size_t>(v + 1) * w; ++p)
-        luma[p] = Luma(&light[3 * p]);
+        luma[p] = DenoiseLuma(&light[3 * p]);
     });
     tbb::parallel_for(0, h, [&](int v) {
       for (int u = 0; u < w; ++u) {
@@ -154,7 +154,7 @@ std::vector<float> Denoise(const DenoiseInput& in, const DenoiseOptions& options
     for (int u = 0; u < w; ++u) {
       const size_t p = static_cast<size_t>(v) * w + u;
       if (in.depth[p] <= 0) continue;
-      for (int c = 0; c < 3; ++c) out[3 * p + c] = light[3 * p + c] * albedo(p, c);
+      for (int c = 0; c < 3; ++c) out[3 * p + c] = light[3 * p + c] * albedo[3 * p + c];
     }
   });
   return out;

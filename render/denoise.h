@@ -16,6 +16,7 @@
 // function of its inputs: the same bytes on any number of threads.
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 namespace cadsynth {
@@ -41,6 +42,24 @@ struct DenoiseOptions {
   float depth_sigma = 1.0f;
   float luminance_sigma = 4.0f;
 };
+
+// What both denoisers work on at pixel p: the lighting, its radiance over the albedo (each
+// channel's albedo at least kDenoiseAlbedoFloor, so that black paint keeps its highlights; a
+// value that is not finite, which the tracer never gives, counts as black, a negative one as 0),
+// and its luminance's variance grown as the division grows the luminance (by the ratio of the two
+// luminances, so a coloured albedo amplifies the channels it lacks; by the albedo's where the
+// pixel is black).
+constexpr float kDenoiseAlbedoFloor = 0.01f;
+struct DemodulatedPixel {
+  float light[3];
+  float albedo[3];  // what `light` was divided by
+  float variance;
+};
+DemodulatedPixel Demodulate(const DenoiseInput& input, size_t p);
+// Rec. 709 luminance of 3 linear values.
+inline float DenoiseLuma(const float* c) {
+  return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
 
 // The filtered radiance, 3 per pixel.
 std::vector<float> Denoise(const DenoiseInput& input, const DenoiseOptions& options = {});

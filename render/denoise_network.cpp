@@ -25,12 +25,9 @@ namespace cadsynth {
 // the names below are the network's own.)
 namespace {
 
-constexpr float kNetworkAlbedoFloor = 0.01f;  // as the filter's kAlbedoFloor
-constexpr float kMaxRatio = 1e4f;             // L / s and sigma / s are at most this
+constexpr float kMaxRatio = 1e4f;  // L / s and sigma / s are at most this
 constexpr int kChannels = 12;
 constexpr int kDownsamplings = 3;  // the image is padded to a multiple of 2^3
-
-float NetworkLuma(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
 
 // The upper median (element n / 2 of the sorted values); 1 where there are none.
 float UpperMedian(std::vector<float> values) {
@@ -82,20 +79,15 @@ std::vector<float> DenoiseWithNetwork(const DenoiseInput& in) {
   const size_t n = static_cast<size_t>(w) * h;
   std::vector<float> out(in.radiance, in.radiance + 3 * n);
 
-  // The lighting (radiance / albedo) and the frame's scales.
-  std::vector<float> light(3 * n, 0.0f);
-  std::vector<float> albedo(3 * n, 1.0f);
+  // The lighting (radiance / albedo, render/denoise.h's Demodulate) and the frame's scales.
+  std::vector<DemodulatedPixel> pixels(n);
   std::vector<float> lumas, depths;
   lumas.reserve(n);
   depths.reserve(n);
   for (size_t p = 0; p < n; ++p) {
     if (!(in.depth[p] > 0)) continue;
-    for (int c = 0; c < 3; ++c) {
-      albedo[3 * p + c] = std::max(kNetworkAlbedoFloor, in.albedo[3 * p + c]);
-      const float value = in.radiance[3 * p + c];
-      light[3 * p + c] = std::isfinite(value) ? std::max(0.0f, value) / albedo[3 * p + c] : 0.0f;
-    }
-    lumas.push_back(NetworkLuma(light[3 * p], light[3 * p + 1], light[3 * p + 2]));
+    pixels[p] = Demodulate(in, p);
+    lumas.push_back(DenoiseLuma(pixels[p].light));
     depths.push_back(in.depth[p]);
   }
   if (lumas.empty()) return out;
@@ -114,21 +106,14 @@ std::vector<float> DenoiseWithNetwork(const DenoiseInput& in) {
       const size_t p = static_cast<size_t>(v) * w + u;
       const size_t q = static_cast<size_t>(v) * wp + u;
       if (!(in.depth[p] > 0)) continue;
-      const float* l = &light[3 * p];
-      const float* a = &albedo[3 * p];
+      const DemodulatedPixel& d = pixels[p];
       for (int c = 0; c < 3; ++c) {
-        x[c * plane + q] = std::log1p(std::min(kMaxRatio, l[c] / scale));
+        x[c * plane + q] = std::log1p(std::min(kMaxRatio, d.light[c] / scale));
         x[(3 + c) * plane + q] = std::clamp(in.albedo[3 * p + c], 0.0f, 1.0f);
         x[(6 + c) * plane + q] = in.normal[3 * p + c];
       }
       x[9 * plane + q] = std::log(in.depth[p] / z_median);
-      // The standard deviation, grown as demodulation grows the luminance (as the filter does).
-      const float* r = &in.radiance[3 * p];
-      const float raw = NetworkLuma(r[0], r[1], r[2]), demodulated = NetworkLuma(l[0], l[1], l[2]);
-      const float gain = raw > 1e-12f && std::isfinite(raw) ? demodulated / raw
-                                                            : 1.0f / NetworkLuma(a[0], a[1], a[2]);
-      const float variance = std::isfinite(in.variance[p]) ? std::max(0.0f, in.variance[p]) : 0.0f;
-      x[10 * plane + q] = std::log1p(std::min(kMaxRatio, std::sqrt(variance) * gain / scale));
+      x[10 * plane + q] = std::log1p(std::min(kMaxRatio, std::sqrt(d.variance) / scale));
       x[11 * plane + q] = 1.0f;
     }
   });
@@ -158,7 +143,7 @@ std::vector<float> DenoiseWithNetwork(const DenoiseInput& in) {
       for (int c = 0; c < 3; ++c) {
         const float own = std::expm1(std::clamp(yp[c * plane + q], 0.0f, std::log1p(kMaxRatio)));
         const float noisy = std::expm1(x[c * plane + q]);
-        out[3 * p + c] = (alpha * own + (1.0f - alpha) * noisy) * scale * albedo[3 * p + c];
+        out[3 * p + c] = (alpha * own + (1.0f - alpha) * noisy) * scale * pixels[p].albedo[c];
       }
     }
   });

@@ -38,7 +38,11 @@ struct PreparedLight {
   bool delta = false;
   Eigen::Vector3f position, normal;  // normal: the side it shines to (rect, disc); spot axis
   Eigen::Vector3f axis_u, axis_v;    // rect: half sides; disc: unit axes of its plane
-  float radius = 0, area = 0;        // sphere or disc radius; rect or disc area (mm^2)
+  // rect: the unit directions of axis_u and axis_v, their lengths, and the corner at
+  // position - axis_u - axis_v
+  Eigen::Vector3f unit_u, unit_v, corner;
+  float half_u = 0, half_v = 0;
+  float radius = 0, area = 0;  // sphere or disc radius; rect or disc area (mm^2)
   Eigen::Vector3f radiance = Eigen::Vector3f::Zero();  // W/(m^2 sr), for area-like lights
   // Delta lights: point and spot intensity times 1e6 (irradiance = intensity / d_mm^2); the
   // parallel sun's irradiance.
@@ -102,6 +106,11 @@ PreparedLight Prepare(const LightSource& s) {
         l.axis_u = x * static_cast<float>(0.5 * s.size_x_mm);
         l.axis_v = y * static_cast<float>(0.5 * s.size_y_mm);
         l.area = static_cast<float>(s.size_x_mm * s.size_y_mm);
+        l.unit_u = x;
+        l.unit_v = y;
+        l.half_u = static_cast<float>(0.5 * s.size_x_mm);
+        l.half_v = static_cast<float>(0.5 * s.size_y_mm);
+        l.corner = l.position - l.axis_u - l.axis_v;
       } else {
         l.axis_u = x;
         l.axis_v = y;
@@ -185,39 +194,59 @@ float Importance(const PreparedLight& l, const Eigen::Vector3f& p, const Eigen::
 // directions uniformly in its solid angle. Sampling by area instead weights each point by
 // cos / d^2, which varies over a panel that is large and near (a work cell's light over its
 // parts), and that variation is noise; sampled by solid angle only the receiver's cosine and
-// the visibility are left. In double: the solid angle is a small difference of angles near
-// pi / 2. Far-away panels (solid angle below kMinSolidAngle) are sampled by area in both
-// SampleLight and HitLight, where the two ways agree and the angles lose precision.
+// the visibility are left. The solid angle is a small difference of angles near pi / 2: its
+// angles are taken in float where it is large (float's error in it below 1e-3 of it), in double
+// below kFloatSolidAngle, and sampling is in double. Far-away panels (solid angle below
+// kMinSolidAngle) are sampled by area in both SampleLight and HitLight, where the two ways agree
+// and the angles lose precision.
 struct SphericalRect {
   static constexpr double kMinSolidAngle = 1e-5;
+  // Below this solid angle the four angles are summed in double (their sum's cancellation).
+  static constexpr float kFloatSolidAngle = 1e-3f;
   Eigen::Vector3d o, x, y, z;  // the point; the light's unit axes; z its normal
   double x0, x1, y0, y1, z0;   // the rectangle in that frame, z0 < 0
   double b0, b1, k, solid_angle;
 
   // False when o is behind the light's plane (or in it).
   bool Init(const PreparedLight& l, const Eigen::Vector3f& point) {
-    o = point.cast<double>();
-    const Eigen::Vector3d u = l.axis_u.cast<double>(), v = l.axis_v.cast<double>();
-    const double half_x = u.norm(), half_y = v.norm();
-    x = u / half_x;
-    y = v / half_y;
-    z = l.normal.cast<double>();  // x cross y
-    const Eigen::Vector3d d = l.position.cast<double>() - u - v - o;
-    z0 = d.dot(z);
-    if (!(z0 < 0)) return false;
-    x0 = d.dot(x), y0 = d.dot(y);
-    x1 = x0 + 2 * half_x, y1 = y0 + 2 * half_y;
-    const Eigen::Vector3d v00(x0, y0, z0), v01(x0, y1, z0), v10(x1, y0, z0), v11(x1, y1, z0);
-    const Eigen::Vector3d n0 = v00.cross(v10).normalized(), n1 = v10.cross(v11).normalized(),
-                          n2 = v11.cross(v01).normalized(), n3 = v01.cross(v00).normalized();
-    const auto angle = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-      return std::acos(std::clamp(-a.dot(b), -1.0, 1.0));
-    };
-    const double g0 = angle(n0, n1), g1 = angle(n1, n2), g2 = angle(n2, n3), g3 = angle(n3, n0);
-    b0 = n0.z();
-    b1 = n2.z();
+    // In the light's frame: the rectangle spans [x0, x1] x [y0, y1] at height z0 below o. The
+    // planes through o and each edge have normals n0 = (0, z0, -y0) / a0, n1 = (-z0, 0, x1) / a1,
+    // n2 = (0, -z0, y1) / a2, n3 = (z0, 0, -x0) / a3 (the cross products of the corners'
+    // directions, a_i their lengths), and the angles between them are the spherical
+    // rectangle's: g_i = acos(-n_i . n_(i+1)).
+    const Eigen::Vector3f d = l.corner - point;
+    const float fz0 = d.dot(l.normal);
+    if (!(fz0 < 0)) return false;
+    const float fx0 = d.dot(l.unit_u), fy0 = d.dot(l.unit_v);
+    const float fx1 = fx0 + 2 * l.half_u, fy1 = fy0 + 2 * l.half_v;
+    const float z2 = fz0 * fz0;
+    const float r0 = 1 / std::sqrt(z2 + fy0 * fy0), r1 = 1 / std::sqrt(z2 + fx1 * fx1),
+                r2 = 1 / std::sqrt(z2 + fy1 * fy1), r3 = 1 / std::sqrt(z2 + fx0 * fx0);
+    const auto angle = [](float c) { return std::acos(std::clamp(c, -1.0f, 1.0f)); };
+    const float g0 = angle(fy0 * fx1 * r0 * r1), g1 = angle(-fx1 * fy1 * r1 * r2),
+                g2 = angle(fx0 * fy1 * r2 * r3), g3 = angle(-fx0 * fy0 * r3 * r0);
+    x0 = fx0, x1 = fx1, y0 = fy0, y1 = fy1, z0 = fz0;
+    b0 = -fy0 * r0;
+    b1 = fy1 * r2;
     k = 2 * M_PI - g2 - g3;
-    solid_angle = g0 + g1 - k;
+    solid_angle = static_cast<double>(g0) + g1 - k;
+    if (solid_angle < kFloatSolidAngle) {
+      // Small and far: the same in double, from the same coordinates.
+      const double zz = z0 * z0;
+      const double s0 = 1 / std::sqrt(zz + y0 * y0), s1 = 1 / std::sqrt(zz + x1 * x1),
+                   s2 = 1 / std::sqrt(zz + y1 * y1), s3 = 1 / std::sqrt(zz + x0 * x0);
+      const auto angle_d = [](double c) { return std::acos(std::clamp(c, -1.0, 1.0)); };
+      const double h0 = angle_d(y0 * x1 * s0 * s1), h1 = angle_d(-x1 * y1 * s1 * s2),
+                   h2 = angle_d(x0 * y1 * s2 * s3), h3 = angle_d(-x0 * y0 * s3 * s0);
+      b0 = -y0 * s0;
+      b1 = y1 * s2;
+      k = 2 * M_PI - h2 - h3;
+      solid_angle = h0 + h1 - k;
+    }
+    o = point.cast<double>();
+    x = l.unit_u.cast<double>();
+    y = l.unit_v.cast<double>();
+    z = l.normal.cast<double>();
     return true;
   }
 

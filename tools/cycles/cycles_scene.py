@@ -209,15 +209,20 @@ def main():
     cam.matrix_world = w2c.inverted() @ mathutils.Matrix.Diagonal((1.0, -1.0, -1.0, 1.0))
     scene.camera = cam
 
+    # materials.assign matches the part's name (models_cad.json's: "ring_z54"), not the
+    # instance's (scene_gt_world.json's: "ring"); they differ where a scene names its instances.
+    part_names = {int(k): v["name"]
+                  for k, v in json.load(open(f"{root}/models/models_cad.json")).items()}
     materials = {}
     for p in placed:
         obj_id = p["obj_id"]
         if obj_id not in materials:
             # The first rule whose glob matches the part's name, as cadsynth's materials.assign.
+            part = part_names[obj_id]
             rule = next((m for glob, m in spec["part_materials"]
-                         if fnmatch.fnmatch(p["name"].lower(), glob.lower())), None)
+                         if fnmatch.fnmatch(part.lower(), glob.lower())), None)
             if rule is None:
-                raise SystemExit(f"no material rule matches part '{p['name']}'")
+                raise SystemExit(f"no material rule matches part '{part}'")
             materials[obj_id] = principled(f"part{obj_id}", rule)
         v, n, f = read_ply(f"{root}/models/obj_{obj_id:06d}.ply")
         mesh = bpy.data.meshes.new(f"obj{obj_id}")

@@ -239,6 +239,39 @@ TEST(PathTracer, RectLightIsSampledUniformlyInItsSolidAngle) {
   EXPECT_NEAR(sum / 64, l * view_factor, 0.001 * l * view_factor);
 }
 
+// The same analytic irradiance where the panel is small for its distance: 20 x 10 mm at 0.8 m
+// (about 3e-4 sr, where the spherical rectangle's angles are summed in double) and 2 x 1 mm
+// (3e-6 sr, below which it is sampled by area).
+TEST(PathTracer, SmallAndFarRectLightsGiveTheirViewFactor) {
+  for (const double a : {10.0, 1.0}) {
+    const double b = a / 2, h = 800.0, power = 1.0;
+    Scene scene = Dark();
+    scene.floor_material = Lambert(1.0f);
+    LightSource panel;
+    panel.kind = LightSource::Kind::kRect;
+    panel.size_x_mm = 2 * a;
+    panel.size_y_mm = 2 * b;
+    panel.position = {0, 0, h};
+    panel.direction = {0, 0, -1};
+    panel.x_axis = {1, 0, 0};
+    panel.power = power;
+    scene.light_sources = {panel};
+    Camera camera;
+    camera.intrinsics = Intrinsics::FromFov(8, 8, 0.0004);
+    camera.world_from_cam = LookingDown({0, 0, 1000});
+    const double l = power / (4 * (2 * a) * (2 * b) * 1e-6);
+    const double ka = a / h, kb = b / h;
+    const double view_factor = 4 / (2 * kPi) *
+                               (ka / std::hypot(1, ka) * std::atan(kb / std::hypot(1, ka)) +
+                                kb / std::hypot(1, kb) * std::atan(ka / std::hypot(1, kb)));
+    const Frame frame = Renderer({}, scene, Pbr(64, 0)).Render(camera);
+    double sum = 0;
+    for (int i = 0; i < 64; ++i) sum += At(frame, i % 8, i / 8);
+    SCOPED_TRACE("panel " + std::to_string(2 * a) + " mm");
+    EXPECT_NEAR(sum / 64, l * view_factor, 0.002 * l * view_factor);
+  }
+}
+
 TEST(PathTracer, SeveralLightsAddUpWhateverTheSelection) {
   // The disc above, plus a point light 300 mm off to the side that gives the patch about ten
   // times the disc's irradiance, plus a uniform sky of radiance 0.05: the floor's radiance is

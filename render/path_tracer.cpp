@@ -219,35 +219,31 @@ struct SphericalRect {
     if (!(fz0 < 0)) return false;
     const float fx0 = d.dot(l.unit_u), fy0 = d.dot(l.unit_v);
     const float fx1 = fx0 + 2 * l.half_u, fy1 = fy0 + 2 * l.half_v;
-    const float z2 = fz0 * fz0;
-    const float r0 = 1 / std::sqrt(z2 + fy0 * fy0), r1 = 1 / std::sqrt(z2 + fx1 * fx1),
-                r2 = 1 / std::sqrt(z2 + fy1 * fy1), r3 = 1 / std::sqrt(z2 + fx0 * fx0);
-    const auto angle = [](float c) { return std::acos(std::clamp(c, -1.0f, 1.0f)); };
-    const float g0 = angle(fy0 * fx1 * r0 * r1), g1 = angle(-fx1 * fy1 * r1 * r2),
-                g2 = angle(fx0 * fy1 * r2 * r3), g3 = angle(-fx0 * fy0 * r3 * r0);
     x0 = fx0, x1 = fx1, y0 = fy0, y1 = fy1, z0 = fz0;
-    b0 = -fy0 * r0;
-    b1 = fy1 * r2;
-    k = 2 * M_PI - g2 - g3;
-    solid_angle = static_cast<double>(g0) + g1 - k;
-    if (solid_angle < kFloatSolidAngle) {
-      // Small and far: the same in double, from the same coordinates.
-      const double zz = z0 * z0;
-      const double s0 = 1 / std::sqrt(zz + y0 * y0), s1 = 1 / std::sqrt(zz + x1 * x1),
-                   s2 = 1 / std::sqrt(zz + y1 * y1), s3 = 1 / std::sqrt(zz + x0 * x0);
-      const auto angle_d = [](double c) { return std::acos(std::clamp(c, -1.0, 1.0)); };
-      const double h0 = angle_d(y0 * x1 * s0 * s1), h1 = angle_d(-x1 * y1 * s1 * s2),
-                   h2 = angle_d(x0 * y1 * s2 * s3), h3 = angle_d(-x0 * y0 * s3 * s0);
-      b0 = -y0 * s0;
-      b1 = y1 * s2;
-      k = 2 * M_PI - h2 - h3;
-      solid_angle = h0 + h1 - k;
-    }
+    Angles<float>();
+    if (solid_angle < kFloatSolidAngle) Angles<double>();  // small and far: the same in double
     o = point.cast<double>();
     x = l.unit_u.cast<double>();
     y = l.unit_v.cast<double>();
     z = l.normal.cast<double>();
     return true;
+  }
+
+  // The angles of the rectangle [x0, x1] x [y0, y1] at z0, in T: b0, b1, k and the solid angle.
+  template <typename T>
+  void Angles() {
+    const T xa = static_cast<T>(x0), xb = static_cast<T>(x1), ya = static_cast<T>(y0),
+            yb = static_cast<T>(y1), za = static_cast<T>(z0);
+    const T zz = za * za;
+    const T r0 = 1 / std::sqrt(zz + ya * ya), r1 = 1 / std::sqrt(zz + xb * xb),
+            r2 = 1 / std::sqrt(zz + yb * yb), r3 = 1 / std::sqrt(zz + xa * xa);
+    const auto angle = [](T c) { return std::acos(std::clamp(c, T(-1), T(1))); };
+    const T g0 = angle(ya * xb * r0 * r1), g1 = angle(-xb * yb * r1 * r2),
+            g2 = angle(xa * yb * r2 * r3), g3 = angle(-xa * ya * r3 * r0);
+    b0 = -ya * r0;
+    b1 = yb * r2;
+    k = 2 * M_PI - g2 - g3;
+    solid_angle = static_cast<double>(g0) + g1 - k;
   }
 
   // The point of the rectangle in direction (u, v) of the unit square, uniform in solid angle.

@@ -200,52 +200,15 @@ TEST(PathTracer, IrradianceUnderADiscLightIsPiLSinSquared) {
 // A = a/h, B = b/h. Sampled uniformly in the panel's solid angle, a light sample's estimate is
 // L Omega cos(theta) / pi: only the floor's cosine varies (from 1 to 0.56 here). Sampled by
 // area it would be L A cos^4(theta) / (pi h^2), which varies from 1 to 0.1 of its largest.
-TEST(PathTracer, RectLightIsSampledUniformlyInItsSolidAngle) {
-  const double a = 200.0, b = 100.0, h = 150.0, power = 40.0;
+// A white Lambert floor under a rect light of 2a x 2b mm and `power` W facing down from height h,
+// seen straight down from 1 m over 8 x 8 pixels of 0.4 mm, and the radiance the floor under its
+// centre has: L times the view factor of the rectangle from there (two right-angle corners'
+// closed form, four of them).
+struct PanelOverFloor {
   Scene scene = Dark();
-  scene.floor_material = Lambert(1.0f);
-  LightSource panel;
-  panel.kind = LightSource::Kind::kRect;
-  panel.size_x_mm = 2 * a;
-  panel.size_y_mm = 2 * b;
-  panel.position = {0, 0, h};
-  panel.direction = {0, 0, -1};
-  panel.x_axis = {1, 0, 0};
-  panel.power = power;
-  scene.light_sources = {panel};
   Camera camera;
-  camera.intrinsics = Intrinsics::FromFov(8, 8, 0.0004);  // 0.4 mm of floor
-  camera.world_from_cam = LookingDown({0, 0, 1000});
-  const double l = power / (4 * (2 * a) * (2 * b) * 1e-6);
-  const double ka = a / h, kb = b / h;
-  const double view_factor = 4 / (2 * kPi) *
-                             (ka / std::hypot(1, ka) * std::atan(kb / std::hypot(1, ka)) +
-                              kb / std::hypot(1, kb) * std::atan(ka / std::hypot(1, kb)));
-  const Frame one = Renderer({}, scene, Pbr(1, 0)).Render(camera);
-  double sum = 0, sum_sq = 0;
-  for (int i = 0; i < 64; ++i) {
-    const double value = At(one, i % 8, i / 8);
-    sum += value;
-    sum_sq += value * value;
-  }
-  const double mean = sum / 64, spread = std::sqrt(std::max(0.0, sum_sq / 64 - mean * mean));
-  EXPECT_NEAR(mean, l * view_factor, 0.02 * l * view_factor);  // 64 stratified samples
-  // One sample a pixel (MIS with the floor's cosine-sampled rays): the spread is a fifth of the
-  // mean; sampled by area, with the same MIS, it was half the mean.
-  EXPECT_LT(spread, 0.3 * mean);
-  const Frame many = Renderer({}, scene, Pbr(1024, 0)).Render(camera);
-  sum = 0;
-  for (int i = 0; i < 64; ++i) sum += At(many, i % 8, i / 8);
-  EXPECT_NEAR(sum / 64, l * view_factor, 0.001 * l * view_factor);
-}
-
-// The same analytic irradiance where the panel is small for its distance: 20 x 10 mm at 0.8 m
-// (about 3e-4 sr, where the spherical rectangle's angles are summed in double) and 2 x 1 mm
-// (3e-6 sr, below which it is sampled by area).
-TEST(PathTracer, SmallAndFarRectLightsGiveTheirViewFactor) {
-  for (const double a : {10.0, 1.0}) {
-    const double b = a / 2, h = 800.0, power = 1.0;
-    Scene scene = Dark();
+  double expected = 0;
+  PanelOverFloor(double a, double b, double h, double power) {
     scene.floor_material = Lambert(1.0f);
     LightSource panel;
     panel.kind = LightSource::Kind::kRect;
@@ -256,19 +219,51 @@ TEST(PathTracer, SmallAndFarRectLightsGiveTheirViewFactor) {
     panel.x_axis = {1, 0, 0};
     panel.power = power;
     scene.light_sources = {panel};
-    Camera camera;
-    camera.intrinsics = Intrinsics::FromFov(8, 8, 0.0004);
+    camera.intrinsics = Intrinsics::FromFov(8, 8, 0.0004);  // 0.4 mm of floor
     camera.world_from_cam = LookingDown({0, 0, 1000});
     const double l = power / (4 * (2 * a) * (2 * b) * 1e-6);
     const double ka = a / h, kb = b / h;
     const double view_factor = 4 / (2 * kPi) *
                                (ka / std::hypot(1, ka) * std::atan(kb / std::hypot(1, ka)) +
                                 kb / std::hypot(1, kb) * std::atan(ka / std::hypot(1, kb)));
-    const Frame frame = Renderer({}, scene, Pbr(64, 0)).Render(camera);
+    expected = l * view_factor;
+  }
+};
+
+TEST(PathTracer, RectLightIsSampledUniformlyInItsSolidAngle) {
+  const PanelOverFloor view(200.0, 100.0, 150.0, 40.0);
+  const Scene& scene = view.scene;
+  const Camera& camera = view.camera;
+  const double expected = view.expected;
+  const Frame one = Renderer({}, scene, Pbr(1, 0)).Render(camera);
+  double sum = 0, sum_sq = 0;
+  for (int i = 0; i < 64; ++i) {
+    const double value = At(one, i % 8, i / 8);
+    sum += value;
+    sum_sq += value * value;
+  }
+  const double mean = sum / 64, spread = std::sqrt(std::max(0.0, sum_sq / 64 - mean * mean));
+  EXPECT_NEAR(mean, expected, 0.02 * expected);  // 64 stratified samples
+  // One sample a pixel (MIS with the floor's cosine-sampled rays): the spread is a fifth of the
+  // mean; sampled by area, with the same MIS, it was half the mean.
+  EXPECT_LT(spread, 0.3 * mean);
+  const Frame many = Renderer({}, scene, Pbr(1024, 0)).Render(camera);
+  sum = 0;
+  for (int i = 0; i < 64; ++i) sum += At(many, i % 8, i / 8);
+  EXPECT_NEAR(sum / 64, expected, 0.001 * expected);
+}
+
+// The same analytic irradiance where the panel is small for its distance: 20 x 10 mm at 0.8 m
+// (about 3e-4 sr, where the spherical rectangle's angles are summed in double) and 2 x 1 mm
+// (3e-6 sr, below which it is sampled by area).
+TEST(PathTracer, SmallAndFarRectLightsGiveTheirViewFactor) {
+  for (const double a : {10.0, 1.0}) {
+    const PanelOverFloor view(a, a / 2, 800.0, 1.0);
+    const Frame frame = Renderer({}, view.scene, Pbr(64, 0)).Render(view.camera);
     double sum = 0;
     for (int i = 0; i < 64; ++i) sum += At(frame, i % 8, i / 8);
     SCOPED_TRACE("panel " + std::to_string(2 * a) + " mm");
-    EXPECT_NEAR(sum / 64, l * view_factor, 0.002 * l * view_factor);
+    EXPECT_NEAR(sum / 64, view.expected, 0.002 * view.expected);
   }
 }
 

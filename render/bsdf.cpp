@@ -4,6 +4,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 namespace cadsynth {
 
@@ -302,26 +307,261 @@ float PrincipledBsdf::Pdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) 
   return pdf;
 }
 
+std::optional<Eigen::Vector3f> PrincipledBsdf::SampleDirection(const Eigen::Vector3f& wo,
+                                                               float u_lobe,
+                                                               const Eigen::Vector2f& u) const {
+  if (wo.z() <= 0) return std::nullopt;
+  const ViewTerms& view = View(wo);
+  Eigen::Vector3f wi;
+  if (u_lobe < view.p_coat) {
+    wi = Reflect(wo, SampleVisibleNormal(wo, coat_alpha_, coat_alpha_, u));
+  } else if ((u_lobe - view.p_coat) / (1 - view.p_coat) < view.p_specular) {
+    wi = Reflect(wo, SampleVisibleNormal(wo, alpha_x_, alpha_y_, u));
+  } else {  // cosine-weighted
+    const float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
+    wi =
+        Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x())));
+  }
+  if (wi.z() <= 0) return std::nullopt;
+  return wi;
+}
+
 std::optional<PrincipledBsdf::Sampled> PrincipledBsdf::Sample(const Eigen::Vector3f& wo,
                                                               float u_lobe,
                                                               const Eigen::Vector2f& u) const {
-  if (wo.z() <= 0) return std::nullopt;
+  const std::optional<Eigen::Vector3f> wi = SampleDirection(wo, u_lobe, u);
+  if (!wi) return std::nullopt;
   Sampled s;
-  const ViewTerms& view = View(wo);
-  if (u_lobe < view.p_coat) {
-    s.wi = Reflect(wo, SampleVisibleNormal(wo, coat_alpha_, coat_alpha_, u));
-  } else if ((u_lobe - view.p_coat) / (1 - view.p_coat) < view.p_specular) {
-    s.wi = Reflect(wo, SampleVisibleNormal(wo, alpha_x_, alpha_y_, u));
-  } else {  // cosine-weighted
-    const float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
-    s.wi =
-        Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x())));
-  }
-  if (s.wi.z() <= 0) return std::nullopt;
+  s.wi = *wi;
   const Eigen::Vector3f f = EvalWithPdf(wo, s.wi, &s.pdf);
   if (!(s.pdf > 0)) return std::nullopt;
   s.weight = f * (s.wi.z() / s.pdf);
   return s;
+}
+
+void PrincipledBsdf::ToLanes(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, BsdfLanes* lanes,
+                             int i) const {
+  BsdfLanes& l = *lanes;
+  const ViewTerms& view = View(wo);
+  for (int c = 0; c < 3; ++c) {
+    l.wo[c][i] = wo[c];
+    l.wi[c][i] = wi[c];
+    l.base[c][i] = params_.base_color[c];
+    l.metal_favg[c][i] = metal_favg_[c];
+  }
+  l.metallic[i] = params_.metallic;
+  l.alpha_x[i] = alpha_x_;
+  l.alpha_y[i] = alpha_y_;
+  l.r[i] = r_;
+  l.f0[i] = dielectric_f0_;
+  l.diffuse_norm[i] = std::max(1e-6f, 1 - e_avg_);
+  l.dielectric_favg[i] = dielectric_favg_;
+  l.coat[i] = coat_;
+  l.coat_r[i] = coat_r_;
+  l.coat_alpha[i] = coat_alpha_;
+  l.has_specular[i] = params_.specular > 0 ? -1 : 0;
+  l.multiscatter[i] = params_.multiscatter ? -1 : 0;
+  l.lambda_o[i] = view.lambda_o;
+  l.e_dielectric[i] = view.e_dielectric;
+  l.missing[i] = view.missing;
+  l.p_specular[i] = view.p_specular;
+  l.lambda_coat_o[i] = view.lambda_coat_o;
+  l.e_coat[i] = view.e_coat;
+  l.p_coat[i] = view.p_coat;
+}
+
+namespace {
+
+// kWidth lanes of EvalWithPdf at a time (GCC's vector extension, which clang shares). Every
+// helper is its scalar twin's operations in its order, std::max and std::clamp's comparisons
+// included.
+constexpr int kWidth = 4;
+// (GCC warns that wider vectors are passed differently with AVX: these functions are internal.)
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef float F8 __attribute__((vector_size(4 * kWidth)));
+typedef int32_t I8 __attribute__((vector_size(4 * kWidth)));
+
+F8 Load(const float* p) {
+  F8 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+I8 LoadMask(const int32_t* p) {
+  I8 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+void Store(float* p, F8 v) { std::memcpy(p, &v, sizeof v); }
+F8 Splat(float x) { return F8{} + x; }
+F8 Select(I8 mask, F8 a, F8 b) {
+  // (A cast between vector types of one size keeps the bits.)
+  return (F8)((mask & (I8)a) | (~mask & (I8)b));
+}
+F8 Max(F8 a, F8 b) { return Select(a < b, b, a); }  // std::max(a, b)
+F8 Clamp01(F8 v) { return Select(v < Splat(0), Splat(0), Select(Splat(1) < v, Splat(1), v)); }
+F8 Sqrt(F8 v) {
+#if defined(__SSE__)
+  __m128 quarter[kWidth / 4];
+  std::memcpy(quarter, &v, sizeof v);
+  for (__m128& q : quarter) q = _mm_sqrt_ps(q);
+  std::memcpy(&v, quarter, sizeof v);
+  return v;
+#else
+  for (int i = 0; i < kWidth; ++i) v[i] = std::sqrt(v[i]);
+  return v;
+#endif
+}
+F8 Pow5(F8 x) {
+  const F8 x2 = x * x;
+  return x2 * x2 * x;
+}
+
+struct V3 {
+  F8 x, y, z;
+};
+// Eigen's dot and squaredNorm of three: a0 + (a1 + a2).
+F8 Dot(const V3& a, const V3& b) { return a.x * b.x + (a.y * b.y + a.z * b.z); }
+V3 Normalized(const V3& v) {  // Eigen's normalized(): unchanged when the norm is not positive
+  const F8 n2 = Dot(v, v);
+  const I8 positive = n2 > Splat(0);
+  const F8 n = Sqrt(n2);
+  return {Select(positive, v.x / n, v.x), Select(positive, v.y / n, v.y),
+          Select(positive, v.z / n, v.z)};
+}
+F8 D(const V3& m, F8 ax, F8 ay) {
+  const F8 e = m.x * m.x / (ax * ax) + m.y * m.y / (ay * ay) + m.z * m.z;
+  return Select(m.z <= Splat(0), Splat(0), 1 / (kPi * ax * ay * e * e));
+}
+F8 Lambda(const V3& w, F8 ax, F8 ay) {
+  const F8 z2 = w.z * w.z;
+  const F8 t = (ax * ax * w.x * w.x + ay * ay * w.y * w.y) / z2;
+  return Select(z2 <= Splat(0), Splat(1e30f), 0.5f * (Sqrt(1 + t) - 1));
+}
+// Lookup() of two tables at the same (roughness, mu). Indices are clamped to the table also
+// where mu is not a number (where Lookup's conversion is undefined).
+void Lookup2(const std::array<float, kTable * kTable>& ta,
+             const std::array<float, kTable * kTable>& tb, F8 roughness, F8 mu, F8* a, F8* b) {
+  constexpr float kLast = kTable - 1;
+  const F8 x = Clamp01(mu) * kLast;
+  const F8 y = Clamp01(roughness) * kLast;
+  I8 x0 = __builtin_convertvector(x, I8), y0 = __builtin_convertvector(y, I8);
+  const I8 top = I8{} + (kTable - 2), zero = I8{};
+  const auto clamp = [&](I8 v) {
+    const I8 below = top < v;  // std::min(v, top), then at least 0
+    v = (below & top) | (~below & v);
+    const I8 negative = v < zero;
+    return ~negative & v;
+  };
+  x0 = clamp(x0);
+  y0 = clamp(y0);
+  const F8 fx = x - __builtin_convertvector(x0, F8), fy = y - __builtin_convertvector(y0, F8);
+  F8 a00, a01, a10, a11, b00, b01, b10, b11;
+  for (int i = 0; i < kWidth; ++i) {
+    const int k = y0[i] * kTable + x0[i];
+    a00[i] = ta[k], a01[i] = ta[k + 1], a10[i] = ta[k + kTable], a11[i] = ta[k + kTable + 1];
+    b00[i] = tb[k], b01[i] = tb[k + 1], b10[i] = tb[k + kTable], b11[i] = tb[k + kTable + 1];
+  }
+  *a = (1 - fy) * ((1 - fx) * a00 + fx * a01) + fy * ((1 - fx) * a10 + fx * a11);
+  *b = (1 - fy) * ((1 - fx) * b00 + fx * b01) + fy * ((1 - fx) * b10 + fx * b11);
+}
+
+// Lanes [i, i + kWidth).
+void EvalVector(BsdfLanes* lanes, int i) {
+  BsdfLanes& l = *lanes;
+  const AlbedoTable& table = Table();
+  const V3 wo{Load(&l.wo[0][i]), Load(&l.wo[1][i]), Load(&l.wo[2][i])};
+  const V3 wi{Load(&l.wi[0][i]), Load(&l.wi[1][i]), Load(&l.wi[2][i])};
+  const F8 base[3] = {Load(&l.base[0][i]), Load(&l.base[1][i]), Load(&l.base[2][i])};
+  const F8 m = Load(&l.metallic[i]), ax = Load(&l.alpha_x[i]), ay = Load(&l.alpha_y[i]);
+  const F8 f0 = Load(&l.f0[i]), lambda_o = Load(&l.lambda_o[i]), missing = Load(&l.missing[i]);
+  const F8 p_specular = Load(&l.p_specular[i]);
+  const I8 has_specular = LoadMask(&l.has_specular[i]);
+  const I8 multiscatter = LoadMask(&l.multiscatter[i]);
+
+  // The specular lobes (EvalWithPdf's branch where p_specular > 0).
+  const V3 h = Normalized({wo.x + wi.x, wo.y + wi.y, wo.z + wi.z});
+  const F8 d = D(h, ax, ay);
+  const F8 o_h = Dot(wo, h);
+  const F8 g2 = 1 / (1 + lambda_o + Lambda(wi, ax, ay));
+  const F8 c5 = Pow5(1 - Clamp01(o_h));
+  F8 dielectric = Select(has_specular, f0 + (1 - f0) * c5, Splat(0));
+  dielectric =
+      Select(multiscatter, dielectric * (1 + Load(&l.dielectric_favg[i]) * missing), dielectric);
+  const F8 scale = d * g2 / (4 * wo.z * wi.z);
+  const I8 specular = p_specular > Splat(0);
+  // The diffuse layer's share, DiffuseScale().
+  F8 a_i, b_i;
+  Lookup2(table.a, table.b, Load(&l.r[i]), wi.z, &a_i, &b_i);
+  F8 e_i = f0 * a_i + b_i;
+  const F8 e1 = a_i + b_i;
+  e_i = Select(multiscatter,
+               e_i * (1 + Load(&l.dielectric_favg[i]) * (1 - e1) / Max(e1, Splat(1e-6f))), e_i);
+  const F8 diffuse_scale =
+      Select(has_specular, (1 - Load(&l.e_dielectric[i])) * (1 - e_i) / Load(&l.diffuse_norm[i]),
+             Splat(1));
+  const I8 diffuse = m < Splat(1);
+  F8 f[3];
+  for (int c = 0; c < 3; ++c) {
+    F8 metal = base[c] + (1 - base[c]) * c5;
+    metal = Select(multiscatter, metal * (1 + Load(&l.metal_favg[c][i]) * missing), metal);
+    const F8 lobe = Select(specular, (m * metal + (1 - m) * dielectric) * scale, Splat(0));
+    f[c] = Select(diffuse, lobe + (1 - m) * base[c] * (diffuse_scale / kPi), lobe);
+  }
+  const F8 specular_pdf =
+      Select(specular & (o_h > Splat(0)), d / ((1 + lambda_o) * 4 * wo.z), Splat(0));
+  F8 pdf = p_specular * specular_pdf + (1 - p_specular) * wi.z / kPi;
+
+  // The clear coat on top, where there is one.
+  const F8 coat = Load(&l.coat[i]);
+  const I8 coated = coat > Splat(0);
+  const int any_coat = [&] {
+    int any = 0;
+    for (int k = 0; k < kWidth; ++k) any |= coated[k];
+    return any;
+  }();
+  if (any_coat) {
+    const F8 ca = Load(&l.coat_alpha[i]), e_coat = Load(&l.e_coat[i]);
+    const F8 lambda_coat_o = Load(&l.lambda_coat_o[i]), p_coat = Load(&l.p_coat[i]);
+    F8 ca_i, cb_i;
+    Lookup2(table.a, table.b, Load(&l.coat_r[i]), wi.z, &ca_i, &cb_i);
+    const F8 e_coat_i = coat * (kCoatF0 * ca_i + cb_i);
+    const F8 through = (1 - e_coat) * (1 - e_coat_i);
+    const F8 dc = D(h, ca, ca);
+    const F8 g2c = 1 / (1 + lambda_coat_o + Lambda(wi, ca, ca));
+    const F8 fresnel = kCoatF0 + (1 - kCoatF0) * Pow5(1 - Clamp01(o_h));
+    const F8 top = coat * fresnel * dc * g2c / (4 * wo.z * wi.z);
+    for (int c = 0; c < 3; ++c) f[c] = Select(coated, f[c] * through + top, f[c]);
+    const F8 coat_pdf = Select(o_h > Splat(0), dc / ((1 + lambda_coat_o) * 4 * wo.z), Splat(0));
+    pdf = Select(coated, p_coat * coat_pdf + (1 - p_coat) * pdf, pdf);
+  }
+  // Nothing unless both directions are above the surface.
+  const I8 above = (wo.z > Splat(0)) & (wi.z > Splat(0));
+  for (int c = 0; c < 3; ++c) Store(&l.f[c][i], Select(above, f[c], Splat(0)));
+  Store(&l.pdf[i], Select(above, pdf, Splat(0)));
+}
+
+}  // namespace
+
+void EvalLanes(BsdfLanes* lanes) {
+  BsdfLanes& l = *lanes;
+  if (l.count <= 0) return;
+  // The last vector's unused lanes repeat lane 0 (numbers a table lookup can take).
+  const int end = (l.count + kWidth - 1) / kWidth * kWidth;
+  for (int i = l.count; i < end; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      l.wo[c][i] = l.wo[c][0], l.wi[c][i] = l.wi[c][0], l.base[c][i] = l.base[c][0];
+      l.metal_favg[c][i] = l.metal_favg[c][0];
+    }
+    l.metallic[i] = l.metallic[0], l.alpha_x[i] = l.alpha_x[0], l.alpha_y[i] = l.alpha_y[0];
+    l.r[i] = l.r[0], l.f0[i] = l.f0[0], l.diffuse_norm[i] = l.diffuse_norm[0];
+    l.dielectric_favg[i] = l.dielectric_favg[0], l.coat[i] = l.coat[0];
+    l.coat_r[i] = l.coat_r[0], l.coat_alpha[i] = l.coat_alpha[0];
+    l.has_specular[i] = l.has_specular[0], l.multiscatter[i] = l.multiscatter[0];
+    l.lambda_o[i] = l.lambda_o[0], l.e_dielectric[i] = l.e_dielectric[0];
+    l.missing[i] = l.missing[0], l.p_specular[i] = l.p_specular[0];
+    l.lambda_coat_o[i] = l.lambda_coat_o[0], l.e_coat[i] = l.e_coat[0], l.p_coat[i] = l.p_coat[0];
+  }
+  for (int i = 0; i < end; i += kWidth) EvalVector(lanes, i);
 }
 
 }  // namespace cadsynth

@@ -13,6 +13,7 @@
 // anisotropic highlights stretch: Material::tangent). All colours are linear RGB.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 
 #include <Eigen/Core>
@@ -66,6 +67,8 @@ struct PrincipledParams {
   }
 };
 
+struct BsdfLanes;
+
 class PrincipledBsdf {
  public:
   explicit PrincipledBsdf(const PrincipledParams& params);
@@ -87,6 +90,12 @@ class PrincipledBsdf {
   // (in proportion to their expected reflectance), u the direction. Nothing below the surface.
   std::optional<Sampled> Sample(const Eigen::Vector3f& wo, float u_lobe,
                                 const Eigen::Vector2f& u) const;
+  // Sample's direction alone (wi.z > 0), for a caller that evaluates it later (in EvalLanes):
+  // Sample is this, then EvalWithPdf, refused where the density is not positive.
+  std::optional<Eigen::Vector3f> SampleDirection(const Eigen::Vector3f& wo, float u_lobe,
+                                                 const Eigen::Vector2f& u) const;
+  // Writes the pair (wo, wi) and what this BSDF's evaluation needs at wo into lane i of `lanes`.
+  void ToLanes(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, BsdfLanes* lanes, int i) const;
 
   float alpha_x() const { return alpha_x_; }
   float alpha_y() const { return alpha_y_; }
@@ -99,6 +108,7 @@ class PrincipledBsdf {
   bool Glossy() const { return params_.metallic > 0 || coat_ > 0; }
 
  private:
+  friend void EvalLanes(BsdfLanes* lanes);
   // What depends only on the outgoing direction, computed once per direction (a shading point
   // asks for it several times: sampling, evaluation and density).
   struct ViewTerms {
@@ -131,6 +141,39 @@ class PrincipledBsdf {
   float coat_avg_ = 0;  // the coat's weight times the cosine-weighted mean of its albedo
   float CoatAlbedo(float mu) const;  // the coat's directional albedo (F0 0.04)
 };
+
+// Many evaluations at once, structure of arrays (issue 44, item 3): the path tracer gathers every
+// lane of a packet that needs its BSDF evaluated (the light sample's direction and the BSDF
+// sample's) and evaluates them eight at a time in SIMD, lanes of different materials side by
+// side. Lane i holds one pair (wo, wi) and its BSDF's constants (PrincipledBsdf::ToLanes);
+// EvalLanes gives each lane what EvalWithPdf gives its pair, by the same operations in the same
+// order (so the same floats, unless a build contracts the two differently into fused multiply-
+// adds). EvalWithPdf stays the reference: tests check the two against each other.
+struct BsdfLanes {
+  static constexpr int kMax = 32;  // a multiple of the vector width, 8
+  int count = 0;
+  // The pair, local shading frame.
+  alignas(32) float wo[3][kMax];
+  alignas(32) float wi[3][kMax];
+  // The BSDF's constants.
+  alignas(32) float base[3][kMax];        // base colour
+  alignas(32) float metal_favg[3][kMax];  // multiscatter: the metal's mean Fresnel
+  alignas(32) float metallic[kMax], alpha_x[kMax], alpha_y[kMax];
+  alignas(32) float r[kMax];             // isotropic roughness equivalent (the tables' row)
+  alignas(32) float f0[kMax];            // the dielectric layer's F0
+  alignas(32) float diffuse_norm[kMax];  // max(1e-6, 1 - E_avg)
+  alignas(32) float dielectric_favg[kMax];
+  alignas(32) float coat[kMax], coat_r[kMax], coat_alpha[kMax];
+  alignas(32) int32_t has_specular[kMax];  // -1 where specular > 0 (a dielectric layer), else 0
+  alignas(32) int32_t multiscatter[kMax];  // -1 or 0
+  // Its terms at wo (PrincipledBsdf's ViewTerms).
+  alignas(32) float lambda_o[kMax], e_dielectric[kMax], missing[kMax], p_specular[kMax];
+  alignas(32) float lambda_coat_o[kMax], e_coat[kMax], p_coat[kMax];
+  // Out: f(wo, wi) (1/sr) and the density Sample picks wi with; zero unless both are above.
+  alignas(32) float f[3][kMax];
+  alignas(32) float pdf[kMax];
+};
+void EvalLanes(BsdfLanes* lanes);
 
 // The GGX pieces, exposed for tests: the distribution of normals D(m) (1/sr), Smith's Lambda(w)
 // and the masking G1(w) = 1 / (1 + Lambda(w)).

@@ -952,6 +952,17 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
   Eigen::Vector3f throughput[16], dir[16], shadow_value[16], prev_normal[16];
   Eigen::Vector3f value[16], first_albedo[16], first_normal[16];
   float prev_pdf[16], cone_width[16], cone_spread[16];
+  // A shading step's per-lane state between its passes, and its BSDF evaluations: lane j's light
+  // sample's at nee_lane[j] and its BSDF sample's at next_lane[j] (-1: none).
+  Impl::Surface surf[16];
+  std::optional<Impl::ShadingFrame> frame[16];
+  std::optional<PrincipledBsdf> bsdfs[16];
+  Eigen::Vector3f wo_local[16], p_off[16], nee_wi[16], next_wi[16];
+  LightSample light_sample[16];
+  float eps[16], light_pdf[16];
+  bool light_delta[16];
+  int nee_lane[16], next_lane[16];
+  BsdfLanes evals;
   // A pixel's angular size: the camera rays' cone.
   const float pixel_spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
 
@@ -1048,41 +1059,46 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       }
       if (!any) break;
 
-      // Shade: one light sample (shadow ray) and one BSDF sample (the next segment) per lane.
+      // Shade: one light sample (shadow ray) and one BSDF sample (the next segment) per lane,
+      // in three passes over the lanes: each lane's surface, light sample and BSDF direction;
+      // then both directions' BSDF values for all lanes at once (EvalLanes, in SIMD); then the
+      // shadow rays and the paths' next segments.
+      evals.count = 0;
       for (int j = 0; j < 16; ++j) {
         shadow_valid[j] = 0;
+        nee_lane[j] = next_lane[j] = -1;
         if (!active[j]) {
           SetRayLane(&shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
           continue;
         }
-        const Impl::Surface surf = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
+        surf[j] = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
         if (depth == 0) {
-          first_albedo[j] = surf.params.base_color;
-          first_normal[j] = surf.ns;
+          first_albedo[j] = surf[j].params.base_color;
+          first_normal[j] = surf[j].ns;
         }
-        const Impl::ShadingFrame local(surf);
-        const Eigen::Vector3f &t = local.t, &b = local.b;
-        const auto to_local = [&](const Eigen::Vector3f& w) { return local.ToLocal(w); };
-        const Eigen::Vector3f wo = to_local(-dir[j]);
-        const PrincipledBsdf bsdf(surf.params);
-        const uint64_t seed = pixel_seed[lane_pixel[j]];
-        const uint32_t s = static_cast<uint32_t>(lane_sample[j]);
-        const PixelSampler sampler(seed, s);
+        frame[j].emplace(surf[j]);
+        const Impl::ShadingFrame& local = *frame[j];
+        const Eigen::Vector3f wo = local.ToLocal(-dir[j]);
+        wo_local[j] = wo;
+        const PrincipledBsdf& bsdf = bsdfs[j].emplace(surf[j].params);
+        const PixelSampler sampler(pixel_seed[lane_pixel[j]],
+                                   static_cast<uint32_t>(lane_sample[j]));
         const uint32_t dim = 1 + 3 * static_cast<uint32_t>(depth);
         const Eigen::Vector2f u_choice = sampler.Get2D(dim);
         // A little off the surface along its geometric normal, scaled with the coordinates
         // (float spacing at 10 m is 1e-3 mm).
-        const float eps = 0.01f + 2e-6f * surf.p.cwiseAbs().maxCoeff();
-        const Eigen::Vector3f p_off = surf.p + eps * surf.ng;
+        eps[j] = 0.01f + 2e-6f * surf[j].p.cwiseAbs().maxCoeff();
+        p_off[j] = surf[j].p + eps[j] * surf[j].ng;
 
         // Next-event estimation.
-        SetRayLane(&shadow, j, p_off, Eigen::Vector3f::UnitZ(), 0, 0);
+        SetRayLane(&shadow, j, p_off[j], Eigen::Vector3f::UnitZ(), 0, 0);
         if (im.num_strategies > 0) {
           int pick = 0;
           float select_pdf = even;
           if (rated) {
             float* select = selection[j];
-            im.SelectionPdfs({p_off, surf.ns, -dir[j], wo, &t, &b, &bsdf}, select);
+            im.SelectionPdfs({p_off[j], surf[j].ns, -dir[j], wo, &local.t, &local.b, &bsdf},
+                             select);
             for (float below = select[0]; pick + 1 < im.num_strategies && u_choice.x() >= below;
                  below += select[++pick]) {
             }
@@ -1092,63 +1108,97 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
                 std::min(static_cast<int>(u_choice.x() * im.num_strategies), im.num_strategies - 1);
           }
           const Eigen::Vector2f u_light = sampler.Get2D(dim + 1);
-          LightSample ls;
-          bool ok = false, delta = false;
+          LightSample& ls = light_sample[j];
+          bool ok = false;
+          light_delta[j] = false;
           if (pick < static_cast<int>(im.lights.size())) {
-            ok = SampleLight(im.lights[pick], surf.p, u_light, &ls);
-            delta = im.lights[pick].delta;
+            ok = SampleLight(im.lights[pick], surf[j].p, u_light, &ls);
+            light_delta[j] = im.lights[pick].delta;
           } else {
-            ls.wi = im.environment->Sample(u_light, surf.ns, &ls.pdf);
+            ls.wi = im.environment->Sample(u_light, surf[j].ns, &ls.pdf);
             ls.distance = kInf;
             ls.value = im.environment->Eval(ls.wi);
             ok = ls.pdf > 0;
           }
-          if (ok && ls.wi.dot(surf.ng) > 0) {
-            const Eigen::Vector3f wi = to_local(ls.wi);
+          light_pdf[j] = select_pdf * ls.pdf;
+          if (ok && ls.wi.dot(surf[j].ng) > 0) {
+            const Eigen::Vector3f wi = local.ToLocal(ls.wi);
             if (wi.z() > 0) {
-              float bsdf_pdf;
-              const Eigen::Vector3f f = bsdf.EvalWithPdf(wo, wi, &bsdf_pdf);
-              const float light_pdf = select_pdf * ls.pdf;
-              const float w = delta ? 1.0f : PowerHeuristic(light_pdf, bsdf_pdf);
-              const Eigen::Vector3f c =
-                  throughput[j].cwiseProduct(f).cwiseProduct(ls.value) * (wi.z() * w / light_pdf);
-              if (c.allFinite() && c.maxCoeff() > 0) {
-                shadow_value[j] = c;
-                shadow_valid[j] = -1;
-                const float tfar = std::isinf(ls.distance) ? kInf : ls.distance * (1 - 1e-4f) - eps;
-                SetRayLane(&shadow, j, p_off, ls.wi, 0, std::max(0.0f, tfar));
-              }
+              nee_wi[j] = wi;
+              nee_lane[j] = evals.count++;
+              bsdf.ToLanes(wo, wi, &evals, nee_lane[j]);
             }
           }
         }
 
         // The BSDF's sample continues the path.
+        if (const auto wi = bsdf.SampleDirection(wo, u_choice.y(), sampler.Get2D(dim + 2))) {
+          next_wi[j] = *wi;
+          next_lane[j] = evals.count++;
+          bsdf.ToLanes(wo, *wi, &evals, next_lane[j]);
+        }
+      }
+      if (im.scene.scalar_shading) {  // the reference: one lane at a time
+        for (int j = 0; j < 16; ++j) {
+          for (const auto& [i, wi] :
+               {std::pair(nee_lane[j], nee_wi[j]), std::pair(next_lane[j], next_wi[j])}) {
+            if (i < 0) continue;
+            const Eigen::Vector3f f = bsdfs[j]->EvalWithPdf(wo_local[j], wi, &evals.pdf[i]);
+            for (int c = 0; c < 3; ++c) evals.f[c][i] = f[c];
+          }
+        }
+      } else {
+        EvalLanes(&evals);
+      }
+      const auto lane_f = [&](int i) {
+        return Eigen::Vector3f(evals.f[0][i], evals.f[1][i], evals.f[2][i]);
+      };
+      for (int j = 0; j < 16; ++j) {
+        if (!active[j]) continue;
+        if (const int i = nee_lane[j]; i >= 0) {
+          const LightSample& ls = light_sample[j];
+          const float w = light_delta[j] ? 1.0f : PowerHeuristic(light_pdf[j], evals.pdf[i]);
+          const Eigen::Vector3f c = throughput[j].cwiseProduct(lane_f(i)).cwiseProduct(ls.value) *
+                                    (nee_wi[j].z() * w / light_pdf[j]);
+          if (c.allFinite() && c.maxCoeff() > 0) {
+            shadow_value[j] = c;
+            shadow_valid[j] = -1;
+            const float tfar = std::isinf(ls.distance) ? kInf : ls.distance * (1 - 1e-4f) - eps[j];
+            SetRayLane(&shadow, j, p_off[j], ls.wi, 0, std::max(0.0f, tfar));
+          }
+        }
+
         active[j] = 0;
-        const auto sampled = bsdf.Sample(wo, u_choice.y(), sampler.Get2D(dim + 2));
-        if (!sampled) continue;
+        const int i = next_lane[j];
+        if (i < 0 || !(evals.pdf[i] > 0)) continue;
+        const float pdf = evals.pdf[i];
+        const Eigen::Vector3f weight = lane_f(i) * (next_wi[j].z() / pdf);
+        const Impl::ShadingFrame& local = *frame[j];
         const Eigen::Vector3f wi =
-            (sampled->wi.x() * t + sampled->wi.y() * b + sampled->wi.z() * surf.ns).normalized();
-        if (wi.dot(surf.ng) <= 0 || !sampled->weight.allFinite()) continue;
-        Eigen::Vector3f next = throughput[j].cwiseProduct(sampled->weight);
+            (next_wi[j].x() * local.t + next_wi[j].y() * local.b + next_wi[j].z() * surf[j].ns)
+                .normalized();
+        if (wi.dot(surf[j].ng) <= 0 || !weight.allFinite()) continue;
+        Eigen::Vector3f next = throughput[j].cwiseProduct(weight);
         // Russian roulette from the third interaction on: continue with probability q.
         if (depth >= 2) {
           const float q = std::min(0.95f, next.maxCoeff());
           const float r = UnitFloat(static_cast<uint32_t>(
-              Hash(seed, (static_cast<uint64_t>(s) << 8) | static_cast<uint64_t>(depth))));
+              Hash(pixel_seed[lane_pixel[j]],
+                   (static_cast<uint64_t>(lane_sample[j]) << 8) | static_cast<uint64_t>(depth))));
           if (!(r < q)) continue;
           next /= q;
         }
         if (!(next.maxCoeff() > 0)) continue;
         throughput[j] = next;
-        prev_pdf[j] = sampled->pdf;
+        prev_pdf[j] = pdf;
         // The cone widens by the lobe it was drawn from: about alpha for a glossy reflection,
         // a radian for a diffuse one.
-        cone_width[j] = surf.cone_width;
-        cone_spread[j] += sampled->pdf > 1 ? std::sqrt(bsdf.alpha_x() * bsdf.alpha_y()) : 1.0f;
-        prev_normal[j] = surf.ns;
+        cone_width[j] = surf[j].cone_width;
+        cone_spread[j] += pdf > 1 ? std::sqrt(bsdfs[j]->alpha_x() * bsdfs[j]->alpha_y()) : 1.0f;
+        prev_normal[j] = surf[j].ns;
         dir[j] = wi;
         active[j] = -1;
-        SetRayLane(&rh.ray, j, p_off, wi, 0, kInf);
+        SetRayLane(&rh.ray, j, p_off[j], wi, 0, kInf);
         rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
       }
       bool any_shadow = false;

@@ -56,6 +56,9 @@ struct PathTracerScene {
   Environment environment;
   int bounces = 3;
   float near_mm = 1.0f, far_mm = 1e7f;  // camera rays' clip (depth along the optical axis)
+  // Evaluate the BSDF lane by lane (PrincipledBsdf::EvalWithPdf) instead of a packet's lanes at
+  // once in SIMD (EvalLanes): the reference the tests hold the SIMD path to.
+  bool scalar_shading = false;
 };
 
 // What the denoiser (render/denoise.h) needs of a tile's pixels: means over each pixel's paths.

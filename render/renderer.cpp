@@ -414,6 +414,7 @@ void Renderer::Impl::BuildTracer() {
   pts.world = world;
   pts.floor_id = floor_id;
   pts.bounces = options.bounces;
+  pts.scalar_shading = options.shading == RenderOptions::Shading::kScalar;
   pts.near_mm = static_cast<float>(options.near_mm);
   pts.far_mm = static_cast<float>(options.far_mm);
   pts.floor = scene.floor_material;

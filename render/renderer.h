@@ -48,7 +48,12 @@ struct RenderOptions {
   // (0: the square root of samples, at least 8). 0: off, every pixel gets `samples`.
   double noise_threshold = 0.0;
   int min_samples = 0;
-  int bounces = 3;        // pbr: surface interactions after the first (Blender's max bounces)
+  int bounces = 3;  // pbr: surface interactions after the first (Blender's max bounces)
+  // pbr: how the BSDF is evaluated: kSimd, a packet's lanes four at a time (EvalLanes); kScalar,
+  // lane by lane (PrincipledBsdf::EvalWithPdf), the reference the tests hold the SIMD path to.
+  // The same image to within float rounding (to the byte on x86-64 builds without FMA).
+  enum class Shading { kSimd, kScalar };
+  Shading shading = Shading::kSimd;
   double exposure = 0.0;  // pbr: stops; the linear value is scaled by 2^exposure
   // pbr: display transform of the exposed linear value: kStandard clips and encodes sRGB;
   // kFilmic compresses highlights first (a filmic curve, see path_tracer.h), then encodes sRGB.
@@ -110,6 +115,11 @@ struct RenderOptions {
                 "pbr: adaptive sampling: paths before the first check (0: sqrt(samples), "
                 "at least 8)"});
     visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
+    visit(o.shading,
+          Field{"shading",
+                "choice",
+                "pbr: BSDF evaluation, simd (lanes of a packet at once) or scalar (the reference)",
+                {"simd", "scalar"}});
     visit(o.exposure, Field{"exposure", "number", "pbr: exposure in stops (-20 to 20)"});
     visit(o.view, Field{"view", "choice", "pbr: display transform", {"standard", "filmic"}});
     visit(o.seed, RunSeed("seed", "pbr: sampler seed"));

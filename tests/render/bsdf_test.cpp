@@ -12,6 +12,7 @@
 #include "tests/render/render_support.h"
 
 #include "render/image.h"
+#include "render/material.h"
 
 namespace cadsynth {
 namespace {
@@ -285,6 +286,68 @@ TEST(PrincipledBsdf, ReciprocalAndItsDensityIsTheOneItSamplesWith) {
       Hemisphere([&](const Eigen::Vector3f& wi) { return bsdf.Pdf(wo, wi); }, 1500, 300);
   EXPECT_GT(total, 0.95);
   EXPECT_LT(total, 1.001);
+}
+
+// The SIMD evaluation (EvalLanes) against the scalar one (EvalWithPdf), lane by lane, for every
+// material preset and random materials (coats, multiscatter, anisotropy, no specular layer), lanes
+// of different materials side by side, directions above and below the surface, and a count that
+// leaves the last vector part empty.
+TEST(PrincipledBsdf, EvalLanesIsEvalWithPdfOnEveryPreset) {
+  std::vector<PrincipledParams> materials;
+  for (const std::string& name : MaterialPresetNames()) {
+    Material m;
+    ASSERT_TRUE(MaterialPreset(name, &m)) << name;
+    materials.push_back(m.surface);
+    m.surface.multiscatter = !m.surface.multiscatter;
+    materials.push_back(m.surface);
+  }
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> uniform(0, 1);
+  for (int k = 0; k < 40; ++k) {
+    PrincipledParams p = Params(uniform(random), uniform(random), uniform(random),
+                                k % 5 == 0 ? 0.0f : uniform(random));
+    p.anisotropic = k % 3 == 0 ? uniform(random) : 0.0f;
+    p.clearcoat = k % 2 == 0 ? uniform(random) : 0.0f;
+    p.clearcoat_roughness = uniform(random);
+    p.multiscatter = k % 4 < 2;
+    p.base_color = Eigen::Vector3f(uniform(random), uniform(random), uniform(random));
+    materials.push_back(p);
+  }
+  const auto direction = [&] {
+    // Mostly above, some grazing, some below the surface.
+    const float mu = uniform(random) < 0.1f ? -0.5f * uniform(random) : uniform(random);
+    return Direction(mu, 2 * kPi * uniform(random));
+  };
+  int compared = 0, nonzero = 0;
+  for (int round = 0; round < 60; ++round) {
+    BsdfLanes lanes;
+    lanes.count = 1 + round % BsdfLanes::kMax;
+    std::vector<PrincipledBsdf> bsdfs;
+    std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> pairs;
+    for (int i = 0; i < lanes.count; ++i) {
+      bsdfs.emplace_back(materials[(round * 7 + i * 3) % materials.size()]);
+      Eigen::Vector3f wo = direction(), wi = direction();
+      if (i % 4 == 1) wi = Eigen::Vector3f(-wo.x(), -wo.y(), wo.z());  // the mirror direction
+      pairs.emplace_back(wo, wi);
+      bsdfs.back().ToLanes(wo, wi, &lanes, i);
+    }
+    EvalLanes(&lanes);
+    for (int i = 0; i < lanes.count; ++i) {
+      float pdf;
+      const Eigen::Vector3f f = bsdfs[i].EvalWithPdf(pairs[i].first, pairs[i].second, &pdf);
+      const auto near = [](float a, float b) {
+        return std::abs(a - b) <= 1e-5f * std::max(std::abs(a), std::abs(b)) + 1e-30f;
+      };
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_PRED2(near, lanes.f[c][i], f[c]) << "round " << round << " lane " << i;
+      }
+      EXPECT_PRED2(near, lanes.pdf[i], pdf) << "round " << round << " lane " << i;
+      ++compared;
+      nonzero += f.maxCoeff() > 0;
+    }
+  }
+  EXPECT_GT(compared, 900);
+  EXPECT_GT(nonzero, compared / 2);
 }
 
 }  // namespace

@@ -159,7 +159,9 @@ PrincipledParams ApplyTexture(const PrincipledParams& surface, const TextureSamp
 float ValueNoise(const Eigen::Vector3f& p, uint64_t seed);
 // Fractal sum of `octaves` value noises, each twice the frequency and half the amplitude, in
 // [0, 1]. Octaves whose cells (1, 1/2, 1/4, ... in p's units) are smaller than `footprint` (same
-// units) count as their mean, 1/2.
+// units) count as their mean, 1/2. Octave o is ValueNoise(q_o, Hash(seed, o)) with q_0 = p and
+// q_(o+1) = (1.6 x + 1.2 y, -1.2 x + 1.6 y, 2 z) of q_o (turned so that lattices do not line
+// up), weighted 2^-(o+1) and summed in order; four octaves are evaluated at once (SIMD).
 float FractalNoise(const Eigen::Vector3f& p, int octaves, uint64_t seed, float footprint = 0.0f);
 
 }  // namespace cadsynth

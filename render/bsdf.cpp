@@ -376,30 +376,28 @@ namespace {
 // helper is its scalar twin's operations in its order, std::max and std::clamp's comparisons
 // included.
 constexpr int kWidth = 4;
-// (GCC warns that wider vectors are passed differently with AVX: these functions are internal.)
-#pragma GCC diagnostic ignored "-Wpsabi"
-typedef float F8 __attribute__((vector_size(4 * kWidth)));
-typedef int32_t I8 __attribute__((vector_size(4 * kWidth)));
+typedef float FV __attribute__((vector_size(4 * kWidth)));
+typedef int32_t IV __attribute__((vector_size(4 * kWidth)));
 
-F8 Load(const float* p) {
-  F8 v;
+FV Load(const float* p) {
+  FV v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-I8 LoadMask(const int32_t* p) {
-  I8 v;
+IV LoadMask(const int32_t* p) {
+  IV v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-void Store(float* p, F8 v) { std::memcpy(p, &v, sizeof v); }
-F8 Splat(float x) { return F8{} + x; }
-F8 Select(I8 mask, F8 a, F8 b) {
+void Store(float* p, FV v) { std::memcpy(p, &v, sizeof v); }
+FV Splat(float x) { return FV{} + x; }
+FV Select(IV mask, FV a, FV b) {
   // (A cast between vector types of one size keeps the bits.)
-  return (F8)((mask & (I8)a) | (~mask & (I8)b));
+  return (FV)((mask & (IV)a) | (~mask & (IV)b));
 }
-F8 Max(F8 a, F8 b) { return Select(a < b, b, a); }  // std::max(a, b)
-F8 Clamp01(F8 v) { return Select(v < Splat(0), Splat(0), Select(Splat(1) < v, Splat(1), v)); }
-F8 Sqrt(F8 v) {
+FV Max(FV a, FV b) { return Select(a < b, b, a); }  // std::max(a, b)
+FV Clamp01(FV v) { return Select(v < Splat(0), Splat(0), Select(Splat(1) < v, Splat(1), v)); }
+FV Sqrt(FV v) {
 #if defined(__SSE__)
   __m128 quarter[kWidth / 4];
   std::memcpy(quarter, &v, sizeof v);
@@ -411,51 +409,52 @@ F8 Sqrt(F8 v) {
   return v;
 #endif
 }
-F8 Pow5(F8 x) {
-  const F8 x2 = x * x;
+FV Pow5(FV x) {
+  const FV x2 = x * x;
   return x2 * x2 * x;
 }
 
 struct V3 {
-  F8 x, y, z;
+  FV x, y, z;
 };
 // Eigen's dot and squaredNorm of three: a0 + (a1 + a2).
-F8 Dot(const V3& a, const V3& b) { return a.x * b.x + (a.y * b.y + a.z * b.z); }
+FV Dot(const V3& a, const V3& b) { return a.x * b.x + (a.y * b.y + a.z * b.z); }
 V3 Normalized(const V3& v) {  // Eigen's normalized(): unchanged when the norm is not positive
-  const F8 n2 = Dot(v, v);
-  const I8 positive = n2 > Splat(0);
-  const F8 n = Sqrt(n2);
+  const FV n2 = Dot(v, v);
+  const IV positive = n2 > Splat(0);
+  const FV n = Sqrt(n2);
   return {Select(positive, v.x / n, v.x), Select(positive, v.y / n, v.y),
           Select(positive, v.z / n, v.z)};
 }
-F8 D(const V3& m, F8 ax, F8 ay) {
-  const F8 e = m.x * m.x / (ax * ax) + m.y * m.y / (ay * ay) + m.z * m.z;
+FV D(const V3& m, FV ax, FV ay) {
+  const FV e = m.x * m.x / (ax * ax) + m.y * m.y / (ay * ay) + m.z * m.z;
   return Select(m.z <= Splat(0), Splat(0), 1 / (kPi * ax * ay * e * e));
 }
-F8 Lambda(const V3& w, F8 ax, F8 ay) {
-  const F8 z2 = w.z * w.z;
-  const F8 t = (ax * ax * w.x * w.x + ay * ay * w.y * w.y) / z2;
+FV Lambda(const V3& w, FV ax, FV ay) {
+  const FV z2 = w.z * w.z;
+  const FV t = (ax * ax * w.x * w.x + ay * ay * w.y * w.y) / z2;
   return Select(z2 <= Splat(0), Splat(1e30f), 0.5f * (Sqrt(1 + t) - 1));
 }
-// Lookup() of two tables at the same (roughness, mu). Indices are clamped to the table also
-// where mu is not a number (where Lookup's conversion is undefined).
+// Lookup() of two tables at the same (roughness, mu). The indices are also clamped to the table
+// where the conversion gives INT_MIN (x86's answer for a NaN mu, where Lookup would read
+// outside the table).
 void Lookup2(const std::array<float, kTable * kTable>& ta,
-             const std::array<float, kTable * kTable>& tb, F8 roughness, F8 mu, F8* a, F8* b) {
+             const std::array<float, kTable * kTable>& tb, FV roughness, FV mu, FV* a, FV* b) {
   constexpr float kLast = kTable - 1;
-  const F8 x = Clamp01(mu) * kLast;
-  const F8 y = Clamp01(roughness) * kLast;
-  I8 x0 = __builtin_convertvector(x, I8), y0 = __builtin_convertvector(y, I8);
-  const I8 top = I8{} + (kTable - 2), zero = I8{};
-  const auto clamp = [&](I8 v) {
-    const I8 below = top < v;  // std::min(v, top), then at least 0
+  const FV x = Clamp01(mu) * kLast;
+  const FV y = Clamp01(roughness) * kLast;
+  IV x0 = __builtin_convertvector(x, IV), y0 = __builtin_convertvector(y, IV);
+  const IV top = IV{} + (kTable - 2), zero = IV{};
+  const auto clamp = [&](IV v) {
+    const IV below = top < v;  // std::min(v, top), then at least 0
     v = (below & top) | (~below & v);
-    const I8 negative = v < zero;
+    const IV negative = v < zero;
     return ~negative & v;
   };
   x0 = clamp(x0);
   y0 = clamp(y0);
-  const F8 fx = x - __builtin_convertvector(x0, F8), fy = y - __builtin_convertvector(y0, F8);
-  F8 a00, a01, a10, a11, b00, b01, b10, b11;
+  const FV fx = x - __builtin_convertvector(x0, FV), fy = y - __builtin_convertvector(y0, FV);
+  FV a00, a01, a10, a11, b00, b01, b10, b11;
   for (int i = 0; i < kWidth; ++i) {
     const int k = y0[i] * kTable + x0[i];
     a00[i] = ta[k], a01[i] = ta[k + 1], a10[i] = ta[k + kTable], a11[i] = ta[k + kTable + 1];
@@ -471,73 +470,73 @@ void EvalVector(BsdfLanes* lanes, int i) {
   const AlbedoTable& table = Table();
   const V3 wo{Load(&l.wo[0][i]), Load(&l.wo[1][i]), Load(&l.wo[2][i])};
   const V3 wi{Load(&l.wi[0][i]), Load(&l.wi[1][i]), Load(&l.wi[2][i])};
-  const F8 base[3] = {Load(&l.base[0][i]), Load(&l.base[1][i]), Load(&l.base[2][i])};
-  const F8 m = Load(&l.metallic[i]), ax = Load(&l.alpha_x[i]), ay = Load(&l.alpha_y[i]);
-  const F8 f0 = Load(&l.f0[i]), lambda_o = Load(&l.lambda_o[i]), missing = Load(&l.missing[i]);
-  const F8 p_specular = Load(&l.p_specular[i]);
-  const I8 has_specular = LoadMask(&l.has_specular[i]);
-  const I8 multiscatter = LoadMask(&l.multiscatter[i]);
+  const FV base[3] = {Load(&l.base[0][i]), Load(&l.base[1][i]), Load(&l.base[2][i])};
+  const FV m = Load(&l.metallic[i]), ax = Load(&l.alpha_x[i]), ay = Load(&l.alpha_y[i]);
+  const FV f0 = Load(&l.f0[i]), lambda_o = Load(&l.lambda_o[i]), missing = Load(&l.missing[i]);
+  const FV p_specular = Load(&l.p_specular[i]);
+  const IV has_specular = LoadMask(&l.has_specular[i]);
+  const IV multiscatter = LoadMask(&l.multiscatter[i]);
 
   // The specular lobes (EvalWithPdf's branch where p_specular > 0).
   const V3 h = Normalized({wo.x + wi.x, wo.y + wi.y, wo.z + wi.z});
-  const F8 d = D(h, ax, ay);
-  const F8 o_h = Dot(wo, h);
-  const F8 g2 = 1 / (1 + lambda_o + Lambda(wi, ax, ay));
-  const F8 c5 = Pow5(1 - Clamp01(o_h));
-  F8 dielectric = Select(has_specular, f0 + (1 - f0) * c5, Splat(0));
+  const FV d = D(h, ax, ay);
+  const FV o_h = Dot(wo, h);
+  const FV g2 = 1 / (1 + lambda_o + Lambda(wi, ax, ay));
+  const FV c5 = Pow5(1 - Clamp01(o_h));
+  FV dielectric = Select(has_specular, f0 + (1 - f0) * c5, Splat(0));
   dielectric =
       Select(multiscatter, dielectric * (1 + Load(&l.dielectric_favg[i]) * missing), dielectric);
-  const F8 scale = d * g2 / (4 * wo.z * wi.z);
-  const I8 specular = p_specular > Splat(0);
+  const FV scale = d * g2 / (4 * wo.z * wi.z);
+  const IV specular = p_specular > Splat(0);
   // The diffuse layer's share, DiffuseScale().
-  F8 a_i, b_i;
+  FV a_i, b_i;
   Lookup2(table.a, table.b, Load(&l.r[i]), wi.z, &a_i, &b_i);
-  F8 e_i = f0 * a_i + b_i;
-  const F8 e1 = a_i + b_i;
+  FV e_i = f0 * a_i + b_i;
+  const FV e1 = a_i + b_i;
   e_i = Select(multiscatter,
                e_i * (1 + Load(&l.dielectric_favg[i]) * (1 - e1) / Max(e1, Splat(1e-6f))), e_i);
-  const F8 diffuse_scale =
+  const FV diffuse_scale =
       Select(has_specular, (1 - Load(&l.e_dielectric[i])) * (1 - e_i) / Load(&l.diffuse_norm[i]),
              Splat(1));
-  const I8 diffuse = m < Splat(1);
-  F8 f[3];
+  const IV diffuse = m < Splat(1);
+  FV f[3];
   for (int c = 0; c < 3; ++c) {
-    F8 metal = base[c] + (1 - base[c]) * c5;
+    FV metal = base[c] + (1 - base[c]) * c5;
     metal = Select(multiscatter, metal * (1 + Load(&l.metal_favg[c][i]) * missing), metal);
-    const F8 lobe = Select(specular, (m * metal + (1 - m) * dielectric) * scale, Splat(0));
+    const FV lobe = Select(specular, (m * metal + (1 - m) * dielectric) * scale, Splat(0));
     f[c] = Select(diffuse, lobe + (1 - m) * base[c] * (diffuse_scale / kPi), lobe);
   }
-  const F8 specular_pdf =
+  const FV specular_pdf =
       Select(specular & (o_h > Splat(0)), d / ((1 + lambda_o) * 4 * wo.z), Splat(0));
-  F8 pdf = p_specular * specular_pdf + (1 - p_specular) * wi.z / kPi;
+  FV pdf = p_specular * specular_pdf + (1 - p_specular) * wi.z / kPi;
 
   // The clear coat on top, where there is one.
-  const F8 coat = Load(&l.coat[i]);
-  const I8 coated = coat > Splat(0);
+  const FV coat = Load(&l.coat[i]);
+  const IV coated = coat > Splat(0);
   const int any_coat = [&] {
     int any = 0;
     for (int k = 0; k < kWidth; ++k) any |= coated[k];
     return any;
   }();
   if (any_coat) {
-    const F8 ca = Load(&l.coat_alpha[i]), e_coat = Load(&l.e_coat[i]);
-    const F8 lambda_coat_o = Load(&l.lambda_coat_o[i]), p_coat = Load(&l.p_coat[i]);
-    F8 ca_i, cb_i;
+    const FV ca = Load(&l.coat_alpha[i]), e_coat = Load(&l.e_coat[i]);
+    const FV lambda_coat_o = Load(&l.lambda_coat_o[i]), p_coat = Load(&l.p_coat[i]);
+    FV ca_i, cb_i;
     Lookup2(table.a, table.b, Load(&l.coat_r[i]), wi.z, &ca_i, &cb_i);
-    const F8 e_coat_i = coat * (kCoatF0 * ca_i + cb_i);
-    const F8 through = (1 - e_coat) * (1 - e_coat_i);
-    const F8 dc = D(h, ca, ca);
-    const F8 g2c = 1 / (1 + lambda_coat_o + Lambda(wi, ca, ca));
-    const F8 fresnel = kCoatF0 + (1 - kCoatF0) * Pow5(1 - Clamp01(o_h));
-    const F8 top = coat * fresnel * dc * g2c / (4 * wo.z * wi.z);
+    const FV e_coat_i = coat * (kCoatF0 * ca_i + cb_i);
+    const FV through = (1 - e_coat) * (1 - e_coat_i);
+    const FV dc = D(h, ca, ca);
+    const FV g2c = 1 / (1 + lambda_coat_o + Lambda(wi, ca, ca));
+    const FV fresnel = kCoatF0 + (1 - kCoatF0) * Pow5(1 - Clamp01(o_h));
+    const FV top = coat * fresnel * dc * g2c / (4 * wo.z * wi.z);
     for (int c = 0; c < 3; ++c) f[c] = Select(coated, f[c] * through + top, f[c]);
-    const F8 coat_pdf = Select(o_h > Splat(0), dc / ((1 + lambda_coat_o) * 4 * wo.z), Splat(0));
+    const FV coat_pdf = Select(o_h > Splat(0), dc / ((1 + lambda_coat_o) * 4 * wo.z), Splat(0));
     pdf = Select(coated, p_coat * coat_pdf + (1 - p_coat) * pdf, pdf);
   }
-  // Nothing unless both directions are above the surface.
-  const I8 above = (wo.z > Splat(0)) & (wi.z > Splat(0));
-  for (int c = 0; c < 3; ++c) Store(&l.f[c][i], Select(above, f[c], Splat(0)));
-  Store(&l.pdf[i], Select(above, pdf, Splat(0)));
+  // Nothing where either direction is below the surface (as EvalWithPdf's early return).
+  const IV below = (wo.z <= Splat(0)) | (wi.z <= Splat(0));
+  for (int c = 0; c < 3; ++c) Store(&l.f[c][i], Select(below, Splat(0), f[c]));
+  Store(&l.pdf[i], Select(below, Splat(0), pdf));
 }
 
 }  // namespace

@@ -108,7 +108,6 @@ class PrincipledBsdf {
   bool Glossy() const { return params_.metallic > 0 || coat_ > 0; }
 
  private:
-  friend void EvalLanes(BsdfLanes* lanes);
   // What depends only on the outgoing direction, computed once per direction (a shading point
   // asks for it several times: sampling, evaluation and density).
   struct ViewTerms {
@@ -144,13 +143,13 @@ class PrincipledBsdf {
 
 // Many evaluations at once, structure of arrays (issue 44, item 3): the path tracer gathers every
 // lane of a packet that needs its BSDF evaluated (the light sample's direction and the BSDF
-// sample's) and evaluates them eight at a time in SIMD, lanes of different materials side by
+// sample's) and evaluates them four at a time in SIMD, lanes of different materials side by
 // side. Lane i holds one pair (wo, wi) and its BSDF's constants (PrincipledBsdf::ToLanes);
 // EvalLanes gives each lane what EvalWithPdf gives its pair, by the same operations in the same
 // order (so the same floats, unless a build contracts the two differently into fused multiply-
 // adds). EvalWithPdf stays the reference: tests check the two against each other.
 struct BsdfLanes {
-  static constexpr int kMax = 32;  // a multiple of the vector width, 8
+  static constexpr int kMax = 32;  // two per lane of a packet; a multiple of the vector width, 4
   int count = 0;
   // The pair, local shading frame.
   alignas(32) float wo[3][kMax];

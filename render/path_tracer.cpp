@@ -1139,13 +1139,13 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
         }
       }
       if (im.scene.scalar_shading) {  // the reference: one lane at a time
+        const auto eval = [&](int j, int i, const Eigen::Vector3f& wi) {
+          const Eigen::Vector3f f = bsdfs[j]->EvalWithPdf(wo_local[j], wi, &evals.pdf[i]);
+          for (int c = 0; c < 3; ++c) evals.f[c][i] = f[c];
+        };
         for (int j = 0; j < 16; ++j) {
-          for (const auto& [i, wi] :
-               {std::pair(nee_lane[j], nee_wi[j]), std::pair(next_lane[j], next_wi[j])}) {
-            if (i < 0) continue;
-            const Eigen::Vector3f f = bsdfs[j]->EvalWithPdf(wo_local[j], wi, &evals.pdf[i]);
-            for (int c = 0; c < 3; ++c) evals.f[c][i] = f[c];
-          }
+          if (nee_lane[j] >= 0) eval(j, nee_lane[j], nee_wi[j]);
+          if (next_lane[j] >= 0) eval(j, next_lane[j], next_wi[j]);
         }
       } else {
         EvalLanes(&evals);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -132,6 +133,17 @@ TEST(Material, FractalNoiseIsItsOctavesSummedInOrderToTheBit) {
     different +=
         FractalNoise(p, octaves, seed, footprint) != specified(p, octaves, seed, footprint);
     ++compared;
+  }
+  // Beyond FastFloor's clamp (+-1e9) and not a number: the same values, NaN where it is NaN.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const Eigen::Vector3f& p :
+       {Eigen::Vector3f(2e9f, -3e9f, 0.5f), Eigen::Vector3f(-2e9f, 1.5f, 4e9f),
+        Eigen::Vector3f(nan, 0.25f, 0.5f), Eigen::Vector3f(0.5f, 0.25f, nan)}) {
+    for (int octaves = 1; octaves <= 6; ++octaves) {
+      const float a = FractalNoise(p, octaves, 7), b = specified(p, octaves, 7, 0.0f);
+      different += !(a == b || (std::isnan(a) && std::isnan(b)));
+      ++compared;
+    }
   }
   EXPECT_EQ(different, 0) << "of " << compared;
 }

@@ -88,6 +88,8 @@ class PrincipledBsdf {
   };
   // A direction for wo from three uniform numbers in [0, 1): u_lobe chooses diffuse or specular
   // (in proportion to their expected reflectance), u the direction. Nothing below the surface.
+  // The path tracer does the same in two steps (SampleDirection, then EvalLanes for the whole
+  // packet); this one-step form is what the tests integrate the sampler's weights with.
   std::optional<Sampled> Sample(const Eigen::Vector3f& wo, float u_lobe,
                                 const Eigen::Vector2f& u) const;
   // Sample's direction alone (wi.z > 0), for a caller that evaluates it later (in EvalLanes):

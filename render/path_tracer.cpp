@@ -692,6 +692,24 @@ struct PathTracer::Impl {
       return Eigen::Vector3f(w.dot(t), w.dot(b), w.dot(n));
     }
   };
+
+  // TraceTile's steps. A packet holds 16 paths of a tile's pixels (Packet, below); each bounce
+  // adds the light its segments found (AddEmission), then shades every lane that hit a surface
+  // in three passes: each lane's surface, light sample and BSDF direction (SampleLanes), every
+  // lane's two BSDF values at once (EvaluateLanes: in SIMD, or one lane at a time for the
+  // scalar reference), and the shadow rays and next segments (ContinuePaths, TraceShadows).
+  struct CameraRays;
+  struct Packet;
+  struct PixelSums;
+  void TracePacket(const CameraRays& camera, Packet* k) const;
+  void StartPaths(const CameraRays& camera, Packet* k) const;
+  // Whether any lane hit a surface it shades (depth <= bounces); lanes that did not stop.
+  bool AddEmission(Packet* k, int depth) const;
+  void SampleLanes(Packet* k, int depth) const;
+  void EvaluateLanes(Packet* k) const;
+  // Whether any lane goes on.
+  bool ContinuePaths(Packet* k, int depth) const;
+  void TraceShadows(Packet* k) const;
 };
 
 PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
@@ -904,349 +922,427 @@ bool AdaptiveSampling::Converged(int n, double sum, double sum_sq) const {
   return 0.5f * (DisplayValue(hi, filmic) - DisplayValue(lo, filmic)) <= threshold;
 }
 
+// What a tile's camera rays need, worked out once per tile.
+struct PathTracer::Impl::CameraRays {
+  const Camera& camera;
+  const PixelRays& rays;
+  const CameraMotion& motion;
+  Eigen::Matrix3f rotation;  // world from camera
+  Eigen::Vector3f origin;    // mm, world
+  float aperture_radius;     // mm; 0: a pinhole
+  float focus;               // mm
+  float pixel_spread;        // a pixel's angular size: the camera rays' cone
+  int u0, v0;                // the tile's top-left pixel
+};
+
+// A packet's 16 lanes: each a path of one of the tile's pixels, and what a bounce's shading
+// passes hand on to each other.
+struct PathTracer::Impl::Packet {
+  int lanes = 0;  // lanes [0, lanes) carry paths; the others stay off
+  // Lane j traces sample sample[j] of tile pixel pixel[j], whose stream is seed[j].
+  int pixel[16], sample[16];
+  uint64_t seed[16];
+
+  // The paths: the current segments (Embree's layout) and which lanes still trace one, whether
+  // the camera ray existed, and what each path carries and has gathered so far; the denoiser's
+  // first-surface albedo and normal.
+  RTCRayHit16 rh;
+  alignas(64) int active[16];
+  alignas(64) int had_ray[16];
+  Eigen::Vector3f dir[16], throughput[16], value[16], first_albedo[16], first_normal[16];
+  // The vertex the segment left: its BSDF sample's pdf, shading normal and strategy selection
+  // probabilities (the MIS weights of a light or the sky the segment finds need them again), and
+  // the ray cone's width there and spread since.
+  float prev_pdf[16], cone_width[16], cone_spread[16];
+  Eigen::Vector3f prev_normal[16];
+  float selection[16][kMaxRated];
+
+  // A bounce's shading, between its passes: the surface, its frame and BSDF, wo in that frame,
+  // the offset origin (eps along the geometric normal), the light sample (its pdf times its
+  // strategy's, and whether the light is a delta) and the two directions wi in the frame; their
+  // BSDF values are entries nee_lane[j] and next_lane[j] of `evals` (-1: none).
+  Surface surf[16];
+  std::optional<ShadingFrame> frame[16];
+  std::optional<PrincipledBsdf> bsdf[16];
+  Eigen::Vector3f wo[16], p_off[16], nee_wi[16], next_wi[16];
+  float eps[16];
+  LightSample light_sample[16];
+  float light_pdf[16];
+  bool light_delta[16];
+  int nee_lane[16], next_lane[16];
+  BsdfLanes evals;
+  // The shadow rays and what each adds to its path's value if nothing blocks it.
+  RTCRay16 shadow;
+  alignas(64) int shadow_valid[16];
+  Eigen::Vector3f shadow_value[16];
+};
+
+// Per pixel of a tile: the sums over its paths so far (radiance; the denoiser's first-surface
+// albedo and normal; each path's luminance and its square, for the error estimate), the paths
+// that had a ray, and the samples drawn (paths without a ray included).
+struct PathTracer::Impl::PixelSums {
+  Eigen::Vector3f sum[16], albedo[16], normal[16];
+  double luminance[16] = {}, luminance_sq[16] = {};
+  int paths[16] = {}, drawn[16] = {};
+
+  PixelSums() {
+    for (int p = 0; p < 16; ++p) {
+      sum[p].setZero();
+      albedo[p].setZero();
+      normal[p].setZero();
+    }
+  }
+  // Adds a traced packet's paths, in lane order.
+  void Add(const Packet& k) {
+    for (int j = 0; j < k.lanes; ++j) {
+      const int p = k.pixel[j];
+      ++drawn[p];
+      if (!k.had_ray[j]) continue;  // a point of the pixel without a ray, beyond a lens's fold
+      ++paths[p];
+      sum[p] += k.value[j];
+      albedo[p] += k.first_albedo[j];
+      normal[p] += k.first_normal[j];
+      const double l = Luminance(k.value[j]);
+      luminance[p] += l;
+      luminance_sq[p] += l * l;
+    }
+  }
+};
+
+void PathTracer::Impl::TracePacket(const CameraRays& camera, Packet* k) const {
+  RTCIntersectContext context;
+  StartPaths(camera, k);
+  rtcInitIntersectContext(&context);
+  rtcIntersect16(k->active, scene.world, &context, &k->rh);
+  for (int depth = 0; AddEmission(k, depth); ++depth) {
+    SampleLanes(k, depth);
+    EvaluateLanes(k);
+    const bool more = ContinuePaths(k, depth);
+    TraceShadows(k);
+    if (!more) break;
+    rtcInitIntersectContext(&context);
+    rtcIntersect16(k->active, scene.world, &context, &k->rh);
+  }
+}
+
+// Camera rays through a point of each lane's pixel: directions with camera z = 1, so that the
+// clip range is in depth like the labels'.
+void PathTracer::Impl::StartPaths(const CameraRays& c, Packet* k) const {
+  for (int j = 0; j < 16; ++j) {
+    k->active[j] = 0;
+    k->value[j].setZero();
+    k->first_albedo[j] = Eigen::Vector3f::Ones();
+    k->first_normal[j].setZero();
+    if (j >= k->lanes) {
+      SetRayLane(&k->rh.ray, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
+      k->had_ray[j] = 0;
+      continue;
+    }
+    const int p = k->pixel[j];
+    const int u = c.u0 + p % 4, v = c.v0 + p / 4;
+    k->throughput[j].setOnes();
+    k->prev_pdf[j] = 0;
+    k->cone_width[j] = 0;
+    k->cone_spread[j] = c.pixel_spread;
+    const PixelSampler sampler(k->seed[j], static_cast<uint32_t>(k->sample[j]));
+    const Eigen::Vector2f jitter = sampler.Get2D(0);
+    Eigen::Vector2f xy = Eigen::Vector2f::Zero();
+    k->active[j] = c.rays.At(u, v, jitter.x(), jitter.y(), &xy) ? -1 : 0;
+    k->had_ray[j] = k->active[j];
+    Eigen::Vector3f o_cam = Eigen::Vector3f::Zero(), d_cam(xy.x(), xy.y(), 1.0f);
+    if (c.aperture_radius > 0.0f) {
+      // Through a point of the aperture to where the pixel's ray meets the plane of focus;
+      // camera z of the direction stays 1.
+      const Eigen::Vector2f l = ConcentricDisc(sampler.Get2D(kLensDimension)) * c.aperture_radius;
+      o_cam = Eigen::Vector3f(l.x(), l.y(), 0.0f);
+      d_cam -= o_cam / c.focus;
+    }
+    Eigen::Vector3f d = c.rotation * d_cam, o = c.origin + c.rotation * o_cam;
+    if (c.motion.active()) {
+      const Eigen::Isometry3d pose =
+          c.camera.world_from_cam * c.motion.At(sampler.Get2D(kTimeDimension).x() - 0.5);
+      const Eigen::Matrix3f r = pose.linear().cast<float>();
+      d = r * d_cam;
+      o = pose.translation().cast<float>() + r * o_cam;
+    }
+    k->dir[j] = d.normalized();
+    SetRayLane(&k->rh.ray, j, o, d, scene.near_mm, scene.far_mm);
+    k->rh.hit.geomID[j] = k->rh.hit.primID[j] = k->rh.hit.instID[0][j] = kInvalid;
+  }
+}
+
+// Light reaching each lane's last vertex (or the camera) along its segment: area lights in front
+// of the surface, and the sky if the ray escaped; lanes that escaped, or hit a surface beyond the
+// last bounce, stop.
+bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
+  const bool shade = depth <= scene.bounces;
+  const int num_lights = static_cast<int>(lights.size());
+  const bool rated = num_strategies <= kMaxRated;
+  const float even = num_strategies > 0 ? 1.0f / num_strategies : 0.0f;
+  bool any = false;
+  for (int j = 0; j < 16; ++j) {
+    if (!k->active[j]) continue;
+    const RTCRayHit16& rh = k->rh;
+    const bool hit = rh.hit.geomID[j] != kInvalid;
+    const Eigen::Vector3f o(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]);
+    // Camera rays are not unit length: their t is depth; compare along the unit direction.
+    const float seg =
+        hit ? rh.ray.tfar[j] *
+                  (depth == 0
+                       ? Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]).norm()
+                       : 1.0f)
+            : kInf;
+    const auto select_pdf = [&](int s) { return rated ? k->selection[j][s] : even; };
+    for (int s = 0; s < num_lights; ++s) {
+      Eigen::Vector3f le;
+      float pdf;
+      if (!HitLight(lights[s], o, k->dir[j], seg, &le, &pdf)) continue;
+      const float w = depth == 0 ? 1.0f : PowerHeuristic(k->prev_pdf[j], select_pdf(s) * pdf);
+      k->value[j] += k->throughput[j].cwiseProduct(le) * w;
+    }
+    if (!hit) {
+      if (environment) {
+        const Eigen::Vector3f le = environment->Eval(k->dir[j]);
+        const float w = depth == 0
+                            ? 1.0f
+                            : PowerHeuristic(k->prev_pdf[j],
+                                             select_pdf(num_lights) *
+                                                 environment->Pdf(k->dir[j], k->prev_normal[j]));
+        k->value[j] += k->throughput[j].cwiseProduct(le) * w;
+      }
+      k->active[j] = 0;
+      continue;
+    }
+    if (!shade) {
+      k->active[j] = 0;
+      continue;
+    }
+    any = true;
+  }
+  return any;
+}
+
+// The first pass: each active lane's surface and BSDF, one light sample (next-event estimation:
+// a strategy picked by SelectionPdfs, then a point of it) and the BSDF's sampled direction, both
+// queued in `evals`.
+void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
+  const bool rated = num_strategies <= kMaxRated;
+  const float even = num_strategies > 0 ? 1.0f / num_strategies : 0.0f;
+  BsdfLanes& evals = k->evals;
+  evals.count = 0;
+  for (int j = 0; j < 16; ++j) {
+    k->shadow_valid[j] = 0;
+    k->nee_lane[j] = k->next_lane[j] = -1;
+    if (!k->active[j]) {
+      SetRayLane(&k->shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
+      continue;
+    }
+    const Surface& surf = k->surf[j] =
+        Hit(k->rh, j, k->dir[j], k->cone_width[j], k->cone_spread[j]);
+    if (depth == 0) {
+      k->first_albedo[j] = surf.params.base_color;
+      k->first_normal[j] = surf.ns;
+    }
+    const ShadingFrame& local = k->frame[j].emplace(surf);
+    const Eigen::Vector3f wo = local.ToLocal(-k->dir[j]);
+    k->wo[j] = wo;
+    const PrincipledBsdf& bsdf = k->bsdf[j].emplace(surf.params);
+    const PixelSampler sampler(k->seed[j], static_cast<uint32_t>(k->sample[j]));
+    const uint32_t dim = 1 + 3 * static_cast<uint32_t>(depth);
+    const Eigen::Vector2f u_choice = sampler.Get2D(dim);
+    // A little off the surface along its geometric normal, scaled with the coordinates (float
+    // spacing at 10 m is 1e-3 mm).
+    k->eps[j] = 0.01f + 2e-6f * surf.p.cwiseAbs().maxCoeff();
+    k->p_off[j] = surf.p + k->eps[j] * surf.ng;
+
+    // Next-event estimation.
+    SetRayLane(&k->shadow, j, k->p_off[j], Eigen::Vector3f::UnitZ(), 0, 0);
+    if (num_strategies > 0) {
+      int pick = 0;
+      float select_pdf = even;
+      if (rated) {
+        float* select = k->selection[j];
+        SelectionPdfs({k->p_off[j], surf.ns, -k->dir[j], wo, &local.t, &local.b, &bsdf}, select);
+        for (float below = select[0]; pick + 1 < num_strategies && u_choice.x() >= below;
+             below += select[++pick]) {
+        }
+        select_pdf = select[pick];
+      } else {
+        pick = std::min(static_cast<int>(u_choice.x() * num_strategies), num_strategies - 1);
+      }
+      const Eigen::Vector2f u_light = sampler.Get2D(dim + 1);
+      LightSample& ls = k->light_sample[j];
+      bool ok = false;
+      k->light_delta[j] = false;
+      if (pick < static_cast<int>(lights.size())) {
+        ok = SampleLight(lights[pick], surf.p, u_light, &ls);
+        k->light_delta[j] = lights[pick].delta;
+      } else {
+        ls.wi = environment->Sample(u_light, surf.ns, &ls.pdf);
+        ls.distance = kInf;
+        ls.value = environment->Eval(ls.wi);
+        ok = ls.pdf > 0;
+      }
+      k->light_pdf[j] = select_pdf * ls.pdf;
+      if (ok && ls.wi.dot(surf.ng) > 0) {
+        const Eigen::Vector3f wi = local.ToLocal(ls.wi);
+        if (wi.z() > 0) {
+          k->nee_wi[j] = wi;
+          k->nee_lane[j] = evals.count++;
+          bsdf.ToLanes(wo, wi, &evals, k->nee_lane[j]);
+        }
+      }
+    }
+
+    // The BSDF's sample continues the path.
+    if (const auto wi = bsdf.SampleDirection(wo, u_choice.y(), sampler.Get2D(dim + 2))) {
+      k->next_wi[j] = *wi;
+      k->next_lane[j] = evals.count++;
+      bsdf.ToLanes(wo, *wi, &evals, k->next_lane[j]);
+    }
+  }
+}
+
+// The second pass: the queued BSDF values and pdfs, all lanes at once in SIMD (EvalLanes), or
+// one at a time with EvalWithPdf, the scalar reference (render.shading: scalar).
+void PathTracer::Impl::EvaluateLanes(Packet* k) const {
+  BsdfLanes& evals = k->evals;
+  if (!scene.scalar_shading) {
+    EvalLanes(&evals);
+    return;
+  }
+  const auto eval = [&](int j, int i, const Eigen::Vector3f& wi) {
+    const Eigen::Vector3f f = k->bsdf[j]->EvalWithPdf(k->wo[j], wi, &evals.pdf[i]);
+    for (int c = 0; c < 3; ++c) evals.f[c][i] = f[c];
+  };
+  for (int j = 0; j < 16; ++j) {
+    if (k->nee_lane[j] >= 0) eval(j, k->nee_lane[j], k->nee_wi[j]);
+    if (k->next_lane[j] >= 0) eval(j, k->next_lane[j], k->next_wi[j]);
+  }
+}
+
+// The third pass: each lane's light sample weighted by MIS becomes a shadow ray, and its BSDF
+// sample the next segment (Russian roulette from the third interaction on).
+bool PathTracer::Impl::ContinuePaths(Packet* k, int depth) const {
+  const BsdfLanes& evals = k->evals;
+  const auto lane_f = [&](int i) {
+    return Eigen::Vector3f(evals.f[0][i], evals.f[1][i], evals.f[2][i]);
+  };
+  bool any = false;
+  for (int j = 0; j < 16; ++j) {
+    if (!k->active[j]) continue;
+    if (const int i = k->nee_lane[j]; i >= 0) {
+      const LightSample& ls = k->light_sample[j];
+      const float w = k->light_delta[j] ? 1.0f : PowerHeuristic(k->light_pdf[j], evals.pdf[i]);
+      const Eigen::Vector3f c = k->throughput[j].cwiseProduct(lane_f(i)).cwiseProduct(ls.value) *
+                                (k->nee_wi[j].z() * w / k->light_pdf[j]);
+      if (c.allFinite() && c.maxCoeff() > 0) {
+        k->shadow_value[j] = c;
+        k->shadow_valid[j] = -1;
+        const float tfar = std::isinf(ls.distance) ? kInf : ls.distance * (1 - 1e-4f) - k->eps[j];
+        SetRayLane(&k->shadow, j, k->p_off[j], ls.wi, 0, std::max(0.0f, tfar));
+      }
+    }
+
+    k->active[j] = 0;
+    const int i = k->next_lane[j];
+    if (i < 0 || !(evals.pdf[i] > 0)) continue;
+    const float pdf = evals.pdf[i];
+    const Eigen::Vector3f weight = lane_f(i) * (k->next_wi[j].z() / pdf);
+    const Surface& surf = k->surf[j];
+    const ShadingFrame& local = *k->frame[j];
+    const Eigen::Vector3f& w = k->next_wi[j];
+    const Eigen::Vector3f wi = (w.x() * local.t + w.y() * local.b + w.z() * surf.ns).normalized();
+    if (wi.dot(surf.ng) <= 0 || !weight.allFinite()) continue;
+    Eigen::Vector3f next = k->throughput[j].cwiseProduct(weight);
+    // Russian roulette from the third interaction on: continue with probability q.
+    if (depth >= 2) {
+      const float q = std::min(0.95f, next.maxCoeff());
+      const float r = UnitFloat(static_cast<uint32_t>(Hash(
+          k->seed[j], (static_cast<uint64_t>(k->sample[j]) << 8) | static_cast<uint64_t>(depth))));
+      if (!(r < q)) continue;
+      next /= q;
+    }
+    if (!(next.maxCoeff() > 0)) continue;
+    k->throughput[j] = next;
+    k->prev_pdf[j] = pdf;
+    // The cone widens by the lobe it was drawn from: about alpha for a glossy reflection, a
+    // radian for a diffuse one.
+    k->cone_width[j] = surf.cone_width;
+    k->cone_spread[j] += pdf > 1 ? std::sqrt(k->bsdf[j]->alpha_x() * k->bsdf[j]->alpha_y()) : 1.0f;
+    k->prev_normal[j] = surf.ns;
+    k->dir[j] = wi;
+    k->active[j] = -1;
+    any = true;
+    SetRayLane(&k->rh.ray, j, k->p_off[j], wi, 0, kInf);
+    k->rh.hit.geomID[j] = k->rh.hit.primID[j] = k->rh.hit.instID[0][j] = kInvalid;
+  }
+  return any;
+}
+
+// The shadow rays: each unblocked one adds its light to its path.
+void PathTracer::Impl::TraceShadows(Packet* k) const {
+  bool any = false;
+  for (int j = 0; j < 16; ++j) any |= k->shadow_valid[j] != 0;
+  if (!any) return;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded16(k->shadow_valid, scene.world, &context, &k->shadow);
+  for (int j = 0; j < 16; ++j) {
+    if (k->shadow_valid[j] && k->shadow.tfar[j] >= 0) k->value[j] += k->shadow_value[j];
+  }
+}
+
 void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const ThinLens& lens,
                            const CameraMotion& motion, int u0, int v0,
                            const AdaptiveSampling& sampling, uint64_t frame_seed,
                            Eigen::Vector3f out[16], TileFeatures* features, int taken[16]) const {
   const Impl& im = *impl_;
-  const Intrinsics& k = camera.intrinsics;
-  const float aperture_radius = lens.active() ? static_cast<float>(0.5 * lens.aperture_mm()) : 0.0f;
-  const float focus = static_cast<float>(lens.focus_distance_mm);
-  const bool moving = motion.active();
-  const Eigen::Matrix3f rotation = camera.world_from_cam.linear().cast<float>();
-  const Eigen::Vector3f origin = camera.world_from_cam.translation().cast<float>();
-  const int bounces = im.scene.bounces;
-  const int num_lights = static_cast<int>(im.lights.size());
+  const Intrinsics& intrinsics = camera.intrinsics;
+  const Impl::CameraRays camera_rays{
+      camera,
+      rays,
+      motion,
+      camera.world_from_cam.linear().cast<float>(),
+      camera.world_from_cam.translation().cast<float>(),
+      lens.active() ? static_cast<float>(0.5 * lens.aperture_mm()) : 0.0f,
+      static_cast<float>(lens.focus_distance_mm),
+      static_cast<float>(1.0 / std::min(intrinsics.fx, intrinsics.fy)),
+      u0,
+      v0};
   const int samples = sampling.samples;
-  // Each lane's selection probabilities at its last vertex (its next-event estimation's), which
-  // the BSDF ray leaving that vertex needs again for its MIS weights when it finds a light.
-  const bool rated = im.num_strategies <= Impl::kMaxRated;
-  const float even = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
-  float selection[16][Impl::kMaxRated];
-
-  // Per pixel of the tile: the sums over its paths so far (radiance; the denoiser's first-surface
-  // albedo and normal; each path's luminance and its square, for the error estimate), the paths
-  // that had a ray, and the samples drawn (paths without a ray included).
-  Eigen::Vector3f sum[16], albedo_sum[16], normal_sum[16];
-  double luminance_sum[16] = {}, luminance_sq[16] = {};
-  int paths[16] = {}, drawn[16] = {};
   uint64_t pixel_seed[16];
   bool in_image[16];
-  for (int j = 0; j < 16; ++j) {
-    sum[j].setZero();
-    albedo_sum[j].setZero();
-    normal_sum[j].setZero();
-    const int u = u0 + j % 4, v = v0 + j / 4;
-    in_image[j] = u < k.width && v < k.height;
-    pixel_seed[j] = Hash(frame_seed, static_cast<uint64_t>(v) * 65536u + static_cast<uint64_t>(u));
+  for (int p = 0; p < 16; ++p) {
+    const int u = u0 + p % 4, v = v0 + p / 4;
+    in_image[p] = u < intrinsics.width && v < intrinsics.height;
+    pixel_seed[p] = Hash(frame_seed, static_cast<uint64_t>(v) * 65536u + static_cast<uint64_t>(u));
   }
-
-  // A packet's lanes are paths: lane j traces sample lane_sample[j] of tile pixel lane_pixel[j].
-  int lane_pixel[16], lane_sample[16];
-  RTCIntersectContext context;
-  RTCRayHit16 rh;
-  RTCRay16 shadow;
-  alignas(64) int active[16];
-  alignas(64) int shadow_valid[16];
-  alignas(64) int had_ray[16];
-  Eigen::Vector3f throughput[16], dir[16], shadow_value[16], prev_normal[16];
-  Eigen::Vector3f value[16], first_albedo[16], first_normal[16];
-  float prev_pdf[16], cone_width[16], cone_spread[16];
-  // A shading step's per-lane state between its passes, and its BSDF evaluations: lane j's light
-  // sample's at nee_lane[j] and its BSDF sample's at next_lane[j] (-1: none).
-  Impl::Surface surf[16];
-  std::optional<Impl::ShadingFrame> frame[16];
-  std::optional<PrincipledBsdf> bsdfs[16];
-  Eigen::Vector3f wo_local[16], p_off[16], nee_wi[16], next_wi[16];
-  LightSample light_sample[16];
-  float eps[16], light_pdf[16];
-  bool light_delta[16];
-  int nee_lane[16], next_lane[16];
-  BsdfLanes evals;
-  // A pixel's angular size: the camera rays' cone.
-  const float pixel_spread = static_cast<float>(1.0 / std::min(k.fx, k.fy));
-
-  // Traces the paths in lanes [0, lanes) and adds each to its pixel's sums, in lane order.
-  const auto trace_packet = [&](int lanes) {
-    // Camera rays through a point of each pixel: directions with camera z = 1, so that the clip
-    // range is in depth like the labels'.
-    for (int j = 0; j < 16; ++j) {
-      active[j] = 0;
-      value[j].setZero();
-      first_albedo[j] = Eigen::Vector3f::Ones();
-      first_normal[j].setZero();
-      if (j >= lanes) {
-        SetRayLane(&rh.ray, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
-        had_ray[j] = 0;
-        continue;
-      }
-      const int p = lane_pixel[j];
-      const int u = u0 + p % 4, v = v0 + p / 4;
-      throughput[j].setOnes();
-      prev_pdf[j] = 0;
-      cone_width[j] = 0;
-      cone_spread[j] = pixel_spread;
-      const PixelSampler sampler(pixel_seed[p], static_cast<uint32_t>(lane_sample[j]));
-      const Eigen::Vector2f jitter = sampler.Get2D(0);
-      Eigen::Vector2f xy = Eigen::Vector2f::Zero();
-      active[j] = rays.At(u, v, jitter.x(), jitter.y(), &xy) ? -1 : 0;
-      had_ray[j] = active[j];
-      Eigen::Vector3f o_cam = Eigen::Vector3f::Zero(), d_cam(xy.x(), xy.y(), 1.0f);
-      if (aperture_radius > 0.0f) {
-        // Through a point of the aperture to where the pixel's ray meets the plane of focus;
-        // camera z of the direction stays 1.
-        const Eigen::Vector2f l = ConcentricDisc(sampler.Get2D(kLensDimension)) * aperture_radius;
-        o_cam = Eigen::Vector3f(l.x(), l.y(), 0.0f);
-        d_cam -= o_cam / focus;
-      }
-      Eigen::Vector3f d = rotation * d_cam, o = origin + rotation * o_cam;
-      if (moving) {
-        const Eigen::Isometry3d pose =
-            camera.world_from_cam * motion.At(sampler.Get2D(kTimeDimension).x() - 0.5);
-        const Eigen::Matrix3f r = pose.linear().cast<float>();
-        d = r * d_cam;
-        o = pose.translation().cast<float>() + r * o_cam;
-      }
-      dir[j] = d.normalized();
-      SetRayLane(&rh.ray, j, o, d, im.scene.near_mm, im.scene.far_mm);
-      rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
-    }
-    rtcInitIntersectContext(&context);
-    rtcIntersect16(active, im.scene.world, &context, &rh);
-
-    for (int depth = 0;; ++depth) {
-      const bool shade = depth <= bounces;
-      bool any = false;
-      for (int j = 0; j < 16; ++j) {
-        if (!active[j]) continue;
-        const bool hit = rh.hit.geomID[j] != kInvalid;
-        // Light reaching the previous vertex (or the camera) along this segment: area lights in
-        // front of the surface, and the sky if the ray escaped.
-        const Eigen::Vector3f o(rh.ray.org_x[j], rh.ray.org_y[j], rh.ray.org_z[j]);
-        // Camera rays are not unit length: their t is depth; compare along the unit direction.
-        const float seg =
-            hit ? rh.ray.tfar[j] * (depth == 0 ? Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j],
-                                                                 rh.ray.dir_z[j])
-                                                     .norm()
-                                               : 1.0f)
-                : kInf;
-        const auto select_pdf = [&](int k) { return rated ? selection[j][k] : even; };
-        for (int k = 0; k < num_lights; ++k) {
-          Eigen::Vector3f le;
-          float pdf;
-          if (!HitLight(im.lights[k], o, dir[j], seg, &le, &pdf)) continue;
-          const float w = depth == 0 ? 1.0f : PowerHeuristic(prev_pdf[j], select_pdf(k) * pdf);
-          value[j] += throughput[j].cwiseProduct(le) * w;
-        }
-        if (!hit) {
-          if (im.environment) {
-            const Eigen::Vector3f le = im.environment->Eval(dir[j]);
-            const float w =
-                depth == 0
-                    ? 1.0f
-                    : PowerHeuristic(prev_pdf[j], select_pdf(num_lights) *
-                                                      im.environment->Pdf(dir[j], prev_normal[j]));
-            value[j] += throughput[j].cwiseProduct(le) * w;
-          }
-          active[j] = 0;
-          continue;
-        }
-        if (!shade) {
-          active[j] = 0;
-          continue;
-        }
-        any = true;
-      }
-      if (!any) break;
-
-      // Shade: one light sample (shadow ray) and one BSDF sample (the next segment) per lane,
-      // in three passes over the lanes: each lane's surface, light sample and BSDF direction;
-      // then both directions' BSDF values for all lanes at once (EvalLanes, in SIMD); then the
-      // shadow rays and the paths' next segments.
-      evals.count = 0;
-      for (int j = 0; j < 16; ++j) {
-        shadow_valid[j] = 0;
-        nee_lane[j] = next_lane[j] = -1;
-        if (!active[j]) {
-          SetRayLane(&shadow, j, Eigen::Vector3f::Zero(), Eigen::Vector3f::UnitZ(), 0, 0);
-          continue;
-        }
-        surf[j] = im.Hit(rh, j, dir[j], cone_width[j], cone_spread[j]);
-        if (depth == 0) {
-          first_albedo[j] = surf[j].params.base_color;
-          first_normal[j] = surf[j].ns;
-        }
-        frame[j].emplace(surf[j]);
-        const Impl::ShadingFrame& local = *frame[j];
-        const Eigen::Vector3f wo = local.ToLocal(-dir[j]);
-        wo_local[j] = wo;
-        const PrincipledBsdf& bsdf = bsdfs[j].emplace(surf[j].params);
-        const PixelSampler sampler(pixel_seed[lane_pixel[j]],
-                                   static_cast<uint32_t>(lane_sample[j]));
-        const uint32_t dim = 1 + 3 * static_cast<uint32_t>(depth);
-        const Eigen::Vector2f u_choice = sampler.Get2D(dim);
-        // A little off the surface along its geometric normal, scaled with the coordinates
-        // (float spacing at 10 m is 1e-3 mm).
-        eps[j] = 0.01f + 2e-6f * surf[j].p.cwiseAbs().maxCoeff();
-        p_off[j] = surf[j].p + eps[j] * surf[j].ng;
-
-        // Next-event estimation.
-        SetRayLane(&shadow, j, p_off[j], Eigen::Vector3f::UnitZ(), 0, 0);
-        if (im.num_strategies > 0) {
-          int pick = 0;
-          float select_pdf = even;
-          if (rated) {
-            float* select = selection[j];
-            im.SelectionPdfs({p_off[j], surf[j].ns, -dir[j], wo, &local.t, &local.b, &bsdf},
-                             select);
-            for (float below = select[0]; pick + 1 < im.num_strategies && u_choice.x() >= below;
-                 below += select[++pick]) {
-            }
-            select_pdf = select[pick];
-          } else {
-            pick =
-                std::min(static_cast<int>(u_choice.x() * im.num_strategies), im.num_strategies - 1);
-          }
-          const Eigen::Vector2f u_light = sampler.Get2D(dim + 1);
-          LightSample& ls = light_sample[j];
-          bool ok = false;
-          light_delta[j] = false;
-          if (pick < static_cast<int>(im.lights.size())) {
-            ok = SampleLight(im.lights[pick], surf[j].p, u_light, &ls);
-            light_delta[j] = im.lights[pick].delta;
-          } else {
-            ls.wi = im.environment->Sample(u_light, surf[j].ns, &ls.pdf);
-            ls.distance = kInf;
-            ls.value = im.environment->Eval(ls.wi);
-            ok = ls.pdf > 0;
-          }
-          light_pdf[j] = select_pdf * ls.pdf;
-          if (ok && ls.wi.dot(surf[j].ng) > 0) {
-            const Eigen::Vector3f wi = local.ToLocal(ls.wi);
-            if (wi.z() > 0) {
-              nee_wi[j] = wi;
-              nee_lane[j] = evals.count++;
-              bsdf.ToLanes(wo, wi, &evals, nee_lane[j]);
-            }
-          }
-        }
-
-        // The BSDF's sample continues the path.
-        if (const auto wi = bsdf.SampleDirection(wo, u_choice.y(), sampler.Get2D(dim + 2))) {
-          next_wi[j] = *wi;
-          next_lane[j] = evals.count++;
-          bsdf.ToLanes(wo, *wi, &evals, next_lane[j]);
-        }
-      }
-      if (im.scene.scalar_shading) {  // the reference: one lane at a time
-        const auto eval = [&](int j, int i, const Eigen::Vector3f& wi) {
-          const Eigen::Vector3f f = bsdfs[j]->EvalWithPdf(wo_local[j], wi, &evals.pdf[i]);
-          for (int c = 0; c < 3; ++c) evals.f[c][i] = f[c];
-        };
-        for (int j = 0; j < 16; ++j) {
-          if (nee_lane[j] >= 0) eval(j, nee_lane[j], nee_wi[j]);
-          if (next_lane[j] >= 0) eval(j, next_lane[j], next_wi[j]);
-        }
-      } else {
-        EvalLanes(&evals);
-      }
-      const auto lane_f = [&](int i) {
-        return Eigen::Vector3f(evals.f[0][i], evals.f[1][i], evals.f[2][i]);
-      };
-      for (int j = 0; j < 16; ++j) {
-        if (!active[j]) continue;
-        if (const int i = nee_lane[j]; i >= 0) {
-          const LightSample& ls = light_sample[j];
-          const float w = light_delta[j] ? 1.0f : PowerHeuristic(light_pdf[j], evals.pdf[i]);
-          const Eigen::Vector3f c = throughput[j].cwiseProduct(lane_f(i)).cwiseProduct(ls.value) *
-                                    (nee_wi[j].z() * w / light_pdf[j]);
-          if (c.allFinite() && c.maxCoeff() > 0) {
-            shadow_value[j] = c;
-            shadow_valid[j] = -1;
-            const float tfar = std::isinf(ls.distance) ? kInf : ls.distance * (1 - 1e-4f) - eps[j];
-            SetRayLane(&shadow, j, p_off[j], ls.wi, 0, std::max(0.0f, tfar));
-          }
-        }
-
-        active[j] = 0;
-        const int i = next_lane[j];
-        if (i < 0 || !(evals.pdf[i] > 0)) continue;
-        const float pdf = evals.pdf[i];
-        const Eigen::Vector3f weight = lane_f(i) * (next_wi[j].z() / pdf);
-        const Impl::ShadingFrame& local = *frame[j];
-        const Eigen::Vector3f wi =
-            (next_wi[j].x() * local.t + next_wi[j].y() * local.b + next_wi[j].z() * surf[j].ns)
-                .normalized();
-        if (wi.dot(surf[j].ng) <= 0 || !weight.allFinite()) continue;
-        Eigen::Vector3f next = throughput[j].cwiseProduct(weight);
-        // Russian roulette from the third interaction on: continue with probability q.
-        if (depth >= 2) {
-          const float q = std::min(0.95f, next.maxCoeff());
-          const float r = UnitFloat(static_cast<uint32_t>(
-              Hash(pixel_seed[lane_pixel[j]],
-                   (static_cast<uint64_t>(lane_sample[j]) << 8) | static_cast<uint64_t>(depth))));
-          if (!(r < q)) continue;
-          next /= q;
-        }
-        if (!(next.maxCoeff() > 0)) continue;
-        throughput[j] = next;
-        prev_pdf[j] = pdf;
-        // The cone widens by the lobe it was drawn from: about alpha for a glossy reflection,
-        // a radian for a diffuse one.
-        cone_width[j] = surf[j].cone_width;
-        cone_spread[j] += pdf > 1 ? std::sqrt(bsdfs[j]->alpha_x() * bsdfs[j]->alpha_y()) : 1.0f;
-        prev_normal[j] = surf[j].ns;
-        dir[j] = wi;
-        active[j] = -1;
-        SetRayLane(&rh.ray, j, p_off[j], wi, 0, kInf);
-        rh.hit.geomID[j] = rh.hit.primID[j] = rh.hit.instID[0][j] = kInvalid;
-      }
-      bool any_shadow = false;
-      for (int j = 0; j < 16; ++j) any_shadow |= shadow_valid[j] != 0;
-      if (any_shadow) {
-        rtcInitIntersectContext(&context);
-        rtcOccluded16(shadow_valid, im.scene.world, &context, &shadow);
-        for (int j = 0; j < 16; ++j) {
-          if (shadow_valid[j] && shadow.tfar[j] >= 0) value[j] += shadow_value[j];
-        }
-      }
-      bool any_active = false;
-      for (int j = 0; j < 16; ++j) any_active |= active[j] != 0;
-      if (!any_active) break;
-      rtcInitIntersectContext(&context);
-      rtcIntersect16(active, im.scene.world, &context, &rh);
-    }
-    for (int j = 0; j < lanes; ++j) {
-      const int p = lane_pixel[j];
-      ++drawn[p];
-      if (!had_ray[j]) continue;  // a point of the pixel without a ray, beyond a lens's fold
-      ++paths[p];
-      sum[p] += value[j];
-      albedo_sum[p] += first_albedo[j];
-      normal_sum[p] += first_normal[j];
-      const double l = Luminance(value[j]);
-      luminance_sum[p] += l;
-      luminance_sq[p] += l * l;
-    }
-  };
+  Impl::PixelSums sums;
+  Impl::Packet packet;
 
   // Runs `count[p]` more samples of each tile pixel p, 16 paths per packet: sample by sample,
   // pixel by pixel within a sample (so a whole tile's first packets are one sample of each pixel).
   const auto run = [&](const int count[16]) {
-    int lanes = 0, most = 0, base[16];
-    for (int p = 0; p < 16; ++p) most = std::max(most, count[p]), base[p] = drawn[p];
+    const auto trace = [&] {
+      im.TracePacket(camera_rays, &packet);
+      sums.Add(packet);
+      packet.lanes = 0;
+    };
+    int most = 0, base[16];
+    for (int p = 0; p < 16; ++p) most = std::max(most, count[p]), base[p] = sums.drawn[p];
+    packet.lanes = 0;
     for (int i = 0; i < most; ++i) {
       for (int p = 0; p < 16; ++p) {
         if (i >= count[p]) continue;
-        lane_pixel[lanes] = p;
-        lane_sample[lanes] = base[p] + i;
-        if (++lanes == 16) {
-          trace_packet(lanes);
-          lanes = 0;
-        }
+        const int j = packet.lanes++;
+        packet.pixel[j] = p;
+        packet.sample[j] = base[p] + i;
+        packet.seed[j] = pixel_seed[p];
+        if (packet.lanes == 16) trace();
       }
     }
-    if (lanes > 0) trace_packet(lanes);
+    if (packet.lanes > 0) trace();
   };
 
   int count[16];
@@ -1258,8 +1354,8 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
     // threshold (Cycles' dilation of unconverged pixels), until it has `samples`.
     bool converged[16];
     for (int p = 0; p < 16; ++p) {
-      converged[p] =
-          !in_image[p] || sampling.Converged(paths[p], luminance_sum[p], luminance_sq[p]);
+      converged[p] = !in_image[p] ||
+                     sampling.Converged(sums.paths[p], sums.luminance[p], sums.luminance_sq[p]);
     }
     int open = 0;
     for (int p = 0; p < 16; ++p) {
@@ -1267,7 +1363,7 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       const bool near_open = !converged[p] || (x > 0 && !converged[p - 1]) ||
                              (x < 3 && !converged[p + 1]) || (y > 0 && !converged[p - 4]) ||
                              (y < 3 && !converged[p + 4]);
-      count[p] = in_image[p] && near_open && drawn[p] < samples ? 1 : 0;
+      count[p] = in_image[p] && near_open && sums.drawn[p] < samples ? 1 : 0;
       open += count[p];
     }
     if (open == 0) break;
@@ -1275,27 +1371,28 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
     // has drawn (a geometric schedule, so the checks cost little), within `samples`.
     for (int p = 0; p < 16; ++p) {
       if (count[p] == 0) continue;
-      const int step = std::max((16 + open - 1) / open, drawn[p] / 4);
-      count[p] = std::min(step, samples - drawn[p]);
+      const int step = std::max((16 + open - 1) / open, sums.drawn[p] / 4);
+      count[p] = std::min(step, samples - sums.drawn[p]);
     }
     run(count);
   }
 
-  for (int j = 0; features != nullptr && j < 16; ++j) {
-    const int n = paths[j];
-    features->albedo[j] = n > 0 ? Eigen::Vector3f(albedo_sum[j] / n) : Eigen::Vector3f::Ones();
-    features->normal[j] = n > 0 ? Eigen::Vector3f(normal_sum[j] / n) : Eigen::Vector3f::Zero();
+  for (int p = 0; features != nullptr && p < 16; ++p) {
+    const int n = sums.paths[p];
+    features->albedo[p] = n > 0 ? Eigen::Vector3f(sums.albedo[p] / n) : Eigen::Vector3f::Ones();
+    features->normal[p] = n > 0 ? Eigen::Vector3f(sums.normal[p] / n) : Eigen::Vector3f::Zero();
     // The variance of the mean; one path says nothing of its spread: as much as its value.
-    const double mean = n > 0 ? luminance_sum[j] / n : 0.0;
-    features->variance[j] =
-        n > 1 ? static_cast<float>(std::max(0.0, luminance_sq[j] - n * mean * mean) / (n - 1) / n)
+    const double mean = n > 0 ? sums.luminance[p] / n : 0.0;
+    features->variance[p] =
+        n > 1 ? static_cast<float>(std::max(0.0, sums.luminance_sq[p] - n * mean * mean) / (n - 1) /
+                                   n)
               : static_cast<float>(mean * mean);
   }
   // (Paths from points of the pixel without a ray, beyond a lens's fold, are left out.)
-  for (int j = 0; j < 16; ++j) {
-    out[j] =
-        in_image[j] && paths[j] > 0 ? Eigen::Vector3f(sum[j] / paths[j]) : Eigen::Vector3f::Zero();
-    if (taken != nullptr) taken[j] = in_image[j] ? drawn[j] : 0;
+  for (int p = 0; p < 16; ++p) {
+    out[p] = in_image[p] && sums.paths[p] > 0 ? Eigen::Vector3f(sums.sum[p] / sums.paths[p])
+                                              : Eigen::Vector3f::Zero();
+    if (taken != nullptr) taken[p] = in_image[p] ? sums.drawn[p] : 0;
   }
 }
 

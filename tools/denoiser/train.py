@@ -186,6 +186,9 @@ def main():
                         help="frames whose name starts with this are kept for validation")
     parser.add_argument("--threads", type=int, default=os.cpu_count())
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--widths", default="24,48,64",
+                        help="channels at 1/2, 1/4 and 1/8 of the image")
+    parser.add_argument("--head", type=int, default=16, help="channels at full resolution")
     parser.add_argument("--out", default=os.path.join(ROOT, "render", "models", "denoiser.onnx"))
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
@@ -203,7 +206,10 @@ def main():
     print(f"{len(train.frames)} training frames, {len(held.frames)} held out, "
           f"read in {time.time() - start:.0f} s", flush=True)
 
-    net = Net()
+    widths = tuple(int(w) for w in args.widths.split(","))
+    if len(widths) != 3 or min(widths) < 1 or args.head < 1:
+        sys.exit(f"--widths {args.widths} --head {args.head}: three widths and a head, each >= 1")
+    net = Net(widths, args.head)
     optimiser = torch.optim.Adam(net.parameters(), lr=args.lr)
     budget = args.minutes * 60.0
     start = time.time()
@@ -246,6 +252,7 @@ def main():
         "training_frames": [f["name"] for f in train.frames],
         "held_out_frames": [f["name"] for f in held.frames],
         "steps": step, "batch": args.batch, "crop": args.crop, "levels": levels,
+        "widths": list(widths), "head": args.head,
         "final_loss": running,
         "held_out_parts_error": {str(s): {"noisy": v[0], "denoised": v[1]}
                                  for s, v in summary.items()},

@@ -280,6 +280,36 @@ def test_the_stub_names_what_the_module_has():
                 assert parameters(method) == signature(getattr(cls, name)), f"{node.name}.{name}"
 
 
+def test_a_piles_tote_is_given_as_traced():
+    # A tote of inner 100 x 80 mm, 40 mm high, walls 4 mm and floor 5 mm, centred on the origin
+    # on the floor: its outside spans 108 x 88 x 45 mm (tools/cycles rebuilds frames from this).
+    run = cadsynth.Recipe.from_dict({
+        "scenes": [{"name": "pile", "parts": [{"family": "round_peg"}], "layout": "pile",
+                    "copies": 2, "seed": 1,
+                    "container": {"type": "tote", "inner": ["100 mm", "80 mm"],
+                                  "height": "40 mm", "wall": "4 mm", "floor": "5 mm",
+                                  "corner_radius": "5 mm", "color": [0.5, 0.25, 0.0]}}],
+        "camera": {"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5},
+        "sweep": {"yaw": [0], "pitch": [90], "radius": ["0.3 m"]},
+    }).prepare(cache=False)
+    [tote] = run.fixtures(0)
+    assert tote["name"] == "tote"
+    v, n, t = tote["vertices"], tote["normals"], tote["triangles"]
+    assert v.dtype == np.float32 and t.dtype == np.uint32
+    np.testing.assert_allclose(v.min(axis=0), [-54, -44, 0], atol=1e-3)
+    np.testing.assert_allclose(v.max(axis=0), [54, 44, 45], atol=1e-3)
+    assert n.shape == v.shape and np.allclose(np.linalg.norm(n, axis=1), 1, atol=1e-5)
+    assert t.shape[1] == 3 and t.max() < len(v)
+    # sRGB 0.5, 0.25, 0 in linear RGB; the default dielectric (Scene::DefaultMaterial).
+    m = tote["material"]
+    np.testing.assert_allclose(m["base_color"], [0.2140, 0.0509, 0.0], atol=1e-4)
+    assert (m["metallic"], m["specular"], m["textured"]) == (0.0, 0.5, False)
+    assert abs(m["roughness"] - 0.45) < 1e-6
+    assert cadsynth.Recipe.default().prepare().fixtures(0) == []
+    with pytest.raises(IndexError):
+        run.fixtures(1)
+
+
 def pbr_peg(**render):
     return cadsynth.Recipe.from_dict({
         "parts": [{"family": "round_peg"}],

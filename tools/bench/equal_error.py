@@ -26,8 +26,10 @@ materials). Both use every core of the machine.
 Scenes: workcell (tools/cycles/compare_with_cycles.py's case: a gear, a bolt, a nut, a peg and a
 washer, metal and Lambert, two area lights and a grey world, 320 x 240); pbr_demo
 (recipes/pbr_demo.yaml's three default scenes, four views each of which view 0 is measured, 640 x
-480, cadsynth only: Cycles' rebuild has no procedural textures). Writes DIR/equal_error_SCENE.json and
-DIR/equal_error_SCENE.png.
+480, cadsynth only: Cycles' rebuild has no procedural textures); tote (an XYZ-IBD-like frame: 60
+steel bolts dropped into bin_picking.yaml's tote under one area light, 1440 x 1080, two views of
+which view 0 is measured; Cycles gets the tote's own mesh and material from Run.fixtures).
+Writes DIR/equal_error_SCENE.json and DIR/equal_error_SCENE.png.
 """
 import argparse
 import json
@@ -49,6 +51,20 @@ WORKCELL_VIEWS = [30, 120, 210, 300]  # yaw (deg) of the views one cadsynth run 
 # pbr_demo's, per scene: a scene's frames after the first overlap their writing with the next
 # frame's rendering, as in a user's run of many views (the error is view 0's, yaw 0).
 PBR_DEMO_VIEWS = [0, 90, 180, 270]
+# tote's: an XYZ-IBD-like frame, 60 steel bolts dropped into a tote (recipes/bin_picking.yaml's
+# pile) under one area light, seen from above at 1440 x 1080; view 0 is measured.
+TOTE_VIEWS = [0, 90]
+TOTE = {"scenes": "[{name: pile, parts: [{family: hex_bolt, params: {size: M16, length: 60 mm}}], "
+                  "layout: pile, copies: 60, seed: 1, container: {type: tote, "
+                  "inner: [355 mm, 265 mm], height: 150 mm, wall: 6 mm, floor: 6 mm, "
+                  "corner_radius: 15 mm, color: [0.15, 0.3, 0.6]}, "
+                  "physics: {density: 7850, friction: 0.7, restitution: 0.1}}]",
+        "camera": (1440, 1080, 1800.0), "view": (0, 85, 0.85)}
+TOTE_MATERIAL = [("hex_bolt*", {"base_color": [0.56, 0.57, 0.58], "metallic": 1.0,
+                                "roughness": 0.3, "specular": 0.5})]
+TOTE_LIGHTS = [{"type": "rect", "position_m": [0.15, -0.1, 1.2], "target_m": [0, 0, 0],
+                "size_m": [0.6, 0.3], "power": 25}]
+TOTE_WORLD = {"color": [0.3, 0.3, 0.3], "strength": 0.1}
 
 
 def read_exr(path):
@@ -113,15 +129,42 @@ class Scene:
         self.min_samples = 0  # adaptive sampling's (0: cadsynth's default)
         self.denoise = False
         self.denoiser = "network"
+        self._fixtures = None  # fixtures(), once
         if name == "workcell":
             case = cwc.CASES["workcell"]
             self.material, self.lights, self.world = case[0], case[1], case[2]
             self.shown = dict(case[5])
             self.exposure, self.filmic = 0.0, False
+        elif name == "tote":
+            self.material, self.lights, self.world = TOTE_MATERIAL, TOTE_LIGHTS, TOTE_WORLD
+            self.shown = dict(TOTE)
+            self.exposure, self.filmic = 0.0, True
         elif name == "pbr_demo":
             self.exposure, self.filmic = 0.0, True
         else:
-            raise SystemExit(f"unknown scene '{name}': workcell or pbr_demo")
+            raise SystemExit(f"unknown scene '{name}': workcell, tote or pbr_demo")
+
+    def views(self):
+        return {"workcell": WORKCELL_VIEWS, "tote": TOTE_VIEWS}.get(self.name, PBR_DEMO_VIEWS)
+
+    def fixtures(self):
+        """The scene's fixtures for Cycles (the tote), each written as a PLY in the world frame
+        with its material: cadsynth's own geometry and pbr material (Run.fixtures)."""
+        if self.name != "tote":
+            return []
+        if self._fixtures is not None:
+            return self._fixtures
+        import cadsynth
+        run = cadsynth.Recipe.from_yaml(self.recipe(1, 0.0, 0), "tote.yaml").prepare()
+        out = []
+        for i, f in enumerate(run.fixtures(0)):
+            if f["material"]["textured"]:
+                sys.exit(f"fixture {f['name']}: textured; the Cycles rebuild has no textures")
+            path = os.path.join(self.out, f"fixture{i}.ply")
+            write_ply(path, f["vertices"], f["normals"], f["triangles"])
+            out.append({"ply": path, "material": f["material"]})
+        self._fixtures = out
+        return out
 
     def recipe(self, samples, threshold, seed, mode="pbr", views=None):
         render = (f"render: {{mode: {mode}, samples: {samples}, noise_threshold: {threshold}, "
@@ -130,10 +173,10 @@ class Scene:
                   f"min_samples: {min(self.min_samples, samples) if threshold else 0}, "
                   f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
                   f"seed: {seed}}}")
-        if self.name == "workcell":
+        if self.name in ("workcell", "tote"):
             text = cwc.recipe(self.material, self.lights, self.world, samples, self.shown)
             text = re.sub(r"^render: .*$", render, text, flags=re.M)
-            yaw = ", ".join(str(y) for y in (views or WORKCELL_VIEWS))
+            yaw = ", ".join(str(y) for y in (views or self.views()))
             pitch, radius = self.shown["view"][1], self.shown["view"][2]
             text = re.sub(r"^sweep: .*$", f"sweep: {{yaw: [{yaw}], pitch: [{pitch}], "
                                           f"radius: [{radius} m]}}", text, flags=re.M)
@@ -155,7 +198,7 @@ class Scene:
 
     def frames(self):
         """(folder, im_id) of the frames whose error is measured."""
-        if self.name == "workcell":
+        if self.name in ("workcell", "tote"):
             return [("000000", 0)]
         return [("000000", 0), ("000001", 0), ("000002", 0)]
 
@@ -184,13 +227,29 @@ class Scene:
         return dataset, seconds / count, max(seconds / count - self.fast_seconds, 1e-3)
 
 
+def write_ply(path, vertices, normals, triangles):
+    """cadsynth's binary PLY layout (tools/cycles/cycles_scene.py read_ply): float x y z nx ny nz,
+    uchar-counted int faces."""
+    v = np.concatenate([vertices, normals], axis=1).astype("<f4")
+    f = np.zeros(len(triangles), dtype=np.dtype([("n", "u1"), ("i", "<i4", 3)]))
+    f["n"], f["i"] = 3, triangles
+    with open(path, "wb") as out:
+        out.write((f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\n"
+                   + "".join(f"property float {p}\n" for p in ("x", "y", "z", "nx", "ny", "nz"))
+                   + f"element face {len(f)}\nproperty list uchar int vertex_indices\n"
+                   "end_header\n").encode("ascii"))
+        out.write(v.tobytes())
+        out.write(f.tobytes())
+
+
 def cycles_run(scene, dataset, samples, threshold, seed, blender, tag):
     spec = {"dataset": dataset, "scene_id": 0, "im_id": 0, "width": scene.shown["camera"][0],
             "height": scene.shown["camera"][1], "samples": samples, "bounces": 3, "seed": seed,
             "adaptive_threshold": threshold,
             "output": os.path.join(scene.out, f"cycles_{tag}.exr"),
             "part_materials": cwc.rules(scene.material), "floor_material": cwc.LAMBERT,
-            "lights": [cwc.blender_light(l) for l in scene.lights], "world": scene.world}
+            "lights": [cwc.blender_light(l) for l in scene.lights], "world": scene.world,
+            "fixtures": scene.fixtures()}
     spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
     with open(spec_path, "w") as f:
         json.dump(spec, f, indent=1)
@@ -240,7 +299,7 @@ def main():
     result = {"scene": args.scene, "reference_samples": args.reference_samples, "curves": {}}
 
     # cadsynth: the reference (another seed), then the curves.
-    first_view = (WORKCELL_VIEWS if args.scene == "workcell" else PBR_DEMO_VIEWS)[:1]
+    first_view = scene.views()[:1]
     ref_dataset, ref_seconds, _ = scene.run("reference", args.reference_samples, 0.0, seed=7,
                                             views=first_view, reuse=args.reuse_reference)
     masks = {}
@@ -301,8 +360,8 @@ def main():
             result["curves"][name] = earlier["curves"][name]
 
     if "cycles" in renderers:
-        if args.scene != "workcell":
-            sys.exit("Cycles runs on the workcell scene only")
+        if args.scene == "pbr_demo":
+            sys.exit("Cycles cannot rebuild pbr_demo (procedural textures): workcell or tote")
         ref_path, ref_t = cycles_run(scene, ref_dataset, args.reference_samples, 0.0, 7,
                                      args.blender, "reference")
         key = scene.frames()[0]

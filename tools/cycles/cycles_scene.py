@@ -7,8 +7,8 @@
 # SPEC.json (written by tools/cycles/compare_with_cycles.py) names the dataset, the frame, the
 # materials, lights and world in SI units (metres, W, W/m^2) and Cycles' settings; the geometry and
 # poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
-# normals), scene_gt_world.json and scene_camera.json. Cycles is set up as docs/testing.md's "Checked
-# against Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
+# normals), scene_gt_world.json and scene_camera.json, and the spec's fixtures (PLY files in the
+# world frame). Cycles is set up as docs/testing.md's "Checked against Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
 # threshold, no denoising or adaptive sampling (unless the spec sets adaptive_threshold), the same
 # bounces. The result is written as a 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's
 # rgb_hdr/).
@@ -236,6 +236,20 @@ def main():
         obj = bpy.data.objects.new(f"obj{obj_id}", mesh)
         scene.collection.objects.link(obj)
         obj.matrix_world = matrix(p["world_R_m2w"], [t * 1e-3 for t in p["world_t_m2w"]])
+
+    # Fixtures (a pile's tote: drawn, no object), in the world frame as cadsynth traced them
+    # (Run.fixtures, written as PLY by the caller), with cadsynth's normals.
+    for i, fixture in enumerate(spec.get("fixtures", [])):
+        v, n, f = read_ply(fixture["ply"])
+        mesh = bpy.data.meshes.new(f"fixture{i}")
+        mesh.from_pydata((v * 1e-3).tolist(), [], f.tolist())
+        mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
+        mesh.use_auto_smooth = True
+        mesh.normals_split_custom_set([tuple(n[j]) for poly in mesh.polygons
+                                       for j in poly.vertices])
+        mesh.materials.append(principled(f"fixture{i}", fixture["material"]))
+        obj = bpy.data.objects.new(f"fixture{i}", mesh)
+        scene.collection.objects.link(obj)
 
     if spec.get("floor", True):
         half = spec.get("floor_half_size_m", 10.0)

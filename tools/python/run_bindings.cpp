@@ -1,5 +1,6 @@
 // Run (a prepared run: Recipe.prepare()) and its frames, rendered ahead in the background and
 // handed to Python in order (FrameIterator).
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -184,6 +185,52 @@ void BindRun(py::module_& m) {
             return out;
           },
           "The objects (BOP obj_id i + 1 for entry i) and their classes.")
+      .def(
+          "fixtures",
+          [](const PyRun& r, size_t scene) {
+            const PreparedRun& p = r.source->prepared();
+            if (scene >= p.scenes.size()) {
+              throw py::index_error("scene " + std::to_string(scene) + " of " +
+                                    std::to_string(p.scenes.size()));
+            }
+            py::list out;
+            for (const Scene::Fixture& f : p.scenes[scene].fixtures) {
+              const Mesh& mesh = f.mesh;
+              const auto n = static_cast<py::ssize_t>(mesh.num_vertices());
+              const auto t = static_cast<py::ssize_t>(mesh.num_triangles());
+              const bool has_normals = mesh.normals.size() == mesh.positions.size();
+              py::array_t<float> vertices({n, py::ssize_t{3}});
+              py::array_t<float> normals({has_normals ? n : py::ssize_t{0}, py::ssize_t{3}});
+              py::array_t<uint32_t> triangles({t, py::ssize_t{3}});
+              auto v = vertices.mutable_unchecked<2>();
+              auto nn = normals.mutable_unchecked<2>();
+              auto tt = triangles.mutable_unchecked<2>();
+              for (py::ssize_t i = 0; i < n; ++i) {
+                for (int c = 0; c < 3; ++c) {
+                  v(i, c) = mesh.positions[i][c];
+                  if (has_normals) nn(i, c) = mesh.normals[i][c];
+                }
+              }
+              for (py::ssize_t i = 0; i < t; ++i) {
+                for (int c = 0; c < 3; ++c) tt(i, c) = mesh.triangles[i][c];
+              }
+              const PrincipledParams& m = f.material.surface;
+              py::dict material(
+                  "base_color"_a =
+                      std::vector<float>{m.base_color[0], m.base_color[1], m.base_color[2]},
+                  "metallic"_a = m.metallic, "roughness"_a = m.roughness, "specular"_a = m.specular,
+                  "textured"_a = f.material.texture.kind != Texture::Kind::kNone);
+              out.append(py::dict("name"_a = f.name, "vertices"_a = vertices, "normals"_a = normals,
+                                  "triangles"_a = triangles, "material"_a = material));
+            }
+            return out;
+          },
+          "scene"_a,
+          R"(Scene `scene`'s fixtures (a pile's tote or container: geometry that is drawn but is
+no object), as traced: name, vertices (N x 3 float32, mm, world frame), normals (N x 3, or 0 x 3
+when the mesh has none), triangles (M x 3 uint32) and the pbr mode's material before any
+randomisation (linear base_color, metallic, roughness, specular; textured: whether a texture
+varies it). For rebuilding a frame in another renderer (tools/cycles).)")
       .def_property_readonly("sensors",
                              [](const PyRun& r) {
                                std::vector<std::string> names;

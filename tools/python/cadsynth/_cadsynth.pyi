@@ -146,6 +146,20 @@ class Frame(TypedDict):
 # An object of the run: BOP obj_id i + 1 for entry i of Run.objects.
 RunObject = TypedDict("RunObject", {"obj_id": int, "name": str, "class": str, "class_id": int})
 
+class FixtureMaterial(TypedDict):
+    base_color: list[float]  # linear RGB
+    metallic: float
+    roughness: float
+    specular: float
+    textured: bool
+
+class Fixture(TypedDict):
+    name: str
+    vertices: NDArray[np.float32]  # N x 3, mm, world frame
+    normals: NDArray[np.float32]  # N x 3, or 0 x 3 without normals
+    triangles: NDArray[np.uint32]  # M x 3
+    material: FixtureMaterial
+
 class WriteSummary(TypedDict):
     """What Recipe.write() and Run.write() wrote (as `cadsynth generate` reports it)."""
 
@@ -209,6 +223,7 @@ class Run:
     def objects(self) -> list[RunObject]: ...
     @property
     def sensors(self) -> list[str]: ...
+    def fixtures(self, scene: int) -> list[Fixture]: ...
     def frames(
         self, shard: _Shard | None = None, masks: bool = True, skip: bool = True, threads: int = 0
     ) -> FrameIterator: ...

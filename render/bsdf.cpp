@@ -154,11 +154,11 @@ float GgxAlbedo(float mu, float alpha, float f0) {
   return f0 * Lookup(t.a, roughness, mu) + Lookup(t.b, roughness, mu);
 }
 
-PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params) {
+PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params, float min_alpha) : params_(params) {
   const float alpha = params.roughness * params.roughness;
   const float aspect = std::sqrt(1 - 0.9f * std::clamp(params.anisotropic, 0.0f, 1.0f));
-  alpha_x_ = std::max(kMinAlpha, alpha / aspect);
-  alpha_y_ = std::max(kMinAlpha, alpha * aspect);
+  alpha_x_ = std::max(std::max(kMinAlpha, min_alpha), alpha / aspect);
+  alpha_y_ = std::max(std::max(kMinAlpha, min_alpha), alpha * aspect);
   dielectric_f0_ = 0.08f * params.specular;
   const AlbedoTable& t = Table();
   r_ = std::sqrt(std::sqrt(alpha_x_ * alpha_y_));  // isotropic equivalent
@@ -174,6 +174,10 @@ PrincipledBsdf::PrincipledBsdf(const PrincipledParams& params) : params_(params)
   coat_ = std::clamp(params.clearcoat, 0.0f, 1.0f);
   coat_r_ = std::clamp(params.clearcoat_roughness, 0.0f, 1.0f);
   coat_alpha_ = std::max(kMinAlpha, coat_r_ * coat_r_);
+  if (min_alpha > coat_alpha_) {
+    coat_alpha_ = min_alpha;
+    coat_r_ = std::sqrt(min_alpha);  // the tables' roughness
+  }
   if (coat_ > 0)
     coat_avg_ =
         coat_ * (kCoatF0 * LookupAverage(t.a_avg, coat_r_) + LookupAverage(t.b_avg, coat_r_));

@@ -71,7 +71,9 @@ struct BsdfLanes;
 
 class PrincipledBsdf {
  public:
-  explicit PrincipledBsdf(const PrincipledParams& params);
+  // min_alpha: the GGX alphas of the specular lobe and the clear coat are at least this (Cycles'
+  // bsdf_blur, for Filter Glossy; 0: the material's own).
+  explicit PrincipledBsdf(const PrincipledParams& params, float min_alpha = 0.0f);
 
   // f(wo, wi) in 1/sr (no cosine); zero unless both directions are above the surface.
   Eigen::Vector3f Eval(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const;

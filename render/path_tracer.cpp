@@ -956,6 +956,9 @@ struct PathTracer::Impl::Packet {
   float prev_pdf[16], cone_width[16], cone_spread[16];
   Eigen::Vector3f prev_normal[16];
   float selection[16][kMaxRated];
+  // The smallest BSDF sampling density of the path's bounces so far (infinite before the first):
+  // Filter Glossy widens the lobes the path meets after an unlikely bounce.
+  float min_pdf[16];
 
   // A bounce's shading, between its passes: the surface, its frame and BSDF, wo in that frame,
   // the offset origin (eps along the geometric normal), the light sample (its pdf times its
@@ -1042,6 +1045,7 @@ void PathTracer::Impl::StartPaths(const CameraRays& c, Packet* k) const {
     const int u = c.u0 + p % 4, v = c.v0 + p / 4;
     k->throughput[j].setOnes();
     k->prev_pdf[j] = 0;
+    k->min_pdf[j] = kInf;
     k->cone_width[j] = 0;
     k->cone_spread[j] = c.pixel_spread;
     const PixelSampler sampler(k->seed[j], static_cast<uint32_t>(k->sample[j]));
@@ -1146,7 +1150,14 @@ void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
     const ShadingFrame& local = k->frame[j].emplace(surf);
     const Eigen::Vector3f wo = local.ToLocal(-k->dir[j]);
     k->wo[j] = wo;
-    const PrincipledBsdf& bsdf = k->bsdf[j].emplace(surf.params);
+    // Filter Glossy (Cycles' formula): glossy lobes at least as wide as the path's least likely
+    // bounce so far allows.
+    float min_alpha = 0.0f;
+    if (scene.filter_glossy > 0) {
+      const float blur_pdf = k->min_pdf[j] / scene.filter_glossy;
+      if (blur_pdf < 1.0f) min_alpha = 0.5f * std::sqrt(1.0f - blur_pdf);
+    }
+    const PrincipledBsdf& bsdf = k->bsdf[j].emplace(surf.params, min_alpha);
     const PixelSampler sampler(k->seed[j], static_cast<uint32_t>(k->sample[j]));
     const uint32_t dim = 1 + 3 * static_cast<uint32_t>(depth);
     const Eigen::Vector2f u_choice = sampler.Get2D(dim);
@@ -1266,6 +1277,7 @@ bool PathTracer::Impl::ContinuePaths(Packet* k, int depth) const {
     if (!(next.maxCoeff() > 0)) continue;
     k->throughput[j] = next;
     k->prev_pdf[j] = pdf;
+    k->min_pdf[j] = std::min(k->min_pdf[j], pdf);
     // The cone widens by the lobe it was drawn from: about alpha for a glossy reflection, a
     // radian for a diffuse one.
     k->cone_width[j] = surf.cone_width;

@@ -59,6 +59,10 @@ struct PathTracerScene {
   // Evaluate the BSDF lane by lane (PrincipledBsdf::EvalWithPdf) instead of a packet's lanes at
   // once in SIMD (EvalLanes): the reference the tests hold the SIMD path to.
   bool scalar_shading = false;
+  // Cycles' Filter Glossy (RenderOptions::filter_glossy; 0: off): at a vertex after bounces
+  // whose smallest BSDF sampling density is min_pdf (1/sr), glossy lobes get GGX alpha at least
+  // sqrt(1 - min_pdf / filter_glossy) / 2 (PrincipledBsdf's min_alpha) where that is positive.
+  float filter_glossy = 0.0f;
 };
 
 // What the denoiser (render/denoise.h) needs of a tile's pixels: means over each pixel's paths.

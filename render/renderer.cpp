@@ -66,6 +66,8 @@ bool RenderOptions::Check(std::string* why) const {
     *why = "min_samples must be 0 (automatic) to samples";
   } else if (bounces < 0 || bounces > 64) {
     *why = "bounces must be 0 to 64";
+  } else if (!(filter_glossy >= 0 && filter_glossy <= 10)) {
+    *why = "filter_glossy must be 0 (off) to 10 (Cycles' Filter Glossy; Blender's default 1)";
   } else if (!(exposure >= -20 && exposure <= 20)) {
     *why = "exposure must lie between -20 and 20 stops";
   } else if (mode == Mode::kPbr && supersampling != 1) {
@@ -415,6 +417,7 @@ void Renderer::Impl::BuildTracer() {
   pts.floor_id = floor_id;
   pts.bounces = options.bounces;
   pts.scalar_shading = options.shading == RenderOptions::Shading::kScalar;
+  pts.filter_glossy = static_cast<float>(options.filter_glossy);
   pts.near_mm = static_cast<float>(options.near_mm);
   pts.far_mm = static_cast<float>(options.far_mm);
   pts.floor = scene.floor_material;

@@ -49,6 +49,13 @@ struct RenderOptions {
   double noise_threshold = 0.0;
   int min_samples = 0;
   int bounces = 3;  // pbr: surface interactions after the first (Blender's max bounces)
+  // pbr: Cycles' Filter Glossy (blur_glossy; Blender's default 1, cadsynth's 0: off). After a
+  // bounce whose BSDF sample was unlikely (a diffuse or rough one), the glossy lobes a path meets
+  // are widened: GGX alpha at least sqrt(1 - min_pdf / filter_glossy) / 2, min_pdf the smallest
+  // sampling density (1/sr) of the path's bounces so far. Rare bright paths (light reflected by
+  // a glossy part onto a diffuse one and seen in another glossy part) lose most of their noise
+  // for some bias; the first surface a camera ray meets is never changed.
+  double filter_glossy = 0.0;
   // pbr: how the BSDF is evaluated: kSimd, a packet's lanes four at a time (EvalLanes); kScalar,
   // lane by lane (PrincipledBsdf::EvalWithPdf), the reference the tests hold the SIMD path to.
   // The same image to within float rounding (to the byte on x86-64 builds without FMA).
@@ -115,6 +122,10 @@ struct RenderOptions {
                 "pbr: adaptive sampling: paths before the first check (0: sqrt(samples), "
                 "at least 8)"});
     visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
+    visit(o.filter_glossy,
+          Field{"filter_glossy", "number",
+                "pbr: Cycles' Filter Glossy: widen glossy lobes after unlikely bounces, less "
+                "noise for some bias (0: off, Blender's default 1; 0-10)"});
     visit(o.shading,
           Field{"shading",
                 "choice",

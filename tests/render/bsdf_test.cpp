@@ -177,6 +177,39 @@ TEST(PrincipledBsdf, RoughMetalLosesWhatSingleScatteringLoses) {
   EXPECT_NEAR(previous, 1 - std::log(2.0), 2e-3);
 }
 
+TEST(PrincipledBsdf, FilterGlossyWidensTheLobesAndNothingElse) {
+  // Cycles' bsdf_blur: the specular lobe's and the clear coat's alphas become at least min_alpha.
+  PrincipledParams p = Params(1, 1, 0.2f);
+  p.anisotropic = 0.5f;
+  EXPECT_FLOAT_EQ(PrincipledBsdf(p, 0.3f).alpha_x(), 0.3f);
+  EXPECT_FLOAT_EQ(PrincipledBsdf(p, 0.3f).alpha_y(), 0.3f);
+  EXPECT_FLOAT_EQ(PrincipledBsdf(p, 0.02f).alpha_x(), PrincipledBsdf(p).alpha_x());
+  // Widened, a white metal lobe is that of the rougher metal: at alpha 0.49 (roughness 0.7) it
+  // loses what roughness 0.7 loses (single scattering), and multiscatter gives it back.
+  const Eigen::Vector3f wo = Direction(0.6, 0.2);
+  const PrincipledBsdf widened(Params(1, 1, 0.1f), 0.49f), rough(Params(1, 1, 0.7f));
+  EXPECT_NEAR(SampledAlbedo(widened, wo)[0], QuadratureAlbedo(rough, wo, 0)[0], 0.01);
+  PrincipledParams m = Params(1, 1, 0.1f);
+  m.multiscatter = true;
+  EXPECT_NEAR(SampledAlbedo(PrincipledBsdf(m, 0.49f), wo)[0], 1.0, 0.01);
+  // A polished clear coat on black, widened, is the rough coat.
+  PrincipledParams coat = Params(0, 0, 0.6f);
+  coat.specular = 0;
+  coat.clearcoat = 1;
+  coat.clearcoat_roughness = 0.03f;
+  PrincipledParams rough_coat = coat;
+  rough_coat.clearcoat_roughness = 0.6f;
+  for (const float mu : {1.0f, 0.4f}) {
+    const Eigen::Vector3f w = Direction(mu, 0.1);
+    float pdf_a = 0, pdf_b = 0;
+    const Eigen::Vector3f wi = Direction(0.8, 2.0);
+    const Eigen::Vector3f fa = PrincipledBsdf(coat, 0.36f).EvalWithPdf(w, wi, &pdf_a);
+    const Eigen::Vector3f fb = PrincipledBsdf(rough_coat).EvalWithPdf(w, wi, &pdf_b);
+    EXPECT_NEAR(fa[0], fb[0], 1e-5f * (1 + fb[0])) << mu;
+    EXPECT_NEAR(pdf_a, pdf_b, 1e-5f * (1 + pdf_b)) << mu;
+  }
+}
+
 TEST(PrincipledBsdf, MultiscatterGgxGivesBackWhatSingleScatteringLoses) {
   // Blender's Multiscatter GGX (Turquin's compensation): a white metal reflects all light at every
   // roughness and angle, where single scattering lost up to 1 - ln 2 straight on at roughness 1.

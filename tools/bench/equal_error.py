@@ -130,6 +130,7 @@ class Scene:
         self.denoise = False
         self.denoiser = "network"
         self._fixtures = None  # fixtures(), once
+        self.filter_glossy = 0.0  # both renderers' (render.filter_glossy, Cycles' blur_glossy)
         if name == "workcell":
             case = cwc.CASES["workcell"]
             self.material, self.lights, self.world = case[0], case[1], case[2]
@@ -172,7 +173,7 @@ class Scene:
                   f"denoiser: {self.denoiser}, "
                   f"min_samples: {min(self.min_samples, samples) if threshold else 0}, "
                   f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
-                  f"seed: {seed}}}")
+                  f"filter_glossy: {self.filter_glossy}, seed: {seed}}}")
         if self.name in ("workcell", "tote"):
             text = cwc.recipe(self.material, self.lights, self.world, samples, self.shown)
             text = re.sub(r"^render: .*$", render, text, flags=re.M)
@@ -249,7 +250,7 @@ def cycles_run(scene, dataset, samples, threshold, seed, blender, tag):
             "output": os.path.join(scene.out, f"cycles_{tag}.exr"),
             "part_materials": cwc.rules(scene.material), "floor_material": cwc.LAMBERT,
             "lights": [cwc.blender_light(l) for l in scene.lights], "world": scene.world,
-            "fixtures": scene.fixtures()}
+            "fixtures": scene.fixtures(), "filter_glossy": scene.filter_glossy}
     spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
     with open(spec_path, "w") as f:
         json.dump(spec, f, indent=1)
@@ -286,6 +287,10 @@ def main():
                         help="also cadsynth's fixed sample counts and thresholds with render.denoise")
     parser.add_argument("--denoisers", default="filter",
                         help="with --denoise: render.denoiser values, each its own curves")
+    parser.add_argument("--filter-glossy", type=float, default=0.0,
+                        help="both renderers' Filter Glossy (render.filter_glossy, Cycles' "
+                             "blur_glossy; Blender's default 1): less noise from glossy caustics "
+                             "for some bias; each renderer's reference has it too")
     parser.add_argument("--reuse-reference", action="store_true",
                         help="keep DIR's cadsynth reference when it is there")
     parser.add_argument("--cycles-from", help="take the Cycles curves from an earlier JSON")
@@ -295,8 +300,10 @@ def main():
     out = os.path.abspath(args.out)
     scene = Scene(args.scene, out, args.cadsynth)
     scene.min_samples = args.min_samples
+    scene.filter_glossy = args.filter_glossy
     renderers = args.renderers.split(",")
-    result = {"scene": args.scene, "reference_samples": args.reference_samples, "curves": {}}
+    result = {"scene": args.scene, "reference_samples": args.reference_samples,
+              "filter_glossy": args.filter_glossy, "curves": {}}
 
     # cadsynth: the reference (another seed), then the curves.
     first_view = scene.views()[:1]
@@ -419,7 +426,9 @@ def plot(result, path):
             ax.axhline(target, color="grey", linewidth=0.5)
         ax.set_xlabel("seconds per frame (2 cores)")
         ax.set_ylabel(f"relative RMSE, {region} pixels")
-        ax.set_title(f"{result['scene']}: {region}")
+        glossy = result.get("filter_glossy", 0.0)
+        ax.set_title(f"{result['scene']}: {region}"
+                     + (f" (Filter Glossy {glossy:g})" if glossy else ""))
         ax.grid(True, which="both", linewidth=0.2)
         ax.legend(fontsize=8)
     fig.tight_layout()

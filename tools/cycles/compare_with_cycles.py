@@ -134,6 +134,11 @@ CASES = {
     # differ (the ring gear is part ring_z54), so a rebuild that matched materials by the
     # wrong name is caught. Its own block tolerance: gear teeth at 128 samples reach a p99 of
     # 0.10 from noise (0.05 at 512).
+    # Filter Glossy (render.filter_glossy, Cycles' blur_glossy) at Blender's default 1: the glossy
+    # case's parts and floor with their lobes widened after unlikely bounces in both renderers.
+    "filter_glossy": (GLOSSY_METAL, GLOSSY_LIGHTS, GLOSSY_WORLD, True,
+                      "the glossy case with Filter Glossy 1 (Blender's default) in both",
+                      dict(GLOSSY, filter_glossy=1.0)),
     "gearbox_metal": ([("*_z*", dict(WHITE_METAL, roughness=0.2)), ("*", dict(WHITE_METAL,
                                                                              roughness=0.35))],
                       GLOSSY_LIGHTS, GLOSSY_WORLD, 0.15,
@@ -244,7 +249,8 @@ def recipe(material, lights, world, samples, shown):
               f"focus_distance: {1000 * world['lens'][1]:g} mm}}" if "lens" in world else "")
            + "}",
            f"sweep: {{yaw: [{yaw}], pitch: [{pitch}], radius: [{radius} m]}}",
-           f"render: {{mode: pbr, samples: {samples}, bounces: 3, hdr: true, view: standard}}",
+           f"render: {{mode: pbr, samples: {samples}, bounces: 3, hdr: true, view: standard, "
+           f"filter_glossy: {shown.get('filter_glossy', 0)}}}",
            "materials:",
            f"  floor: {mat(shown.get('floor', LAMBERT))}",
            "  assign:"]
@@ -310,6 +316,7 @@ def compare_frame(args, label, sid, shown, material, lights, world, strict, note
                    for m in os.listdir(os.path.join(frame, "mask_visib")))
     spec = {"dataset": dataset, "scene_id": sid, "im_id": 0, "width": shown["camera"][0],
             "height": shown["camera"][1], "samples": args.samples, "bounces": 3,
+            "filter_glossy": shown.get("filter_glossy", 0.0),
             "output": os.path.join(out, f"{label}_cycles.exr"),
             "part_materials": rules(material),
             "floor_material": shown.get("floor", LAMBERT),

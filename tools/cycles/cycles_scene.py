@@ -8,10 +8,11 @@
 # materials, lights and world in SI units (metres, W, W/m^2) and Cycles' settings; the geometry and
 # poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
 # normals), scene_gt_world.json and scene_camera.json, and the spec's fixtures (PLY files in the
-# world frame). Cycles is set up as docs/testing.md's "Checked against Blender Cycles" says: GGX, no clamping, no glossy filter, a 1-pixel box filter, no light
-# threshold, no denoising or adaptive sampling (unless the spec sets adaptive_threshold), the same
-# bounces. The result is written as a 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's
-# rgb_hdr/).
+# world frame). Cycles is set up as docs/testing.md's "Checked against Blender Cycles" says: GGX,
+# no clamping, no glossy filter (unless the spec sets filter_glossy, cadsynth's
+# render.filter_glossy), a 1-pixel box filter, no light threshold, no denoising or adaptive
+# sampling (unless the spec sets adaptive_threshold), the same bounces. The result is written as
+# a 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).
 import fnmatch
 import json
 import math
@@ -159,7 +160,7 @@ def main():
     cy.transparent_max_bounces = 0
     cy.sample_clamp_direct = 0.0
     cy.sample_clamp_indirect = 0.0
-    cy.blur_glossy = 0.0
+    cy.blur_glossy = spec.get("filter_glossy", 0.0)  # cadsynth's render.filter_glossy
     cy.light_sampling_threshold = 0.0
     cy.caustics_reflective = cy.caustics_refractive = True
     cy.pixel_filter_type = "BOX"

@@ -304,6 +304,7 @@ def test_a_piles_tote_is_given_as_traced():
     m = tote["material"]
     np.testing.assert_allclose(m["base_color"], [0.2140, 0.0509, 0.0], atol=1e-4)
     assert (m["metallic"], m["specular"], m["textured"]) == (0.0, 0.5, False)
+    assert (m["anisotropic"], m["clearcoat"], m["multiscatter"]) == (0.0, 0.0, False)
     assert abs(m["roughness"] - 0.45) < 1e-6
     assert cadsynth.Recipe.default().prepare().fixtures(0) == []
     with pytest.raises(IndexError):

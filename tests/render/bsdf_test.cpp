@@ -177,13 +177,20 @@ TEST(PrincipledBsdf, RoughMetalLosesWhatSingleScatteringLoses) {
   EXPECT_NEAR(previous, 1 - std::log(2.0), 2e-3);
 }
 
-TEST(PrincipledBsdf, FilterGlossyWidensTheLobesAndNothingElse) {
+TEST(PrincipledBsdf, FilterGlossyWidensTheGlossyLobesOnly) {
   // Cycles' bsdf_blur: the specular lobe's and the clear coat's alphas become at least min_alpha.
   PrincipledParams p = Params(1, 1, 0.2f);
   p.anisotropic = 0.5f;
   EXPECT_FLOAT_EQ(PrincipledBsdf(p, 0.3f).alpha_x(), 0.3f);
   EXPECT_FLOAT_EQ(PrincipledBsdf(p, 0.3f).alpha_y(), 0.3f);
   EXPECT_FLOAT_EQ(PrincipledBsdf(p, 0.02f).alpha_x(), PrincipledBsdf(p).alpha_x());
+  // A Lambert surface (no specular layer) has no lobe to widen: the same values.
+  const PrincipledParams lambert = Params(0.7f, 0, 0.3f, 0);
+  const Eigen::Vector3f wo_l = Direction(0.7, 0.3), wi_l = Direction(0.4, 2.5);
+  float pdf_plain = 0, pdf_widened = 0;
+  EXPECT_EQ(PrincipledBsdf(lambert).EvalWithPdf(wo_l, wi_l, &pdf_plain),
+            PrincipledBsdf(lambert, 0.5f).EvalWithPdf(wo_l, wi_l, &pdf_widened));
+  EXPECT_EQ(pdf_plain, pdf_widened);
   // Widened, a white metal lobe is that of the rougher metal: at alpha 0.49 (roughness 0.7) it
   // loses what roughness 0.7 loses (single scattering), and multiscatter gives it back.
   const Eigen::Vector3f wo = Direction(0.6, 0.2);

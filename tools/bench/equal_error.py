@@ -207,11 +207,14 @@ class Scene:
         """The dataset and its seconds per frame: the whole process's, and the path tracer's
         share (less the same run in the fast mode: the start-up, the labels and the writing)."""
         path = os.path.join(self.out, f"{self.name}_{tag}.yaml")
-        with open(path, "w") as f:
-            f.write(self.recipe(samples, threshold, seed, mode, views))
+        text = self.recipe(samples, threshold, seed, mode, views)
         dataset = os.path.join(self.out, f"{self.name}_{tag}")
-        if reuse and os.path.isdir(os.path.join(dataset, "train")):
+        # Reused only when made from the same recipe (samples, filter_glossy, ...).
+        if (reuse and os.path.isdir(os.path.join(dataset, "train")) and os.path.exists(path)
+                and open(path).read() == text):
             return dataset, float("nan"), float("nan")
+        with open(path, "w") as f:
+            f.write(text)
         start = time.monotonic()
         done = subprocess.run([self.bin, "generate", path, "-o", dataset, "--overwrite",
                                "--quiet"], capture_output=True, text=True)
@@ -292,7 +295,8 @@ def main():
                              "blur_glossy; Blender's default 1): less noise from glossy caustics "
                              "for some bias; each renderer's reference has it too")
     parser.add_argument("--reuse-reference", action="store_true",
-                        help="keep DIR's cadsynth reference when it is there")
+                        help="keep DIR's cadsynth reference when it is there, made from the "
+                             "same recipe")
     parser.add_argument("--cycles-from", help="take the Cycles curves from an earlier JSON")
     parser.add_argument("--out", default="equal_error")
     args = parser.parse_args()

@@ -123,6 +123,11 @@ CASES = {
                      "the same on a metal floor (grey, roughness 0.3): glossy paths between the "
                      "parts and the floor",
                      dict(GLOSSY, floor=dict(METAL, base_color=[0.6, 0.6, 0.6]))),
+    # Filter Glossy (render.filter_glossy, Cycles' blur_glossy) at Blender's default 1: the glossy
+    # case's parts and floor with their lobes widened after unlikely bounces in both renderers.
+    "filter_glossy": (GLOSSY_METAL, GLOSSY_LIGHTS, GLOSSY_WORLD, True,
+                      "the glossy case with Filter Glossy 1 (Blender's default) in both",
+                      dict(GLOSSY, filter_glossy=1.0)),
     "default_metal": ([("*_z*", dict(WHITE_METAL, roughness=0.2)),  # the gears
                        ("*peg*", dict(WHITE_METAL, roughness=0.25)),
                        ("*shaft*", dict(WHITE_METAL, roughness=0.3)),
@@ -134,11 +139,6 @@ CASES = {
     # differ (the ring gear is part ring_z54), so a rebuild that matched materials by the
     # wrong name is caught. Its own block tolerance: gear teeth at 128 samples reach a p99 of
     # 0.10 from noise (0.05 at 512).
-    # Filter Glossy (render.filter_glossy, Cycles' blur_glossy) at Blender's default 1: the glossy
-    # case's parts and floor with their lobes widened after unlikely bounces in both renderers.
-    "filter_glossy": (GLOSSY_METAL, GLOSSY_LIGHTS, GLOSSY_WORLD, True,
-                      "the glossy case with Filter Glossy 1 (Blender's default) in both",
-                      dict(GLOSSY, filter_glossy=1.0)),
     "gearbox_metal": ([("*_z*", dict(WHITE_METAL, roughness=0.2)), ("*", dict(WHITE_METAL,
                                                                              roughness=0.35))],
                       GLOSSY_LIGHTS, GLOSSY_WORLD, 0.15,

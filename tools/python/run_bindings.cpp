@@ -219,6 +219,9 @@ void BindRun(py::module_& m) {
                   "base_color"_a =
                       std::vector<float>{m.base_color[0], m.base_color[1], m.base_color[2]},
                   "metallic"_a = m.metallic, "roughness"_a = m.roughness, "specular"_a = m.specular,
+                  "anisotropic"_a = m.anisotropic, "clearcoat"_a = m.clearcoat,
+                  "clearcoat_roughness"_a = m.clearcoat_roughness,
+                  "multiscatter"_a = m.multiscatter,
                   "textured"_a = f.material.texture.kind != Texture::Kind::kNone);
               out.append(py::dict("name"_a = f.name, "vertices"_a = vertices, "normals"_a = normals,
                                   "triangles"_a = triangles, "material"_a = material));
@@ -229,8 +232,8 @@ void BindRun(py::module_& m) {
           R"(Scene `scene`'s fixtures (a pile's tote or container: geometry that is drawn but is
 no object), as traced: name, vertices (N x 3 float32, mm, world frame), normals (N x 3, or 0 x 3
 when the mesh has none), triangles (M x 3 uint32) and the pbr mode's material before any
-randomisation (linear base_color, metallic, roughness, specular; textured: whether a texture
-varies it). For rebuilding a frame in another renderer (tools/cycles).)")
+randomisation (linear base_color, metallic, roughness, specular, anisotropic, clearcoat,
+clearcoat_roughness, multiscatter; textured: whether a texture varies it). For rebuilding a frame in another renderer (tools/cycles).)")
       .def_property_readonly("sensors",
                              [](const PyRun& r) {
                                std::vector<std::string> names;

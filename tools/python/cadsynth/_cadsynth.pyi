@@ -151,6 +151,10 @@ class FixtureMaterial(TypedDict):
     metallic: float
     roughness: float
     specular: float
+    anisotropic: float
+    clearcoat: float
+    clearcoat_roughness: float
+    multiscatter: bool
     textured: bool
 
 class Fixture(TypedDict):

@@ -50,6 +50,21 @@ def read_ply(path):
     return v[:, :3].astype(np.float64), v[:, 3:].astype(np.float64), f["i"].astype(np.int64)
 
 
+def add_mesh(name, ply, material):
+    """An object of cadsynth's PLY (mm) with cadsynth's own normals per face corner, linked into
+    the scene at the identity."""
+    v, n, f = read_ply(ply)
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata((v * 1e-3).tolist(), [], f.tolist())
+    mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
+    mesh.use_auto_smooth = True
+    mesh.normals_split_custom_set([tuple(n[i]) for poly in mesh.polygons for i in poly.vertices])
+    mesh.materials.append(material)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
 def matrix(r, t):
     m = mathutils.Matrix.Identity(4)
     for i in range(3):
@@ -225,32 +240,13 @@ def main():
             if rule is None:
                 raise SystemExit(f"no material rule matches part '{part}'")
             materials[obj_id] = principled(f"part{obj_id}", rule)
-        v, n, f = read_ply(f"{root}/models/obj_{obj_id:06d}.ply")
-        mesh = bpy.data.meshes.new(f"obj{obj_id}")
-        mesh.from_pydata((v * 1e-3).tolist(), [], f.tolist())
-        mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
-        mesh.use_auto_smooth = True
-        # cadsynth's own normals, per face corner (its PLY has a vertex per corner).
-        mesh.normals_split_custom_set([tuple(n[i]) for poly in mesh.polygons
-                                       for i in poly.vertices])
-        mesh.materials.append(materials[obj_id])
-        obj = bpy.data.objects.new(f"obj{obj_id}", mesh)
-        scene.collection.objects.link(obj)
+        obj = add_mesh(f"obj{obj_id}", f"{root}/models/obj_{obj_id:06d}.ply", materials[obj_id])
         obj.matrix_world = matrix(p["world_R_m2w"], [t * 1e-3 for t in p["world_t_m2w"]])
 
     # Fixtures (a pile's tote: drawn, no object), in the world frame as cadsynth traced them
-    # (Run.fixtures, written as PLY by the caller), with cadsynth's normals.
+    # (Run.fixtures, written as PLY by the caller).
     for i, fixture in enumerate(spec.get("fixtures", [])):
-        v, n, f = read_ply(fixture["ply"])
-        mesh = bpy.data.meshes.new(f"fixture{i}")
-        mesh.from_pydata((v * 1e-3).tolist(), [], f.tolist())
-        mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
-        mesh.use_auto_smooth = True
-        mesh.normals_split_custom_set([tuple(n[j]) for poly in mesh.polygons
-                                       for j in poly.vertices])
-        mesh.materials.append(principled(f"fixture{i}", fixture["material"]))
-        obj = bpy.data.objects.new(f"fixture{i}", mesh)
-        scene.collection.objects.link(obj)
+        add_mesh(f"fixture{i}", fixture["ply"], principled(f"fixture{i}", fixture["material"]))
 
     if spec.get("floor", True):
         half = spec.get("floor_half_size_m", 10.0)

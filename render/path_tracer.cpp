@@ -642,7 +642,10 @@ struct PathTracer::Impl {
   std::vector<PreparedLight> lights;
   std::optional<PreparedEnvironment> environment;  // absent when black
   int num_strategies = 0;                          // lights + environment
-  float environment_importance = 0;                // pi times its mean luminance (W/m^2)
+  // Whether strategies are rated (SelectionPdfs; at most kMaxRated), and the even probability.
+  bool rated = true;
+  float even_pdf = 0;
+  float environment_importance = 0;  // pi times its mean luminance (W/m^2)
   std::vector<std::shared_ptr<const LinearImage>> instance_images;
   std::shared_ptr<const LinearImage> floor_image;
   std::vector<std::shared_ptr<const LinearImage>> fixture_images;
@@ -724,6 +727,8 @@ PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
   const PreparedEnvironment env(im.scene.environment, before);
   if (!env.black()) im.environment.emplace(env);
   im.num_strategies = static_cast<int>(im.lights.size()) + (im.environment ? 1 : 0);
+  im.rated = im.num_strategies <= Impl::kMaxRated;
+  im.even_pdf = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
   if (im.environment) im.environment_importance = kPiF * im.environment->MeanLuminance();
   const auto image_of = [](const Material& m) -> std::shared_ptr<const LinearImage> {
     if (m.texture.kind != Texture::Kind::kImage) return nullptr;
@@ -1081,8 +1086,6 @@ void PathTracer::Impl::StartPaths(const CameraRays& c, Packet* k) const {
 bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
   const bool shade = depth <= scene.bounces;
   const int num_lights = static_cast<int>(lights.size());
-  const bool rated = num_strategies <= kMaxRated;
-  const float even = num_strategies > 0 ? 1.0f / num_strategies : 0.0f;
   bool any = false;
   for (int j = 0; j < 16; ++j) {
     if (!k->active[j]) continue;
@@ -1096,7 +1099,7 @@ bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
                        ? Eigen::Vector3f(rh.ray.dir_x[j], rh.ray.dir_y[j], rh.ray.dir_z[j]).norm()
                        : 1.0f)
             : kInf;
-    const auto select_pdf = [&](int s) { return rated ? k->selection[j][s] : even; };
+    const auto select_pdf = [&](int s) { return rated ? k->selection[j][s] : even_pdf; };
     for (int s = 0; s < num_lights; ++s) {
       Eigen::Vector3f le;
       float pdf;
@@ -1130,8 +1133,6 @@ bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
 // a strategy picked by SelectionPdfs, then a point of it) and the BSDF's sampled direction, both
 // queued in `evals`.
 void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
-  const bool rated = num_strategies <= kMaxRated;
-  const float even = num_strategies > 0 ? 1.0f / num_strategies : 0.0f;
   BsdfLanes& evals = k->evals;
   evals.count = 0;
   for (int j = 0; j < 16; ++j) {
@@ -1170,7 +1171,7 @@ void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
     SetRayLane(&k->shadow, j, k->p_off[j], Eigen::Vector3f::UnitZ(), 0, 0);
     if (num_strategies > 0) {
       int pick = 0;
-      float select_pdf = even;
+      float select_pdf = even_pdf;
       if (rated) {
         float* select = k->selection[j];
         SelectionPdfs({k->p_off[j], surf.ns, -k->dir[j], wo, &local.t, &local.b, &bsdf}, select);

@@ -161,6 +161,8 @@ class Scene:
         for i, f in enumerate(run.fixtures(0)):
             if f["material"]["textured"]:
                 sys.exit(f"fixture {f['name']}: textured; the Cycles rebuild has no textures")
+            if len(f["normals"]) != len(f["vertices"]):
+                sys.exit(f"fixture {f['name']}: no normals; the Cycles rebuild takes cadsynth's")
             path = os.path.join(self.out, f"fixture{i}.ply")
             write_ply(path, f["vertices"], f["normals"], f["triangles"])
             out.append({"ply": path, "material": f["material"]})

@@ -38,9 +38,11 @@ import features as F  # noqa: E402
 
 
 class Net(nn.Module):
-    def __init__(self, widths=(24, 48, 64), head=16):
+    def __init__(self, widths=(24, 48, 64), head=16, skips="concat"):
         super().__init__()
         a, b, c = widths
+        self.add = skips == "add"
+        m = 1 if self.add else 2  # a decoder level reads its skip added, or concatenated
 
         def relu():
             return nn.ReLU(inplace=True)
@@ -53,19 +55,22 @@ class Net(nn.Module):
         self.down2 = nn.Sequential(nn.Conv2d(b, c, 2, stride=2), relu(),
                                    nn.Conv2d(c, c, 3, padding=1), relu())
         self.up2 = nn.Sequential(nn.ConvTranspose2d(c, b, 2, stride=2), relu())
-        self.dec1 = nn.Sequential(nn.Conv2d(2 * b, b, 3, padding=1), relu())
+        self.dec1 = nn.Sequential(nn.Conv2d(m * b, b, 3, padding=1), relu())
         self.up1 = nn.Sequential(nn.ConvTranspose2d(b, a, 2, stride=2), relu())
-        self.dec0 = nn.Sequential(nn.Conv2d(2 * a, a, 3, padding=1), relu())
+        self.dec0 = nn.Sequential(nn.Conv2d(m * a, a, 3, padding=1), relu())
         self.up0 = nn.Sequential(nn.ConvTranspose2d(a, head, 2, stride=2), relu())
         self.full = nn.Sequential(nn.Conv2d(head + cin, head, 3, padding=1), relu(),
                                   nn.Conv2d(head, 4, 1))
+
+    def join(self, up, skip):
+        return up + skip if self.add else torch.cat([up, skip], 1)
 
     def forward(self, x):
         e0 = self.down0(x)
         e1 = self.down1(e0)
         e2 = self.down2(e1)
-        d1 = self.dec1(torch.cat([self.up2(e2), e1], 1))
-        d0 = self.dec0(torch.cat([self.up1(d1), e0], 1))
+        d1 = self.dec1(self.join(self.up2(e2), e1))
+        d0 = self.dec0(self.join(self.up1(d1), e0))
         return self.full(torch.cat([self.up0(d0), x], 1))
 
 
@@ -189,6 +194,9 @@ def main():
     parser.add_argument("--widths", default="24,48,64",
                         help="channels at 1/2, 1/4 and 1/8 of the image")
     parser.add_argument("--head", type=int, default=16, help="channels at full resolution")
+    parser.add_argument("--skips", choices=["concat", "add"], default="concat",
+                        help="how a decoder level reads the encoder's features at its scale: "
+                        "concatenated (the shipped model) or added (fewer weights, faster)")
     parser.add_argument("--out", default=os.path.join(ROOT, "render", "models", "denoiser.onnx"))
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
@@ -209,7 +217,7 @@ def main():
     widths = tuple(int(w) for w in args.widths.split(","))
     if len(widths) != 3 or min(widths) < 1 or args.head < 1:
         sys.exit(f"--widths {args.widths} --head {args.head}: three widths and a head, each >= 1")
-    net = Net(widths, args.head)
+    net = Net(widths, args.head, args.skips)
     optimiser = torch.optim.Adam(net.parameters(), lr=args.lr)
     budget = args.minutes * 60.0
     start = time.time()
@@ -252,7 +260,7 @@ def main():
         "training_frames": [f["name"] for f in train.frames],
         "held_out_frames": [f["name"] for f in held.frames],
         "steps": step, "batch": args.batch, "crop": args.crop, "levels": levels,
-        "widths": list(widths), "head": args.head,
+        "widths": list(widths), "head": args.head, "skips": args.skips,
         "final_loss": running,
         "held_out_parts_error": {str(s): {"noisy": v[0], "denoised": v[1]}
                                  for s, v in summary.items()},

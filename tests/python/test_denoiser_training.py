@@ -24,6 +24,11 @@ def test_the_network_gives_four_channels_at_full_resolution(skips):
     assert tuple(y.shape) == (1, 4, 16, 24)
 
 
+def test_an_unknown_kind_of_skip_is_refused():
+    with pytest.raises(ValueError, match="'sum' is neither 'concat' nor 'add'"):
+        train.Net((4, 8, 8), 4, "sum")
+
+
 def test_added_skips_save_the_decoders_input_weights():
     # A decoder level's 3 x 3 convolution reads 2 w channels concatenated or w added: w * w * 9
     # weights fewer at each of the two levels (widths 4 and 8 there), the rest unchanged.

@@ -41,6 +41,8 @@ class Net(nn.Module):
     def __init__(self, widths=(24, 48, 64), head=16, skips="concat"):
         super().__init__()
         a, b, c = widths
+        if skips not in ("concat", "add"):
+            raise ValueError(f"skips: '{skips}' is neither 'concat' nor 'add'")
         self.add = skips == "add"
         m = 1 if self.add else 2  # a decoder level reads its skip added, or concatenated
 

@@ -10,6 +10,7 @@
 // image is the same for any thread count, tile order or shard.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -87,6 +88,15 @@ struct AdaptiveSampling {
   bool filmic = true;
 
   bool adaptive() const { return threshold > 0 && min_samples < samples; }
+  // The same with at most `most` paths a pixel (0: unchanged; render.background_samples).
+  AdaptiveSampling Capped(int most) const {
+    AdaptiveSampling c = *this;
+    if (most > 0) {
+      c.samples = std::min(samples, most);
+      c.min_samples = std::min(min_samples, c.samples);
+    }
+    return c;
+  }
   // Whether a pixel whose `n` paths have luminances summing to `sum` (squares: `sum_sq`) is done.
   bool Converged(int n, double sum, double sum_sq) const;
 };

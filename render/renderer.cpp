@@ -64,6 +64,8 @@ bool RenderOptions::Check(std::string* why) const {
     *why = "noise_threshold must be 0 (off) or a display-value error in (0, 1]";
   } else if (min_samples < 0 || min_samples > samples) {
     *why = "min_samples must be 0 (automatic) to samples";
+  } else if (background_samples < 0 || background_samples > samples) {
+    *why = "background_samples must be 0 (as the objects' pixels) to samples";
   } else if (bounces < 0 || bounces > 64) {
     *why = "bounces must be 0 to 64";
   } else if (!(filter_glossy >= 0 && filter_glossy <= 10)) {
@@ -1031,6 +1033,8 @@ struct Renderer::Impl::FramePasses {
   const bool balanced;
   const bool filmic;
   const AdaptiveSampling sampling;
+  // Tiles that show no object (render.background_samples; `sampling` where it is 0).
+  const AdaptiveSampling background_sampling;
 
   const std::shared_ptr<const PixelRays> rays;
   const bool distorted;
@@ -1090,6 +1094,7 @@ Renderer::Impl::FramePasses::FramePasses(const Impl& im, const Camera& camera, u
       filmic(o.view == RenderOptions::View::kFilmic),
       sampling{o.samples, o.FirstSamples(), static_cast<float>(o.noise_threshold), exposure_scale,
                filmic},
+      background_sampling(sampling.Capped(o.background_samples)),
       rays(im.RaysOf(k)),
       distorted(rays->distorted()),
       gen(camera.world_from_cam.linear().cast<float>(),
@@ -1208,8 +1213,15 @@ void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
   if (pbr && o.shade) {
     TileFeatures features;
     int taken[16];
-    tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, sampling, frame_seed,
-                      radiance, need_denoiser_inputs ? &features : nullptr, taken);
+    // The tile's centre rays (CastLabels) say whether it shows an object.
+    bool object = false;
+    for (int j = 0; j < 16; ++j) {
+      if (valid[j] && u0 + j % kTile < w && v0 + j / kTile < h)
+        object |= frame.instance[static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile)] != 0;
+    }
+    tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0,
+                      object ? sampling : background_sampling, frame_seed, radiance,
+                      need_denoiser_inputs ? &features : nullptr, taken);
     for (int j = 0; j < 16; ++j) {
       if (!valid[j]) continue;
       const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);

@@ -48,6 +48,11 @@ struct RenderOptions {
   // (0: the square root of samples, at least 8). 0: off, every pixel gets `samples`.
   double noise_threshold = 0.0;
   int min_samples = 0;
+  // pbr: the most paths a pixel gets in a 4 x 4 tile where no pixel centre shows an object (a
+  // part or a distractor): the floor, fixtures and sky around the parts, which users do not
+  // train on and the denoiser cleans well from one path. 0: as the objects' pixels. Adaptive
+  // sampling's min_samples is capped by it there too.
+  int background_samples = 0;
   int bounces = 3;  // pbr: surface interactions after the first (Blender's max bounces)
   // pbr: Cycles' Filter Glossy (blur_glossy; Blender's default 1, cadsynth's 0: off). After a
   // bounce whose BSDF sample was unlikely (a diffuse or rough one), the glossy lobes a path meets
@@ -121,6 +126,10 @@ struct RenderOptions {
           Field{"min_samples", "integer",
                 "pbr: adaptive sampling: paths before the first check (0: sqrt(samples), "
                 "at least 8)"});
+    visit(o.background_samples,
+          Field{"background_samples", "integer",
+                "pbr: the most paths a pixel gets in a 4 x 4 tile that shows no object (floor, "
+                "fixtures, sky; 0: as the objects' pixels, up to samples)"});
     visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
     visit(o.filter_glossy,
           Field{"filter_glossy", "number",

@@ -259,6 +259,98 @@ TEST(AdaptiveSampling, BadOptionsAreRefused) {
   EXPECT_EQ(o.FirstSamples(), 32);
   o.samples = 4;
   EXPECT_EQ(o.FirstSamples(), 4);
+  o = Adaptive(16, 0.0, 0, 3);
+  o.background_samples = 17;
+  EXPECT_FALSE(o.Check(&why));
+  EXPECT_NE(why.find("background_samples"), std::string::npos) << why;
+  o.background_samples = -1;
+  EXPECT_FALSE(o.Check(&why));
+  o.background_samples = 16;
+  EXPECT_TRUE(o.Check(&why)) << why;
+}
+
+// render.background_samples: a 4 x 4 tile none of whose pixel centres shows an object takes at
+// most that many paths. Each tile's paths are those it takes without the cap (a tile with an
+// object) or with `samples` set to the cap (a tile without): the same paths, summed in the same
+// order, so every pixel's estimate is exactly as unbiased as a plain render's.
+TEST(BackgroundSamples, TilesWithoutAnObjectTakeTheirOwnCountAndTheSamePaths) {
+  const GlossySphere view;
+  RenderOptions o = testing::Pbr(8, 3);
+  const Frame all8 = Renderer(view.parts, view.scene, o).Render(view.camera, 5);
+  o.background_samples = 2;
+  const Frame capped = Renderer(view.parts, view.scene, o).Render(view.camera, 5);
+  o = testing::Pbr(2, 3);
+  const Frame all2 = Renderer(view.parts, view.scene, o).Render(view.camera, 5);
+  const int w = capped.width(), h = capped.height();
+  int object_tiles = 0, background_tiles = 0;
+  for (int v0 = 0; v0 < h; v0 += 4) {
+    for (int u0 = 0; u0 < w; u0 += 4) {
+      bool object = false;
+      for (int v = v0; v < std::min(h, v0 + 4); ++v) {
+        for (int u = u0; u < std::min(w, u0 + 4); ++u)
+          object |= capped.instance[static_cast<size_t>(v) * w + u] != 0;
+      }
+      ++(object ? object_tiles : background_tiles);
+      const Frame& like = object ? all8 : all2;
+      for (int v = v0; v < std::min(h, v0 + 4); ++v) {
+        for (int u = u0; u < std::min(w, u0 + 4); ++u) {
+          const size_t p = static_cast<size_t>(v) * w + u;
+          ASSERT_EQ(capped.samples[p], object ? 8u : 2u) << u << ", " << v;
+          for (int c = 0; c < 3; ++c)
+            ASSERT_EQ(capped.radiance[3 * p + c], like.radiance[3 * p + c]) << u << ", " << v;
+        }
+      }
+    }
+  }
+  EXPECT_GT(object_tiles, 20);
+  EXPECT_GT(background_tiles, 100);
+  // The labels do not depend on it.
+  EXPECT_EQ(capped.instance, all8.instance);
+  EXPECT_EQ(capped.depth, all8.depth);
+}
+
+TEST(BackgroundSamples, CapsAdaptiveSamplingAndKeepsTheBytesOnAnyThreadCount) {
+  const GlossySphere view;
+  RenderOptions o = Adaptive(64, 0.02, 8, 3);
+  o.background_samples = 4;
+  const Renderer renderer(view.parts, view.scene, o);
+  const Frame one = RenderOnThreads(renderer, view.camera, 3, 1);
+  const Frame two = RenderOnThreads(renderer, view.camera, 3, 2);
+  EXPECT_EQ(one.radiance, two.radiance);
+  EXPECT_EQ(one.samples, two.samples);
+  const int w = one.width();
+  size_t object_pixels = 0;
+  for (size_t p = 0; p < one.samples.size(); ++p) {
+    // Pixels of objects have their tile's adaptive count (8-64), the floor far from them 4.
+    if (one.instance[p] != 0) {
+      ++object_pixels;
+      EXPECT_GE(one.samples[p], 8u) << p % w << ", " << p / w;
+    }
+    EXPECT_LE(one.samples[p], 64u);
+    EXPECT_TRUE(one.samples[p] == 4u || one.samples[p] >= 8u) << p % w << ", " << p / w;
+  }
+  EXPECT_GT(object_pixels, 200u);
+  EXPECT_GT(std::count(one.samples.begin(), one.samples.end(), 4u), 2000);
+}
+
+TEST(BackgroundSamples, AnAnalyticFloorIsUnbiasedAtTheCap) {
+  // The floor under a disc light (DiscLightIrradianceIsUnbiased's): no object anywhere, so every
+  // pixel takes 4 paths of the 64 asked for, and the mean over 32 x 32 pixels is still
+  // pi L sin^2(alpha) / pi.
+  const double radius = 200.0, height = 300.0, power = 50.0;
+  LightSource disc;
+  disc.kind = LightSource::Kind::kDisc;
+  disc.radius_mm = radius;
+  disc.position = {0, 0, height};
+  disc.direction = {0, 0, -1};
+  disc.power = power;
+  const double l = power / (4 * kPi * radius * radius * 1e-6);
+  const double expected = l * radius * radius / (radius * radius + height * height);
+  RenderOptions o = testing::Pbr(64, 0);
+  o.background_samples = 4;
+  const Frame frame = FloorPatch(disc, o);
+  for (uint32_t n : frame.samples) ASSERT_EQ(n, 4u);
+  EXPECT_NEAR(MeanRed(frame), expected, 0.01 * expected);
 }
 
 }  // namespace

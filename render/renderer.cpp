@@ -987,7 +987,16 @@ struct Renderer::Impl::FramePasses {
   [[gnu::always_inline]] inline void CastLabels(int tile, int u0, int v0, TilePacket* p,
                                                 int centre_valid[16]);
   [[gnu::always_inline]] inline void Shade(int tile, int u0, int v0, TilePacket* p,
+                                           const AdaptiveSampling& tile_sampling,
                                            Eigen::Vector3f radiance[16], Eigen::Vector3f color[16]);
+  // Whether pixel j of a packet CastLabels traced shows an object: an instance, or a fixture
+  // sampled as one (Scene::Fixture::object).
+  bool ShowsObject(const RTCRayHit16& rh, int j) const {
+    if (rh.hit.geomID[j] == kInvalid) return false;
+    if (rh.hit.instID[0][j] != kInvalid) return true;
+    const int f = im.FixtureOf(rh.hit.geomID[j]);
+    return f >= 0 && im.scene.fixtures[static_cast<size_t>(f)].object;
+  }
   inline void SenseAndDisplay(int u, int v, Eigen::Vector3f radiance, Eigen::Vector3f color);
 
   const Impl& im;
@@ -1201,6 +1210,7 @@ void Renderer::Impl::FramePasses::CastLabels(int tile, int u0, int v0, TilePacke
 // Lambert colour at the centre or the mean of a grid of supersamples; pbr, the path tracer's
 // radiance, also kept for the HDR image and the denoiser.
 void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
+                                        const AdaptiveSampling& tile_sampling,
                                         Eigen::Vector3f radiance[16], Eigen::Vector3f color[16]) {
   RTCRayHit16& rh = p->rh;
   int* valid = p->valid;
@@ -1213,15 +1223,8 @@ void Renderer::Impl::FramePasses::Shade(int tile, int u0, int v0, TilePacket* p,
   if (pbr && o.shade) {
     TileFeatures features;
     int taken[16];
-    // The tile's centre rays (CastLabels) say whether it shows an object.
-    bool object = false;
-    for (int j = 0; j < 16; ++j) {
-      if (valid[j] && u0 + j % kTile < w && v0 + j / kTile < h)
-        object |= frame.instance[static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile)] != 0;
-    }
-    tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0,
-                      object ? sampling : background_sampling, frame_seed, radiance,
-                      need_denoiser_inputs ? &features : nullptr, taken);
+    tracer->TraceTile(camera, *rays, sensor.lens, sensor.motion, u0, v0, tile_sampling, frame_seed,
+                      radiance, need_denoiser_inputs ? &features : nullptr, taken);
     for (int j = 0; j < 16; ++j) {
       if (!valid[j]) continue;
       const size_t pixel = static_cast<size_t>(v0 + j / kTile) * w + (u0 + j % kTile);
@@ -1313,26 +1316,82 @@ void Renderer::Impl::FramePasses::SenseAndDisplay(int u, int v, Eigen::Vector3f 
 }
 
 void Renderer::Impl::FramePasses::TraceTiles() {
-  tbb::parallel_for(
-      tbb::blocked_range<int>(0, tiles_x * tiles_y, 16), [&](const tbb::blocked_range<int>& range) {
-        TilePacket packet;
-        for (int tile = range.begin(); tile < range.end(); ++tile) {
-          const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
-          alignas(64) int centre_valid[16];  // the pixels (supersamples reuse the packet's mask)
-          CastLabels(tile, u0, v0, &packet, centre_valid);
-          Eigen::Vector3f radiance[16], color[16];
-          Shade(tile, u0, v0, &packet, radiance, color);
-          for (int j = 0; j < 16; ++j) {
-            if (!centre_valid[j]) continue;
-            const int u = u0 + j % kTile, v = v0 + j / kTile;
-            if (denoising) {
-              coloured[static_cast<size_t>(v) * w + u] = 1;
-              continue;
-            }
-            SenseAndDisplay(u, v, radiance[j], color[j]);
-          }
-        }
-      });
+  // A tile's pixels once shaded: their reading and display, or (denoising) a mark.
+  const auto finish = [&](int u0, int v0, const int centre_valid[16],
+                          const Eigen::Vector3f radiance[16], const Eigen::Vector3f color[16]) {
+    for (int j = 0; j < 16; ++j) {
+      if (!centre_valid[j]) continue;
+      const int u = u0 + j % kTile, v = v0 + j / kTile;
+      if (denoising) {
+        coloured[static_cast<size_t>(v) * w + u] = 1;
+        continue;
+      }
+      SenseAndDisplay(u, v, radiance[j], color[j]);
+    }
+  };
+  const int num_tiles = tiles_x * tiles_y;
+  if (!(pbr && o.shade && background_sampling.samples < sampling.samples)) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, num_tiles, 16),
+                      [&](const tbb::blocked_range<int>& range) {
+                        TilePacket packet;
+                        for (int tile = range.begin(); tile < range.end(); ++tile) {
+                          const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
+                          // The pixels (supersamples reuse the packet's mask).
+                          alignas(64) int centre_valid[16];
+                          CastLabels(tile, u0, v0, &packet, centre_valid);
+                          Eigen::Vector3f radiance[16], color[16];
+                          Shade(tile, u0, v0, &packet, sampling, radiance, color);
+                          finish(u0, v0, centre_valid, radiance, color);
+                        }
+                      });
+    return;
+  }
+  // render.background_samples: every tile's labels first, to know which tiles show an object;
+  // those and the tiles next to them (their contact shadows, the pixels their edges cover in
+  // part) get `sampling`, the rest `background_sampling`. Both depend on the labels only.
+  std::vector<uint16_t> centres(static_cast<size_t>(num_tiles), 0);
+  std::vector<uint8_t> object(static_cast<size_t>(num_tiles), 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, num_tiles, 16),
+                    [&](const tbb::blocked_range<int>& range) {
+                      TilePacket packet;
+                      for (int tile = range.begin(); tile < range.end(); ++tile) {
+                        const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
+                        alignas(64) int centre_valid[16];
+                        CastLabels(tile, u0, v0, &packet, centre_valid);
+                        uint16_t mask = 0;
+                        for (int j = 0; j < 16; ++j) {
+                          if (!centre_valid[j]) continue;
+                          mask = static_cast<uint16_t>(mask | (1u << j));
+                          if (ShowsObject(packet.rh, j)) object[static_cast<size_t>(tile)] = 1;
+                        }
+                        centres[static_cast<size_t>(tile)] = mask;
+                      }
+                    });
+  const auto near_object = [&](int tile) {
+    const int tx = tile % tiles_x, ty = tile / tiles_x;
+    for (int y = std::max(0, ty - 1); y <= std::min(tiles_y - 1, ty + 1); ++y) {
+      for (int x = std::max(0, tx - 1); x <= std::min(tiles_x - 1, tx + 1); ++x) {
+        if (object[static_cast<size_t>(y) * tiles_x + x]) return true;
+      }
+    }
+    return false;
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, num_tiles, 16),
+                    [&](const tbb::blocked_range<int>& range) {
+                      TilePacket packet;
+                      for (int tile = range.begin(); tile < range.end(); ++tile) {
+                        const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
+                        alignas(64) int centre_valid[16];
+                        for (int j = 0; j < 16; ++j) {
+                          centre_valid[j] = (centres[static_cast<size_t>(tile)] >> j) & 1 ? -1 : 0;
+                          packet.valid[j] = centre_valid[j];
+                        }
+                        Eigen::Vector3f radiance[16], color[16];
+                        Shade(tile, u0, v0, &packet,
+                              near_object(tile) ? sampling : background_sampling, radiance, color);
+                        finish(u0, v0, centre_valid, radiance, color);
+                      }
+                    });
 }
 
 void Renderer::Impl::FramePasses::DenoiseColour() {

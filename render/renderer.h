@@ -48,10 +48,11 @@ struct RenderOptions {
   // (0: the square root of samples, at least 8). 0: off, every pixel gets `samples`.
   double noise_threshold = 0.0;
   int min_samples = 0;
-  // pbr: the most paths a pixel gets in a 4 x 4 tile where no pixel centre shows an object (a
-  // part or a distractor): the floor, fixtures and sky around the parts, which users do not
-  // train on and the denoiser cleans well from one path. 0: as the objects' pixels. Adaptive
-  // sampling's min_samples is capped by it there too.
+  // pbr: the most paths a pixel gets in a 4 x 4 tile where no pixel centre shows an object (an
+  // instance or a distractor, Scene::Fixture::object) and none of the 8 tiles around does: the
+  // floor, containers and sky away from the parts, which users do not train on and the denoiser
+  // cleans well from one path. 0: as the objects' pixels. Adaptive sampling's min_samples is
+  // capped by it there too. The tiles are chosen from the labels alone.
   int background_samples = 0;
   int bounces = 3;  // pbr: surface interactions after the first (Blender's max bounces)
   // pbr: Cycles' Filter Glossy (blur_glossy; Blender's default 1, cadsynth's 0: off). After a
@@ -128,8 +129,9 @@ struct RenderOptions {
                 "at least 8)"});
     visit(o.background_samples,
           Field{"background_samples", "integer",
-                "pbr: the most paths a pixel gets in a 4 x 4 tile that shows no object (floor, "
-                "fixtures, sky; 0: as the objects' pixels, up to samples)"});
+                "pbr: the most paths a pixel gets in a 4 x 4 tile that neither shows an object "
+                "nor touches a tile that does (floor, containers, sky; 0: as the objects' "
+                "pixels, up to samples)"});
     visit(o.bounces, Field{"bounces", "integer", "pbr: bounces after the first hit (0-64)"});
     visit(o.filter_glossy,
           Field{"filter_glossy", "number",

@@ -29,6 +29,9 @@ struct Scene {
     Mesh mesh;                                   // in the world frame, mm
     Eigen::Vector3f color{0.3f, 0.4f, 0.55f};    // sRGB, the fast mode's albedo
     Material material = DefaultMaterial(color);  // the pbr mode's
+    // Sampled as the instances are where render.background_samples caps the rest: an object
+    // that is not labelled but should look as an instance does (a distractor), not a container.
+    bool object = false;
   };
   std::vector<Fixture> fixtures;
 

@@ -6,6 +6,7 @@ error (interpolated on the error-time curve, log-log), and a picture of the curv
 
     tools/bench/equal_error.py --scene workcell [--renderers cadsynth,cycles] [--out DIR]
     tools/bench/equal_error.py --scene pbr_demo --renderers cadsynth --reference-samples 1024
+    tools/bench/equal_error.py --scene pbr_demo ... --denoise --background-samples 1
 
 Error: the relative RMSE of the displayed values (the linear radiance of rgb_hdr/ or Cycles' EXR,
 exposed and put through the recipe's display transform, standard or filmic, as cadsynth's 8-bit
@@ -131,6 +132,7 @@ class Scene:
         self.denoiser = "network"
         self._fixtures = None  # fixtures(), once
         self.filter_glossy = 0.0  # both renderers' (render.filter_glossy, Cycles' blur_glossy)
+        self.background_samples = 0  # render.background_samples of the curves (0: off)
         if name == "workcell":
             case = cwc.CASES["workcell"]
             self.material, self.lights, self.world = case[0], case[1], case[2]
@@ -169,11 +171,12 @@ class Scene:
         self._fixtures = out
         return out
 
-    def recipe(self, samples, threshold, seed, mode="pbr", views=None):
+    def recipe(self, samples, threshold, seed, mode="pbr", views=None, background=0):
         render = (f"render: {{mode: {mode}, samples: {samples}, noise_threshold: {threshold}, "
                   f"denoise: {'true' if self.denoise and mode == 'pbr' else 'false'}, "
                   f"denoiser: {self.denoiser}, "
                   f"min_samples: {min(self.min_samples, samples) if threshold else 0}, "
+                  + (f"background_samples: {min(background, samples)}, " if background else "") +
                   f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
                   f"filter_glossy: {self.filter_glossy}, seed: {seed}}}")
         if self.name in ("workcell", "tote"):
@@ -209,7 +212,9 @@ class Scene:
         """The dataset and its seconds per frame: the whole process's, and the path tracer's
         share (less the same run in the fast mode: the start-up, the labels and the writing)."""
         path = os.path.join(self.out, f"{self.name}_{tag}.yaml")
-        text = self.recipe(samples, threshold, seed, mode, views)
+        # (The reference and the fast run sample every pixel alike.)
+        background = self.background_samples if mode == "pbr" and tag != "reference" else 0
+        text = self.recipe(samples, threshold, seed, mode, views, background)
         dataset = os.path.join(self.out, f"{self.name}_{tag}")
         # Reused only when made from the same recipe (samples, filter_glossy, ...).
         if (reuse and os.path.isdir(os.path.join(dataset, "train")) and os.path.exists(path)
@@ -296,6 +301,9 @@ def main():
                         help="both renderers' Filter Glossy (render.filter_glossy, Cycles' "
                              "blur_glossy; Blender's default 1): less noise from glossy caustics "
                              "for some bias; each renderer's reference has it too")
+    parser.add_argument("--background-samples", type=int, default=0,
+                        help="cadsynth's curves again with render.background_samples N: the "
+                             "samples as set where a 4 x 4 tile shows a part, N elsewhere")
     parser.add_argument("--reuse-reference", action="store_true",
                         help="keep DIR's cadsynth reference when it is there, made from the "
                              "same recipe")
@@ -309,7 +317,8 @@ def main():
     scene.filter_glossy = args.filter_glossy
     renderers = args.renderers.split(",")
     result = {"scene": args.scene, "reference_samples": args.reference_samples,
-              "filter_glossy": args.filter_glossy, "curves": {}}
+              "filter_glossy": args.filter_glossy,
+              "background_samples": args.background_samples, "curves": {}}
 
     # cadsynth: the reference (another seed), then the curves.
     first_view = scene.views()[:1]
@@ -353,20 +362,28 @@ def main():
         return point
 
     if "cadsynth" in renderers:
-        fixed = [cadsynth_point(f"spp{n}", n, 0.0) for n in map(int, args.samples.split(","))]
-        adaptive = [cadsynth_point(f"t{t}", args.max_samples, float(t))
-                    for t in args.thresholds.split(",") if t]
-        result["curves"]["cadsynth"] = fixed
-        result["curves"]["cadsynth adaptive"] = adaptive
-        for denoiser in (args.denoisers.split(",") if args.denoise else []):
-            scene.denoise, scene.denoiser = True, denoiser
-            result["curves"][f"cadsynth denoised ({denoiser})"] = [
-                cadsynth_point(f"{denoiser}{n}", n, 0.0) for n in map(int, args.samples.split(","))]
-            if args.thresholds:
-                result["curves"][f"cadsynth adaptive denoised ({denoiser})"] = [
-                    cadsynth_point(f"{denoiser}t{t}", args.max_samples, float(t))
-                    for t in args.thresholds.split(",")]
-            scene.denoise = False
+        # Without render.background_samples, then (--background-samples N) with it: the parts'
+        # samples as set, N paths in the tiles that show no part.
+        for background in sorted({0, args.background_samples}):
+            scene.background_samples = background
+            suffix = f", background {background}" if background else ""
+            bg = f"bg{background}" if background else ""
+            result["curves"]["cadsynth" + suffix] = [
+                cadsynth_point(f"spp{n}{bg}", n, 0.0) for n in map(int, args.samples.split(","))]
+            result["curves"]["cadsynth adaptive" + suffix] = [
+                cadsynth_point(f"t{t}{bg}", args.max_samples, float(t))
+                for t in args.thresholds.split(",") if t]
+            for denoiser in (args.denoisers.split(",") if args.denoise else []):
+                scene.denoise, scene.denoiser = True, denoiser
+                result["curves"][f"cadsynth denoised ({denoiser}){suffix}"] = [
+                    cadsynth_point(f"{denoiser}{n}{bg}", n, 0.0)
+                    for n in map(int, args.samples.split(","))]
+                if args.thresholds:
+                    result["curves"][f"cadsynth adaptive denoised ({denoiser}){suffix}"] = [
+                        cadsynth_point(f"{denoiser}t{t}{bg}", args.max_samples, float(t))
+                        for t in args.thresholds.split(",")]
+                scene.denoise = False
+        scene.background_samples = 0
     if args.cycles_from:
         earlier = json.load(open(args.cycles_from))
         for name in ("Cycles", "Cycles adaptive"):
@@ -418,7 +435,7 @@ def plot(result, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 5.5 if len(result["curves"]) > 8 else 4.5))
     styles = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o",
               "cadsynth denoised (network)": "C2-s", "cadsynth adaptive denoised (network)": "C2-o",
               "cadsynth denoised (filter)": "C1-s", "cadsynth adaptive denoised (filter)": "C1-o",
@@ -426,8 +443,12 @@ def plot(result, path):
     for ax, region in zip(axes, ("parts", "all")):
         for name, points in result["curves"].items():
             points = sorted(points, key=lambda p: p["seconds"])
+            base = name.split(", background")[0]
+            style = styles.get(base, "C7-")
+            if base != name:  # render.background_samples: the same colour, dotted, triangles
+                style = style[:2] + ":" + {"s": "^", "o": "v"}.get(style[-1], "")
             ax.loglog([p["seconds"] for p in points], [p[region] for p in points],
-                      styles.get(name, "-"), label=name, markersize=4)
+                      style, label=name, markersize=4)
         for target in (0.05, 0.1):
             ax.axhline(target, color="grey", linewidth=0.5)
         ax.set_xlabel("seconds per frame (2 cores)")
@@ -436,8 +457,11 @@ def plot(result, path):
         ax.set_title(f"{result['scene']}: {region}"
                      + (f" (Filter Glossy {glossy:g})" if glossy else ""))
         ax.grid(True, which="both", linewidth=0.2)
-        ax.legend(fontsize=8)
-    fig.tight_layout()
+    # One legend for both, below them (inside, it hid the curves).
+    handles, labels = axes[0].get_legend_handles_labels()
+    rows = (len(labels) + 2) // 3
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=7.5)
+    fig.tight_layout(rect=(0, 0.045 * rows, 1, 1))
     fig.savefig(path, dpi=110)
 
 

@@ -378,6 +378,7 @@ void AddDistractorFixtures(const std::vector<Part>& arranged_parts,
     fixture.mesh.Transform(d.world_from_model);
     fixture.color = picks[k].color;
     fixture.material = Scene::DefaultMaterial(fixture.color);
+    fixture.object = true;  // sampled as the parts are (render.background_samples)
     placement->scene.fixtures.push_back(std::move(fixture));
     const Eigen::Quaterniond q(d.world_from_model.linear());
     const Eigen::Vector3d t = d.world_from_model.translation();

@@ -361,3 +361,30 @@ def test_pbr_frames_give_the_paths_each_pixel_got():
         "sweep": {"yaw": [0], "pitch": [60], "radius": ["0.3 m"]},
     }).prepare(cache=False).frame(0, masks=False)
     assert "samples" not in fast
+
+
+def test_background_samples_cap_the_tiles_away_from_the_parts():
+    # render.background_samples: the 4 x 4 tiles that neither show the peg nor touch a tile that
+    # does take one path; the peg's own pixels keep the 8 asked for.
+    recipe = cadsynth.Recipe.from_dict({
+        "parts": [{"family": "round_peg"}],
+        "camera": {"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5},
+        "sweep": {"yaw": [0], "pitch": [60], "radius": ["0.45 m"]},
+        "render": {"mode": "pbr", "samples": 8, "background_samples": 1},
+    })
+    frame = recipe.prepare(cache=False).frame(0, masks=False)
+    samples, instance = frame["samples"], frame["instance"]
+    assert (instance > 0).sum() > 10
+    assert np.all(samples[instance > 0] == 8)
+    assert set(np.unique(samples)) == {1, 8}
+    tiles = samples.reshape(12, 4, 16, 4).transpose(0, 2, 1, 3).reshape(12, 16, 16)
+    assert all(len(np.unique(t)) == 1 for t in tiles.reshape(-1, 16))  # one count per tile
+    # 8 exactly in the tiles that show the peg and their 8 neighbours.
+    shows = (instance > 0).reshape(12, 4, 16, 4).any(axis=(1, 3))
+    padded = np.pad(shows, 1)
+    near = np.zeros_like(shows)
+    for dy in range(3):
+        for dx in range(3):
+            near |= padded[dy:dy + 12, dx:dx + 16]
+    assert np.array_equal(tiles[:, :, 0] == 8, near)
+    assert (samples == 1).mean() > 0.5

@@ -19,10 +19,12 @@ namespace cadsynth {
 namespace {
 
 using testing::Dark;
+using testing::DownwardDisc;
 using testing::kPi;
 using testing::Lambert;
 using testing::LookingDown;
 using testing::RenderOnThreads;
+using testing::WhiteFloorUnderDisc;
 
 RenderOptions Adaptive(int samples, double threshold, int min_samples, int bounces) {
   RenderOptions o = testing::Pbr(samples, bounces);
@@ -108,15 +110,8 @@ Frame FloorPatch(const LightSource& light, const RenderOptions& options) {
 
 TEST(AdaptiveSampling, DiscLightIrradianceIsUnbiased) {
   // pi L sin^2(alpha) / pi with L = P / (4 A) (Blender's area light), as in path_tracer_test.cpp.
-  const double radius = 200.0, height = 300.0, power = 50.0;
-  LightSource disc;
-  disc.kind = LightSource::Kind::kDisc;
-  disc.radius_mm = radius;
-  disc.position = {0, 0, height};
-  disc.direction = {0, 0, -1};
-  disc.power = power;
-  const double l = power / (4 * kPi * radius * radius * 1e-6);
-  const double expected = l * radius * radius / (radius * radius + height * height);
+  const LightSource disc = DownwardDisc(200.0, 300.0, 50.0);
+  const double expected = WhiteFloorUnderDisc(200.0, 300.0, 50.0);
   // 30.6 W/(m^2 sr): exposed by 2^-6.5 it shows about 0.6 (unexposed it would clip to white,
   // where no noise shows and every pixel stops at once).
   RenderOptions o = Adaptive(1024, 0.005, 16, 0);
@@ -224,12 +219,7 @@ TEST(AdaptiveSampling, SameBytesForAnyThreadCount) {
 
 TEST(AdaptiveSampling, AThresholdNoPixelReachesChangesNothing) {
   // The floor under a disc light: every pixel's paths spread (the points drawn on the disc).
-  LightSource disc;
-  disc.kind = LightSource::Kind::kDisc;
-  disc.radius_mm = 200.0;
-  disc.position = {0, 0, 300.0};
-  disc.direction = {0, 0, -1};
-  disc.power = 50.0;
+  const LightSource disc = DownwardDisc(200.0, 300.0, 50.0);
   RenderOptions o = Adaptive(6, 0.0, 0, 0);
   o.exposure = -6.5;  // not clipped to white
   const Frame fixed = FloorPatch(disc, o);
@@ -361,15 +351,8 @@ TEST(BackgroundSamples, AnAnalyticFloorIsUnbiasedAtTheCap) {
   // The floor under a disc light (DiscLightIrradianceIsUnbiased's): no object anywhere, so every
   // pixel takes 4 paths of the 64 asked for, and the mean over 32 x 32 pixels is still
   // pi L sin^2(alpha) / pi.
-  const double radius = 200.0, height = 300.0, power = 50.0;
-  LightSource disc;
-  disc.kind = LightSource::Kind::kDisc;
-  disc.radius_mm = radius;
-  disc.position = {0, 0, height};
-  disc.direction = {0, 0, -1};
-  disc.power = power;
-  const double l = power / (4 * kPi * radius * radius * 1e-6);
-  const double expected = l * radius * radius / (radius * radius + height * height);
+  const LightSource disc = DownwardDisc(200.0, 300.0, 50.0);
+  const double expected = WhiteFloorUnderDisc(200.0, 300.0, 50.0);
   RenderOptions o = testing::Pbr(64, 0);
   o.background_samples = 4;
   const Frame frame = FloorPatch(disc, o);

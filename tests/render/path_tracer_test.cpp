@@ -168,22 +168,11 @@ struct DiscLightView {
   Camera camera;
   DiscLightView() {
     scene.floor_material = Lambert(1.0f);
-    LightSource disc;
-    disc.kind = LightSource::Kind::kDisc;
-    disc.radius_mm = radius;
-    disc.position = {0, 0, height};
-    disc.direction = {0, 0, -1};
-    disc.power = power;
-    scene.light_sources = {disc};
+    scene.light_sources = {testing::DownwardDisc(radius, height, power)};
     camera.intrinsics = Intrinsics::FromFov(4, 4, 0.0004);  // 0.4 mm of floor
     camera.world_from_cam = LookingDown({0, 0, 1000});
   }
-  double Expected() const {
-    const double area_m2 = kPi * radius * radius * 1e-6;
-    const double l = power / (4 * area_m2);
-    const double sin2 = radius * radius / (radius * radius + height * height);
-    return kPi * l * sin2 / kPi;
-  }
+  double Expected() const { return testing::WhiteFloorUnderDisc(radius, height, power); }
 };
 
 TEST(PathTracer, IrradianceUnderADiscLightIsPiLSinSquared) {

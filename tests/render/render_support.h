@@ -40,6 +40,25 @@ inline Scene Dark() {
   return scene;
 }
 
+// A disc light of `power` W and `radius` mm facing straight down from `height` mm above the
+// origin, and the radiance of a white Lambert floor straight under its centre: the irradiance
+// pi L sin^2(alpha) over pi, L = P / (4 A) (Blender's area light), sin^2(alpha) = r^2 / (r^2 +
+// h^2).
+inline LightSource DownwardDisc(double radius, double height, double power) {
+  LightSource disc;
+  disc.kind = LightSource::Kind::kDisc;
+  disc.radius_mm = radius;
+  disc.position = {0, 0, height};
+  disc.direction = {0, 0, -1};
+  disc.power = power;
+  return disc;
+}
+inline double WhiteFloorUnderDisc(double radius, double height, double power) {
+  const double l = power / (4 * kPi * radius * radius * 1e-6);
+  const double sin2 = radius * radius / (radius * radius + height * height);
+  return kPi * l * sin2 / kPi;
+}
+
 // The physically based mode at `samples` paths per pixel (every pixel gets them all), the linear
 // radiance kept (Frame::radiance), the standard display transform, no amodal masks.
 inline RenderOptions Pbr(int samples, int bounces) {

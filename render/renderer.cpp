@@ -1316,6 +1316,16 @@ void Renderer::Impl::FramePasses::SenseAndDisplay(int u, int v, Eigen::Vector3f 
 }
 
 void Renderer::Impl::FramePasses::TraceTiles() {
+  const int num_tiles = tiles_x * tiles_y;
+  // body(tile, u0, v0, packet) for every tile, in parallel; a packet per range of tiles.
+  const auto for_each_tile = [&](auto&& body) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, num_tiles, 16),
+                      [&](const tbb::blocked_range<int>& range) {
+                        TilePacket packet;
+                        for (int tile = range.begin(); tile < range.end(); ++tile)
+                          body(tile, (tile % tiles_x) * kTile, (tile / tiles_x) * kTile, &packet);
+                      });
+  };
   // A tile's pixels once shaded: their reading and display, or (denoising) a mark.
   const auto finish = [&](int u0, int v0, const int centre_valid[16],
                           const Eigen::Vector3f radiance[16], const Eigen::Vector3f color[16]) {
@@ -1329,21 +1339,14 @@ void Renderer::Impl::FramePasses::TraceTiles() {
       SenseAndDisplay(u, v, radiance[j], color[j]);
     }
   };
-  const int num_tiles = tiles_x * tiles_y;
   if (!(pbr && o.shade && background_sampling.samples < sampling.samples)) {
-    tbb::parallel_for(tbb::blocked_range<int>(0, num_tiles, 16),
-                      [&](const tbb::blocked_range<int>& range) {
-                        TilePacket packet;
-                        for (int tile = range.begin(); tile < range.end(); ++tile) {
-                          const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
-                          // The pixels (supersamples reuse the packet's mask).
-                          alignas(64) int centre_valid[16];
-                          CastLabels(tile, u0, v0, &packet, centre_valid);
-                          Eigen::Vector3f radiance[16], color[16];
-                          Shade(tile, u0, v0, &packet, sampling, radiance, color);
-                          finish(u0, v0, centre_valid, radiance, color);
-                        }
-                      });
+    for_each_tile([&](int tile, int u0, int v0, TilePacket* packet) {
+      alignas(64) int centre_valid[16];  // the pixels (supersamples reuse the packet's mask)
+      CastLabels(tile, u0, v0, packet, centre_valid);
+      Eigen::Vector3f radiance[16], color[16];
+      Shade(tile, u0, v0, packet, sampling, radiance, color);
+      finish(u0, v0, centre_valid, radiance, color);
+    });
     return;
   }
   // render.background_samples: every tile's labels first, to know which tiles show an object;
@@ -1351,22 +1354,17 @@ void Renderer::Impl::FramePasses::TraceTiles() {
   // part) get `sampling`, the rest `background_sampling`. Both depend on the labels only.
   std::vector<uint16_t> centres(static_cast<size_t>(num_tiles), 0);
   std::vector<uint8_t> object(static_cast<size_t>(num_tiles), 0);
-  tbb::parallel_for(tbb::blocked_range<int>(0, num_tiles, 16),
-                    [&](const tbb::blocked_range<int>& range) {
-                      TilePacket packet;
-                      for (int tile = range.begin(); tile < range.end(); ++tile) {
-                        const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
-                        alignas(64) int centre_valid[16];
-                        CastLabels(tile, u0, v0, &packet, centre_valid);
-                        uint16_t mask = 0;
-                        for (int j = 0; j < 16; ++j) {
-                          if (!centre_valid[j]) continue;
-                          mask = static_cast<uint16_t>(mask | (1u << j));
-                          if (ShowsObject(packet.rh, j)) object[static_cast<size_t>(tile)] = 1;
-                        }
-                        centres[static_cast<size_t>(tile)] = mask;
-                      }
-                    });
+  for_each_tile([&](int tile, int u0, int v0, TilePacket* packet) {
+    alignas(64) int centre_valid[16];
+    CastLabels(tile, u0, v0, packet, centre_valid);
+    uint16_t mask = 0;
+    for (int j = 0; j < 16; ++j) {
+      if (!centre_valid[j]) continue;
+      mask = static_cast<uint16_t>(mask | (1u << j));
+      if (ShowsObject(packet->rh, j)) object[static_cast<size_t>(tile)] = 1;
+    }
+    centres[static_cast<size_t>(tile)] = mask;
+  });
   const auto near_object = [&](int tile) {
     const int tx = tile % tiles_x, ty = tile / tiles_x;
     for (int y = std::max(0, ty - 1); y <= std::min(tiles_y - 1, ty + 1); ++y) {
@@ -1376,22 +1374,17 @@ void Renderer::Impl::FramePasses::TraceTiles() {
     }
     return false;
   };
-  tbb::parallel_for(tbb::blocked_range<int>(0, num_tiles, 16),
-                    [&](const tbb::blocked_range<int>& range) {
-                      TilePacket packet;
-                      for (int tile = range.begin(); tile < range.end(); ++tile) {
-                        const int u0 = (tile % tiles_x) * kTile, v0 = (tile / tiles_x) * kTile;
-                        alignas(64) int centre_valid[16];
-                        for (int j = 0; j < 16; ++j) {
-                          centre_valid[j] = (centres[static_cast<size_t>(tile)] >> j) & 1 ? -1 : 0;
-                          packet.valid[j] = centre_valid[j];
-                        }
-                        Eigen::Vector3f radiance[16], color[16];
-                        Shade(tile, u0, v0, &packet,
-                              near_object(tile) ? sampling : background_sampling, radiance, color);
-                        finish(u0, v0, centre_valid, radiance, color);
-                      }
-                    });
+  for_each_tile([&](int tile, int u0, int v0, TilePacket* packet) {
+    alignas(64) int centre_valid[16];
+    for (int j = 0; j < 16; ++j) {
+      centre_valid[j] = (centres[static_cast<size_t>(tile)] >> j) & 1 ? -1 : 0;
+      packet->valid[j] = centre_valid[j];
+    }
+    Eigen::Vector3f radiance[16], color[16];
+    Shade(tile, u0, v0, packet, near_object(tile) ? sampling : background_sampling, radiance,
+          color);
+    finish(u0, v0, centre_valid, radiance, color);
+  });
 }
 
 void Renderer::Impl::FramePasses::DenoiseColour() {

@@ -313,20 +313,24 @@ float PrincipledBsdf::Pdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) 
 
 std::optional<Eigen::Vector3f> PrincipledBsdf::SampleDirection(const Eigen::Vector3f& wo,
                                                                float u_lobe,
-                                                               const Eigen::Vector2f& u) const {
+                                                               const Eigen::Vector2f& u,
+                                                               bool* glossy) const {
   if (wo.z() <= 0) return std::nullopt;
   const ViewTerms& view = View(wo);
   Eigen::Vector3f wi;
+  bool from_glossy = true;
   if (u_lobe < view.p_coat) {
     wi = Reflect(wo, SampleVisibleNormal(wo, coat_alpha_, coat_alpha_, u));
   } else if ((u_lobe - view.p_coat) / (1 - view.p_coat) < view.p_specular) {
     wi = Reflect(wo, SampleVisibleNormal(wo, alpha_x_, alpha_y_, u));
   } else {  // cosine-weighted
+    from_glossy = false;
     const float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
     wi =
         Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x())));
   }
   if (wi.z() <= 0) return std::nullopt;
+  if (glossy) *glossy = from_glossy;
   return wi;
 }
 

@@ -95,9 +95,12 @@ class PrincipledBsdf {
   std::optional<Sampled> Sample(const Eigen::Vector3f& wo, float u_lobe,
                                 const Eigen::Vector2f& u) const;
   // Sample's direction alone (wi.z > 0), for a caller that evaluates it later (in EvalLanes):
-  // Sample is this, then EvalWithPdf, refused where the density is not positive.
+  // Sample is this, then EvalWithPdf, refused where the density is not positive. `glossy`, if
+  // given, tells whether a glossy lobe (the specular layer or the coat) drew it rather than the
+  // diffuse one: Blender's glossy and diffuse bounces.
   std::optional<Eigen::Vector3f> SampleDirection(const Eigen::Vector3f& wo, float u_lobe,
-                                                 const Eigen::Vector2f& u) const;
+                                                 const Eigen::Vector2f& u,
+                                                 bool* glossy = nullptr) const;
   // Writes the pair (wo, wi) and what this BSDF's evaluation needs at wo into lane i of `lanes`.
   void ToLanes(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, BsdfLanes* lanes, int i) const;
 

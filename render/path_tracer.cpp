@@ -713,6 +713,19 @@ struct PathTracer::Impl {
   // Whether any lane goes on.
   bool ContinuePaths(Packet* k, int depth) const;
   void TraceShadows(Packet* k) const;
+
+  // Clamp Indirect (Cycles' kernel_accum_clamp): a contribution of indirect light scaled to an
+  // RGB sum of at most scene.clamp_indirect. Light a path's segment `depth` finds is indirect
+  // from the third segment on (two bounces before it); a light sample from the second vertex on.
+  Eigen::Vector3f ClampIndirect(const Eigen::Vector3f& c) const {
+    const float sum = c.cwiseAbs().sum();
+    return scene.clamp_indirect > 0 && sum > scene.clamp_indirect
+               ? Eigen::Vector3f(c * (scene.clamp_indirect / sum))
+               : c;
+  }
+  Eigen::Vector3f ClampEmission(const Eigen::Vector3f& c, int depth) const {
+    return depth >= 2 ? ClampIndirect(c) : c;
+  }
 };
 
 PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
@@ -964,6 +977,10 @@ struct PathTracer::Impl::Packet {
   // The smallest BSDF sampling density of the path's bounces so far (infinite before the first):
   // Filter Glossy widens the lobes the path meets after an unlikely bounce.
   float min_pdf[16];
+  // The path's glossy bounces so far, and whether its segment is its last (more glossy bounces
+  // than glossy_bounces: only the light and sky it finds count).
+  int glossy[16];
+  bool last_segment[16];
 
   // A bounce's shading, between its passes: the surface, its frame and BSDF, wo in that frame,
   // the offset origin (eps along the geometric normal), the light sample (its pdf times its
@@ -978,6 +995,7 @@ struct PathTracer::Impl::Packet {
   float light_pdf[16];
   bool light_delta[16];
   int nee_lane[16], next_lane[16];
+  bool next_glossy[16];  // a glossy lobe drew next_wi
   BsdfLanes evals;
   // The shadow rays and what each adds to its path's value if nothing blocks it.
   RTCRay16 shadow;
@@ -1051,6 +1069,8 @@ void PathTracer::Impl::StartPaths(const CameraRays& c, Packet* k) const {
     k->throughput[j].setOnes();
     k->prev_pdf[j] = 0;
     k->min_pdf[j] = kInf;
+    k->glossy[j] = 0;
+    k->last_segment[j] = false;
     k->cone_width[j] = 0;
     k->cone_spread[j] = c.pixel_spread;
     const PixelSampler sampler(k->seed[j], static_cast<uint32_t>(k->sample[j]));
@@ -1105,7 +1125,7 @@ bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
       float pdf;
       if (!HitLight(lights[s], o, k->dir[j], seg, &le, &pdf)) continue;
       const float w = depth == 0 ? 1.0f : PowerHeuristic(k->prev_pdf[j], select_pdf(s) * pdf);
-      k->value[j] += k->throughput[j].cwiseProduct(le) * w;
+      k->value[j] += ClampEmission(k->throughput[j].cwiseProduct(le) * w, depth);
     }
     if (!hit) {
       if (environment) {
@@ -1115,12 +1135,12 @@ bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
                             : PowerHeuristic(k->prev_pdf[j],
                                              select_pdf(num_lights) *
                                                  environment->Pdf(k->dir[j], k->prev_normal[j]));
-        k->value[j] += k->throughput[j].cwiseProduct(le) * w;
+        k->value[j] += ClampEmission(k->throughput[j].cwiseProduct(le) * w, depth);
       }
       k->active[j] = 0;
       continue;
     }
-    if (!shade) {
+    if (!shade || k->last_segment[j]) {
       k->active[j] = 0;
       continue;
     }
@@ -1207,7 +1227,8 @@ void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
     }
 
     // The BSDF's sample continues the path.
-    if (const auto wi = bsdf.SampleDirection(wo, u_choice.y(), sampler.Get2D(dim + 2))) {
+    if (const auto wi =
+            bsdf.SampleDirection(wo, u_choice.y(), sampler.Get2D(dim + 2), &k->next_glossy[j])) {
       k->next_wi[j] = *wi;
       k->next_lane[j] = evals.count++;
       bsdf.ToLanes(wo, *wi, &evals, k->next_lane[j]);
@@ -1246,8 +1267,9 @@ bool PathTracer::Impl::ContinuePaths(Packet* k, int depth) const {
     if (const int i = k->nee_lane[j]; i >= 0) {
       const LightSample& ls = k->light_sample[j];
       const float w = k->light_delta[j] ? 1.0f : PowerHeuristic(k->light_pdf[j], evals.pdf[i]);
-      const Eigen::Vector3f c = k->throughput[j].cwiseProduct(lane_f(i)).cwiseProduct(ls.value) *
-                                (k->nee_wi[j].z() * w / k->light_pdf[j]);
+      Eigen::Vector3f c = k->throughput[j].cwiseProduct(lane_f(i)).cwiseProduct(ls.value) *
+                          (k->nee_wi[j].z() * w / k->light_pdf[j]);
+      if (depth >= 1) c = ClampIndirect(c);
       if (c.allFinite() && c.maxCoeff() > 0) {
         k->shadow_value[j] = c;
         k->shadow_valid[j] = -1;
@@ -1285,6 +1307,8 @@ bool PathTracer::Impl::ContinuePaths(Packet* k, int depth) const {
     k->cone_spread[j] += pdf > 1 ? std::sqrt(k->bsdf[j]->alpha_x() * k->bsdf[j]->alpha_y()) : 1.0f;
     k->prev_normal[j] = surf.ns;
     k->dir[j] = wi;
+    k->glossy[j] += k->next_glossy[j] ? 1 : 0;
+    k->last_segment[j] = k->glossy[j] > scene.glossy_bounces;
     k->active[j] = -1;
     any = true;
     SetRayLane(&k->rh.ray, j, k->p_off[j], wi, 0, kInf);

@@ -56,6 +56,14 @@ struct PathTracerScene {
   std::vector<LightSource> lights;
   Environment environment;
   int bounces = 3;
+  // Of the bounces, how many may be glossy (Blender's Glossy bounces; RenderOptions): after one
+  // more, the path only gathers the light and sky its segment finds, as after its last bounce.
+  int glossy_bounces = 64;
+  // Cycles' Clamp Indirect (RenderOptions::clamp_indirect; 0: off): a path's contribution of
+  // light that met a surface before the one the path's first or second vertex is (emission found
+  // after two bounces or more, a light sample from the second vertex on) is scaled down to an
+  // RGB sum of at most this.
+  float clamp_indirect = 0.0f;
   float near_mm = 1.0f, far_mm = 1e7f;  // camera rays' clip (depth along the optical axis)
   // Evaluate the BSDF lane by lane (PrincipledBsdf::EvalWithPdf) instead of a packet's lanes at
   // once in SIMD (EvalLanes): the reference the tests hold the SIMD path to.

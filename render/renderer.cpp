@@ -70,6 +70,10 @@ bool RenderOptions::Check(std::string* why) const {
     *why = "bounces must be 0 to 64";
   } else if (!(filter_glossy >= 0 && filter_glossy <= 10)) {
     *why = "filter_glossy must be 0 (off) to 10 (Cycles' Filter Glossy; Blender's default 1)";
+  } else if (glossy_bounces < 0 || glossy_bounces > 1024) {
+    *why = "glossy_bounces must be 0 to 1024 (at or above bounces: no limit of their own)";
+  } else if (!(clamp_indirect >= 0 && clamp_indirect <= 1e8)) {
+    *why = "clamp_indirect must be 0 (off) to 1e8 (Cycles' Clamp Indirect; Blender's default 10)";
   } else if (!(exposure >= -20 && exposure <= 20)) {
     *why = "exposure must lie between -20 and 20 stops";
   } else if (mode == Mode::kPbr && supersampling != 1) {
@@ -420,6 +424,8 @@ void Renderer::Impl::BuildTracer() {
   pts.bounces = options.bounces;
   pts.scalar_shading = options.shading == RenderOptions::Shading::kScalar;
   pts.filter_glossy = static_cast<float>(options.filter_glossy);
+  pts.glossy_bounces = options.glossy_bounces;
+  pts.clamp_indirect = static_cast<float>(options.clamp_indirect);
   pts.near_mm = static_cast<float>(options.near_mm);
   pts.far_mm = static_cast<float>(options.far_mm);
   pts.floor = scene.floor_material;

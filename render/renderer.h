@@ -62,6 +62,15 @@ struct RenderOptions {
   // a glossy part onto a diffuse one and seen in another glossy part) lose most of their noise
   // for some bias; the first surface a camera ray meets is never changed.
   double filter_glossy = 0.0;
+  // pbr: of the bounces, how many may be glossy (Blender's Glossy bounces; BlenderProc sets 0):
+  // a path whose BSDF sample comes from a glossy lobe once more than this only gathers the light
+  // and sky its next segment finds. At or above `bounces`: no limit of their own.
+  int glossy_bounces = 64;
+  // pbr: Cycles' Clamp Indirect (Blender's default 10, cadsynth's 0: off): a path's light that
+  // met more than one surface (found after two bounces, or sampled from the second surface on)
+  // is scaled down to an RGB sum of at most this, in linear radiance before the exposure.
+  // Biased (darker), as in Cycles; fireflies from rare paths are cut.
+  double clamp_indirect = 0.0;
   // pbr: how the BSDF is evaluated: kSimd, a packet's lanes four at a time (EvalLanes); kScalar,
   // lane by lane (PrincipledBsdf::EvalWithPdf), the reference the tests hold the SIMD path to.
   // The same image to within float rounding (to the byte on x86-64 builds without FMA).
@@ -137,6 +146,14 @@ struct RenderOptions {
           Field{"filter_glossy", "number",
                 "pbr: Cycles' Filter Glossy: widen glossy lobes after unlikely bounces, less "
                 "noise for some bias (0: off, Blender's default 1; 0-10)"});
+    visit(o.glossy_bounces,
+          Field{"glossy_bounces", "integer",
+                "pbr: of the bounces, at most this many glossy ones (Blender's Glossy bounces; "
+                "BlenderProc's 0; at or above bounces: no limit)"});
+    visit(o.clamp_indirect,
+          Field{"clamp_indirect", "number",
+                "pbr: Cycles' Clamp Indirect: indirect light of a path scaled to an RGB sum of "
+                "at most this (0: off, Blender's default 10)"});
     visit(o.shading,
           Field{"shading",
                 "choice",

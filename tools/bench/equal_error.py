@@ -132,6 +132,10 @@ class Scene:
         self.denoiser = "network"
         self._fixtures = None  # fixtures(), once
         self.filter_glossy = 0.0  # both renderers' (render.filter_glossy, Cycles' blur_glossy)
+        # Both renderers' glossy bounce limit and Clamp Indirect (render.glossy_bounces and
+        # render.clamp_indirect; Cycles' glossy_bounces and sample_clamp_indirect).
+        self.glossy_bounces = 64
+        self.clamp_indirect = 0.0
         self.background_samples = 0  # render.background_samples of the curves (0: off)
         if name == "workcell":
             case = cwc.CASES["workcell"]
@@ -178,7 +182,8 @@ class Scene:
                   f"min_samples: {min(self.min_samples, samples) if threshold else 0}, "
                   + (f"background_samples: {min(background, samples)}, " if background else "") +
                   f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
-                  f"filter_glossy: {self.filter_glossy}, seed: {seed}}}")
+                  f"filter_glossy: {self.filter_glossy}, glossy_bounces: {self.glossy_bounces}, "
+                  f"clamp_indirect: {self.clamp_indirect}, seed: {seed}}}")
         if self.name in ("workcell", "tote"):
             text = cwc.recipe(self.material, self.lights, self.world, samples, self.shown)
             text = re.sub(r"^render: .*$", render, text, flags=re.M)
@@ -260,7 +265,8 @@ def cycles_run(scene, dataset, samples, threshold, seed, blender, tag):
             "output": os.path.join(scene.out, f"cycles_{tag}.exr"),
             "part_materials": cwc.rules(scene.material), "floor_material": cwc.LAMBERT,
             "lights": [cwc.blender_light(l) for l in scene.lights], "world": scene.world,
-            "fixtures": scene.fixtures(), "filter_glossy": scene.filter_glossy}
+            "fixtures": scene.fixtures(), "filter_glossy": scene.filter_glossy,
+            "glossy_bounces": scene.glossy_bounces, "clamp_indirect": scene.clamp_indirect}
     spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
     with open(spec_path, "w") as f:
         json.dump(spec, f, indent=1)
@@ -301,6 +307,12 @@ def main():
                         help="both renderers' Filter Glossy (render.filter_glossy, Cycles' "
                              "blur_glossy; Blender's default 1): less noise from glossy caustics "
                              "for some bias; each renderer's reference has it too")
+    parser.add_argument("--glossy-bounces", type=int, default=64,
+                        help="both renderers' glossy bounce limit (render.glossy_bounces, Cycles' "
+                             "glossy_bounces; BlenderProc sets 0)")
+    parser.add_argument("--clamp-indirect", type=float, default=0.0,
+                        help="both renderers' Clamp Indirect (render.clamp_indirect, Cycles' "
+                             "sample_clamp_indirect; Blender's default 10)")
     parser.add_argument("--background-samples", type=int, default=0,
                         help="cadsynth's curves again with render.background_samples N: the "
                              "samples as set where a 4 x 4 tile shows a part, N elsewhere")
@@ -315,9 +327,12 @@ def main():
     scene = Scene(args.scene, out, args.cadsynth)
     scene.min_samples = args.min_samples
     scene.filter_glossy = args.filter_glossy
+    scene.glossy_bounces = args.glossy_bounces
+    scene.clamp_indirect = args.clamp_indirect
     renderers = args.renderers.split(",")
     result = {"scene": args.scene, "reference_samples": args.reference_samples,
-              "filter_glossy": args.filter_glossy,
+              "filter_glossy": args.filter_glossy, "glossy_bounces": args.glossy_bounces,
+              "clamp_indirect": args.clamp_indirect,
               "background_samples": args.background_samples, "curves": {}}
 
     # cadsynth: the reference (another seed), then the curves.
@@ -453,9 +468,15 @@ def plot(result, path):
             ax.axhline(target, color="grey", linewidth=0.5)
         ax.set_xlabel("seconds per frame (2 cores)")
         ax.set_ylabel(f"relative RMSE, {region} pixels")
-        glossy = result.get("filter_glossy", 0.0)
+        paths = []
+        if result.get("filter_glossy", 0.0):
+            paths.append(f"Filter Glossy {result['filter_glossy']:g}")
+        if result.get("glossy_bounces", 64) < 3:
+            paths.append(f"glossy bounces {result['glossy_bounces']}")
+        if result.get("clamp_indirect", 0.0):
+            paths.append(f"Clamp Indirect {result['clamp_indirect']:g}")
         ax.set_title(f"{result['scene']}: {region}"
-                     + (f" (Filter Glossy {glossy:g})" if glossy else ""))
+                     + (f" ({', '.join(paths)})" if paths else ""), fontsize=9)
         ax.grid(True, which="both", linewidth=0.2)
     # One legend for both, below them (inside, it hid the curves).
     handles, labels = axes[0].get_legend_handles_labels()

@@ -9,8 +9,9 @@
 # poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
 # normals), scene_gt_world.json and scene_camera.json, and the spec's fixtures (PLY files in the
 # world frame). Cycles is set up as docs/testing.md's "Checked against Blender Cycles" says: GGX,
-# no clamping, no glossy filter (unless the spec sets filter_glossy, cadsynth's
-# render.filter_glossy), a 1-pixel box filter, no light threshold, no denoising or adaptive
+# no clamping, no glossy filter and no separate glossy bounce limit (unless the spec sets
+# clamp_indirect, filter_glossy or glossy_bounces: cadsynth's render options of those names),
+# a 1-pixel box filter, no light threshold, no denoising or adaptive
 # sampling (unless the spec sets adaptive_threshold), the same bounces. The result is written as
 # a 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).
 import fnmatch
@@ -171,10 +172,11 @@ def main():
     cy.use_denoising = False
     cy.seed = spec.get("seed", 0)
     cy.max_bounces = spec["bounces"]
-    cy.diffuse_bounces = cy.glossy_bounces = cy.transmission_bounces = spec["bounces"]
+    cy.diffuse_bounces = cy.transmission_bounces = spec["bounces"]
+    cy.glossy_bounces = min(spec["bounces"], spec.get("glossy_bounces", 64))
     cy.transparent_max_bounces = 0
     cy.sample_clamp_direct = 0.0
-    cy.sample_clamp_indirect = 0.0
+    cy.sample_clamp_indirect = spec.get("clamp_indirect", 0.0)  # cadsynth's render.clamp_indirect
     cy.blur_glossy = spec.get("filter_glossy", 0.0)  # cadsynth's render.filter_glossy
     cy.light_sampling_threshold = 0.0
     cy.caustics_reflective = cy.caustics_refractive = True

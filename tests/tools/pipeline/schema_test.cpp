@@ -121,7 +121,7 @@ TEST(Schema, ChangingAnyOptionChangesTheRunKey) {
             22);
   EXPECT_EQ(ForEachChange<RenderOptions>(
                 spec, [](RunSpec& s) -> RenderOptions& { return s.render; }, check),
-            23);
+            25);
   // Each field of `Options` in `base` changes base's key to one of its own.
   const auto each_field = [&](auto options, const RunSpec& base, auto select) {
     const std::string base_key = RunKey(base, prepared, views);

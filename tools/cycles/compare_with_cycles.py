@@ -161,6 +161,14 @@ CASES = {
     "plastic": (PLASTIC, [RECT], {"color": [0.05, 0.05, 0.05], "strength": 1.0}, False,
                 "Principled dielectric; Blender 3's diffuse is Disney's, not energy-conserving"),
 }
+# BlenderProc's light paths (render.glossy_bounces 0, Cycles' glossy_bounces; render.clamp_indirect,
+# Cycles' Clamp Indirect) on the workcell, strict: every surface there has one lobe in both
+# renderers (GGX metals, Lambert plastic and floor), so which bounce is glossy is the same. The
+# metals stop mirroring each other; the clamp, far below Blender's default 10 in these units,
+# cuts a share of the Lambert parts' and floor's indirect light.
+CASES["light_paths"] = CASES["workcell"][:3] + (
+    True, "the workcell with glossy bounces 0 and Clamp Indirect 0.05 in both",
+    dict(WORKCELL, glossy_bounces=0, clamp_indirect=0.05))
 
 
 def sphere_obj(path, radius=40.0, segments=96, rings=48):
@@ -250,7 +258,9 @@ def recipe(material, lights, world, samples, shown):
            + "}",
            f"sweep: {{yaw: [{yaw}], pitch: [{pitch}], radius: [{radius} m]}}",
            f"render: {{mode: pbr, samples: {samples}, bounces: 3, hdr: true, view: standard, "
-           f"filter_glossy: {shown.get('filter_glossy', 0)}}}",
+           f"filter_glossy: {shown.get('filter_glossy', 0)}, "
+           f"glossy_bounces: {shown.get('glossy_bounces', 64)}, "
+           f"clamp_indirect: {shown.get('clamp_indirect', 0)}}}",
            "materials:",
            f"  floor: {mat(shown.get('floor', LAMBERT))}",
            "  assign:"]
@@ -317,6 +327,8 @@ def compare_frame(args, label, sid, shown, material, lights, world, strict, note
     spec = {"dataset": dataset, "scene_id": sid, "im_id": 0, "width": shown["camera"][0],
             "height": shown["camera"][1], "samples": args.samples, "bounces": 3,
             "filter_glossy": shown.get("filter_glossy", 0.0),
+            "glossy_bounces": shown.get("glossy_bounces", 64),
+            "clamp_indirect": shown.get("clamp_indirect", 0.0),
             "output": os.path.join(out, f"{label}_cycles.exr"),
             "part_materials": rules(material),
             "floor_material": shown.get("floor", LAMBERT),

@@ -59,10 +59,9 @@ struct PathTracerScene {
   // Of the bounces, how many may be glossy (Blender's Glossy bounces; RenderOptions): after one
   // more, the path only gathers the light and sky its segment finds, as after its last bounce.
   int glossy_bounces = 64;
-  // Cycles' Clamp Indirect (RenderOptions::clamp_indirect; 0: off): a path's contribution of
-  // light that met a surface before the one the path's first or second vertex is (emission found
-  // after two bounces or more, a light sample from the second vertex on) is scaled down to an
-  // RGB sum of at most this.
+  // Cycles' Clamp Indirect (RenderOptions::clamp_indirect; 0: off): a path's contributions of
+  // indirect light (emission its third segment or a later one finds, a light sample from its
+  // second vertex on) are scaled down to an RGB sum of at most this.
   float clamp_indirect = 0.0f;
   float near_mm = 1.0f, far_mm = 1e7f;  // camera rays' clip (depth along the optical axis)
   // Evaluate the BSDF lane by lane (PrincipledBsdf::EvalWithPdf) instead of a packet's lanes at

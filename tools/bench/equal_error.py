@@ -131,11 +131,9 @@ class Scene:
         self.denoise = False
         self.denoiser = "network"
         self._fixtures = None  # fixtures(), once
-        self.filter_glossy = 0.0  # both renderers' (render.filter_glossy, Cycles' blur_glossy)
-        # Both renderers' glossy bounce limit and Clamp Indirect (render.glossy_bounces and
-        # render.clamp_indirect; Cycles' glossy_bounces and sample_clamp_indirect).
-        self.glossy_bounces = 64
-        self.clamp_indirect = 0.0
+        # Both renderers' light-path settings (Filter Glossy, the glossy bounce limit, Clamp
+        # Indirect: cwc.LIGHT_PATHS), their references' too.
+        self.light_paths = dict(cwc.LIGHT_PATHS)
         self.background_samples = 0  # render.background_samples of the curves (0: off)
         if name == "workcell":
             case = cwc.CASES["workcell"]
@@ -182,8 +180,7 @@ class Scene:
                   f"min_samples: {min(self.min_samples, samples) if threshold else 0}, "
                   + (f"background_samples: {min(background, samples)}, " if background else "") +
                   f"bounces: 3, hdr: true, view: {'filmic' if self.filmic else 'standard'}, "
-                  f"filter_glossy: {self.filter_glossy}, glossy_bounces: {self.glossy_bounces}, "
-                  f"clamp_indirect: {self.clamp_indirect}, seed: {seed}}}")
+                  f"{cwc.light_paths_yaml(self.light_paths)}, seed: {seed}}}")
         if self.name in ("workcell", "tote"):
             text = cwc.recipe(self.material, self.lights, self.world, samples, self.shown)
             text = re.sub(r"^render: .*$", render, text, flags=re.M)
@@ -221,7 +218,7 @@ class Scene:
         background = self.background_samples if mode == "pbr" and tag != "reference" else 0
         text = self.recipe(samples, threshold, seed, mode, views, background)
         dataset = os.path.join(self.out, f"{self.name}_{tag}")
-        # Reused only when made from the same recipe (samples, filter_glossy, ...).
+        # Reused only when made from the same recipe (samples, light paths, ...).
         if (reuse and os.path.isdir(os.path.join(dataset, "train")) and os.path.exists(path)
                 and open(path).read() == text):
             return dataset, float("nan"), float("nan")
@@ -265,8 +262,7 @@ def cycles_run(scene, dataset, samples, threshold, seed, blender, tag):
             "output": os.path.join(scene.out, f"cycles_{tag}.exr"),
             "part_materials": cwc.rules(scene.material), "floor_material": cwc.LAMBERT,
             "lights": [cwc.blender_light(l) for l in scene.lights], "world": scene.world,
-            "fixtures": scene.fixtures(), "filter_glossy": scene.filter_glossy,
-            "glossy_bounces": scene.glossy_bounces, "clamp_indirect": scene.clamp_indirect}
+            "fixtures": scene.fixtures(), **scene.light_paths}
     spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
     with open(spec_path, "w") as f:
         json.dump(spec, f, indent=1)
@@ -326,13 +322,12 @@ def main():
     out = os.path.abspath(args.out)
     scene = Scene(args.scene, out, args.cadsynth)
     scene.min_samples = args.min_samples
-    scene.filter_glossy = args.filter_glossy
-    scene.glossy_bounces = args.glossy_bounces
-    scene.clamp_indirect = args.clamp_indirect
+    scene.light_paths = {"filter_glossy": args.filter_glossy,
+                         "glossy_bounces": args.glossy_bounces,
+                         "clamp_indirect": args.clamp_indirect}
     renderers = args.renderers.split(",")
     result = {"scene": args.scene, "reference_samples": args.reference_samples,
-              "filter_glossy": args.filter_glossy, "glossy_bounces": args.glossy_bounces,
-              "clamp_indirect": args.clamp_indirect,
+              **scene.light_paths,
               "background_samples": args.background_samples, "curves": {}}
 
     # cadsynth: the reference (another seed), then the curves.

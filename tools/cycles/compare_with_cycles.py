@@ -171,6 +171,22 @@ CASES["light_paths"] = CASES["workcell"][:3] + (
     dict(WORKCELL, glossy_bounces=0, clamp_indirect=0.05))
 
 
+# The light-path settings cadsynth's recipe and the Cycles spec both take by these names
+# (render.filter_glossy, render.glossy_bounces, render.clamp_indirect; cycles_scene.py sets
+# blur_glossy, glossy_bounces and sample_clamp_indirect from them), and their values when unset.
+LIGHT_PATHS = {"filter_glossy": 0.0, "glossy_bounces": 64, "clamp_indirect": 0.0}
+
+
+def light_paths(shown):
+    """The light-path settings of a case's (or a bench scene's) dict, unset ones at LIGHT_PATHS."""
+    return {key: shown.get(key, unset) for key, unset in LIGHT_PATHS.items()}
+
+
+def light_paths_yaml(paths):
+    """The settings as flow-mapping entries of a recipe's render: section."""
+    return ", ".join(f"{key}: {value:g}" for key, value in paths.items())
+
+
 def sphere_obj(path, radius=40.0, segments=96, rings=48):
     vertices = [(0.0, 0.0, radius)]
     for i in range(1, rings):
@@ -258,9 +274,7 @@ def recipe(material, lights, world, samples, shown):
            + "}",
            f"sweep: {{yaw: [{yaw}], pitch: [{pitch}], radius: [{radius} m]}}",
            f"render: {{mode: pbr, samples: {samples}, bounces: 3, hdr: true, view: standard, "
-           f"filter_glossy: {shown.get('filter_glossy', 0)}, "
-           f"glossy_bounces: {shown.get('glossy_bounces', 64)}, "
-           f"clamp_indirect: {shown.get('clamp_indirect', 0)}}}",
+           f"{light_paths_yaml(light_paths(shown))}}}",
            "materials:",
            f"  floor: {mat(shown.get('floor', LAMBERT))}",
            "  assign:"]
@@ -326,9 +340,7 @@ def compare_frame(args, label, sid, shown, material, lights, world, strict, note
                    for m in os.listdir(os.path.join(frame, "mask_visib")))
     spec = {"dataset": dataset, "scene_id": sid, "im_id": 0, "width": shown["camera"][0],
             "height": shown["camera"][1], "samples": args.samples, "bounces": 3,
-            "filter_glossy": shown.get("filter_glossy", 0.0),
-            "glossy_bounces": shown.get("glossy_bounces", 64),
-            "clamp_indirect": shown.get("clamp_indirect", 0.0),
+            **light_paths(shown),
             "output": os.path.join(out, f"{label}_cycles.exr"),
             "part_materials": rules(material),
             "floor_material": shown.get("floor", LAMBERT),

@@ -344,11 +344,7 @@ void Renderer::Impl::BuildWorld() {
     rtcAttachGeometryByID(world, geometry, static_cast<unsigned>(i));
     rtcReleaseGeometry(geometry);
     instance_rotation.push_back(scene.instances[i].world_from_model.linear().cast<float>());
-    const Instance& instance = scene.instances[i];
-    const size_t part = static_cast<size_t>(instance.part);
-    albedo_of.push_back(instance.color                    ? *instance.color
-                        : part < scene.part_colors.size() ? scene.part_colors[part]
-                                                          : Eigen::Vector3f(0.7f, 0.7f, 0.7f));
+    albedo_of.push_back(scene.InstanceColor(i));
   }
   if (scene.floor) AddFloor();
   AddFixtures();
@@ -452,15 +448,10 @@ void Renderer::Impl::BuildTracer() {
     ti.translation = instance.world_from_model.translation().cast<float>();
     ti.box_centre = buffers.box_centre;
     ti.box_size = buffers.box_size;
-    const int m = i < scene.instance_material.size() ? scene.instance_material[i] : -1;
-    if (m >= static_cast<int>(scene.materials.size()))
-      throw Error("renderer: instance '" + instance.name + "' refers to a missing material");
-    // Part colours are sRGB (CAD files and the palette); materials take linear colours.
-    ti.material = m < 0 ? Scene::DefaultMaterial(albedo_of[i]) : scene.materials[m];
+    ti.material = scene.InstanceMaterial(i);
     Eigen::Vector3f linear;
     for (int c = 0; c < 3; ++c) linear[c] = SrgbToLinear(albedo_of[i][c]);
     instance_linear.push_back(linear);
-    if (ti.material.base_from_part) ti.material.surface.base_color = linear;
     pts.instances.push_back(std::move(ti));
   }
   std::string why;

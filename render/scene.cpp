@@ -2,9 +2,31 @@
 
 #include <cmath>
 
+#include "cad/core/error.h"
 #include "render/image.h"
 
 namespace cadsynth {
+
+Eigen::Vector3f Scene::InstanceColor(size_t i) const {
+  const Instance& instance = instances.at(i);
+  const size_t part = static_cast<size_t>(instance.part);
+  return instance.color              ? *instance.color
+         : part < part_colors.size() ? part_colors[part]
+                                     : Eigen::Vector3f(0.7f, 0.7f, 0.7f);
+}
+
+Material Scene::InstanceMaterial(size_t i) const {
+  const Eigen::Vector3f srgb = InstanceColor(i);
+  const int m = i < instance_material.size() ? instance_material[i] : -1;
+  if (m >= static_cast<int>(materials.size()))
+    throw Error("renderer: instance '" + instances[i].name + "' refers to a missing material");
+  Material material = m < 0 ? DefaultMaterial(srgb) : materials[static_cast<size_t>(m)];
+  // Part colours are sRGB (CAD files and the palette); materials take linear colours.
+  if (material.base_from_part) {
+    for (int c = 0; c < 3; ++c) material.surface.base_color[c] = SrgbToLinear(srgb[c]);
+  }
+  return material;
+}
 
 Material Scene::DefaultMaterial(const Eigen::Vector3f& srgb) {
   Material m;

@@ -99,6 +99,14 @@ struct Scene {
   std::vector<LightSource> light_sources = DefaultLightSources();
   Environment environment;
 
+  // Instance i's colour (sRGB): its own, else its part's, else light grey (0.7).
+  Eigen::Vector3f InstanceColor(size_t i) const;
+  // Instance i's material in the pbr mode as the renderer shades it (before any randomisation):
+  // its assigned one, or DefaultMaterial of its colour, with a base colour taken from the part
+  // (Material::base_from_part) resolved to the instance's colour, linear. Throws if
+  // instance_material names a missing material.
+  Material InstanceMaterial(size_t i) const;
+
   // A dielectric of base colour `srgb` (CAD colours are sRGB), roughness 0.45, specular 0.5.
   static Material DefaultMaterial(const Eigen::Vector3f& srgb);
   static Material DefaultFloorMaterial(const Eigen::Vector3f& srgb);

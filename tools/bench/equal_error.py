@@ -103,11 +103,6 @@ def regions(frame_dir, im_id, shape):
     return {"all": np.ones(shape, dtype=bool), "parts": parts, "edges": edge & parts}
 
 
-def rel_rmse(x, ref, mask):
-    d = x[mask] - ref[mask]
-    return float(math.sqrt(np.mean(d * d)) / max(float(np.mean(ref[mask])), 1e-9))
-
-
 def time_to(points, target):
     """Seconds to reach `target` error on a curve of (seconds, error) points, interpolated
     log-log between the first pair that brackets it; None if never reached."""
@@ -131,6 +126,7 @@ class Scene:
         self.denoise = False
         self.denoiser = "network"
         self._fixtures = None  # fixtures(), once
+        self._looks = {}  # look(), once
         # Both renderers' light-path settings (Filter Glossy, the glossy bounce limit, Clamp
         # Indirect: cwc.LIGHT_PATHS), their references' too.
         self.light_paths = dict(cwc.LIGHT_PATHS)
@@ -148,6 +144,14 @@ class Scene:
             self.exposure, self.filmic = 0.0, True
         else:
             raise SystemExit(f"unknown scene '{name}': workcell, tote or pbr_demo")
+
+    def look(self, sid):
+        """Scene sid's look in the pbr mode (Run.look), once per scene."""
+        if sid not in self._looks:
+            import cadsynth
+            run = cadsynth.Recipe.from_yaml(self.recipe(1, 0.0, 0), f"{self.name}.yaml").prepare()
+            self._looks.update({i: run.look(i) for i in range(run.scenes)})
+        return self._looks[sid]
 
     def views(self):
         return {"workcell": WORKCELL_VIEWS, "tote": TOTE_VIEWS}.get(self.name, PBR_DEMO_VIEWS)
@@ -255,14 +259,21 @@ def write_ply(path, vertices, normals, triangles):
         out.write(f.tobytes())
 
 
-def cycles_run(scene, dataset, samples, threshold, seed, blender, tag):
-    spec = {"dataset": dataset, "scene_id": 0, "im_id": 0, "width": scene.shown["camera"][0],
-            "height": scene.shown["camera"][1], "samples": samples, "bounces": 3, "seed": seed,
+def cycles_run(scene, dataset, samples, threshold, seed, blender, tag, sid=0):
+    """Renders frame (scene sid, image 0) of `dataset` in Cycles: its EXR and render seconds."""
+    camera = json.load(open(os.path.join(dataset, "camera.json")))
+    spec = {"dataset": dataset, "scene_id": sid, "im_id": 0, "width": camera["width"],
+            "height": camera["height"], "samples": samples, "bounces": 3, "seed": seed,
             "adaptive_threshold": threshold,
-            "output": os.path.join(scene.out, f"cycles_{tag}.exr"),
-            "part_materials": cwc.rules(scene.material), "floor_material": cwc.LAMBERT,
-            "lights": [cwc.blender_light(l) for l in scene.lights], "world": scene.world,
-            "fixtures": scene.fixtures(), **scene.light_paths}
+            "output": os.path.join(scene.out, f"cycles_{tag}.exr"), **scene.light_paths}
+    if scene.name == "pbr_demo":
+        # Everything from cadsynth's own look of the scene (Run.look): each instance's material
+        # (textures rebuilt in kind from Cycles' nodes), the floor's, the lights and the world.
+        spec.update(cwc.spec_from_look(scene.look(sid)))
+    else:
+        spec.update({"part_materials": cwc.rules(scene.material), "floor_material": cwc.LAMBERT,
+                     "lights": [cwc.blender_light(l) for l in scene.lights],
+                     "world": scene.world, "fixtures": scene.fixtures()})
     spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
     with open(spec_path, "w") as f:
         json.dump(spec, f, indent=1)
@@ -344,7 +355,7 @@ def main():
     print(f"{args.scene}: cadsynth reference {args.reference_samples} spp, "
           f"{ref_seconds:.1f} s per frame")
 
-    def errors(images):
+    def errors(images, refs=refs):
         """Pooled over the measured frames: RMSE over their regions' values / mean value."""
         e = {}
         for region in ("all", "parts", "edges"):
@@ -400,21 +411,33 @@ def main():
             result["curves"][name] = earlier["curves"][name]
 
     if "cycles" in renderers:
-        if args.scene == "pbr_demo":
-            sys.exit("Cycles cannot rebuild pbr_demo (procedural textures): workcell or tote")
-        ref_path, ref_t = cycles_run(scene, ref_dataset, args.reference_samples, 0.0, 7,
-                                     args.blender, "reference")
-        key = scene.frames()[0]
-        cycles_ref = display(read_exr(ref_path), scene.exposure, scene.filmic)
-        print(f"  Cycles reference {args.reference_samples} spp: {ref_t:.1f} s")
+        # Each measured frame rebuilt from cadsynth's reference dataset (the same poses and
+        # camera), its own Cycles reference at --reference-samples with another seed.
+        cycles_refs = {}
+        ref_t = 0.0
+        for folder, im in scene.frames():
+            ref_path, t = cycles_run(scene, ref_dataset, args.reference_samples, 0.0, 7,
+                                     args.blender, f"reference_{folder}", int(folder))
+            ref_t += t
+            cycles_refs[(folder, im)] = display(read_exr(ref_path), scene.exposure, scene.filmic)
+        print(f"  Cycles reference {args.reference_samples} spp: "
+              f"{ref_t / len(cycles_refs):.1f} s per frame")
+        # How alike the two scenes look: the mean displayed value over the parts, each
+        # renderer's reference (pbr_demo's textures are rebuilt in kind, not copied).
+        result["reference_parts_mean"] = {
+            name: float(np.mean([np.mean(r[key][masks[key]["parts"]]) for key in r]))
+            for name, r in (("cadsynth", refs), ("Cycles", cycles_refs))}
+        print(f"  parts' mean value in the references: {result['reference_parts_mean']}")
 
         def cycles_point(tag, samples, threshold):
-            path, seconds = cycles_run(scene, ref_dataset, samples, threshold, 0, args.blender,
-                                       tag)
-            x = display(read_exr(path), scene.exposure, scene.filmic)
-            point = {"samples": samples, "threshold": threshold, "seconds": seconds}
-            for region in ("all", "parts", "edges"):
-                point[region] = rel_rmse(x, cycles_ref, masks[key][region])
+            images, seconds = {}, 0.0
+            for folder, im in scene.frames():
+                path, t = cycles_run(scene, ref_dataset, samples, threshold, 0, args.blender,
+                                     f"{tag}_{folder}", int(folder))
+                seconds += t / len(scene.frames())
+                images[(folder, im)] = display(read_exr(path), scene.exposure, scene.filmic)
+            point = {"samples": samples, "threshold": threshold, "seconds": seconds,
+                     **errors(images, cycles_refs)}
             print(f"  Cycles   {tag:>12s}: {seconds:7.3f} s/frame  rel. RMSE all "
                   f"{point['all']:.4f}  parts {point['parts']:.4f}  edges {point['edges']:.4f}",
                   flush=True)

@@ -321,6 +321,35 @@ def blender_light(l):
     return b
 
 
+def spec_from_look(look):
+    """A scene's look in cadsynth (Run.look: its materials per instance, floor, lights and world)
+    as cycles_scene.py's spec takes it: instance_materials, floor_material (or floor: false),
+    floor_half_size_m, lights in m and rad, world. Fixtures and worlds other than a uniform one
+    are refused (the spec's fixtures need their meshes: equal_error.py's Scene.fixtures)."""
+    if look["fixtures"]:
+        raise SystemExit("Run.look: fixtures are rebuilt from Run.fixtures, not here")
+    env = look["environment"]
+    if env["type"] != "uniform":
+        raise SystemExit(f"Run.look: a {env['type']} world has no rebuild here (uniform only)")
+    lights = []
+    for l in look["lights"]:
+        b = {"type": l["type"], "color": l["color"], "direction": l["direction"],
+             "x_axis": l["x_axis"], "position_m": [c * 1e-3 for c in l["position"]],
+             "radius_m": l["radius"] * 1e-3, "size_m": [l["size_x"] * 1e-3, l["size_y"] * 1e-3],
+             "spot_size_rad": l["spot_size"], "spot_blend": l["spot_blend"],
+             "angle_rad": l["angle"]}
+        # A sun's strength (W/m^2) is LightSource::power, as the recipe's `strength`.
+        b["strength" if l["type"] == "sun" else "power"] = l["power"]
+        lights.append(b)
+    spec = {"instance_materials": look["instances"], "lights": lights,
+            "world": {"color": env["color"], "strength": env["strength"]},
+            "floor": look["floor"] is not None}
+    if look["floor"] is not None:
+        spec["floor_material"] = look["floor"]
+        spec["floor_half_size_m"] = look["floor_half_size"] * 1e-3
+    return spec
+
+
 def blender_env():
     """Blender's embedded Python finds its standard library (and numpy) from PATH's python3: keep
     a Python version manager's (pyenv) directories and variables away from it."""

@@ -103,7 +103,139 @@ def principled(name, m):
     bsdf.inputs["Clearcoat Roughness"].default_value = m.get("clearcoat_roughness", 0.03)
     bsdf.inputs["Sheen Tint"].default_value = 0.0
     mat.node_tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    if m.get("tangent") == "x" and m.get("anisotropic", 0.0) > 0.0:
+        # cadsynth's tangent `x`: the model's x axis (the object's), in the world. Tilted by a
+        # milliradian: on a face whose normal is x itself Cycles' frame (cross(N, T)) vanishes
+        # and the face renders black, where cadsynth takes any tangent of the face.
+        axis = nodes.new("ShaderNodeCombineXYZ")
+        axis.inputs["X"].default_value = 1.0
+        axis.inputs["Y"].default_value = axis.inputs["Z"].default_value = 1e-3
+        to_world = nodes.new("ShaderNodeVectorTransform")
+        to_world.vector_type = "VECTOR"
+        to_world.convert_from, to_world.convert_to = "OBJECT", "WORLD"
+        mat.node_tree.links.new(axis.outputs["Vector"], to_world.inputs["Vector"])
+        mat.node_tree.links.new(to_world.outputs["Vector"], bsdf.inputs["Tangent"])
+    if m.get("texture"):
+        texture(mat, bsdf, m)
     return mat
+
+
+def texture(mat, bsdf, m):
+    """cadsynth's procedural textures (render/material.cpp Pattern, EvalTexture) in kind, from
+    Cycles' own nodes: the same kinds, feature sizes and amounts, not the same patterns (Cycles'
+    Noise Texture is Perlin noise, cadsynth's value noise; no OSL in Debian's Blender). Enough
+    for a scene of the same look and difficulty; a pixel-by-pixel comparison needs untextured
+    materials. The texture frame: the object's coordinates (the model's, or the world's for the
+    floor), in mm as cadsynth's."""
+    t = m["texture"]
+    kind, s = t["type"], t["scale"]
+    if kind not in ("noise", "brushed", "wood"):
+        raise SystemExit(f"texture '{kind}': no Cycles rebuild (noise, brushed and wood have one)")
+    if t["bump"] > 0.0:
+        raise SystemExit(f"texture '{kind}' with bump {t['bump']}: no Cycles rebuild of bump")
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+
+    def math_node(op, a, b=None, clamp=False):
+        node = nodes.new("ShaderNodeMath")
+        node.operation = op
+        node.use_clamp = clamp
+        for i, v in enumerate((a, b)):
+            if v is None:
+                continue
+            if isinstance(v, (int, float)):
+                node.inputs[i].default_value = float(v)
+            else:
+                links.new(v, node.inputs[i])
+        return node.outputs["Value"]
+
+    def smoothstep(lo, hi, x):
+        node = nodes.new("ShaderNodeMapRange")
+        node.interpolation_type = "SMOOTHSTEP"
+        node.inputs["From Min"].default_value = lo
+        node.inputs["From Max"].default_value = hi
+        links.new(x, node.inputs["Value"])
+        return node.outputs["Result"]
+
+    def noise(vector, octaves, w=None):
+        node = nodes.new("ShaderNodeTexNoise")
+        node.noise_dimensions = "4D" if w is not None else "3D"
+        node.inputs["Scale"].default_value = 1.0
+        node.inputs["Detail"].default_value = octaves - 1
+        node.inputs["Roughness"].default_value = 0.5  # each octave half the amplitude
+        node.inputs["Distortion"].default_value = 0.0
+        links.new(vector, node.inputs["Vector"])
+        if w is not None:
+            links.new(w, node.inputs["W"])
+        return node.outputs["Fac"]
+
+    def scaled(per_axis_mm):
+        """The object's coordinates (m) in mm times per_axis_mm (x, y, z)."""
+        coords = nodes.new("ShaderNodeTexCoord")
+        node = nodes.new("ShaderNodeVectorMath")
+        node.operation = "MULTIPLY"
+        node.inputs[1].default_value = [1000.0 * f for f in per_axis_mm]
+        links.new(coords.outputs["Object"], node.inputs[0])
+        return node.outputs["Vector"]
+
+    def axis(vector, name):
+        node = nodes.new("ShaderNodeSeparateXYZ")
+        links.new(vector, node.inputs["Vector"])
+        return node.outputs[name]
+
+    if kind == "noise":
+        v = noise(scaled((1 / s, 1 / s, 1 / s)), 4)
+    elif kind == "brushed":
+        # Streaks along x, 4 `scale` long and a fiftieth of `scale` wide.
+        v = noise(scaled((1 / (4 * s), 50 / s, 50 / s)), 3)
+    else:
+        # Boards 8 `scale` wide across x, each its own tone (a white noise of the board's number)
+        # and grain (long streaks along y), growth rings across x, a dark seam between boards.
+        x = axis(scaled((1.0, 1.0, 1.0)), "X")
+        board = math_node("FLOOR", math_node("DIVIDE", x, 8 * s))
+        white = nodes.new("ShaderNodeTexWhiteNoise")
+        white.noise_dimensions = "1D"
+        links.new(board, white.inputs["W"])
+        tone = white.outputs["Value"]
+        grain = noise(scaled((20 / s, 1 / (4 * s), 20 / s)), 4, board)
+        w = math_node("ADD", math_node("DIVIDE", x, 1.5 * s),
+                      math_node("MULTIPLY", noise(scaled((0.1 / s,) * 3), 3,
+                                                  math_node("ADD", board, 0.5)), 2.0))
+        ring = math_node("FRACT", w)
+        band = math_node("MULTIPLY", smoothstep(0.0, 0.3, ring),
+                         math_node("SUBTRACT", 1.0, smoothstep(0.5, 1.0, ring)))
+        across = math_node("SUBTRACT", math_node("DIVIDE", x, 8 * s), board)
+        edge = math_node("MINIMUM", across, math_node("SUBTRACT", 1.0, across))
+        seam = math_node("SUBTRACT", 1.0, smoothstep(0.0, 0.004, edge))
+        v = math_node("ADD", math_node("ADD", math_node("MULTIPLY", grain, 0.45),
+                                       math_node("MULTIPLY", band, 0.2)),
+                      math_node("ADD", math_node("MULTIPLY", tone, 0.35), seam), clamp=True)
+    base = nodes.new("ShaderNodeRGB")
+    base.outputs["Color"].default_value = (*m["base_color"], 1.0)
+    if kind == "wood":
+        # The second colour blended in by amount x v; a coating, not metal.
+        mix = math_node("MULTIPLY", v, t["amount"])
+        blend = nodes.new("ShaderNodeMixRGB")
+        blend.blend_type = "MIX"
+        links.new(mix, blend.inputs["Fac"])
+        links.new(base.outputs["Color"], blend.inputs["Color1"])
+        blend.inputs["Color2"].default_value = (*t["color"], 1.0)
+        links.new(blend.outputs["Color"], bsdf.inputs["Base Color"])
+        links.new(math_node("MULTIPLY", math_node("SUBTRACT", 1.0, mix), m["metallic"]),
+                  bsdf.inputs["Metallic"])
+        links.new(math_node("ADD", math_node("MULTIPLY", math_node("SUBTRACT", v, 0.5),
+                                             t["roughness"]), m["roughness"], clamp=True),
+                  bsdf.inputs["Roughness"])
+        return
+    # Base colour x (1 + 2 amount (v - 0.5)), roughness + 2 roughness_amount (v - 0.5).
+    d = math_node("SUBTRACT", v, 0.5)
+    gain = math_node("ADD", math_node("MULTIPLY", d, 2 * t["amount"]), 1.0)
+    colour = nodes.new("ShaderNodeVectorMath")
+    colour.operation = "SCALE"
+    links.new(base.outputs["Color"], colour.inputs[0])
+    links.new(gain, colour.inputs["Scale"])
+    links.new(colour.outputs["Vector"], bsdf.inputs["Base Color"])
+    links.new(math_node("ADD", math_node("MULTIPLY", d, 2 * t["roughness"]), m["roughness"],
+                        clamp=True), bsdf.inputs["Roughness"])
 
 
 def orient(obj, direction, x_axis=(1.0, 0.0, 0.0)):
@@ -232,8 +364,18 @@ def main():
     part_names = {int(k): v["name"]
                   for k, v in json.load(open(f"{root}/models/models_cad.json")).items()}
     materials = {}
-    for p in placed:
+    # Per instance (Run.look's, in scene_gt_world.json's order), or by the rules below.
+    instance_materials = spec.get("instance_materials")
+    if instance_materials is not None and len(instance_materials) != len(placed):
+        raise SystemExit(f"{len(instance_materials)} instance materials for {len(placed)} "
+                         "instances")
+    for i, p in enumerate(placed):
         obj_id = p["obj_id"]
+        if instance_materials is not None:
+            obj = add_mesh(f"instance{i}", f"{root}/models/obj_{obj_id:06d}.ply",
+                           principled(f"instance{i}", instance_materials[i]))
+            obj.matrix_world = matrix(p["world_R_m2w"], [t * 1e-3 for t in p["world_t_m2w"]])
+            continue
         if obj_id not in materials:
             # The first rule whose glob matches the part's name, as cadsynth's materials.assign.
             part = part_names[obj_id]

@@ -11,17 +11,67 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <thread>
+#include <type_traits>
 
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
+#include "cad/core/schema.h"
 #include "tools/python/bindings.h"
 
 using namespace pybind11::literals;
 
 namespace cadsynth::python {
 namespace {
+
+// A described struct's fields (its static Fields) as a dict under their recipe keys (or internal
+// names), in the struct's units: lengths in mm, angles in radians, colours linear; choices by
+// name; vectors as lists.
+template <class T>
+py::object FieldValue(const T& value, const Field& field) {
+  if constexpr (std::is_enum_v<T>) {
+    return py::str(FieldText(value, field));
+  } else if constexpr (std::is_same_v<T, bool>) {
+    if (field.choices.size() == 2) return py::str(FieldText(value, field));
+    return py::bool_(value);
+  } else if constexpr (IsFixedVector<T>::value) {
+    py::list list;
+    for (int i = 0; i < value.size(); ++i) list.append(static_cast<double>(value[i]));
+    return list;
+  } else if constexpr (std::is_same_v<T, std::filesystem::path>) {
+    return py::str(value.string());
+  } else if constexpr (std::is_floating_point_v<T>) {
+    return py::float_(static_cast<double>(value));
+  } else if constexpr (std::is_integral_v<T>) {
+    return py::int_(value);
+  } else {
+    return py::str(FieldText(value, field));
+  }
+}
+
+template <class S>
+py::dict FieldsDict(const S& options) {
+  py::dict out;
+  S::Fields(options, [&](const auto& value, const Field& field) {
+    out[py::str(std::string(field.Name()))] = FieldValue(value, field);
+  });
+  return out;
+}
+
+// A pbr material: the surface's fields (PrincipledParams: base_color linear, metallic, ...,
+// distribution), multiscatter (bool), tangent, base_from_part, textured and texture (Texture's
+// fields, scale in mm; None without one).
+py::dict MaterialDict(const Material& material) {
+  py::dict out = FieldsDict(material.surface);
+  out["multiscatter"] = material.surface.multiscatter;
+  for (const auto& [key, value] : FieldsDict(material)) out[key] = value;
+  const bool textured = material.texture.kind != Texture::Kind::kNone;
+  out["textured"] = textured;
+  out["texture"] = textured ? py::object(FieldsDict(material.texture)) : py::object(py::none());
+  return out;
+}
 
 // Frames rendered ahead in a background thread (a TBB pipeline, frames in flight in parallel)
 // and handed over in order; the GIL is released while Python waits.
@@ -214,17 +264,9 @@ void BindRun(py::module_& m) {
               for (py::ssize_t i = 0; i < t; ++i) {
                 for (int c = 0; c < 3; ++c) tt(i, c) = mesh.triangles[i][c];
               }
-              const PrincipledParams& m = f.material.surface;
-              py::dict material(
-                  "base_color"_a =
-                      std::vector<float>{m.base_color[0], m.base_color[1], m.base_color[2]},
-                  "metallic"_a = m.metallic, "roughness"_a = m.roughness, "specular"_a = m.specular,
-                  "anisotropic"_a = m.anisotropic, "clearcoat"_a = m.clearcoat,
-                  "clearcoat_roughness"_a = m.clearcoat_roughness,
-                  "multiscatter"_a = m.multiscatter,
-                  "textured"_a = f.material.texture.kind != Texture::Kind::kNone);
               out.append(py::dict("name"_a = f.name, "vertices"_a = vertices, "normals"_a = normals,
-                                  "triangles"_a = triangles, "material"_a = material));
+                                  "triangles"_a = triangles,
+                                  "material"_a = MaterialDict(f.material)));
             }
             return out;
           },
@@ -232,8 +274,42 @@ void BindRun(py::module_& m) {
           R"(Scene `scene`'s fixtures (a pile's tote or container: geometry that is drawn but is
 no object), as traced: name, vertices (N x 3 float32, mm, world frame), normals (N x 3, or 0 x 3
 when the mesh has none), triangles (M x 3 uint32) and the pbr mode's material before any
-randomisation (linear base_color, metallic, roughness, specular, anisotropic, clearcoat,
-clearcoat_roughness, multiscatter; textured: whether a texture varies it). For rebuilding a frame in another renderer (tools/cycles).)")
+randomisation (as Run.look's). For rebuilding a frame in another renderer (tools/cycles).)")
+      .def(
+          "look",
+          [](const PyRun& r, size_t scene) {
+            const PreparedRun& p = r.source->prepared();
+            if (scene >= p.scenes.size()) {
+              throw py::index_error("scene " + std::to_string(scene) + " of " +
+                                    std::to_string(p.scenes.size()));
+            }
+            const Scene& s = p.scenes[scene];
+            py::list instances;
+            for (size_t i = 0; i < s.instances.size(); ++i) {
+              py::dict material = MaterialDict(s.InstanceMaterial(i));
+              material["name"] = s.instances[i].name;
+              instances.append(material);
+            }
+            py::list fixtures;
+            for (const Scene::Fixture& f : s.fixtures) fixtures.append(MaterialDict(f.material));
+            py::list lights;
+            for (const LightSource& l : s.light_sources) lights.append(FieldsDict(l));
+            return py::dict(
+                "instances"_a = instances,
+                "floor"_a = s.floor ? py::object(MaterialDict(s.floor_material)) : py::none(),
+                "floor_half_size"_a = s.floor_half_size_mm, "fixtures"_a = fixtures,
+                "lights"_a = lights, "environment"_a = FieldsDict(s.environment));
+          },
+          "scene"_a,
+          R"(Scene `scene`'s look in the pbr mode before any randomisation, as the renderer
+shades it: instances (one material per instance, in scene_gt_world.json's order, its `name` too),
+floor (None without one), floor_half_size (mm), fixtures (one material each), lights and
+environment. A material: the surface (base_color linear, metallic, roughness, specular,
+anisotropic, clearcoat, clearcoat_roughness, distribution, and multiscatter as a bool), tangent,
+base_from_part (its base colour already the instance's own), textured, and texture (type, scale
+in mm, amount, roughness, bump, color, seed, file, projection) or None. Lights and the
+environment: their recipe keys (lengths in mm, angles in radians; a rect's sides size_x, size_y;
+type). For rebuilding a frame in another renderer (tools/cycles).)")
       .def_property_readonly("sensors",
                              [](const PyRun& r) {
                                std::vector<std::string> names;

@@ -146,16 +146,49 @@ class Frame(TypedDict):
 # An object of the run: BOP obj_id i + 1 for entry i of Run.objects.
 RunObject = TypedDict("RunObject", {"obj_id": int, "name": str, "class": str, "class_id": int})
 
-class FixtureMaterial(TypedDict):
-    base_color: list[float]  # linear RGB
+class Texture(TypedDict):
+    type: str  # noise, brushed, turned, checker, concrete, wood, rust, scratches, image
+    scale: float  # mm
+    amount: float
+    roughness: float
+    bump: float
+    color: list[float]  # linear RGB
+    seed: int
+    file: str  # image
+    projection: str  # image: auto, triplanar or uv
+
+class Material(TypedDict):
+    """A pbr material as the renderer shades it before any randomisation (Run.look)."""
+
+    base_color: list[float]  # linear RGB (a base_from_part one already the instance's)
     metallic: float
     roughness: float
     specular: float
     anisotropic: float
     clearcoat: float
     clearcoat_roughness: float
+    distribution: str  # ggx or multiscatter_ggx
     multiscatter: bool
+    tangent: str  # radial or x
+    base_from_part: bool
     textured: bool
+    texture: Texture | None
+
+FixtureMaterial = Material
+
+class InstanceMaterial(Material):
+    name: str  # the instance's (scene_gt_world.json's)
+
+class Look(TypedDict):
+    """A scene's look in the pbr mode (Run.look). Lights and the environment are dicts of their
+    recipe keys (lengths in mm, angles in radians, a rect's sides size_x and size_y, type)."""
+
+    instances: list[InstanceMaterial]  # in scene_gt_world.json's order
+    floor: Material | None
+    floor_half_size: float  # mm
+    fixtures: list[Material]
+    lights: list[dict[str, Any]]
+    environment: dict[str, Any]
 
 class Fixture(TypedDict):
     name: str
@@ -228,6 +261,7 @@ class Run:
     @property
     def sensors(self) -> list[str]: ...
     def fixtures(self, scene: int) -> list[Fixture]: ...
+    def look(self, scene: int) -> Look: ...
     def frames(
         self, shard: _Shard | None = None, masks: bool = True, skip: bool = True, threads: int = 0
     ) -> FrameIterator: ...

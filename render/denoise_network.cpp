@@ -123,7 +123,10 @@ std::vector<float> DenoiseWithNetwork(const DenoiseInput& in) {
   try {
     cv::dnn::Net net = pool.Take();
     net.setInput(blob);
-    y = net.forward();
+    // forward()'s Mat is the network's own output blob, not a copy: once the net is back in the
+    // pool another frame's forward() overwrites it (seen as bands of garbage in a frame when
+    // several were denoised at once). A copy is ours.
+    y = net.forward().clone();
     pool.Give(net);
   } catch (const cv::Exception& e) {
     throw Error(std::string("the denoiser network (render/models/denoiser.onnx): ") + e.what());

@@ -3,8 +3,10 @@
 // a 4-sample image brought closer to a 512-sample one.
 #include "render/denoise.h"
 
+#include <atomic>
 #include <cmath>
 #include <random>
+#include <thread>
 
 #include <tbb/global_control.h>
 
@@ -280,6 +282,24 @@ TEST(DenoiseNetwork, PixelsThatSeeNothingKeepTheirRadianceOnAnyThreadCount) {
   // Nothing seen at all: the radiance as it was.
   for (float& z : planes.depth) z = 0;
   EXPECT_EQ(planes.RunNetwork(), planes.radiance);
+}
+
+TEST(DenoiseNetwork, FramesDenoisedAtOnceGetTheirOwnResults) {
+  // Frames in flight are denoised in parallel, each with a network from a pool. Two different
+  // frames denoised over and over on two threads must each come out as denoised alone: the
+  // network's output must not be read after the network is back in the pool, where the other
+  // frame's pass overwrites it (bands of the other frame's values in a dataset, before the fix).
+  const Planes a = NoisyPlane(96, 64, 0.4f, 2, 5), b = NoisyPlane(96, 64, 2.0f, 8, 11);
+  const std::vector<float> alone_a = a.RunNetwork(), alone_b = b.RunNetwork();
+  ASSERT_NE(alone_a, alone_b);
+  std::atomic<int> wrong{0};
+  const auto hammer = [&](const Planes& planes, const std::vector<float>& alone) {
+    for (int i = 0; i < 40; ++i) wrong += planes.RunNetwork() != alone ? 1 : 0;
+  };
+  std::thread other([&] { hammer(b, alone_b); });
+  hammer(a, alone_a);
+  other.join();
+  EXPECT_EQ(wrong.load(), 0);
 }
 
 RenderOptions Pbr(int samples, bool denoise,

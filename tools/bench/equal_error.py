@@ -27,7 +27,9 @@ materials). Both use every core of the machine.
 Scenes: workcell (tools/cycles/compare_with_cycles.py's case: a gear, a bolt, a nut, a peg and a
 washer, metal and Lambert, two area lights and a grey world, 320 x 240); pbr_demo
 (recipes/pbr_demo.yaml's three default scenes, four views each of which view 0 is measured, 640 x
-480, cadsynth only: Cycles' rebuild has no procedural textures); tote (an XYZ-IBD-like frame: 60
+480; Cycles rebuilds each of the three from Run.look, its steel, aluminium, black oxide and wood
+textures in kind from Cycles' own nodes: the same kinds, sizes and amounts, not the same
+patterns); tote (an XYZ-IBD-like frame: 60
 steel bolts dropped into bin_picking.yaml's tote under one area light, 1440 x 1080, two views of
 which view 0 is measured; Cycles gets the tote's own mesh and material from Run.fixtures).
 Writes DIR/equal_error_SCENE.json and DIR/equal_error_SCENE.png.

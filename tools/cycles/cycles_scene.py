@@ -4,15 +4,19 @@
 #
 #   blender -b --factory-startup --python tools/cycles/cycles_scene.py -- SPEC.json
 #
-# SPEC.json (written by tools/cycles/compare_with_cycles.py) names the dataset, the frame, the
-# materials, lights and world in SI units (metres, W, W/m^2) and Cycles' settings; the geometry and
+# SPEC.json (written by tools/cycles/compare_with_cycles.py or tools/bench/equal_error.py) names
+# the dataset, the frame, the materials (by part name globs, or one per instance as Run.look gives
+# them: instance_materials), lights and world in SI units (metres, W, W/m^2) and Cycles'
+# settings; the geometry and
 # poses come from the dataset itself: models/obj_*.ply (the meshes cadsynth traced, with its
 # normals), scene_gt_world.json and scene_camera.json, and the spec's fixtures (PLY files in the
 # world frame). Cycles is set up as docs/testing.md's "Checked against Blender Cycles" says: GGX,
 # no clamping, no glossy filter and no separate glossy bounce limit (unless the spec sets
 # clamp_indirect, filter_glossy or glossy_bounces: cadsynth's render options of those names),
 # a 1-pixel box filter, no light threshold, no denoising or adaptive
-# sampling (unless the spec sets adaptive_threshold), the same bounces. The result is written as
+# sampling (unless the spec sets adaptive_threshold), the same bounces. cadsynth's noise, brushed
+# and wood textures become Cycles nodes of the same kind, size and amount (texture(), not the
+# same patterns), its tangent `x` the object's x axis. The result is written as
 # a 32-bit EXR (linear Rec.709, W/(m^2 sr), like cadsynth's rgb_hdr/).
 import fnmatch
 import json

@@ -61,17 +61,26 @@ TEST(PathTracer, WhiteLambertSphereInAUniformSkyIsInvisible) {
   // The white furnace: a closed convex surface of albedo 1 under radiance L everywhere reflects
   // exactly L at every point. Cosine-weighted sky sampling makes this exact sample by sample;
   // the facets of the tessellated sphere (smooth normals) leave well under 1 %.
+  // A cosine-sampled direction within the facet's tilt of the horizon, above the smooth normal
+  // but below the flat triangle, is lost (Cycles loses it too): rare, so at most a few pixels
+  // may lose one ray of their 4 paths' 8 (half a path: 1/8 of the pixel). Which pixels depends
+  // on the sample pattern, so the test allows a few rather than none.
   SphereView view(Lambert(1.0f), 0.5f);
   const Renderer renderer(view.parts, view.scene, Pbr(4, 2));
   const Frame frame = renderer.Render(view.camera);
-  int on_sphere = 0;
+  int on_sphere = 0, lost = 0;
   for (int v = 0; v < 64; ++v) {
     for (int u = 0; u < 64; ++u) {
-      EXPECT_NEAR(At(frame, u, v), 0.5f, 0.005f) << u << "," << v;
+      const float value = At(frame, u, v);
+      if (std::abs(value - 0.5f) > 0.005f) {
+        ++lost;
+        EXPECT_NEAR(value, 0.5f * (1 - 1.0f / 8), 0.005f) << u << "," << v;
+      }
       on_sphere += frame.instance[v * 64 + u] != 0;
     }
   }
   EXPECT_GT(on_sphere, 1000);
+  EXPECT_LE(lost, 4);
 }
 
 TEST(PathTracer, WhiteRoughDielectricSphereInAUniformSkyIsInvisible) {
@@ -234,7 +243,9 @@ TEST(PathTracer, RectLightIsSampledUniformlyInItsSolidAngle) {
     sum_sq += value * value;
   }
   const double mean = sum / 64, spread = std::sqrt(std::max(0.0, sum_sq / 64 - mean * mean));
-  EXPECT_NEAR(mean, expected, 0.02 * expected);  // 64 stratified samples
+  // 64 pixels of one path each: independent samples (each pixel scrambles its own sequence), so
+  // the mean is within 4 standard errors (spread / 8); the 1,024-sample image below pins it.
+  EXPECT_NEAR(mean, expected, 4 * spread / 8);
   // One sample a pixel (MIS with the floor's cosine-sampled rays): the spread is a fifth of the
   // mean; sampled by area, with the same MIS, it was half the mean.
   EXPECT_LT(spread, 0.3 * mean);

@@ -73,6 +73,16 @@ py::dict MaterialDict(const Material& material) {
   return out;
 }
 
+// Prepared scene `scene` of the run, or IndexError.
+const Scene& SceneOf(const PyRun& r, size_t scene) {
+  const PreparedRun& p = r.source->prepared();
+  if (scene >= p.scenes.size()) {
+    throw py::index_error("scene " + std::to_string(scene) + " of " +
+                          std::to_string(p.scenes.size()));
+  }
+  return p.scenes[scene];
+}
+
 // Frames rendered ahead in a background thread (a TBB pipeline, frames in flight in parallel)
 // and handed over in order; the GIL is released while Python waits.
 class FrameStream {
@@ -238,13 +248,8 @@ void BindRun(py::module_& m) {
       .def(
           "fixtures",
           [](const PyRun& r, size_t scene) {
-            const PreparedRun& p = r.source->prepared();
-            if (scene >= p.scenes.size()) {
-              throw py::index_error("scene " + std::to_string(scene) + " of " +
-                                    std::to_string(p.scenes.size()));
-            }
             py::list out;
-            for (const Scene::Fixture& f : p.scenes[scene].fixtures) {
+            for (const Scene::Fixture& f : SceneOf(r, scene).fixtures) {
               const Mesh& mesh = f.mesh;
               const auto n = static_cast<py::ssize_t>(mesh.num_vertices());
               const auto t = static_cast<py::ssize_t>(mesh.num_triangles());
@@ -278,12 +283,7 @@ randomisation (as Run.look's). For rebuilding a frame in another renderer (tools
       .def(
           "look",
           [](const PyRun& r, size_t scene) {
-            const PreparedRun& p = r.source->prepared();
-            if (scene >= p.scenes.size()) {
-              throw py::index_error("scene " + std::to_string(scene) + " of " +
-                                    std::to_string(p.scenes.size()));
-            }
-            const Scene& s = p.scenes[scene];
+            const Scene& s = SceneOf(r, scene);
             py::list instances;
             for (size_t i = 0; i < s.instances.size(); ++i) {
               py::dict material = MaterialDict(s.InstanceMaterial(i));

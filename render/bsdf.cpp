@@ -317,20 +317,52 @@ std::optional<Eigen::Vector3f> PrincipledBsdf::SampleDirection(const Eigen::Vect
                                                                bool* glossy) const {
   if (wo.z() <= 0) return std::nullopt;
   const ViewTerms& view = View(wo);
+  float unused;
+  return SampleLobe(wo, PickLobe(view, u_lobe, &unused), u, glossy);
+}
+
+std::optional<Eigen::Vector3f> PrincipledBsdf::SampleDirection(const Eigen::Vector3f& wo,
+                                                               const Eigen::Vector2f& u,
+                                                               bool* glossy) const {
+  if (wo.z() <= 0) return std::nullopt;
+  const ViewTerms& view = View(wo);
+  float x;
+  const Lobe lobe = PickLobe(view, u.x(), &x);
+  return SampleLobe(wo, lobe, Eigen::Vector2f(x, u.y()), glossy);
+}
+
+PrincipledBsdf::Lobe PrincipledBsdf::PickLobe(const ViewTerms& view, float u, float* rescaled) {
+  // The lobes' shares of [0, 1): the coat's p_coat, then of the rest the specular layer's
+  // p_specular, then the diffuse one's. The rescaled number stays below 1 (floats round).
+  const auto within = [](float v) { return std::min(std::max(v, 0.0f), 0x1.fffffep-1f); };
+  if (u < view.p_coat) {
+    *rescaled = within(u / view.p_coat);
+    return Lobe::kCoat;
+  }
+  const float rest = (u - view.p_coat) / (1 - view.p_coat);
+  if (rest < view.p_specular) {
+    *rescaled = within(rest / view.p_specular);
+    return Lobe::kSpecular;
+  }
+  *rescaled = within((rest - view.p_specular) / (1 - view.p_specular));
+  return Lobe::kDiffuse;
+}
+
+std::optional<Eigen::Vector3f> PrincipledBsdf::SampleLobe(const Eigen::Vector3f& wo, Lobe lobe,
+                                                          const Eigen::Vector2f& u,
+                                                          bool* glossy) const {
   Eigen::Vector3f wi;
-  bool from_glossy = true;
-  if (u_lobe < view.p_coat) {
+  if (lobe == Lobe::kCoat) {
     wi = Reflect(wo, SampleVisibleNormal(wo, coat_alpha_, coat_alpha_, u));
-  } else if ((u_lobe - view.p_coat) / (1 - view.p_coat) < view.p_specular) {
+  } else if (lobe == Lobe::kSpecular) {
     wi = Reflect(wo, SampleVisibleNormal(wo, alpha_x_, alpha_y_, u));
   } else {  // cosine-weighted
-    from_glossy = false;
     const float r = std::sqrt(u.x()), phi = 2 * kPi * u.y();
     wi =
         Eigen::Vector3f(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x())));
   }
   if (wi.z() <= 0) return std::nullopt;
-  if (glossy) *glossy = from_glossy;
+  if (glossy) *glossy = lobe != Lobe::kDiffuse;
   return wi;
 }
 

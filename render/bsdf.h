@@ -101,6 +101,13 @@ class PrincipledBsdf {
   std::optional<Eigen::Vector3f> SampleDirection(const Eigen::Vector3f& wo, float u_lobe,
                                                  const Eigen::Vector2f& u,
                                                  bool* glossy = nullptr) const;
+  // The same from one pair, as Cycles picks a closure: u.x chooses the lobe, then, rescaled into
+  // that lobe's share of [0, 1), is the lobe's own first coordinate. Each lobe's directions then
+  // keep the pair's stratification, where a separate u_lobe would hand each lobe a random subset
+  // of a stratified sequence's points (what the path tracer uses).
+  std::optional<Eigen::Vector3f> SampleDirection(const Eigen::Vector3f& wo,
+                                                 const Eigen::Vector2f& u,
+                                                 bool* glossy = nullptr) const;
   // Writes the pair (wo, wi) and what this BSDF's evaluation needs at wo into lane i of `lanes`.
   void ToLanes(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, BsdfLanes* lanes, int i) const;
 
@@ -129,6 +136,12 @@ class PrincipledBsdf {
     float albedo = 0;         // Albedo(wo)
   };
   const ViewTerms& View(const Eigen::Vector3f& wo) const;
+  enum class Lobe { kCoat, kSpecular, kDiffuse };
+  // The lobe u in [0, 1) picks at wo (in proportion to view's probabilities), and u rescaled into
+  // that lobe's share of [0, 1) (uniform again, for the lobe's own sampling).
+  static Lobe PickLobe(const ViewTerms& view, float u, float* rescaled);
+  std::optional<Eigen::Vector3f> SampleLobe(const Eigen::Vector3f& wo, Lobe lobe,
+                                            const Eigen::Vector2f& u, bool* glossy) const;
   // The diffuse layer's share: (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg), 1 without a layer.
   float DiffuseScale(const ViewTerms& view, float mu_i) const;
   // The dielectric layer's directional albedo at mu from the table's A and B there (compensated

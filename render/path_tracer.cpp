@@ -1180,8 +1180,11 @@ void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
     }
     const PrincipledBsdf& bsdf = k->bsdf[j].emplace(surf.params, min_alpha);
     const PixelSampler sampler(k->seed[j], static_cast<uint32_t>(k->sample[j]));
-    const uint32_t dim = 1 + 3 * static_cast<uint32_t>(depth);
-    const Eigen::Vector2f u_choice = sampler.Get2D(dim);
+    // Two pairs a bounce: the light's (which light, then where on it) and the BSDF's (which
+    // lobe, then which direction). Each picks with its x and reuses x rescaled into the picked
+    // share (as Cycles does), so the samples one light or lobe gets keep the pair's
+    // stratification instead of being a random subset of it.
+    const uint32_t dim = 1 + 2 * static_cast<uint32_t>(depth);
     // A little off the surface along its geometric normal, scaled with the coordinates (float
     // spacing at 10 m is 1e-3 mm).
     k->eps[j] = 0.01f + 2e-6f * surf.p.cwiseAbs().maxCoeff();
@@ -1192,17 +1195,20 @@ void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
     if (num_strategies > 0) {
       int pick = 0;
       float select_pdf = even_pdf;
+      Eigen::Vector2f u_light = sampler.Get2D(dim);
+      float below = 0.0f;  // the picked strategy's share of [0, 1) starts here
       if (rated) {
         float* select = k->selection[j];
         SelectionPdfs({k->p_off[j], surf.ns, -k->dir[j], wo, &local.t, &local.b, &bsdf}, select);
-        for (float below = select[0]; pick + 1 < num_strategies && u_choice.x() >= below;
-             below += select[++pick]) {
+        while (pick + 1 < num_strategies && u_light.x() >= below + select[pick]) {
+          below += select[pick++];
         }
         select_pdf = select[pick];
       } else {
-        pick = std::min(static_cast<int>(u_choice.x() * num_strategies), num_strategies - 1);
+        pick = std::min(static_cast<int>(u_light.x() * num_strategies), num_strategies - 1);
+        below = static_cast<float>(pick) * even_pdf;
       }
-      const Eigen::Vector2f u_light = sampler.Get2D(dim + 1);
+      u_light.x() = std::clamp((u_light.x() - below) / select_pdf, 0.0f, 0x1.fffffep-1f);
       LightSample& ls = k->light_sample[j];
       bool ok = false;
       k->light_delta[j] = false;
@@ -1227,8 +1233,7 @@ void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
     }
 
     // The BSDF's sample continues the path.
-    if (const auto wi =
-            bsdf.SampleDirection(wo, u_choice.y(), sampler.Get2D(dim + 2), &k->next_glossy[j])) {
+    if (const auto wi = bsdf.SampleDirection(wo, sampler.Get2D(dim + 1), &k->next_glossy[j])) {
       k->next_wi[j] = *wi;
       k->next_lane[j] = evals.count++;
       bsdf.ToLanes(wo, *wi, &evals, k->next_lane[j]);

@@ -32,8 +32,9 @@ inline float UnitFloat(uint32_t x) { return static_cast<float>(x >> 8) * (1.0f /
 Eigen::Vector2f SobolOwen2D(uint32_t index, uint64_t seed);
 
 // The per-pixel sampler of one path: sample `index` of the pixel's sequence, dimension pair `dim`
-// (0: the position in the pixel, then three pairs per bounce). Pairs with different `dim` are
-// scrambled and shuffled with seeds SobolOwen2D hashes apart, so they do not correlate.
+// (0: the position in the pixel, then two pairs per bounce: the light, the BSDF). Pairs with
+// different `dim` are scrambled and shuffled with seeds SobolOwen2D hashes apart, so they do not
+// correlate.
 class PixelSampler {
  public:
   PixelSampler(uint64_t pixel_seed, uint32_t index) : seed_(pixel_seed), index_(index) {}

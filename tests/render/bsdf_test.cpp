@@ -3,6 +3,7 @@
 // two independent integrations (importance sampling and a deterministic quadrature) agreeing.
 #include "render/bsdf.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -96,6 +97,45 @@ TEST(PrincipledBsdf, WithoutSpecularItIsLambert) {
   const auto s = bsdf.Sample(wo, 0.5f, Eigen::Vector2f(0.3f, 0.8f));
   ASSERT_TRUE(s);
   EXPECT_TRUE(s->weight.isApprox(p.base_color, 1e-5f));  // base/pi * cos / (cos/pi)
+}
+
+TEST(PrincipledBsdf, OnePairPicksTheLobeAndKeepsEachLobesStratification) {
+  // SampleDirection(wo, u): u.x picks the lobe as u_lobe would, then, rescaled into the lobe's
+  // share, is the lobe's first coordinate. N stratified u.x (one per 1/N of [0, 1)): the diffuse
+  // lobe's share [c, 1) holds M of them, a regular progression, so its M directions (cosine-
+  // weighted: 1 - z^2 is that coordinate) fall one in each 1/M of [0, 1), as stratified as the
+  // pair, instead of a random subset of it.
+  const PrincipledBsdf bsdf(Params(0.8f, 0, 0.5f));
+  const Eigen::Vector3f wo = Direction(0.8, 0.3);
+  constexpr int kN = 256;
+  std::vector<float> diffuse;
+  int glossy_count = 0;
+  for (int i = 0; i < kN; ++i) {
+    const Eigen::Vector2f u((i + 0.5f) / kN, 0.37f);
+    bool glossy = false, glossy_apart = false;
+    const auto wi = bsdf.SampleDirection(wo, u, &glossy);
+    // The same lobe as a separate u_lobe equal to u.x picks.
+    const auto apart = bsdf.SampleDirection(wo, u.x(), u, &glossy_apart);
+    if (!wi) {  // a microfacet's mirror direction below the surface: the glossy lobe's only
+      ++glossy_count;
+      continue;
+    }
+    ASSERT_TRUE(apart) << i;
+    EXPECT_EQ(glossy, glossy_apart) << i;
+    if (glossy) {
+      ++glossy_count;
+    } else {
+      diffuse.push_back(1 - wi->z() * wi->z());
+    }
+  }
+  // Both lobes drawn (a dielectric of specular 0.5 at roughness 0.5), the glossy ones first.
+  ASSERT_GT(glossy_count, 4);
+  const int m = static_cast<int>(diffuse.size());
+  ASSERT_GT(m, kN / 2);
+  std::sort(diffuse.begin(), diffuse.end());
+  for (int k = 0; k < m; ++k) {
+    EXPECT_NEAR(diffuse[k], (k + 0.5) / m, 1.0 / m + 1e-5) << k << " of " << m;
+  }
 }
 
 TEST(PrincipledBsdf, WhiteDielectricReflectsAllLightAtEveryAngleAndRoughness) {

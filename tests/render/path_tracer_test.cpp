@@ -584,8 +584,12 @@ TEST(PathTracer, SimdAndScalarShadingAgreeOnEveryPreset) {
 }
 
 // A near-mirror ball (metal, roughness 0.05) resting above a Lambert floor (albedo 0.8) under a
-// small panel, in a black world, seen from the side and above: light reaches the floor directly,
-// through the ball's reflection (a caustic) and off the floor again.
+// panel, in a black world, seen from the side and above: light reaches the floor directly,
+// through the ball's reflection (a caustic) and off the floor again. The panel is large enough
+// (200 mm square, 370 mm from the ball) that its image in the ball, seen from the floor, is found
+// by a few of each floor pixel's paths: the caustic is noisy in every render, not only in those
+// whose sample pattern happens to find a tiny panel's image (a 40 mm panel's was found in 4 of 12
+// renders).
 SphereView MirrorBallOnAFloor() {
   SphereView view(Metal(0.05f), 0.0f);
   view.scene.floor = true;
@@ -595,11 +599,11 @@ SphereView MirrorBallOnAFloor() {
       Eigen::Translation3d(0, 0, 60) * Eigen::Isometry3d::Identity();
   LightSource panel;
   panel.kind = LightSource::Kind::kRect;
-  panel.size_x_mm = panel.size_y_mm = 40;
+  panel.size_x_mm = panel.size_y_mm = 200;
   panel.position = {150, 0, 400};
   panel.direction = Eigen::Vector3d(-150, 0, -400).normalized();
   panel.x_axis = Eigen::Vector3d::UnitY();
-  panel.power = 20;
+  panel.power = 80;
   view.scene.light_sources = {panel};
   view.camera.intrinsics = Intrinsics::FromFov(48, 48, 1.0);
   view.camera.world_from_cam = WorldFromCamOnSphere({0, 0, 0}, 0.5, 0.9, 600.0);
@@ -647,8 +651,9 @@ TEST(PathTracer, FilterGlossyQuietsCausticsAndLeavesTheFirstHit) {
   const Frame off1 = render(0.0, 3, 1), off2 = render(0.0, 3, 2);
   const Frame on1 = render(1.0, 3, 1), on2 = render(1.0, 3, 2);
   const double noise_off = noise(off1, off2), noise_on = noise(on1, on2);
-  // Measured: 0.0096 against 6.5 (the floor's mean 2.76 against 2.82).
-  EXPECT_LT(noise_on, noise_off / 20) << noise_on << " against " << noise_off;
+  // Measured: 0.167 against 3.20 (the floor's mean 10.79 against 10.88); over five seed pairs
+  // the ratio was 12.5 to 19.
+  EXPECT_LT(noise_on, noise_off / 6) << noise_on << " against " << noise_off;
   // Widening a lobe moves light about, it does not make or lose much of it.
   EXPECT_NEAR(mean(on1), mean(off1), 0.1 * mean(off1));
 }
@@ -694,8 +699,8 @@ TEST(PathTracer, GlossyBouncesEndPathsAfterTheirGlossyBounce) {
   ASSERT_GT(ball, 500u);
   EXPECT_EQ(differ, 0u) << "ball values that differ from the render without bounces";
   // The ball mirrors the lit floor only with glossy bounces to spare; the floor's light off the
-  // floor again and through the ball is kept. Measured: the ball's red sum 7,051 against 5,134,
-  // the floor's 59,116 against 57,197 without bounces.
+  // floor again and through the ball is kept. Measured: the ball's red sum 29,031 against 21,496,
+  // the floor's 222,619 against 216,969 without bounces.
   EXPECT_GT(ball_full, 1.2 * ball_glossy0);
   EXPECT_GT(floor_glossy0, 1.02 * floor_direct);
 }
@@ -727,11 +732,12 @@ TEST(PathTracer, ClampIndirectScalesOnlyIndirectLight) {
   }
   EXPECT_EQ(not_monotone, 0u);
   // The caustic's paths (floor, ball, panel) carry far more than these limits, the floor's light
-  // off the floor less: some is cut, not all. Measured: the image's sum 18,456 direct, 18,524 at
-  // 2, 18,795 at 20, 19,512 unclamped.
-  EXPECT_GT(sum_low, sum_direct * 1.002);
-  EXPECT_GT(sum_high, sum_low * 1.01);
-  EXPECT_LT(sum_high, sum_full * 0.98);
+  // off the floor less: some is cut, not all. Measured: the image's sum 73,843 direct, 73,918 at
+  // 2, 74,496 at 20, 76,437 unclamped (over five seeds the three ratios were 1.0010-1.0011,
+  // 1.0078-1.0084 and 0.973-0.984).
+  EXPECT_GT(sum_low, sum_direct * 1.0005);
+  EXPECT_GT(sum_high, sum_low * 1.004);
+  EXPECT_LT(sum_high, sum_full * 0.99);
 }
 
 // A surface that sees nothing but the sky receives no indirect light: clamping leaves it alone.

@@ -461,6 +461,13 @@ class PreparedEnvironment {
     }
   }
   bool black() const { return black_; }
+  // Whether next-event estimation samples it: an image only. A uniform or sky environment
+  // changes slowly with direction, so the BSDF's own sample finds it as well as a light sample
+  // would (Sample() draws those cosine-weighted about the normal: the diffuse lobe's own
+  // distribution) and better on a glossy lobe, where a cosine-weighted direction lands in the
+  // lobe's tail now and then with a large weight. Cycles too leaves a world without spatial
+  // variation out of its light sampling ("Background MIS has been disabled").
+  bool sampled() const { return env_.kind == Environment::Kind::kImage; }
   // The mean radiance's luminance over all directions (W/(m^2 sr)).
   float MeanLuminance() const { return mean_luminance_; }
 
@@ -641,7 +648,8 @@ struct PathTracer::Impl {
   PathTracerScene scene;
   std::vector<PreparedLight> lights;
   std::optional<PreparedEnvironment> environment;  // absent when black
-  int num_strategies = 0;                          // lights + environment
+  bool environment_sampled = false;                // a strategy of next-event estimation
+  int num_strategies = 0;                          // lights + a sampled environment
   // Whether strategies are rated (SelectionPdfs; at most kMaxRated), and the even probability.
   bool rated = true;
   float even_pdf = 0;
@@ -662,12 +670,12 @@ struct PathTracer::Impl {
   Surface Hit(const RTCRayHit16& rh, int j, const Eigen::Vector3f& dir, float width,
               float spread) const;
 
-  // Next-event estimation picks one strategy (a light, or the environment: index lights.size())
-  // per surface point, with probability pdf[k]: nine tenths in proportion to an estimate of what
-  // each gives the point (its definition below: bright and near lights, and those a glossy lobe
-  // sees, get the samples), one tenth evenly (so that nothing that can light p is starved by a
-  // poor estimate). Evenly when more than kMaxRated strategies. The BSDF's sample leaving the
-  // same point reuses the numbers for its MIS weights when it finds a light or the sky.
+  // Next-event estimation picks one strategy (a light, or a sampled environment: index
+  // lights.size()) per surface point, with probability pdf[k]: nine tenths in proportion to an
+  // estimate of what each gives the point (its definition below: bright and near lights, and those
+  // a glossy lobe sees, get the samples), one tenth evenly (so that nothing that can light p is
+  // starved by a poor estimate). Evenly when more than kMaxRated strategies. The BSDF's sample
+  // leaving the same point reuses the numbers for its MIS weights when it finds a light or the sky.
   static constexpr int kMaxRated = 32;
   // The point a strategy is rated for: position, shading normal and frame, the direction towards
   // the viewer (world and the frame's) and its BSDF.
@@ -739,7 +747,8 @@ PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
       like != nullptr && like->impl_->environment ? &*like->impl_->environment : nullptr;
   const PreparedEnvironment env(im.scene.environment, before);
   if (!env.black()) im.environment.emplace(env);
-  im.num_strategies = static_cast<int>(im.lights.size()) + (im.environment ? 1 : 0);
+  im.environment_sampled = im.environment && im.environment->sampled();
+  im.num_strategies = static_cast<int>(im.lights.size()) + (im.environment_sampled ? 1 : 0);
   im.rated = im.num_strategies <= Impl::kMaxRated;
   im.even_pdf = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
   if (im.environment) im.environment_importance = kPiF * im.environment->MeanLuminance();
@@ -1130,7 +1139,7 @@ bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
     if (!hit) {
       if (environment) {
         const Eigen::Vector3f le = environment->Eval(k->dir[j]);
-        const float w = depth == 0
+        const float w = depth == 0 || !environment_sampled
                             ? 1.0f
                             : PowerHeuristic(k->prev_pdf[j],
                                              select_pdf(num_lights) *

@@ -152,9 +152,9 @@ TEST(AdaptiveSampling, SunIrradianceIsUnbiased) {
 }
 
 // A glossy metal sphere on a dark Lambert floor under a uniform sky, seen from the side. Far from
-// the sphere the floor's every path returns albedo * sky (the sky's sample and the BSDF's share it
-// by their MIS weights): no noise there. The sphere's silhouette mixes sphere and floor within its
-// pixels, and the sphere mirrors the floor and its own shadow.
+// the sphere the floor's every path returns albedo * sky (the BSDF's cosine-weighted sample finds
+// the sky, the only light): no noise there. The sphere's silhouette mixes sphere and floor within
+// its pixels, and the sphere mirrors the floor and its own shadow.
 struct GlossySphere {
   std::vector<Part> parts = {MakePart("ball", MakeSphere(50.0), TessellationOptions{0.02, 0.05})};
   Scene scene;

@@ -492,7 +492,13 @@ def compare(c, cycles_path, stats_path):
 def image_shift(a, b):
     """The sub-pixel translation (x, y) that best carries image b onto image a: one Lucas-Kanade
     step on b's gradients, a(p) = b(p - d) to first order. Both renderers' pixels seeing the same
-    rays give (0, 0); a camera or pixel-centre convention off by half a pixel gives about 0.5."""
+    rays give (0, 0); a camera or pixel-centre convention off by half a pixel gives about 0.5.
+    Both are clipped at Cycles' 99th percentile first: fireflies (a caustic's sparkle) carry no
+    geometry, and unclipped they moved the glossy cases' fit by up to 0.12 px with no shift at
+    all, where clipped every case fits within 0.03 px and half a pixel still comes out as 0.25 to
+    0.58 (measured on the strict cases, cadsynth's image moved by half a pixel)."""
+    top = np.percentile(b, 99)
+    a, b = np.minimum(a, top), np.minimum(b, top)
     gy, gx = np.gradient(b)
     diff = a - b
     inner = (slice(2, -2), slice(2, -2))  # central differences need both neighbours

@@ -83,6 +83,37 @@ TEST(PathTracer, WhiteLambertSphereInAUniformSkyIsInvisible) {
   EXPECT_LE(lost, 4);
 }
 
+// A uniform sky is found by the BSDF's rays only, so the lights get every light sample. Under a
+// parallel sun (irradiance E at 40 degrees from the zenith) and a uniform sky L, an open Lambert
+// floor of albedo rho returns rho (E cos 40 / pi + L) from every single path: the sun, the only
+// strategy, is picked with probability 1 and its sample gives rho E cos / pi exactly, and the
+// BSDF's cosine-weighted direction escapes to the sky and gives rho L exactly (f cos / pdf =
+// rho). One path a pixel is then exact. With the sky as a second strategy the sun was picked only
+// most of the time, and each pixel's one path had its light or lacked it.
+TEST(PathTracer, AUniformSkyLeavesEveryLightSampleToTheLights) {
+  Scene scene = Dark();
+  scene.floor_material = Lambert(0.5f);
+  scene.environment.color = Eigen::Vector3f::Constant(0.2f);
+  LightSource sun;
+  sun.kind = LightSource::Kind::kSun;
+  sun.power = 3.0;
+  const double theta = 40 * kPi / 180;
+  sun.direction = {std::sin(theta), 0.0, -std::cos(theta)};
+  sun.angle_rad = 0;
+  scene.light_sources = {sun};
+  Camera camera;
+  camera.intrinsics = Intrinsics::FromFov(32, 32, 0.004);
+  camera.world_from_cam = LookingDown({0, 0, 1000});
+  const Frame frame = Renderer({}, scene, Pbr(1, 1)).Render(camera);
+  const double expected = 0.5 * (3.0 * std::cos(theta) / kPi + 0.2);
+  for (int v = 0; v < 32; ++v) {
+    for (int u = 0; u < 32; ++u) {
+      ASSERT_GT(frame.depth[v * 32 + u], 0) << "the floor fills the view";
+      EXPECT_NEAR(At(frame, u, v), expected, 1e-4 * expected) << u << "," << v;
+    }
+  }
+}
+
 TEST(PathTracer, WhiteRoughDielectricSphereInAUniformSkyIsInvisible) {
   // The same furnace with a specular layer on top (specular 0.5, roughness 0.5): the layered
   // model conserves energy exactly, so the sphere still returns L, up to sampling noise.

@@ -420,7 +420,8 @@ bool HitLight(const PreparedLight& l, const Eigen::Vector3f& o, const Eigen::Vec
   return false;
 }
 
-// The environment: evaluation, and sampling in proportion to what a surface receives from it.
+// The environment: evaluation, and for an image (the only kind next-event estimation samples)
+// sampling in proportion to its pixels' luminance times their solid angle.
 class PreparedEnvironment {
  public:
   // `like`: an environment prepared before whose image's sampling tables can be shared (the
@@ -446,29 +447,17 @@ class PreparedEnvironment {
       // sum of lum sin(theta) over pixels of (pi / h) x (2 pi / w), over 4 pi.
       mean_luminance_ =
           tables_->total * kPiF / (2.0f * image_->width * image_->height) * e.strength;
-    } else {
-      // Midpoints of 32 elevation bands, weighted by their solid angle (the sky varies with
-      // elevation only).
-      double sum = 0, weight = 0;
-      for (int i = 0; i < 32; ++i) {
-        const double theta = M_PI * (i + 0.5) / 32;
-        const Eigen::Vector3f d(static_cast<float>(std::sin(theta)), 0.0f,
-                                static_cast<float>(std::cos(theta)));
-        sum += std::sin(theta) * Luminance(Eval(d));
-        weight += std::sin(theta);
-      }
-      mean_luminance_ = static_cast<float>(sum / weight);
     }
   }
   bool black() const { return black_; }
   // Whether next-event estimation samples it: an image only. A uniform or sky environment
   // changes slowly with direction, so the BSDF's own sample finds it as well as a light sample
-  // would (Sample() draws those cosine-weighted about the normal: the diffuse lobe's own
-  // distribution) and better on a glossy lobe, where a cosine-weighted direction lands in the
-  // lobe's tail now and then with a large weight. Cycles too leaves a world without spatial
+  // would (drawn cosine-weighted about the normal, the diffuse lobe's own distribution) and
+  // better on a glossy lobe, where a cosine-weighted direction landed in the lobe's tail now and
+  // then with a large weight. Cycles too leaves a world without spatial
   // variation out of its light sampling ("Background MIS has been disabled").
   bool sampled() const { return env_.kind == Environment::Kind::kImage; }
-  // The mean radiance's luminance over all directions (W/(m^2 sr)).
+  // A sampled environment's mean radiance's luminance over all directions (W/(m^2 sr)).
   float MeanLuminance() const { return mean_luminance_; }
 
   Eigen::Vector3f Eval(const Eigen::Vector3f& d) const {
@@ -486,16 +475,9 @@ class PreparedEnvironment {
     return Eigen::Vector3f::Zero();
   }
 
-  // Uniform and sky: cosine-weighted about the surface normal n (exact for a uniform sky on a
-  // Lambertian surface); image: in proportion to the pixels' luminance times their solid angle.
-  Eigen::Vector3f Sample(const Eigen::Vector2f& u, const Eigen::Vector3f& n, float* pdf) const {
-    if (env_.kind != Environment::Kind::kImage) {
-      Eigen::Vector3f t, b;
-      OrthonormalBasis(n, &t, &b);
-      const Eigen::Vector3f local = CosineHemisphere(u);
-      *pdf = local.z() / kPiF;
-      return (local.x() * t + local.y() * b + local.z() * n).normalized();
-    }
+  // A sampled (image) environment only: a direction in proportion to the pixels' luminance
+  // times their solid angle, and its density.
+  Eigen::Vector3f Sample(const Eigen::Vector2f& u, float* pdf) const {
     const int w = image_->width, h = image_->height;
     const Tables& t = *tables_;
     // Row by the marginal distribution, then the column within it.
@@ -516,12 +498,11 @@ class PreparedEnvironment {
     const float phi = 2 * kPiF * (0.5f - uu) - static_cast<float>(env_.rotation_rad);
     const Eigen::Vector3f d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
                             std::cos(theta));
-    *pdf = Pdf(d, n);
+    *pdf = Pdf(d);
     return d;
   }
 
-  float Pdf(const Eigen::Vector3f& d, const Eigen::Vector3f& n) const {
-    if (env_.kind != Environment::Kind::kImage) return std::max(0.0f, d.dot(n)) / kPiF;
+  float Pdf(const Eigen::Vector3f& d) const {
     const auto [x, y] = Pixel(d);
     const float sin_theta = std::sqrt(std::max(0.0f, 1 - d.z() * d.z()));
     const Tables& t = *tables_;
@@ -751,7 +732,7 @@ PathTracer::PathTracer(PathTracerScene scene, const PathTracer* like)
   im.num_strategies = static_cast<int>(im.lights.size()) + (im.environment_sampled ? 1 : 0);
   im.rated = im.num_strategies <= Impl::kMaxRated;
   im.even_pdf = im.num_strategies > 0 ? 1.0f / im.num_strategies : 0.0f;
-  if (im.environment) im.environment_importance = kPiF * im.environment->MeanLuminance();
+  if (im.environment_sampled) im.environment_importance = kPiF * im.environment->MeanLuminance();
   const auto image_of = [](const Material& m) -> std::shared_ptr<const LinearImage> {
     if (m.texture.kind != Texture::Kind::kImage) return nullptr;
     return m.texture.pixels ? m.texture.pixels : LoadLinearImage(m.texture.image);
@@ -977,11 +958,10 @@ struct PathTracer::Impl::Packet {
   alignas(64) int active[16];
   alignas(64) int had_ray[16];
   Eigen::Vector3f dir[16], throughput[16], value[16], first_albedo[16], first_normal[16];
-  // The vertex the segment left: its BSDF sample's pdf, shading normal and strategy selection
-  // probabilities (the MIS weights of a light or the sky the segment finds need them again), and
-  // the ray cone's width there and spread since.
+  // The vertex the segment left: its BSDF sample's pdf and strategy selection probabilities (the
+  // MIS weights of a light or a sampled sky the segment finds need them again), and the ray
+  // cone's width there and spread since.
   float prev_pdf[16], cone_width[16], cone_spread[16];
-  Eigen::Vector3f prev_normal[16];
   float selection[16][kMaxRated];
   // The smallest BSDF sampling density of the path's bounces so far (infinite before the first):
   // Filter Glossy widens the lobes the path meets after an unlikely bounce.
@@ -1142,8 +1122,7 @@ bool PathTracer::Impl::AddEmission(Packet* k, int depth) const {
         const float w = depth == 0 || !environment_sampled
                             ? 1.0f
                             : PowerHeuristic(k->prev_pdf[j],
-                                             select_pdf(num_lights) *
-                                                 environment->Pdf(k->dir[j], k->prev_normal[j]));
+                                             select_pdf(num_lights) * environment->Pdf(k->dir[j]));
         k->value[j] += ClampEmission(k->throughput[j].cwiseProduct(le) * w, depth);
       }
       k->active[j] = 0;
@@ -1225,7 +1204,7 @@ void PathTracer::Impl::SampleLanes(Packet* k, int depth) const {
         ok = SampleLight(lights[pick], surf.p, u_light, &ls);
         k->light_delta[j] = lights[pick].delta;
       } else {
-        ls.wi = environment->Sample(u_light, surf.ns, &ls.pdf);
+        ls.wi = environment->Sample(u_light, &ls.pdf);
         ls.distance = kInf;
         ls.value = environment->Eval(ls.wi);
         ok = ls.pdf > 0;
@@ -1319,7 +1298,6 @@ bool PathTracer::Impl::ContinuePaths(Packet* k, int depth) const {
     // radian for a diffuse one.
     k->cone_width[j] = surf.cone_width;
     k->cone_spread[j] += pdf > 1 ? std::sqrt(k->bsdf[j]->alpha_x() * k->bsdf[j]->alpha_y()) : 1.0f;
-    k->prev_normal[j] = surf.ns;
     k->dir[j] = wi;
     k->glossy[j] += k->next_glossy[j] ? 1 : 0;
     k->last_segment[j] = k->glossy[j] > scene.glossy_bounces;

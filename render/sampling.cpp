@@ -83,11 +83,6 @@ Eigen::Vector2f ConcentricDisc(const Eigen::Vector2f& u) {
   return {r * std::cos(phi), r * std::sin(phi)};
 }
 
-Eigen::Vector3f CosineHemisphere(const Eigen::Vector2f& u) {
-  const Eigen::Vector2f d = ConcentricDisc(u);
-  return {d.x(), d.y(), std::sqrt(std::max(0.0f, 1 - d.squaredNorm()))};
-}
-
 Eigen::Vector3f UniformCone(const Eigen::Vector2f& u, float cos_max) {
   const float cos_theta = 1 - u.x() * (1 - cos_max);
   const float sin_theta = std::sqrt(std::max(0.0f, 1 - cos_theta * cos_theta));

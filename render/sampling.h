@@ -50,8 +50,6 @@ class PixelSampler {
 // Warps of the unit square, each with its density.
 // Concentric map to the unit disc (Shirley and Chiu 1997): area-preserving, density 1/pi.
 Eigen::Vector2f ConcentricDisc(const Eigen::Vector2f& u);
-// Cosine-weighted direction about +z: density cos(theta) / pi.
-Eigen::Vector3f CosineHemisphere(const Eigen::Vector2f& u);
 // Uniform direction in the cone about +z of half-angle acos(cos_max): density
 // 1 / (2 pi (1 - cos_max)).
 Eigen::Vector3f UniformCone(const Eigen::Vector2f& u, float cos_max);

@@ -920,10 +920,13 @@ void PathTracer::ProjectorSignal(const RTCRayHit16& rh, const int valid[16],
   }
 }
 
-bool AdaptiveSampling::Converged(int n, double sum, double sum_sq) const {
+bool AdaptiveSampling::Converged(int n, double sum, double sum_sq, double peak) const {
   if (n < 2) return false;
   const double mean = sum / n;
-  const double variance = std::max(0.0, sum_sq - n * mean * mean) / (n - 1);
+  double variance = std::max(0.0, sum_sq - n * mean * mean) / (n - 1);
+  // A value as bright as `peak` not drawn in n paths may still come with probability about
+  // 1 / (n + 2) (Laplace's rule of succession): its share of a path's variance.
+  if (peak > mean) variance += (peak - mean) * (peak - mean) / (n + 2);
   const double error = std::sqrt(variance / n);  // the standard error of the pixel's mean
   const float hi = static_cast<float>(exposure_scale * (mean + error));
   const float lo = static_cast<float>(exposure_scale * std::max(0.0, mean - error));
@@ -997,7 +1000,7 @@ struct PathTracer::Impl::Packet {
 // that had a ray, and the samples drawn (paths without a ray included).
 struct PathTracer::Impl::PixelSums {
   Eigen::Vector3f sum[16], albedo[16], normal[16];
-  double luminance[16] = {}, luminance_sq[16] = {};
+  double luminance[16] = {}, luminance_sq[16] = {}, luminance_max[16] = {};
   int paths[16] = {}, drawn[16] = {};
 
   PixelSums() {
@@ -1020,6 +1023,7 @@ struct PathTracer::Impl::PixelSums {
       const double l = Luminance(k.value[j]);
       luminance[p] += l;
       luminance_sq[p] += l * l;
+      luminance_max[p] = std::max(luminance_max[p], l);
     }
   }
 };
@@ -1383,8 +1387,22 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
     // threshold (Cycles' dilation of unconverged pixels), until it has `samples`.
     bool converged[16];
     for (int p = 0; p < 16; ++p) {
-      converged[p] = !in_image[p] ||
-                     sampling.Converged(sums.paths[p], sums.luminance[p], sums.luminance_sq[p]);
+      if (!in_image[p]) {
+        converged[p] = true;
+        continue;
+      }
+      // The brightest path of the pixel and its 8 neighbours in the tile: a highlight the
+      // pixel's own paths have not found yet (a rough metal part's, a small sub-pixel one)
+      // shows in its neighbours' paths first.
+      const int x = p % 4, y = p / 4;
+      double peak = 0.0;
+      for (int dy = std::max(0, y - 1); dy <= std::min(3, y + 1); ++dy) {
+        for (int dx = std::max(0, x - 1); dx <= std::min(3, x + 1); ++dx) {
+          if (in_image[dy * 4 + dx]) peak = std::max(peak, sums.luminance_max[dy * 4 + dx]);
+        }
+      }
+      converged[p] =
+          sampling.Converged(sums.paths[p], sums.luminance[p], sums.luminance_sq[p], peak);
     }
     int open = 0;
     for (int p = 0; p < 16; ++p) {

@@ -85,7 +85,10 @@ struct TileFeatures {
 // then more in steps until the standard error of its mean, carried through the exposure and the
 // display transform, is at most `threshold` (on the [0, 1] scale of the 8-bit image: 0.01 is
 // 2.5 grey levels) for it and its 4-neighbours in the tile, or it has `samples`: as Cycles'
-// adaptive sampling, samples go where the image is still noisy. The schedule is a function of the
+// adaptive sampling, samples go where the image is still noisy. The error counts the brightest
+// path of the pixel and its 8 neighbours in the tile as a value the pixel may still draw, with
+// probability 1 / (n + 2) after n paths (Laplace's rule of succession): a dark pixel beside a
+// highlight its own first paths missed goes on. The schedule is a function of the
 // tile's own paths, so the image is the same for any thread count, tile order or shard.
 struct AdaptiveSampling {
   int samples = 16;          // paths per pixel, at most
@@ -105,7 +108,9 @@ struct AdaptiveSampling {
     return c;
   }
   // Whether a pixel whose `n` paths have luminances summing to `sum` (squares: `sum_sq`) is done.
-  bool Converged(int n, double sum, double sum_sq) const;
+  // `peak`: the brightest path's luminance among the pixel and its neighbours (0: none); a value
+  // that bright, not drawn yet, counts with probability 1 / (n + 2).
+  bool Converged(int n, double sum, double sum_sq, double peak = 0.0) const;
 };
 
 class PathTracer {

@@ -73,6 +73,27 @@ TEST(AdaptiveSampling, ConvergedFollowsTheStandardErrorOfTheDisplayedValue) {
   EXPECT_FALSE(a.Converged(400, 200, 200));
 }
 
+TEST(AdaptiveSampling, ABrightPathNearbyKeepsADarkPixelSampling) {
+  // A dark pixel (every path 0.02, no spread of its own) next to one that has drawn a path of 2.0
+  // (a rough metal part's highlight, which the dark pixel's paths may find too). Laplace's rule
+  // of succession gives such a path probability 1 / (n + 2) after n without it: a path variance
+  // of 1.98^2 / (n + 2), a standard error of about 1.98 / n, displayed through the sRGB curve's
+  // slope at 0.02, 1.055 / 2.4 * 0.02^(-0.583) = 4.3: about 8.5 / n against 0.01.
+  AdaptiveSampling a;
+  a.samples = 4096;
+  a.min_samples = 4;
+  a.threshold = 0.01f;
+  a.filmic = false;
+  const auto dark = [&](int n, double peak) { return a.Converged(n, 0.02 * n, 4e-4 * n, peak); };
+  EXPECT_TRUE(dark(4, 0.0));   // alone: no spread, done after 4
+  EXPECT_TRUE(dark(4, 0.02));  // a neighbour no brighter changes nothing
+  EXPECT_FALSE(dark(4, 2.0));
+  EXPECT_FALSE(dark(400, 2.0));  // about 0.021
+  EXPECT_TRUE(dark(2000, 2.0));  // about 0.0043
+  // A peak the pixel has drawn itself counts once more: 8 paths, one of them 2.0.
+  EXPECT_FALSE(a.Converged(8, 7 * 0.02 + 2.0, 7 * 4e-4 + 4.0, 2.0));
+}
+
 TEST(AdaptiveSampling, FurnaceStopsAtTheMinimumAndStaysExact) {
   // The white furnace (path_tracer_test.cpp): every path of every pixel returns the sky's
   // radiance, so every pixel's spread is 0 and it stops after min_samples.

@@ -261,8 +261,9 @@ def write_ply(path, vertices, normals, triangles):
         out.write(f.tobytes())
 
 
-def cycles_run(scene, dataset, samples, threshold, seed, blender, tag, sid=0):
-    """Renders frame (scene sid, image 0) of `dataset` in Cycles: its EXR and render seconds."""
+def cycles_run(scene, dataset, samples, threshold, seed, blender, tag, sid=0, reuse=False):
+    """Renders frame (scene sid, image 0) of `dataset` in Cycles: its EXR and render seconds
+    (with `reuse`, the EXR already there when it was made from the same spec, and NaN)."""
     camera = json.load(open(os.path.join(dataset, "camera.json")))
     spec = {"dataset": dataset, "scene_id": sid, "im_id": 0, "width": camera["width"],
             "height": camera["height"], "samples": samples, "bounces": 3, "seed": seed,
@@ -277,8 +278,12 @@ def cycles_run(scene, dataset, samples, threshold, seed, blender, tag, sid=0):
                      "lights": [cwc.blender_light(l) for l in scene.lights],
                      "world": scene.world, "fixtures": scene.fixtures()})
     spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
+    text = json.dumps(spec, indent=1)
+    if (reuse and os.path.exists(spec["output"]) and os.path.exists(spec_path)
+            and open(spec_path).read() == text):
+        return spec["output"], float("nan")
     with open(spec_path, "w") as f:
-        json.dump(spec, f, indent=1)
+        f.write(text)
     log = os.path.join(scene.out, f"cycles_{tag}.log")
     with open(log, "w") as f:
         done = subprocess.run([blender, "-b", "--factory-startup", "--python-exit-code", "1",
@@ -326,8 +331,12 @@ def main():
                         help="cadsynth's curves again with render.background_samples N: the "
                              "samples as set where a 4 x 4 tile shows a part, N elsewhere")
     parser.add_argument("--reuse-reference", action="store_true",
-                        help="keep DIR's cadsynth reference when it is there, made from the "
-                             "same recipe")
+                        help="keep DIR's references when they are there, made from the same "
+                             "recipe (cadsynth) and spec (Cycles)")
+    parser.add_argument("--references-only", action="store_true",
+                        help="render the references and stop (their time is not measured: "
+                             "the curves can then run on a quiet machine with "
+                             "--reuse-reference)")
     parser.add_argument("--cycles-from", help="take the Cycles curves from an earlier JSON")
     parser.add_argument("--out", default="equal_error")
     args = parser.parse_args()
@@ -356,6 +365,8 @@ def main():
         masks[(folder, im)] = regions(frame_dir, im, linear.shape[:2])
     print(f"{args.scene}: cadsynth reference {args.reference_samples} spp, "
           f"{ref_seconds:.1f} s per frame")
+    if args.references_only and "cycles" not in renderers:
+        return
 
     def errors(images, refs=refs):
         """Pooled over the measured frames: RMSE over their regions' values / mean value."""
@@ -384,7 +395,7 @@ def main():
               f"  parts {point['parts']:.4f}  edges {point['edges']:.4f}", flush=True)
         return point
 
-    if "cadsynth" in renderers:
+    if "cadsynth" in renderers and not args.references_only:
         # Without render.background_samples, then (--background-samples N) with it: the parts'
         # samples as set, N paths in the tiles that show no part.
         for background in sorted({0, args.background_samples}):
@@ -419,7 +430,8 @@ def main():
         ref_t = 0.0
         for folder, im in scene.frames():
             ref_path, t = cycles_run(scene, ref_dataset, args.reference_samples, 0.0, 7,
-                                     args.blender, f"reference_{folder}", int(folder))
+                                     args.blender, f"reference_{folder}", int(folder),
+                                     reuse=args.reuse_reference)
             ref_t += t
             cycles_refs[(folder, im)] = display(read_exr(ref_path), scene.exposure, scene.filmic)
         print(f"  Cycles reference {args.reference_samples} spp: "
@@ -430,6 +442,8 @@ def main():
             name: float(np.mean([np.mean(r[key][masks[key]["parts"]]) for key in r]))
             for name, r in (("cadsynth", refs), ("Cycles", cycles_refs))}
         print(f"  parts' mean value in the references: {result['reference_parts_mean']}")
+        if args.references_only:
+            return
 
         def cycles_point(tag, samples, threshold):
             images, seconds = {}, 0.0

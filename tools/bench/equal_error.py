@@ -463,7 +463,7 @@ def main():
                                       for n in map(int, args.samples.split(","))]
         result["curves"]["Cycles adaptive"] = [
             cycles_point(f"t{t}", args.max_samples, float(t))
-            for t in args.cycles_thresholds.split(",")]
+            for t in args.cycles_thresholds.split(",") if t]
 
     result["time_to"] = {}
     for target in map(float, args.targets.split(",")):

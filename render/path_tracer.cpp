@@ -1393,12 +1393,12 @@ void PathTracer::TraceTile(const Camera& camera, const PixelRays& rays, const Th
       }
       // The brightest path of the pixel and its 8 neighbours in the tile: a highlight the
       // pixel's own paths have not found yet (a rough metal part's, a small sub-pixel one)
-      // shows in its neighbours' paths first.
+      // shows in its neighbours' paths first. (Pixels outside the image have no paths: 0.)
       const int x = p % 4, y = p / 4;
       double peak = 0.0;
       for (int dy = std::max(0, y - 1); dy <= std::min(3, y + 1); ++dy) {
         for (int dx = std::max(0, x - 1); dx <= std::min(3, x + 1); ++dx) {
-          if (in_image[dy * 4 + dx]) peak = std::max(peak, sums.luminance_max[dy * 4 + dx]);
+          peak = std::max(peak, sums.luminance_max[dy * 4 + dx]);
         }
       }
       converged[p] =

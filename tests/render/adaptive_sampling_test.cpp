@@ -45,12 +45,18 @@ double MeanSamples(const Frame& frame) {
   return sum / static_cast<double>(frame.samples.size());
 }
 
-TEST(AdaptiveSampling, ConvergedFollowsTheStandardErrorOfTheDisplayedValue) {
+// Adaptive sampling at threshold 0.01 through the sRGB curve (no filmic), from 4 paths.
+AdaptiveSampling Srgb(int samples) {
   AdaptiveSampling a;
-  a.samples = 64;
+  a.samples = samples;
   a.min_samples = 4;
   a.threshold = 0.01f;
   a.filmic = false;
+  return a;
+}
+
+TEST(AdaptiveSampling, ConvergedFollowsTheStandardErrorOfTheDisplayedValue) {
+  AdaptiveSampling a = Srgb(64);
   // Every path 0.5: no spread, done. One path says nothing of the spread: not done.
   EXPECT_TRUE(a.Converged(8, 8 * 0.5, 8 * 0.25));
   EXPECT_FALSE(a.Converged(1, 0.5, 0.25));
@@ -79,11 +85,7 @@ TEST(AdaptiveSampling, ABrightPathNearbyKeepsADarkPixelSampling) {
   // of succession gives such a path probability 1 / (n + 2) after n without it: a path variance
   // of 1.98^2 / (n + 2), a standard error of about 1.98 / n, displayed through the sRGB curve's
   // slope at 0.02, 1.055 / 2.4 * 0.02^(-0.583) = 4.3: about 8.5 / n against 0.01.
-  AdaptiveSampling a;
-  a.samples = 4096;
-  a.min_samples = 4;
-  a.threshold = 0.01f;
-  a.filmic = false;
+  const AdaptiveSampling a = Srgb(4096);
   const auto dark = [&](int n, double peak) { return a.Converged(n, 0.02 * n, 4e-4 * n, peak); };
   EXPECT_TRUE(dark(4, 0.0));   // alone: no spread, done after 4
   EXPECT_TRUE(dark(4, 0.02));  // a neighbour no brighter changes nothing

@@ -7,6 +7,8 @@ error (interpolated on the error-time curve, log-log), and a picture of the curv
     tools/bench/equal_error.py --scene workcell [--renderers cadsynth,cycles] [--out DIR]
     tools/bench/equal_error.py --scene pbr_demo --renderers cadsynth --reference-samples 1024
     tools/bench/equal_error.py --scene pbr_demo ... --denoise --background-samples 1
+    tools/bench/equal_error.py --scene tote ... --references-from EARLIER_OUT   (both renderers'
+        curves in one run against references rendered once: hours at 1,024 samples)
 
 Error: the relative RMSE of the displayed values (the linear radiance of rgb_hdr/ or Cycles' EXR,
 exposed and put through the recipe's display transform, standard or filmic, as cadsynth's 8-bit
@@ -39,11 +41,13 @@ import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
 
 import numpy as np
+import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -133,6 +137,7 @@ class Scene:
         # Indirect: cwc.LIGHT_PATHS), their references' too.
         self.light_paths = dict(cwc.LIGHT_PATHS)
         self.background_samples = 0  # render.background_samples of the curves (0: off)
+        self.references_from = []  # earlier OUT folders whose references may be taken
         if name == "workcell":
             case = cwc.CASES["workcell"]
             self.material, self.lights, self.world = case[0], case[1], case[2]
@@ -224,6 +229,18 @@ class Scene:
         background = self.background_samples if mode == "pbr" and tag != "reference" else 0
         text = self.recipe(samples, threshold, seed, mode, views, background)
         dataset = os.path.join(self.out, f"{self.name}_{tag}")
+        if tag == "reference":
+            for earlier in self.references_from:
+                old = os.path.join(earlier, f"{self.name}_reference")
+                if (os.path.isdir(os.path.join(old, "train")) and os.path.exists(old + ".yaml")
+                        and same_recipe(open(old + ".yaml").read(), text)):
+                    if os.path.abspath(old) != os.path.abspath(dataset):
+                        shutil.rmtree(dataset, ignore_errors=True)
+                        shutil.copytree(old, dataset, copy_function=link_or_copy)
+                        with open(path, "w") as f:
+                            f.write(text)
+                    print(f"{self.name}: cadsynth reference taken from {old}")
+                    return dataset, float("nan"), float("nan")
         # Reused only when made from the same recipe (samples, light paths, ...).
         if (reuse and os.path.isdir(os.path.join(dataset, "train")) and os.path.exists(path)
                 and open(path).read() == text):
@@ -244,6 +261,36 @@ class Scene:
             self.fast_seconds = sorted(self.run("fast", 1, 0.0, mode="fast")[1]
                                        for _ in range(3))[1]
         return dataset, seconds / count, max(seconds / count - self.fast_seconds, 1e-3)
+
+
+def same_recipe(a, b):
+    """Whether two recipe texts describe the same run: the same YAML, comments and the spelling
+    of numbers aside (`1` and `1.0`)."""
+    return yaml.safe_load(a) == yaml.safe_load(b)
+
+
+# Material keys that specs gained after earlier references were made, at the values
+# cycles_scene.py takes when a key is absent: a spec with them builds the same Cycles scene.
+MATERIAL_DEFAULTS = {"distribution": "ggx", "tangent": "radial", "base_from_part": True,
+                     "texture": None}
+
+
+def without_defaults(value):
+    """`value` (a spec) without MATERIAL_DEFAULTS' keys where they have their default values."""
+    if isinstance(value, list):
+        return [without_defaults(v) for v in value]
+    if isinstance(value, dict):
+        return {k: without_defaults(v) for k, v in value.items()
+                if not (k in MATERIAL_DEFAULTS and v == MATERIAL_DEFAULTS[k])}
+    return value
+
+
+def link_or_copy(src, dst):
+    """A hard link where the file system allows one (references are large), else a copy."""
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
 
 
 def write_ply(path, vertices, normals, triangles):
@@ -279,6 +326,28 @@ def cycles_run(scene, dataset, samples, threshold, seed, blender, tag, sid=0, re
                      "world": scene.world, "fixtures": scene.fixtures()})
     spec_path = os.path.join(scene.out, f"cycles_{tag}.json")
     text = json.dumps(spec, indent=1)
+    if tag.startswith("reference"):
+        # An earlier folder's reference made from the same spec, its paths aside (one-frame
+        # scenes' references were once called cycles_reference).
+        def scene_of(s, folder):
+            return without_defaults(json.loads(
+                json.dumps({k: v for k, v in s.items() if k not in ("dataset", "output")})
+                .replace(json.dumps(folder)[1:-1], "OUT")))
+        for earlier in scene.references_from:
+            for name in (f"cycles_{tag}", "cycles_reference"):
+                old = os.path.join(earlier, name)
+                if (os.path.exists(old + ".json") and os.path.exists(old + ".exr")
+                        and scene_of(json.load(open(old + ".json")), earlier)
+                        == scene_of(spec, scene.out)
+                        and (name != "cycles_reference" or len(scene.frames()) == 1)):
+                    if os.path.abspath(old + ".exr") != os.path.abspath(spec["output"]):
+                        if os.path.exists(spec["output"]):
+                            os.remove(spec["output"])
+                        link_or_copy(old + ".exr", spec["output"])
+                        with open(spec_path, "w") as f:
+                            f.write(text)
+                    print(f"  Cycles reference taken from {old}.exr")
+                    return spec["output"], float("nan")
     if (reuse and os.path.exists(spec["output"]) and os.path.exists(spec_path)
             and open(spec_path).read() == text):
         return spec["output"], float("nan")
@@ -337,13 +406,25 @@ def main():
                         help="render the references and stop (their time is not measured: "
                              "the curves can then run on a quiet machine with "
                              "--reuse-reference)")
+    parser.add_argument("--references-from", default="",
+                        help="earlier OUT folders (comma-separated) whose references are taken, "
+                             "hard-linked, where made from the same recipe (cadsynth: the same "
+                             "YAML, comments and the spelling of numbers aside) and spec (Cycles: "
+                             "the same, its paths aside)")
     parser.add_argument("--cycles-from", help="take the Cycles curves from an earlier JSON")
+    parser.add_argument("--combine", help="earlier runs' JSONs (comma-separated): print their "
+                                          "times to --targets on the parts and draw their curves "
+                                          "side by side in DIR/equal_error_scenes.png; no runs")
     parser.add_argument("--out", default="equal_error")
     args = parser.parse_args()
+    if args.combine:
+        return combine(args.combine.split(","), list(map(float, args.targets.split(","))),
+                       args.out)
     os.makedirs(args.out, exist_ok=True)
     out = os.path.abspath(args.out)
     scene = Scene(args.scene, out, args.cadsynth)
     scene.min_samples = args.min_samples
+    scene.references_from = [os.path.abspath(d) for d in args.references_from.split(",") if d]
     scene.light_paths = {"filter_glossy": args.filter_glossy,
                          "glossy_bounces": args.glossy_bounces,
                          "clamp_indirect": args.clamp_indirect}
@@ -480,38 +561,100 @@ def main():
     plot(result, os.path.join(out, f"equal_error_{args.scene}.png"))
 
 
+CURVE_STYLES = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o",
+                "cadsynth denoised (network)": "C2-s",
+                "cadsynth adaptive denoised (network)": "C2-o",
+                "cadsynth denoised (filter)": "C1-s", "cadsynth adaptive denoised (filter)": "C1-o",
+                "Cycles": "C3--", "Cycles adaptive": "C3-o"}
+
+
+def draw_curves(ax, result, region):
+    """Every curve of `result`, error on `region` against seconds, log-log, on `ax`."""
+    for name, points in result["curves"].items():
+        points = sorted(points, key=lambda p: p["seconds"])
+        base = name.split(", background")[0]
+        style = CURVE_STYLES.get(base, "C7-")
+        if base != name:  # render.background_samples: the same colour, dotted, triangles
+            style = style[:2] + ":" + {"s": "^", "o": "v"}.get(style[-1], "")
+        ax.loglog([p["seconds"] for p in points], [p[region] for p in points],
+                  style, label=name, markersize=4)
+    for target in (0.05, 0.1):
+        ax.axhline(target, color="grey", linewidth=0.5)
+    ax.set_xlabel("seconds per frame (2 cores)")
+    ax.set_ylabel(f"relative RMSE, {region} pixels")
+    ax.grid(True, which="both", linewidth=0.2)
+
+
+def light_paths_title(result):
+    paths = []
+    if result.get("filter_glossy", 0.0):
+        paths.append(f"Filter Glossy {result['filter_glossy']:g}")
+    if result.get("glossy_bounces", 64) < 3:
+        paths.append(f"glossy bounces {result['glossy_bounces']}")
+    if result.get("clamp_indirect", 0.0):
+        paths.append(f"Clamp Indirect {result['clamp_indirect']:g}")
+    return f" ({', '.join(paths)})" if paths else ""
+
+
+def combine(paths, targets, out):
+    """Several scenes' JSONs: a table of each one's time to the targets on the parts (cadsynth's
+    fastest curve against Cycles' fixed and adaptive sampling) and their parts' curves side by
+    side in OUT/equal_error_scenes.png."""
+    results = [json.load(open(p)) for p in paths]
+    print("| scene | parts' error | cadsynth (its fastest curve) | Cycles fixed | "
+          "Cycles adaptive |")
+    print("|---|---|---|---|---|")
+    for r in results:
+        for target in targets:
+            times = {name: time_to([(p["seconds"], p["parts"]) for p in points], target)
+                     for name, points in r["curves"].items()}
+            # "at most": the curve's cheapest point is already below the target.
+            at_most = {name: bool(points) and min(points, key=lambda p: p["seconds"])["parts"]
+                       <= target for name, points in r["curves"].items()}
+            mine = {n: t for n, t in times.items() if n.startswith("cadsynth") and t}
+            cells = []
+            if mine:
+                name = min(mine, key=mine.get)
+                best = mine[name]
+                kind = name.removeprefix("cadsynth")
+                kind = "fixed" + kind if kind.startswith(",") or not kind else kind.strip()
+                cells.append(f"{'at most ' if at_most[name] else ''}{best:.3f} s ({kind})")
+            else:
+                best = None
+                cells.append("not reached")
+            for cycles in ("Cycles", "Cycles adaptive"):
+                t = times.get(cycles)
+                cells.append("not reached" if not t else
+                             f"{'at most ' if at_most[cycles] else ''}{t:.3f} s"
+                             + (f" ({t / best:.1f}x)" if best else ""))
+            print(f"| {r['scene']}{light_paths_title(r)} | {target:g} | " + " | ".join(cells)
+                  + " |")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, len(results), figsize=(5 * len(results), 5.5))
+    for ax, r in zip(np.atleast_1d(axes), results):
+        draw_curves(ax, r, "parts")
+        ax.set_title(f"{r['scene']}: parts" + light_paths_title(r), fontsize=9)
+    labels = {}
+    for ax in np.atleast_1d(axes):
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            labels.setdefault(label, h)
+    rows = (len(labels) + 3) // 4
+    fig.legend(list(labels.values()), list(labels), loc="lower center", ncol=4, fontsize=7.5)
+    fig.tight_layout(rect=(0, 0.05 * rows, 1, 1))
+    os.makedirs(out, exist_ok=True)
+    fig.savefig(os.path.join(out, "equal_error_scenes.png"), dpi=100)
+
+
 def plot(result, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 5.5 if len(result["curves"]) > 8 else 4.5))
-    styles = {"cadsynth": "C0--", "cadsynth adaptive": "C0-o",
-              "cadsynth denoised (network)": "C2-s", "cadsynth adaptive denoised (network)": "C2-o",
-              "cadsynth denoised (filter)": "C1-s", "cadsynth adaptive denoised (filter)": "C1-o",
-              "Cycles": "C3--", "Cycles adaptive": "C3-o"}
     for ax, region in zip(axes, ("parts", "all")):
-        for name, points in result["curves"].items():
-            points = sorted(points, key=lambda p: p["seconds"])
-            base = name.split(", background")[0]
-            style = styles.get(base, "C7-")
-            if base != name:  # render.background_samples: the same colour, dotted, triangles
-                style = style[:2] + ":" + {"s": "^", "o": "v"}.get(style[-1], "")
-            ax.loglog([p["seconds"] for p in points], [p[region] for p in points],
-                      style, label=name, markersize=4)
-        for target in (0.05, 0.1):
-            ax.axhline(target, color="grey", linewidth=0.5)
-        ax.set_xlabel("seconds per frame (2 cores)")
-        ax.set_ylabel(f"relative RMSE, {region} pixels")
-        paths = []
-        if result.get("filter_glossy", 0.0):
-            paths.append(f"Filter Glossy {result['filter_glossy']:g}")
-        if result.get("glossy_bounces", 64) < 3:
-            paths.append(f"glossy bounces {result['glossy_bounces']}")
-        if result.get("clamp_indirect", 0.0):
-            paths.append(f"Clamp Indirect {result['clamp_indirect']:g}")
-        ax.set_title(f"{result['scene']}: {region}"
-                     + (f" ({', '.join(paths)})" if paths else ""), fontsize=9)
-        ax.grid(True, which="both", linewidth=0.2)
+        draw_curves(ax, result, region)
+        ax.set_title(f"{result['scene']}: {region}" + light_paths_title(result), fontsize=9)
     # One legend for both, below them (inside, it hid the curves).
     handles, labels = axes[0].get_legend_handles_labels()
     rows = (len(labels) + 2) // 3

@@ -47,7 +47,6 @@ import sys
 import time
 
 import numpy as np
-import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -266,6 +265,7 @@ class Scene:
 def same_recipe(a, b):
     """Whether two recipe texts describe the same run: the same YAML, comments and the spelling
     of numbers aside (`1` and `1.0`)."""
+    import yaml  # python3-yaml, only here
     return yaml.safe_load(a) == yaml.safe_load(b)
 
 

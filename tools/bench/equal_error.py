@@ -34,7 +34,8 @@ textures in kind from Cycles' own nodes: the same kinds, sizes and amounts, not 
 patterns); tote (an XYZ-IBD-like frame: 60
 steel bolts dropped into bin_picking.yaml's tote under one area light, 1440 x 1080, two views of
 which view 0 is measured; Cycles gets the tote's own mesh and material from Run.fixtures).
-Writes DIR/equal_error_SCENE.json and DIR/equal_error_SCENE.png.
+Writes DIR/equal_error_SCENE.json and DIR/equal_error_SCENE.png; `--combine` reads several such
+JSONs and writes DIR/equal_error_scenes.png (their parts' curves side by side) and prints a table.
 """
 import argparse
 import json

@@ -2,6 +2,7 @@
 build tree's package (build/python) and CADSYNTH_BUILD_DIR / CADSYNTH_SOURCE_DIR set."""
 
 import ast
+import importlib.util
 import os
 import pathlib
 import re
@@ -84,3 +85,12 @@ def stub_frame_keys():
         keys[node.target.id] = (required, ast.unparse(annotation), dtypes,
                                 shape if dtypes else None)
     return keys
+
+
+def load_by_path(path, name):
+    """The Python file at `path` as a module called `name`, loaded as a script runs it (the
+    tools the C++ binary or a user starts by path are not in a package)."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

@@ -4,26 +4,20 @@ means: the time to an error read off a curve, which earlier references a run may
 would be started, the test gives a program that fails, so taking a reference that should not be
 taken, or not taking one that should, shows as an exit."""
 
-import importlib.util
 import json
 import math
 import pathlib
+import sys
 
 import pytest
+from conftest import load_by_path
 
 pytest.importorskip("yaml")
 
 SCRIPT = pathlib.Path(__file__).resolve().parents[2] / "tools" / "bench" / "equal_error.py"
 
 
-def load():
-    spec = importlib.util.spec_from_file_location("equal_error_under_test", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-ee = load()
+ee = load_by_path(SCRIPT, "equal_error_under_test")
 
 
 def test_time_to_interpolates_log_log_between_the_bracketing_points():
@@ -142,3 +136,15 @@ def test_combine_prints_each_scenes_times_and_ratios(tmp_path, capsys):
                         "at most 3.000 s (adaptive, background 1) | 40.000 s (13.3x) | "
                         "48.000 s (16.0x) |")
     assert (tmp_path / "c" / "equal_error_scenes.png").stat().st_size > 10000
+
+
+def test_a_missing_input_is_one_message_naming_it(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys, "argv", ["equal_error.py", "--combine", str(tmp_path / "no.json"),
+                                      "--out", str(tmp_path / "c")])
+    with pytest.raises(SystemExit, match="--combine: .*no.json: no such file"):
+        ee.main()
+    monkeypatch.setattr(sys, "argv", ["equal_error.py", "--references-from",
+                                      str(tmp_path / "gone"), "--out", str(tmp_path / "o")])
+    with pytest.raises(SystemExit, match="--references-from: .*gone: no such folder"):
+        ee.main()
+    assert not (tmp_path / "c").exists() and not (tmp_path / "o").exists()

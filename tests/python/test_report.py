@@ -5,7 +5,6 @@ package, so these tests need no build (but matplotlib and PIL: Debian's /usr/bin
 """
 
 import base64
-import importlib.util
 import io
 import json
 import pathlib
@@ -15,6 +14,7 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import load_by_path
 
 pytest.importorskip("matplotlib")
 Image = pytest.importorskip("PIL.Image")
@@ -24,14 +24,7 @@ SECTION_IDS = ["run", "verify", "objects", "images", "randomization", "grasps", 
                "gallery"]
 
 
-def load_report():
-    spec = importlib.util.spec_from_file_location("cadsynth_report_under_test", REPORT_PY)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-report = load_report()
+report = load_by_path(REPORT_PY, "cadsynth_report_under_test")
 
 
 def hist(rng, low, high, bins=20, label="", log=False, total=500):

@@ -421,6 +421,9 @@ def main():
     if args.combine:
         return combine(args.combine.split(","), list(map(float, args.targets.split(","))),
                        args.out)
+    for d in args.references_from.split(","):
+        if d and not os.path.isdir(d):
+            sys.exit(f"--references-from: {d}: no such folder")
     os.makedirs(args.out, exist_ok=True)
     out = os.path.abspath(args.out)
     scene = Scene(args.scene, out, args.cadsynth)
@@ -601,6 +604,9 @@ def combine(paths, targets, out):
     """Several scenes' JSONs: a table of each one's time to the targets on the parts (cadsynth's
     fastest curve against Cycles' fixed and adaptive sampling) and their parts' curves side by
     side in OUT/equal_error_scenes.png."""
+    for p in paths:
+        if not os.path.isfile(p):
+            sys.exit(f"--combine: {p}: no such file (an earlier run's equal_error_SCENE.json)")
     results = [json.load(open(p)) for p in paths]
     print("| scene | parts' error | cadsynth (its fastest curve) | Cycles fixed | "
           "Cycles adaptive |")
